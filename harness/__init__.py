@@ -1,0 +1,1 @@
+"""occbench harness: datasets, detection sources, runs, evaluation and reports."""

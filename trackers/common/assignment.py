@@ -1,0 +1,33 @@
+"""Optimal assignment (Hungarian method) with a gate."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+
+def assign(
+    cost: np.ndarray, max_cost: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Minimum-cost assignment keeping only pairs with cost <= max_cost.
+
+    Args:
+        cost: (N, M) float matrix; +inf or NaN marks forbidden pairs.
+        max_cost: largest accepted cost.
+    Returns:
+        matches (K, 2) int rows (i, j), unmatched rows (N - K,), unmatched columns (M - K,).
+    """
+    cost = np.asarray(cost, dtype=np.float64)
+    n, m = cost.shape
+    if n == 0 or m == 0:
+        return np.zeros((0, 2), dtype=int), np.arange(n), np.arange(m)
+    allowed = np.isfinite(cost) & (cost <= max_cost)
+    big = max_cost + 1.0 + (np.abs(cost[allowed]).max() if allowed.any() else 0.0) * (n + m)
+    rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
+    keep = allowed[rows, cols]
+    matches = np.column_stack([rows[keep], cols[keep]]).astype(int)
+    return (
+        matches,
+        np.setdiff1d(np.arange(n), matches[:, 0]),
+        np.setdiff1d(np.arange(m), matches[:, 1]),
+    )
