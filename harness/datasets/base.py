@@ -56,6 +56,11 @@ class Sequence:
         """Frame ``index`` (1-based) as (H, W, 3) uint8 BGR, or None without pixels."""
         raise NotImplementedError
 
+    def foreground(self, index: int) -> np.ndarray | None:
+        """Exact (H, W) int32 person label image of frame ``index`` (pixel value = gt id,
+        0 = background) when the dataset knows it (synthetic scenes), else None."""
+        return None
+
     def frames(self) -> Iterator[tuple[int, np.ndarray | None]]:
         for k in range(1, self.info.length + 1):
             yield k, self.frame(k)

@@ -1,0 +1,29 @@
+"""``python -m harness.fit <what> [options]``: fit a model from annotated sequences.
+
+Each subcommand lives in its own module ``harness.fit.<what>`` exposing ``main(argv)``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+COMMANDS = {
+    "pbm": "feature-difference models of the PBM tracker (PBM 2.2)",
+    "heads": "hair and skin colour mixtures of the head detector (PBM 2.3)",
+    "silhouette": "mean person silhouette template of the silhouette detector (Reta 3.1)",
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
+        lines = [f"  {name:<11} {what}" for name, what in COMMANDS.items()]
+        print("usage: python -m harness.fit {" + ",".join(COMMANDS) + "} [options]\n" + "\n".join(lines))
+        return 0 if argv and argv[0] in ("-h", "--help") else 2
+    module = importlib.import_module(f"harness.fit.{argv[0]}")
+    return int(module.main(argv[1:]) or 0)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
