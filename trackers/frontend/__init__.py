@@ -1,0 +1,12 @@
+"""Shared detection and segmentation front end (both paper trackers).
+
+Frames flow: ``background`` (MOG2/KNN foreground, shadows dropped) -> ``morphology``
+(open/close) -> ``blobs`` (connected components) -> a person detector (``detectors``:
+foreground blobs, silhouette template, HOG) -> ``features`` (ellipse histograms, rho, delta).
+``heads`` is the PBM 2.3 hair/skin head detector.
+"""
+
+from trackers.frontend.background import BackgroundModel, clean_mask
+from trackers.frontend.blobs import Blob, blobs_from_mask
+
+__all__ = ["BackgroundModel", "Blob", "blobs_from_mask", "clean_mask"]
