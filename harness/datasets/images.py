@@ -1,0 +1,142 @@
+"""Frame decoding shared by the dataset readers: image files, image-folder sequences.
+
+Frames are (H, W, 3) uint8 BGR arrays (OpenCV's order). A frame that cannot be read raises
+``FrameError`` naming the file, so that the runner can record which sequence failed and why;
+readers never substitute black frames silently.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from harness.datasets.base import GroundTruth, Sequence
+from harness.io.mot import MotTable
+from trackers.records import SequenceInfo
+
+log = logging.getLogger(__name__)
+
+IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm")
+
+
+class FrameError(RuntimeError):
+    """A frame that is missing or cannot be decoded; the message names the file."""
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """Decode one image file as (H, W, 3) uint8 BGR (grey and 16-bit images are converted).
+
+    Raises:
+        FrameError: the file does not exist, or OpenCV cannot decode it (corrupt/unsupported).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FrameError(f"missing frame file: {path}")
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if image is None:
+        raise FrameError(f"cannot decode image (corrupt or unsupported format): {path}")
+    return image
+
+
+def image_size(path: str | Path) -> tuple[int, int]:
+    """(width, height) of an image file, by decoding it (raises ``FrameError``)."""
+    h, w = read_image(path).shape[:2]
+    return int(w), int(h)
+
+
+def numbered_images(folder: str | Path) -> dict[int, Path]:
+    """Image files of ``folder`` whose name ends in a number, keyed by that number.
+
+    ``img1/000001.jpg`` -> {1: ...}; ``OneLeaveShop1cor0000.jpg`` -> {0: ...}. Files of
+    other extensions are ignored.
+    """
+    found: dict[int, Path] = {}
+    for p in Path(folder).iterdir():
+        if p.suffix.lower() not in IMAGE_EXTENSIONS:
+            continue
+        m = re.search(r"(\d+)$", p.stem)
+        if m:
+            found[int(m.group(1))] = p
+    return found
+
+
+class ImageSequence(Sequence):
+    """A sequence whose frame k is the image file ``paths[k - 1]``, or without pixels.
+
+    Args:
+        info: sequence metadata (the frame size is checked against each decoded frame).
+        paths: one path per frame (length ``info.length``), or None for a box-only
+            sequence (ground truth and detections but no frames: ``frame`` returns None).
+        gt: ground truth or None.
+        public_detections: the sequence's public detections or None.
+        prefetch: frames ``frames()`` decodes ahead in a background thread (OpenCV
+            releases the GIL while decoding, so decoding overlaps the tracker); 0 disables.
+    """
+
+    def __init__(self, info: SequenceInfo, paths: list[Path] | None,
+                 gt: GroundTruth | None = None, public_detections: MotTable | None = None,
+                 prefetch: int = 2) -> None:
+        if paths is not None and len(paths) != info.length:
+            raise ValueError(f"{info.name}: {len(paths)} frame paths for {info.length} frames")
+        if prefetch < 0:
+            raise ValueError(f"prefetch must be >= 0, got {prefetch}")
+        self.info = info
+        self.paths = None if paths is None else [Path(p) for p in paths]
+        self.gt = gt
+        self.public_detections = public_detections
+        self.prefetch = int(prefetch)
+
+    @property
+    def has_pixels(self) -> bool:
+        return self.paths is not None
+
+    def _check_index(self, index: int) -> int:
+        k = int(index)
+        if not 1 <= k <= self.info.length:
+            raise IndexError(f"{self.info.name}: frame {index} outside 1..{self.info.length}")
+        return k
+
+    def frame(self, index: int) -> np.ndarray | None:
+        """Frame ``index`` (1-based) as (H, W, 3) uint8 BGR; None for a box-only sequence.
+
+        Raises:
+            IndexError: index outside 1..length.
+            FrameError: the file is missing, corrupt, or has another size than the sequence.
+        """
+        k = self._check_index(index)
+        if self.paths is None:
+            return None
+        return self._decode(k)
+
+    def _decode(self, k: int) -> np.ndarray:
+        path = self.paths[k - 1]
+        image = read_image(path)
+        h, w = image.shape[:2]
+        if (w, h) != (self.info.width, self.info.height):
+            raise FrameError(
+                f"{path}: frame is {w}x{h} but sequence {self.info.name!r} is "
+                f"{self.info.width}x{self.info.height}"
+            )
+        return image
+
+    def frames(self) -> Iterator[tuple[int, np.ndarray | None]]:
+        """Yield (k, frame) for k = 1..length, decoding ``prefetch`` frames ahead."""
+        if self.paths is None or self.prefetch == 0:
+            yield from super().frames()
+            return
+        n = self.info.length
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="occbench-decode") as pool:
+            pending: dict[int, Future] = {}
+            for k in range(1, n + 1):
+                for j in range(k, min(n, k + self.prefetch) + 1):
+                    if j not in pending:
+                        pending[j] = pool.submit(self._decode, j)
+                yield k, pending.pop(k).result()
+            for fut in pending.values():
+                fut.cancel()

@@ -1,0 +1,279 @@
+"""MOTChallenge sequence folders: ``<root>/<sequence>/{seqinfo.ini, img1/, gt/gt.txt, det/det.txt}``.
+
+Layout of one sequence folder (MOT15/16/17/20 and the folders under ``../shared/data``)::
+
+    seqinfo.ini          [Sequence] name, imDir, frameRate, seqLength, imWidth, imHeight, imExt
+    img1/000001.jpg ...  frame k is ``<imDir>/<k:06d><imExt>`` (optional: box-only without it)
+    gt/gt.txt            ground truth (MOT15 10 columns, or MOT16+ with class and visibility)
+    gt/gt_caviar_appearance.txt   optional ``frame,id,label`` CAVIAR appearance labels
+    det/det.txt          public detections (optional)
+
+Boxes are converted to 0-based xywh by ``harness.io.mot.read_mot`` only.
+"""
+
+from __future__ import annotations
+
+import configparser
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from harness.datasets.base import GroundTruth
+from harness.datasets.images import ImageSequence, numbered_images
+from harness.datasets.images import image_size as read_image_size
+from harness.io.mot import MotFormatError, MotTable, read_mot
+from trackers.records import SequenceInfo
+
+log = logging.getLogger(__name__)
+
+APPEARANCE_LABELS = ("visible", "occluded", "appear", "disappear")
+
+
+class SeqInfoError(ValueError):
+    """A seqinfo.ini that cannot be used; the message names the file and key."""
+
+
+def load_mot(root: str | Path, sequences: list[str] | None = None,
+             image_size: list[int] | tuple[int, int] | None = None, fps: float | None = None,
+             occlusion_threshold: float = 0.5, prefetch: int = 2) -> list[ImageSequence]:
+    """Read MOTChallenge sequence folders.
+
+    Args:
+        root: folder holding sequence folders (e.g. ``MOT17/train``), or one sequence folder
+            itself (recognised by its ``seqinfo.ini``, ``img1/``, ``gt/`` or ``det/``).
+        sequences: names of sequence folders under ``root``; None = every sequence folder,
+            sorted by name.
+        image_size: [width, height] for sequences whose size is neither in seqinfo.ini nor
+            readable from a frame (box-only folders without seqinfo.ini, e.g. TUD-Campus).
+        fps: frame rate overriding seqinfo.ini (needed only where seqinfo.ini has none;
+            25 is assumed with a warning otherwise).
+        occlusion_threshold: gt rows whose visibility is below it are flagged
+            ``GroundTruth.occluded``; CAVIAR ``occluded`` labels are flagged too.
+        prefetch: frames decoded ahead while iterating ``frames()``.
+    Returns:
+        one ``ImageSequence`` per folder; without ``img1/`` the sequence is box-only
+        (``has_pixels`` False, ``frame`` returns None): only box-only trackers can run on it.
+    Raises:
+        FileNotFoundError: ``root`` or a named sequence folder does not exist.
+        SeqInfoError: a malformed seqinfo.ini, or a length/size that cannot be inferred.
+        MotFormatError: a malformed gt/det line (file and line named).
+    """
+    root = Path(root).expanduser()
+    if not root.exists():
+        raise FileNotFoundError(f"MOT dataset root not found: {root}")
+    if not root.is_dir():
+        raise NotADirectoryError(f"MOT dataset root is not a folder: {root}")
+    if image_size is not None and (len(image_size) != 2 or min(image_size) <= 0):
+        raise ValueError(f"image_size must be [width, height] > 0, got {image_size!r}")
+    if sequences is None:
+        if _is_sequence_folder(root):
+            folders = [root]
+        else:
+            folders = sorted((p for p in root.iterdir() if p.is_dir() and _is_sequence_folder(p)),
+                             key=lambda p: p.name)
+        if not folders:
+            raise FileNotFoundError(
+                f"no MOT sequence folders (with seqinfo.ini, img1/, gt/ or det/) under {root}"
+            )
+    else:
+        if isinstance(sequences, str):
+            sequences = [sequences]
+        folders = []
+        for name in sequences:
+            folder = root / str(name)
+            if not folder.is_dir():
+                raise FileNotFoundError(f"MOT sequence folder not found: {folder}")
+            folders.append(folder)
+    return [load_mot_sequence(f, image_size=image_size, fps=fps,
+                              occlusion_threshold=occlusion_threshold, prefetch=prefetch)
+            for f in folders]
+
+
+def _is_sequence_folder(folder: Path) -> bool:
+    return any((folder / n).exists() for n in ("seqinfo.ini", "img1", "gt", "det"))
+
+
+def read_seqinfo(path: Path) -> dict[str, str]:
+    """The ``[Sequence]`` section of a seqinfo.ini as a dict (keys as written, e.g. imWidth)."""
+    parser = configparser.ConfigParser(interpolation=None)
+    parser.optionxform = str  # keep imWidth's case
+    try:
+        parser.read_string(path.read_text())
+    except configparser.Error as err:
+        raise SeqInfoError(f"{path}: not an ini file: {err}") from None
+    if not parser.has_section("Sequence"):
+        raise SeqInfoError(f"{path}: no [Sequence] section")
+    return dict(parser["Sequence"])
+
+
+def _number(info: dict[str, str], key: str, path: Path, kind: type) -> float | int | None:
+    if key not in info or not info[key].strip():
+        return None
+    try:
+        value = kind(float(info[key])) if kind is int else kind(info[key])
+    except ValueError:
+        raise SeqInfoError(f"{path}: key {key!r} is not a number: {info[key]!r}") from None
+    if value <= 0:
+        raise SeqInfoError(f"{path}: key {key!r} must be positive, got {info[key]!r}")
+    return value
+
+
+def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int] | None = None,
+                      fps: float | None = None, occlusion_threshold: float = 0.5,
+                      prefetch: int = 2) -> ImageSequence:
+    """Read one MOTChallenge sequence folder (see ``load_mot`` for the arguments)."""
+    folder = Path(folder).expanduser()
+    if not folder.is_dir():
+        raise FileNotFoundError(f"MOT sequence folder not found: {folder}")
+    ini_path = folder / "seqinfo.ini"
+    ini = read_seqinfo(ini_path) if ini_path.is_file() else None
+    if ini is None:
+        log.warning("%s: no seqinfo.ini; inferring length and size from the files", folder)
+        ini = {}
+    name = ini.get("name", "").strip() or folder.name
+
+    gt = None
+    gt_path = folder / "gt" / "gt.txt"
+    if gt_path.is_file():
+        gt = ground_truth_from_table(read_mot(gt_path, gt=True), occlusion_threshold)
+        labels_path = folder / "gt" / "gt_caviar_appearance.txt"
+        if labels_path.is_file():
+            attach_appearance_labels(gt, labels_path)
+    det = None
+    det_path = folder / "det" / "det.txt"
+    if det_path.is_file():
+        det = read_mot(det_path)
+        if len(det) == 0:
+            log.warning("%s: empty detection file: the sequence has no public detections", det_path)
+
+    im_dir = folder / (ini.get("imDir", "").strip() or "img1")
+    images = numbered_images(im_dir) if im_dir.is_dir() else {}
+    if im_dir.is_dir() and not images:
+        log.warning("%s: image folder holds no numbered images", im_dir)
+    ext = ini.get("imExt", "").strip()
+    if not ext and images:
+        first = images[min(images)]
+        ext = first.suffix
+    if ext and not ext.startswith("."):
+        ext = "." + ext
+
+    length = _number(ini, "seqLength", ini_path, int)
+    if length is None:
+        candidates = [max(images)] if images else []
+        candidates += [int(t.frames.max()) for t in (gt and gt.table, det) if t is not None and len(t)]
+        if not candidates:
+            raise SeqInfoError(
+                f"{folder}: cannot infer the sequence length: no seqLength in seqinfo.ini, "
+                "no frames in img1/ and no rows in gt/gt.txt or det/det.txt"
+            )
+        length = max(candidates)
+        log.warning("%s: length %d inferred from %s", folder, length,
+                    "the image files" if images else "the largest gt/det frame")
+
+    width = _number(ini, "imWidth", ini_path, int)
+    height = _number(ini, "imHeight", ini_path, int)
+    if width is None or height is None:
+        if images:
+            width, height = read_image_size(images[min(images)])
+            log.warning("%s: frame size %dx%d read from %s", folder, width, height,
+                        images[min(images)].name)
+        elif image_size is not None:
+            width, height = int(image_size[0]), int(image_size[1])
+            log.warning("%s: frame size %dx%d taken from the image_size argument", folder,
+                        width, height)
+        else:
+            raise SeqInfoError(
+                f"{folder}: cannot infer the frame size: no imWidth/imHeight in seqinfo.ini "
+                "and no frames; write a seqinfo.ini or pass image_size=[width,height] "
+                "(dataset.image_size=[W,H])"
+            )
+    if fps is not None:
+        if fps <= 0:
+            raise ValueError(f"fps must be positive, got {fps}")
+        rate = float(fps)
+    else:
+        rate = _number(ini, "frameRate", ini_path, float)
+        if rate is None:
+            rate = 25.0
+            log.warning("%s: no frameRate in seqinfo.ini; assuming 25 fps", folder)
+
+    info = SequenceInfo(name=name, width=int(width), height=int(height), fps=float(rate),
+                        length=int(length))
+    for what, table in (("gt", gt and gt.table), ("det", det)):
+        if table is not None and len(table) and table.frames.max() > length:
+            log.warning("%s: %s has rows after the last frame %d (up to %d); they are never used",
+                        folder, what, length, int(table.frames.max()))
+
+    paths = None
+    if im_dir.is_dir() and images:
+        paths = [im_dir / f"{k:06d}{ext}" for k in range(1, length + 1)]
+        missing = sum(not p.is_file() for p in paths)
+        if missing:
+            log.warning("%s: %d of %d frame files missing; reading them raises FrameError",
+                        im_dir, missing, length)
+    else:
+        log.warning("%s: no frames (%s/ absent or empty): box-only sequence, frame() returns None; "
+                    "only trackers that need no pixels can run on it", name, im_dir.name)
+    return ImageSequence(info, paths, gt=gt, public_detections=det, prefetch=prefetch)
+
+
+def ground_truth_from_table(table: MotTable, occlusion_threshold: float = 0.5) -> GroundTruth:
+    """Wrap gt rows: ``occluded`` = visibility < threshold where visibility is known, else
+    False; None when no row has a visibility."""
+    if not 0.0 <= occlusion_threshold <= 1.0:
+        raise ValueError(f"occlusion_threshold must be in [0, 1], got {occlusion_threshold}")
+    known = np.isfinite(table.visibility)
+    occluded = None
+    if known.any():
+        occluded = np.zeros(len(table), dtype=bool)
+        occluded[known] = table.visibility[known] < occlusion_threshold
+    return GroundTruth(table=table, occluded=occluded)
+
+
+def read_appearance_labels(path: str | Path) -> dict[tuple[int, int], str]:
+    """``frame,id,label`` rows (frame and id as in gt.txt) -> {(frame, id): label}.
+
+    Raises:
+        FileNotFoundError: no such file.
+        MotFormatError: a malformed line or an unknown label (file and line named).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"appearance label file not found: {path}")
+    labels: dict[tuple[int, int], str] = {}
+    with path.open() as fh:
+        for lineno, line in enumerate(fh, 1):
+            text = line.strip()
+            if not text or text.startswith("#"):
+                continue
+            fields = [f.strip() for f in text.split(",")]
+            if len(fields) != 3:
+                raise MotFormatError(f"{path}:{lineno}: expected frame,id,label: {text!r}")
+            try:
+                key = (int(fields[0]), int(fields[1]))
+            except ValueError:
+                raise MotFormatError(f"{path}:{lineno}: frame and id must be integers: {text!r}") from None
+            if fields[2] not in APPEARANCE_LABELS:
+                raise MotFormatError(
+                    f"{path}:{lineno}: label {fields[2]!r} is not one of {', '.join(APPEARANCE_LABELS)}"
+                )
+            labels[key] = fields[2]
+    return labels
+
+
+def attach_appearance_labels(gt: GroundTruth, path: str | Path) -> None:
+    """Set ``gt.labels`` from an appearance label file and flag ``occluded`` rows (in place).
+
+    Rows without a label get "" (logged); the ``occluded`` label sets ``gt.occluded``.
+    """
+    labels = read_appearance_labels(path)
+    t = gt.table
+    per_row = np.array([labels.get((int(f), int(i)), "") for f, i in zip(t.frames, t.ids)],
+                       dtype=object)
+    unlabelled = int(np.sum(per_row == ""))
+    if unlabelled:
+        log.warning("%s: %d gt rows have no appearance label", path, unlabelled)
+    gt.labels = per_row.astype(str)
+    flag = gt.labels == "occluded"
+    gt.occluded = flag if gt.occluded is None else (gt.occluded | flag)
