@@ -84,6 +84,7 @@ def read_mot(path: str | Path, gt: bool = False) -> MotTable:
         raise FileNotFoundError(f"MOT file not found: {path}")
     values: list[list[float]] = []
     skipped = 0
+    ncols = 0  # most fields on any row, before padding
     with path.open() as fh:
         for lineno, line in enumerate(fh, 1):
             text = line.strip()
@@ -98,6 +99,7 @@ def read_mot(path: str | Path, gt: bool = False) -> MotTable:
                 row = [float(v) for v in fields[:10]]
             except ValueError as err:
                 raise MotFormatError(f"{path}:{lineno}: not a number ({err}): {text!r}") from None
+            ncols = max(ncols, len(row))
             row += [-1.0] * (10 - len(row))
             if row[0] != int(row[0]) or row[0] < 1:
                 raise MotFormatError(f"{path}:{lineno}: frame must be a positive integer: {text!r}")
@@ -116,11 +118,12 @@ def read_mot(path: str | Path, gt: bool = False) -> MotTable:
     a = a[order]
     boxes = a[:, 2:6].copy()
     boxes[:, :2] -= 1.0  # 1-based file -> 0-based memory
-    ncols = max(len(r) for r in values)
-    classes = a[:, 7].astype(np.int64) if gt else np.full(len(a), -1, dtype=np.int64)
-    visibility = a[:, 8].copy() if gt else np.full(len(a), np.nan)
-    if gt and ncols >= 9:
-        # MOT15 gt files fill columns 8-10 with -1: no class, no visibility
+    # MOT16+ gt has exactly 9 columns (class, visibility); MOT15 gt has 10 whose columns
+    # 8-10 are world coordinates x, y, z (or -1): no class, no visibility.
+    mot16_gt = gt and ncols == 9
+    classes = a[:, 7].astype(np.int64) if mot16_gt else np.full(len(a), -1, dtype=np.int64)
+    visibility = a[:, 8].copy() if mot16_gt else np.full(len(a), np.nan)
+    if mot16_gt:
         visibility[visibility < 0] = np.nan
     return MotTable(a[:, 0].astype(np.int64), a[:, 1].astype(np.int64), boxes, a[:, 6].copy(),
                     classes, visibility, str(path))
