@@ -1,0 +1,134 @@
+"""Evaluation metrics: CLEAR MOT, identity (IDF1) and HOTA, per sequence and combined.
+
+Public API::
+
+    score = score_sequence(gt, res, iou_threshold=0.5)   # gt, res: harness.io.mot.MotTable
+    table = summarize({"seq-a": score_a, "seq-b": score_b})
+
+``summarize`` returns one row per sequence plus a ``COMBINED`` row, columns ``sequence`` +
+``COLUMNS``. Ratios are fractions (not percent); MOTP is the mean IoU of matched pairs.
+The combined row sums the counts of all sequences and recomputes every ratio from the sums
+(MOTA is never averaged); HOTA is combined as TrackEval does (TP/FN/FP summed per alpha,
+AssA and LocA weighted by the TP counts). Which gt and tracker rows are scored is decided
+in ``harness.metrics.frames`` (MOTChallenge devkit ignore rules).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import motmetrics as mm
+import pandas as pd
+
+from harness.io.mot import MotTable
+from harness.metrics.clear import ClearCounts, accumulate, clear_counts
+from harness.metrics.frames import pair_frames
+from harness.metrics.hota import HotaCounts, combine_hota, hota_counts
+
+__all__ = ["COLUMNS", "COMBINED", "SequenceScore", "score_sequence", "summarize", "combine"]
+
+COLUMNS: list[str] = [
+    "MOTA", "MOTP", "IDF1", "IDP", "IDR", "Recall", "Precision",
+    "GT", "MT", "PT", "ML", "FP", "FN", "IDs", "Frag",
+    "HOTA", "DetA", "AssA", "LocA",
+]  # fmt: skip
+COUNT_COLUMNS: list[str] = ["GT", "MT", "PT", "ML", "FP", "FN", "IDs", "Frag"]
+COMBINED = "COMBINED"
+
+
+@dataclass
+class SequenceScore:
+    """Everything needed to report one sequence and to combine it with others.
+
+    Attributes:
+        clear: additive CLEAR/ID counts.
+        hota: HOTA per-alpha counts.
+        iou_threshold: IoU threshold used for CLEAR/ID matching.
+        ignored_gt: gt rows not scored (conf 0 or non-pedestrian class).
+        removed_tracker: tracker rows removed for matching a distractor-class gt box.
+        accumulator: the motmetrics accumulator (events) of the sequence; None for a
+            combined score.
+    """
+
+    clear: ClearCounts
+    hota: HotaCounts
+    iou_threshold: float = 0.5
+    ignored_gt: int = 0
+    removed_tracker: int = 0
+    accumulator: mm.MOTAccumulator | None = field(default=None, repr=False, compare=False)
+
+    def row(self) -> dict[str, float | int]:
+        """The values of ``COLUMNS`` for this score."""
+        c = self.clear
+        out: dict[str, float | int] = dict(c.ratios())
+        out.update(
+            GT=c.unique_objects, MT=c.mostly_tracked, PT=c.partially_tracked, ML=c.mostly_lost,
+            FP=c.false_positives, FN=c.misses, IDs=c.switches, Frag=c.fragmentations,
+        )  # fmt: skip
+        h = self.hota.summary()
+        out.update(HOTA=h["HOTA"], DetA=h["DetA"], AssA=h["AssA"], LocA=h["LocA"])
+        return {k: out[k] for k in COLUMNS}
+
+
+def score_sequence(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> SequenceScore:
+    """Score one sequence.
+
+    Args:
+        gt: ground truth from ``read_mot(path, gt=True)``; boxes (N, 4) xywh 0-based.
+        res: tracker output from ``read_mot(path)``; boxes (M, 4) xywh 0-based.
+        iou_threshold: smallest IoU of a CLEAR/ID match, in (0, 1]. HOTA does not use it
+            (it averages over its own thresholds 0.05..0.95).
+    Raises:
+        ValueError: bad threshold, or an id repeated within a frame (names the file).
+    """
+    if not 0.0 < iou_threshold <= 1.0:
+        raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold!r}")
+    pairs = pair_frames(gt, res)
+    acc = accumulate(pairs, iou_threshold)
+    return SequenceScore(
+        clear=clear_counts(acc),
+        hota=hota_counts(pairs.gt_ids, pairs.tracker_ids, pairs.iou),
+        iou_threshold=iou_threshold,
+        ignored_gt=pairs.ignored_gt,
+        removed_tracker=pairs.removed_tracker,
+        accumulator=acc,
+    )
+
+
+def combine(scores: Mapping[str, SequenceScore] | list[SequenceScore]) -> SequenceScore:
+    """Combined score: counts summed, HOTA combined as TrackEval; no accumulator."""
+    parts = list(scores.values()) if isinstance(scores, Mapping) else list(scores)
+    thresholds = {s.iou_threshold for s in parts}
+    if len(thresholds) > 1:
+        raise ValueError(f"cannot combine scores with different IoU thresholds {thresholds}")
+    clear = ClearCounts()
+    for s in parts:
+        clear = clear + s.clear
+    return SequenceScore(
+        clear=clear,
+        hota=combine_hota([s.hota for s in parts]),
+        iou_threshold=thresholds.pop() if thresholds else 0.5,
+        ignored_gt=sum(s.ignored_gt for s in parts),
+        removed_tracker=sum(s.removed_tracker for s in parts),
+    )
+
+
+def summarize(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
+    """One row per sequence (in the mapping's order) plus a ``COMBINED`` row.
+
+    Returns:
+        DataFrame with columns ``sequence`` + ``COLUMNS``; count columns are int64, ratios
+        float64 fractions (NaN where undefined, e.g. MOTA without gt).
+    Raises:
+        ValueError: no scores, or a sequence named ``COMBINED``.
+    """
+    if not scores:
+        raise ValueError("summarize needs at least one sequence score")
+    if COMBINED in scores:
+        raise ValueError(f"a sequence may not be named {COMBINED!r}")
+    rows = [{"sequence": name, **s.row()} for name, s in scores.items()]
+    rows.append({"sequence": COMBINED, **combine(scores).row()})
+    table = pd.DataFrame(rows, columns=["sequence", *COLUMNS])
+    table[COUNT_COLUMNS] = table[COUNT_COLUMNS].astype("int64")
+    return table
