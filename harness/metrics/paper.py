@@ -5,7 +5,7 @@ matching of ground-truth rows to result rows (``match_rows``), made the CLEAR MO
 (Bernardin & Stiefelhagen 2008): a pair matched in the previous frame is kept while its
 IoU stays >= the threshold, the remaining rows are matched by the Hungarian method on IoU
 (pairs below the threshold are forbidden). Ground-truth rows with ``conf == 0`` (MOT16
-"ignore") are left out.
+"ignore") or a class other than pedestrian are left out (``considered_mask``).
 
 Reta et al. 2015, Table 1 (metrics "obtained from Song et al. [22]", who took them from
 Li, Huang & Nevatia, CVPR 2009), implemented word for word:
@@ -84,9 +84,15 @@ SEGMENTATION_COLUMNS = ["PBM_dx%", "PBM_dy%", "PBM_dw%", "PBM_dh%"]
 COLUMNS = RETA_COLUMNS + PBM_COLUMNS + SEGMENTATION_COLUMNS
 
 
+def considered_mask(gt: MotTable) -> np.ndarray:
+    """(N,) bool: GT rows that are scored, by the MOTChallenge rules of
+    ``harness.metrics.frames``: ``conf != 0`` and class pedestrian (1) or none (-1)."""
+    return (gt.conf != 0) & np.isin(gt.classes, (-1, 1))
+
+
 def considered(gt: MotTable) -> MotTable:
-    """The GT rows that are scored (``conf != 0``; MOT16 marks ignore regions with 0)."""
-    return gt.rows(gt.conf != 0)
+    """The GT rows that are scored (see ``considered_mask``)."""
+    return gt.rows(considered_mask(gt))
 
 
 def match_rows(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> np.ndarray:
