@@ -1,0 +1,78 @@
+"""``python -m harness`` (console script ``occbench``): the Hydra app.
+
+Runs the selected trackers (default: every built tracker, ``conf/tracker/all.yaml``) on the
+selected dataset (default: the synthetic suite) with the selected detection source, writes
+the run directory (``results/<date>/<time>/``: metrics.csv, summary.md, tracks/, plots/,
+config.yaml) and prints the COMBINED comparison table. Examples::
+
+    python -m harness tracker=baseline
+    python -m harness dataset=synthetic dataset.scenarios=[stop_behind] dataset.seed=3
+    python -m harness detector=noisy_gt detector.miss_rate=0.3
+    python -m harness dataset=mot dataset.root=../shared/data/trajectories tracker=baseline
+    python -m harness +external.sort=path/to/results   # score another tracker's files too
+
+The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
+``objective.tracker`` (default IDF1 of the first tracker).
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from hydra.errors import CompactHydraException
+from omegaconf import DictConfig
+
+log = logging.getLogger("harness")
+
+# Columns of the table printed at the end (all columns are in summary.md and metrics.csv).
+PRINTED = ("HOTA", "DetA", "AssA", "IDF1", "MOTA", "MOTP", "Recall", "Precision", "MT", "ML",
+           "FP", "FN", "IDs", "Frag")
+
+
+class AppError(CompactHydraException):
+    """A run that failed with a clear message: Hydra prints it (no traceback), exit code 1."""
+
+
+@hydra.main(version_base="1.3", config_path="../conf", config_name="config")
+def app(cfg: DictConfig) -> float:
+    """The Hydra task: run the experiment, print the table, return the objective."""
+    from tqdm.contrib.logging import logging_redirect_tqdm
+
+    from harness.progress import progress_factory
+    from harness.report.tables import comparison, to_text
+    from harness.run import RunError, run_experiment
+
+    hc = HydraConfig.get()
+    out_dir = Path(hc.runtime.output_dir)
+    choice = hc.runtime.choices.get("tracker")
+    objective = cfg.get("objective") or {}
+    try:
+        with logging_redirect_tqdm():
+            result = run_experiment(cfg, out_dir, tracker_name=choice,
+                                    progress=progress_factory(bool(cfg.get("progress", True))))
+        value = result.objective(objective.get("tracker"), objective.get("metric") or "IDF1")
+    except RunError as err:
+        raise AppError(f"occbench: {err}") from None
+    if not result.metrics.empty:
+        print(to_text(comparison(result.metrics, PRINTED)), end="")
+    print(f"results: {out_dir}")
+    if result.failures:
+        raise AppError(
+            f"occbench: {len(result.failures)} part(s) of the run failed (the rest is written): "
+            f"see {out_dir / 'errors.txt'}\n"
+            + "\n".join(f"  [{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}"
+                        for f in result.failures[:10])
+        )
+    return value
+
+
+def main() -> None:
+    """Console-script entry point ``occbench`` (same as ``python -m harness``)."""
+    app()
+
+
+if __name__ == "__main__":
+    main()

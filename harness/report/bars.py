@@ -1,0 +1,67 @@
+"""Grouped bar chart of the COMBINED metrics: one group per metric, one bar per tracker."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from harness.report.tables import COMBINED
+
+log = logging.getLogger(__name__)
+
+DEFAULT_METRICS = ("HOTA", "DetA", "AssA", "IDF1", "MOTA")
+
+
+def metric_bars(metrics: pd.DataFrame, path: str | Path,
+                names: Sequence[str] = DEFAULT_METRICS, title: str | None = None) -> Path | None:
+    """Draw the COMBINED rows of ``metrics`` as grouped bars into ``path`` (PNG).
+
+    Args:
+        metrics: frame with ``tracker``, ``sequence`` and metric columns (``metrics.csv``).
+        names: metrics to draw, in order; names absent from ``metrics`` are left out.
+    Returns:
+        The written path, or None when there is nothing to draw (no COMBINED row or none of
+        ``names`` present).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    rows = metrics[metrics["sequence"] == COMBINED]
+    names = [m for m in names if m in rows.columns]
+    if rows.empty or not names:
+        log.info("no COMBINED rows or metrics to plot: %s not written", path)
+        return None
+    trackers = list(dict.fromkeys(rows["tracker"]))
+    values = np.array([[float(rows.loc[rows["tracker"] == t, m].iloc[0]) for m in names]
+                       for t in trackers])
+    width = 0.8 / len(trackers)
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(max(4.0, 1.2 * len(names) * max(1, len(trackers)) ** 0.5 + 2),
+                                    3.6), dpi=120)
+    for i, t in enumerate(trackers):
+        pos = x - 0.4 + width * (i + 0.5)
+        bars = ax.bar(pos, np.nan_to_num(values[i]), width, label=t)
+        for b, v in zip(bars, values[i]):
+            if np.isfinite(v):
+                ax.annotate(f"{v:.2f}", (b.get_x() + b.get_width() / 2, b.get_height()),
+                            ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(x, names)
+    top = np.nanmax(values) if np.isfinite(values).any() else 1.0
+    ax.set_ylim(min(0.0, np.nanmin(np.nan_to_num(values))) * 1.1, max(1.0, top) * 1.12)
+    ax.axhline(0.0, color="black", linewidth=0.6)
+    ax.set_ylabel("score (COMBINED)")
+    if title:
+        ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8, ncol=min(len(trackers), 4), loc="upper right", frameon=False)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, metadata={"Software": None})
+    plt.close(fig)
+    return path

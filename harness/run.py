@@ -1,0 +1,724 @@
+"""Run trackers on sequences and score them: plain functions, usable without Hydra.
+
+Per sequence the data flow is: frame k -> detection source (once per frame) -> every
+tracker (the same detections and foreground, each tracker its own copy) -> reported tracks
+-> ``tracks/<tracker>/<sequence>.txt`` -> metrics against the ground truth. Frames are
+visited once, in order, and every tracker advances on the same frame before the next one is
+read: the detections are computed once per sequence, identical for every tracker, and no
+more than one frame is held in memory.
+
+``run_tracker`` runs one tracker on one sequence; ``run_sequence`` runs several side by
+side; ``run_experiment`` runs a whole composed config (dataset x detector x trackers, plus
+external result folders) and writes the run directory (see ``RunWriter``).
+
+A failing tracker (an exception in ``update``) or a failing sequence (an unreadable frame,
+a failing detector) is recorded in ``errors.txt`` and the run goes on; everything written
+before the failure stays on disk.
+"""
+
+from __future__ import annotations
+
+import csv
+import inspect
+import logging
+import math
+import time
+import traceback
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+import pandas as pd
+
+from harness.datasets.base import Sequence
+from harness.io.mot import MotTable, read_mot, write_mot
+from harness.report.bars import DEFAULT_METRICS, metric_bars
+from harness.report.tables import comparison, direction, per_sequence, to_markdown
+from harness.sources import DetectionSource
+from trackers.records import Detections, Track
+
+log = logging.getLogger(__name__)
+
+COMBINED = "COMBINED"
+FOREGROUND_MODES = ("auto", "exact", "none", "mog2")
+
+
+class RunError(RuntimeError):
+    """A run that cannot start or go on: bad config, unbuilt tracker, unreadable dataset."""
+
+
+class Tracker(Protocol):
+    def reset(self) -> None: ...
+
+    def update(self, frame: np.ndarray | None, detections: Detections,
+               foreground: np.ndarray | None = None) -> list[Track]: ...
+
+
+class Progress(Protocol):
+    def update(self, n: int = 1) -> Any: ...
+
+    def close(self) -> Any: ...
+
+
+ProgressFactory = Callable[..., Progress]  # called as factory(total=..., desc=...)
+
+
+class _NoProgress:
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _no_progress(total: int = 0, desc: str = "") -> Progress:
+    return _NoProgress()
+
+
+# --------------------------------------------------------------------------- foreground
+
+
+class ForegroundProvider:
+    """The foreground image handed to the trackers, by mode.
+
+    Modes:
+        auto: the detection source's mask when it computes one, else the dataset's exact
+            label image (synthetic scenes) when it has one, else None.
+        exact: the dataset's exact label image; an error when the dataset has none.
+        none: always None.
+        mog2: a background-subtraction mask (``trackers.frontend.BackgroundModel``, one
+            model per sequence, built with ``background`` as keyword arguments), unless
+            the detection source computes its own mask, which then takes precedence.
+    """
+
+    def __init__(self, mode: str, sequence: Sequence,
+                 background: Mapping[str, Any] | None = None) -> None:
+        if mode not in FOREGROUND_MODES:
+            raise RunError(f"foreground must be one of {FOREGROUND_MODES}, got {mode!r}")
+        self.mode = mode
+        self.sequence = sequence
+        self._model = None
+        if mode == "mog2":
+            try:
+                from trackers.frontend import BackgroundModel
+            except ImportError as err:  # the front end is an optional part of the build
+                raise RunError(f"foreground=mog2 needs trackers.frontend ({err})") from err
+            self._model = BackgroundModel(**dict(background or {}))
+            warm = getattr(self._model, "warm_up_sequence", None)
+            if warm is not None:
+                warm(sequence.info.length, sequence.frame)
+
+    def __call__(self, index: int, frame: np.ndarray | None,
+                 source_mask: np.ndarray | None) -> np.ndarray | None:
+        if self.mode == "none":
+            return None
+        if self.mode == "exact":
+            fg = self.sequence.foreground(index)
+            if fg is None:
+                raise RunError(
+                    f"foreground=exact but {self.sequence.info.name!r} has no exact foreground "
+                    f"(frame {index}); use foreground=auto, none or mog2"
+                )
+            return fg
+        if self.mode == "mog2":
+            mask = self._model.apply(frame) if frame is not None else None
+            return source_mask if source_mask is not None else mask
+        # auto
+        if source_mask is not None:
+            return source_mask
+        return self.sequence.foreground(index)
+
+
+# --------------------------------------------------------------------------- one sequence
+
+
+@dataclass
+class TrackerOutput:
+    """What one tracker reported on one sequence.
+
+    Attributes:
+        table: reported tracks as a ``MotTable`` (0-based xywh boxes, ``conf`` = score).
+        frames: frames the tracker processed.
+        seconds: wall-clock time spent in the tracker's ``update`` (not detection).
+        dropped: reported boxes dropped because they were not finite or had no area.
+        error: the exception text when the tracker failed (``table`` then holds the frames
+            before the failure), else None.
+        trace: the traceback of the failure, else None.
+    """
+
+    table: MotTable
+    frames: int = 0
+    seconds: float = 0.0
+    dropped: int = 0
+    error: str | None = None
+    trace: str | None = None
+
+    @property
+    def fps(self) -> float:
+        return self.frames / self.seconds if self.seconds > 0 else math.inf
+
+
+class _Rows:
+    """Accumulates reported tracks frame by frame."""
+
+    def __init__(self) -> None:
+        self.frames: list[int] = []
+        self.ids: list[int] = []
+        self.boxes: list[np.ndarray] = []
+        self.scores: list[float] = []
+        self.dropped = 0
+
+    def add(self, k: int, tracks: Iterable[Track]) -> None:
+        for t in tracks:
+            if not t.state.reported:
+                continue
+            box = np.asarray(t.box, dtype=np.float64).reshape(4)
+            if not (np.isfinite(box).all() and box[2] > 0 and box[3] > 0):
+                self.dropped += 1
+                continue
+            self.frames.append(k)
+            self.ids.append(int(t.id))
+            self.boxes.append(box)
+            self.scores.append(float(t.score))
+
+    def table(self, path: str = "<memory>") -> MotTable:
+        n = len(self.frames)
+        if n == 0:
+            return MotTable.empty(path)
+        frames = np.asarray(self.frames, dtype=np.int64)
+        ids = np.asarray(self.ids, dtype=np.int64)
+        order = np.lexsort((ids, frames))
+        return MotTable(frames[order], ids[order], np.asarray(self.boxes)[order],
+                        np.asarray(self.scores)[order], np.full(n, -1, dtype=np.int64),
+                        np.full(n, np.nan), path)
+
+
+def clean_detections(dets: Detections) -> tuple[Detections, int]:
+    """Drop detections with a non-finite box or score or a box without area.
+
+    Returns the kept detections and the number dropped.
+    """
+    ok = (np.isfinite(dets.boxes).all(axis=1) & (dets.boxes[:, 2] > 0) & (dets.boxes[:, 3] > 0)
+          & np.isfinite(dets.scores))
+    if ok.all():
+        return dets, 0
+    return dets.subset(ok), int((~ok).sum())
+
+
+def _copy_detections(d: Detections) -> Detections:
+    return Detections(d.boxes.copy(), d.scores.copy(),
+                      None if d.labels is None else d.labels.copy(),
+                      None if d.heads is None else d.heads.copy())
+
+
+def _copy(a: np.ndarray | None) -> np.ndarray | None:
+    return None if a is None else a.copy()
+
+
+def run_sequence(
+    trackers: Mapping[str, Tracker],
+    sequence: Sequence,
+    source: DetectionSource,
+    foreground: str = "auto",
+    background: Mapping[str, Any] | None = None,
+    progress: ProgressFactory | None = None,
+) -> dict[str, TrackerOutput]:
+    """Run several trackers side by side on one sequence.
+
+    Every frame is read once and detected once; each tracker gets its own copy of the frame,
+    the detections and the foreground, so no tracker can disturb another's input.
+
+    Args:
+        trackers: name -> freshly built tracker.
+        sequence: the sequence; frames 1..length are visited in order.
+        source: detection source; ``start(sequence)`` is called here.
+        foreground: foreground mode (see ``ForegroundProvider``).
+        background: keyword arguments of the background model for ``foreground="mog2"``.
+        progress: progress-bar factory ``(total=, desc=)``; None shows nothing.
+    Returns:
+        name -> ``TrackerOutput``. A tracker raising an exception is stopped there (its
+        ``error`` set, the exception logged) while the others go on.
+    Raises:
+        Whatever reading a frame, the detection source or the foreground raise: the sequence
+        cannot go on for any tracker.
+    """
+    name = sequence.info.name
+    source.start(sequence)
+    fg_of = ForegroundProvider(foreground, sequence, background)
+    rows = {t: _Rows() for t in trackers}
+    out = {t: TrackerOutput(MotTable.empty()) for t in trackers}
+    active = dict(trackers)
+    dropped_dets = 0
+    bar = (progress or _no_progress)(total=sequence.info.length, desc=name)
+    try:
+        for k in range(1, sequence.info.length + 1):
+            if not active:
+                break
+            frame = sequence.frame(k)
+            dets, mask = source.detect(k, frame)
+            dets, bad = clean_detections(dets)
+            dropped_dets += bad
+            fg = fg_of(k, frame, mask)
+            shared = len(active) == 1
+            for t, tracker in list(active.items()):
+                args = (frame, dets, fg) if shared else (_copy(frame), _copy_detections(dets),
+                                                         _copy(fg))
+                t0 = time.perf_counter()
+                try:
+                    tracks = tracker.update(*args)
+                except Exception as err:  # one tracker's failure must not stop the others
+                    out[t].error = f"frame {k}: {type(err).__name__}: {err}"
+                    out[t].trace = traceback.format_exc()
+                    log.error("%s on %s failed at frame %d: %s: %s", t, name, k,
+                              type(err).__name__, err)
+                    del active[t]
+                    continue
+                out[t].seconds += time.perf_counter() - t0
+                out[t].frames += 1
+                rows[t].add(k, tracks)
+            bar.update(1)
+    finally:
+        bar.close()
+    if dropped_dets:
+        log.warning("%s: %d detections with a NaN/infinite box or score or no area dropped",
+                    name, dropped_dets)
+    for t in trackers:
+        out[t].table = rows[t].table()
+        out[t].dropped = rows[t].dropped
+        if rows[t].dropped:
+            log.warning("%s on %s: %d reported boxes not finite or without area dropped",
+                        t, name, rows[t].dropped)
+    return out
+
+
+def run_tracker(tracker: Tracker, sequence: Sequence, source: DetectionSource,
+                foreground: str = "auto") -> MotTable:
+    """Run one tracker on one sequence; the reported tracks (0-based xywh) as a MotTable.
+
+    Raises:
+        RuntimeError: the tracker raised (the original exception is chained).
+    """
+    out = run_sequence({"tracker": tracker}, sequence, source, foreground)["tracker"]
+    if out.error is not None:
+        raise RuntimeError(f"tracker failed on {sequence.info.name}: {out.error}")
+    return out.table
+
+
+# --------------------------------------------------------------------------- scoring
+
+
+def _metrics():
+    try:
+        import harness.metrics as metrics
+    except ImportError as err:
+        raise RunError(f"harness.metrics is not available: {err}") from err
+    return metrics
+
+
+def score(gt: Any, result: MotTable, iou_threshold: float = 0.5):
+    """``harness.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth.
+
+    Optional keyword arguments of ``score_sequence`` that the ground truth can fill
+    (``occluded``, ``labels``) are passed when the metrics accept them.
+    """
+    metrics = _metrics()
+    fn = metrics.score_sequence
+    kwargs: dict[str, Any] = {"iou_threshold": iou_threshold}
+    params = inspect.signature(fn).parameters
+    for key in ("occluded", "labels"):
+        value = getattr(gt, key, None)
+        if key in params and value is not None:
+            kwargs[key] = value
+    return fn(gt.table, result, **kwargs)
+
+
+def summary_rows(tracker: str, scores: Mapping[str, Any]) -> pd.DataFrame:
+    """``summarize(scores)`` with a leading ``tracker`` column."""
+    frame = _metrics().summarize(dict(scores)).reset_index(drop=True)
+    if "sequence" not in frame.columns:
+        raise RunError("harness.metrics.summarize returned no 'sequence' column")
+    frame.insert(0, "tracker", tracker)
+    return frame
+
+
+# --------------------------------------------------------------------------- experiment
+
+
+@dataclass
+class Failure:
+    """One failed piece of a run: ``tracker`` is '*' when the whole sequence failed."""
+
+    tracker: str
+    sequence: str
+    stage: str
+    message: str
+    trace: str = ""
+
+
+@dataclass
+class ExperimentResult:
+    """The outcome of ``run_experiment``.
+
+    Attributes:
+        metrics: the rows of ``metrics.csv`` (``tracker``, ``sequence`` + metric columns).
+        failures: everything that failed (also in ``errors.txt``).
+        timings: per tracker and sequence: frames, seconds, frames/s (``timings.csv``).
+        out_dir: the run directory.
+        trackers: names of the trackers run, in order (then the external names).
+    """
+
+    metrics: pd.DataFrame
+    failures: list[Failure]
+    timings: pd.DataFrame
+    out_dir: Path
+    trackers: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.failures
+
+    def objective(self, tracker: str | None = None, metric: str = "IDF1") -> float:
+        """COMBINED ``metric`` of ``tracker`` (default: the first tracker)."""
+        tracker = tracker or (self.trackers[0] if self.trackers else None)
+        if tracker not in self.trackers:
+            raise RunError(f"objective.tracker {tracker!r} is not in this run: {self.trackers}")
+        if metric not in self.metrics.columns or metric in ("tracker", "sequence"):
+            cols = [c for c in self.metrics.columns if c not in ("tracker", "sequence")]
+            raise RunError(f"objective.metric {metric!r} is not a metric column: {cols}")
+        rows = self.metrics[(self.metrics["tracker"] == tracker)
+                            & (self.metrics["sequence"] == COMBINED)]
+        if rows.empty:
+            return math.nan
+        return float(rows[metric].iloc[0])
+
+
+class RunWriter:
+    """Writes a run directory as results arrive, so that a later failure loses nothing.
+
+    Layout: ``config.yaml`` (resolved config), ``tracks/<tracker>/<sequence>.txt`` (MOT
+    results, written as each tracker finishes a sequence), ``metrics.csv`` (rewritten after
+    each sequence), ``timings.csv``, ``errors.txt`` (only when something failed),
+    ``summary.md`` and ``plots/metrics.png`` (at the end).
+    """
+
+    def __init__(self, out_dir: str | Path) -> None:
+        self.out_dir = Path(out_dir)
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        for stale in ("errors.txt",):
+            (self.out_dir / stale).unlink(missing_ok=True)
+
+    def track_path(self, tracker: str, sequence: str) -> Path:
+        return self.out_dir / "tracks" / tracker / f"{sequence}.txt"
+
+    def tracks(self, tracker: str, sequence: str, table: MotTable) -> Path:
+        path = self.track_path(tracker, sequence)
+        write_mot(path, table.frames, table.ids, table.boxes, table.conf)
+        return path
+
+    def metrics(self, frame: pd.DataFrame) -> None:
+        _atomic_write(self.out_dir / "metrics.csv", frame.to_csv(index=False, float_format="%.6f",
+                                                                 lineterminator="\n"))
+
+    def timings(self, rows: list[dict[str, Any]]) -> None:
+        path = self.out_dir / "timings.csv"
+        with path.open("w", newline="") as fh:
+            w = csv.DictWriter(fh, ["tracker", "sequence", "frames", "seconds", "fps"],
+                               lineterminator="\n")
+            w.writeheader()
+            w.writerows(rows)
+
+    def failure(self, f: Failure) -> None:
+        with (self.out_dir / "errors.txt").open("a") as fh:
+            fh.write(f"[{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}\n")
+            if f.trace:
+                fh.write("    " + f.trace.rstrip().replace("\n", "\n    ") + "\n")
+
+    def text(self, name: str, text: str) -> Path:
+        path = self.out_dir / name
+        _atomic_write(path, text)
+        return path
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".part")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def _cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
+    try:
+        value = cfg.get(key, default)
+    except AttributeError:
+        value = getattr(cfg, key, default)
+    return default if value is None else value
+
+
+def _container(node: Any) -> Any:
+    from omegaconf import DictConfig, ListConfig, OmegaConf
+
+    if isinstance(node, DictConfig | ListConfig):
+        return OmegaConf.to_container(node, resolve=True)
+    return node
+
+
+def _locate_target(target: str) -> None:
+    """Import ``target``'s module; ImportError names what is missing."""
+    from hydra.utils import get_object
+
+    get_object(target)
+
+
+def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
+    """Tracker configs by name from ``cfg.tracker``.
+
+    ``cfg.tracker`` is either one config with ``_target_`` (``tracker=baseline``; its name
+    is ``name``, the config choice) or a dict of such configs keyed by name
+    (``tracker=all``).
+    """
+    if node is None or len(node) == 0:
+        raise RunError("no tracker selected: set tracker=<name> or tracker=all")
+    if "_target_" in node:
+        if name is None or name == "all":
+            name = str(node["_target_"]).rsplit(".", 1)[-1]
+        return {str(name): node}
+    out = {}
+    for key, sub in node.items():
+        if not hasattr(sub, "keys") or "_target_" not in sub:
+            raise RunError(f"tracker.{key}: a tracker config needs a _target_ key, got {sub!r}")
+        out[str(key)] = sub
+    return out
+
+
+def build_tracker(name: str, node: Any) -> Tracker:
+    """Instantiate one tracker config; RunError with a clear message when it cannot be."""
+    from hydra.utils import instantiate
+
+    target = str(node["_target_"])
+    try:
+        _locate_target(target)
+    except Exception as err:
+        raise RunError(
+            f"tracker {name!r}: its code {target} is not built or cannot be imported "
+            f"({type(err).__name__}: {err}). conf/tracker/all.yaml lists the built trackers."
+        ) from err
+    try:
+        return instantiate(node, _convert_="all")
+    except Exception as err:
+        cause = err.__cause__ or err
+        raise RunError(f"tracker {name!r} ({target}): {type(cause).__name__}: {cause}") from err
+
+
+def load_sequences(node: Any) -> list[Sequence]:
+    """Instantiate the dataset config: a list of Sequence, RunError when it cannot be."""
+    from hydra.utils import instantiate
+
+    if node is None or "_target_" not in node:
+        raise RunError("dataset: no dataset selected (dataset=<name> with a _target_)")
+    try:
+        seqs = instantiate(node, _convert_="all")
+    except Exception as err:
+        cause = err.__cause__ or err
+        raise RunError(f"dataset ({node['_target_']}): {type(cause).__name__}: {cause}") from err
+    if isinstance(seqs, Sequence):
+        seqs = [seqs]
+    seqs = list(seqs)
+    if not seqs:
+        raise RunError(f"dataset ({node['_target_']}) has no sequences")
+    for s in seqs:
+        if not isinstance(s, Sequence):
+            raise RunError(f"dataset ({node['_target_']}) yielded {type(s).__name__}, "
+                           "not a harness.datasets.base.Sequence")
+    names = [s.info.name for s in seqs]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise RunError(f"dataset: sequence names repeat: {dup}")
+    return seqs
+
+
+def build_source(node: Any) -> DetectionSource:
+    from hydra.utils import instantiate
+
+    if node is None or "_target_" not in node:
+        raise RunError("detector: no detection source selected (detector=<name>)")
+    try:
+        return instantiate(node, _convert_="all")
+    except Exception as err:
+        cause = err.__cause__ or err
+        raise RunError(f"detector ({node['_target_']}): {type(cause).__name__}: {cause}") from err
+
+
+def external_folders(node: Any, taken: Iterable[str]) -> dict[str, Path]:
+    """``external: {name: folder}`` checked: folders exist, names do not clash."""
+    out: dict[str, Path] = {}
+    taken = set(taken)
+    for name, folder in dict(_container(node) or {}).items():
+        if name in taken:
+            raise RunError(f"external.{name}: the name is already a tracker of this run")
+        if name == COMBINED or "/" in str(name):
+            raise RunError(f"external.{name}: not a valid tracker name")
+        path = Path(str(folder)).expanduser()
+        if not path.is_dir():
+            raise RunError(f"external.{name}: result folder not found: {path}")
+        out[str(name)] = path
+    return out
+
+
+def read_external(name: str, folder: Path, sequence: str) -> MotTable:
+    """The external tracker's result for ``sequence``; empty (with a warning) when missing."""
+    path = folder / f"{sequence}.txt"
+    if not path.is_file():
+        log.warning("external %s: no result file %s: scored as an empty result", name, path)
+        return MotTable.empty(str(path))
+    return read_mot(path)
+
+
+def run_experiment(
+    cfg: Any,
+    out_dir: str | Path,
+    tracker_name: str | None = None,
+    progress: ProgressFactory | None = None,
+) -> ExperimentResult:
+    """Run every tracker (and external result folder) of ``cfg`` on every sequence.
+
+    Args:
+        cfg: the composed config (``conf/config.yaml``): ``dataset``, ``detector``,
+            ``tracker``, ``evaluation``, ``external``, ``foreground``, ``background``.
+        out_dir: the run directory (see ``RunWriter`` for its layout).
+        tracker_name: the name of a single selected tracker config (Hydra's choice).
+        progress: progress-bar factory; None shows nothing.
+    Returns:
+        ``ExperimentResult``; failures are recorded there and in ``errors.txt``.
+    Raises:
+        RunError: the run cannot start (no such dataset, tracker not built, bad config).
+    """
+    from omegaconf import OmegaConf
+
+    writer = RunWriter(out_dir)
+    if OmegaConf.is_config(cfg):
+        writer.text("config.yaml", OmegaConf.to_yaml(cfg, resolve=True))
+    foreground = str(_cfg_get(cfg, "foreground", "auto"))
+    if foreground not in FOREGROUND_MODES:
+        raise RunError(f"foreground must be one of {FOREGROUND_MODES}, got {foreground!r}")
+    background = _container(_cfg_get(cfg, "background", {}))
+    evaluation = _cfg_get(cfg, "evaluation", {})
+    iou_threshold = float(_cfg_get(evaluation, "iou_threshold", 0.5))
+    table_columns = list(_container(_cfg_get(evaluation, "table", [])) or []) or None
+    plot_metrics = list(_container(_cfg_get(evaluation, "plot", DEFAULT_METRICS)))
+
+    # check everything that can be checked before the first frame
+    configs = tracker_configs(_cfg_get(cfg, "tracker"), tracker_name)
+    for name, node in configs.items():
+        build_tracker(name, node)
+    externals = external_folders(_cfg_get(cfg, "external", {}), configs)
+    build_source(_cfg_get(cfg, "detector"))
+    sequences = load_sequences(_cfg_get(cfg, "dataset"))
+    _metrics()
+    names = [*configs, *externals]
+    title = _title(cfg, sequences)
+    log.info("%d sequence(s) x %d tracker(s) %s, foreground=%s", len(sequences), len(names),
+             names, foreground)
+
+    scores: dict[str, dict[str, Any]] = {n: {} for n in names}
+    failures: list[Failure] = []
+    timings: list[dict[str, Any]] = []
+    metrics = pd.DataFrame()
+
+    def fail(tracker: str, sequence: str, stage: str, err: BaseException | str,
+             trace: str = "") -> None:
+        msg = err if isinstance(err, str) else f"{type(err).__name__}: {err}"
+        f = Failure(tracker, sequence, stage, msg, trace)
+        failures.append(f)
+        writer.failure(f)
+        log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
+
+    for seq in sequences:
+        sname = seq.info.name
+        try:
+            trackers = {n: build_tracker(n, node) for n, node in configs.items()}
+            source = build_source(_cfg_get(cfg, "detector"))
+            outputs = run_sequence(trackers, seq, source, foreground, background, progress)
+        except Exception as err:  # the sequence cannot go on: record it, go to the next
+            fail("*", sname, "sequence", err, traceback.format_exc())
+            continue
+        for n, out in outputs.items():
+            path = writer.tracks(n, sname, out.table)
+            timings.append({"tracker": n, "sequence": sname, "frames": out.frames,
+                            "seconds": round(out.seconds, 4),
+                            "fps": round(out.fps, 2) if math.isfinite(out.fps) else ""})
+            if out.error is not None:
+                fail(n, sname, "tracker", out.error, out.trace or "")
+                continue
+            log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
+            if seq.gt is None:
+                log.warning("%s has no ground truth: %s not scored", sname, n)
+                continue
+            try:
+                scores[n][sname] = score(seq.gt, read_mot(path), iou_threshold)
+            except Exception as err:
+                fail(n, sname, "score", err, traceback.format_exc())
+        for n, folder in externals.items():
+            if seq.gt is None:
+                continue
+            try:
+                scores[n][sname] = score(seq.gt, read_external(n, folder, sname), iou_threshold)
+            except Exception as err:
+                fail(n, sname, "external", err, traceback.format_exc())
+        writer.timings(timings)
+        try:
+            metrics = _metrics_frame(scores)
+            writer.metrics(metrics)
+            writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
+        except Exception as err:
+            fail("*", sname, "metrics", err, traceback.format_exc())
+    if metrics.empty:
+        log.warning("no sequence was scored: metrics.csv has no rows")
+        metrics = pd.DataFrame(columns=["tracker", "sequence", *_metrics().COLUMNS])
+        writer.metrics(metrics)
+    writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
+    try:
+        metric_bars(metrics, writer.out_dir / "plots" / "metrics.png", plot_metrics, title)
+    except Exception as err:  # a plot is not worth losing the run for
+        fail("*", "*", "plot", err, traceback.format_exc())
+    return ExperimentResult(metrics, failures, pd.DataFrame(timings), writer.out_dir, names)
+
+
+def _title(cfg: Any, sequences: list[Sequence]) -> str:
+    def target(key: str) -> str:
+        node = _cfg_get(cfg, key, {})
+        return str(_cfg_get(node, "_target_", "?")).rsplit(".", 1)[-1]
+
+    return (f"dataset {target('dataset')} ({len(sequences)} sequences), "
+            f"detector {target('detector')}")
+
+
+def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
+                     columns: list[str] | None = None, title: str = "") -> str:
+    """``summary.md``: the COMBINED comparison, per-sequence tables, and failures."""
+    lines = ["# occbench results", ""]
+    if title:
+        lines += [title, ""]
+    if metrics.empty:
+        lines += ["No sequence was scored.", ""]
+    else:
+        lines += ["## Combined (best per column in bold)", "",
+                  to_markdown(comparison(metrics, columns))]
+        seqs = [s for s in dict.fromkeys(metrics["sequence"]) if s != COMBINED]
+        for metric in [m for m in ("IDF1", "HOTA", "MOTA") if m in metrics.columns]:
+            lines += [f"## {metric} per sequence", "",
+                      to_markdown(per_sequence(metrics, metric, seqs), sense=direction(metric))]
+    if failures:
+        lines += ["## Failures", ""]
+        lines += [f"- [{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}"
+                  for f in failures]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+    parts = [summary_rows(n, s) for n, s in scores.items() if s]
+    if not parts:
+        return pd.DataFrame()
+    return pd.concat(parts, ignore_index=True)
