@@ -72,15 +72,13 @@ def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
                 f"{results} is one file but {gt} holds {len(gt_files)} sequences; "
                 "give a results folder with <seq>.txt files"
             )
-        (name, g), = gt_files.items()
+        ((name, g),) = gt_files.items()
         return {name: (g, results)}
     pairs: dict[str, tuple[Path, Path | None]] = {}
     for name, g in gt_files.items():
         r = results / f"{name}.txt"
         pairs[name] = (g, r if r.is_file() else None)
-    extra = sorted(
-        p.stem for p in results.glob("*.txt") if p.stem not in gt_files and p.is_file()
-    )
+    extra = sorted(p.stem for p in results.glob("*.txt") if p.stem not in gt_files and p.is_file())
     if extra:
         log.warning("%s: result files without ground truth ignored: %s", results, ", ".join(extra))
     return pairs
@@ -92,14 +90,18 @@ def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) ->
     for name, (g, r) in pair_files(Path(gt), Path(results)).items():
         gt_table = read_mot(g, gt=True)
         if r is None:
-            log.warning("%s: no result file %s; scored as an empty result",
-                        name, Path(results) / f"{name}.txt")
+            log.warning(
+                "%s: no result file %s; scored as an empty result",
+                name,
+                Path(results) / f"{name}.txt",
+            )
             res_table = MotTable.empty(str(Path(results) / f"{name}.txt"))
         else:
             res_table = read_mot(r)
         scores[name] = score_sequence(gt_table, res_table, iou_threshold)
-        log.debug("%s: scored %d gt rows against %d result rows", name, len(gt_table),
-                  len(res_table))
+        log.debug(
+            "%s: scored %d gt rows against %d result rows", name, len(gt_table), len(res_table)
+        )
     return summarize(scores)
 
 
@@ -120,8 +122,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("gt", type=Path, help="gt file, or folder of <seq>/gt/gt.txt or <seq>.txt")
     p.add_argument("results", type=Path, help="result file, or folder of <seq>.txt")
     p.add_argument("--csv", type=Path, default=None, help="write the table here (fractions)")
-    p.add_argument("--iou", type=float, default=0.5,
-                   help="IoU threshold of a CLEAR/ID match, in (0, 1] (default 0.5)")
+    p.add_argument(
+        "--iou",
+        type=float,
+        default=0.5,
+        help="IoU threshold of a CLEAR/ID match, in (0, 1] (default 0.5)",
+    )
     return p
 
 

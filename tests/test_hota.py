@@ -24,8 +24,14 @@ def table(rows: list[tuple[int, int, float, float, float, float]]) -> MotTable:
         return MotTable.empty()
     a = np.asarray(rows, dtype=np.float64)
     n = len(a)
-    return MotTable(a[:, 0].astype(np.int64), a[:, 1].astype(np.int64), a[:, 2:6].copy(),
-                    np.ones(n), np.full(n, -1, dtype=np.int64), np.full(n, np.nan))
+    return MotTable(
+        a[:, 0].astype(np.int64),
+        a[:, 1].astype(np.int64),
+        a[:, 2:6].copy(),
+        np.ones(n),
+        np.full(n, -1, dtype=np.int64),
+        np.full(n, np.nan),
+    )
 
 
 def hota_of(gt: MotTable, res: MotTable) -> dict[str, float]:
@@ -55,8 +61,12 @@ def test_single_box_iou_06_matches_for_12_of_19_alphas():
 
 def test_perfect_tracker_scores_one_whatever_its_ids():
     rng = np.random.default_rng(3)
-    rows = [(f, i, *rng.uniform(0, 500, 2), 30, 80) for f in range(1, 31) for i in range(1, 6)
-            if rng.random() > 0.2]
+    rows = [
+        (f, i, *rng.uniform(0, 500, 2), 30, 80)
+        for f in range(1, 31)
+        for i in range(1, 6)
+        if rng.random() > 0.2
+    ]
     gt = table(rows)
     res = table([(f, 100 + 3 * i, x, y, w, h) for f, i, x, y, w, h in rows])
     h = hota_of(gt, res)
@@ -173,8 +183,12 @@ def random_scene(rng: np.random.Generator, frames: int = 40, people: int = 6):
         tb = boxes[keep] + rng.normal(0, 4, (keep.sum(), 4)) * [1, 1, 0.3, 0.3]
         t = g[keep] + 10 * rng.integers(0, 2, keep.sum())  # occasional id swaps
         n_fp = rng.integers(0, 3)
-        tb = np.vstack([tb, np.column_stack([rng.uniform(0, 200, (n_fp, 2)),
-                                             np.full((n_fp, 2), [20.0, 50.0])])])
+        tb = np.vstack(
+            [
+                tb,
+                np.column_stack([rng.uniform(0, 200, (n_fp, 2)), np.full((n_fp, 2), [20.0, 50.0])]),
+            ]
+        )
         t = np.concatenate([t, 100 + rng.integers(0, 5, n_fp)])
         t, first = np.unique(t, return_index=True)
         tb = tb[first]
@@ -190,8 +204,9 @@ def test_vectorised_equals_trackeval_loops(seed: int):
     got = hota_counts(gt_ids, tr_ids, sims)
     ref = reference_hota(gt_ids, tr_ids, sims)
     for name in ("tp", "fn", "fp", "ass_a", "ass_re", "ass_pr", "loc_a"):
-        np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=1e-12,
-                                   atol=1e-12, err_msg=name)
+        np.testing.assert_allclose(
+            getattr(got, name), getattr(ref, name), rtol=1e-12, atol=1e-12, err_msg=name
+        )
     assert 0.2 < got.summary()["HOTA"] < 0.95  # a non-trivial scene
 
 
@@ -205,8 +220,9 @@ def test_combined_equals_scoring_disjoint_sequences_together():
     both = hota_counts(a[0] + b[0], a[1] + b[1], a[2] + b[2])
     comb = combine_hota([ha, hb])
     for name in ("tp", "fn", "fp", "ass_a", "ass_re", "ass_pr", "loc_a"):
-        np.testing.assert_allclose(getattr(comb, name), getattr(both, name), rtol=1e-12,
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            getattr(comb, name), getattr(both, name), rtol=1e-12, err_msg=name
+        )
     np.testing.assert_array_equal(comb.tp, ha.tp + hb.tp)
     # and it is not the plain mean of the two sequences' HOTA
     mean = (ha.summary()["HOTA"] + hb.summary()["HOTA"]) / 2

@@ -26,7 +26,15 @@ from harness.metrics.clear import ClearCounts, accumulate, clear_counts
 from harness.metrics.frames import pair_frames
 from harness.metrics.hota import HotaCounts, combine_hota, hota_counts
 
-__all__ = ["COLUMNS", "COMBINED", "SequenceScore", "score_sequence", "summarize", "combine"]
+__all__ = [
+    "COLUMNS",
+    "COMBINED",
+    "COUNT_COLUMNS",
+    "SequenceScore",
+    "combine",
+    "score_sequence",
+    "summarize",
+]
 
 COLUMNS: list[str] = [
     "MOTA", "MOTP", "IDF1", "IDP", "IDR", "Recall", "Precision",
