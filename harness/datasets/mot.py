@@ -145,7 +145,7 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
     if det_path.is_file():
         det = read_mot(det_path)
         if len(det) == 0:
-            log.warning("%s: empty detection file: the sequence has no public detections", det_path)
+            log.warning("%s: empty detection file: no public detections in any frame", det_path)
 
     im_dir = folder / (ini.get("imDir", "").strip() or "img1")
     images = numbered_images(im_dir) if im_dir.is_dir() else {}
