@@ -161,6 +161,8 @@ def test_empty_result_and_empty_gt():
     row = summarize({"s": score_sequence(MotTable.empty(), gt)}).iloc[0]
     assert (row["FN"], row["FP"], row["GT"]) == (0, 2, 0)
     assert math.isnan(row["MOTA"]) and row["Precision"] == 0.0
+    row = summarize({"s": score_sequence(MotTable.empty(), MotTable.empty())}).iloc[0]
+    assert math.isnan(row["MOTA"]) and (row["GT"], row["FP"], row["HOTA"]) == (0, 0, 0.0)
 
 
 def test_mot16_ignore_rules(tmp_path: Path):
