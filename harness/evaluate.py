@@ -28,9 +28,10 @@ class EvaluationInputError(ValueError):
 
 
 def sequence_name(gt_file: Path) -> str:
-    """``<seq>/gt/gt.txt`` -> ``<seq>``; ``<seq>.txt`` -> ``<seq>``."""
-    if gt_file.name == "gt.txt" and gt_file.parent.name == "gt":
-        return gt_file.parent.parent.name
+    """``<seq>/gt/gt.txt`` or ``<seq>/gt.txt`` -> ``<seq>``; ``<seq>.txt`` -> ``<seq>``."""
+    if gt_file.name == "gt.txt":
+        parent = gt_file.resolve().parent
+        return parent.parent.name if parent.name == "gt" else parent.name
     return gt_file.stem
 
 

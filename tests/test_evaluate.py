@@ -264,6 +264,8 @@ def test_cli_single_files_and_iou(tud_dirs, tmp_path, capsys):
     assert pd.read_csv(out).loc[0, "MOTA"] < 0.3  # stricter matching
     # a gt file against a results folder finds <seq>.txt
     assert pair_files(gt, res)["TUD-Campus"] == (gt, res / "TUD-Campus.txt")
+    # motmetrics' own layout <seq>/gt.txt is named after the folder too
+    assert list(pair_files(MM_DATA / "TUD-Campus" / "gt.txt", res)) == ["TUD-Campus"]
 
 
 def test_cli_missing_result_is_empty_with_warning(tud_dirs, tmp_path, caplog):
