@@ -1,0 +1,10 @@
+"""Reta et al. 2015: three-hypothesis tracking graph with occlusion reasoning.
+
+Modules: ``graph`` (G = <N, E>, nodes and edges, snapshot), ``occlusion`` (eq. 2, eq. 3),
+``association`` (3.3.2 two-stage Hungarian), ``hypotheses`` (Alg. 1's three cases),
+``appearance`` (eq. 1 histograms), ``motion`` (Kalman M), ``tracker`` (``RetaTracker``).
+"""
+
+from trackers.three_hypothesis.tracker import RetaTracker
+
+__all__ = ["RetaTracker"]

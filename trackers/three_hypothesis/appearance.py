@@ -1,0 +1,98 @@
+"""Appearance model q (Reta 3.2, eq. 1) and its similarity rho (eq. 4), fast path.
+
+The definition lives in ``trackers.frontend.features.ellipse_histograms``: joint 16x16x16
+colour histogram over the pixels whose centres lie in the ellipse inscribed in a box,
+optionally restricted to foreground pixels. This module computes exactly the same
+histograms for boxes snapped to whole pixels (``tests/test_reta.py`` checks equality) but
+with ``cv2.calcHist`` over each box crop and ellipse masks cached by box size, so the
+tracker's per-frame feature cost stays near 10 us per person instead of binning the whole
+frame. Boxes are (N, 4) float64 xywh, 0-based pixels.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from trackers.frontend.features import bhattacharyya
+
+__all__ = ["EllipseHistogrammer", "bhattacharyya", "snap_boxes"]
+
+
+def snap_boxes(boxes: np.ndarray) -> np.ndarray:
+    """(N, 4) xywh rounded to whole pixels (sizes at least 1): the histogram support."""
+    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    x0 = np.round(b[:, :2])
+    x1 = np.round(b[:, :2] + b[:, 2:])
+    return np.column_stack([x0, np.maximum(x1 - x0, 1.0)])
+
+
+class EllipseHistogrammer:
+    """Eq. 1 histograms of many ellipses of one frame at once.
+
+    Args:
+        bins: bins per colour channel (16 in the paper); must divide 256.
+        min_foreground: when a foreground mask is given, the fraction of an ellipse's
+            pixels that must be foreground for the mask to be used; below it the whole
+            ellipse is counted (a person missed by the background model keeps a model).
+        cache_size: most ellipse masks kept (keyed by box height and width).
+    """
+
+    def __init__(self, bins: int = 16, min_foreground: float = 0.2, cache_size: int = 4096) -> None:
+        if bins < 1 or 256 % bins:
+            raise ValueError(f"bins must divide 256, got {bins}")
+        self.bins = bins
+        self.min_foreground = min_foreground
+        self.cache_size = cache_size
+        self._masks: dict[tuple[int, int], np.ndarray] = {}
+        self._sizes = [bins, bins, bins]
+        self._ranges = [0, 256, 0, 256, 0, 256]
+
+    def _mask(self, h: int, w: int) -> np.ndarray:
+        key = (h, w)
+        m = self._masks.get(key)
+        if m is None:
+            if len(self._masks) >= self.cache_size:
+                self._masks.clear()
+            rx, ry = max(w / 2, 0.5), max(h / 2, 0.5)
+            xs = (np.arange(w) + 0.5 - w / 2) / rx
+            ys = (np.arange(h) + 0.5 - h / 2) / ry
+            m = ys[:, None] ** 2 + xs[None, :] ** 2 <= 1.0
+            self._masks[key] = m
+        return m
+
+    def __call__(
+        self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Histograms of the ellipses of ``boxes`` (snapped with ``snap_boxes``).
+
+        Args:
+            frame: (H, W, 3) uint8 image.
+            boxes: (N, 4) xywh.
+            foreground: optional (H, W) bool mask or label image (nonzero = foreground).
+        Returns:
+            (N, bins**3) float64 rows summing to 1 (all zero where no pixel is counted).
+        """
+        b = snap_boxes(boxes).astype(np.int64)
+        n = len(b)
+        height, width = frame.shape[:2]
+        out = np.zeros((n, self.bins**3), dtype=np.float64)
+        for i in range(n):
+            x, y, w, h = (int(v) for v in b[i])
+            r0, r1 = max(y, 0), min(y + h, height)
+            c0, c1 = max(x, 0), min(x + w, width)
+            if r1 <= r0 or c1 <= c0:
+                continue
+            m = self._mask(h, w)[r0 - y : r1 - y, c0 - x : c1 - x]
+            if foreground is not None:
+                fm = m & (foreground[r0:r1, c0:c1] != 0)
+                if np.count_nonzero(fm) >= self.min_foreground * np.count_nonzero(m):
+                    m = fm
+            # cv2.calcHist: same joint bin order as trackers.histograms.colour_histogram
+            counts = cv2.calcHist(
+                [frame[r0:r1, c0:c1]], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges
+            )
+            out[i] = counts.ravel()
+        total = out.sum(axis=1, keepdims=True)
+        np.divide(out, total, out=out, where=total > 0)
+        return out

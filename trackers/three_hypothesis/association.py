@@ -1,0 +1,128 @@
+"""Two-stage similarity association (Reta 3.3.2, steps 1-8, eqs. 4 and 5).
+
+Predictions are the regions S^{t|t-1} of the nodes of the previous frame (a person may
+own several nodes: its hypotheses). All branches of one person share its appearance q,
+so the Hungarian method runs over persons x measurements with each pair's cost taken at
+the person's best node; the chosen node is returned so the other hypotheses of that
+person can be pruned. Boxes are (N, 4) float64 xywh, 0-based pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from trackers.common.assignment import assign
+from trackers.frontend.features import bhattacharyya, region_similarity
+from trackers.geometry import centre_distance_matrix
+
+
+@dataclass
+class Association:
+    """Result of one frame's association.
+
+    Attributes:
+        matches: (K, 3) int rows (person, measurement, node).
+        stages: (K,) int, 1 or 2: the stage that accepted each match.
+        rho: (K,) float appearance similarity of each match (eq. 4).
+        unmatched_persons: (P - K,) int person indices.
+        unmatched_measurements: (D - K,) int measurement indices.
+    """
+
+    matches: np.ndarray
+    stages: np.ndarray
+    rho: np.ndarray
+    unmatched_persons: np.ndarray
+    unmatched_measurements: np.ndarray
+
+
+def _person_costs(cost_nodes: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Reduce (B, D) node costs to (P, D) person costs (min over each person's nodes) and
+    the (P, D) index of the node attaining it. Nodes are grouped by person: person k owns
+    rows ``starts[k]:starts[k + 1]``."""
+    cost = np.minimum.reduceat(cost_nodes, starts, axis=0)
+    best = np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
+    sizes = np.diff(np.r_[starts, len(cost_nodes)])
+    for k in np.flatnonzero(sizes > 1):
+        a = starts[k]
+        best[k] = a + np.argmin(cost_nodes[a : a + sizes[k]], axis=0)
+    return cost, best
+
+
+def associate(
+    node_boxes: np.ndarray,
+    owners: np.ndarray,
+    q: np.ndarray,
+    measurement_boxes: np.ndarray,
+    p: np.ndarray,
+    mu_rho: float,
+    mu_g: float,
+) -> Association:
+    """Match measurements to persons in two stages.
+
+    Stage 1 (steps 1-4): pairs whose predicted and measured regions intersect; cost
+    (1 - rho) + (1 - delta) with rho the Bhattacharyya coefficient (eq. 4) and delta the
+    region similarity (eq. 5); Hungarian method; accept only rho >= mu_rho.
+    Stage 2 (steps 5-8): leftovers whose measurement centre lies inside the gate of radius
+    mu_g around a prediction's centre; cost (1 - rho) + d / mu_g with d the centre
+    distance; Hungarian method; accept only rho >= mu_rho.
+
+    Pairs with rho < mu_rho are excluded before the Hungarian step, so a rejected best
+    pair never blocks an acceptable alternative.
+
+    Args:
+        node_boxes: (B, 4) xywh predicted regions of the nodes.
+        owners: (B,) int person index of each node, sorted, covering 0..P-1 (every
+            person owns at least one node).
+        q: (P, bins) person appearance histograms.
+        measurement_boxes: (D, 4) xywh.
+        p: (D, bins) measurement histograms.
+        mu_rho: appearance threshold mu_rho in [0, 1].
+        mu_g: gate radius mu_g in pixels.
+    """
+    owners = np.asarray(owners, dtype=int)
+    n_persons, n_meas = len(q), len(measurement_boxes)
+    if len(owners) and not (np.all(np.diff(owners) >= 0) and owners[0] == 0
+                            and owners[-1] == n_persons - 1 and np.all(np.diff(owners) <= 1)):
+        raise ValueError("associate: owners must be sorted and cover persons 0..P-1")
+    empty = np.zeros(0, dtype=int)
+    if n_persons == 0 or n_meas == 0:
+        return Association(np.zeros((0, 3), dtype=int), empty, np.zeros(0), np.arange(n_persons),
+                           np.arange(n_meas))
+    rho = np.clip(bhattacharyya(q, p), 0.0, 1.0)  # (P, D) eq. 4
+    rho_nodes = rho[owners]  # (B, D)
+    appearance_ok = rho_nodes >= mu_rho
+
+    # stage 1: intersecting regions, cost (1 - rho) + (1 - delta)
+    delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
+    c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
+    starts = np.flatnonzero(np.r_[True, np.diff(owners) > 0])
+    cost1, best1 = _person_costs(c1, starts)
+    m1, _, _ = assign(cost1, 2.0)
+
+    matched_p = np.zeros(n_persons, dtype=bool)
+    matched_d = np.zeros(n_meas, dtype=bool)
+    matched_p[m1[:, 0]] = True
+    matched_d[m1[:, 1]] = True
+
+    # stage 2: leftovers inside the gate, cost (1 - rho) + d / mu_g
+    d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
+    free = ~matched_p[owners][:, None] & ~matched_d[None, :]
+    c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
+    cost2, best2 = _person_costs(c2, starts)
+    m2, _, _ = assign(cost2, 2.0)
+
+    rows = [np.column_stack([m1, best1[m1[:, 0], m1[:, 1]]]),
+            np.column_stack([m2, best2[m2[:, 0], m2[:, 1]]])]
+    matches = np.concatenate(rows).astype(int).reshape(-1, 3)
+    stages = np.concatenate([np.full(len(m1), 1), np.full(len(m2), 2)]).astype(int)
+    matched_p[m2[:, 0]] = True
+    matched_d[m2[:, 1]] = True
+    return Association(
+        matches,
+        stages,
+        rho[matches[:, 0], matches[:, 1]] if len(matches) else np.zeros(0),
+        np.flatnonzero(~matched_p),
+        np.flatnonzero(~matched_d),
+    )

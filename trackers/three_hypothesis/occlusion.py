@@ -1,0 +1,103 @@
+"""Occlusion relations O (Reta 3.3.1, eq. 2) and depth order pi (eq. 3).
+
+Regions are the ellipses inscribed in (N, 4) float64 xywh boxes (0-based pixels), the
+shape S = (xc, yc, 0, w/2, h/2) of ``trackers.geometry.box_ellipses``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackers.frontend.features import region_similarity
+
+
+def overlap_ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Eq. 2's ratio |Si & Sj| / (|Si| + |Sj|) for all pairs of ellipse regions.
+
+    It is half the region similarity delta of eq. 5 (delta = 2 |Si & Sj| / (|Si| + |Sj|)),
+    so it lies in [0, 0.5]: 0.5 for identical regions.
+
+    Args:
+        a: (N, 4) xywh; b: (M, 4) xywh.
+    Returns:
+        (N, M) float64.
+    """
+    return 0.5 * region_similarity(a, b)
+
+
+def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float) -> np.ndarray:
+    """Occlusion relation O of eq. 2 over predicted regions of nodes.
+
+    O = {(n_i, n_j) | id_i != id_j, |S_i & S_j| / (|S_i| + |S_j|) > lambda}.
+
+    Args:
+        boxes: (N, 4) xywh predicted regions S^{t|t-1} of the nodes.
+        owners: (N,) person key of each node (hypotheses of one person never occlude
+            each other).
+        lam: overlap threshold lambda in [0, 0.5).
+    Returns:
+        (K, 2) int rows (i, j) with i < j, node indices into ``boxes``.
+    """
+    n = len(boxes)
+    if n < 2:
+        return np.zeros((0, 2), dtype=int)
+    ratio = overlap_ratio(boxes, boxes)
+    owners = np.asarray(owners)
+    mask = (ratio > lam) & (owners[:, None] != owners[None, :])
+    i, j = np.nonzero(np.triu(mask, k=1))
+    return np.column_stack([i, j]).astype(int)
+
+
+def area_above(boxes: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """Area of each box's ellipse above the image row y0 (smaller y), exactly.
+
+    With t = (y0 - yc) / ry clipped to [-1, 1], the area is
+    rx ry (t sqrt(1 - t^2) + arcsin t + pi / 2).
+
+    Args:
+        boxes: (N, 4) xywh; y0: (N,) row coordinates.
+    Returns:
+        (N,) float64 areas.
+    """
+    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    rx, ry = b[:, 2] / 2, b[:, 3] / 2
+    yc = b[:, 1] + ry
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(np.where(ry > 0, (np.asarray(y0, dtype=np.float64) - yc) / ry, 0.0), -1.0, 1.0)
+    return rx * ry * (t * np.sqrt(1.0 - t * t) + np.arcsin(t) + np.pi / 2)
+
+
+def depth_order(
+    visible_i: bool,
+    visible_j: bool,
+    shape_i: np.ndarray,
+    predicted_j: np.ndarray,
+    previous: int,
+) -> int:
+    """Depth order pi_ij of eq. 3: +1 when i occludes j, -1 when j occludes i.
+
+    * i visible and j not: +1; j visible and i not: -1 (the detected one is in front).
+    * both visible: compare the areas of j's predicted region up and down the centre of
+      i's current region: up_yc(i, S_j) > down_yc(i, S_j) means j stands higher in the
+      image, farther from the camera, so i occludes j (+1); smaller gives -1.
+    * otherwise (neither visible, or a tie): inherit pi^{t-1}_ij (``previous``).
+
+    Args:
+        shape_i: (4,) xywh current region of i (its measurement when visible).
+        predicted_j: (4,) xywh predicted region S^{t|t-1}_j.
+        previous: pi^{t-1}_ij in {+1, -1, 0} (0 = unknown).
+    """
+    if visible_i and not visible_j:
+        return 1
+    if visible_j and not visible_i:
+        return -1
+    if visible_i and visible_j:
+        yc = shape_i[1] + shape_i[3] / 2
+        up = float(area_above(predicted_j[None], np.array([yc]))[0])
+        total = np.pi / 4 * predicted_j[2] * predicted_j[3]
+        down = total - up
+        if up > down:
+            return 1
+        if up < down:
+            return -1
+    return previous

@@ -1,0 +1,414 @@
+"""Three-hypothesis tracking graph (Reta et al., J. Electron. Imaging 24(1) 013015, 2015).
+
+Algorithm 1 per frame t:
+1. predict every node of frame t-1 with its motion model M (Kalman, 3.2); hypothesis nodes
+   move by their case (3.3.3): keep velocity, follow the occluder, stand still;
+2. occlusion relations O between predicted regions of different people (eq. 2, lambda);
+3. measurements: ellipse S from each detection box (3.2), colour histogram q (eq. 1)
+   over the ellipse, restricted to foreground pixels when a mask is given;
+4. two-stage similarity association with the Hungarian method (3.3.2, eqs. 4, 5,
+   mu_rho, mu_g);
+5. depth order pi of every pair in O (eq. 3), inherited when neither is visible;
+6. attribute update (3.3.3): a matched person not occluded takes the measurement's q, S
+   and corrects M; a matched person behind another keeps q, takes S from the prediction
+   and corrects only its position; a person matched through a hypothesis keeps its id and
+   loses its other hypotheses;
+7. an unmatched person continues each hypothesis; at its first total occlusion (behind a
+   visible person in O) hypotheses 2 (occluder) and 3 (still) are added;
+8. an unmatched measurement starts a tentative track, confirmed after ``confirm_frames``
+   matches, dropped as a false positive after ``m`` frames without one;
+9. pruning after m frames (PruneHypothesis): a hypothesis in plain view (not covered by a
+   visible person, eq. 2 overlap > lambda) for m consecutive frames contradicts the missing
+   detection and is removed; a hypothesis whose centre leaves the image ends; a person
+   with no hypothesis left ends.
+
+Adaptations (also in the README): the person detector is whatever ``detector=`` gives;
+shapes are axis-aligned ellipses inscribed in boxes (phi = 0); pairs below mu_rho are
+excluded before the Hungarian step rather than rejected after it; ``max_hidden`` bounds how
+long a hidden person is kept (the paper has no such limit; it keeps memory flat).
+
+Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a
+hidden confirmed person: covered by a visible person first, then fewest frames in plain
+view, then velocity > occluder > still), HYPOTHESIS (its other hypotheses), TENTATIVE.
+``Track.extra`` holds {'ellipse', 'hypothesis', 'occluder', 'depth', 'node'}.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from trackers.geometry import box_ellipses, valid_boxes
+from trackers.records import Detections, Track, TrackState
+from trackers.three_hypothesis import hypotheses as hyp
+from trackers.three_hypothesis.appearance import EllipseHistogrammer
+from trackers.three_hypothesis.association import associate
+from trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE, Node, TrackingGraph
+from trackers.three_hypothesis.motion import (
+    MotionModel,
+    box_measurements,
+    correct,
+    predict,
+    state_boxes,
+)
+from trackers.three_hypothesis.occlusion import depth_order, occlusion_pairs, overlap_ratio
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class _Branch:
+    """One live node of a person: kind is 'visible' or a hypothesis kind."""
+
+    kind: str
+    x: np.ndarray
+    P: np.ndarray
+    node: int | None = None  # graph key of the node in the last frame
+    occluder: int | None = None  # person key followed / hidden behind
+    exposed: int = 0  # consecutive frames in plain view without a detection
+    covered: bool = False  # hidden behind a visible person this frame
+    depth: int = 0  # people in front of this node (eq. 3)
+    graph_node: Node | None = None  # this frame's graph node
+
+
+@dataclass
+class _Person:
+    key: int
+    q: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    branches: list[_Branch]
+    id: int = 0  # public id once confirmed
+    hits: int = 1
+    misses: int = 0
+    spawned: bool = False  # occlusion hypotheses created in this hidden streak
+    depth: int = 0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def confirmed(self) -> bool:
+        return self.id > 0
+
+    @property
+    def public_id(self) -> int:
+        return self.id if self.id > 0 else -self.key
+
+
+class RetaTracker:
+    """Three-hypothesis tracking graph with occlusion reasoning (Reta et al. 2015).
+
+    Args:
+        mu_rho: appearance threshold mu_rho (Alg. 1): smallest Bhattacharyya coefficient
+            (eq. 4) accepted for a match, in [0, 1].
+        mu_g: gate radius mu_g in pixels (3.3.2 stage 2).
+        m: frames before pruning (Alg. 1): contradicted hypotheses, false-positive tracks.
+        lam: overlap threshold lambda of eq. 2, in [0, 0.5).
+        confirm_frames: matches needed to confirm a tentative track.
+        max_hidden: most frames a person is kept without a match (adaptation).
+        min_score: detections below this score are ignored.
+        bins: histogram bins per colour channel (16 in the paper).
+        position_noise, velocity_noise, measurement_noise, initial_velocity_variance:
+            Kalman noise standard deviations (``trackers.common.kalman``), per 10 px height.
+        min_foreground: fraction of an ellipse that must be foreground for the histogram
+            to be restricted to foreground pixels.
+    """
+
+    def __init__(
+        self,
+        mu_rho: float = 0.5,
+        mu_g: float = 60.0,
+        m: int = 5,
+        lam: float = 0.1,
+        confirm_frames: int = 3,
+        max_hidden: int = 150,
+        min_score: float = 0.0,
+        bins: int = 16,
+        position_noise: float = 1.0,
+        velocity_noise: float = 0.1,
+        measurement_noise: float = 1.0,
+        initial_velocity_variance: float = 100.0,
+        min_foreground: float = 0.2,
+    ) -> None:
+        if not 0.0 <= mu_rho <= 1.0:
+            raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
+        if mu_g <= 0:
+            raise ValueError(f"mu_g must be > 0 pixels, got {mu_g}")
+        if m < 1:
+            raise ValueError(f"m must be >= 1 frame, got {m}")
+        if not 0.0 <= lam < 0.5:
+            raise ValueError(f"lam must lie in [0, 0.5), got {lam}")
+        if confirm_frames < 1:
+            raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
+        if max_hidden < 1:
+            raise ValueError(f"max_hidden must be >= 1, got {max_hidden}")
+        for name, value in (("position_noise", position_noise), ("velocity_noise", velocity_noise),
+                            ("measurement_noise", measurement_noise),
+                            ("initial_velocity_variance", initial_velocity_variance)):
+            if value <= 0:
+                raise ValueError(f"{name} must be > 0, got {value}")
+        self.mu_rho = mu_rho
+        self.mu_g = mu_g
+        self.m = m
+        self.lam = lam
+        self.confirm_frames = confirm_frames
+        self.max_hidden = max_hidden
+        self.min_score = min_score
+        self.motion = MotionModel(position_noise, velocity_noise, measurement_noise,
+                                  initial_velocity_variance)
+        self.histograms = EllipseHistogrammer(bins=bins, min_foreground=min_foreground)
+        _, _, self._F, self._H, _, _ = self.motion.init(np.array([0.0, 0.0, 10.0, 10.0]))
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every person and the graph; ids restart at 1."""
+        self._persons: list[_Person] = []
+        self._next_key = 1
+        self._next_id = 1
+        self._frame = 0
+        self._pi: dict[tuple[int, int], int] = {}
+        self.graph = TrackingGraph(window=self.m + 1)
+
+    def graph_snapshot(self) -> dict:
+        """The current frame's graph: {'frame', 'nodes': [records], 'edges': [records]}."""
+        return self.graph.snapshot()
+
+    # ------------------------------------------------------------------ update
+    def update(
+        self, frame: np.ndarray | None, detections: Detections, foreground: np.ndarray | None = None
+    ) -> list[Track]:
+        """Advance one frame (Alg. 1 body).
+
+        Args:
+            frame: (H, W, 3) uint8 image (needed for colour histograms).
+            detections: person boxes of this frame.
+            foreground: optional (H, W) bool mask or label image.
+        Raises:
+            ValueError: when ``frame`` is None or not an (H, W, 3) uint8 image.
+        """
+        if frame is None:
+            raise ValueError("RetaTracker needs frame pixels (colour histograms); got frame=None")
+        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
+            raise ValueError(f"RetaTracker: frame must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
+        height, width = frame.shape[:2]
+        if foreground is not None and foreground.shape[:2] != (height, width):
+            raise ValueError(f"RetaTracker: foreground shape {foreground.shape} != frame {(height, width)}")
+        self._frame += 1
+        self.graph.begin_frame(self._frame)
+        keep = valid_boxes(detections.boxes) & (detections.scores >= self.min_score)
+        dets = detections.boxes[keep]
+        p = self.histograms(frame, dets, foreground)
+
+        persons = self._persons
+        # 1. prediction of every node of t-1 (hypotheses move by their case)
+        branches = [b for person in persons for b in person.branches]
+        owners = np.array([i for i, person in enumerate(persons) for _ in person.branches], dtype=int)
+        n_nodes = len(branches)
+        if n_nodes:
+            x_prev = np.array([b.x for b in branches])
+            P_prev = np.array([b.P for b in branches])
+            velocity = {person.key: person.branches[0].x[4:6] for person in persons}
+            occ_v = np.array([velocity.get(b.occluder, np.zeros(2)) if b.occluder is not None
+                              else np.zeros(2) for b in branches])
+            x_set = hyp.set_motion(x_prev, [b.kind for b in branches], occ_v)
+            Qs = np.array([persons[o].Q for o in owners])
+            Xp, Pp = predict(x_set, P_prev, self._F, Qs)
+            pred = state_boxes(Xp)
+        else:
+            x_prev = Xp = np.zeros((0, 8))
+            Pp = np.zeros((0, 8, 8))
+            pred = np.zeros((0, 4))
+
+        # 2. occlusion relations O over predicted regions (eq. 2)
+        pairs = occlusion_pairs(pred, owners, self.lam)
+
+        # 4. two-stage association (3.3.2)
+        q = np.array([person.q for person in persons]).reshape(len(persons), p.shape[1])
+        assoc = associate(pred, owners, q, dets, p, self.mu_rho, self.mu_g)
+        matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
+                       in zip(assoc.matches, assoc.stages, assoc.rho)}
+
+        # 5. depth order pi (eq. 3) of the pairs in O; who is hidden behind whom
+        visible_node = {matched_det[pi][1] for pi in matched_det}
+        in_front: dict[int, list[int]] = {}  # node index -> person indices in front of it
+        for a, b in pairs:
+            i, j = owners[a], owners[b]
+            ki, kj = persons[i].key, persons[j].key
+            vi, vj = a in visible_node, b in visible_node
+            shape_i = dets[matched_det[i][0]] if vi else pred[a]
+            prev = self._pi.get((ki, kj), 0)
+            order = depth_order(vi, vj, shape_i, pred[b], prev)
+            if order == 0:  # unknown and neither visible: the lower region is in front
+                order = 1 if pred[a, 1] + pred[a, 3] >= pred[b, 1] + pred[b, 3] else -1
+            self._pi[(ki, kj)] = order
+            self._pi[(kj, ki)] = -order
+            if order > 0:
+                in_front.setdefault(b, []).append(i)
+            else:
+                in_front.setdefault(a, []).append(j)
+
+        # 6. attribute update of matched persons (3.3.3)
+        rows = sorted(matched_det.items())
+        if rows:
+            idx = np.array([n for _, (_, n, _, _) in rows])
+            dbox = dets[[d for _, (d, _, _, _) in rows]]
+            behind = np.array([n in in_front for _, (_, n, _, _) in rows])
+            z = box_measurements(dbox)
+            zp = box_measurements(pred[idx])
+            z[behind, 2:] = zp[behind, 2:]  # occluded: shape from the prediction
+            Rs = np.array([persons[i].R for i, _ in rows])
+            Xc, Pc = correct(Xp[idx], Pp[idx], z, self._H, Rs)
+            for r, (i, (d, n, stage, rho)) in enumerate(rows):
+                person = persons[i]
+                if not behind[r]:
+                    person.q = p[d]  # appearance updated only when not occluded
+                    shape = dbox[r]
+                else:
+                    shape = pred[n]
+                person.hits += 1
+                person.misses = 0
+                person.spawned = False
+                if not person.confirmed and person.hits >= self.confirm_frames:
+                    person.id = self._next_id
+                    self._next_id += 1
+                occluder = in_front.get(n)
+                branch = _Branch(VISIBLE, Xc[r], Pc[r],
+                                 occluder=persons[occluder[0]].key if occluder else None)
+                parent = branches[n].node
+                branch.node = self._add_node(person, branch, shape, len(occluder or []), parent,
+                                             stage, rho)
+                person.extra = {"shape": shape}
+                person.branches = [branch]
+
+        # 7. unmatched persons: continue hypotheses, spawn at the first total occlusion
+        visible_boxes = dets[[d for _, (d, _, _, _) in rows]] if rows else np.zeros((0, 4))
+        survivors: list[_Person] = []
+        for i, person in enumerate(persons):
+            if i in matched_det:
+                survivors.append(person)
+                continue
+            person.misses += 1
+            node_idx = np.flatnonzero(owners == i)
+            new: list[_Branch] = []
+            for n in node_idx:
+                old = branches[n]
+                kind = hyp.VELOCITY if old.kind == VISIBLE else old.kind
+                fronts = in_front.get(n, [])
+                occluder = old.occluder if kind == hyp.OCCLUDER else (
+                    persons[fronts[0]].key if fronts else None)
+                b = _Branch(kind, Xp[n], Pp[n], node=old.node, occluder=occluder,
+                            exposed=old.exposed, depth=len(fronts))
+                new.append(b)
+                if (person.confirmed and not person.spawned and fronts
+                        and any(f in matched_det for f in fronts)):
+                    # FirstOcclusion: hidden behind a visible person for the first time
+                    occ = next(f for f in fronts if f in matched_det)
+                    states = hyp.spawn(x_prev[n], matched_velocity(persons[occ]))
+                    for kind2, x2 in states.items():
+                        new.append(_Branch(kind2, x2, Pp[n].copy(), node=old.node,
+                                           occluder=persons[occ].key, depth=len(fronts)))
+                    person.spawned = True
+            if not person.confirmed:
+                new = new[:1]
+            # 9. pruning: left the scene, contradicted in plain view for m frames, duplicates
+            boxes = state_boxes(np.array([b.x for b in new]))
+            gone = hyp.outside_image(boxes, width, height)
+            cover = overlap_ratio(boxes, visible_boxes).max(axis=1, initial=0.0) > self.lam
+            kept: list[_Branch] = []
+            kept_boxes: list[np.ndarray] = []
+            for b, box, g, c in zip(new, boxes, gone, cover):
+                b.covered = bool(c)
+                b.exposed = 0 if c else b.exposed + 1
+                if g or b.exposed >= self.m:
+                    continue
+                if any(np.abs(box - kb).max() < 0.5 for kb in kept_boxes):
+                    continue  # the same place twice: keep the preferred kind
+                kept.append(b)
+                kept_boxes.append(box)
+            if not person.confirmed and person.misses >= self.m:
+                kept = []  # false positive track
+            if person.misses > self.max_hidden:
+                kept = []
+            if not kept:
+                log.debug("person %d ended at frame %d", person.public_id, self._frame)
+                continue
+            person.branches = kept
+            for b in kept:
+                b.node = self._add_node(person, b, state_boxes(b.x[None])[0], b.depth, b.node,
+                                        0, float("nan"))
+            survivors.append(person)
+
+        # 8. unmatched measurements start tentative tracks
+        for d in assoc.unmatched_measurements:
+            x0, P0, _, _, Q0, R0 = self.motion.init(dets[d])
+            person = _Person(self._next_key, p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)])
+            self._next_key += 1
+            if self.confirm_frames <= 1:
+                person.id = self._next_id
+                self._next_id += 1
+            person.branches[0].node = self._add_node(person, person.branches[0], dets[d], 0, None,
+                                                     0, float("nan"))
+            survivors.append(person)
+
+        alive = {person.key for person in survivors}
+        if len(self._pi) > 4 * len(alive) ** 2 + 16:
+            self._pi = {k: v for k, v in self._pi.items() if k[0] in alive and k[1] in alive}
+        self._persons = survivors
+        return self._outputs()
+
+    # ------------------------------------------------------------------ helpers
+    def _add_node(self, person: _Person, branch: _Branch, box: np.ndarray, depth: int,
+                  parent: int | None, stage: int, rho: float) -> int:
+        if branch.kind == VISIBLE:
+            kind = VISIBLE if person.confirmed else TENTATIVE
+            hypothesis = None
+        else:
+            kind = HYPOTHESIS if person.confirmed else TENTATIVE
+            hypothesis = branch.kind
+        occluder = None
+        if branch.occluder is not None:
+            occ = next((o for o in self._persons if o.key == branch.occluder), None)
+            occluder = occ.public_id if occ is not None else None
+        node = self.graph.add_node(
+            person=person.key, id=person.public_id, kind=kind, hypothesis=hypothesis,
+            S=box_ellipses(box[None])[0], q=person.q, x=branch.x, P=branch.P,
+            occluder=occluder, depth=depth, parent=parent, stage=stage, rho=rho,
+        )
+        branch.graph_node = node
+        return node.key
+
+    def _outputs(self) -> list[Track]:
+        out: list[Track] = []
+        for person in self._persons:
+            branches = person.branches
+            nodes = [b.graph_node for b in branches]
+            boxes = state_boxes(np.array([b.x for b in branches]))
+            if branches[0].kind == VISIBLE:
+                box = np.asarray(person.extra.get("shape", boxes[0]), dtype=np.float64)
+                state = TrackState.CONFIRMED if person.confirmed else TrackState.TENTATIVE
+                out.append(self._track(person, box, state, nodes[0], None))
+                continue
+            if not person.confirmed:
+                out.append(self._track(person, boxes[0], TrackState.TENTATIVE, nodes[0],
+                                       branches[0].kind))
+                continue
+            best = hyp.best_hypothesis([b.kind for b in branches], [b.exposed for b in branches],
+                                       [b.covered for b in branches])
+            for k, b in enumerate(branches):
+                state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS
+                out.append(self._track(person, boxes[k], state, nodes[k], b.kind))
+        return out
+
+    @staticmethod
+    def _track(person: _Person, box: np.ndarray, state: TrackState, node, kind: str | None) -> Track:
+        extra = {"ellipse": box_ellipses(box[None])[0], "hypothesis": kind,
+                 "occluder": None if node is None else node.occluder,
+                 "depth": 0 if node is None else node.depth,
+                 "node": None if node is None else node.key}
+        return Track(person.public_id, box.copy(), state, 1.0, extra)
+
+
+def matched_velocity(person: _Person) -> np.ndarray:
+    """(2,) velocity (vx, vy) of a person's current (visible) node."""
+    return person.branches[0].x[4:6].copy()
