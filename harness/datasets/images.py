@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import logging
 import re
-from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
@@ -75,8 +74,9 @@ class ImageSequence(Sequence):
             sequence (ground truth and detections but no frames: ``frame`` returns None).
         gt: ground truth or None.
         public_detections: the sequence's public detections or None.
-        prefetch: frames ``frames()`` decodes ahead in a background thread (OpenCV
-            releases the GIL while decoding, so decoding overlaps the tracker); 0 disables.
+        prefetch: frames decoded ahead in a background thread after each ``frame(k)``
+            (OpenCV releases the GIL while decoding, so decoding overlaps the tracker);
+            0 disables.
     """
 
     def __init__(self, info: SequenceInfo, paths: list[Path] | None,
@@ -91,6 +91,8 @@ class ImageSequence(Sequence):
         self.gt = gt
         self.public_detections = public_detections
         self.prefetch = int(prefetch)
+        self._pool: ThreadPoolExecutor | None = None
+        self._pending: dict[int, Future] = {}
 
     @property
     def has_pixels(self) -> bool:
@@ -105,6 +107,9 @@ class ImageSequence(Sequence):
     def frame(self, index: int) -> np.ndarray | None:
         """Frame ``index`` (1-based) as (H, W, 3) uint8 BGR; None for a box-only sequence.
 
+        After frame k, frames k+1..k+prefetch are decoded in a background thread, so
+        reading in order (the runner's pattern) overlaps decoding with the caller's work.
+
         Raises:
             IndexError: index outside 1..length.
             FrameError: the file is missing, corrupt, or has another size than the sequence.
@@ -112,7 +117,21 @@ class ImageSequence(Sequence):
         k = self._check_index(index)
         if self.paths is None:
             return None
-        return self._decode(k)
+        if self.prefetch == 0:
+            return self._decode(k)
+        pending = self._pending
+        fut = pending.pop(k, None)
+        for j in [j for j in pending if j < k or j > k + self.prefetch]:
+            pending.pop(j).cancel()
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="occbench-decode")
+        for j in range(k + 1, min(self.info.length, k + self.prefetch) + 1):
+            if j not in pending:  # frame k, decoded below, is not waited for by the pool
+                pending[j] = self._pool.submit(self._decode, j)
+        image = self._decode(k) if fut is None else fut.result()
+        if k == self.info.length:
+            self.close()  # the last frame: do not keep an idle thread per finished sequence
+        return image
 
     def _decode(self, k: int) -> np.ndarray:
         path = self.paths[k - 1]
@@ -125,18 +144,22 @@ class ImageSequence(Sequence):
             )
         return image
 
-    def frames(self) -> Iterator[tuple[int, np.ndarray | None]]:
-        """Yield (k, frame) for k = 1..length, decoding ``prefetch`` frames ahead."""
-        if self.paths is None or self.prefetch == 0:
-            yield from super().frames()
-            return
-        n = self.info.length
-        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="occbench-decode") as pool:
-            pending: dict[int, Future] = {}
-            for k in range(1, n + 1):
-                for j in range(k, min(n, k + self.prefetch) + 1):
-                    if j not in pending:
-                        pending[j] = pool.submit(self._decode, j)
-                yield k, pending.pop(k).result()
-            for fut in pending.values():
-                fut.cancel()
+    def close(self) -> None:
+        """Stop the background decoder (it restarts on the next ``frame`` call)."""
+        for fut in self._pending.values():
+            fut.cancel()
+        self._pending = {}
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+        self._pool = None
+
+    def __getstate__(self) -> dict:
+        # threads and futures cannot be pickled (joblib workers): restart them on first use
+        state = self.__dict__.copy()
+        state.update(_pool=None, _pending={})
+        return state
+
+    def __del__(self) -> None:
+        pool = getattr(self, "_pool", None)
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
