@@ -19,6 +19,7 @@ before the failure stays on disk.
 from __future__ import annotations
 
 import csv
+import importlib
 import inspect
 import logging
 import math
@@ -268,7 +269,7 @@ def run_sequence(
                 t0 = time.perf_counter()
                 try:
                     tracks = tracker.update(*args)
-                except Exception as err:  # one tracker's failure must not stop the others
+                except Exception as err:  # noqa: BLE001 - one tracker's failure must not stop the others
                     out[t].error = f"frame {k}: {type(err).__name__}: {err}"
                     out[t].trace = traceback.format_exc()
                     log.error("%s on %s failed at frame %d: %s: %s", t, name, k,
@@ -311,7 +312,7 @@ def run_tracker(tracker: Tracker, sequence: Sequence, source: DetectionSource,
 
 def _metrics():
     try:
-        import harness.metrics as metrics
+        from harness import metrics
     except ImportError as err:
         raise RunError(f"harness.metrics is not available: {err}") from err
     return metrics
@@ -464,23 +465,51 @@ def _container(node: Any) -> Any:
     return node
 
 
-def _locate_target(target: str) -> None:
-    """Import ``target``'s module; ImportError names what is missing."""
-    from hydra.utils import get_object
+def _locate_target(target: str) -> Any:
+    """The object named by the dotted path ``target``; ImportError naming what is missing."""
+    parts = target.split(".")
+    first_error: ImportError | None = None
+    for i in range(len(parts) - 1, 0, -1):  # the longest importable module prefix
+        module_name = ".".join(parts[:i])
+        try:
+            obj = importlib.import_module(module_name)
+        except ModuleNotFoundError as err:
+            if err.name and (module_name + ".").startswith(err.name + "."):
+                first_error = first_error or err  # this prefix is not a module: try shorter
+                continue
+            raise  # the module exists but one of its own imports is missing
+        try:
+            for attr in parts[i:]:
+                obj = getattr(obj, attr)
+        except AttributeError as err:
+            raise first_error or ImportError(f"{target}: {err}") from err
+        return obj
+    raise first_error or ImportError(f"{target!r} is not a dotted path to an object")
 
-    get_object(target)
+
+def _hydra_choice(group: str) -> str | None:
+    """The config choice of ``group`` in a running Hydra app, else None."""
+    from hydra.core.hydra_config import HydraConfig
+
+    if not HydraConfig.initialized():
+        return None
+    choice = HydraConfig.get().runtime.choices.get(group)
+    return None if choice is None else str(choice)
 
 
 def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
     """Tracker configs by name from ``cfg.tracker``.
 
     ``cfg.tracker`` is either one config with ``_target_`` (``tracker=baseline``; its name
-    is ``name``, the config choice) or a dict of such configs keyed by name
+    is ``name``, by default the config choice of a running Hydra app, else the class name)
+    or a dict of such configs keyed by name
     (``tracker=all``).
     """
     if node is None or len(node) == 0:
         raise RunError("no tracker selected: set tracker=<name> or tracker=all")
     if "_target_" in node:
+        if name is None:
+            name = _hydra_choice("tracker")
         if name is None or name == "all":
             name = str(node["_target_"]).rsplit(".", 1)[-1]
         return {str(name): node}
@@ -640,7 +669,7 @@ def run_experiment(
             trackers = {n: build_tracker(n, node) for n, node in configs.items()}
             source = build_source(_cfg_get(cfg, "detector"))
             outputs = run_sequence(trackers, seq, source, foreground, background, progress)
-        except Exception as err:  # the sequence cannot go on: record it, go to the next
+        except Exception as err:  # noqa: BLE001 - the sequence fails, the next goes on
             fail("*", sname, "sequence", err, traceback.format_exc())
             continue
         for n, out in outputs.items():
@@ -657,21 +686,21 @@ def run_experiment(
                 continue
             try:
                 scores[n][sname] = score(seq.gt, read_mot(path), iou_threshold)
-            except Exception as err:
+            except Exception as err:  # noqa: BLE001 - recorded, the run goes on
                 fail(n, sname, "score", err, traceback.format_exc())
         for n, folder in externals.items():
             if seq.gt is None:
                 continue
             try:
                 scores[n][sname] = score(seq.gt, read_external(n, folder, sname), iou_threshold)
-            except Exception as err:
+            except Exception as err:  # noqa: BLE001 - recorded, the run goes on
                 fail(n, sname, "external", err, traceback.format_exc())
         writer.timings(timings)
         try:
             metrics = _metrics_frame(scores)
             writer.metrics(metrics)
             writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
-        except Exception as err:
+        except Exception as err:  # noqa: BLE001 - recorded, the run goes on
             fail("*", sname, "metrics", err, traceback.format_exc())
     if metrics.empty:
         log.warning("no sequence was scored: metrics.csv has no rows")
@@ -680,7 +709,7 @@ def run_experiment(
     writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
     try:
         metric_bars(metrics, writer.out_dir / "plots" / "metrics.png", plot_metrics, title)
-    except Exception as err:  # a plot is not worth losing the run for
+    except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
         fail("*", "*", "plot", err, traceback.format_exc())
     return ExperimentResult(metrics, failures, pd.DataFrame(timings), writer.out_dir, names)
 

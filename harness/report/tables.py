@@ -114,7 +114,7 @@ def format_values(df: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
             elif v is None or (isinstance(v, float) and math.isnan(v)):
                 out.loc[i, c] = "-"
             elif count:
-                out.loc[i, c] = str(int(round(float(v))))
+                out.loc[i, c] = str(round(float(v)))
             else:
                 out.loc[i, c] = f"{float(v):.{digits}f}"
     return out
