@@ -1,0 +1,88 @@
+"""Layered data association: feature -> part -> global (PBM 4, 4.1, eqs. 11-13).
+
+Feature layer (eq. 11): d_ij = |f_ij - F_ij| for feature i of part j of a candidate (f)
+and of the target's parts model (F). Histograms differ by 1 - rho (Bhattacharyya
+coefficient, ``trackers.histograms.bhattacharyya``), overlap by 1 - IoU.
+Part layer (eq. 12): p_j = sum_i omega_i p(d_ij | theta_ij), p(. | theta) the match
+probability of ``FeatureModels``.
+Global layer (eq. 13): p = sum_j gamma_j p_j.
+
+Everything is vectorised over T targets x N candidates.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackers.frontend.parts import N_PARTS, PartFeatures, part_displacement, part_overlap
+from trackers.histograms import bhattacharyya
+from trackers.layered.models import FEATURES, FeatureModels
+
+
+def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
+                        ) -> np.ndarray:
+    """Eq. 11 for every target/candidate pair.
+
+    Args:
+        model: T targets' parts models. cand: N candidates' part features.
+        misses: (T,) frames since each target was last found; displacement and overlap
+            differences are divided by (1 + misses) so they stay per-frame after a gap.
+    Returns:
+        (T, N, 6, 5) differences, features in ``FEATURES`` order.
+    """
+    T, N = len(model), len(cand)
+    d = np.empty((T, N, len(FEATURES), N_PARTS))
+    d[:, :, 0] = np.abs(model.area[:, None] - cand.area[None])
+    d[:, :, 1] = np.abs(model.perimeter[:, None] - cand.perimeter[None])
+    for i, name in ((2, "hsv"), (3, "xyz")):
+        a, b = getattr(model, name), getattr(cand, name)
+        for j in range(N_PARTS):
+            d[:, :, i, j] = 1.0 - bhattacharyya(a[:, j], b[:, j]).reshape(T, N)
+    d[:, :, 4] = part_displacement(cand, model).transpose(1, 0, 2)
+    d[:, :, 5] = 1.0 - part_overlap(model, cand)
+    # an empty histogram (part without foreground) never matches
+    empty = (cand.area <= 0)[None, :, :]
+    d[:, :, 2] = np.where(empty, 1.0, d[:, :, 2])
+    d[:, :, 3] = np.where(empty, 1.0, d[:, :, 3])
+    if misses is not None:
+        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[:, None, None]
+        d[:, :, 4] *= g
+        d[:, :, 5] *= g
+    return np.clip(d, 0.0, None)
+
+
+def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 12-13.
+
+    Args:
+        d: (..., 6, 5) differences. omega: (6,) feature weights; gamma: (5,) part weights
+            (both normalised to sum 1 here).
+    Returns:
+        part scores p_j (..., 5) and global scores p (...,), all in [0, 1].
+    """
+    prob = models.match_probability(d)  # p(d_ij | theta_ij)
+    w = np.asarray(omega, dtype=np.float64) / np.sum(omega)
+    g = np.asarray(gamma, dtype=np.float64) / np.sum(gamma)
+    p_parts = np.einsum("...ij,i->...j", prob, w)  # eq. 12
+    return p_parts, p_parts @ g  # eq. 13
+
+
+def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:
+    """The best candidate of one target and whether the decision is ambiguous (PBM 4, step 4).
+
+    Args:
+        scores: (N,) global scores, -inf outside the gate.
+    Returns:
+        (best index or -1, runner-up index or -1, ambiguous) where ambiguous means the best
+        does not exceed ``margin`` times the runner-up while both pass ``threshold``.
+    """
+    if len(scores) == 0:
+        return -1, -1, False
+    order = np.argsort(-scores, kind="stable")
+    best = int(order[0])
+    if not np.isfinite(scores[best]) or scores[best] < threshold:
+        return -1, -1, False
+    runner = int(order[1]) if len(order) > 1 and np.isfinite(scores[order[1]]) else -1
+    amb = runner >= 0 and scores[runner] >= threshold and scores[best] < margin * scores[runner]
+    return best, runner, bool(amb)

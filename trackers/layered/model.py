@@ -1,0 +1,158 @@
+"""The target: global model (PBM 2.1), parts model (2.2), filters (3) and update (4.2).
+
+Global model (GM): six degrees of freedom (xtl, ytl, xc, yc, w, h) and the centroid
+ratios alpha (eq. 1) and beta (eq. 2), each a running average over ``ratio_window``
+frames, which place the five part rectangles and infer xtl and yc under occlusion.
+
+Update (PBM 4.2):
+- global DOF: replaced by the candidate's when unoccluded; under occlusion the mean of the
+  last ``occluded_window`` DOF vectors (the new estimate included);
+- each part whose score p_j (eq. 12) reaches ``part_match_threshold`` moves its area,
+  perimeter and colour histograms towards the candidate's by a running average with weight
+  ``update_rate * p_j`` (the better the match, the larger the step); a part below the
+  threshold does not match and keeps its model frozen (its rectangle follows the GM).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from trackers.frontend.parts import (
+    HEAD_FRACTION,
+    N_PARTS,
+    PartFeatures,
+    centroid_ratios,
+    part_boxes,
+)
+from trackers.layered.dynamics import GateFilter, SizeFilter
+
+
+def dof_from_box(box: np.ndarray, centroid: np.ndarray) -> np.ndarray:
+    """(6,) global DOF (xtl, ytl, xc, yc, w, h) of a box and its centroid."""
+    x, y, w, h = box
+    return np.array([x, y, centroid[0], centroid[1], w, h], dtype=np.float64)
+
+
+def dof_from_head(head: np.ndarray, w: float, h: float, alpha: float, beta: float) -> np.ndarray:
+    """(6,) DOF under occlusion (PBM 2.1): xc, ytl from the head top; xtl (eq. 1) and yc
+    (eq. 2) from the previous frame's alpha and beta."""
+    xc, ytl = head[0], head[1]
+    xtl = xc - alpha * w
+    yc = ytl + HEAD_FRACTION * h + beta * (h - HEAD_FRACTION * h)
+    return np.array([xtl, ytl, xc, yc, w, h], dtype=np.float64)
+
+
+class Target:
+    """One tracked person.
+
+    Attributes:
+        id: track id. dof: (6,) global model. alpha, beta: averaged centroid ratios.
+        parts: PartFeatures of one box: the parts model.
+        hits, misses, age: life-cycle counters; confirmed: passed ``min_hits``.
+        occluded_parts: (5,) bool, parts frozen at the last update.
+        occluded: the last match was an occluded candidate.
+        head_template: grey head patch for multiple-response pruning, or None.
+    """
+
+    def __init__(self, track_id: int, dof: np.ndarray, alpha: float, beta: float,
+                 parts: PartFeatures, gate_args: dict, size_args: dict, ratio_window: int,
+                 occluded_window: int) -> None:
+        self.id = track_id
+        self.dof = np.asarray(dof, dtype=np.float64).copy()
+        self._alphas: deque[float] = deque([alpha], maxlen=ratio_window)
+        self._betas: deque[float] = deque([beta], maxlen=ratio_window)
+        self._history: deque[np.ndarray] = deque([self.dof.copy()], maxlen=occluded_window)
+        self.parts = parts.copy()
+        xc, yc, w, h = self.dof[2], self.dof[3], self.dof[4], self.dof[5]
+        self.gate = GateFilter(np.array([xc, yc]), h, **gate_args)
+        self.size = SizeFilter(w, h, **size_args)
+        self.hits = 1
+        self.misses = 0
+        self.age = 1
+        self.confirmed = False
+        self.occluded = False
+        self.occluded_parts = np.zeros(N_PARTS, dtype=bool)
+        self.part_scores = np.ones(N_PARTS)
+        self.head_template: np.ndarray | None = None
+        self.score = 0.0
+
+    @property
+    def alpha(self) -> float:
+        return float(np.mean(self._alphas))
+
+    @property
+    def beta(self) -> float:
+        return float(np.mean(self._betas))
+
+    @property
+    def box(self) -> np.ndarray:
+        """(4,) xywh of the global model."""
+        return self.dof[[0, 1, 4, 5]].copy()
+
+    @property
+    def head(self) -> np.ndarray:
+        """(3,) head top-centre x, top y, head width of the global model."""
+        return np.array([self.dof[2], self.dof[1], self.dof[4] * 0.5])
+
+    def part_rectangles(self) -> np.ndarray:
+        """(5, 4) part boxes of the global model."""
+        return part_boxes(self.box[None], self.alpha, self.beta)[0]
+
+    def predict(self) -> np.ndarray:
+        """Advance KF1 and KF2 one frame; returns the predicted (w, h) (KF2)."""
+        self.gate.predict()
+        self.age += 1
+        return self.size.predict()
+
+    def gate_box(self) -> np.ndarray:
+        return self.gate.gate(self.size.predicted, self.misses)
+
+    def mark_missed(self) -> None:
+        self.misses += 1
+        self.occluded_parts[:] = True
+
+    def update(self, dof: np.ndarray, centroid_measured: bool, occluded: bool,
+               cand: PartFeatures, part_scores: np.ndarray, part_match_threshold: float,
+               update_rate: float) -> None:
+        """PBM 4.2 model update from the chosen candidate.
+
+        Args:
+            dof: (6,) the candidate's global model. centroid_measured: xc, yc come from the
+                candidate's own foreground (then alpha, beta are re-measured, eqs. 1-2).
+            occluded: the candidate was occluded (window-average the DOF).
+            cand: the candidate's PartFeatures (one box). part_scores: (5,) p_j (eq. 12).
+        """
+        old_centre = self.dof[2:4].copy()
+        self._history.append(np.asarray(dof, dtype=np.float64).copy())
+        if occluded:
+            self.dof = np.mean(np.stack(self._history), axis=0)
+        else:
+            self.dof = np.asarray(dof, dtype=np.float64).copy()
+            if centroid_measured:
+                a, b = centroid_ratios(self.box[None], self.dof[None, 2:4])
+                self._alphas.append(float(a[0]))
+                self._betas.append(float(b[0]))
+        xc, yc, w, h = self.dof[2:]
+        self.gate.correct(np.array([xc, yc]))
+        self.size.correct(w, h)
+        # parts model (PBM 4.2)
+        matched = part_scores >= part_match_threshold
+        eta = np.where(matched, update_rate * part_scores, 0.0)
+        P = self.parts
+        P.area[0] += eta * (cand.area[0] - P.area[0])
+        P.perimeter[0] += eta * (cand.perimeter[0] - P.perimeter[0])
+        P.hsv[0] += eta[:, None] * (cand.hsv[0] - P.hsv[0])
+        P.xyz[0] += eta[:, None] * (cand.xyz[0] - P.xyz[0])
+        # geometry follows the global model; centroids of frozen parts move with it
+        shift = np.array([xc, yc]) - old_centre
+        new_parts = self.part_rectangles()
+        P.centroid[0] = np.where(matched[:, None], cand.centroid[0], P.centroid[0] + shift)
+        P.parts[0] = new_parts
+        P.height[0] = h
+        self.part_scores = np.asarray(part_scores, dtype=np.float64).copy()
+        self.occluded_parts = ~matched
+        self.occluded = occluded
+        self.hits += 1
+        self.misses = 0

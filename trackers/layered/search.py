@@ -1,0 +1,252 @@
+"""Candidates, heads, occlusion test, head-anchored search and alignment (PBM 2.1, 3.1, 4.1).
+
+A *candidate* ("anchor") is one head in one candidate region: a detection box with its
+head, or a head found on a foreground blob. Heads come from ``Detections.heads`` when the
+source gives them; otherwise from the foreground itself: the peaks of a blob's top
+profile (the topmost foreground row of each column), the visible tops of heads that PBM
+3.1 relies on ("the tops of the heads are visible most of the time"). A blob holding two
+people side by side has two peaks, so each is located by its own head.
+
+Occlusion test (PBM 3.1): a candidate region whose width or height differs from the
+target's predicted size by more than ``occlusion_threshold`` (50%) is occluded:
+- larger (merged) region: boxes of sizes w (1 + delta i), h (1 + delta i), i = -search_range
+  .. search_range (eqs. 9-10; delta is relative to the predicted size) hang from the head
+  top inside the region; the best-scoring one is the candidate's global model;
+- smaller region: the predicted-size box is aligned on the head; when the head is not
+  supported by foreground the candidate is dismissed.
+
+When a target has several close candidates with similar scores, ``match_head_template``
+refines the head by normalised cross-correlation of the target's head template in a local
+neighbourhood (multiple-response pruning, PBM 4.1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy.ndimage import minimum_filter1d
+
+from trackers.frontend.parts import HEAD_FRACTION
+
+
+@dataclass
+class Anchor:
+    """One candidate: a head in a region.
+
+    Attributes:
+        box: (4,) xywh own box (the detection, the blob, or the blob's slice for this head).
+        region: (4,) xywh candidate region the occlusion test compares (detection or blob).
+        head: (3,) head top-centre x, top y, head width (pixels).
+        centroid: (2,) foreground centroid of ``box`` (its centre without foreground).
+        source: "detection" or "blob".
+        heads_in_region: number of heads found in the region.
+    """
+
+    box: np.ndarray
+    region: np.ndarray
+    head: np.ndarray
+    centroid: np.ndarray
+    source: str
+    heads_in_region: int = 1
+
+
+def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Connected components of a bool mask (PBM 2).
+
+    Returns:
+        labels (H, W) int32, boxes (K, 4) xywh float64, label numbers (K,) of the blobs with
+        at least ``min_area`` pixels.
+    """
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8)
+    keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area)[0] + 1
+    boxes = stats[keep, :4].astype(np.float64)
+    return labels, boxes, keep
+
+
+def top_profile_heads(mask: np.ndarray, min_separation: float, min_prominence: float) -> np.ndarray:
+    """Heads of a blob crop as the peaks of its top profile.
+
+    Args:
+        mask: (h, w) bool crop of one blob.
+        min_separation: smallest horizontal distance between two heads (pixels).
+        min_prominence: rows the profile must drop on both sides of a peak (or reach the
+            crop edge) within ``2 * min_separation`` columns.
+    Returns:
+        (K, 2) float64 (column centre, top row) in crop coordinates, highest head first.
+    """
+    h, w = mask.shape
+    if h == 0 or w == 0:
+        return np.zeros((0, 2))
+    has = mask.any(axis=0)
+    top = np.where(has, mask.argmax(axis=0), h).astype(np.float64)
+    r = max(int(min_separation // 2), 1)
+    local = minimum_filter1d(top, size=2 * r + 1, mode="nearest")
+    is_min = (top == local) & has
+    cols = np.nonzero(is_min)[0]
+    if len(cols) == 0:
+        return np.zeros((0, 2))
+    # group consecutive plateau columns into one peak
+    groups = np.split(cols, np.nonzero(np.diff(cols) > 1)[0] + 1)
+    peaks = []
+    span = int(2 * min_separation)
+    for g in groups:
+        c = 0.5 * (g[0] + g[-1])
+        t = top[g[0]]
+        lo, hi = max(g[0] - span, 0), min(g[-1] + span + 1, w)
+        left = top[lo : g[0]]
+        right = top[g[-1] + 1 : hi]
+        ok_left = g[0] - span <= 0 or (len(left) and left.max() - t >= min_prominence)
+        ok_right = g[-1] + span >= w - 1 or (len(right) and right.max() - t >= min_prominence)
+        if ok_left and ok_right:
+            peaks.append((c, t))
+    if not peaks:
+        c = int(np.argmin(top))
+        peaks = [(float(c), top[c])]
+    peaks = np.array(sorted(peaks, key=lambda p: p[1]), dtype=np.float64)
+    kept: list[np.ndarray] = []
+    for p in peaks:  # non-maximum suppression, highest first
+        if all(abs(p[0] - q[0]) >= min_separation for q in kept):
+            kept.append(p)
+    return np.array(kept).reshape(-1, 2)
+
+
+def head_from_band(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
+    """(3,) head (x top-centre, y top, width) of a box: the top 1/7 band's foreground.
+
+    Without foreground (or with none in the band) the band's centre.
+    """
+    x, y, w, h = box
+    if fg is not None:
+        H, W = fg.shape
+        r0, r1 = max(int(y), 0), min(int(np.ceil(y + HEAD_FRACTION * h)) + 1, H)
+        c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
+        if r1 > r0 and c1 > c0:
+            band = fg[r0:r1, c0:c1]
+            cols = np.nonzero(band.any(axis=0))[0]
+            if len(cols):
+                rows = np.nonzero(band.any(axis=1))[0]
+                return np.array([c0 + 0.5 * (cols[0] + cols[-1] + 1), r0 + rows[0],
+                                 max(cols[-1] + 1 - cols[0], 1)], dtype=np.float64)
+    return np.array([x + 0.5 * w, y, 0.5 * w])
+
+
+def region_centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
+    """(2,) foreground centroid inside a box (the box centre without foreground)."""
+    x, y, w, h = box
+    if fg is not None:
+        H, W = fg.shape
+        r0, r1 = max(int(round(y)), 0), min(int(round(y + h)), H)
+        c0, c1 = max(int(round(x)), 0), min(int(round(x + w)), W)
+        if r1 > r0 and c1 > c0:
+            crop = fg[r0:r1, c0:c1]
+            n = crop.sum()
+            if n > 0:
+                cy = (crop.sum(axis=1) @ np.arange(r0, r1)) / n + 0.5
+                cx = (crop.sum(axis=0) @ np.arange(c0, c1)) / n + 0.5
+                return np.array([cx, cy])
+    return np.array([x + 0.5 * w, y + 0.5 * h])
+
+
+def split_blob_box(mask: np.ndarray, offset: np.ndarray, heads_x: np.ndarray, k: int) -> np.ndarray:
+    """(4,) xywh slice of a merged blob that belongs to head k.
+
+    Columns are split half-way between neighbouring heads; rows run from the head's top to
+    the lowest foreground pixel in those columns.
+    """
+    h, w = mask.shape
+    order = np.sort(heads_x)
+    xk = heads_x[k]
+    i = int(np.searchsorted(order, xk))
+    lo = 0 if i == 0 else int(round(0.5 * (order[i - 1] + xk)))
+    hi = w if i == len(order) - 1 else int(round(0.5 * (order[i + 1] + xk)))
+    sub = mask[:, lo:hi]
+    rows = np.nonzero(sub.any(axis=1))[0]
+    cols = np.nonzero(sub.any(axis=0))[0]
+    if len(rows) == 0:
+        return np.array([offset[0] + lo, offset[1], max(hi - lo, 1), h], dtype=np.float64)
+    return np.array([offset[0] + lo + cols[0], offset[1] + rows[0], cols[-1] + 1 - cols[0],
+                     rows[-1] + 1 - rows[0]], dtype=np.float64)
+
+
+def occlusion_kind(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> int:
+    """PBM 3.1 occlusion test: 0 unoccluded, +1 larger region, -1 smaller region.
+
+    Occluded when |w_c - w| / w or |h_c - h| / h exceeds ``threshold``; larger when either
+    dimension grew beyond it, else smaller.
+    """
+    rel = (np.asarray(region_wh, dtype=np.float64) - predicted_wh) / np.maximum(predicted_wh, 1.0)
+    if (rel > threshold).any():
+        return 1
+    if (rel < -threshold).any():
+        return -1
+    return 0
+
+
+def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step: float,
+                 search_range: int) -> np.ndarray:
+    """Head-anchored boxes of eqs. 9-10: ((2 r + 1)^2, 4) xywh.
+
+    w_i = w (1 + step i), h_k = h (1 + step k), i, k = -r..r; each box hangs from the head
+    top (y = head top) with its centroid column on the head (x = head x - alpha w_i, eq. 1).
+    """
+    i = np.arange(-search_range, search_range + 1, dtype=np.float64)
+    ws = predicted_wh[0] * (1.0 + step * i)
+    hs = predicted_wh[1] * (1.0 + step * i)
+    W, Hh = np.meshgrid(ws, hs, indexing="ij")
+    W, Hh = W.ravel(), Hh.ravel()
+    return np.column_stack([head[0] - alpha * W, np.full_like(W, head[1]), W, Hh])
+
+
+def aligned_box(head: np.ndarray, predicted_wh: np.ndarray, alpha: float) -> np.ndarray:
+    """(4,) predicted-size box aligned on a head (PBM 3.1, smaller candidate)."""
+    w, h = predicted_wh
+    return np.array([head[0] - alpha * w, head[1], w, h])
+
+
+def head_fill(fg: np.ndarray | None, box: np.ndarray) -> float:
+    """Foreground fraction of the head rectangle (top 1/7) of a box; 1 without foreground."""
+    if fg is None:
+        return 1.0
+    x, y, w, h = box
+    H, W = fg.shape
+    r0, r1 = max(int(round(y)), 0), min(int(round(y + HEAD_FRACTION * h)), H)
+    c0, c1 = max(int(round(x + 0.25 * w)), 0), min(int(round(x + 0.75 * w)), W)
+    if r1 <= r0 or c1 <= c0:
+        return 0.0
+    return float(fg[r0:r1, c0:c1].mean())
+
+
+def head_patch(gray: np.ndarray, box: np.ndarray) -> np.ndarray | None:
+    """Grey head template: the top 1/7 of a box, or None when it leaves the image."""
+    x, y, w, h = box
+    H, W = gray.shape
+    r0, r1 = int(round(y)), int(round(y + HEAD_FRACTION * h))
+    c0, c1 = int(round(x)), int(round(x + w))
+    if r0 < 0 or c0 < 0 or r1 > H or c1 > W or r1 - r0 < 3 or c1 - c0 < 3:
+        return None
+    return gray[r0:r1, c0:c1].copy()
+
+
+def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarray,
+                        radius: float) -> tuple[np.ndarray, float]:
+    """Exhaustive local template matching (PBM 4.1, multiple-response pruning).
+
+    Args:
+        gray: (H, W) uint8 frame. template: (th, tw) head patch.
+        centre: (2,) expected top-left corner of the head patch. radius: search radius.
+    Returns:
+        best top-left corner (2,) and its normalised correlation (-1..1; -1 when no room).
+    """
+    th, tw = template.shape
+    H, W = gray.shape
+    r = int(np.ceil(radius))
+    x0, y0 = int(round(centre[0])) - r, int(round(centre[1])) - r
+    c0, r0 = max(x0, 0), max(y0, 0)
+    c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
+    if c1 - c0 < tw or r1 - r0 < th:
+        return np.asarray(centre, dtype=np.float64), -1.0
+    res = cv2.matchTemplate(gray[r0:r1, c0:c1], template, cv2.TM_CCOEFF_NORMED)
+    _, best, _, loc = cv2.minMaxLoc(res)
+    return np.array([c0 + loc[0], r0 + loc[1]], dtype=np.float64), float(best)

@@ -1,0 +1,483 @@
+"""PBM: part-based model with layered data association, multi-target.
+
+Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM). Per
+frame (PBM Fig. 1):
+
+1. Candidates (``search.Anchor``): each detection box with its head, plus every head of
+   every foreground blob (connected components, PBM 2) that no detection explains. Heads
+   come from ``Detections.heads`` when given, else from the foreground: the top band (1/7)
+   of a detection box, and the peaks of a blob's top profile. With ``foreground=None`` the
+   detection boxes are the candidate blobs and every box pixel counts as foreground
+   (area and perimeter then carry no information; colour, displacement and overlap do).
+2. Dynamical model (PBM 3): KF1 gives the gate (zero-order centre, size from speed,
+   doubled after a miss and growing until found or dropped); KF2 predicts (w, h).
+3. Occlusion detection (PBM 3.1): size differs from the prediction by > 50%. Larger
+   candidates (and blobs holding several heads) get the head-anchored search over
+   w (1 + delta i), h (1 + delta i); smaller ones are aligned on their head or dismissed.
+4. Layered association (PBM 4.1): eq. 11 differences -> eq. 12 part scores (weights
+   omega) -> eq. 13 global score (weights gamma); per target the best gated candidate must
+   pass ``match_threshold`` and beat the runner-up by ``margin_ratio``; otherwise (or when
+   all scores are weak, above ``weak_threshold``) the target's head template is matched in
+   a local neighbourhood and the candidate nearest the refined head is kept (multiple-
+   response pruning). Targets then share candidates one-to-one by the Hungarian method on
+   1 - p (a multi-target addition: the paper tracks one target at a time).
+5. Model update (PBM 4.2): ``model.Target.update``.
+
+Multi-target life cycle (an adaptation: the paper initialises by hand, PBM 3): a candidate
+that no target takes starts a TENTATIVE target (new blobs, and heads of a blob that split
+from another); it is CONFIRMED after ``min_hits`` matches in a row and dropped if it
+misses before. A confirmed target that is not found is reported OCCLUDED at its last
+validated box (zero-order, as the gate) for up to ``max_report_misses`` frames when
+``report_occluded``; it is dropped after ``max_misses`` frames, or after ``exit_misses``
+frames when its box touches the image border (it left).
+
+Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
+parts), ``part_scores`` (5,), ``gate`` (4,) xywh.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+
+import cv2
+import numpy as np
+
+from trackers.common.assignment import assign
+from trackers.frontend.parts import (
+    N_PARTS,
+    PartFeatureExtractor,
+    PartFeatures,
+    centroid_ratios,
+)
+from trackers.geometry import iou_matrix
+from trackers.layered.association import ambiguous, feature_differences, layered_scores
+from trackers.layered.model import Target, dof_from_box, dof_from_head
+from trackers.layered.models import FEATURES, FeatureModels
+from trackers.layered.search import (
+    Anchor,
+    aligned_box,
+    blobs_boxes,
+    head_fill,
+    head_from_band,
+    head_patch,
+    match_head_template,
+    occlusion_kind,
+    region_centroid,
+    search_boxes,
+    split_blob_box,
+    top_profile_heads,
+)
+from trackers.records import Detections, Track, TrackState
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
+                           "displacement": 0.1, "overlap": 0.15}
+DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
+
+
+class PBMTracker:
+    """Five-part layered-association tracker (PBM), tracking every person in view.
+
+    Args:
+        models: feature-difference models (``FeatureModels``, a dict as written by
+            ``python -m harness.fit pbm``, or None for the shipped defaults).
+        feature_weights: omega_i of eq. 12, a mapping feature name -> weight.
+        part_weights: gamma_j of eq. 13, five weights (head, left/right torso-arm,
+            left/right leg).
+        match_threshold: smallest global score p (eq. 13) of an accepted match.
+        weak_threshold: scores in [weak, match) trigger head-template pruning (PBM 4.1).
+        margin_ratio: the best candidate must exceed ``margin_ratio`` x the runner-up.
+        part_match_threshold: a part with p_j below it does not match and stays frozen.
+        update_rate: running-average rate of matched parts (step = rate x p_j, PBM 4.2).
+        occlusion_threshold: relative size change that flags an occlusion (PBM 3.1, 50%).
+        search_step: delta of eqs. 9-10 (relative to the predicted size).
+        search_range: i runs over -range..range in eqs. 9-10.
+        ratio_window: frames of the running averages of alpha and beta (PBM 2.1, 3-5).
+        occluded_window: DOF vectors averaged under occlusion (PBM 4.2).
+        gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
+        gate_max_fraction: KF1 gate half-size = speed_factor |v| + min_fraction (w, h),
+            x miss_factor after a miss, x growth per further miss, <= max_fraction (w, h).
+        kf1_position_noise, kf1_velocity_noise, kf1_measurement_noise: KF1 noise (per
+            person height / 10). kf2_*: the same for KF2.
+        min_blob_area: smallest foreground blob used as a candidate (pixels).
+        min_height: smallest candidate height that may start a target (pixels).
+        head_separation: smallest distance between two heads in a blob, x blob height.
+        head_min_fill: foreground fraction a head rectangle needs for alignment (PBM 3.1).
+        histogram_bins: bins per channel of the HSV and XYZ part histograms.
+        template_threshold: normalised correlation needed by head-template pruning.
+        prune_radius: ambiguous candidates closer than this many head widths are "nearby".
+        min_hits: matches in a row that confirm a new target.
+        max_misses: frames a confirmed target survives unfound.
+        exit_margin: pixels from the border within which a lost target counts as leaving.
+        exit_misses: frames unfound after which a leaving target is dropped.
+        new_track_iou: a free candidate overlapping a live target by more IoU than this
+            does not start a new target.
+        report_occluded: report unfound confirmed targets as OCCLUDED.
+        max_report_misses: frames an unfound target is reported.
+    """
+
+    def __init__(
+        self,
+        models: FeatureModels | Mapping | None = None,
+        feature_weights: Mapping[str, float] | None = None,
+        part_weights: Sequence[float] = DEFAULT_PART_WEIGHTS,
+        match_threshold: float = 0.35,
+        weak_threshold: float = 0.2,
+        margin_ratio: float = 1.1,
+        part_match_threshold: float = 0.4,
+        update_rate: float = 0.3,
+        occlusion_threshold: float = 0.5,
+        search_step: float = 0.05,
+        search_range: int = 2,
+        ratio_window: int = 4,
+        occluded_window: int = 3,
+        gate_speed_factor: float = 3.0,
+        gate_min_fraction: float = 0.5,
+        gate_miss_factor: float = 2.0,
+        gate_growth: float = 1.15,
+        gate_max_fraction: float = 4.0,
+        kf1_position_noise: float = 0.5,
+        kf1_velocity_noise: float = 0.2,
+        kf1_measurement_noise: float = 0.5,
+        kf2_position_noise: float = 0.2,
+        kf2_velocity_noise: float = 0.02,
+        kf2_measurement_noise: float = 0.5,
+        min_blob_area: int = 80,
+        min_height: float = 12.0,
+        head_separation: float = 0.12,
+        head_min_fill: float = 0.2,
+        histogram_bins: int = 4,
+        template_threshold: float = 0.6,
+        prune_radius: float = 3.0,
+        min_hits: int = 3,
+        max_misses: int = 40,
+        exit_margin: float = 8.0,
+        exit_misses: int = 3,
+        new_track_iou: float = 0.3,
+        report_occluded: bool = True,
+        max_report_misses: int = 15,
+    ) -> None:
+        if models is None:
+            models = FeatureModels.default()
+        elif isinstance(models, Mapping):
+            models = FeatureModels.from_dict(dict(models), "models")
+        elif not isinstance(models, FeatureModels):
+            raise ValueError(f"models must be FeatureModels, a mapping or None, got {type(models).__name__}")
+        self.models = models
+        fw = dict(DEFAULT_FEATURE_WEIGHTS if feature_weights is None else feature_weights)
+        unknown = set(fw) - set(FEATURES)
+        if unknown:
+            raise ValueError(f"feature_weights: unknown features {sorted(unknown)}; known {FEATURES}")
+        omega = np.array([float(fw.get(f, 0.0)) for f in FEATURES])
+        if (omega < 0).any() or omega.sum() <= 0:
+            raise ValueError(f"feature_weights must be >= 0 with a positive sum, got {fw}")
+        gamma = np.asarray(list(part_weights), dtype=np.float64)
+        if gamma.shape != (N_PARTS,) or (gamma < 0).any() or gamma.sum() <= 0:
+            raise ValueError(f"part_weights must be {N_PARTS} weights >= 0 with a positive sum, got {part_weights}")
+        self.omega = omega / omega.sum()
+        self.gamma = gamma / gamma.sum()
+        for name, v in (("match_threshold", match_threshold), ("weak_threshold", weak_threshold),
+                        ("part_match_threshold", part_match_threshold), ("update_rate", update_rate),
+                        ("head_min_fill", head_min_fill), ("new_track_iou", new_track_iou)):
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must lie in [0, 1], got {v}")
+        if weak_threshold > match_threshold:
+            raise ValueError(f"weak_threshold ({weak_threshold}) must be <= match_threshold ({match_threshold})")
+        if margin_ratio < 1.0:
+            raise ValueError(f"margin_ratio must be >= 1, got {margin_ratio}")
+        if occlusion_threshold <= 0:
+            raise ValueError(f"occlusion_threshold must be > 0, got {occlusion_threshold}")
+        if not 0 < search_step < 0.5 or search_range < 0:
+            raise ValueError(f"search_step must be in (0, 0.5) and search_range >= 0, got {search_step}, {search_range}")
+        for name, v in (("ratio_window", ratio_window), ("occluded_window", occluded_window),
+                        ("min_hits", min_hits), ("histogram_bins", histogram_bins)):
+            if int(v) < 1:
+                raise ValueError(f"{name} must be >= 1, got {v}")
+        if max_misses < 0 or exit_misses < 0 or max_report_misses < 0:
+            raise ValueError("max_misses, exit_misses and max_report_misses must be >= 0")
+        if gate_miss_factor < 1 or gate_growth < 1 or gate_max_fraction <= 0:
+            raise ValueError("gate_miss_factor and gate_growth must be >= 1, gate_max_fraction > 0")
+        self.match_threshold = match_threshold
+        self.weak_threshold = weak_threshold
+        self.margin_ratio = margin_ratio
+        self.part_match_threshold = part_match_threshold
+        self.update_rate = update_rate
+        self.occlusion_threshold = occlusion_threshold
+        self.search_step = search_step
+        self.search_range = int(search_range)
+        self.ratio_window = int(ratio_window)
+        self.occluded_window = int(occluded_window)
+        self._gate_args = dict(
+            position_noise=kf1_position_noise, velocity_noise=kf1_velocity_noise,
+            measurement_noise=kf1_measurement_noise, speed_factor=gate_speed_factor,
+            min_fraction=gate_min_fraction, miss_factor=gate_miss_factor, growth=gate_growth,
+            max_fraction=gate_max_fraction)
+        self._size_args = dict(position_noise=kf2_position_noise, velocity_noise=kf2_velocity_noise,
+                               measurement_noise=kf2_measurement_noise)
+        self.min_blob_area = int(min_blob_area)
+        self.min_height = float(min_height)
+        self.head_separation = float(head_separation)
+        self.head_min_fill = head_min_fill
+        self.template_threshold = template_threshold
+        self.prune_radius = prune_radius
+        self.min_hits = int(min_hits)
+        self.max_misses = int(max_misses)
+        self.exit_margin = float(exit_margin)
+        self.exit_misses = int(exit_misses)
+        self.new_track_iou = new_track_iou
+        self.report_occluded = bool(report_occluded)
+        self.max_report_misses = int(max_report_misses)
+        self._extractor = PartFeatureExtractor(int(histogram_bins))
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every target and restart ids at 1."""
+        self.targets: list[Target] = []
+        self._next_id = 1
+        self._frame = 0
+
+    # ------------------------------------------------------------------ candidates
+    def _anchors(self, fg: np.ndarray | None, detections: Detections) -> list[Anchor]:
+        anchors: list[Anchor] = []
+        det_boxes = detections.boxes
+        heads = detections.heads
+        for k, box in enumerate(det_boxes):
+            if not (box[2] > 1 and box[3] > 1 and np.isfinite(box).all()):
+                continue
+            if heads is not None and np.isfinite(heads[k]).all():
+                hx, hy, hw, _ = heads[k]
+                head = np.array([hx + 0.5 * hw, hy, hw])
+            else:
+                head = head_from_band(fg, box)
+            anchors.append(Anchor(box.copy(), box.copy(), head, region_centroid(fg, box), "detection"))
+        if fg is None:
+            return anchors
+        labels, bboxes, numbers = blobs_boxes(fg, self.min_blob_area)
+        for bbox, lab in zip(bboxes, numbers):
+            x, y, w, h = (int(v) for v in bbox)
+            mask = labels[y:y + h, x:x + w] == lab
+            peaks = top_profile_heads(mask, max(self.head_separation * h, 3.0),
+                                      max(0.06 * h, 2.0))
+            hx = peaks[:, 0] + x + 0.5
+            hy = peaks[:, 1] + y
+            # heads explained by a detection: inside a detection box's top third
+            explained = np.zeros(len(peaks), dtype=bool)
+            for b in det_boxes:
+                explained |= ((hx >= b[0]) & (hx <= b[0] + b[2]) & (hy >= b[1] - 0.1 * b[3])
+                              & (hy <= b[1] + b[3] / 3.0))
+            if explained.all():
+                continue
+            n = len(peaks)
+            for k in np.nonzero(~explained)[0]:
+                own = bbox.copy() if n == 1 else split_blob_box(mask, bbox[:2], peaks[:, 0], int(k))
+                head_w = max(self.head_separation * h, 3.0)
+                anchors.append(Anchor(own, bbox.copy(), np.array([hx[k], hy[k], head_w]),
+                                      region_centroid(fg, own), "blob", n))
+        return anchors
+
+    # ------------------------------------------------------------------ hypotheses
+    def _occluded_hypothesis(self, t: Target, a: Anchor, kind: int, fg: np.ndarray | None,
+                             pred_wh: np.ndarray):
+        """Head-anchored search (larger) or alignment (smaller) of PBM 3.1.
+
+        Returns (score, part scores, features (1 box), dof) or None when dismissed.
+        """
+        if kind > 0:
+            boxes = search_boxes(a.head, pred_wh, t.alpha, self.search_step, self.search_range)
+            region = a.region
+        else:
+            box = aligned_box(a.head, pred_wh, t.alpha)
+            if head_fill(fg, box) < self.head_min_fill:
+                return None
+            boxes = box[None]
+            region = None
+        feats = self._extractor.extract(boxes, t.alpha, t.beta, region=region)
+        d = feature_differences(t.parts, feats, np.array([t.misses]))
+        pj, p = layered_scores(self.models, d, self.omega, self.gamma)
+        k = int(np.argmax(p[0]))
+        w, h = boxes[k, 2], boxes[k, 3]
+        dof = dof_from_head(a.head, w, h, t.alpha, t.beta)
+        return float(p[0, k]), pj[0, k], feats.take(k), dof
+
+    # ------------------------------------------------------------------ pruning
+    def _prune(self, t: Target, cands: list[int], anchors: list[Anchor], gray: np.ndarray) -> int:
+        """Multiple-response pruning (PBM 4.1): the candidate nearest the head template's
+        best local match, or -1 when the template does not match."""
+        if t.head_template is None or not cands:
+            return -1
+        th, tw = t.head_template.shape
+        hs = np.array([anchors[n].head[:2] for n in cands])
+        centre = hs.mean(axis=0)
+        radius = float(np.max(np.linalg.norm(hs - centre, axis=1))) + 0.5 * tw + 2
+        tl, corr = match_head_template(gray, t.head_template,
+                                       np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
+        if corr < self.template_threshold:
+            return -1
+        refined = np.array([tl[0] + 0.5 * tw, tl[1]])
+        dist = np.linalg.norm(hs - refined, axis=1)
+        return cands[int(np.argmin(dist))]
+
+    # ------------------------------------------------------------------ update
+    def update(self, frame: np.ndarray, detections: Detections | None,
+               foreground: np.ndarray | None = None) -> list[Track]:
+        """Advance one frame.
+
+        Args:
+            frame: (H, W, 3) uint8 BGR image (required: PBM compares colours).
+            detections: person boxes (``Detections.heads`` used when present); None = none.
+            foreground: (H, W) bool mask or int label image (nonzero = foreground), or None.
+        Returns:
+            One Track per live target: CONFIRMED when found, OCCLUDED (last box) while
+            unfound, TENTATIVE before confirmation.
+        """
+        if frame is None:
+            raise ValueError("PBMTracker.update: frame is None; PBM needs pixels (colour histograms of the parts)")
+        frame = np.asarray(frame)
+        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
+            raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
+        fg = None
+        if foreground is not None:
+            foreground = np.asarray(foreground)
+            if foreground.shape != frame.shape[:2]:
+                raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
+                                 f"differs from frame {frame.shape[:2]}")
+            fg = foreground != 0
+        if detections is None:
+            detections = Detections.empty()
+        self._frame += 1
+        H, W = frame.shape[:2]
+        anchors = self._anchors(fg, detections)
+        self._extractor.start(frame, fg)
+        gray = None
+        n_a = len(anchors)
+        if n_a:
+            boxes = np.array([a.box for a in anchors])
+            cents = np.array([a.centroid for a in anchors])
+            al, be = centroid_ratios(boxes, cents)
+            feats = self._extractor.extract(boxes, al, be)
+        else:
+            boxes = np.zeros((0, 4))
+            feats = PartFeatures.concatenate([], self._extractor.bins)
+        targets = self.targets
+        pred_wh = np.array([t.predict() for t in targets]).reshape(-1, 2)
+        T = len(targets)
+        S = np.full((T, n_a), -np.inf)
+        hyp: dict[tuple[int, int], tuple] = {}
+        if T and n_a:
+            model = PartFeatures.concatenate([t.parts for t in targets], self._extractor.bins)
+            misses = np.array([t.misses for t in targets])
+            d = feature_differences(model, feats, misses)
+            pj_all, p_all = layered_scores(self.models, d, self.omega, self.gamma)
+            gates = np.array([t.gate_box() for t in targets])
+            c = boxes[:, :2] + 0.5 * boxes[:, 2:]
+            inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
+                      & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
+            for ti, n in zip(*np.nonzero(inside)):
+                a = anchors[n]
+                kind = occlusion_kind(a.region[2:], pred_wh[ti], self.occlusion_threshold)
+                if kind == 0 and a.heads_in_region > 1:
+                    kind = 1  # a blob holding several heads is a merge: search it
+                if kind == 0:
+                    S[ti, n] = p_all[ti, n]
+                    hyp[(ti, n)] = (pj_all[ti, n], feats.take(n), dof_from_box(a.box, a.centroid), False)
+                    continue
+                res = self._occluded_hypothesis(targets[ti], a, kind, fg, pred_wh[ti])
+                if res is None:
+                    continue
+                S[ti, n] = res[0]
+                hyp[(ti, n)] = (res[1], res[2], res[3], True)
+            # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
+            for ti, t in enumerate(targets):
+                row = S[ti]
+                best, runner, amb = ambiguous(row, self.match_threshold, self.margin_ratio)
+                weak = best < 0 and np.isfinite(row).any() and row.max() >= self.weak_threshold
+                if not (amb or weak):
+                    continue
+                lo = self.match_threshold if amb else self.weak_threshold
+                cands = [int(n) for n in np.nonzero(row >= lo)[0]]
+                if amb:
+                    hw = max(anchors[best].head[2], 1.0)
+                    cands = [n for n in cands if n == best or np.linalg.norm(
+                        anchors[n].head[:2] - anchors[best].head[:2]) <= self.prune_radius * hw
+                        or row[n] * self.margin_ratio > row[best]]
+                if gray is None:
+                    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+                chosen = self._prune(t, cands, anchors, gray)
+                if chosen < 0:
+                    if weak:
+                        continue
+                    chosen = best
+                keep = row[chosen]
+                S[ti, cands] = -np.inf
+                S[ti, chosen] = max(keep, self.match_threshold)
+        cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
+        matches, lost, free = assign(cost, 1.0 - self.match_threshold)
+        taken = np.zeros(n_a, dtype=bool)
+        for ti, n in matches:
+            t = targets[ti]
+            pj, f1, dof, occl = hyp[(ti, n)]
+            t.update(dof, fg is not None and not occl, occl, f1, pj, self.part_match_threshold,
+                     self.update_rate)
+            t.score = float(S[ti, n])
+            taken[n] = True
+            if not t.occluded and pj[0] >= self.part_match_threshold:
+                if gray is None:
+                    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+                tpl = head_patch(gray, t.box)
+                if tpl is not None:
+                    t.head_template = tpl
+            if not t.confirmed and t.hits >= self.min_hits:
+                t.confirmed = True
+        for ti in lost:
+            targets[ti].mark_missed()
+        # drop tentative misses, long-lost and leaving targets
+        alive = []
+        for t in targets:
+            if t.misses == 0:
+                alive.append(t)
+                continue
+            if not t.confirmed or t.misses > self.max_misses:
+                continue
+            x, y, w, h = t.box
+            near_border = (x <= self.exit_margin or y <= self.exit_margin
+                           or x + w >= W - self.exit_margin or y + h >= H - self.exit_margin)
+            if near_border and t.misses >= self.exit_misses:
+                continue
+            alive.append(t)
+        # new targets from free candidates (new blobs, split heads)
+        live_boxes = np.array([t.box for t in alive]).reshape(-1, 4)
+        for n in free:
+            a = anchors[n]
+            if taken[n] or a.box[3] < self.min_height:
+                continue
+            if len(live_boxes) and iou_matrix(a.box[None], live_boxes).max() > self.new_track_iou:
+                continue
+            al_n, be_n = centroid_ratios(a.box[None], a.centroid[None])
+            t = Target(self._next_id, dof_from_box(a.box, a.centroid), float(al_n[0]),
+                       float(be_n[0]), feats.take(n), self._gate_args, self._size_args,
+                       self.ratio_window, self.occluded_window)
+            t.score = 0.0
+            self._next_id += 1
+            if gray is None:
+                gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+            t.head_template = head_patch(gray, t.box)
+            if self._frame <= self.min_hits:
+                t.confirmed = True  # people present from the start are reported at once
+            alive.append(t)
+            live_boxes = np.vstack([live_boxes, a.box[None]])
+        self.targets = alive
+        return self._output()
+
+    def _output(self) -> list[Track]:
+        out = []
+        for t in self.targets:
+            extra = {"parts": t.part_rectangles(), "occluded_parts": t.occluded_parts.copy(),
+                     "part_scores": t.part_scores.copy(), "gate": t.gate_box()}
+            if t.misses == 0:
+                state = TrackState.CONFIRMED if t.confirmed else TrackState.TENTATIVE
+                out.append(Track(t.id, t.box, state, float(np.clip(t.score, 0, 1)), extra))
+            elif t.confirmed and self.report_occluded and t.misses <= self.max_report_misses:
+                out.append(Track(t.id, t.box, TrackState.OCCLUDED, 0.0, extra))
+        return out
