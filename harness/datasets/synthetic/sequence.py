@@ -1,0 +1,273 @@
+"""``SyntheticSequence``: renders frames, exact label images, ground truth and head boxes
+of a cast of people over a static background.
+
+Ground truth (``gt``, computed on first use by a label-only pass over all frames):
+
+- box: the person's full (amodal) box **clipped to the image**; a row exists for every frame
+  in which at least one pixel of the person, drawn alone, falls inside the image.
+- conf 1 (replay copies the source file's conf), class 1 (pedestrian).
+- visibility (MOT16 column 9) = visible pixels / pixels of the person drawn alone, both
+  counted inside the image, from the rendered label images (people painted far to near).
+- ``occluded`` = visibility < ``occluded_below`` (0.3 by default).
+
+Head boxes (``head_boxes(k)`` and ``head_table``) are the amodal head boxes clipped to the
+image; whether the head is visible follows from ``foreground(k)`` (pixels equal to the id).
+
+Shadows darken the floor only: they are not part of a person's label.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import OrderedDict
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from harness.datasets.base import GroundTruth, Sequence
+from harness.datasets.synthetic.people import Appearance, ShadowPainter, draw_person, head_box
+from harness.io.mot import MotTable
+from trackers.records import SequenceInfo
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Cast:
+    """Who is drawn where, per person ``p`` and frame index ``i`` (0-based, frame i + 1).
+
+    Attributes:
+        ids: (P,) int64 gt ids (positive, distinct).
+        appearances: P appearances.
+        boxes: (P, L, 4) float64 amodal xywh boxes in pixels, NaN where absent.
+        depth: (P, L) float64 painting key: larger is farther (painted first).
+        phase: (P, L) float64 walking phase, radians.
+        facing: (P, L) float64 lateral direction in [-1, 1].
+        away: (P, L) bool seen from behind.
+        swing: (P, L) float64 swing amplitude in [0, 1].
+        conf: (P, L) float64 gt conf column (1 unless a replayed file says otherwise).
+    """
+
+    ids: np.ndarray
+    appearances: list[Appearance]
+    boxes: np.ndarray
+    depth: np.ndarray
+    phase: np.ndarray
+    facing: np.ndarray
+    away: np.ndarray
+    swing: np.ndarray
+    conf: np.ndarray = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        self.ids = np.asarray(self.ids, dtype=np.int64)
+        P = len(self.ids)
+        if self.boxes.ndim != 3 or self.boxes.shape[0] != P or self.boxes.shape[2] != 4:
+            raise ValueError(f"Cast: boxes must be (P, L, 4) with P={P}, got {self.boxes.shape}")
+        if len(self.appearances) != P:
+            raise ValueError(f"Cast: {P} ids but {len(self.appearances)} appearances")
+        if (self.ids <= 0).any() or len(set(self.ids.tolist())) != P:
+            raise ValueError(f"Cast: ids must be positive and distinct, got {self.ids.tolist()}")
+        if self.conf is None:
+            self.conf = np.ones(self.boxes.shape[:2])
+
+    @property
+    def length(self) -> int:
+        return int(self.boxes.shape[1])
+
+
+class SyntheticSequence(Sequence):
+    """A rendered sequence.
+
+    Args:
+        name: sequence name.
+        cast: the people and their per-frame boxes and poses.
+        background: (H, W, 3) uint8 BGR static background.
+        fps: frame rate.
+        seed: seed of the per-frame randomness (sensor noise).
+        noise: standard deviation of the additive Gaussian sensor noise, grey levels (0 = off).
+        gains: optional (L, 3) per-frame B, G, R illumination gains (None = constant light).
+        shadows: draw soft cast shadows.
+        occluded_below: visibility under which a gt row is flagged occluded.
+        cache_frames: how many rendered frames (with their label images) are kept.
+    Frames are rendered on demand: ``frame(k)`` works in any order, and ``frame(k)`` followed
+    by ``foreground(k)`` renders once.
+    """
+
+    def __init__(self, name: str, cast: Cast, background: np.ndarray, fps: float = 25.0,
+                 seed: int = 0, noise: float = 2.0, gains: np.ndarray | None = None,
+                 shadows: bool = True, occluded_below: float = 0.3, cache_frames: int = 4) -> None:
+        if background.ndim != 3 or background.shape[2] != 3 or background.dtype != np.uint8:
+            raise ValueError(f"SyntheticSequence: background must be (H, W, 3) uint8, got "
+                             f"{background.shape} {background.dtype}")
+        if noise < 0:
+            raise ValueError(f"SyntheticSequence: noise must be >= 0, got {noise}")
+        if fps <= 0:
+            raise ValueError(f"SyntheticSequence: fps must be > 0, got {fps}")
+        if cache_frames < 1:
+            raise ValueError(f"SyntheticSequence: cache_frames must be >= 1, got {cache_frames}")
+        H, W = background.shape[:2]
+        L = cast.length
+        if gains is not None:
+            gains = np.asarray(gains, dtype=np.float64)
+            if gains.shape != (L, 3):
+                raise ValueError(f"SyntheticSequence: gains must be ({L}, 3), got {gains.shape}")
+        self.info = SequenceInfo(name=name, width=W, height=H, fps=float(fps), length=L)
+        self.cast = cast
+        self.background = background
+        self.seed = int(seed)
+        self.noise = float(noise)
+        self.gains = gains
+        self.shadows = ShadowPainter() if shadows else None
+        self.occluded_below = float(occluded_below)
+        self.public_detections: MotTable | None = None
+        self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self._cache_frames = int(cache_frames)
+        self._noise_bank: np.ndarray | None = None
+        self._gt: GroundTruth | None = None
+        self._heads: np.ndarray | None = None
+        self._label = np.zeros((H, W), np.int32)
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def gt(self) -> GroundTruth:  # type: ignore[override]
+        if self._gt is None:
+            self._gt, self._heads = self._ground_truth()
+        return self._gt
+
+    @property
+    def head_table(self) -> np.ndarray:
+        """(N, 4) float64 xywh head boxes (clipped to the image) aligned with ``gt.table`` rows."""
+        if self._heads is None:
+            self._gt, self._heads = self._ground_truth()
+        return self._heads
+
+    def head_boxes(self, index: int) -> dict[int, np.ndarray]:
+        """Head box (xywh, clipped to the image) of every person in frame ``index`` with
+        pixels in the image: {gt id: (4,) float64}."""
+        self._check(index)
+        rows = self.gt.rows_of(index)
+        return {int(self.gt.table.ids[r]): self.head_table[r].copy() for r in rows}
+
+    def frame(self, index: int) -> np.ndarray:
+        """Frame ``index`` (1-based): (H, W, 3) uint8 BGR (a fresh copy)."""
+        return self._render(index)[0].copy()
+
+    def foreground(self, index: int) -> np.ndarray:
+        """Exact label image of frame ``index``: (H, W) int32, gt id at each visible person
+        pixel, 0 elsewhere (shadows are background)."""
+        return self._render(index)[1].copy()
+
+    # ------------------------------------------------------------------ rendering
+    def _check(self, index: int) -> int:
+        k = int(index)
+        if k != index or not 1 <= k <= self.info.length:
+            raise IndexError(f"{self.info.name}: frame {index} outside 1..{self.info.length}")
+        return k
+
+    def _present(self, i: int) -> list[int]:
+        """Persons drawn in frame index ``i`` (0-based), far to near (ties by id)."""
+        c = self.cast
+        b = c.boxes[:, i]
+        W, H = self.info.width, self.info.height
+        ok = (np.isfinite(b).all(1) & (b[:, 2] > 0) & (b[:, 3] > 0) & (b[:, 0] < W) & (b[:, 1] < H)
+              & (b[:, 0] + b[:, 2] > 0) & (b[:, 1] + b[:, 3] > 0))
+        idx = np.flatnonzero(ok)
+        order = np.lexsort((c.ids[idx], -c.depth[idx, i]))
+        return [int(p) for p in idx[order]]
+
+    def _draw(self, p: int, i: int, img, label, value=None, origin=(0, 0)) -> None:
+        c = self.cast
+        draw_person(img, label, int(c.ids[p]) if value is None else value, c.boxes[p, i],
+                    c.appearances[p], float(c.phase[p, i]), float(c.facing[p, i]),
+                    bool(c.away[p, i]), float(c.swing[p, i]), origin)
+
+    def _render(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        k = self._check(index)
+        hit = self._cache.get(k)
+        if hit is not None:
+            self._cache.move_to_end(k)
+            return hit
+        i = k - 1
+        img = self.background.copy()
+        label = np.zeros(img.shape[:2], np.int32)
+        people = self._present(i)
+        if self.shadows is not None:
+            for p in people:
+                self.shadows.paint(img, self.cast.boxes[p, i], 0.15)
+        for p in people:
+            self._draw(p, i, img, label)
+        if self.gains is not None:
+            g = self.gains[i]
+            img = cv2.multiply(img, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+        if self.noise > 0:
+            img = self._add_noise(img, k)
+        self._cache[k] = (img, label)
+        if len(self._cache) > self._cache_frames:
+            self._cache.popitem(last=False)
+        return img, label
+
+    def _add_noise(self, img: np.ndarray, k: int) -> np.ndarray:
+        """Add Gaussian sensor noise: a shifted window of one of two precomputed noise
+        images chosen by (seed, k), so any frame is reproducible on its own."""
+        H, W = img.shape[:2]
+        pad = 64
+        if self._noise_bank is None:
+            rng = np.random.default_rng([self.seed, 0x5E45])
+            bank = rng.normal(0.0, self.noise, (2, H + pad, W + pad, 3))
+            self._noise_bank = np.round(bank).clip(-255, 255).astype(np.int16)
+        r = np.random.default_rng([self.seed, k, 0x701])
+        b, dy, dx = int(r.integers(2)), int(r.integers(pad)), int(r.integers(pad))
+        return cv2.add(img, self._noise_bank[b, dy:dy + H, dx:dx + W], dtype=cv2.CV_8U)
+
+    # ------------------------------------------------------------------ ground truth
+    def _ground_truth(self) -> tuple[GroundTruth, np.ndarray]:
+        c = self.cast
+        W, H = self.info.width, self.info.height
+        label = self._label
+        frames, ids, boxes, conf, vis, heads = [], [], [], [], [], []
+        for i in range(c.length):
+            people = self._present(i)
+            if not people:
+                continue
+            label[:] = 0
+            alone: dict[int, tuple[int, tuple[int, int, int, int]]] = {}
+            for p in people:
+                self._draw(p, i, None, label)
+                x, y, w, h = c.boxes[p, i]
+                x0, y0 = max(int(math.floor(x)), 0), max(int(math.floor(y)), 0)
+                x1, y1 = min(int(math.ceil(x + w)), W), min(int(math.ceil(y + h)), H)
+                crop = np.zeros((y1 - y0, x1 - x0), np.uint8)
+                self._draw(p, i, None, crop, 1, (x0, y0))
+                alone[p] = (int(cv2.countNonZero(crop)), (x0, y0, x1, y1))
+            for p in people:
+                n, (x0, y0, x1, y1) = alone[p]
+                if n == 0:
+                    continue
+                pid = int(c.ids[p])
+                seen = int(np.count_nonzero(label[y0:y1, x0:x1] == pid))
+                x, y, w, h = c.boxes[p, i]
+                bx0, by0 = max(x, 0.0), max(y, 0.0)
+                bx1, by1 = min(x + w, float(W)), min(y + h, float(H))
+                frames.append(i + 1)
+                ids.append(pid)
+                boxes.append((bx0, by0, bx1 - bx0, by1 - by0))
+                conf.append(float(c.conf[p, i]))
+                vis.append(min(seen / n, 1.0))
+                hb = head_box(c.boxes[p, i], float(c.facing[p, i]))
+                hx0, hy0 = min(max(hb[0], 0.0), W), min(max(hb[1], 0.0), H)
+                hx1, hy1 = min(max(hb[0] + hb[2], 0.0), W), min(max(hb[1] + hb[3], 0.0), H)
+                heads.append((hx0, hy0, hx1 - hx0, hy1 - hy0))
+        n = len(frames)
+        table = MotTable(
+            np.asarray(frames, np.int64).reshape(n), np.asarray(ids, np.int64).reshape(n),
+            np.asarray(boxes, np.float64).reshape(n, 4), np.asarray(conf, np.float64).reshape(n),
+            np.ones(n, np.int64), np.asarray(vis, np.float64).reshape(n), f"<synthetic:{self.info.name}>",
+        )
+        order = np.lexsort((table.ids, table.frames))
+        table = table.rows(order)
+        heads_a = np.asarray(heads, np.float64).reshape(n, 4)[order]
+        gt = GroundTruth(table, occluded=table.visibility < self.occluded_below)
+        log.debug("%s: %d gt rows, %d occluded", self.info.name, n, int(gt.occluded.sum()))
+        return gt, heads_a
