@@ -204,6 +204,17 @@ def test_mot_missing_frame_raises_frame_error_naming_file(tmp_path, caplog):
     assert seen == [1, 2]
 
 
+def test_prefetching_reader_random_access_and_pickle(tmp_path):
+    make_mot_seq(tmp_path / "S")
+    (seq,) = load_mot(tmp_path, prefetch=3)
+    for k in (1, 2, 3, 5, 2, 4, 1, 1, 5):  # in order, then jumps that drop queued frames
+        assert np.array_equal(seq.frame(k), make_frame(k))
+    seq.frame(2)
+    again = pickle.loads(pickle.dumps(seq))  # a thread pool cannot be pickled: rebuilt
+    assert all(np.array_equal(img, make_frame(k)) for k, img in again.frames())
+    assert again._pool is None  # closed after the last frame
+
+
 def test_corrupt_image_raises_frame_error_naming_file(tmp_path):
     make_mot_seq(tmp_path / "S")
     bad = tmp_path / "S" / "img1" / "000002.png"
@@ -419,6 +430,37 @@ def test_video_sequential_and_random_access(tmp_path, monkeypatch, name, fourcc)
         assert frame_number(seq.frame(k)) == k
     again = pickle.loads(pickle.dumps(seq))  # e.g. sent to a joblib worker
     assert frame_number(again.frame(6)) == 6
+
+
+def bar_frame(k: int) -> np.ndarray:
+    """96x64 frame identifying k in 0..59 by two white bars (survives MPEG compression)."""
+    img = np.zeros((64, 96, 3), dtype=np.uint8)
+    img[:24, (k % 12) * 8:(k % 12) * 8 + 8] = 255
+    img[40:, (k // 12) * 16:(k // 12) * 16 + 16] = 255
+    return img
+
+
+def bar_number(img: np.ndarray) -> int:
+    a = img[:24].mean(axis=(0, 2)).reshape(12, 8).mean(1).argmax()
+    b = img[40:].mean(axis=(0, 2)).reshape(6, 16).mean(1).argmax()
+    return int(b * 12 + a)
+
+
+def test_mpeg_program_stream_is_counted_and_never_seeked(tmp_path):
+    # FFmpeg estimates an MPEG-PS frame count from its duration and seeks to wrong frames
+    # near the end; the reader counts by decoding and decodes forward instead
+    path = tmp_path / "clip.mpg"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MPEG"), 25.0, (96, 64))
+    if not writer.isOpened():
+        pytest.skip("this OpenCV build cannot write MPEG-1 program streams")
+    for k in range(1, 60):
+        writer.write(bar_frame(k))
+    writer.release()
+    (seq,) = load_video(path)
+    assert seq.exact and seq.info.length == 59
+    assert [bar_number(img) for _, img in seq.frames()] == list(range(1, 60))
+    for k in (59, 3, 58, 57, 40, 1, 59):
+        assert bar_number(seq.frame(k)) == k
 
 
 def test_video_with_gt_name_and_fps(tmp_path):

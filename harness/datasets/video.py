@@ -27,6 +27,12 @@ VIDEO_EXTENSIONS = (".mpg", ".mpeg", ".mp4", ".avi", ".mov", ".mkv", ".m4v", ".w
 #: a forward jump of at most this many frames is decoded through instead of seeking
 GRAB_AHEAD = 32
 
+#: containers whose frame count FFmpeg estimates from the duration and in which seeking by
+#: frame number lands on wrong frames (measured: an MPEG-1 program stream of 295 frames
+#: reports 293, and seeking to frame 290 returns frame 288): their frames are counted by
+#: decoding once, and a jump back reopens the file and decodes forward (exact, slower).
+UNRELIABLE_SEEK = (".mpg", ".mpeg", ".mpe", ".m1v", ".m2v", ".vob", ".ts", ".m2ts")
+
 
 class VideoSequence(Sequence):
     """A video file as a sequence.
@@ -37,6 +43,8 @@ class VideoSequence(Sequence):
         public_detections: a ``MotTable`` or MOT det file path, or None.
         name: sequence name; None = the file stem.
         fps: frame rate; None = the container's (25 when it reports none, logged).
+        exact: count frames by decoding and never seek by frame number (slower random
+            access, always right); None = only for ``UNRELIABLE_SEEK`` containers (MPEG).
     Raises:
         FileNotFoundError: no such video (or gt/det file).
         FrameError: OpenCV cannot open or decode the video.
@@ -44,7 +52,8 @@ class VideoSequence(Sequence):
 
     def __init__(self, path: str | Path, gt: GroundTruth | str | Path | None = None,
                  public_detections: MotTable | str | Path | None = None,
-                 name: str | None = None, fps: float | None = None) -> None:
+                 name: str | None = None, fps: float | None = None,
+                 exact: bool | None = None) -> None:
         self.path = Path(path).expanduser()
         if not self.path.is_file():
             raise FileNotFoundError(f"video file not found: {self.path}")
@@ -53,6 +62,7 @@ class VideoSequence(Sequence):
         self._cap: cv2.VideoCapture | None = None
         self._next = 1  # frame the capture decodes on the next read()
         self._last: tuple[int, np.ndarray] | None = None
+        self.exact = self.path.suffix.lower() in UNRELIABLE_SEEK if exact is None else bool(exact)
         cap = self._capture()
         length = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
         width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH))
@@ -61,7 +71,11 @@ class VideoSequence(Sequence):
         if not np.isfinite(rate) or rate <= 0:
             log.warning("%s: the container reports no frame rate; assuming 25 fps", self.path)
             rate = 25.0
-        if length <= 0:
+        if self.exact:
+            reported, length = length, self._count_frames()
+            if reported != length:
+                log.info("%s: %d frames (the container estimates %d)", self.path, length, reported)
+        elif length <= 0:
             length = self._count_frames()
             log.warning("%s: the container reports no frame count; counted %d frames",
                         self.path, length)
@@ -124,17 +138,19 @@ class VideoSequence(Sequence):
         if self._last is not None and self._last[0] == k:
             return self._last[1].copy()
         cap = self._capture()
-        if k != self._next:
-            if self._next < k <= self._next + GRAB_AHEAD:
-                while self._next < k:
-                    if not cap.grab():
-                        self.close()
-                        raise FrameError(f"{self.path}: cannot decode frame {self._next} "
-                                         f"of {self.info.length}")
-                    self._next += 1
-            else:
-                cap.set(cv2.CAP_PROP_POS_FRAMES, k - 1)
-                self._next = k
+        if k < self._next and self.exact:
+            self.close()  # no seeking: reopen and decode forward
+            cap = self._capture()
+        if self._next < k and (self.exact or k <= self._next + GRAB_AHEAD):
+            while self._next < k:
+                if not cap.grab():
+                    self.close()
+                    raise FrameError(f"{self.path}: cannot decode frame {self._next} "
+                                     f"of {self.info.length}")
+                self._next += 1
+        elif k != self._next:
+            cap.set(cv2.CAP_PROP_POS_FRAMES, k - 1)
+            self._next = k
         ok, image = cap.read()
         if not ok or image is None:
             self.close()
@@ -147,7 +163,8 @@ class VideoSequence(Sequence):
 
 
 def load_video(path: str | Path, gt: str | Path | None = None, name: str | None = None,
-               fps: float | None = None, det: str | Path | None = None) -> list[Sequence]:
+               fps: float | None = None, det: str | Path | None = None,
+               exact: bool | None = None) -> list[Sequence]:
     """One video file as a one-sequence dataset.
 
     Args:
@@ -156,11 +173,12 @@ def load_video(path: str | Path, gt: str | Path | None = None, name: str | None 
         name: sequence name (default: the file stem; results are written as <name>.txt).
         fps: frame rate overriding the container's.
         det: optional MOT detection file (public detections).
+        exact: never seek by frame number (see ``VideoSequence``); None = only for MPEG.
     """
     path = Path(path).expanduser()
     if not path.exists():
         raise FileNotFoundError(f"video file not found: {path}")
-    seq = VideoSequence(path, gt=gt, public_detections=det, name=name, fps=fps)
+    seq = VideoSequence(path, gt=gt, public_detections=det, name=name, fps=fps, exact=exact)
     if seq.gt is not None and len(seq.gt.table) and seq.gt.table.frames.max() > seq.info.length:
         log.warning("%s: gt reaches frame %d but the video has %d frames", gt,
                     int(seq.gt.table.frames.max()), seq.info.length)
