@@ -27,7 +27,7 @@ import numpy as np
 
 from harness.datasets.base import GroundTruth, Sequence
 from harness.datasets.images import ImageSequence, numbered_images, read_image
-from harness.datasets.mot import APPEARANCE_LABELS, read_seqinfo
+from harness.datasets.mot import APPEARANCE_LABELS, read_seqinfo, seqinfo_number
 from harness.datasets.video import VIDEO_EXTENSIONS, VideoSequence
 from harness.io.mot import MotTable, read_mot
 from trackers.records import SequenceInfo
@@ -159,7 +159,12 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
         raise NotADirectoryError(f"CAVIAR root is not a folder: {root}")
     xml_path = Path(xml).expanduser() if xml is not None else _find_xml(root)
     gt = read_cvml(xml_path)
-    ini = read_seqinfo(root / "seqinfo.ini") if (root / "seqinfo.ini").is_file() else {}
+    ini_path = root / "seqinfo.ini"
+    ini = read_seqinfo(ini_path) if ini_path.is_file() else {}
+    ini_length = seqinfo_number(ini, "seqLength", ini_path, int)
+    ini_width = seqinfo_number(ini, "imWidth", ini_path, int)
+    ini_height = seqinfo_number(ini, "imHeight", ini_path, int)
+    ini_fps = seqinfo_number(ini, "frameRate", ini_path, float)
     seq_name = name or ini.get("name", "").strip() or root.name
     last_gt = int(gt.table.frames.max()) if len(gt.table) else 0
 
@@ -186,20 +191,20 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
         first = min(images)
         if sorted(images) != list(range(first, first + len(images))):
             log.warning("%s: frame numbers are not contiguous; frame k is the k-th file", folder)
-        length = int(ini.get("seqLength", len(paths)))
+        length = ini_length or len(paths)
         if length != len(paths):
             raise ValueError(f"{folder}: {len(paths)} frames but seqLength={length} in seqinfo.ini")
         h, w = read_image(paths[0]).shape[:2]
     else:
         log.warning("%s: no frames (no img1/, video or JPEGs): box-only sequence", root)
         paths = None
-        if "imWidth" not in ini or "imHeight" not in ini:
+        if ini_width is None or ini_height is None:
             w, h = 384, 288  # every CAVIAR clip is half-PAL 384x288
             log.warning("%s: no frames and no seqinfo.ini size: assuming CAVIAR's 384x288", root)
         else:
-            w, h = int(ini["imWidth"]), int(ini["imHeight"])
-        length = int(ini.get("seqLength", last_gt))
-    rate = float(fps) if fps is not None else float(ini.get("frameRate", CAVIAR_FPS))
+            w, h = ini_width, ini_height
+        length = ini_length or last_gt
+    rate = float(fps) if fps is not None else float(ini_fps or CAVIAR_FPS)
     if last_gt > length:
         log.warning("%s: ground truth reaches frame %d but the sequence has %d frames",
                     xml_path, last_gt, length)

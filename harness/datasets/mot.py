@@ -107,7 +107,8 @@ def read_seqinfo(path: Path) -> dict[str, str]:
     return dict(parser["Sequence"])
 
 
-def _number(info: dict[str, str], key: str, path: Path, kind: type) -> float | int | None:
+def seqinfo_number(info: dict[str, str], key: str, path: Path, kind: type) -> float | int | None:
+    """A positive number of a seqinfo dict, None when absent; ``SeqInfoError`` naming key."""
     if key not in info or not info[key].strip():
         return None
     try:
@@ -158,7 +159,7 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
     if ext and not ext.startswith("."):
         ext = "." + ext
 
-    length = _number(ini, "seqLength", ini_path, int)
+    length = seqinfo_number(ini, "seqLength", ini_path, int)
     if length is None:
         candidates = [max(images)] if images else []
         candidates += [int(t.frames.max()) for t in (gt and gt.table, det) if t is not None and len(t)]
@@ -171,8 +172,8 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
         log.warning("%s: length %d inferred from %s", folder, length,
                     "the image files" if images else "the largest gt/det frame")
 
-    width = _number(ini, "imWidth", ini_path, int)
-    height = _number(ini, "imHeight", ini_path, int)
+    width = seqinfo_number(ini, "imWidth", ini_path, int)
+    height = seqinfo_number(ini, "imHeight", ini_path, int)
     if width is None or height is None:
         if images:
             width, height = read_image_size(images[min(images)])
@@ -193,7 +194,7 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
             raise ValueError(f"fps must be positive, got {fps}")
         rate = float(fps)
     else:
-        rate = _number(ini, "frameRate", ini_path, float)
+        rate = seqinfo_number(ini, "frameRate", ini_path, float)
         if rate is None:
             rate = 25.0
             log.warning("%s: no frameRate in seqinfo.ini; assuming 25 fps", folder)
