@@ -23,6 +23,7 @@ from pathlib import Path
 import hydra
 from hydra.core.hydra_config import HydraConfig
 from hydra.errors import CompactHydraException
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
 log = logging.getLogger("harness")
@@ -38,7 +39,22 @@ class AppError(CompactHydraException):
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="config")
 def app(cfg: DictConfig) -> float:
-    """The Hydra task: run the experiment, print the table, return the objective."""
+    """The Hydra task: run the experiment, print the table, return the objective.
+
+    In a multirun each job goes through ``harness.sweep.guarded``: a job already done with
+    the same overrides is skipped, a failing job is recorded in its ``status.json`` (and
+    gathered into sweep.csv) while the other jobs go on.
+    """
+    hc = HydraConfig.get()
+    if hc.mode == RunMode.MULTIRUN:
+        from harness.sweep import guarded
+
+        return guarded(hc.runtime.output_dir, list(hc.overrides.task), lambda: run_app(cfg))
+    return run_app(cfg)
+
+
+def run_app(cfg: DictConfig) -> float:
+    """One run: the experiment, the printed table, the objective (raises AppError on failure)."""
     from tqdm.contrib.logging import logging_redirect_tqdm
 
     from harness.progress import progress_factory

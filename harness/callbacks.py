@@ -1,0 +1,47 @@
+"""Hydra callbacks of the app (registered under ``hydra.callbacks`` in ``conf/config.yaml``).
+
+``GatherSweep``: at the end of a multirun, gather every job's ``metrics.csv`` into
+``sweep.csv``, ``sweep.md`` and ``plots/`` in the sweep directory (``harness.sweep``). It runs
+in the launching process, whatever the launcher (basic, joblib, Ray, SLURM via submitit), so
+the job directories must be on a file system it can read.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from hydra.experimental.callback import Callback
+from omegaconf import DictConfig
+
+from harness.sweep import DEFAULT_METRICS, write_sweep
+
+log = logging.getLogger(__name__)
+
+
+class GatherSweep(Callback):
+    """Write the sweep table and plots when a multirun ends.
+
+    Args:
+        metrics: metric columns shown in sweep.md and plotted (COMBINED rows).
+        plots: draw the metric-vs-parameter plots and heatmaps.
+    """
+
+    def __init__(self, metrics: Sequence[str] = DEFAULT_METRICS, plots: bool = True) -> None:
+        self.metrics = list(metrics)
+        self.plots = bool(plots)
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        sweep_dir = Path(str(config.hydra.sweep.dir))
+        if not sweep_dir.is_dir():
+            log.warning("sweep directory %s does not exist: nothing gathered", sweep_dir)
+            return
+        try:
+            frame = write_sweep(sweep_dir, self.metrics, self.plots)
+        except Exception:  # gathering must never turn a finished sweep into a failure
+            log.exception("gathering the sweep in %s failed", sweep_dir)
+            return
+        log.info("sweep of %d jobs gathered: %s", frame["job"].nunique() if len(frame) else 0,
+                 sweep_dir / "sweep.md")

@@ -1,0 +1,443 @@
+"""Sweeps: per-job status and done-markers, gathering a multirun into one table, sweep plots.
+
+A Hydra multirun (``python -m harness -m tracker=baseline tracker.max_age=1,3 seed=0,1,2``)
+writes one job directory per parameter combination under ``hydra.sweep.dir``
+(``<sweep>/<job number>/``), each with the run's ``metrics.csv`` and Hydra's
+``.hydra/overrides.yaml``. Three things make a sweep robust and repeatable:
+
+* ``guarded(job_dir, overrides, run)``, called by the app around one job: a job already
+  finished with the same overrides (its ``status.json`` says ``done``) is skipped and its
+  stored objective returned; a job that raises is recorded as ``failed`` with its error and
+  returns NaN, so the launcher goes on with the other jobs.
+* ``gather(sweep_dir)`` reads every job directory into one frame: one row per job and
+  sequence (the per-sequence and COMBINED rows of each ``metrics.csv``) with the job number,
+  every overridden value as a column, ``status`` and ``error`` (a failed job is one row with
+  its error and no metrics). Rows are ordered by job number, tracker and sequence as the run
+  wrote them, so the table does not depend on the launcher or on the number of workers.
+* ``write_sweep(sweep_dir)`` writes ``sweep.csv``, ``sweep.md`` and ``plots/``: for each
+  metric and each swept parameter (``seed`` excepted) the COMBINED value against the
+  parameter, one line per tracker, mean and 95% t-interval over the jobs sharing the value
+  (the seeds, and the other parameters' values when several are swept); and, when two or more
+  parameters besides the seed are swept, a heatmap of each pair (mean over the rest).
+
+The Hydra callback ``harness.callbacks.GatherSweep`` calls ``write_sweep`` at the end of a
+multirun; ``python -m harness.sweep <sweep_dir>`` does the same by hand.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import yaml
+
+log = logging.getLogger(__name__)
+
+STATUS_FILE = "status.json"
+DONE, FAILED = "done", "failed"
+COMBINED = "COMBINED"
+SEED = "seed"
+DEFAULT_METRICS = ("HOTA", "IDF1", "MOTA", "IDs", "ReID")
+LOWER_IS_BETTER = ("IDs", "Frag", "FP", "FN", "ML", "Song_Frag", "Song_IDS", "Song_ML%")
+
+
+# --------------------------------------------------------------------------- job status
+
+
+def read_overrides(job_dir: str | Path) -> list[str]:
+    """The job's task overrides (``.hydra/overrides.yaml``), [] when there are none."""
+    path = Path(job_dir) / ".hydra" / "overrides.yaml"
+    if not path.is_file():
+        return []
+    value = yaml.safe_load(path.read_text()) or []
+    if not isinstance(value, list):
+        raise TypeError(f"{path}: expected a list of overrides, got {type(value).__name__}")
+    return [str(v) for v in value]
+
+
+def read_status(job_dir: str | Path) -> dict[str, Any] | None:
+    """The job's ``status.json`` as a dict, None when absent or unreadable."""
+    path = Path(job_dir) / STATUS_FILE
+    if not path.is_file():
+        return None
+    try:
+        return json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as err:
+        log.warning("%s: unreadable status (%s): the job counts as not run", path, err)
+        return None
+
+
+def write_status(job_dir: str | Path, status: str, overrides: Sequence[str],
+                 objective: float | None = None, error: str | None = None) -> Path:
+    """Write ``status.json`` (atomically): status, overrides, objective, error."""
+    path = Path(job_dir) / STATUS_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    obj = None if objective is None or not math.isfinite(objective) else float(objective)
+    body = {"status": status, "overrides": list(overrides), "objective": obj, "error": error}
+    tmp = path.with_suffix(".json.part")
+    tmp.write_text(json.dumps(body, indent=1) + "\n")
+    tmp.replace(path)
+    return path
+
+
+def finished(job_dir: str | Path, overrides: Sequence[str]) -> dict[str, Any] | None:
+    """The status of a job already done with exactly these overrides, else None."""
+    status = read_status(job_dir)
+    if status and status.get("status") == DONE and list(status.get("overrides") or []) == list(
+            overrides):
+        return status
+    return None
+
+
+def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], float]) -> float:
+    """Run one sweep job: skip it when already done, record its failure instead of raising.
+
+    Args:
+        job_dir: the job's output directory.
+        overrides: the job's task overrides (``HydraConfig.get().overrides.task``).
+        run: the job; returns the objective.
+    Returns:
+        The objective; the stored one for a skipped job; NaN for a failed job.
+    """
+    done = finished(job_dir, overrides)
+    if done is not None:
+        log.info("%s: already done with the same overrides: skipped", job_dir)
+        value = done.get("objective")
+        return float("nan") if value is None else float(value)
+    write_status(job_dir, "running", overrides)
+    try:
+        value = float(run())
+    except Exception as err:  # one job's failure must not stop the sweep
+        msg = f"{type(err).__name__}: {err}".strip()
+        log.exception("%s: job failed: %s", job_dir, msg)
+        write_status(job_dir, FAILED, overrides, error=msg)
+        return float("nan")
+    write_status(job_dir, DONE, overrides, objective=value)
+    return value
+
+
+# --------------------------------------------------------------------------- gathering
+
+
+def parse_override(text: str) -> tuple[str, str]:
+    """``key=value`` (``+key``/``++key``/``~key`` prefixes dropped) -> (key, value as written).
+
+    Values stay text, so sweep.csv shows them as the command line gave them; plots read
+    numbers out of them where every value is one."""
+    key, _, value = text.partition("=")
+    return key.lstrip("+~"), value
+
+
+# metrics.csv columns that an override key (a config-group choice) may share a name with
+_RESERVED = frozenset({"job", "status", "error", "tracker", "sequence"})
+
+
+def _column(key: str) -> str:
+    """Column name of an override key: ``tracker`` (the group choice) becomes ``tracker_choice``
+    so that it does not clash with the ``tracker`` column of metrics.csv."""
+    return f"{key}_choice" if key in _RESERVED else key
+
+
+def job_dirs(sweep_dir: str | Path) -> list[Path]:
+    """Job directories of a sweep (those with ``.hydra/`` or a status), by job number."""
+    root = Path(sweep_dir)
+    if not root.is_dir():
+        raise FileNotFoundError(f"sweep directory not found: {root}")
+    dirs = [d for d in root.iterdir()
+            if d.is_dir() and ((d / ".hydra").is_dir() or (d / STATUS_FILE).is_file())]
+
+    def key(d: Path) -> tuple[int, int | str]:
+        return (0, int(d.name)) if d.name.isdigit() else (1, d.name)
+
+    return sorted(dirs, key=key)
+
+
+def gather(sweep_dir: str | Path) -> pd.DataFrame:
+    """One frame of every job of a sweep (see the module docstring).
+
+    Columns: ``job``, the overridden keys (in order of first appearance), ``status``,
+    ``error``, then the columns of ``metrics.csv`` (``tracker``, ``sequence``, metrics).
+    """
+    parts: list[pd.DataFrame] = []
+    keys: list[str] = []
+    for d in job_dirs(sweep_dir):
+        overrides = read_overrides(d)
+        status = read_status(d)
+        params = dict(parse_override(o) for o in overrides)
+        if status and status.get("overrides"):
+            params = dict(parse_override(o) for o in status["overrides"]) | params
+        keys += [_column(k) for k in params if _column(k) not in keys]
+        state = (status or {}).get("status", "")
+        error = (status or {}).get("error") or ""
+        metrics_path = d / "metrics.csv"
+        if not state:
+            state = DONE if metrics_path.is_file() else "missing"
+            if state == "missing":
+                error = "no status.json and no metrics.csv: the job did not run or finish"
+        # a failed job keeps whatever it scored before failing
+        frame = pd.read_csv(metrics_path) if metrics_path.is_file() else pd.DataFrame()
+        if frame.empty:
+            frame = pd.DataFrame([{}])
+            if state == DONE:
+                error = error or "metrics.csv has no rows (nothing scored)"
+        if (d / "errors.txt").is_file() and state == DONE and not error:
+            error = (d / "errors.txt").read_text().splitlines()[0]
+        head = {"job": d.name, **{_column(k): v for k, v in params.items()}, "status": state,
+                "error": error}
+        for col, value in reversed(list(head.items())):
+            frame.insert(0, col, [value] * len(frame))
+        parts.append(frame)
+    if not parts:
+        return pd.DataFrame(columns=["job", "status", "error"])
+    out = pd.concat(parts, ignore_index=True)
+    for col in out.columns:  # counts stay whole numbers beside a failed job's empty row
+        kinds = {p[col].dtype.kind for p in parts if col in p.columns and p[col].notna().any()}
+        if kinds == {"i"} and out[col].dtype.kind == "f":
+            out[col] = out[col].astype("Int64")
+    lead = ["job", *keys, "status", "error"]
+    return out[lead + [c for c in out.columns if c not in lead]]
+
+
+def parameters(frame: pd.DataFrame) -> list[str]:
+    """The override columns of a gathered frame (between ``job`` and ``status``)."""
+    cols = list(frame.columns)
+    if "job" not in cols or "status" not in cols:
+        return []
+    return cols[cols.index("job") + 1:cols.index("status")]
+
+
+def swept(frame: pd.DataFrame) -> list[str]:
+    """Override columns that take more than one value across the jobs."""
+    jobs = frame.drop_duplicates("job")
+    return [c for c in parameters(frame) if jobs[c].astype(str).nunique() > 1]
+
+
+def interval95(values: np.ndarray) -> tuple[float, float, int]:
+    """Mean, half-width of the 95% t-interval, and number of finite values."""
+    from scipy import stats
+
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    n = len(v)
+    if n == 0:
+        return float("nan"), float("nan"), 0
+    if n == 1:
+        return float(v[0]), 0.0, 1
+    half = stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / math.sqrt(n)
+    return float(v.mean()), float(half), n
+
+
+def aggregate(frame: pd.DataFrame, by: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
+    """COMBINED rows of finished jobs grouped by ``by`` (+ tracker): mean, 95% half-width
+    and count of each metric (columns ``<m>``, ``<m>_ci95``, ``n``)."""
+    if "sequence" not in frame.columns:
+        return pd.DataFrame()
+    rows = frame[(frame["status"] == DONE) & (frame["sequence"] == COMBINED)]
+    group = [*by, "tracker"] if "tracker" in rows.columns else list(by)
+    out = []
+    for keys, g in rows.groupby(group, sort=False, dropna=False):
+        keys = keys if isinstance(keys, tuple) else (keys,)
+        rec: dict[str, Any] = dict(zip(group, keys))
+        for m in metrics:
+            if m not in g.columns:
+                continue
+            mean, half, _ = interval95(pd.to_numeric(g[m], errors="coerce").to_numpy())
+            rec[m], rec[f"{m}_ci95"] = mean, half
+        rec["n"] = len(g)
+        out.append(rec)
+    result = pd.DataFrame(out)
+    if not result.empty and by:
+        result = _sort_values(result, [*by])
+    return result
+
+
+def _sort_values(frame: pd.DataFrame, cols: list[str]) -> pd.DataFrame:
+    """Stable sort by parameter columns, numbers numerically, others as text."""
+    def key(s: pd.Series) -> pd.Series:
+        num = pd.to_numeric(s, errors="coerce")
+        return num if num.notna().all() else s.astype(str)
+
+    return frame.sort_values(cols, key=key, kind="stable").reset_index(drop=True)
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _fmt(v: Any) -> str:
+    if v is None or v is pd.NA:
+        return "-"
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "-"
+        return f"{v:.4g}"
+    return str(v).replace("|", "\\|").replace("\n", " ")
+
+
+def markdown_table(frame: pd.DataFrame) -> str:
+    if frame.empty:
+        return "(no rows)\n"
+    cols = list(frame.columns)
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for rec in frame.itertuples(index=False):
+        lines.append("| " + " | ".join(_fmt(v) for v in rec) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def sweep_markdown(frame: pd.DataFrame, metrics: Sequence[str], title: str = "") -> str:
+    params = swept(frame)
+    shown = [m for m in metrics if m in frame.columns]
+    lines = [f"# Sweep {title}".rstrip(), ""]
+    jobs = frame.drop_duplicates("job")
+    n_failed = int((jobs["status"] != DONE).sum())
+    done = len(jobs) - n_failed
+    lines += [f"{len(jobs)} jobs, {done} done, {n_failed} failed or missing; swept: "
+              + (", ".join(params) or "nothing") + ".", ""]
+    non_seed = [p for p in params if p != SEED]
+    if "sequence" in frame.columns and shown:
+        agg = aggregate(frame, non_seed, shown)
+        if not agg.empty:
+            seeds = f" over {SEED}s" if SEED in params else ""
+            lines += [f"## COMBINED, mean ± 95% interval{seeds}", ""]
+            table = agg[[c for c in agg.columns if not c.endswith("_ci95")]].copy()
+            for m in shown:
+                if m in agg.columns:
+                    table[m] = [f"{a:.4g} ± {b:.2g}" if np.isfinite(a) and b > 0 else _fmt(a)
+                                for a, b in zip(agg[m], agg[f"{m}_ci95"])]
+            lines += [markdown_table(table), ""]
+    per_job = frame
+    if "sequence" in frame.columns:
+        per_job = frame[(frame["sequence"] == COMBINED) | frame["sequence"].isna()]
+    cols = ["job", *params, "status", *(["tracker"] if "tracker" in frame.columns else []),
+            *shown]
+    lines += ["## Jobs (COMBINED rows)", "", markdown_table(per_job[cols])]
+    failed = jobs[jobs["status"] != DONE]
+    if not failed.empty:
+        lines += ["## Failed jobs", ""]
+        lines += [f"- job {r.job}: {r.status}: {r.error}" for r in failed.itertuples()]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str]) -> list[Path]:
+    """Metric-vs-parameter line plots (mean ± 95% over seeds) and pairwise heatmaps."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    params = [p for p in swept(frame) if p != SEED]
+    shown = [m for m in metrics if m in frame.columns]
+    written: list[Path] = []
+    if "sequence" not in frame.columns:
+        return written
+    for p in params:
+        agg = aggregate(frame, [p], shown)
+        if agg.empty:
+            continue
+        numeric = pd.to_numeric(agg[p], errors="coerce").notna().all()
+        labels = list(dict.fromkeys(agg[p].astype(str)))
+        fig, axes = plt.subplots(1, len(shown), figsize=(3.6 * len(shown), 3.2), squeeze=False)
+        for ax, m in zip(axes[0], shown):
+            for tracker, g in agg.groupby("tracker", sort=False) if "tracker" in agg else [("", agg)]:
+                x = (pd.to_numeric(g[p]).to_numpy() if numeric
+                     else np.array([labels.index(str(v)) for v in g[p]]))
+                ax.errorbar(x, g[m], yerr=g[f"{m}_ci95"], marker="o", capsize=3, label=tracker)
+            if not numeric:
+                ax.set_xticks(range(len(labels)), labels, rotation=30)
+            ax.set_xlabel(p)
+            ax.set_title(m)
+            ax.grid(alpha=0.3)
+        axes[0][0].legend(fontsize=8)
+        n = int(agg["n"].max())
+        fig.suptitle(f"COMBINED metrics against {p} (mean ± 95% interval, up to {n} jobs each)",
+                     fontsize=9)
+        fig.tight_layout()
+        path = out_dir / f"sweep_{_safe(p)}.png"
+        fig.savefig(path, dpi=90)
+        plt.close(fig)
+        written.append(path)
+    for i, a in enumerate(params):
+        for b in params[i + 1:]:
+            agg = aggregate(frame, [a, b], shown)
+            if agg.empty:
+                continue
+            trackers = list(dict.fromkeys(agg["tracker"])) if "tracker" in agg else [None]
+            for m in shown[:2]:
+                fig, axes = plt.subplots(1, len(trackers), figsize=(4 * len(trackers), 3.4),
+                                         squeeze=False)
+                for ax, t in zip(axes[0], trackers):
+                    g = agg if t is None else agg[agg["tracker"] == t]
+                    grid = g.pivot_table(index=a, columns=b, values=m, aggfunc="mean",
+                                         sort=True)
+                    im = ax.imshow(grid.to_numpy(dtype=float), cmap="viridis", aspect="auto")
+                    ax.set_xticks(range(grid.shape[1]), [str(v) for v in grid.columns])
+                    ax.set_yticks(range(grid.shape[0]), [str(v) for v in grid.index])
+                    ax.set_xlabel(b)
+                    ax.set_ylabel(a)
+                    ax.set_title(f"{t or ''} {m}".strip())
+                    for (r, c), v in np.ndenumerate(grid.to_numpy(dtype=float)):
+                        if np.isfinite(v):
+                            ax.text(c, r, f"{v:.3g}", ha="center", va="center", fontsize=7,
+                                    color="w")
+                    fig.colorbar(im, ax=ax)
+                fig.tight_layout()
+                path = out_dir / f"heatmap_{_safe(m)}_{_safe(a)}_{_safe(b)}.png"
+                fig.savefig(path, dpi=90)
+                plt.close(fig)
+                written.append(path)
+    return written
+
+
+def _safe(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
+
+
+def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
+                plots: bool = True) -> pd.DataFrame:
+    """Gather a sweep and write ``sweep.csv``, ``sweep.md`` and ``plots/`` into it."""
+    sweep_dir = Path(sweep_dir)
+    frame = gather(sweep_dir)
+    tmp = sweep_dir / "sweep.csv.part"
+    frame.to_csv(tmp, index=False, float_format="%.6f", lineterminator="\n")
+    tmp.replace(sweep_dir / "sweep.csv")
+    (sweep_dir / "sweep.md").write_text(sweep_markdown(frame, metrics, sweep_dir.name))
+    if plots:
+        try:
+            plot_sweep(frame, sweep_dir / "plots", metrics)
+        except Exception:  # a plot is not worth losing the table for
+            log.exception("sweep plots failed")
+    n_bad = int((frame.drop_duplicates("job")["status"] != DONE).sum()) if len(frame) else 0
+    log.info("gathered %d jobs into %s (%d not done)", frame["job"].nunique(),
+             sweep_dir / "sweep.csv", n_bad)
+    return frame
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m harness.sweep",
+                                description="Gather a Hydra multirun into sweep.csv/.md/plots.")
+    p.add_argument("sweep_dir", type=Path)
+    p.add_argument("--metrics", nargs="+", default=list(DEFAULT_METRICS))
+    p.add_argument("--no-plots", action="store_true")
+    args = p.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        write_sweep(args.sweep_dir, args.metrics, not args.no_plots)
+    except (FileNotFoundError, ValueError, TypeError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(args.sweep_dir / "sweep.md")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
