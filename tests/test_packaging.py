@@ -1,0 +1,53 @@
+"""Packaging: the import names resolve to this repository, the console script is declared.
+
+``trackers`` is also the import name of an unrelated PyPI project (roboflow's ``trackers``);
+with both installed, the one found first on ``sys.path`` wins. These tests fail loudly when
+the other one shadows ours.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.metadata
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("name", ["trackers", "harness"])
+def test_import_names_come_from_this_repository(name):
+    module = importlib.import_module(name)
+    path = Path(module.__file__).resolve()
+    assert path.is_relative_to(ROOT), f"{name} imported from {path}, not from {ROOT}"
+    # and it is ours: modules only this project has
+    ours = {"trackers": "trackers.records", "harness": "harness.run"}[name]
+    assert Path(importlib.import_module(ours).__file__).resolve().is_relative_to(ROOT)
+
+
+def test_console_script_is_the_app():
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert project["scripts"]["occbench"] == "harness.__main__:main"
+    from harness.__main__ import main
+
+    assert callable(main)
+
+
+def test_installed_console_script_points_to_the_app():
+    try:
+        eps = importlib.metadata.entry_points(group="console_scripts", name="occbench")
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover
+        eps = ()
+    if not eps:
+        pytest.skip("occbench is not installed (pip install -e .): no console script")
+    assert next(iter(eps)).value == "harness.__main__:main"
+
+
+def test_app_finds_its_configs():
+    # hydra.main(config_path="../conf") is relative to harness/__main__.py
+    import harness.__main__ as app
+
+    conf = Path(app.__file__).resolve().parent.parent / "conf"
+    assert (conf / "config.yaml").is_file()
