@@ -131,28 +131,28 @@ def head_box(box: np.ndarray, facing: float = 0.0) -> np.ndarray:
 
 
 class _Pen:
-    """Draws the same primitive in colour into ``img`` and as ``value`` into ``label``."""
+    """Records primitives in body units, then draws them all (``flush``) in colour into
+    ``img`` and as ``value`` into ``label``.
 
-    __slots__ = ("cx", "h", "img", "label", "ox", "oy", "sx", "value", "y0")
+    Points of all primitives are converted to fixed-point pixels in one vectorised step;
+    rounding is ``floor(x * 8 + 0.5)`` in image coordinates, then the integer ``origin`` is
+    subtracted, so a person drawn into a crop gets exactly the pixels it gets in the image.
+    """
+
+    __slots__ = ("cmds", "cx", "h", "img", "label", "ox", "oy", "pts", "sx", "value", "y0")
 
     def __init__(self, img, label, value, box, origin=(0, 0)) -> None:
         x, y, w, h = (float(v) for v in box)
         self.img, self.label, self.value = img, label, int(value)
         self.cx, self.y0, self.sx, self.h = x + w / 2.0, y, w / 0.4, h
-        # integer translation applied after rounding: a person drawn into a crop at
-        # ``origin`` gets exactly the pixels it gets in the full image
         self.ox, self.oy = int(origin[0]) * _S, int(origin[1]) * _S
-
-    def pt(self, a: float, v: float) -> tuple[int, int]:
-        return (int(round((self.cx + a * self.sx) * _S)) - self.ox,
-                int(round((self.y0 + v * self.h) * _S)) - self.oy)
+        self.pts: list[float] = []
+        self.cmds: list[tuple] = []
 
     def poly(self, pts, colour) -> None:
-        p = np.array([self.pt(a, v) for a, v in pts], np.int32)
-        if self.img is not None:
-            cv2.fillConvexPoly(self.img, p, colour, cv2.LINE_8, SHIFT)
-        if self.label is not None:
-            cv2.fillConvexPoly(self.label, p, self.value, cv2.LINE_8, SHIFT)
+        self.cmds.append((0, len(self.pts) // 2, len(pts), colour))
+        for a, v in pts:
+            self.pts += (a, v)
 
     def limb(self, a0, v0, r0, a1, v1, r1, colour) -> None:
         """A tapered segment from (a0, v0) to (a1, v1) with half widths r0, r1 (body units)."""
@@ -160,16 +160,46 @@ class _Pen:
         n = math.hypot(dx, dy) or 1.0
         # unit normal in pixels, converted back to body units (widths scale with sx)
         nxa, nyv = -dy / n, dx / n * self.sx / self.h
-        self.poly([(a0 + nxa * r0, v0 + nyv * r0), (a1 + nxa * r1, v1 + nyv * r1),
-                   (a1 - nxa * r1, v1 - nyv * r1), (a0 - nxa * r0, v0 - nyv * r0)], colour)
+        self.poly(((a0 + nxa * r0, v0 + nyv * r0), (a1 + nxa * r1, v1 + nyv * r1),
+                   (a1 - nxa * r1, v1 - nyv * r1), (a0 - nxa * r0, v0 - nyv * r0)), colour)
 
     def ellipse(self, a, v, ra, rv, colour, start: float = 0.0, end: float = 360.0) -> None:
-        c = self.pt(a, v)
-        axes = (max(int(round(ra * self.sx * _S)), 1), max(int(round(rv * self.h * _S)), 1))
-        if self.img is not None:
-            cv2.ellipse(self.img, c, axes, 0, start, end, colour, -1, cv2.LINE_8, SHIFT)
-        if self.label is not None:
-            cv2.ellipse(self.label, c, axes, 0, start, end, self.value, -1, cv2.LINE_8, SHIFT)
+        axes = (max(int(ra * self.sx * _S + 0.5), 1), max(int(rv * self.h * _S + 0.5), 1))
+        self.cmds.append((1, len(self.pts) // 2, axes, colour, start, end))
+        self.pts += (a, v)
+
+    def dot(self, a, v, radius: int, colour) -> None:
+        """A small disc drawn in colour only (a detail inside already labelled pixels)."""
+        self.cmds.append((2, len(self.pts) // 2, radius, colour))
+        self.pts += (a, v)
+
+    def flush(self) -> None:
+        if not self.cmds:
+            return
+        q = np.array(self.pts).reshape(-1, 2)
+        q *= (self.sx * _S, self.h * _S)
+        q += (self.cx * _S + 0.5, self.y0 * _S + 0.5)
+        q = np.floor(q).astype(np.int32)
+        q -= (self.ox, self.oy)
+        img, label, value = self.img, self.label, self.value
+        for cmd in self.cmds:
+            kind, i = cmd[0], cmd[1]
+            if kind == 0:
+                p = q[i:i + cmd[2]]
+                if img is not None:
+                    cv2.fillConvexPoly(img, p, cmd[3], cv2.LINE_8, SHIFT)
+                if label is not None:
+                    cv2.fillConvexPoly(label, p, value, cv2.LINE_8, SHIFT)
+            elif kind == 1:
+                c = (int(q[i, 0]), int(q[i, 1]))
+                if img is not None:
+                    cv2.ellipse(img, c, cmd[2], 0, cmd[4], cmd[5], cmd[3], -1, cv2.LINE_8, SHIFT)
+                if label is not None:
+                    cv2.ellipse(label, c, cmd[2], 0, cmd[4], cmd[5], value, -1, cv2.LINE_8, SHIFT)
+            elif img is not None:
+                cv2.circle(img, (int(q[i, 0]), int(q[i, 1])), cmd[2], cmd[3], -1, cv2.LINE_8, SHIFT)
+        self.cmds.clear()
+        self.pts.clear()
 
 
 def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, box: np.ndarray,
@@ -268,8 +298,8 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
         pen.ellipse(hx - 0.004 * facing, _HEAD_V - 0.018, _HEAD_RA * 0.92, _HEAD_RV * 0.5, hair, 180, 360)
         if pen.h >= 120 and img is not None:  # eyes on large heads only
             for e in ((-0.018, 0.018) if side < 0.5 else (0.02 * dirn,)):
-                cv2.circle(img, pen.pt(fx + e * (1 - 0.4 * side), _HEAD_V + 0.004),
-                           max(int(0.005 * pen.h), 1), (30, 30, 30), -1, cv2.LINE_8, SHIFT)
+                pen.dot(fx + e * (1 - 0.4 * side), _HEAD_V + 0.004, max(int(0.005 * pen.h * _S), _S),
+                        (30, 30, 30))
     elif app.long_hair:
         pen.poly([(-0.055, 0.07), (0.055, 0.07), (0.06, 0.21), (-0.06, 0.21)], hair)
 
@@ -279,6 +309,7 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
     else:
         arm(-1.0, 0.95)
         arm(1.0, 0.95)
+    pen.flush()
 
 
 def _shadow_kernel() -> np.ndarray:

@@ -10,8 +10,9 @@ Ground truth (``gt``, computed on first use by a label-only pass over all frames
   counted inside the image, from the rendered label images (people painted far to near).
 - ``occluded`` = visibility < ``occluded_below`` (0.3 by default).
 
-Head boxes (``head_boxes(k)`` and ``head_table``) are the amodal head boxes clipped to the
-image; whether the head is visible follows from ``foreground(k)`` (pixels equal to the id).
+Head boxes (``head_boxes(k)``, aligned with ``gt.rows_of(k)``; ``head_table``, aligned with
+``gt.table``) are the amodal head boxes clipped to the image; whether the head is visible
+follows from ``foreground(k)`` (pixels equal to the id).
 
 Shadows darken the floor only: they are not part of a person's label.
 """
@@ -87,7 +88,8 @@ class SyntheticSequence(Sequence):
         fps: frame rate.
         seed: seed of the per-frame randomness (sensor noise).
         noise: standard deviation of the additive Gaussian sensor noise, grey levels (0 = off).
-        gains: optional (L, 3) per-frame B, G, R illumination gains (None = constant light).
+        gains: optional (L, 3) per-frame B, G, R illumination gains in [0, 2) applied in
+            steps of 1/128 (None = constant light).
         shadows: draw soft cast shadows.
         occluded_below: visibility under which a gt row is flagged occluded.
         cache_frames: how many rendered frames (with their label images) are kept.
@@ -122,9 +124,9 @@ class SyntheticSequence(Sequence):
         self.shadows = ShadowPainter() if shadows else None
         self.occluded_below = float(occluded_below)
         self.public_detections: MotTable | None = None
-        self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self._cache: OrderedDict[int, list] = OrderedDict()
         self._cache_frames = int(cache_frames)
-        self._noise_bank: np.ndarray | None = None
+        self._noise_bank: tuple[np.ndarray, np.ndarray] | None = None
         self._gt: GroundTruth | None = None
         self._heads: np.ndarray | None = None
         self._label = np.zeros((H, W), np.int32)
@@ -143,21 +145,20 @@ class SyntheticSequence(Sequence):
             self._gt, self._heads = self._ground_truth()
         return self._heads
 
-    def head_boxes(self, index: int) -> dict[int, np.ndarray]:
-        """Head box (xywh, clipped to the image) of every person in frame ``index`` with
-        pixels in the image: {gt id: (4,) float64}."""
+    def head_boxes(self, index: int) -> np.ndarray:
+        """(n, 4) float64 xywh head boxes (clipped to the image) of frame ``index``, aligned
+        with ``gt.rows_of(index)`` (row j is the head of gt row ``rows_of(index)[j]``)."""
         self._check(index)
-        rows = self.gt.rows_of(index)
-        return {int(self.gt.table.ids[r]): self.head_table[r].copy() for r in rows}
+        return self.head_table[self.gt.rows_of(index)].copy()
 
     def frame(self, index: int) -> np.ndarray:
         """Frame ``index`` (1-based): (H, W, 3) uint8 BGR (a fresh copy)."""
-        return self._render(index)[0].copy()
+        return self._entry(index, colour=True)[0].copy()
 
     def foreground(self, index: int) -> np.ndarray:
         """Exact label image of frame ``index``: (H, W) int32, gt id at each visible person
         pixel, 0 elsewhere (shadows are background)."""
-        return self._render(index)[1].copy()
+        return self._entry(index, colour=False)[1].copy()
 
     # ------------------------------------------------------------------ rendering
     def _check(self, index: int) -> int:
@@ -183,30 +184,42 @@ class SyntheticSequence(Sequence):
                     c.appearances[p], float(c.phase[p, i]), float(c.facing[p, i]),
                     bool(c.away[p, i]), float(c.swing[p, i]), origin)
 
-    def _render(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+    def _entry(self, index: int, colour: bool) -> list:
+        """Cached [frame, label image] of frame ``index``, rendering what is missing."""
         k = self._check(index)
-        hit = self._cache.get(k)
-        if hit is not None:
+        entry = self._cache.get(k)
+        if entry is None:
+            entry = self._cache[k] = [None, None]
+            if len(self._cache) > self._cache_frames:
+                self._cache.popitem(last=False)
+        else:
             self._cache.move_to_end(k)
-            return hit
+        if colour and entry[0] is None:
+            entry[0] = self._render_colour(k)
+        if not colour and entry[1] is None:
+            label = np.zeros((self.info.height, self.info.width), np.int32)
+            for p in self._present(k - 1):
+                self._draw(p, k - 1, None, label)
+            entry[1] = label
+        return entry
+
+    def _render_colour(self, k: int) -> np.ndarray:
         i = k - 1
         img = self.background.copy()
-        label = np.zeros(img.shape[:2], np.int32)
         people = self._present(i)
         if self.shadows is not None:
             for p in people:
                 self.shadows.paint(img, self.cast.boxes[p, i], 0.15)
         for p in people:
-            self._draw(p, i, img, label)
+            self._draw(p, i, img, None)
         if self.gains is not None:
-            g = self.gains[i]
-            img = cv2.multiply(img, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+            # per-channel gain in steps of 1/128 (uint8 multiply: fast and saturating)
+            row = np.empty((1, img.shape[1], 3), np.uint8)
+            row[:] = np.clip(np.round(self.gains[i] * 128.0), 0, 255).astype(np.uint8)
+            img = cv2.multiply(img, cv2.repeat(row, img.shape[0], 1), scale=1.0 / 128.0)
         if self.noise > 0:
             img = self._add_noise(img, k)
-        self._cache[k] = (img, label)
-        if len(self._cache) > self._cache_frames:
-            self._cache.popitem(last=False)
-        return img, label
+        return img
 
     def _add_noise(self, img: np.ndarray, k: int) -> np.ndarray:
         """Add Gaussian sensor noise: a shifted window of one of two precomputed noise
@@ -215,11 +228,15 @@ class SyntheticSequence(Sequence):
         pad = 64
         if self._noise_bank is None:
             rng = np.random.default_rng([self.seed, 0x5E45])
-            bank = rng.normal(0.0, self.noise, (2, H + pad, W + pad, 3))
-            self._noise_bank = np.round(bank).clip(-255, 255).astype(np.int16)
+            bank = np.round(rng.normal(0.0, self.noise, (2, H + pad, W + pad, 3)))
+            # positive and negative parts as uint8: two saturating uint8 operations
+            self._noise_bank = (np.clip(bank, 0, 255).astype(np.uint8),
+                                np.clip(-bank, 0, 255).astype(np.uint8))
         r = np.random.default_rng([self.seed, k, 0x701])
         b, dy, dx = int(r.integers(2)), int(r.integers(pad)), int(r.integers(pad))
-        return cv2.add(img, self._noise_bank[b, dy:dy + H, dx:dx + W], dtype=cv2.CV_8U)
+        pos, neg = self._noise_bank
+        img = cv2.add(img, pos[b, dy:dy + H, dx:dx + W])
+        return cv2.subtract(img, neg[b, dy:dy + H, dx:dx + W])
 
     # ------------------------------------------------------------------ ground truth
     def _ground_truth(self) -> tuple[GroundTruth, np.ndarray]:
