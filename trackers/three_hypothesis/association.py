@@ -50,6 +50,17 @@ def _person_costs(cost_nodes: np.ndarray, starts: np.ndarray) -> tuple[np.ndarra
     return cost, best
 
 
+def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
+    """Hungarian method where leaving a person unmatched costs ``leave`` (the largest
+    cost an accepted pair can have), so one good pair is never traded for two poor ones
+    just to match more. Returns (K, 2) rows (person, measurement)."""
+    n = len(cost)
+    dummy = np.full((n, n), np.inf)
+    np.fill_diagonal(dummy, leave)
+    matches, _, _ = assign(np.hstack([cost, dummy]), leave)
+    return matches[matches[:, 1] < cost.shape[1]]
+
+
 def associate(
     node_boxes: np.ndarray,
     owners: np.ndarray,
@@ -69,7 +80,9 @@ def associate(
     distance; Hungarian method; accept only rho >= mu_rho.
 
     Pairs with rho < mu_rho are excluded before the Hungarian step, so a rejected best
-    pair never blocks an acceptable alternative.
+    pair never blocks an acceptable alternative; leaving a person unmatched costs 2, the
+    largest cost of an acceptable pair, so every acceptable isolated pair is matched but
+    one good pair is not split into two poor ones merely to match more.
 
     Args:
         node_boxes: (B, 4) xywh predicted regions of the nodes.
@@ -99,7 +112,7 @@ def associate(
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
     starts = np.flatnonzero(np.r_[True, np.diff(owners) > 0])
     cost1, best1 = _person_costs(c1, starts)
-    m1, _, _ = assign(cost1, 2.0)
+    m1 = _hungarian(cost1, 2.0)
 
     matched_p = np.zeros(n_persons, dtype=bool)
     matched_d = np.zeros(n_meas, dtype=bool)
@@ -111,7 +124,7 @@ def associate(
     free = ~matched_p[owners][:, None] & ~matched_d[None, :]
     c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
     cost2, best2 = _person_costs(c2, starts)
-    m2, _, _ = assign(cost2, 2.0)
+    m2 = _hungarian(cost2, 2.0)
 
     rows = [np.column_stack([m1, best1[m1[:, 0], m1[:, 1]]]),
             np.column_stack([m2, best2[m2[:, 0], m2[:, 1]]])]

@@ -17,8 +17,8 @@ Algorithm 1 per frame t:
    visible person in O) hypotheses 2 (occluder) and 3 (still) are added;
 8. an unmatched measurement starts a tentative track, confirmed after ``confirm_frames``
    matches, dropped as a false positive after ``m`` frames without one;
-9. pruning after m frames (PruneHypothesis): a hypothesis in plain view (not covered by a
-   visible person, eq. 2 overlap > lambda) for m consecutive frames contradicts the missing
+9. pruning after m frames (PruneHypothesis): a hypothesis in plain view (less than
+   ``cover`` of its region hidden by a visible person) for m consecutive frames contradicts the missing
    detection and is removed; a hypothesis whose centre leaves the image ends; a person
    with no hypothesis left ends.
 
@@ -113,14 +113,17 @@ class RetaTracker:
             Kalman noise standard deviations (``trackers.common.kalman``), per 10 px height.
         min_foreground: fraction of an ellipse that must be foreground for the histogram
             to be restricted to foreground pixels.
+        cover: fraction of a hypothesis region hidden by a visible person's region above
+            which the hypothesis counts as covered (explains the missing detection);
+            otherwise it is in plain view and pruned after m such frames.
     """
 
     def __init__(
         self,
-        mu_rho: float = 0.5,
-        mu_g: float = 60.0,
+        mu_rho: float = 0.3,
+        mu_g: float = 120.0,
         m: int = 5,
-        lam: float = 0.1,
+        lam: float = 0.05,
         confirm_frames: int = 3,
         max_hidden: int = 150,
         min_score: float = 0.0,
@@ -130,6 +133,7 @@ class RetaTracker:
         measurement_noise: float = 1.0,
         initial_velocity_variance: float = 100.0,
         min_foreground: float = 0.2,
+        cover: float = 0.5,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -139,6 +143,8 @@ class RetaTracker:
             raise ValueError(f"m must be >= 1 frame, got {m}")
         if not 0.0 <= lam < 0.5:
             raise ValueError(f"lam must lie in [0, 0.5), got {lam}")
+        if not 0.0 < cover <= 1.0:
+            raise ValueError(f"cover must lie in (0, 1], got {cover}")
         if confirm_frames < 1:
             raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
         if max_hidden < 1:
@@ -153,6 +159,7 @@ class RetaTracker:
         self.m = m
         self.lam = lam
         self.confirm_frames = confirm_frames
+        self.cover = cover
         self.max_hidden = max_hidden
         self.min_score = min_score
         self.motion = MotionModel(position_noise, velocity_noise, measurement_noise,
@@ -314,7 +321,7 @@ class RetaTracker:
             # 9. pruning: left the scene, contradicted in plain view for m frames, duplicates
             boxes = state_boxes(np.array([b.x for b in new]))
             gone = hyp.outside_image(boxes, width, height)
-            cover = overlap_ratio(boxes, visible_boxes).max(axis=1, initial=0.0) > self.lam
+            cover = covered_fraction(boxes, visible_boxes) >= self.cover
             kept: list[_Branch] = []
             kept_boxes: list[np.ndarray] = []
             for b, box, g, c in zip(new, boxes, gone, cover):
@@ -407,6 +414,17 @@ class RetaTracker:
                  "depth": 0 if node is None else node.depth,
                  "node": None if node is None else node.key}
         return Track(person.public_id, box.copy(), state, 1.0, extra)
+
+
+def covered_fraction(boxes: np.ndarray, visible: np.ndarray) -> np.ndarray:
+    """(N,) largest fraction |S_i & S_v| / |S_i| of each hypothesis region S_i hidden by one
+    visible region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2)."""
+    if len(boxes) == 0 or len(visible) == 0:
+        return np.zeros(len(boxes))
+    area_i = np.pi / 4 * boxes[:, 2] * boxes[:, 3]
+    area_v = np.pi / 4 * visible[:, 2] * visible[:, 3]
+    inter = overlap_ratio(boxes, visible) * (area_i[:, None] + area_v[None, :])
+    return (inter / np.maximum(area_i, 1e-9)[:, None]).max(axis=1)
 
 
 def matched_velocity(person: _Person) -> np.ndarray:
