@@ -26,8 +26,16 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     cv2.setNumThreads(1)
-    seq = load_scenario("crowd", seed=args.seed, width=args.width, height=args.height,
-                        length=args.frames, people=args.people, noise=2.0, illumination=0.1)
+    seq = load_scenario(
+        "crowd",
+        seed=args.seed,
+        width=args.width,
+        height=args.height,
+        length=args.frames,
+        people=args.people,
+        noise=2.0,
+        illumination=0.1,
+    )
     seq.frame(1)  # warm-up: noise bank
     n = args.frames - 1
     t0 = time.perf_counter()
@@ -38,8 +46,10 @@ def main() -> None:
     t1 = time.perf_counter()
     gt = seq.gt
     dg = time.perf_counter() - t1
-    print(f"render: {n / dt:.1f} frames/s ({args.width}x{args.height}, {drawn:.1f} people drawn per "
-          f"frame, one thread, noise + illumination on)")
+    print(
+        f"render: {n / dt:.1f} frames/s ({args.width}x{args.height}, {drawn:.1f} people drawn per "
+        f"frame, one thread, noise + illumination on)"
+    )
     print(f"ground truth pass: {args.frames / dg:.1f} frames/s ({len(gt.table)} rows)")
 
 

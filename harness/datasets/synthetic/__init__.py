@@ -32,21 +32,50 @@ from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
 log = logging.getLogger(__name__)
 
 #: the default suite, in order
-DEFAULT_SCENARIOS = ("crossing", "stop_behind", "follow_occluder", "uturn_behind", "pair_walk",
-                     "similar_clothes", "illumination", "crowd")
+DEFAULT_SCENARIOS = (
+    "crossing",
+    "stop_behind",
+    "follow_occluder",
+    "uturn_behind",
+    "pair_walk",
+    "similar_clothes",
+    "illumination",
+    "crowd",
+)
 
 __all__ = [
-    "DEFAULT_SCENARIOS", "SCENARIOS", "Appearance", "Camera", "Cast", "SyntheticSequence",
-    "draw_person", "head_box", "load_replay", "load_scenario", "load_suite", "random_appearance",
+    "DEFAULT_SCENARIOS",
+    "SCENARIOS",
+    "Appearance",
+    "Camera",
+    "Cast",
+    "SyntheticSequence",
+    "draw_person",
+    "head_box",
+    "load_replay",
+    "load_scenario",
+    "load_suite",
+    "random_appearance",
     "render_background",
 ]
 
 
-def load_scenario(scenario: str, seed: int = 0, width: int = 640, height: int = 480,
-                  length: int = 150, fps: float = 25.0, people: int = 10, density: float = 0.3,
-                  noise: float = 2.0, illumination: float = 0.0, shadows: bool = True,
-                  occluded_below: float = 0.3, mirror: bool | None = None,
-                  name: str | None = None) -> SyntheticSequence:
+def load_scenario(
+    scenario: str,
+    seed: int = 0,
+    width: int = 640,
+    height: int = 480,
+    length: int = 150,
+    fps: float = 25.0,
+    people: int = 10,
+    density: float = 0.3,
+    noise: float = 2.0,
+    illumination: float = 0.0,
+    shadows: bool = True,
+    occluded_below: float = 0.3,
+    mirror: bool | None = None,
+    name: str | None = None,
+) -> SyntheticSequence:
     """One synthetic sequence of preset ``scenario`` (arguments as in ``load_suite``;
     ``mirror`` forces the left-right orientation, None lets the seed choose)."""
     if scenario not in SCENARIOS:
@@ -66,18 +95,34 @@ def load_scenario(scenario: str, seed: int = 0, width: int = 640, height: int = 
     sign = -1.0 if flip else 1.0
     walkers = SCENARIOS[scenario](cam, rng, fps, length, int(people), float(density), sign)
     cast = world_cast(cam, walkers, int(length), float(fps), rng)
-    gains = illumination_gains(max(illumination, 0.3) if scenario == "illumination" else illumination,
-                               int(length), float(fps), rng, step=scenario == "illumination")
-    seq = SyntheticSequence(name or scenario, cast, background, fps, int(seed), noise, gains,
-                            shadows, occluded_below)
+    gains = illumination_gains(
+        max(illumination, 0.3) if scenario == "illumination" else illumination,
+        int(length),
+        float(fps),
+        rng,
+        step=scenario == "illumination",
+    )
+    seq = SyntheticSequence(
+        name or scenario, cast, background, fps, int(seed), noise, gains, shadows, occluded_below
+    )
     log.debug("built %r", seq)
     return seq
 
 
-def load_suite(scenarios: Seq[str] = DEFAULT_SCENARIOS, seed: int = 0, width: int = 640,
-               height: int = 480, length: int = 150, fps: float = 25.0, people: int = 10,
-               density: float = 0.3, noise: float = 2.0, illumination: float = 0.0,
-               shadows: bool = True, occluded_below: float = 0.3) -> list[SyntheticSequence]:
+def load_suite(
+    scenarios: Seq[str] = DEFAULT_SCENARIOS,
+    seed: int = 0,
+    width: int = 640,
+    height: int = 480,
+    length: int = 150,
+    fps: float = 25.0,
+    people: int = 10,
+    density: float = 0.3,
+    noise: float = 2.0,
+    illumination: float = 0.0,
+    shadows: bool = True,
+    occluded_below: float = 0.3,
+) -> list[SyntheticSequence]:
     """One sequence per scenario preset, named after it.
 
     Args:
@@ -105,7 +150,19 @@ def load_suite(scenarios: Seq[str] = DEFAULT_SCENARIOS, seed: int = 0, width: in
     if len(set(names)) != len(names):
         raise ValueError(f"scenarios must be distinct, got {names}")
     return [
-        load_scenario(s, seed, width, height, length, fps, people, density, noise, illumination,
-                      shadows, occluded_below)
+        load_scenario(
+            s,
+            seed,
+            width,
+            height,
+            length,
+            fps,
+            people,
+            density,
+            noise,
+            illumination,
+            shadows,
+            occluded_below,
+        )
         for s in names
     ]

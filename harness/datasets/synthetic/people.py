@@ -30,11 +30,23 @@ _S = 1 << SHIFT
 #: skin tones (BGR) of the head detector's categories (PBM 2.3): bright, standard, dark
 SKIN = {"bright": (190, 205, 238), "standard": (135, 165, 212), "dark": (55, 80, 118)}
 #: hair colours (BGR): black, brown, blond, red (PBM 2.3) and grey
-HAIR = {"black": (22, 22, 28), "brown": (30, 52, 88), "blond": (105, 175, 212),
-        "red": (35, 70, 160), "grey": (150, 150, 155)}
+HAIR = {
+    "black": (22, 22, 28),
+    "brown": (30, 52, 88),
+    "blond": (105, 175, 212),
+    "red": (35, 70, 160),
+    "grey": (150, 150, 155),
+}
 #: trouser colours (BGR)
-TROUSERS = ((130, 80, 40), (35, 35, 38), (105, 105, 110), (110, 155, 175), (40, 60, 90),
-            (85, 45, 30), (60, 90, 70))
+TROUSERS = (
+    (130, 80, 40),
+    (35, 35, 38),
+    (105, 105, 110),
+    (110, 155, 175),
+    (40, 60, 90),
+    (85, 45, 30),
+    (60, 90, 70),
+)
 PATTERNS = ("plain", "stripes", "jacket", "logo")
 
 
@@ -103,13 +115,18 @@ def random_appearance(rng: np.random.Generator) -> Appearance:
     )
 
 
-def similar_appearance(app: Appearance, rng: np.random.Generator, amount: float = 6.0) -> Appearance:
+def similar_appearance(
+    app: Appearance, rng: np.random.Generator, amount: float = 6.0
+) -> Appearance:
     """A near-identical copy of ``app`` (every colour jittered by at most ``amount`` levels)."""
     return replace(
         app,
-        skin=_jitter(rng, app.skin, amount), hair=_jitter(rng, app.hair, amount),
-        shirt=_jitter(rng, app.shirt, amount), accent=_jitter(rng, app.accent, amount),
-        trousers=_jitter(rng, app.trousers, amount), shoes=_jitter(rng, app.shoes, amount),
+        skin=_jitter(rng, app.skin, amount),
+        hair=_jitter(rng, app.hair, amount),
+        shirt=_jitter(rng, app.shirt, amount),
+        accent=_jitter(rng, app.accent, amount),
+        trousers=_jitter(rng, app.trousers, amount),
+        shoes=_jitter(rng, app.shoes, amount),
         height_m=float(app.height_m + rng.uniform(-0.03, 0.03)),
     )
 
@@ -127,7 +144,9 @@ def head_box(box: np.ndarray, facing: float = 0.0) -> np.ndarray:
     x, y, w, h = (float(v) for v in box)
     sx = w / 0.4
     cx = x + w / 2 + 0.006 * facing * sx
-    return np.array([cx - _HEAD_RA * sx, y + (_HEAD_V - _HEAD_RV) * h, 2 * _HEAD_RA * sx, 2 * _HEAD_RV * h])
+    return np.array(
+        [cx - _HEAD_RA * sx, y + (_HEAD_V - _HEAD_RV) * h, 2 * _HEAD_RA * sx, 2 * _HEAD_RV * h]
+    )
 
 
 class _Pen:
@@ -160,8 +179,15 @@ class _Pen:
         n = math.hypot(dx, dy) or 1.0
         # unit normal in pixels, converted back to body units (widths scale with sx)
         nxa, nyv = -dy / n, dx / n * self.sx / self.h
-        self.poly(((a0 + nxa * r0, v0 + nyv * r0), (a1 + nxa * r1, v1 + nyv * r1),
-                   (a1 - nxa * r1, v1 - nyv * r1), (a0 - nxa * r0, v0 - nyv * r0)), colour)
+        self.poly(
+            (
+                (a0 + nxa * r0, v0 + nyv * r0),
+                (a1 + nxa * r1, v1 + nyv * r1),
+                (a1 - nxa * r1, v1 - nyv * r1),
+                (a0 - nxa * r0, v0 - nyv * r0),
+            ),
+            colour,
+        )
 
     def ellipse(self, a, v, ra, rv, colour, start: float = 0.0, end: float = 360.0) -> None:
         axes = (max(int(ra * self.sx * _S + 0.5), 1), max(int(rv * self.h * _S + 0.5), 1))
@@ -185,7 +211,7 @@ class _Pen:
         for cmd in self.cmds:
             kind, i = cmd[0], cmd[1]
             if kind == 0:
-                p = q[i:i + cmd[2]]
+                p = q[i : i + cmd[2]]
                 if img is not None:
                     cv2.fillConvexPoly(img, p, cmd[3], cv2.LINE_8, SHIFT)
                 if label is not None:
@@ -202,9 +228,18 @@ class _Pen:
         self.pts.clear()
 
 
-def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, box: np.ndarray,
-                app: Appearance, phase: float = 0.0, facing: float = 0.0, away: bool = False,
-                swing: float = 1.0, origin: tuple[int, int] = (0, 0)) -> None:
+def draw_person(
+    img: np.ndarray | None,
+    label: np.ndarray | None,
+    value: int,
+    box: np.ndarray,
+    app: Appearance,
+    phase: float = 0.0,
+    facing: float = 0.0,
+    away: bool = False,
+    swing: float = 1.0,
+    origin: tuple[int, int] = (0, 0),
+) -> None:
     """Draw one person into ``img`` ((H, W, 3) uint8 BGR) and/or ``label`` ((H, W) int32).
 
     Args:
@@ -226,7 +261,6 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
     s = math.sin(phase) * swing
     c = math.cos(phase) * swing
     shirt, trousers, skin, hair = app.shirt, app.trousers, app.skin, app.hair
-    dark_shirt = _scaled(shirt, 0.72)
 
     # --- legs: hip -> knee -> ankle, the leg behind drawn first and darker
     stride = 0.11 * max(side, 0.25)
@@ -237,7 +271,7 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
         knee_a = 0.5 * (hip_a + foot_a) + dirn * 0.02 * side * max(k * c, 0.0)
         lift = 0.02 * max(-k * s * dirn * dirn, 0.0) * side  # the swinging foot lifts
         legs.append((hip_a, knee_a, foot_a, lift, k))
-    legs.sort(key=lambda leg: (leg[4] * s * dirn))  # the leg moving back is behind
+    legs.sort(key=lambda leg: leg[4] * s * dirn)  # the leg moving back is behind
     for i, (hip_a, knee_a, foot_a, lift, _) in enumerate(legs):
         col = _scaled(trousers, 0.82) if i == 0 else trousers
         pen.limb(hip_a, 0.5, 0.045, knee_a, 0.73, 0.035, col)
@@ -245,7 +279,9 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
         pen.ellipse(knee_a, 0.73, 0.035, 0.012, col)
         pen.ellipse(foot_a + 0.012 * dirn * side, 0.968 - lift, 0.036, 0.022, app.shoes)
     # pelvis
-    pen.poly([(-0.092 * tw, 0.44), (0.092 * tw, 0.44), (0.088 * tw, 0.56), (-0.088 * tw, 0.56)], trousers)
+    pen.poly(
+        [(-0.092 * tw, 0.44), (0.092 * tw, 0.44), (0.088 * tw, 0.56), (-0.088 * tw, 0.56)], trousers
+    )
 
     # --- arm behind the torso in side views
     def arm(k: float, colour_scale: float) -> None:
@@ -270,22 +306,47 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
         pen.poly([(-0.06, 0.07), (0.06, 0.07), (0.065, 0.2), (-0.065, 0.2)], hair)
 
     # --- torso with shading and pattern
-    pen.poly([(-0.045, 0.15), (0.045, 0.15), (0.11 * tw, 0.168), (0.125 * tw, 0.21),
-              (0.097 * tw, 0.46), (-0.097 * tw, 0.46), (-0.125 * tw, 0.21), (-0.11 * tw, 0.168)], shirt)
-    pen.poly([(0.04 * tw, 0.16), (0.11 * tw, 0.168), (0.125 * tw, 0.21), (0.097 * tw, 0.46),
-              (0.04 * tw, 0.46)], _scaled(shirt, 0.85))
+    pen.poly(
+        [
+            (-0.045, 0.15),
+            (0.045, 0.15),
+            (0.11 * tw, 0.168),
+            (0.125 * tw, 0.21),
+            (0.097 * tw, 0.46),
+            (-0.097 * tw, 0.46),
+            (-0.125 * tw, 0.21),
+            (-0.11 * tw, 0.168),
+        ],
+        shirt,
+    )
+    pen.poly(
+        [
+            (0.04 * tw, 0.16),
+            (0.11 * tw, 0.168),
+            (0.125 * tw, 0.21),
+            (0.097 * tw, 0.46),
+            (0.04 * tw, 0.46),
+        ],
+        _scaled(shirt, 0.85),
+    )
     if app.pattern == "stripes":
         for v in (0.22, 0.27, 0.32, 0.37, 0.42):
             half = (0.125 + (0.097 - 0.125) * (v - 0.21) / 0.25) * tw - 0.004
             pen.poly([(-half, v), (half, v), (half, v + 0.018), (-half, v + 0.018)], app.accent)
     elif app.pattern == "jacket" and not away:
         o = 0.012 * facing
-        pen.poly([(o - 0.03, 0.155), (o + 0.03, 0.155), (o + 0.018, 0.46), (o - 0.018, 0.46)], app.accent)
+        pen.poly(
+            [(o - 0.03, 0.155), (o + 0.03, 0.155), (o + 0.018, 0.46), (o - 0.018, 0.46)], app.accent
+        )
     elif app.pattern == "logo" and not away:
         o = 0.02 * facing
-        pen.poly([(o - 0.04, 0.23), (o + 0.04, 0.23), (o + 0.04, 0.29), (o - 0.04, 0.29)], app.accent)
-    pen.poly([(-0.097 * tw, 0.445), (0.097 * tw, 0.445), (0.096 * tw, 0.465), (-0.096 * tw, 0.465)],
-             _scaled(trousers, 0.5))  # belt
+        pen.poly(
+            [(o - 0.04, 0.23), (o + 0.04, 0.23), (o + 0.04, 0.29), (o - 0.04, 0.29)], app.accent
+        )
+    pen.poly(
+        [(-0.097 * tw, 0.445), (0.097 * tw, 0.445), (0.096 * tw, 0.465), (-0.096 * tw, 0.465)],
+        _scaled(trousers, 0.5),
+    )  # belt
 
     # --- neck and head
     pen.poly([(-0.024, 0.12), (0.024, 0.12), (0.026, 0.165), (-0.026, 0.165)], _scaled(skin, 0.85))
@@ -295,11 +356,17 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
         fx = hx + 0.016 * facing
         pen.ellipse(fx, _HEAD_V + 0.012, _HEAD_RA * (0.82 - 0.12 * side), _HEAD_RV * 0.8, skin)
         # hair fringe over the forehead
-        pen.ellipse(hx - 0.004 * facing, _HEAD_V - 0.018, _HEAD_RA * 0.92, _HEAD_RV * 0.5, hair, 180, 360)
+        pen.ellipse(
+            hx - 0.004 * facing, _HEAD_V - 0.018, _HEAD_RA * 0.92, _HEAD_RV * 0.5, hair, 180, 360
+        )
         if pen.h >= 120 and img is not None:  # eyes on large heads only
-            for e in ((-0.018, 0.018) if side < 0.5 else (0.02 * dirn,)):
-                pen.dot(fx + e * (1 - 0.4 * side), _HEAD_V + 0.004, max(int(0.005 * pen.h * _S), _S),
-                        (30, 30, 30))
+            for e in (-0.018, 0.018) if side < 0.5 else (0.02 * dirn,):
+                pen.dot(
+                    fx + e * (1 - 0.4 * side),
+                    _HEAD_V + 0.004,
+                    max(int(0.005 * pen.h * _S), _S),
+                    (30, 30, 30),
+                )
     elif app.long_hair:
         pen.poly([(-0.055, 0.07), (0.055, 0.07), (0.06, 0.21), (-0.06, 0.21)], hair)
 
@@ -314,7 +381,7 @@ def draw_person(img: np.ndarray | None, label: np.ndarray | None, value: int, bo
 
 def _shadow_kernel() -> np.ndarray:
     n = 64
-    yy, xx = np.mgrid[-1:1:n * 1j, -1:1:n * 1j]
+    yy, xx = np.mgrid[-1 : 1 : n * 1j, -1 : 1 : n * 1j]
     r2 = xx**2 + yy**2
     dark = 0.5 * np.exp(-2.5 * r2) * (r2 < 1)
     return dark.astype(np.float32)
@@ -332,14 +399,14 @@ class ShadowPainter:
         x, y, w, h = (float(v) for v in box)
         ax, ay = 0.75 * w, 0.05 * h
         cx, cy = x + w / 2 + offset * w, y + 0.975 * h
-        x0, x1 = int(math.floor(cx - ax)), int(math.ceil(cx + ax))
-        y0, y1 = int(math.floor(cy - ay)), int(math.ceil(cy + ay))
+        x0, x1 = math.floor(cx - ax), math.ceil(cx + ax)
+        y0, y1 = math.floor(cy - ay), math.ceil(cy + ay)
         H, W = img.shape[:2]
         if x1 <= 0 or y1 <= 0 or x0 >= W or y0 >= H or x1 - x0 < 2 or y1 - y0 < 2:
             return
         k = cv2.resize(self.kernel, (x1 - x0, y1 - y0), interpolation=cv2.INTER_LINEAR)
         cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x1, W), min(y1, H)
-        k = k[cy0 - y0: cy1 - y0, cx0 - x0: cx1 - x0]
+        k = k[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0]
         keep = cv2.merge([1.0 - k] * 3)
         roi = img[cy0:cy1, cx0:cx1]
         roi[:] = cv2.multiply(roi, keep, dtype=cv2.CV_8U)

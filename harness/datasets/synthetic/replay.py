@@ -38,8 +38,10 @@ def _locate(gt_path: str | Path) -> tuple[Path, Path]:
     if path.is_file():
         root = path.parent.parent if path.parent.name == "gt" else path.parent
         return path, root
-    raise FileNotFoundError(f"replay: ground truth not found: {path} (expected a MOTChallenge "
-                            "sequence folder with gt/gt.txt, or a MOT gt file)")
+    raise FileNotFoundError(
+        f"replay: ground truth not found: {path} (expected a MOTChallenge "
+        "sequence folder with gt/gt.txt, or a MOT gt file)"
+    )
 
 
 def _seqinfo(root: Path) -> dict[str, str]:
@@ -53,10 +55,18 @@ def _seqinfo(root: Path) -> dict[str, str]:
     return dict(cp["Sequence"])
 
 
-def load_replay(gt_path: str | Path, seed: int = 0, max_frames: int | None = None,
-                width: int | None = None, height: int | None = None, fps: float | None = None,
-                noise: float = 2.0, shadows: bool = True, occluded_below: float = 0.3,
-                name: str | None = None) -> list[SyntheticSequence]:
+def load_replay(
+    gt_path: str | Path,
+    seed: int = 0,
+    max_frames: int | None = None,
+    width: int | None = None,
+    height: int | None = None,
+    fps: float | None = None,
+    noise: float = 2.0,
+    shadows: bool = True,
+    occluded_below: float = 0.3,
+    name: str | None = None,
+) -> list[SyntheticSequence]:
     """Replay a MOT gt file as a synthetic sequence.
 
     Args:
@@ -82,7 +92,10 @@ def load_replay(gt_path: str | Path, seed: int = 0, max_frames: int | None = Non
             raise ValueError(f"replay: max_frames must be >= 1, got {max_frames}")
         table = table.rows(table.frames <= max_frames)
     if len(table) == 0:
-        raise ValueError(f"replay: {gt_file} has no boxes" + (f" in frames 1..{max_frames}" if max_frames else ""))
+        raise ValueError(
+            f"replay: {gt_file} has no boxes"
+            + (f" in frames 1..{max_frames}" if max_frames else "")
+        )
     b = table.boxes
     W = int(width or info.get("imwidth") or math.ceil(np.max(b[:, 0] + b[:, 2]) / 16) * 16)
     H = int(height or info.get("imheight") or math.ceil(np.max(b[:, 1] + b[:, 3]) / 16) * 16)
@@ -117,13 +130,19 @@ def load_replay(gt_path: str | Path, seed: int = 0, max_frames: int | None = Non
     phase, facing, away, swing = walking_poses(vx, vz, speed, rate, rng.uniform(0, 2 * math.pi, P))
     apps = [random_appearance(rng) for _ in range(P)]
     cast = Cast(ids, apps, boxes, -foot_y, phase, facing, away, swing, conf)
-    background = render_background(Camera.for_size(W, H), rng)
-    seq = SyntheticSequence(seq_name, cast, background, rate, int(seed), noise, None, shadows,
-                            occluded_below)
+    # put the floor's far edge just above the highest feet so people stand on the floor
+    feet = foot_y[np.isfinite(foot_y)]
+    horizon = float(np.clip(np.min(feet) - 0.1 * H, 0.05 * H, 0.6 * H))
+    background = render_background(Camera(W, H, float(H), horizon), rng)
+    seq = SyntheticSequence(
+        seq_name, cast, background, rate, int(seed), noise, None, shadows, occluded_below
+    )
     det = root / "det" / "det.txt"
     if det.is_file():
         dets = read_mot(det)
         seq.public_detections = dets.rows(dets.frames <= length)
-        log.info("%s: attached %d public detections from %s", seq_name, len(seq.public_detections), det)
+        log.info(
+            "%s: attached %d public detections from %s", seq_name, len(seq.public_detections), det
+        )
     log.info("%s: replaying %d people over %d frames from %s", seq_name, P, length, gt_file)
     return [seq]

@@ -77,8 +77,9 @@ class Walker:
         return x, z
 
 
-def walking_poses(vx: np.ndarray, vz: np.ndarray, speed: np.ndarray, fps: float,
-                  phase0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def walking_poses(
+    vx: np.ndarray, vz: np.ndarray, speed: np.ndarray, fps: float, phase0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per-frame pose of walkers from their velocities.
 
     Args:
@@ -110,8 +111,9 @@ def walking_poses(vx: np.ndarray, vz: np.ndarray, speed: np.ndarray, fps: float,
     return phase, facing, away.astype(bool), swing
 
 
-def world_cast(cam: Camera, walkers: list[Walker], length: int, fps: float,
-               rng: np.random.Generator) -> Cast:
+def world_cast(
+    cam: Camera, walkers: list[Walker], length: int, fps: float, rng: np.random.Generator
+) -> Cast:
     """Image-space cast of ``walkers`` over ``length`` frames (ids 1..P in order)."""
     times = (np.arange(length) - (length - 1) / 2.0) / fps
     P = len(walkers)
@@ -131,18 +133,25 @@ def world_cast(cam: Camera, walkers: list[Walker], length: int, fps: float,
     hp = cam.focal * heights / Zs
     wp = builds * hp
     boxes = np.stack([xf - wp / 2, yf - hp, wp, hp], axis=-1)
-    return Cast(np.arange(1, P + 1), [w.app for w in walkers], boxes, Zs, phase, facing, away, swing)
+    return Cast(
+        np.arange(1, P + 1), [w.app for w in walkers], boxes, Zs, phase, facing, away, swing
+    )
 
 
 # ---------------------------------------------------------------------- appearances
 def _occluder(rng: np.random.Generator) -> Appearance:
-    return replace(random_appearance(rng), height_m=float(rng.uniform(1.83, 1.88)),
-                   build=float(rng.uniform(0.42, 0.44)))
+    return replace(
+        random_appearance(rng),
+        height_m=float(rng.uniform(1.83, 1.88)),
+        build=float(rng.uniform(0.42, 0.44)),
+    )
 
 
 def _hidden(rng: np.random.Generator, base: Appearance | None = None) -> Appearance:
     app = random_appearance(rng) if base is None else similar_appearance(base, rng)
-    return replace(app, height_m=float(rng.uniform(1.6, 1.66)), build=float(rng.uniform(0.37, 0.39)))
+    return replace(
+        app, height_m=float(rng.uniform(1.6, 1.66)), build=float(rng.uniform(0.37, 0.39))
+    )
 
 
 # ---------------------------------------------------------------------- presets
@@ -181,8 +190,12 @@ def _uturn_behind(cam, rng, fps, length, people, density, sign):
     s = sign
     a = Walker.columns(_occluder(rng), [-1.0, 1.0], [-0.118 * s, 0.118 * s], 3.4)
     u_turn = -0.01
-    b = Walker.columns(_hidden(rng), [-3.0, 0.0, 3.0],
-                       [(u_turn + 0.126 * 3.0) * s, u_turn * s, (u_turn + 0.15 * 3.0) * s], 9.5)
+    b = Walker.columns(
+        _hidden(rng),
+        [-3.0, 0.0, 3.0],
+        [(u_turn + 0.126 * 3.0) * s, u_turn * s, (u_turn + 0.15 * 3.0) * s],
+        9.5,
+    )
     return [a, b]
 
 
@@ -199,16 +212,22 @@ def _pair_walk(cam, rng, fps, length, people, density, sign):
 def _similar_clothes(cam, rng, fps, length, people, density, sign):
     s = sign
     base = random_appearance(rng)
-    a = Walker.columns(replace(similar_appearance(base, rng), height_m=1.86, build=0.43),
-                       [-1.0, 1.0], [-0.206 * s, 0.206 * s], 3.4)
+    a = Walker.columns(
+        replace(similar_appearance(base, rng), height_m=1.86, build=0.43),
+        [-1.0, 1.0],
+        [-0.206 * s, 0.206 * s],
+        3.4,
+    )
     b = Walker.columns(_hidden(rng, base), [-1.0, 1.0], [0.0857 * s, -0.0857 * s], 10.5)
-    c = Walker.columns(similar_appearance(base, rng), [1.5, 2.5],
-                       [0.309 * s, (0.309 - 0.1667) * s], 6.0)
+    c = Walker.columns(
+        similar_appearance(base, rng), [1.5, 2.5], [0.309 * s, (0.309 - 0.1667) * s], 6.0
+    )
     return [a, b, c]
 
 
-def _passers(cam: Camera, rng: np.random.Generator, fps: float, length: int, n: int,
-             sign: float) -> list[Walker]:
+def _passers(
+    cam: Camera, rng: np.random.Generator, fps: float, length: int, n: int, sign: float
+) -> list[Walker]:
     """``n`` people crossing the view on straight lines, spread over the sequence."""
     half_t = length / (2.0 * fps)
     out = []
@@ -223,8 +242,14 @@ def _passers(cam: Camera, rng: np.random.Generator, fps: float, length: int, n: 
         # the middle of the walk falls somewhere inside the sequence
         tm = rng.uniform(-0.7, 0.7) * half_t + (i - (n - 1) / 2) * 0.1
         t0 = tm - dur / 2
-        out.append(Walker(random_appearance(rng), np.array([t0, t0 + dur]), np.array([X0, X1]),
-                          np.array([z0, z1])))
+        out.append(
+            Walker(
+                random_appearance(rng),
+                np.array([t0, t0 + dur]),
+                np.array([X0, X1]),
+                np.array([z0, z1]),
+            )
+        )
     return out
 
 
@@ -275,8 +300,9 @@ SCENARIOS: dict[str, Builder] = {
 }
 
 
-def illumination_gains(amplitude: float, length: int, fps: float, rng: np.random.Generator,
-                       step: bool = False) -> np.ndarray | None:
+def illumination_gains(
+    amplitude: float, length: int, fps: float, rng: np.random.Generator, step: bool = False
+) -> np.ndarray | None:
     """(L, 3) per-frame B, G, R gains: a slow drift plus a faster flicker of relative size
     ``amplitude``, a small colour-temperature drift, and with ``step`` a 30% dimming over
     half a second in the middle. None when there is nothing to apply."""
@@ -287,7 +313,9 @@ def illumination_gains(amplitude: float, length: int, fps: float, rng: np.random
     t = np.arange(length) / fps
     T1, T2, T3 = rng.uniform(6.0, 12.0), rng.uniform(1.5, 3.0), rng.uniform(4.0, 8.0)
     p1, p2, p3 = rng.uniform(0, 2 * math.pi, 3)
-    base = 1.0 + amplitude * (0.7 * np.sin(2 * math.pi * t / T1 + p1) + 0.3 * np.sin(2 * math.pi * t / T2 + p2))
+    base = 1.0 + amplitude * (
+        0.7 * np.sin(2 * math.pi * t / T1 + p1) + 0.3 * np.sin(2 * math.pi * t / T2 + p2)
+    )
     if step:
         mid = t[-1] / 2.0
         base = base * (1.0 - 0.3 * np.clip((t - mid) / 0.5, 0.0, 1.0))

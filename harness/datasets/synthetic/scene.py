@@ -17,6 +17,7 @@ Image coordinates are pixels with (0, 0) the top-left pixel, x right, y down.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import cv2
@@ -55,7 +56,9 @@ class Camera:
     def project(self, X: np.ndarray, Y: np.ndarray, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Image (x, y) in pixels of world points (X, Y, Z) in metres (Z > 0)."""
         X, Y, Z = np.asarray(X, float), np.asarray(Y, float), np.asarray(Z, float)
-        return self.cx + self.focal * X / Z, self.horizon + self.focal * (self.camera_height - Y) / Z
+        return self.cx + self.focal * X / Z, self.horizon + self.focal * (
+            self.camera_height - Y
+        ) / Z
 
     def scale(self, Z: np.ndarray) -> np.ndarray:
         """Pixels per metre at depth ``Z``."""
@@ -92,8 +95,16 @@ def _fill(img: np.ndarray, cam: Camera, pts: list[tuple[float, float, float]], c
     cv2.fillPoly(img, [_poly(cam, pts)], tuple(float(c) for c in colour), cv2.LINE_AA, 4)
 
 
-def _cuboid(img: np.ndarray, cam: Camera, x0: float, x1: float, z0: float, z1: float, h: float,
-            colour: np.ndarray) -> None:
+def _cuboid(
+    img: np.ndarray,
+    cam: Camera,
+    x0: float,
+    x1: float,
+    z0: float,
+    z1: float,
+    h: float,
+    colour: np.ndarray,
+) -> None:
     """A box standing on the floor: front face, the visible side face and the top (if below
     eye level), shaded differently."""
     c = np.asarray(colour, float)
@@ -129,39 +140,81 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
     floor_b = floor_a * rng.uniform(0.78, 0.9)
     xl = LEFT_WALL_X
     xr = cam.half_width_at(zb) + 1.0
-    zs = np.arange(np.floor(cam.near_depth * 0.5), zb + 1.0, 1.0)
+    zs = np.arange(max(np.floor(cam.near_depth * 0.5), 0.5), zb + 1.0, 1.0)
     xs = np.arange(np.floor(xl), np.ceil(xr) + 1.0, 1.0)
-    for i, (z0, z1) in enumerate(zip(zs[:-1], zs[1:])):
+    for i, (z0, z1) in enumerate(itertools.pairwise(zs)):
         z1 = min(z1, zb)
         if z0 >= z1:
             continue
-        for j, (x0, x1) in enumerate(zip(xs[:-1], xs[1:])):
+        for j, (x0, x1) in enumerate(itertools.pairwise(xs)):
             base = floor_a if (i + j) % 2 == 0 else floor_b
             col = np.clip(base * rng.uniform(0.94, 1.06), 0, 255)
             _fill(img, cam, [(x0, 0, z0), (x1, 0, z0), (x1, 0, z1), (x0, 0, z1)], col)
     grout = tuple(float(v) for v in floor_b * 0.7)
     for x in xs:
-        cv2.line(img, tuple(_poly(cam, [(x, 0, 0.3)])[0]), tuple(_poly(cam, [(x, 0, zb)])[0]),
-                 grout, 1, cv2.LINE_AA, 4)
+        cv2.line(
+            img,
+            tuple(_poly(cam, [(x, 0, 0.3)])[0]),
+            tuple(_poly(cam, [(x, 0, zb)])[0]),
+            grout,
+            1,
+            cv2.LINE_AA,
+            4,
+        )
     for z in zs:
         if z <= zb:
-            cv2.line(img, tuple(_poly(cam, [(xl, 0, z)])[0]), tuple(_poly(cam, [(xr + 50, 0, z)])[0]),
-                     grout, 1, cv2.LINE_AA, 4)
+            cv2.line(
+                img,
+                tuple(_poly(cam, [(xl, 0, z)])[0]),
+                tuple(_poly(cam, [(xr + 50, 0, z)])[0]),
+                grout,
+                1,
+                cv2.LINE_AA,
+                4,
+            )
     # --- back wall: skirting, windows, a door
-    _fill(img, cam, [(xl, 0, zb), (xr + 50, 0, zb), (xr + 50, 0.15, zb), (xl, 0.15, zb)], wall * 0.5)
+    _fill(
+        img, cam, [(xl, 0, zb), (xr + 50, 0, zb), (xr + 50, 0.15, zb), (xl, 0.15, zb)], wall * 0.5
+    )
     glass = rng.uniform(120, 200, 3) * np.array([1.1, 1.0, 0.8])
     wx = xl + 1.5
     while wx < xr - 1.0:
         if rng.random() < 0.25:  # a door
-            _fill(img, cam, [(wx, 0.15, zb), (wx + 1.2, 0.15, zb), (wx + 1.2, 2.3, zb), (wx, 2.3, zb)],
-                  wall * 0.45)
+            _fill(
+                img,
+                cam,
+                [(wx, 0.15, zb), (wx + 1.2, 0.15, zb), (wx + 1.2, 2.3, zb), (wx, 2.3, zb)],
+                wall * 0.45,
+            )
         else:
-            _fill(img, cam, [(wx - 0.08, 0.92, zb), (wx + 1.88, 0.92, zb), (wx + 1.88, 2.58, zb),
-                             (wx - 0.08, 2.58, zb)], wall * 0.6)
-            _fill(img, cam, [(wx, 1.0, zb), (wx + 1.8, 1.0, zb), (wx + 1.8, 2.5, zb), (wx, 2.5, zb)],
-                  np.clip(glass * rng.uniform(0.9, 1.1), 0, 255))
-            _fill(img, cam, [(wx + 0.87, 1.0, zb), (wx + 0.93, 1.0, zb), (wx + 0.93, 2.5, zb),
-                             (wx + 0.87, 2.5, zb)], wall * 0.6)
+            _fill(
+                img,
+                cam,
+                [
+                    (wx - 0.08, 0.92, zb),
+                    (wx + 1.88, 0.92, zb),
+                    (wx + 1.88, 2.58, zb),
+                    (wx - 0.08, 2.58, zb),
+                ],
+                wall * 0.6,
+            )
+            _fill(
+                img,
+                cam,
+                [(wx, 1.0, zb), (wx + 1.8, 1.0, zb), (wx + 1.8, 2.5, zb), (wx, 2.5, zb)],
+                np.clip(glass * rng.uniform(0.9, 1.1), 0, 255),
+            )
+            _fill(
+                img,
+                cam,
+                [
+                    (wx + 0.87, 1.0, zb),
+                    (wx + 0.93, 1.0, zb),
+                    (wx + 0.93, 2.5, zb),
+                    (wx + 0.87, 2.5, zb),
+                ],
+                wall * 0.6,
+            )
         wx += rng.uniform(2.6, 3.6)
     # --- left wall (plane X = LEFT_WALL_X), posters
     side = wall * rng.uniform(0.7, 0.85)
@@ -172,8 +225,12 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
     while z < zb - 2.0:
         col = rng.uniform(40, 230, 3)
         _fill(img, cam, [(xl, 1.0, z), (xl, 1.0, z + 1.2), (xl, 2.2, z + 1.2), (xl, 2.2, z)], col)
-        _fill(img, cam, [(xl, 1.15, z + 0.2), (xl, 1.15, z + 1.0), (xl, 1.5, z + 1.0), (xl, 1.5, z + 0.2)],
-              255 - col)
+        _fill(
+            img,
+            cam,
+            [(xl, 1.15, z + 0.2), (xl, 1.15, z + 1.0), (xl, 1.5, z + 1.0), (xl, 1.5, z + 0.2)],
+            255 - col,
+        )
         z += rng.uniform(3.0, 5.0)
     # --- static objects near the walls (people walk in front of them)
     for _ in range(int(rng.integers(3, 6))):
@@ -183,7 +240,16 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
         kind = rng.integers(3)
         if kind == 0:  # crate
             s = rng.uniform(0.5, 0.9)
-            _cuboid(img, cam, xc - s / 2, xc + s / 2, zc, zc + s, s, rng.uniform(40, 140, 3) * [0.6, 0.9, 1.2])
+            _cuboid(
+                img,
+                cam,
+                xc - s / 2,
+                xc + s / 2,
+                zc,
+                zc + s,
+                s,
+                rng.uniform(40, 140, 3) * [0.6, 0.9, 1.2],
+            )
         elif kind == 1:  # bench
             col = rng.uniform(50, 120, 3)
             _cuboid(img, cam, xc - 0.9, xc + 0.9, zc, zc + 0.45, 0.45, col)
@@ -192,9 +258,21 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
             _cuboid(img, cam, xc - 0.3, xc + 0.3, zc, zc + 0.6, 0.5, rng.uniform(60, 120, 3))
             cxy = cam.project(xc, 0.95, zc + 0.3)
             r = cam.scale(zc) * 0.45
-            cv2.ellipse(img, (int(cxy[0]), int(cxy[1])), (int(r), int(r * 1.1)), 0, 0, 360,
-                        (float(rng.uniform(30, 70)), float(rng.uniform(90, 150)), float(rng.uniform(30, 70))),
-                        -1, cv2.LINE_AA)
+            cv2.ellipse(
+                img,
+                (int(cxy[0]), int(cxy[1])),
+                (int(r), int(r * 1.1)),
+                0,
+                0,
+                360,
+                (
+                    float(rng.uniform(30, 70)),
+                    float(rng.uniform(90, 150)),
+                    float(rng.uniform(30, 70)),
+                ),
+                -1,
+                cv2.LINE_AA,
+            )
     # --- texture noise (smoothed) and vignette
     noise = rng.normal(0.0, 1.0, (H // 2 + 1, W // 2 + 1)).astype(np.float32)
     noise = cv2.GaussianBlur(noise, (0, 0), 0.8)

@@ -97,12 +97,24 @@ class SyntheticSequence(Sequence):
     by ``foreground(k)`` renders once.
     """
 
-    def __init__(self, name: str, cast: Cast, background: np.ndarray, fps: float = 25.0,
-                 seed: int = 0, noise: float = 2.0, gains: np.ndarray | None = None,
-                 shadows: bool = True, occluded_below: float = 0.3, cache_frames: int = 4) -> None:
+    def __init__(
+        self,
+        name: str,
+        cast: Cast,
+        background: np.ndarray,
+        fps: float = 25.0,
+        seed: int = 0,
+        noise: float = 2.0,
+        gains: np.ndarray | None = None,
+        shadows: bool = True,
+        occluded_below: float = 0.3,
+        cache_frames: int = 4,
+    ) -> None:
         if background.ndim != 3 or background.shape[2] != 3 or background.dtype != np.uint8:
-            raise ValueError(f"SyntheticSequence: background must be (H, W, 3) uint8, got "
-                             f"{background.shape} {background.dtype}")
+            raise ValueError(
+                f"SyntheticSequence: background must be (H, W, 3) uint8, got "
+                f"{background.shape} {background.dtype}"
+            )
         if noise < 0:
             raise ValueError(f"SyntheticSequence: noise must be >= 0, got {noise}")
         if fps <= 0:
@@ -172,17 +184,33 @@ class SyntheticSequence(Sequence):
         c = self.cast
         b = c.boxes[:, i]
         W, H = self.info.width, self.info.height
-        ok = (np.isfinite(b).all(1) & (b[:, 2] > 0) & (b[:, 3] > 0) & (b[:, 0] < W) & (b[:, 1] < H)
-              & (b[:, 0] + b[:, 2] > 0) & (b[:, 1] + b[:, 3] > 0))
+        ok = (
+            np.isfinite(b).all(1)
+            & (b[:, 2] > 0)
+            & (b[:, 3] > 0)
+            & (b[:, 0] < W)
+            & (b[:, 1] < H)
+            & (b[:, 0] + b[:, 2] > 0)
+            & (b[:, 1] + b[:, 3] > 0)
+        )
         idx = np.flatnonzero(ok)
         order = np.lexsort((c.ids[idx], -c.depth[idx, i]))
         return [int(p) for p in idx[order]]
 
     def _draw(self, p: int, i: int, img, label, value=None, origin=(0, 0)) -> None:
         c = self.cast
-        draw_person(img, label, int(c.ids[p]) if value is None else value, c.boxes[p, i],
-                    c.appearances[p], float(c.phase[p, i]), float(c.facing[p, i]),
-                    bool(c.away[p, i]), float(c.swing[p, i]), origin)
+        draw_person(
+            img,
+            label,
+            int(c.ids[p]) if value is None else value,
+            c.boxes[p, i],
+            c.appearances[p],
+            float(c.phase[p, i]),
+            float(c.facing[p, i]),
+            bool(c.away[p, i]),
+            float(c.swing[p, i]),
+            origin,
+        )
 
     def _entry(self, index: int, colour: bool) -> list:
         """Cached [frame, label image] of frame ``index``, rendering what is missing."""
@@ -230,13 +258,15 @@ class SyntheticSequence(Sequence):
             rng = np.random.default_rng([self.seed, 0x5E45])
             bank = np.round(rng.normal(0.0, self.noise, (2, H + pad, W + pad, 3)))
             # positive and negative parts as uint8: two saturating uint8 operations
-            self._noise_bank = (np.clip(bank, 0, 255).astype(np.uint8),
-                                np.clip(-bank, 0, 255).astype(np.uint8))
+            self._noise_bank = (
+                np.clip(bank, 0, 255).astype(np.uint8),
+                np.clip(-bank, 0, 255).astype(np.uint8),
+            )
         r = np.random.default_rng([self.seed, k, 0x701])
         b, dy, dx = int(r.integers(2)), int(r.integers(pad)), int(r.integers(pad))
         pos, neg = self._noise_bank
-        img = cv2.add(img, pos[b, dy:dy + H, dx:dx + W])
-        return cv2.subtract(img, neg[b, dy:dy + H, dx:dx + W])
+        img = cv2.add(img, pos[b, dy : dy + H, dx : dx + W])
+        return cv2.subtract(img, neg[b, dy : dy + H, dx : dx + W])
 
     # ------------------------------------------------------------------ ground truth
     def _ground_truth(self) -> tuple[GroundTruth, np.ndarray]:
@@ -253,8 +283,8 @@ class SyntheticSequence(Sequence):
             for p in people:
                 self._draw(p, i, None, label)
                 x, y, w, h = c.boxes[p, i]
-                x0, y0 = max(int(math.floor(x)), 0), max(int(math.floor(y)), 0)
-                x1, y1 = min(int(math.ceil(x + w)), W), min(int(math.ceil(y + h)), H)
+                x0, y0 = max(math.floor(x), 0), max(math.floor(y), 0)
+                x1, y1 = min(math.ceil(x + w), W), min(math.ceil(y + h), H)
                 crop = np.zeros((y1 - y0, x1 - x0), np.uint8)
                 self._draw(p, i, None, crop, 1, (x0, y0))
                 alone[p] = (int(cv2.countNonZero(crop)), (x0, y0, x1, y1))
@@ -278,9 +308,13 @@ class SyntheticSequence(Sequence):
                 heads.append((hx0, hy0, hx1 - hx0, hy1 - hy0))
         n = len(frames)
         table = MotTable(
-            np.asarray(frames, np.int64).reshape(n), np.asarray(ids, np.int64).reshape(n),
-            np.asarray(boxes, np.float64).reshape(n, 4), np.asarray(conf, np.float64).reshape(n),
-            np.ones(n, np.int64), np.asarray(vis, np.float64).reshape(n), f"<synthetic:{self.info.name}>",
+            np.asarray(frames, np.int64).reshape(n),
+            np.asarray(ids, np.int64).reshape(n),
+            np.asarray(boxes, np.float64).reshape(n, 4),
+            np.asarray(conf, np.float64).reshape(n),
+            np.ones(n, np.int64),
+            np.asarray(vis, np.float64).reshape(n),
+            f"<synthetic:{self.info.name}>",
         )
         order = np.lexsort((table.ids, table.frames))
         table = table.rows(order)
