@@ -449,7 +449,8 @@ def test_cli_failure_exits_nonzero_and_keeps_outputs(tmp_path, mot_root):
 @needs_synthetic
 def test_cli_end_to_end_on_synthetic(tmp_path):
     run = tmp_path / "run"
-    p = run_app("tracker=baseline", "dataset.length=30", f"hydra.run.dir={run}")
+    p = run_app("tracker=baseline", "dataset.length=30", "dataset.scenarios=[crossing,crowd]",
+                f"hydra.run.dir={run}")
     assert p.returncode == 0, p.stderr
     assert "IDF1" in p.stdout and "baseline" in p.stdout
     for name in ("metrics.csv", "summary.md", "config.yaml", ".hydra/config.yaml",
@@ -458,6 +459,7 @@ def test_cli_end_to_end_on_synthetic(tmp_path):
     m = pd.read_csv(run / "metrics.csv")
     assert list(m.columns) == ["tracker", "sequence", *COLUMNS]
     seqs = [s for s in m["sequence"] if s != "COMBINED"]
-    assert seqs and all((run / "tracks" / "baseline" / f"{s}.txt").is_file() for s in seqs)
+    assert seqs == ["crossing", "crowd"]
+    assert all((run / "tracks" / "baseline" / f"{s}.txt").is_file() for s in seqs)
     row = m[m["sequence"] == "COMBINED"].iloc[0]
     assert 0 < row["IDF1"] <= 1 and 0 < row["Recall"] <= 1
