@@ -205,7 +205,7 @@ def test_crowd_people_and_density() -> None:
 
 
 def test_people_look_like_people(crowd) -> None:
-    """A fully visible person fills 35-65% of its box; its head box holds skin or hair
+    """A fully visible person fills 28-65% of its box; its head box holds skin or hair
     colours and sits at the top 1/7 of the box."""
     t = crowd.gt.table
     checked = 0
@@ -221,7 +221,7 @@ def test_people_look_like_people(crowd) -> None:
             pid = int(t.ids[r])
             p = int(np.flatnonzero(crowd.cast.ids == pid)[0])
             fill = (lab == pid).sum() / (w * h)
-            assert 0.35 < fill < 0.65
+            assert 0.28 < fill < 0.65
             hx, hy, hw, hh = heads[j]
             assert hy == pytest.approx(y, abs=0.01 * h) and hh == pytest.approx(h / 7.5, rel=0.15)
             assert x <= hx and hx + hw <= x + w

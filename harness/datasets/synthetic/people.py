@@ -266,10 +266,11 @@ def draw_person(
     stride = 0.11 * max(side, 0.25)
     legs = []
     for k in (-1.0, 1.0):
-        hip_a = k * 0.045 * tw
+        hip_a = k * 0.045 * (1.0 - 0.7 * side)  # hips overlap in a side view
         foot_a = hip_a + k * dirn * stride * s
-        knee_a = 0.5 * (hip_a + foot_a) + dirn * 0.02 * side * max(k * c, 0.0)
-        lift = 0.02 * max(-k * s * dirn * dirn, 0.0) * side  # the swinging foot lifts
+        # the leg swinging forward (k * c > 0) bends its knee forward and lifts its foot
+        knee_a = 0.5 * (hip_a + foot_a) + dirn * 0.025 * side * max(k * c, 0.0)
+        lift = 0.025 * max(k * c, 0.0) * side
         legs.append((hip_a, knee_a, foot_a, lift, k))
     legs.sort(key=lambda leg: leg[4] * s * dirn)  # the leg moving back is behind
     for i, (hip_a, knee_a, foot_a, lift, _) in enumerate(legs):
@@ -285,8 +286,8 @@ def draw_person(
 
     # --- arm behind the torso in side views
     def arm(k: float, colour_scale: float) -> None:
-        sh_a = k * 0.11 * tw
-        swing_a = -k * dirn * 0.075 * s * max(side, 0.3) if side > 0.4 else 0.0
+        sh_a = k * 0.11 * tw * (1.0 - 0.7 * side)  # shoulders overlap in a side view
+        swing_a = -k * dirn * 0.1 * s * max(side, 0.3) if side > 0.4 else 0.0
         elbow_a = sh_a + k * 0.012 * (1 - side) + 0.5 * swing_a
         hand_a = sh_a + k * 0.02 * (1 - side) + swing_a + dirn * 0.02 * side * abs(s)
         hand_a = max(min(hand_a, 0.17), -0.17)
