@@ -141,7 +141,6 @@ class SyntheticSequence(Sequence):
         self._noise_bank: tuple[np.ndarray, np.ndarray] | None = None
         self._gt: GroundTruth | None = None
         self._heads: np.ndarray | None = None
-        self._label = np.zeros((H, W), np.int32)
 
     # ------------------------------------------------------------------ public API
     @property
@@ -272,7 +271,7 @@ class SyntheticSequence(Sequence):
     def _ground_truth(self) -> tuple[GroundTruth, np.ndarray]:
         c = self.cast
         W, H = self.info.width, self.info.height
-        label = self._label
+        label = np.zeros((H, W), np.int32)  # scratch, cleared per frame
         frames, ids, boxes, conf, vis, heads = [], [], [], [], [], []
         for i in range(c.length):
             people = self._present(i)
