@@ -463,3 +463,17 @@ def test_cli_end_to_end_on_synthetic(tmp_path):
     assert all((run / "tracks" / "baseline" / f"{s}.txt").is_file() for s in seqs)
     row = m[m["sequence"] == "COMBINED"].iloc[0]
     assert 0 < row["IDF1"] <= 1 and 0 < row["Recall"] <= 1
+
+
+@needs_synthetic
+def test_every_tracker_is_reproducible_on_synthetic(tmp_path):
+    """All built trackers (pixels, exact foreground, noisy detections): same bytes twice."""
+    cfg = compose_cfg("dataset.length=24", "dataset.scenarios=[crossing]",
+                      "dataset.width=320", "dataset.height=240",
+                      "detector.miss_rate=0.1", "detector.jitter=0.03", "detector.fp_rate=0.3")
+    a = _run_experiment(cfg, tmp_path / "a", tracker_name="all")
+    b = _run_experiment(cfg, tmp_path / "b", tracker_name="all")
+    assert a.ok and b.ok, (a.failures, b.failures)
+    assert a.trackers == list(cfg.tracker)
+    for rel in ["metrics.csv", *[f"tracks/{t}/crossing.txt" for t in a.trackers]]:
+        assert (tmp_path / "a" / rel).read_bytes() == (tmp_path / "b" / rel).read_bytes(), rel
