@@ -6,7 +6,7 @@ event, so a longer sequence shows more walking before and after the event at the
 walking speeds; positions are linear between keyframes and extrapolated with the first
 (last) segment's velocity before (after) them.
 
-Occlusion presets put the hidden person about three times farther from the camera than the
+Occlusion presets put the hidden person three to four times farther from the camera than the
 occluder, shorter and slimmer, so that its whole silhouette fits inside the occluder's
 torso: visibility really drops to 0 (``tests/test_synthetic.py`` checks it).
 
@@ -157,8 +157,9 @@ def _hidden(rng: np.random.Generator, base: Appearance | None = None) -> Appeara
 # ---------------------------------------------------------------------- presets
 # Each returns the walkers; ``sign`` mirrors the scene left-right (chosen by the seed).
 def _crossing(cam, rng, fps, length, people, density, sign):
-    a = Walker.columns(_occluder(rng), [-1.0, 1.0], [-0.212 * sign, 0.212 * sign], 3.3)
-    b = Walker.columns(_hidden(rng), [-1.0, 1.0], [0.07 * sign, -0.07 * sign], 11.5)
+    # 0.65 m/s at 3.3 m and 0.75 m/s at 12.5 m, in image columns per second
+    a = Walker.columns(_occluder(rng), [-1.0, 1.0], [-0.197 * sign, 0.197 * sign], 3.3)
+    b = Walker.columns(_hidden(rng), [-1.0, 1.0], [0.06 * sign, -0.06 * sign], 12.5)
     return [a, b]
 
 
