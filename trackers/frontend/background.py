@@ -30,16 +30,69 @@ def _kernel(size: int | Sequence[int], name: str) -> np.ndarray | None:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(kw, 1), max(kh, 1)))
 
 
+def fill_holes(mask: np.ndarray) -> np.ndarray:
+    """Fill the background regions of a (H, W) uint8 0/255 mask not connected to its border."""
+    h, w = mask.shape
+    pad = np.zeros((h + 2, w + 2), dtype=np.uint8)
+    pad[1:-1, 1:-1] = mask
+    flood = np.zeros((h + 4, w + 4), dtype=np.uint8)
+    cv2.floodFill(pad, flood, (0, 0), 255)  # paints the outside background 255
+    return mask | ~pad[1:-1, 1:-1]
+
+
 def clean_mask(
-    mask: np.ndarray, open_kernel: np.ndarray | None, close_kernel: np.ndarray | None
+    mask: np.ndarray,
+    open_kernel: np.ndarray | None,
+    close_kernel: np.ndarray | None,
+    holes: bool = False,
 ) -> np.ndarray:
-    """Opening (removes specks) then closing (fills holes) of a (H, W) uint8 0/255 mask."""
+    """Opening (removes specks), closing (bridges gaps) and optional hole filling of a
+    (H, W) uint8 0/255 mask."""
     out = mask
     if open_kernel is not None:
         out = cv2.morphologyEx(out, cv2.MORPH_OPEN, open_kernel)
     if close_kernel is not None:
         out = cv2.morphologyEx(out, cv2.MORPH_CLOSE, close_kernel)
+    if holes:
+        out = fill_holes(out)
     return out
+
+
+WARMUPS = ("samples", "median", "inpaint")
+
+
+def background_estimate(
+    frames: Sequence[np.ndarray], inpaint: bool = True, spread_threshold: float = 12.0,
+    inpaint_radius: int = 5,
+) -> np.ndarray:
+    """Static background image from frames sampled over a sequence.
+
+    The per-pixel median of the frames; with ``inpaint``, pixels whose temporal spread
+    (median absolute deviation of the grey level from its median) exceeds
+    ``spread_threshold`` are unreliable (people stood there for much of the sample) and are
+    filled by ``cv2.inpaint`` (Telea) from the reliable pixels around them, together with
+    the steady regions such a ring of unreliable pixels encloses (a person standing still).
+
+    Args:
+        frames: (H, W, 3) uint8 images.
+    Returns:
+        (H, W, 3) uint8 background.
+    """
+    stack = np.stack(frames)
+    med = np.median(stack, axis=0).astype(np.uint8)
+    if not inpaint:
+        return med
+    grey = stack.astype(np.int16).sum(axis=3) // 3
+    mad = np.median(np.abs(grey - np.median(grey, axis=0)), axis=0)
+    bad = (mad > spread_threshold).astype(np.uint8)
+    bad = cv2.morphologyEx(bad, cv2.MORPH_CLOSE,
+                           cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (15, 15)))
+    # a person standing still is a steady core inside a ring of high spread: fill it too
+    bad = cv2.dilate(fill_holes(bad * np.uint8(255)),
+                     cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) // 255
+    if not bad.any():
+        return med
+    return cv2.inpaint(med, bad, inpaint_radius, cv2.INPAINT_TELEA)
 
 
 class BackgroundModel:
@@ -51,14 +104,21 @@ class BackgroundModel:
         var_threshold: MOG2 squared Mahalanobis threshold (KNN: squared distance threshold).
         learning_rate: per-frame update rate in [0, 1]; -1 lets OpenCV choose 1/history.
         detect_shadows: let the model label shadows (then removed from the mask).
+        background_ratio: MOG2 share of the mixture weight counted as background (OpenCV
+            default 0.9); None keeps the default.
         open_kernel: (w, h) or int size of the elliptic opening kernel; 0/1 disables.
         close_kernel: (w, h) or int size of the elliptic closing kernel; 0/1 disables.
-        warmup_frames: number of frames sampled evenly across the sequence and fed to the
-            model before the first frame (0 disables); learns a background when people are
-            in view at the start.
-        warmup_passes: times the warm-up sample is fed (more passes forget moving people).
-        median_init: build the warm-up sample's per-pixel median image and feed it as the
-            first warm-up frames (a median background), before the samples.
+        fill_holes: fill background regions enclosed by foreground (hollow people whose
+            clothes match the learnt background).
+        warmup_frames: number of frames sampled evenly across the sequence to learn the
+            background before the first frame (0 disables): for sequences that start with
+            people in view.
+        warmup: how the sample teaches the model: "samples" feeds the frames themselves
+            (``warmup_passes`` times, rate 1/len), "median" feeds their per-pixel median,
+            "inpaint" feeds the median with high-spread pixels inpainted
+            (``background_estimate``: for people who stay in one place).
+        warmup_passes: times the sample is fed for "samples".
+        spread_threshold: grey-level MAD above which a pixel is inpainted ("inpaint").
     """
 
     def __init__(
@@ -68,11 +128,14 @@ class BackgroundModel:
         var_threshold: float = 16.0,
         learning_rate: float = -1.0,
         detect_shadows: bool = True,
+        background_ratio: float | None = None,
         open_kernel: int | Sequence[int] = 3,
         close_kernel: int | Sequence[int] = 5,
+        fill_holes: bool = False,
         warmup_frames: int = 0,
+        warmup: str = "median",
         warmup_passes: int = 1,
-        median_init: bool = True,
+        spread_threshold: float = 12.0,
     ) -> None:
         if method not in ("mog2", "knn"):
             raise ValueError(f"method must be 'mog2' or 'knn', got {method!r}")
@@ -82,6 +145,10 @@ class BackgroundModel:
             raise ValueError(f"var_threshold must be > 0, got {var_threshold}")
         if not (learning_rate == -1 or 0.0 <= learning_rate <= 1.0):
             raise ValueError(f"learning_rate must be -1 or in [0, 1], got {learning_rate}")
+        if background_ratio is not None and not 0.0 < background_ratio <= 1.0:
+            raise ValueError(f"background_ratio must be in (0, 1], got {background_ratio}")
+        if warmup not in WARMUPS:
+            raise ValueError(f"warmup must be one of {WARMUPS}, got {warmup!r}")
         if warmup_frames < 0 or warmup_passes < 1:
             raise ValueError(
                 f"warmup_frames must be >= 0 and warmup_passes >= 1, got "
@@ -92,11 +159,14 @@ class BackgroundModel:
         self.var_threshold = float(var_threshold)
         self.learning_rate = float(learning_rate)
         self.detect_shadows = bool(detect_shadows)
+        self.background_ratio = background_ratio
         self.open_kernel = _kernel(open_kernel, "open_kernel")
         self.close_kernel = _kernel(close_kernel, "close_kernel")
+        self.fill_holes = bool(fill_holes)
         self.warmup_frames = int(warmup_frames)
+        self.warmup = warmup
         self.warmup_passes = int(warmup_passes)
-        self.median_init = bool(median_init)
+        self.spread_threshold = float(spread_threshold)
         self.reset()
 
     def reset(self) -> None:
@@ -111,31 +181,26 @@ class BackgroundModel:
                 history=self.history, dist2Threshold=self.var_threshold,
                 detectShadows=self.detect_shadows,
             )
+        if self.background_ratio is not None:
+            self._model.setBackgroundRatio(float(self.background_ratio))
 
     def warm_up(self, frames: Sequence[np.ndarray]) -> None:
-        """Learn the background from ``frames`` ((H, W, 3) uint8 each) before tracking.
-
-        With ``median_init`` the per-pixel median of the frames is fed first (a median
-        background), then the frames themselves ``warmup_passes`` times at learning rate
-        1/len; the person pixels seen in a minority of frames end up as foreground.
-        """
+        """Learn the background from ``frames`` ((H, W, 3) uint8 each) before tracking
+        (see ``warmup``)."""
         frames = [f for f in frames if f is not None]
         if not frames:
             return
-        rate = 1.0 / max(len(frames), 2)
-        if self.median_init:
-            med = np.median(np.stack(frames), axis=0).astype(np.uint8)
-            for _ in range(min(self.history, 30)):
-                self._model.apply(med, learningRate=max(rate, 0.05))
-        for _ in range(self.warmup_passes):
-            for f in frames:
-                self._model.apply(f, learningRate=rate)
-        if self.median_init:
-            # end on the median so the dominant mode is the background
-            for _ in range(10):
-                self._model.apply(med, learningRate=0.05)
-        log.debug("background warm-up on %d frames", len(frames))
-
+        if self.warmup == "samples":
+            rate = 1.0 / max(len(frames), 2)
+            for _ in range(self.warmup_passes):
+                for f in frames:
+                    self._model.apply(f, learningRate=rate)
+        else:
+            bg = background_estimate(frames, inpaint=self.warmup == "inpaint",
+                                     spread_threshold=self.spread_threshold)
+            for _ in range(30):
+                self._model.apply(bg, learningRate=0.1)
+        log.debug("background warm-up (%s) on %d frames", self.warmup, len(frames))
     def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
         """Warm up from ``warmup_frames`` frames sampled evenly over 1..length (1-based)."""
         if self.warmup_frames <= 0 or length <= 0:
@@ -156,7 +221,7 @@ class BackgroundModel:
         # shadows are 127: keep only values above it (without shadow detection: any nonzero)
         level = SHADOW_VALUE if self.detect_shadows else 0
         fg = cv2.threshold(raw, level, 255, cv2.THRESH_BINARY)[1]
-        return clean_mask(fg, self.open_kernel, self.close_kernel)
+        return clean_mask(fg, self.open_kernel, self.close_kernel, self.fill_holes)
 
     def background_image(self) -> np.ndarray | None:
         """Current background estimate (H, W, 3) uint8, or None before the first frame."""

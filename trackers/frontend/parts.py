@@ -174,64 +174,51 @@ def part_overlap(a: PartFeatures, b: PartFeatures) -> np.ndarray:
     return out
 
 
-class _Region:
-    """Quantised colours, foreground and outline of one image crop (computed once)."""
-
-    __slots__ = ("x0", "y0", "hsv", "xyz", "fg", "edge")
-
-    def __init__(self, frame: np.ndarray, fg: np.ndarray | None, x0: int, y0: int, x1: int,
-                 y1: int, bins: int) -> None:
-        self.x0, self.y0 = x0, y0
-        crop = frame[y0:y1, x0:x1]
-        hsv = cv2.cvtColor(crop, cv2.COLOR_BGR2HSV)
-        xyz = cv2.cvtColor(crop, cv2.COLOR_BGR2XYZ)
-        self.hsv = _joint_index(hsv, bins, (180.0, 256.0, 256.0))
-        self.xyz = _joint_index(xyz, bins, (256.0, 256.0, 256.0))
-        if fg is None:
-            f = np.ones(crop.shape[:2], dtype=np.uint8)
-            self.fg = f
-            e = np.zeros_like(f)
-            e[0, :] = e[-1, :] = 1
-            e[:, 0] = e[:, -1] = 1
-            self.edge = e
-        else:
-            f = np.ascontiguousarray(fg[y0:y1, x0:x1]).view(np.uint8)
-            self.fg = f
-            # outline = foreground with a background 4-neighbour (outside the image = bg)
-            er = cv2.erode(f, _CROSS, borderType=cv2.BORDER_CONSTANT, borderValue=0)
-            self.edge = f - er
-
-
-_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
-
-
 def _joint_index(img: np.ndarray, bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
-    """(h, w) int64 joint bin index of a 3-channel uint8 image (as colour_histogram)."""
-    q = [np.minimum((img[..., c].astype(np.int64) * bins) // int(ranges[c]), bins - 1)
-         for c in range(3)]
-    return (q[0] * bins + q[1]) * bins + q[2]
+    """int64 joint bin index of a (..., 3) uint8 image, as ``colour_histogram`` bins it:
+    channel value v falls in bin min(v * bins // range, bins - 1)."""
+    v = np.arange(256, dtype=np.int64)
+    luts = [np.minimum(v * bins // int(r), bins - 1) * bins ** (2 - c) for c, r in enumerate(ranges)]
+    return luts[0][img[..., 0]] + luts[1][img[..., 1]] + luts[2][img[..., 2]]
+
+
+HSV_RANGES = (180.0, 256.0, 256.0)
+"""Channel ranges of OpenCV's 8-bit HSV (hue is 0..179)."""
+XYZ_RANGES = (256.0, 256.0, 256.0)
 
 
 class PartFeatureExtractor:
-    """Per-frame part features: colour conversion once per region, bincounts per box.
+    """Part features of many boxes of one frame, vectorised over the boxes.
 
-    Usage: ``ex = PartFeatureExtractor(bins); ex.start(frame, fg)`` once per frame, then
-    ``ex.extract(boxes, alpha, beta, region=...)`` as often as needed. Boxes extracted with
-    the same ``region`` (an xywh box that contains them, e.g. a foreground blob) share one
-    HSV/XYZ conversion of that region: the head-anchored search of PBM 3.1 evaluates 25
-    sizes per head at the cost of bincounts only.
+    Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
+    pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour):
+    one fancy-indexing gather for all boxes, one ``cv2.cvtColor`` to HSV and one to XYZ for
+    all samples, one ``np.bincount`` per feature for all (box, part) pairs. Features are
+    thus scale-free by construction, and the 25 sizes of the head-anchored search (PBM 3.1)
+    cost one call. Outline (perimeter) samples are foreground samples with a background
+    4-neighbour on the grid (outside the box counts as background). Samples outside the
+    image count as background.
+
+    Usage: ``ex.start(frame, fg)`` once per frame, then ``ex.extract(boxes, alpha, beta)``.
 
     Args:
         bins: histogram bins per channel (joint histograms have ``bins**3`` bins).
+        grid_rows, grid_cols: samples per box (rows should be a multiple of 7 so the head
+            band of PBM 2.1 is whole rows).
     """
 
-    def __init__(self, bins: int = 4) -> None:
+    def __init__(self, bins: int = 4, grid_rows: int = 35, grid_cols: int = 15) -> None:
         if bins < 1 or bins > 32:
             raise ValueError(f"bins must be in 1..32, got {bins}")
+        if grid_rows < 7 or grid_cols < 2:
+            raise ValueError(f"grid must be at least 7 x 2 samples, got {grid_rows} x {grid_cols}")
         self.bins = bins
+        self.grid_rows = grid_rows
+        self.grid_cols = grid_cols
+        self._fr = (np.arange(grid_rows) + 0.5) / grid_rows
+        self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
         self._frame: np.ndarray | None = None
         self._fg: np.ndarray | None = None
-        self._cache: dict[tuple[int, int, int, int], _Region] = {}
 
     def start(self, frame: np.ndarray, foreground: np.ndarray | None) -> None:
         """Set the frame ((H, W, 3) uint8 BGR) and foreground ((H, W) bool or None = all)."""
@@ -242,92 +229,85 @@ class PartFeatureExtractor:
                 f"foreground shape {foreground.shape} differs from frame {frame.shape[:2]}")
         self._frame = frame
         self._fg = None if foreground is None else np.asarray(foreground, dtype=bool)
-        self._cache = {}
-
-    def _region(self, box: np.ndarray) -> _Region:
-        H, W = self._frame.shape[:2]
-        x, y, w, h = box
-        x0 = min(max(int(np.floor(x)), 0), W - 1)
-        y0 = min(max(int(np.floor(y)), 0), H - 1)
-        x1 = max(min(int(np.ceil(x + w)), W), x0 + 1)
-        y1 = max(min(int(np.ceil(y + h)), H), y0 + 1)
-        key = (x0, y0, x1, y1)
-        reg = self._cache.get(key)
-        if reg is None:
-            reg = _Region(self._frame, self._fg, x0, y0, x1, y1, self.bins)
-            self._cache[key] = reg
-        return reg
 
     def extract(
         self,
         boxes: np.ndarray,
         alpha: np.ndarray | float = DEFAULT_ALPHA,
         beta: np.ndarray | float = DEFAULT_BETA,
-        region: np.ndarray | None = None,
     ) -> PartFeatures:
         """Part features of (N, 4) xywh boxes (PBM 2.2).
 
         Args:
-            boxes: (N, 4) person boxes. alpha, beta: centroid ratios, (N,) or scalar.
-            region: optional (4,) xywh box holding all ``boxes``: one colour conversion for
-                all of them; pixels of a box outside the region count as background.
+            boxes: (N, 4) person boxes. alpha, beta: centroid ratios (eqs. 1-2), (N,) or scalar.
         Returns:
             PartFeatures of N boxes.
         """
         if self._frame is None:
             raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
         b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-        n = len(b)
+        n, R, C, P = len(b), self.grid_rows, self.grid_cols, N_PARTS
         nb = self.bins**3
         parts = part_boxes(b, alpha, beta)
-        area = np.zeros((n, N_PARTS))
-        perim = np.zeros((n, N_PARTS))
-        hsv = np.zeros((n, N_PARTS, nb))
-        xyz = np.zeros((n, N_PARTS, nb))
+        if n == 0:
+            return PartFeatures.concatenate([], self.bins)
+        H, W = self._frame.shape[:2]
+        ys = b[:, 1, None] + self._fr[None] * b[:, 3, None]  # (N, R) sample rows
+        xs = b[:, 0, None] + self._fc[None] * b[:, 2, None]  # (N, C) sample columns
+        yi = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
+        xi = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+        inside = ((ys >= 0) & (ys < H))[:, :, None] & ((xs >= 0) & (xs < W))[:, None, :]
+        pix = self._frame[yi[:, :, None], xi[:, None, :]]  # (N, R, C, 3)
+        if self._fg is None:
+            fg = inside
+        else:
+            fg = self._fg[yi[:, :, None], xi[:, None, :]] & inside
+        flat = np.ascontiguousarray(pix.reshape(n * R, C, 3))
+        hsv = _joint_index(cv2.cvtColor(flat, cv2.COLOR_BGR2HSV), self.bins, HSV_RANGES).reshape(n, R, C)
+        xyz = _joint_index(cv2.cvtColor(flat, cv2.COLOR_BGR2XYZ), self.bins, XYZ_RANGES).reshape(n, R, C)
+        # part label of every sample (PBM 2.1): head band, torso rows, leg rows; left/right of xc
+        head_end = parts[:, 0, 1] + parts[:, 0, 3]
+        torso_end = parts[:, 1, 1] + parts[:, 1, 3]
+        split = parts[:, 1, 0] + parts[:, 1, 2]
+        band = np.where(ys < head_end[:, None], 0, np.where(ys < torso_end[:, None], 1, 3))
+        side = (xs >= split[:, None]).astype(np.int64)
+        label = band[:, :, None] + np.where(band[:, :, None] == 0, 0, side[:, None, :])
+        key = np.arange(n)[:, None, None] * P + label  # (N, R, C) in 0..N*P
+        kf = key[fg]
+        cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
+        total = np.bincount(key.ravel(), minlength=n * P).astype(np.float64)
+        norm = np.maximum(cnt, 1.0)
+        h_hsv = np.bincount(kf * nb + hsv[fg], minlength=n * P * nb).reshape(n, P, nb)
+        h_xyz = np.bincount(kf * nb + xyz[fg], minlength=n * P * nb).reshape(n, P, nb)
+        X = np.broadcast_to(xs[:, None, :], fg.shape)[fg]
+        Y = np.broadcast_to(ys[:, :, None], fg.shape)[fg]
+        cx = np.bincount(kf, weights=X, minlength=n * P)
+        cy = np.bincount(kf, weights=Y, minlength=n * P)
+        # outline: foreground samples with a background 4-neighbour (outside = background)
+        pad = np.zeros((n, R + 2, C + 2), dtype=bool)
+        pad[:, 1:-1, 1:-1] = fg
+        interior = pad[:, :-2, 1:-1] & pad[:, 2:, 1:-1] & pad[:, 1:-1, :-2] & pad[:, 1:-1, 2:]
+        edge = fg & ~interior
+        perim = np.bincount(key[edge], minlength=n * P).astype(np.float64)
+        # half perimeter of each part in samples: rows in its band + columns on its side
+        rows_band = np.stack([(band == 0).sum(1), (band == 1).sum(1), (band == 3).sum(1)], axis=1)
+        cols_right = side.sum(1)
+        half = np.empty((n, P))
+        half[:, 0] = rows_band[:, 0] + C
+        half[:, 1] = rows_band[:, 1] + C - cols_right
+        half[:, 2] = rows_band[:, 1] + cols_right
+        half[:, 3] = rows_band[:, 2] + C - cols_right
+        half[:, 4] = rows_band[:, 2] + cols_right
         cen = parts[:, :, :2] + 0.5 * parts[:, :, 2:]
-        shared = None if region is None else self._region(np.asarray(region, dtype=np.float64))
-        for k in range(n):
-            reg = shared if shared is not None else self._region(b[k])
-            rh, rw = reg.fg.shape
-            # box and split lines in region pixel coordinates
-            x, y, w, h = b[k]
-            c0 = min(max(int(round(x)) - reg.x0, 0), rw)
-            c1 = min(max(int(round(x + w)) - reg.x0, c0), rw)
-            r0 = min(max(int(round(y)) - reg.y0, 0), rh)
-            r1 = min(max(int(round(y + h)) - reg.y0, r0), rh)
-            if c1 <= c0 or r1 <= r0:
-                continue
-            p = parts[k]
-            head_end = int(round(p[0, 1] + p[0, 3])) - reg.y0
-            torso_end = int(round(p[1, 1] + p[1, 3])) - reg.y0
-            split = int(round(p[1, 0] + p[1, 2])) - reg.x0
-            rows = np.arange(r0, r1)
-            cols = np.arange(c0, c1)
-            band = np.where(rows < head_end, 0, np.where(rows < torso_end, 1, 3))
-            side = (cols >= split).astype(np.int64)
-            label = band[:, None] + np.where(band[:, None] == 0, 0, side[None, :])  # (h, w)
-            fg = reg.fg[r0:r1, c0:c1]
-            lab = label[fg.astype(bool)]
-            if lab.size:
-                cnt = np.bincount(lab, minlength=N_PARTS).astype(np.float64)
-                yy, xx = np.nonzero(fg)
-                sx = np.bincount(lab, weights=xx + c0 + reg.x0 + 0.5, minlength=N_PARTS)
-                sy = np.bincount(lab, weights=yy + r0 + reg.y0 + 0.5, minlength=N_PARTS)
-                has = cnt > 0
-                cen[k, has, 0] = sx[has] / cnt[has]
-                cen[k, has, 1] = sy[has] / cnt[has]
-                hs = np.bincount(lab * nb + reg.hsv[r0:r1, c0:c1][fg.astype(bool)],
-                                 minlength=N_PARTS * nb).reshape(N_PARTS, nb)
-                xz = np.bincount(lab * nb + reg.xyz[r0:r1, c0:c1][fg.astype(bool)],
-                                 minlength=N_PARTS * nb).reshape(N_PARTS, nb)
-                norm = np.maximum(cnt, 1.0)[:, None]
-                hsv[k] = hs / norm
-                xyz[k] = xz / norm
-                e = reg.edge[r0:r1, c0:c1].astype(bool)
-                perim[k] = np.bincount(label[e], minlength=N_PARTS)
-                area[k] = cnt
-        size = parts[:, :, 2] * parts[:, :, 3]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            area = np.where(size > 0, area / np.maximum(size, 1e-9), 0.0)
-            perim = perim / np.maximum(parts[:, :, 2] + parts[:, :, 3], 1.0)
-        return PartFeatures(parts, np.clip(area, 0.0, 1.0), perim, hsv, xyz, cen, b[:, 3].copy())
+        has = (cnt > 0).reshape(n, P)
+        cen = np.where(has[:, :, None], np.stack([cx, cy], axis=1).reshape(n, P, 2)
+                       / norm.reshape(n, P, 1), cen)
+        return PartFeatures(
+            parts,
+            (cnt / np.maximum(total, 1.0)).reshape(n, P),
+            perim.reshape(n, P) / np.maximum(half, 1.0),
+            h_hsv / norm.reshape(n, P, 1),
+            h_xyz / norm.reshape(n, P, 1),
+            cen,
+            b[:, 3].copy(),
+        )

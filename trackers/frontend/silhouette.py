@@ -1,0 +1,221 @@
+"""Silhouette-template person detector (Reta 3.1, adapted).
+
+Reta et al. fit an active-basis silhouette template at several scales over the moving
+foreground: the best fit marks its silhouette occupied and the search repeats on the
+vacant foreground. We keep the greedy occupancy loop and replace the active basis (Gabor
+sketch learnt from their training images, which we do not have) with a mean person mask
+``T`` (values in [0, 1], learnt by ``python -m harness.fit silhouette`` from exact person
+masks, or the shipped default).
+
+Fit of the template (scaled to one of ``n_scales`` heights) centred at a pixel, over the
+vacant foreground V and the occupied foreground O (both 0/1 images), with the template's
+visible mass M = sum T - sum T O (the part not hidden by people already found):
+
+    E     = sum T V - alpha (M - sum T V) - beta sum (1 - T) V     (explained foreground)
+    score = E / M
+
+E rewards foreground under the template, pays ``alpha`` for template pixels without
+foreground and ``beta`` for foreground where the template expects background; the greedy
+step takes the placement and scale of largest E (the active basis' log-likelihood also
+grows with the template's size), among placements with ``score >= threshold`` and
+M / sum T >= ``min_visible`` (Reta: people more than 30% visible). Every sum is one
+``cv2.filter2D`` per scale over a foreground crop, never a Python loop over pixels.
+"""
+
+from __future__ import annotations
+
+import logging
+from importlib import resources
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+TEMPLATE_HEIGHT = 64  # rows of the stored template
+
+
+def analytic_template(height: int = TEMPLATE_HEIGHT, width_ratio: float = 0.42) -> np.ndarray:
+    """A drawn mean-person mask: head 1/7 of height, torso with arms, two legs, blurred.
+
+    Returns (height, round(width_ratio * height)) float32 in [0, 1].
+    """
+    w = round(width_ratio * height)
+    img = np.zeros((height * 4, w * 4), dtype=np.float32)
+    H, W = img.shape
+    hh = H / 7
+    cx = W / 2
+    cv2.ellipse(img, (int(cx), int(hh / 2)), (int(0.33 * hh), int(hh / 2)), 0, 0, 360, 1.0, -1)
+    cv2.rectangle(img, (int(cx - 0.12 * H / 2.4), int(hh * 0.9)), (int(cx + 0.12 * H / 2.4), int(hh * 1.3)),
+                  1.0, -1)  # neck
+    torso = np.array([[cx - 0.4 * W, hh * 1.25], [cx + 0.4 * W, hh * 1.25],
+                      [cx + 0.45 * W, hh * 4.0], [cx - 0.45 * W, hh * 4.0]], dtype=np.int32)
+    cv2.fillPoly(img, [torso], 1.0)
+    for side in (-1, 1):
+        leg = np.array([[cx + side * 0.02 * W, hh * 3.6], [cx + side * 0.4 * W, hh * 3.6],
+                        [cx + side * 0.36 * W, H], [cx + side * 0.06 * W, H]], dtype=np.int32)
+        cv2.fillPoly(img, [leg], 1.0)
+    img = cv2.GaussianBlur(img, (0, 0), sigmaX=W * 0.06)
+    return np.clip(cv2.resize(img, (w, height), interpolation=cv2.INTER_AREA), 0.0, 1.0)
+
+
+def fit_template(masks: list[np.ndarray], height: int = TEMPLATE_HEIGHT) -> np.ndarray:
+    """Mean of person masks, each cropped to its box and resized to a common size.
+
+    Args:
+        masks: list of (h_i, w_i) bool/0-1 masks of single people, each cropped to the
+            person's box.
+        height: rows of the template; its width is height x the median box aspect ratio.
+    Returns:
+        (height, width) float32 in [0, 1].
+    """
+    masks = [np.asarray(m, dtype=np.float32) for m in masks if m.size and m.any()]
+    if not masks:
+        raise ValueError("fit_template: no non-empty masks")
+    aspect = float(np.median([m.shape[1] / m.shape[0] for m in masks]))
+    width = max(round(aspect * height), 3)
+    acc = np.zeros((height, width), dtype=np.float64)
+    for m in masks:
+        acc += cv2.resize(m, (width, height), interpolation=cv2.INTER_AREA)
+    return np.clip(acc / len(masks), 0.0, 1.0).astype(np.float32)
+
+
+def load_template(path: str | Path | None = None) -> np.ndarray:
+    """Load a template ``.npy``; None loads the shipped ``trackers/frontend/data/silhouette.npy``."""
+    if path is None:
+        path = resources.files("trackers.frontend") / "data" / "silhouette.npy"
+    path = Path(str(path))
+    if not path.is_file():
+        raise FileNotFoundError(f"silhouette template not found: {path}")
+    t = np.load(path, allow_pickle=False).astype(np.float32)
+    if t.ndim != 2 or t.min() < 0 or t.max() > 1:
+        raise ValueError(f"{path}: a template must be a 2-D array in [0, 1], got {t.shape}")
+    return t
+
+
+class SilhouetteMatcher:
+    """Greedy multi-scale silhouette fitting over a foreground mask.
+
+    Args:
+        template: path of a template ``.npy`` (None: shipped default).
+        min_height: smallest person height searched, pixels (full resolution).
+        max_height: largest person height searched, pixels.
+        n_scales: number of heights, geometrically spaced.
+        downscale: work on the foreground reduced by this integer factor (speed).
+        alpha: penalty weight for template pixels without foreground.
+        beta: penalty weight for foreground where the template expects background.
+        threshold: smallest accepted score E / M (at most 1).
+        min_visible: smallest fraction of template mass not already occupied.
+        max_people: safety bound of fits per region.
+        margin: pixels (full resolution) added around each foreground region searched.
+    """
+
+    def __init__(
+        self,
+        template: str | None = None,
+        min_height: float = 30.0,
+        max_height: float = 120.0,
+        n_scales: int = 8,
+        downscale: int = 2,
+        alpha: float = 1.0,
+        beta: float = 0.5,
+        threshold: float = 0.3,
+        min_visible: float = 0.3,
+        max_people: int = 20,
+        margin: int = 8,
+    ) -> None:
+        if not 0 < min_height <= max_height:
+            raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
+        if n_scales < 1 or downscale < 1:
+            raise ValueError(f"n_scales and downscale must be >= 1, got {n_scales}, {downscale}")
+        if not 0.0 < min_visible <= 1.0:
+            raise ValueError(f"min_visible must be in (0, 1], got {min_visible}")
+        self.template = load_template(template)
+        self.min_height, self.max_height = float(min_height), float(max_height)
+        self.n_scales, self.downscale = int(n_scales), int(downscale)
+        self.alpha, self.beta, self.threshold = float(alpha), float(beta), float(threshold)
+        self.min_visible, self.max_people, self.margin = float(min_visible), int(max_people), int(margin)
+        heights = np.geomspace(min_height, max_height, n_scales) / downscale
+        aspect = self.template.shape[1] / self.template.shape[0]
+        self._kernels = []
+        for h in heights:
+            th = max(round(h), 3)
+            tw = max(round(h * aspect), 2)
+            t = cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA)
+            self._kernels.append((t, (1.0 - t), float(t.sum())))
+
+    def fit(self, foreground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Greedy fits over a (H, W) foreground mask (nonzero = foreground).
+
+        Returns:
+            boxes (N, 4) float64 xywh in full-resolution pixels and scores (N,) float64.
+        """
+        d = self.downscale
+        fg = (np.asarray(foreground) != 0).astype(np.uint8)
+        H, W = fg.shape
+        small = fg if d == 1 else cv2.resize(fg, (W // d, H // d), interpolation=cv2.INTER_AREA)
+        if d > 1:  # INTER_AREA on 0/1 uint8 rounds: keep cells at least half foreground
+            small = cv2.resize(fg * np.uint8(255), (W // d, H // d), interpolation=cv2.INTER_AREA)
+            small = (small >= 128).astype(np.uint8)
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(small, connectivity=8)
+        boxes, scores = [], []
+        m = max(self.margin // d, 1)
+        hmax = max(k[0].shape[0] for k in self._kernels)
+        wmax = max(k[0].shape[1] for k in self._kernels)
+        min_area = 0.15 * self._kernels[0][2]
+        for i in range(1, n):
+            x, y, w, h, area = stats[i]
+            if area < min_area:
+                continue
+            x0, y0 = max(x - m - wmax // 2, 0), max(y - m - hmax // 2, 0)
+            x1, y1 = min(x + w + m + wmax // 2, small.shape[1]), min(y + h + m + hmax // 2, small.shape[0])
+            # only this component's pixels in the crop (others are found from their own)
+            crop = (lab[y0:y1, x0:x1] == i).astype(np.float32)
+            b, s = self._greedy(crop, region_height=h)
+            for bx, sc in zip(b, s):
+                boxes.append([(bx[0] + x0) * d, (bx[1] + y0) * d, bx[2] * d, bx[3] * d])
+                scores.append(sc)
+        if not boxes:
+            return np.zeros((0, 4)), np.zeros(0)
+        return np.asarray(boxes, dtype=np.float64), np.asarray(scores, dtype=np.float64)
+
+    def _greedy(self, vacant: np.ndarray, region_height: int) -> tuple[list, list]:
+        occupied = np.zeros_like(vacant)
+        boxes, scores = [], []
+        kernels = [k for k in self._kernels if k[0].shape[0] <= 1.5 * region_height + 4]
+        if not kernels:
+            kernels = self._kernels[:1]
+        for _ in range(self.max_people):
+            best = (0.0, None)
+            for t, inv, tsum in kernels:
+                tv = cv2.filter2D(vacant, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
+                iv = cv2.filter2D(vacant, cv2.CV_32F, inv, borderType=cv2.BORDER_CONSTANT)
+                visible = tsum - (cv2.filter2D(occupied, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
+                                  if occupied.any() else 0.0)
+                # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V
+                explained = tv - self.alpha * (visible - tv) - self.beta * iv
+                ok = (explained >= self.threshold * np.maximum(visible, 1e-6)) & (
+                    visible >= self.min_visible * tsum)
+                if not ok.any():
+                    continue
+                e = np.where(ok, explained, -np.inf)
+                j = int(np.argmax(e))
+                r, c = divmod(j, e.shape[1])
+                if e[r, c] > best[0]:
+                    best = (float(e[r, c]), (r, c, t, float(e[r, c] / max(visible if np.isscalar(visible) else visible[r, c], 1e-6))))
+            if best[1] is None:
+                break
+            r, c, t, score = best[1]
+            th, tw = t.shape
+            # filter2D anchors the kernel at its centre (th // 2, tw // 2)
+            top, left = r - th // 2, c - tw // 2
+            boxes.append([left, top, tw, th])
+            scores.append(score)
+            rr0, cc0 = max(top, 0), max(left, 0)
+            rr1, cc1 = min(top + th, vacant.shape[0]), min(left + tw, vacant.shape[1])
+            sil = t[rr0 - top : rr1 - top, cc0 - left : cc1 - left] > 0.5
+            region = vacant[rr0:rr1, cc0:cc1]
+            occupied[rr0:rr1, cc0:cc1] = np.maximum(occupied[rr0:rr1, cc0:cc1], sil & (region > 0))
+            region[sil] = 0.0
+        return boxes, scores
