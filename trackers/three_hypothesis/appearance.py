@@ -36,12 +36,17 @@ class EllipseHistogrammer:
             pixels that must be foreground for the mask to be used; below it the whole
             ellipse is counted (a person missed by the background model keeps a model).
         cache_size: most ellipse masks kept (keyed by box height and width).
+        stride: count every stride-th row and column only (1 = every pixel, eq. 1 exactly).
     """
 
-    def __init__(self, bins: int = 16, min_foreground: float = 0.2, cache_size: int = 4096) -> None:
+    def __init__(self, bins: int = 16, min_foreground: float = 0.2, cache_size: int = 4096,
+                 stride: int = 1) -> None:
         if bins < 1 or 256 % bins:
             raise ValueError(f"bins must divide 256, got {bins}")
+        if stride < 1:
+            raise ValueError(f"stride must be >= 1, got {stride}")
         self.bins = bins
+        self.stride = stride
         self.min_foreground = min_foreground
         self.cache_size = cache_size
         self._masks: dict[tuple[int, int], np.ndarray] = {}
@@ -88,10 +93,12 @@ class EllipseHistogrammer:
                 fm = m & (foreground[r0:r1, c0:c1] != 0)
                 if np.count_nonzero(fm) >= self.min_foreground * np.count_nonzero(m):
                     m = fm
+            crop = frame[r0:r1, c0:c1]
+            if self.stride > 1:
+                crop = np.ascontiguousarray(crop[:: self.stride, :: self.stride])
+                m = np.ascontiguousarray(m[:: self.stride, :: self.stride])
             # cv2.calcHist: same joint bin order as trackers.histograms.colour_histogram
-            counts = cv2.calcHist(
-                [frame[r0:r1, c0:c1]], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges
-            )
+            counts = cv2.calcHist([crop], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges)
             out[i] = counts.ravel()
         total = out.sum(axis=1, keepdims=True)
         np.divide(out, total, out=out, where=total > 0)

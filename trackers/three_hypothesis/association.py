@@ -69,6 +69,9 @@ def associate(
     p: np.ndarray,
     mu_rho: float,
     mu_g: float,
+    delta: np.ndarray | None = None,
+    sqrt_q: np.ndarray | None = None,
+    sqrt_p: np.ndarray | None = None,
 ) -> Association:
     """Match measurements to persons in two stages.
 
@@ -93,6 +96,8 @@ def associate(
         p: (D, bins) measurement histograms.
         mu_rho: appearance threshold mu_rho in [0, 1].
         mu_g: gate radius mu_g in pixels.
+        delta: optional precomputed (B, D) region similarity of nodes and measurements.
+        sqrt_q, sqrt_p: optional element-wise square roots of q and p (rho = sqrt_q sqrt_p').
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
@@ -103,12 +108,16 @@ def associate(
     if n_persons == 0 or n_meas == 0:
         return Association(np.zeros((0, 3), dtype=int), empty, np.zeros(0), np.arange(n_persons),
                            np.arange(n_meas))
-    rho = np.clip(bhattacharyya(q, p), 0.0, 1.0)  # (P, D) eq. 4
+    if sqrt_q is not None and sqrt_p is not None:
+        rho = np.clip(sqrt_q @ sqrt_p.T, 0.0, 1.0)  # (P, D) eq. 4
+    else:
+        rho = np.clip(bhattacharyya(q, p), 0.0, 1.0)  # (P, D) eq. 4
     rho_nodes = rho[owners]  # (B, D)
     appearance_ok = rho_nodes >= mu_rho
 
     # stage 1: intersecting regions, cost (1 - rho) + (1 - delta)
-    delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
+    if delta is None:
+        delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
     starts = np.flatnonzero(np.r_[True, np.diff(owners) > 0])
     cost1, best1 = _person_costs(c1, starts)

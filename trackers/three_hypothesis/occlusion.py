@@ -11,7 +11,7 @@ import numpy as np
 from trackers.frontend.features import region_similarity
 
 
-def overlap_ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def overlap_ratio(a: np.ndarray, b: np.ndarray, samples: int = 24) -> np.ndarray:
     """Eq. 2's ratio |Si & Sj| / (|Si| + |Sj|) for all pairs of ellipse regions.
 
     It is half the region similarity delta of eq. 5 (delta = 2 |Si & Sj| / (|Si| + |Sj|)),
@@ -19,13 +19,15 @@ def overlap_ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Args:
         a: (N, 4) xywh; b: (M, 4) xywh.
+        samples: integration grid per side (``region_similarity``).
     Returns:
         (N, M) float64.
     """
-    return 0.5 * region_similarity(a, b)
+    return 0.5 * region_similarity(a, b, samples=samples)
 
 
-def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float) -> np.ndarray:
+def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
+                    ratio: np.ndarray | None = None) -> np.ndarray:
     """Occlusion relation O of eq. 2 over predicted regions of nodes.
 
     O = {(n_i, n_j) | id_i != id_j, |S_i & S_j| / (|S_i| + |S_j|) > lambda}.
@@ -35,13 +37,15 @@ def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float) -> np.nda
         owners: (N,) person key of each node (hypotheses of one person never occlude
             each other).
         lam: overlap threshold lambda in [0, 0.5).
+        ratio: optional precomputed (N, N) ``overlap_ratio(boxes, boxes)``.
     Returns:
         (K, 2) int rows (i, j) with i < j, node indices into ``boxes``.
     """
     n = len(boxes)
     if n < 2:
         return np.zeros((0, 2), dtype=int)
-    ratio = overlap_ratio(boxes, boxes)
+    if ratio is None:
+        ratio = overlap_ratio(boxes, boxes)
     owners = np.asarray(owners)
     mask = (ratio > lam) & (owners[:, None] != owners[None, :])
     i, j = np.nonzero(np.triu(mask, k=1))

@@ -36,11 +36,12 @@ view, then velocity > occluder > still), HYPOTHESIS (its other hypotheses), TENT
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.geometry import box_ellipses, valid_boxes
+from trackers.frontend.features import region_similarity
+from trackers.geometry import valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
@@ -77,15 +78,15 @@ class _Branch:
 class _Person:
     key: int
     q: np.ndarray
+    sqrt_q: np.ndarray
     Q: np.ndarray
     R: np.ndarray
     branches: list[_Branch]
+    shape: np.ndarray  # (4,) xywh region of the last visible node
     id: int = 0  # public id once confirmed
     hits: int = 1
     misses: int = 0
     spawned: bool = False  # occlusion hypotheses created in this hidden streak
-    depth: int = 0
-    extra: dict = field(default_factory=dict)
 
     @property
     def confirmed(self) -> bool:
@@ -116,13 +117,16 @@ class RetaTracker:
         cover: fraction of a hypothesis region hidden by a visible person's region above
             which the hypothesis counts as covered (explains the missing detection);
             otherwise it is in plain view and pruned after m such frames.
+        region_samples: grid points per side integrating ellipse overlaps (eqs. 2, 5).
+        pixel_stride: histogram every pixel_stride-th row and column of an ellipse (1 =
+            every pixel, as in the paper; 2 is four times cheaper for large people).
     """
 
     def __init__(
         self,
         mu_rho: float = 0.3,
         mu_g: float = 120.0,
-        m: int = 5,
+        m: int = 8,
         lam: float = 0.05,
         confirm_frames: int = 3,
         max_hidden: int = 150,
@@ -134,6 +138,8 @@ class RetaTracker:
         initial_velocity_variance: float = 100.0,
         min_foreground: float = 0.2,
         cover: float = 0.5,
+        region_samples: int = 12,
+        pixel_stride: int = 1,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -145,6 +151,10 @@ class RetaTracker:
             raise ValueError(f"lam must lie in [0, 0.5), got {lam}")
         if not 0.0 < cover <= 1.0:
             raise ValueError(f"cover must lie in (0, 1], got {cover}")
+        if region_samples < 2:
+            raise ValueError(f"region_samples must be >= 2, got {region_samples}")
+        if pixel_stride < 1:
+            raise ValueError(f"pixel_stride must be >= 1, got {pixel_stride}")
         if confirm_frames < 1:
             raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
         if max_hidden < 1:
@@ -160,11 +170,13 @@ class RetaTracker:
         self.lam = lam
         self.confirm_frames = confirm_frames
         self.cover = cover
+        self.region_samples = region_samples
         self.max_hidden = max_hidden
         self.min_score = min_score
         self.motion = MotionModel(position_noise, velocity_noise, measurement_noise,
                                   initial_velocity_variance)
-        self.histograms = EllipseHistogrammer(bins=bins, min_foreground=min_foreground)
+        self.histograms = EllipseHistogrammer(bins=bins, min_foreground=min_foreground,
+                                              stride=pixel_stride)
         _, _, self._F, self._H, _, _ = self.motion.init(np.array([0.0, 0.0, 10.0, 10.0]))
         self.reset()
 
@@ -205,19 +217,21 @@ class RetaTracker:
         self.graph.begin_frame(self._frame)
         keep = valid_boxes(detections.boxes) & (detections.scores >= self.min_score)
         dets = detections.boxes[keep]
-        p = self.histograms(frame, dets, foreground)
-
+        p = self.histograms(frame, dets, foreground)  # eq. 1 per measurement
+        sqrt_p = np.sqrt(p)
         persons = self._persons
-        # 1. prediction of every node of t-1 (hypotheses move by their case)
+        self._public = {person.key: person.public_id for person in persons}
+
+        # 1. prediction of every node of t-1 (hypotheses move by their case, 3.3.3)
         branches = [b for person in persons for b in person.branches]
         owners = np.array([i for i, person in enumerate(persons) for _ in person.branches], dtype=int)
-        n_nodes = len(branches)
-        if n_nodes:
+        if branches:
             x_prev = np.array([b.x for b in branches])
             P_prev = np.array([b.P for b in branches])
             velocity = {person.key: person.branches[0].x[4:6] for person in persons}
-            occ_v = np.array([velocity.get(b.occluder, np.zeros(2)) if b.occluder is not None
-                              else np.zeros(2) for b in branches])
+            zero = np.zeros(2)
+            occ_v = np.array([velocity.get(b.occluder, zero) if b.occluder is not None else zero
+                              for b in branches])
             x_set = hyp.set_motion(x_prev, [b.kind for b in branches], occ_v)
             Qs = np.array([persons[o].Q for o in owners])
             Xp, Pp = predict(x_set, P_prev, self._F, Qs)
@@ -226,13 +240,18 @@ class RetaTracker:
             x_prev = Xp = np.zeros((0, 8))
             Pp = np.zeros((0, 8, 8))
             pred = np.zeros((0, 4))
+        n_nodes = len(pred)
+        # one region-similarity matrix per frame: predictions x (predictions, measurements)
+        rs = region_similarity(pred, np.vstack([pred, dets]), samples=self.region_samples)
 
-        # 2. occlusion relations O over predicted regions (eq. 2)
-        pairs = occlusion_pairs(pred, owners, self.lam)
+        # 2. occlusion relations O over predicted regions (eq. 2: ratio = delta / 2)
+        pairs = occlusion_pairs(pred, owners, self.lam, ratio=0.5 * rs[:, :n_nodes])
 
         # 4. two-stage association (3.3.2)
         q = np.array([person.q for person in persons]).reshape(len(persons), p.shape[1])
-        assoc = associate(pred, owners, q, dets, p, self.mu_rho, self.mu_g)
+        sqrt_q = np.array([person.sqrt_q for person in persons]).reshape(q.shape)
+        assoc = associate(pred, owners, q, dets, p, self.mu_rho, self.mu_g,
+                          delta=rs[:, n_nodes:], sqrt_q=sqrt_q, sqrt_p=sqrt_p)
         matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
                        in zip(assoc.matches, assoc.stages, assoc.rho)}
 
@@ -257,9 +276,11 @@ class RetaTracker:
 
         # 6. attribute update of matched persons (3.3.3)
         rows = sorted(matched_det.items())
+        visible_boxes = np.zeros((0, 4))
         if rows:
             idx = np.array([n for _, (_, n, _, _) in rows])
             dbox = dets[[d for _, (d, _, _, _) in rows]]
+            visible_boxes = dbox
             behind = np.array([n in in_front for _, (_, n, _, _) in rows])
             z = box_measurements(dbox)
             zp = box_measurements(pred[idx])
@@ -270,6 +291,7 @@ class RetaTracker:
                 person = persons[i]
                 if not behind[r]:
                     person.q = p[d]  # appearance updated only when not occluded
+                    person.sqrt_q = sqrt_p[d]
                     shape = dbox[r]
                 else:
                     shape = pred[n]
@@ -279,82 +301,84 @@ class RetaTracker:
                 if not person.confirmed and person.hits >= self.confirm_frames:
                     person.id = self._next_id
                     self._next_id += 1
-                occluder = in_front.get(n)
-                branch = _Branch(VISIBLE, Xc[r], Pc[r],
-                                 occluder=persons[occluder[0]].key if occluder else None)
-                parent = branches[n].node
-                branch.node = self._add_node(person, branch, shape, len(occluder or []), parent,
-                                             stage, rho)
-                person.extra = {"shape": shape}
+                    self._public[person.key] = person.id
+                fronts = in_front.get(n, [])
+                branch = _Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
+                                 occluder=persons[fronts[0]].key if fronts else None)
+                branch.node = self._add_node(person, branch, shape, branches[n].node, stage, rho)
+                person.shape = shape
                 person.branches = [branch]
 
-        # 7. unmatched persons: continue hypotheses, spawn at the first total occlusion
-        visible_boxes = dets[[d for _, (d, _, _, _) in rows]] if rows else np.zeros((0, 4))
-        survivors: list[_Person] = []
+        # 7. unmatched persons: continue each hypothesis, spawn at the first total occlusion
+        pending: list[tuple[_Person, list[_Branch]]] = []
         for i, person in enumerate(persons):
             if i in matched_det:
-                survivors.append(person)
                 continue
             person.misses += 1
-            node_idx = np.flatnonzero(owners == i)
             new: list[_Branch] = []
-            for n in node_idx:
+            for n in np.flatnonzero(owners == i):
                 old = branches[n]
                 kind = hyp.VELOCITY if old.kind == VISIBLE else old.kind
                 fronts = in_front.get(n, [])
                 occluder = old.occluder if kind == hyp.OCCLUDER else (
                     persons[fronts[0]].key if fronts else None)
-                b = _Branch(kind, Xp[n], Pp[n], node=old.node, occluder=occluder,
-                            exposed=old.exposed, depth=len(fronts))
-                new.append(b)
-                if (person.confirmed and not person.spawned and fronts
-                        and any(f in matched_det for f in fronts)):
+                new.append(_Branch(kind, Xp[n], Pp[n], node=old.node, occluder=occluder,
+                                   exposed=old.exposed, depth=len(fronts)))
+                seen = [f for f in fronts if f in matched_det]
+                if person.confirmed and not person.spawned and seen:
                     # FirstOcclusion: hidden behind a visible person for the first time
-                    occ = next(f for f in fronts if f in matched_det)
-                    states = hyp.spawn(x_prev[n], matched_velocity(persons[occ]))
-                    for kind2, x2 in states.items():
+                    occ = persons[seen[0]]
+                    for kind2, x2 in hyp.spawn(x_prev[n], matched_velocity(occ)).items():
                         new.append(_Branch(kind2, x2, Pp[n].copy(), node=old.node,
-                                           occluder=persons[occ].key, depth=len(fronts)))
+                                           occluder=occ.key, depth=len(fronts)))
                     person.spawned = True
             if not person.confirmed:
                 new = new[:1]
-            # 9. pruning: left the scene, contradicted in plain view for m frames, duplicates
-            boxes = state_boxes(np.array([b.x for b in new]))
-            gone = hyp.outside_image(boxes, width, height)
-            cover = covered_fraction(boxes, visible_boxes) >= self.cover
-            kept: list[_Branch] = []
-            kept_boxes: list[np.ndarray] = []
-            for b, box, g, c in zip(new, boxes, gone, cover):
-                b.covered = bool(c)
-                b.exposed = 0 if c else b.exposed + 1
-                if g or b.exposed >= self.m:
-                    continue
-                if any(np.abs(box - kb).max() < 0.5 for kb in kept_boxes):
-                    continue  # the same place twice: keep the preferred kind
-                kept.append(b)
-                kept_boxes.append(box)
-            if not person.confirmed and person.misses >= self.m:
-                kept = []  # false positive track
-            if person.misses > self.max_hidden:
-                kept = []
-            if not kept:
-                log.debug("person %d ended at frame %d", person.public_id, self._frame)
-                continue
-            person.branches = kept
-            for b in kept:
-                b.node = self._add_node(person, b, state_boxes(b.x[None])[0], b.depth, b.node,
-                                        0, float("nan"))
-            survivors.append(person)
+            pending.append((person, new))
 
-        # 8. unmatched measurements start tentative tracks
+        # 9. pruning after m frames: left the scene, contradicted in plain view, duplicates
+        survivors = [persons[i] for i in sorted(matched_det)]
+        if pending:
+            hyp_boxes = state_boxes(np.array([b.x for _, new in pending for b in new]))
+            gone = hyp.outside_image(hyp_boxes, width, height)
+            cover = covered_fraction(hyp_boxes, visible_boxes, self.region_samples) >= self.cover
+            k = 0
+            for person, new in pending:
+                kept: list[_Branch] = []
+                kept_boxes: list[np.ndarray] = []
+                for b in new:
+                    box, g, c = hyp_boxes[k], gone[k], cover[k]
+                    k += 1
+                    b.covered = bool(c)
+                    b.exposed = 0 if c else b.exposed + 1
+                    if g or b.exposed >= self.m:
+                        continue
+                    if any(np.abs(box - kb).max() < 0.5 for kb in kept_boxes):
+                        continue  # the same place twice: keep the preferred kind
+                    kept.append(b)
+                    kept_boxes.append(box)
+                if not person.confirmed and person.misses >= self.m:
+                    kept = []  # false-positive track
+                if person.misses > self.max_hidden:
+                    kept = []
+                if not kept:
+                    log.debug("person %d ended at frame %d", person.public_id, self._frame)
+                    continue
+                person.branches = kept
+                for b, box in zip(kept, kept_boxes):
+                    b.node = self._add_node(person, b, box, b.node, 0, float("nan"))
+                survivors.append(person)
+
+        # 8. unmatched measurements start tentative tracks (3.3)
         for d in assoc.unmatched_measurements:
             x0, P0, _, _, Q0, R0 = self.motion.init(dets[d])
-            person = _Person(self._next_key, p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)])
+            person = _Person(self._next_key, p[d], sqrt_p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)],
+                             shape=dets[d])
             self._next_key += 1
             if self.confirm_frames <= 1:
                 person.id = self._next_id
                 self._next_id += 1
-            person.branches[0].node = self._add_node(person, person.branches[0], dets[d], 0, None,
+            person.branches[0].node = self._add_node(person, person.branches[0], dets[d], None,
                                                      0, float("nan"))
             survivors.append(person)
 
@@ -365,22 +389,22 @@ class RetaTracker:
         return self._outputs()
 
     # ------------------------------------------------------------------ helpers
-    def _add_node(self, person: _Person, branch: _Branch, box: np.ndarray, depth: int,
+    def _add_node(self, person: _Person, branch: _Branch, box: np.ndarray,
                   parent: int | None, stage: int, rho: float) -> int:
+        """AddNodeToGraph + AddEdgeToGraph for one branch; returns the node key."""
         if branch.kind == VISIBLE:
             kind = VISIBLE if person.confirmed else TENTATIVE
             hypothesis = None
         else:
             kind = HYPOTHESIS if person.confirmed else TENTATIVE
             hypothesis = branch.kind
-        occluder = None
-        if branch.occluder is not None:
-            occ = next((o for o in self._persons if o.key == branch.occluder), None)
-            occluder = occ.public_id if occ is not None else None
+        occluder = None if branch.occluder is None else self._public.get(branch.occluder)
+        x, y, w, h = (float(v) for v in box)
         node = self.graph.add_node(
             person=person.key, id=person.public_id, kind=kind, hypothesis=hypothesis,
-            S=box_ellipses(box[None])[0], q=person.q, x=branch.x, P=branch.P,
-            occluder=occluder, depth=depth, parent=parent, stage=stage, rho=rho,
+            S=np.array([x + w / 2, y + h / 2, 0.0, w / 2, h / 2]), q=person.q, x=branch.x,
+            P=branch.P, occluder=occluder, depth=branch.depth, parent=parent, stage=stage,
+            rho=rho,
         )
         branch.graph_node = node
         return node.key
@@ -389,41 +413,39 @@ class RetaTracker:
         out: list[Track] = []
         for person in self._persons:
             branches = person.branches
-            nodes = [b.graph_node for b in branches]
-            boxes = state_boxes(np.array([b.x for b in branches]))
             if branches[0].kind == VISIBLE:
-                box = np.asarray(person.extra.get("shape", boxes[0]), dtype=np.float64)
                 state = TrackState.CONFIRMED if person.confirmed else TrackState.TENTATIVE
-                out.append(self._track(person, box, state, nodes[0], None))
+                out.append(self._track(person, branches[0], person.shape, state))
                 continue
             if not person.confirmed:
-                out.append(self._track(person, boxes[0], TrackState.TENTATIVE, nodes[0],
-                                       branches[0].kind))
+                out.append(self._track(person, branches[0], None, TrackState.TENTATIVE))
                 continue
             best = hyp.best_hypothesis([b.kind for b in branches], [b.exposed for b in branches],
                                        [b.covered for b in branches])
             for k, b in enumerate(branches):
                 state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS
-                out.append(self._track(person, boxes[k], state, nodes[k], b.kind))
+                out.append(self._track(person, b, None, state))
         return out
 
     @staticmethod
-    def _track(person: _Person, box: np.ndarray, state: TrackState, node, kind: str | None) -> Track:
-        extra = {"ellipse": box_ellipses(box[None])[0], "hypothesis": kind,
-                 "occluder": None if node is None else node.occluder,
-                 "depth": 0 if node is None else node.depth,
-                 "node": None if node is None else node.key}
-        return Track(person.public_id, box.copy(), state, 1.0, extra)
+    def _track(person: _Person, branch: _Branch, box: np.ndarray | None, state: TrackState) -> Track:
+        node = branch.graph_node
+        S = node.S
+        if box is None:
+            box = np.array([S[0] - S[3], S[1] - S[4], 2 * S[3], 2 * S[4]])
+        extra = {"ellipse": S, "hypothesis": node.hypothesis, "occluder": node.occluder,
+                 "depth": node.depth, "node": node.key}
+        return Track(person.public_id, np.array(box, dtype=np.float64), state, 1.0, extra)
 
 
-def covered_fraction(boxes: np.ndarray, visible: np.ndarray) -> np.ndarray:
+def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24) -> np.ndarray:
     """(N,) largest fraction |S_i & S_v| / |S_i| of each hypothesis region S_i hidden by one
     visible region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2)."""
     if len(boxes) == 0 or len(visible) == 0:
         return np.zeros(len(boxes))
     area_i = np.pi / 4 * boxes[:, 2] * boxes[:, 3]
     area_v = np.pi / 4 * visible[:, 2] * visible[:, 3]
-    inter = overlap_ratio(boxes, visible) * (area_i[:, None] + area_v[None, :])
+    inter = overlap_ratio(boxes, visible, samples) * (area_i[:, None] + area_v[None, :])
     return (inter / np.maximum(area_i, 1e-9)[:, None]).max(axis=1)
 
 
