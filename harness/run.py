@@ -651,6 +651,10 @@ def run_experiment(
              names, foreground)
 
     scores: dict[str, dict[str, Any]] = {n: {} for n in names}
+    # paper-table and occlusion metrics (harness.metrics.paper / .occlusion), merged below
+    extras: dict[str, dict[str, Any]] = {n: {} for n in names}
+    hidden_below = float(_cfg_get(evaluation, "hidden_below", 0.05))
+    from harness.metrics.occlusion import extra_score
     failures: list[Failure] = []
     timings: list[dict[str, Any]] = []
     metrics = pd.DataFrame()
@@ -663,6 +667,7 @@ def run_experiment(
         writer.failure(f)
         log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
 
+    overall = (progress or _no_progress)(total=len(sequences), desc="sequences")
     for seq in sequences:
         sname = seq.info.name
         try:
@@ -671,6 +676,7 @@ def run_experiment(
             outputs = run_sequence(trackers, seq, source, foreground, background, progress)
         except Exception as err:  # noqa: BLE001 - the sequence fails, the next goes on
             fail("*", sname, "sequence", err, traceback.format_exc())
+            overall.update(1)
             continue
         for n, out in outputs.items():
             path = writer.tracks(n, sname, out.table)
@@ -685,23 +691,29 @@ def run_experiment(
                 log.warning("%s has no ground truth: %s not scored", sname, n)
                 continue
             try:
-                scores[n][sname] = score(seq.gt, read_mot(path), iou_threshold)
+                result_table = read_mot(path)
+                scores[n][sname] = score(seq.gt, result_table, iou_threshold)
+                extras[n][sname] = extra_score(seq.gt, result_table, iou_threshold, hidden_below)
             except Exception as err:  # noqa: BLE001 - recorded, the run goes on
                 fail(n, sname, "score", err, traceback.format_exc())
         for n, folder in externals.items():
             if seq.gt is None:
                 continue
             try:
-                scores[n][sname] = score(seq.gt, read_external(n, folder, sname), iou_threshold)
+                result_table = read_external(n, folder, sname)
+                scores[n][sname] = score(seq.gt, result_table, iou_threshold)
+                extras[n][sname] = extra_score(seq.gt, result_table, iou_threshold, hidden_below)
             except Exception as err:  # noqa: BLE001 - recorded, the run goes on
                 fail(n, sname, "external", err, traceback.format_exc())
         writer.timings(timings)
+        overall.update(1)
         try:
-            metrics = _metrics_frame(scores)
+            metrics = _with_extras(_metrics_frame(scores), extras)
             writer.metrics(metrics)
             writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
         except Exception as err:  # noqa: BLE001 - recorded, the run goes on
             fail("*", sname, "metrics", err, traceback.format_exc())
+    overall.close()
     if metrics.empty:
         log.warning("no sequence was scored: metrics.csv has no rows")
         metrics = pd.DataFrame(columns=["tracker", "sequence", *_metrics().COLUMNS])
@@ -744,6 +756,16 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                   for f in failures]
         lines.append("")
     return "\n".join(lines)
+
+
+def _with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+    """``metrics`` with the paper-table and occlusion columns appended (same rows)."""
+    from harness.metrics.occlusion import extra_rows
+
+    if metrics.empty:
+        return metrics
+    return metrics.merge(extra_rows(extras), on=["tracker", "sequence"], how="left",
+                         validate="one_to_one")
 
 
 def _metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:

@@ -22,6 +22,7 @@ from harness.datasets.base import GroundTruth, Sequence
 from harness.detection_sources import NoisyGroundTruth
 from harness.io.mot import MotTable, read_mot
 from harness.metrics import COLUMNS
+from harness.metrics.occlusion import EXTRA_COLUMNS
 from harness.report.tables import best_mask, comparison, to_latex, to_markdown, to_text
 from harness.run import (
     RunError,
@@ -212,6 +213,61 @@ def test_foreground_modes():
         run_tracker(BaselineTracker(), seq, NoisyGroundTruth(), foreground="magic")
 
 
+class LabelledSequence(BoxSequence):
+    """Pixels and an exact label image, as a synthetic scene has."""
+
+    def frame(self, index: int):
+        img = np.full((240, 320, 3), 80, np.uint8)
+        for row in self.gt.rows_of(index):
+            x, y, w, h = self.gt.table.boxes[row].astype(int)
+            img[y:y + h, x:x + w] = 200
+        return img
+
+    def foreground(self, index: int):
+        lab = np.zeros((240, 320), np.int32)
+        for row in self.gt.rows_of(index):
+            x, y, w, h = self.gt.table.boxes[row].astype(int)
+            lab[y:y + h, x:x + w] = self.gt.table.ids[row]
+        return lab
+
+
+class Recorder(BaselineTracker):
+    """Keeps the foreground images it is given."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.seen = []
+
+    def update(self, frame, detections, foreground=None):
+        self.seen.append(foreground)
+        return super().update(frame, detections, foreground)
+
+
+class MaskSource(NoisyGroundTruth):
+    """Exact detections plus its own (all-True) foreground mask."""
+
+    def detect(self, index, frame=None):
+        dets, _ = super().detect(index, frame)
+        return dets, np.ones((240, 320), bool)
+
+
+@pytest.mark.parametrize("mode", ["auto", "exact", "none", "mog2"])
+def test_foreground_reaches_the_tracker(mode):
+    seq = LabelledSequence("cross", crossing_rows(12, 320), 12)
+    rec = Recorder()
+    run_tracker(rec, seq, NoisyGroundTruth(), foreground=mode)
+    assert len(rec.seen) == 12
+    if mode == "none":
+        assert all(fg is None for fg in rec.seen)
+    elif mode == "mog2":
+        assert all(fg.shape == (240, 320) and fg.dtype == bool for fg in rec.seen)
+    else:  # the exact label image
+        np.testing.assert_array_equal(rec.seen[3], seq.foreground(4))
+    rec = Recorder()
+    run_tracker(rec, seq, MaskSource(), foreground="auto")  # the detector's own mask wins
+    assert all(fg.dtype == bool and fg.all() for fg in rec.seen)
+
+
 def test_tracker_configs_single_and_dict():
     cfg = compose_cfg("dataset=mot", "dataset.root=x", "tracker=baseline")
     assert list(tracker_configs(cfg.tracker, "baseline")) == ["baseline"]
@@ -235,7 +291,7 @@ def test_experiment_writes_run_directory(tmp_path, mot_root):
         assert (out / name).is_file(), name
     assert not (out / "errors.txt").exists()
     m = pd.read_csv(out / "metrics.csv")
-    assert list(m.columns) == ["tracker", "sequence", *COLUMNS]
+    assert list(m.columns) == ["tracker", "sequence", *COLUMNS, *EXTRA_COLUMNS]
     assert list(m["sequence"]) == ["cross-a", "cross-b", "COMBINED"]
     assert set(m["tracker"]) == {"baseline"}
     combined = m[m["sequence"] == "COMBINED"].iloc[0]
@@ -457,7 +513,7 @@ def test_cli_end_to_end_on_synthetic(tmp_path):
                  "plots/metrics.png"):
         assert (run / name).is_file(), name
     m = pd.read_csv(run / "metrics.csv")
-    assert list(m.columns) == ["tracker", "sequence", *COLUMNS]
+    assert list(m.columns) == ["tracker", "sequence", *COLUMNS, *EXTRA_COLUMNS]
     seqs = [s for s in m["sequence"] if s != "COMBINED"]
     assert seqs == ["crossing", "crowd"]
     assert all((run / "tracks" / "baseline" / f"{s}.txt").is_file() for s in seqs)

@@ -116,3 +116,17 @@ def test_combined_sums_counts():
     out = combine({"a": a, "b": b})
     assert out["COMBINED"]["Recall_v75-100"] == 0.5
     assert (OcclusionCounts() + a).rows.tolist() == a.rows.tolist()
+
+
+def test_extra_rows_for_metrics_csv_have_sequence_and_combined_rows():
+    from harness.metrics.occlusion import EXTRA_COLUMNS, extra_rows, extra_score
+
+    gt = table(walk(1, range(1, 5)), [1, 1, 0, 1])
+    good = extra_score(gt, table(walk(1, range(1, 5))))
+    none = extra_score(GroundTruth(gt), MotTable.empty())
+    rows = extra_rows({"t": {"a": good, "b": none}, "u": {}})
+    assert list(rows.columns) == ["tracker", "sequence", *EXTRA_COLUMNS]
+    assert rows["sequence"].tolist() == ["a", "b", "COMBINED"]
+    combined = rows.iloc[2]
+    assert combined["Song_GT"] == 2 and combined["Song_MT%"] == 50
+    assert combined["Recall_v75-100"] == 0.5 and combined["ReID_n"] == 1

@@ -27,19 +27,26 @@ over the re-identified episodes; ``ReID_n`` = scored episodes.
 
 Counts are additive over sequences (``OcclusionCounts.__add__``); ``columns`` recomputes
 ratios from the sums.
+
+For the runner: ``extra_score(gt, res)`` computes these and the paper metrics
+(``harness.metrics.paper``) of one sequence, ``extra_rows`` turns them into ``metrics.csv``
+rows (per sequence and COMBINED) with the columns ``EXTRA_COLUMNS``.
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from harness.datasets.base import GroundTruth
 from harness.io.mot import MotTable
-from harness.metrics.paper import considered_mask, match_rows
+from harness.metrics.paper import COLUMNS as PAPER_COLUMNS
+from harness.metrics.paper import PaperCounts, considered_mask, match_rows, paper_counts
 from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix
 
@@ -210,3 +217,45 @@ def combine(counts: dict[str, OcclusionCounts]) -> dict[str, dict[str, float]]:
         total = total + c
     out["COMBINED"] = total.columns()
     return out
+
+
+# --------------------------------------------------------------------------- metrics.csv rows
+
+EXTRA_COLUMNS = [*PAPER_COLUMNS, *COLUMNS]
+
+
+@dataclass
+class ExtraScore:
+    """The paper-table and occlusion counts of one tracker on one sequence."""
+
+    paper: PaperCounts
+    occlusion: OcclusionCounts
+
+    def __add__(self, other: ExtraScore) -> ExtraScore:
+        return ExtraScore(self.paper + other.paper, self.occlusion + other.occlusion)
+
+    def columns(self) -> dict[str, float]:
+        return {**self.paper.columns(), **self.occlusion.columns()}
+
+
+def extra_score(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: float = 0.5,
+                hidden_below: float = 0.05) -> ExtraScore:
+    """Paper metrics (``harness.metrics.paper``) and occlusion metrics of one sequence."""
+    table = gt.table if isinstance(gt, GroundTruth) else gt
+    return ExtraScore(paper_counts(table, res, iou_threshold),
+                      occlusion_counts(gt, res, iou_threshold, hidden_below))
+
+
+def extra_rows(scores: Mapping[str, Mapping[str, ExtraScore]]) -> pd.DataFrame:
+    """Rows ``tracker, sequence`` + EXTRA_COLUMNS: each sequence, then a COMBINED row per
+    tracker from the summed counts; merge them into metrics.csv on (tracker, sequence)."""
+    rows = []
+    for tracker, per_seq in scores.items():
+        if not per_seq:
+            continue
+        total = None
+        for seq, s in per_seq.items():
+            rows.append({"tracker": tracker, "sequence": seq, **s.columns()})
+            total = s if total is None else total + s
+        rows.append({"tracker": tracker, "sequence": "COMBINED", **total.columns()})
+    return pd.DataFrame(rows, columns=["tracker", "sequence", *EXTRA_COLUMNS])
