@@ -207,23 +207,25 @@ class _Pen:
         q += (self.cx * _S + 0.5, self.y0 * _S + 0.5)
         q = np.floor(q).astype(np.int32)
         q -= (self.ox, self.oy)
+        ql = q.tolist()
         img, label, value = self.img, self.label, self.value
+        fill, ellipse, line8 = cv2.fillConvexPoly, cv2.ellipse, cv2.LINE_8
         for cmd in self.cmds:
             kind, i = cmd[0], cmd[1]
             if kind == 0:
                 p = q[i : i + cmd[2]]
                 if img is not None:
-                    cv2.fillConvexPoly(img, p, cmd[3], cv2.LINE_8, SHIFT)
+                    fill(img, p, cmd[3], line8, SHIFT)
                 if label is not None:
-                    cv2.fillConvexPoly(label, p, value, cv2.LINE_8, SHIFT)
+                    fill(label, p, value, line8, SHIFT)
             elif kind == 1:
-                c = (int(q[i, 0]), int(q[i, 1]))
+                c = ql[i]
                 if img is not None:
-                    cv2.ellipse(img, c, cmd[2], 0, cmd[4], cmd[5], cmd[3], -1, cv2.LINE_8, SHIFT)
+                    ellipse(img, c, cmd[2], 0, cmd[4], cmd[5], cmd[3], -1, line8, SHIFT)
                 if label is not None:
-                    cv2.ellipse(label, c, cmd[2], 0, cmd[4], cmd[5], value, -1, cv2.LINE_8, SHIFT)
+                    ellipse(label, c, cmd[2], 0, cmd[4], cmd[5], value, -1, line8, SHIFT)
             elif img is not None:
-                cv2.circle(img, (int(q[i, 0]), int(q[i, 1])), cmd[2], cmd[3], -1, cv2.LINE_8, SHIFT)
+                cv2.circle(img, ql[i], cmd[2], cmd[3], -1, line8, SHIFT)
         self.cmds.clear()
         self.pts.clear()
 
