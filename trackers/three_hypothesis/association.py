@@ -55,6 +55,11 @@ def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
     cost an accepted pair can have), so one good pair is never traded for two poor ones
     just to match more. Returns (K, 2) rows (person, measurement)."""
     n = len(cost)
+    allowed = np.isfinite(cost) & (cost <= leave)
+    if not allowed.any():
+        return np.zeros((0, 2), dtype=int)
+    if allowed.sum(axis=0).max() <= 1 and allowed.sum(axis=1).max() <= 1:
+        return np.argwhere(allowed)  # no competing pairs: the assignment is immediate
     dummy = np.full((n, n), np.inf)
     np.fill_diagonal(dummy, leave)
     matches, _, _ = assign(np.hstack([cost, dummy]), leave)
