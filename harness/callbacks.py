@@ -45,3 +45,25 @@ class GatherSweep(Callback):
             return
         log.info("sweep of %d jobs gathered: %s", frame["job"].nunique() if len(frame) else 0,
                  sweep_dir / "sweep.md")
+
+
+class PaperTable(Callback):
+    """At the end of a job whose config has a ``paper_table`` node (``+experiment=...``),
+    write ``paper_table.md`` / ``.csv`` into the job's output directory and log the table.
+    ``harness.report.paper_tables`` documents the node."""
+
+    def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
+        from omegaconf import OmegaConf
+
+        from harness.report.paper_tables import write_paper_table
+
+        spec = config.get("paper_table")
+        if not spec:
+            return
+        out_dir = Path(str(config.hydra.runtime.output_dir))
+        try:
+            path = write_paper_table(out_dir, OmegaConf.to_container(spec, resolve=True))
+        except Exception:  # the job's own results stay valid without the table
+            log.exception("paper table for %s failed", out_dir)
+            return
+        log.info("paper table written to %s\n%s", path, path.read_text())

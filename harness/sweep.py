@@ -46,7 +46,7 @@ DONE, FAILED = "done", "failed"
 COMBINED = "COMBINED"
 SEED = "seed"
 DEFAULT_METRICS = ("HOTA", "IDF1", "MOTA", "IDs", "ReID")
-LOWER_IS_BETTER = ("IDs", "Frag", "FP", "FN", "ML", "Song_Frag", "Song_IDS", "Song_ML%")
+MAX_HEATMAP_VALUES = 12  # a parameter with more distinct values gets no heatmap
 
 
 # --------------------------------------------------------------------------- job status
@@ -366,8 +366,10 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
         fig.savefig(path, dpi=90)
         plt.close(fig)
         written.append(path)
-    for i, a in enumerate(params):
-        for b in params[i + 1:]:
+    jobs = frame.drop_duplicates("job")
+    grid_params = [p for p in params if jobs[p].nunique() <= MAX_HEATMAP_VALUES]
+    for i, a in enumerate(grid_params):  # continuous searches (Optuna) draw no heatmaps
+        for b in grid_params[i + 1:]:
             agg = aggregate(frame, [a, b], shown)
             if agg.empty:
                 continue
