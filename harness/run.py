@@ -746,6 +746,15 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
     else:
         lines += ["## Combined (best per column in bold)", "",
                   to_markdown(comparison(metrics, columns))]
+        occlusion = [c for c in metrics.columns if c.startswith(("Recall_v", "IDs_v", "ReID"))]
+        if occlusion:
+            lines += [("## Occlusion (COMBINED): recall and identity switches by gt "
+                       "visibility, re-identification after total occlusion"), "",
+                      to_markdown(comparison(metrics, occlusion))]
+        paper = [c for c in metrics.columns if c.startswith(("Song_", "PBM_"))]
+        if paper:
+            lines += ["## Paper-table metrics (COMBINED): Song et al. (Reta), PBM", "",
+                      to_markdown(comparison(metrics, paper))]
         seqs = [s for s in dict.fromkeys(metrics["sequence"]) if s != COMBINED]
         for metric in [m for m in ("IDF1", "HOTA", "MOTA") if m in metrics.columns]:
             lines += [f"## {metric} per sequence", "",

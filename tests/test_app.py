@@ -537,3 +537,17 @@ def test_every_tracker_is_reproducible_on_synthetic(tmp_path):
     assert a.trackers == list(cfg.tracker)
     for rel in ["metrics.csv", *[f"tracks/{t}/crossing.txt" for t in a.trackers]]:
         assert (tmp_path / "a" / rel).read_bytes() == (tmp_path / "b" / rel).read_bytes(), rel
+
+
+def test_every_metric_column_has_a_deliberate_direction():
+    from harness.report.tables import direction
+
+    lower = {"FP", "FN", "IDs", "Frag", "ML", "Song_ML%", "Song_IDS", "PBM_Missed",
+             "PBM_IDs/frame", "PBM_dx%", "IDs_v0-25", "ReID_frames"}
+    neutral = {"GT", "PT", "Song_GT", "PBM_GT", "ReID_n"}
+    higher = {"IDF1", "HOTA", "MOTA", "MOTP", "Recall", "MT", "Song_MT%", "PBM_MT",
+              "Recall_v0-25", "IDP_v0-25", "ReID"}
+    for names, d in ((lower, -1), (neutral, 0), (higher, 1)):
+        for c in names:
+            assert c in [*COLUMNS, *EXTRA_COLUMNS], c
+            assert direction(c) == d, c

@@ -7,7 +7,8 @@ default) and indexes the rows by tracker; the writers format it as Markdown (bes
 ``*``). CSV output is plain numbers (``DataFrame.to_csv``): the machine-readable copy.
 
 Which value is best depends on the column: higher is better for scores (IDF1, HOTA, MOTA,
-Recall, MT ...), lower is better for error counts (FP, FN, IDs, Frag, ML ...), and columns
+MOTP as a mean IoU, Recall, MT, ReID ...), lower is better for errors (FP, FN, IDs, Frag, ML,
+the paper tables' ML/Frag/IDS/Missed/Under/Over/dx%..., per-visibility IDs_*), and columns
 that are neither (PT, GT counts) are never marked.
 """
 
@@ -21,27 +22,32 @@ import pandas as pd
 
 COMBINED = "COMBINED"
 
-# Lower is better: error counts and rates (a distance MOTP is not listed: see ``direction``).
+# Lower is better: error counts and rates (a distance MOTP is not listed: ours is an IoU).
 LOWER_IS_BETTER: frozenset[str] = frozenset({
-    "FP", "FN", "IDs", "IDSW", "IDSw", "ID_switches", "Frag", "ML", "IDFP", "IDFN",
-    "FP_rate", "FN_rate", "FPR", "FAF", "occ_IDs", "occ_FN", "lost", "ML_rate",
-    "IDs_occ", "IDs_occlusion", "FN_occ", "FN_occluded", "IDs_occluded",
+    "FP", "FN", "IDs", "IDSW", "Frag", "ML", "IDFP", "IDFN",
+    # paper tables (harness.metrics.paper): Song et al. for Reta, PBM Tables 1-4
+    "Song_ML%", "Song_Frag", "Song_IDS", "PBM_ML", "PBM_Missed", "PBM_Under", "PBM_Over",
+    "PBM_IDsw/traj", "PBM_IDs/traj", "PBM_IDs/frame", "PBM_dx%", "PBM_dy%", "PBM_dw%",
+    "PBM_dh%",
+    # occlusion (harness.metrics.occlusion): frames to re-identify after a total occlusion
+    "ReID_frames",
 })
-# Neither: sizes of the ground truth or of the output, not a quality.
+LOWER_PREFIXES = ("IDs_", "FP_", "FN_", "Frag_")  # per-bin error counts, e.g. IDs_v0-25
+# Neither: sizes of the ground truth or of the evaluation, not a quality.
 NEUTRAL: frozenset[str] = frozenset({
-    "PT", "GT", "GT_IDs", "GT_dets", "num_frames", "num_objects", "num_unique_objects",
-    "num_predictions", "Dets", "IDs_gt", "frames", "n_gt", "n_res", "gt_ids", "res_ids",
-    "occlusions", "n_occlusions", "num_occlusions", "gt_boxes", "res_boxes", "Frames",
+    "PT", "GT", "Song_GT", "Song_PT%", "PBM_GT", "ReID_n", "frames", "num_frames",
 })
-# Columns written as whole numbers.
-COUNTS: frozenset[str] = LOWER_IS_BETTER | NEUTRAL | frozenset({
-    "MT", "TP", "IDTP", "Frag", "IDs", "num_matches", "num_switches", "num_fragmentations",
+# Columns written as whole numbers (when their values are whole).
+COUNTS: frozenset[str] = frozenset({
+    "GT", "MT", "PT", "ML", "FP", "FN", "IDs", "Frag", "TP", "IDTP", "IDFP", "IDFN",
+    "Song_GT", "Song_Frag", "Song_IDS", "PBM_GT", "PBM_MT", "PBM_MT1", "PBM_ML", "PBM_Missed",
+    "PBM_Under", "PBM_Over", "ReID_n",
 })
 
 
 def direction(column: str) -> int:
     """+1 when a higher value of ``column`` is better, -1 when lower is, 0 when neither."""
-    if column in LOWER_IS_BETTER or column.endswith(("_FP", "_FN", "_IDs", "_Frag")):
+    if column in LOWER_IS_BETTER or column.startswith(LOWER_PREFIXES):
         return -1
     if column in NEUTRAL or column in ("tracker", "sequence", "status"):
         return 0
@@ -71,7 +77,8 @@ def _is_count(df: pd.DataFrame, column: str) -> bool:
     finite = values[np.isfinite(values)]
     if pd.api.types.is_integer_dtype(df[column].dtype):
         return True
-    return column in COUNTS and bool(np.all(finite == np.round(finite)))
+    counted = column in COUNTS or column.startswith(LOWER_PREFIXES)
+    return counted and bool(np.all(finite == np.round(finite)))
 
 
 def _rounded(df: pd.DataFrame, digits: int) -> pd.DataFrame:
