@@ -1,0 +1,190 @@
+"""Draw each tracker's output its own way, and put panels side by side.
+
+* boxes (baseline and any tracker without drawing data): a rectangle per track in the id's
+  colour, the id above it; OCCLUDED tracks dashed.
+* ellipses (Reta et al. 2015, Figs. 3-5; ``Track.extra['ellipse'] = (xc, yc, phi, rx, ry)``):
+  solid ellipse for a node matched by a detection, dashed for hypotheses (HYPOTHESIS and
+  OCCLUDED tracks, with the hypothesis kind v/o/s after the id), light grey for tentative
+  nodes.
+* parts (PBM, Fig. 7; ``Track.extra['parts']`` (5, 4) xywh part rectangles: head, left/right
+  torso-arm, left/right leg): the five rectangles in the id's colour, frozen (occluded) parts
+  dashed; ``harness.report.parts.draw_parts`` is used instead when the PBM engineer's module
+  provides it.
+
+All images are (H, W, 3) uint8 BGR; boxes are xywh with a 0-based top-left (pixels).
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+
+from harness.report.graph import id_colour
+from trackers.records import Track, TrackState
+
+log = logging.getLogger(__name__)
+
+GREY = (190, 190, 190)
+WHITE = (255, 255, 255)
+__all__ = ["STYLES", "TRACKER_STYLES", "draw_tracks", "grid", "id_colour", "infer_style"]
+STYLES = ("auto", "boxes", "ellipses", "parts")
+# the style of each known tracker (by config name); others are inferred from Track.extra
+TRACKER_STYLES = {"baseline": "boxes", "reta": "ellipses", "pbm": "parts"}
+
+
+def _pt(x: float, y: float) -> tuple[int, int]:
+    return round(x), round(y)
+
+
+def dashed_polyline(img: np.ndarray, pts: np.ndarray, colour, thickness: int = 1,
+                    closed: bool = True) -> None:
+    """Every other segment of a densely sampled polyline (OpenCV has no dashed style)."""
+    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+    if closed:
+        pts = np.vstack([pts, pts[:1]])
+    for k in range(0, len(pts) - 1, 2):
+        cv2.line(img, _pt(*pts[k]), _pt(*pts[k + 1]), colour, thickness, cv2.LINE_AA)
+
+
+def dashed_rectangle(img: np.ndarray, box: np.ndarray, colour, thickness: int = 1,
+                     dash: float = 6.0) -> None:
+    x, y, w, h = (float(v) for v in box)
+    corners = np.array([[x, y], [x + w, y], [x + w, y + h], [x, y + h], [x, y]])
+    pts = []
+    for a, b in itertools.pairwise(corners):
+        n = max(int(np.hypot(*(b - a)) / dash), 1)
+        pts.append(a + (b - a) * (np.arange(n)[:, None] / n))
+    dashed_polyline(img, np.vstack(pts), colour, thickness)
+
+
+def _label(img: np.ndarray, text: str, org: tuple[int, int], colour, scale: float = 0.45) -> None:
+    org = (max(org[0], 0), max(org[1], 11))
+    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 3, cv2.LINE_AA)
+    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv2.LINE_AA)
+
+
+def _colour(t: Track):
+    return GREY if t.state == TrackState.TENTATIVE else id_colour(t.id)
+
+
+def draw_boxes(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) -> None:
+    for t in tracks:
+        c = _colour(t)
+        if t.state in (TrackState.OCCLUDED, TrackState.HYPOTHESIS):
+            dashed_rectangle(img, t.box, c, thickness)
+        else:
+            x, y, w, h = t.box
+            cv2.rectangle(img, _pt(x, y), _pt(x + w, y + h), c, thickness, cv2.LINE_AA)
+        _label(img, str(t.id), _pt(t.box[0], t.box[1] - 3), c)
+
+
+def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) -> None:
+    for t in tracks:
+        e = t.extra.get("ellipse")
+        if e is None:
+            draw_boxes(img, [t], thickness)
+            continue
+        xc, yc, phi, rx, ry = (float(v) for v in e)
+        c = _colour(t)
+        if t.state in (TrackState.HYPOTHESIS, TrackState.OCCLUDED):
+            poly = cv2.ellipse2Poly(_pt(xc, yc), (max(int(rx), 1), max(int(ry), 1)),
+                                    round(np.degrees(phi)), 0, 360, 8)
+            dashed_polyline(img, poly, c, thickness)
+        else:
+            cv2.ellipse(img, ((xc, yc), (2 * rx, 2 * ry), float(np.degrees(phi))), c, thickness,
+                        cv2.LINE_AA)
+        text = str(t.id) if t.state != TrackState.TENTATIVE else f"-{t.id}"
+        kind = t.extra.get("hypothesis")
+        if kind:
+            text += {"velocity": "v", "occluder": "o", "still": "s"}.get(str(kind), "")
+        _label(img, text, _pt(xc - rx, yc - ry - 4), c)
+
+
+def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1) -> None:
+    try:  # the PBM engineer's own drawing, when it exists
+        from harness.report.parts import draw_parts as pbm_draw_parts
+    except ImportError:
+        pbm_draw_parts = None
+    if pbm_draw_parts is not None:
+        try:
+            out = pbm_draw_parts(img, tracks)
+            if isinstance(out, np.ndarray) and out.shape == img.shape:
+                img[...] = out
+            return
+        except Exception:  # fall back to ours rather than lose the frame
+            log.exception("harness.report.parts.draw_parts failed: drawing parts here")
+    for t in tracks:
+        parts = t.extra.get("parts")
+        if parts is None:
+            draw_boxes(img, [t], 2)
+            continue
+        c = _colour(t)
+        hidden = np.asarray(t.extra.get("occluded_parts", np.zeros(len(parts), bool)), bool)
+        dashed = t.state == TrackState.OCCLUDED
+        for box, off in zip(np.asarray(parts, dtype=np.float64).reshape(-1, 4), hidden):
+            if dashed or off:
+                dashed_rectangle(img, box, c, thickness, dash=4.0)
+            else:
+                x, y, w, h = box
+                cv2.rectangle(img, _pt(x, y), _pt(x + w, y + h), c, thickness, cv2.LINE_AA)
+        _label(img, str(t.id), _pt(t.box[0], t.box[1] - 3), c)
+
+
+def infer_style(tracks: Sequence[Track]) -> str:
+    """The drawing style from the tracks' ``extra`` data."""
+    for t in tracks:
+        if "ellipse" in t.extra:
+            return "ellipses"
+        if "parts" in t.extra:
+            return "parts"
+    return "boxes"
+
+
+def draw_tracks(frame: np.ndarray, tracks: Sequence[Track], style: str = "auto",
+                gt: tuple[np.ndarray, np.ndarray] | None = None, title: str | None = None
+                ) -> np.ndarray:
+    """A copy of ``frame`` with ``tracks`` drawn in ``style`` (see the module docstring).
+
+    Args:
+        frame: (H, W, 3) uint8 BGR.
+        tracks: one frame's tracker output (every state: tentative and hypotheses too).
+        style: auto, boxes, ellipses or parts.
+        gt: optional ((N, 4) xywh boxes, (N,) ids) ground truth, drawn thin white underneath.
+        title: text at the top-left corner (the tracker's name).
+    """
+    if style not in STYLES:
+        raise ValueError(f"style must be one of {STYLES}, got {style!r}")
+    img = np.ascontiguousarray(frame).copy()
+    if gt is not None:
+        for box, gid in zip(*gt):
+            x, y, w, h = box
+            cv2.rectangle(img, _pt(x, y), _pt(x + w, y + h), WHITE, 1, cv2.LINE_AA)
+            _label(img, f"gt{int(gid)}", _pt(x, y + h + 11), WHITE, 0.35)
+    style = infer_style(tracks) if style == "auto" else style
+    {"boxes": draw_boxes, "ellipses": draw_ellipses, "parts": draw_parts}[style](img, tracks)
+    if title:
+        (tw, _), _ = cv2.getTextSize(title, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)
+        cv2.rectangle(img, (0, 0), (tw + 10, 20), (0, 0, 0), -1)
+        cv2.putText(img, title, (5, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.5, WHITE, 1, cv2.LINE_AA)
+    return img
+
+
+def grid(panels: Sequence[np.ndarray], columns: int | None = None,
+         background: int = 32) -> np.ndarray:
+    """Panels of one size tiled row by row (``columns`` per row; default: all in one row)."""
+    if not panels:
+        raise ValueError("grid: no panels")
+    h, w = panels[0].shape[:2]
+    columns = columns or len(panels)
+    rows = -(-len(panels) // columns)
+    out = np.full((rows * h, columns * w, 3), background, np.uint8)
+    for k, p in enumerate(panels):
+        if p.shape[:2] != (h, w):
+            p = cv2.resize(p, (w, h), interpolation=cv2.INTER_AREA)
+        r, c = divmod(k, columns)
+        out[r * h:(r + 1) * h, c * w:(c + 1) * w] = p
+    return out

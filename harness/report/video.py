@@ -1,0 +1,223 @@
+"""Annotated video and contact sheets: every tracker's output drawn its own way, side by side.
+
+The result files hold only the scored boxes; the drawings need every output of every frame
+(hypotheses, tentative tracks, ellipses, part rectangles), so ``render`` runs the trackers
+again, exactly as the runner does (same detection source, same foreground, each tracker its
+own copy of the inputs: the tracks are the ones of the run with the same config and seed),
+and draws each frame as one panel per tracker (``harness.report.draw``), ground truth thin
+white underneath when asked.
+
+Outputs: an MP4 (``cv2.VideoWriter``, fourcc mp4v) of the panels, and a contact sheet: a PNG
+grid with one row per chosen frame and one column per tracker.
+
+Command line (config overrides as for ``python -m harness``, or the config of a finished run)::
+
+    python -m harness.report.video --sequence stop_behind --out stop_behind.mp4 \\
+        --sheet stop_behind.png -- dataset=synthetic dataset.scenarios=[stop_behind]
+    python -m harness.report.video --run results/2026-01-01/12-00-00 --sequence crossing
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from harness.datasets.base import Sequence as DataSequence
+from harness.report.draw import TRACKER_STYLES, draw_tracks, grid
+from harness.sources import DetectionSource
+from trackers.records import Track
+
+log = logging.getLogger(__name__)
+
+
+def _copy(a: np.ndarray | None) -> np.ndarray | None:
+    return None if a is None else a.copy()
+
+
+def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: DetectionSource,
+                 foreground: str = "auto", background: Mapping[str, Any] | None = None,
+                 last: int | None = None) -> Iterable[tuple[int, np.ndarray | None,
+                                                           dict[str, list[Track]]]]:
+    """Yield ``(k, frame, {tracker: tracks})`` for frames 1..``last`` (default: all), running
+    every tracker on the same detections as ``harness.run.run_sequence`` does."""
+    from harness.run import ForegroundProvider, clean_detections
+
+    source.start(sequence)
+    fg_of = ForegroundProvider(foreground, sequence, background)
+    for t in trackers.values():
+        t.reset()
+    last = sequence.info.length if last is None else min(last, sequence.info.length)
+    for k in range(1, last + 1):
+        frame = sequence.frame(k)
+        dets, mask = source.detect(k, frame)
+        dets, _ = clean_detections(dets)
+        fg = fg_of(k, frame, mask)
+        out = {}
+        for name, tracker in trackers.items():
+            d = type(dets)(dets.boxes.copy(), dets.scores.copy(), _copy(dets.labels),
+                           _copy(dets.heads))
+            out[name] = list(tracker.update(_copy(frame), d, _copy(fg)))
+        yield k, frame, out
+
+
+def _gt_of(sequence: DataSequence, k: int) -> tuple[np.ndarray, np.ndarray] | None:
+    if sequence.gt is None:
+        return None
+    rows = sequence.gt.rows_of(k)
+    t = sequence.gt.table
+    return t.boxes[rows], t.ids[rows]
+
+
+def _blank(sequence: DataSequence) -> np.ndarray:
+    return np.full((sequence.info.height, sequence.info.width, 3), 40, np.uint8)
+
+
+def render(trackers: Mapping[str, Any], sequence: DataSequence, source: DetectionSource,
+           video: str | Path | None = None, sheet: str | Path | None = None,
+           sheet_frames: Sequence[int] | None = None, show_gt: bool = True,
+           frames: tuple[int, int] | None = None, columns: int | None = None,
+           scale: float = 1.0, foreground: str = "auto",
+           background: Mapping[str, Any] | None = None) -> dict[str, Path]:
+    """Run the trackers on ``sequence`` and write the annotated video and/or contact sheet.
+
+    Args:
+        trackers: name -> freshly built tracker (drawn in this order, styled by name when the
+            name is known (``TRACKER_STYLES``), else by the tracks' ``extra`` data).
+        sequence, source: the data and the detection source (as for the runner).
+        video: MP4 path, or None for no video.
+        sheet: PNG path of the contact sheet, or None.
+        sheet_frames: 1-based frames of the sheet's rows (default: 6 evenly spaced frames
+            of the rendered range).
+        show_gt: draw the ground truth (thin white boxes) under each tracker's output.
+        frames: (first, last) 1-based range written to the video (default: all).
+        columns: panels per row in a video frame (default: all side by side).
+        scale: resize factor of each panel.
+    Returns:
+        {"video": path, "sheet": path} for what was written.
+    """
+    if not trackers:
+        raise ValueError("render: no trackers")
+    n = sequence.info.length
+    first, last = frames or (1, n)
+    if not 1 <= first <= last <= n:
+        raise ValueError(f"frames must satisfy 1 <= first <= last <= {n}, got {(first, last)}")
+    if sheet is not None and sheet_frames is None:
+        sheet_frames = sorted({int(v) for v in np.linspace(first, last, 6).round()})
+    wanted = set(sheet_frames or [])
+    bad = sorted(f for f in wanted if not 1 <= f <= n)
+    if bad:
+        raise ValueError(f"sheet_frames outside 1..{n}: {bad}")
+    end = max([last, *wanted])
+    writer = None
+    rows: dict[int, list[np.ndarray]] = {}
+    written: dict[str, Path] = {}
+    try:
+        for k, frame, tracks in track_frames(trackers, sequence, source, foreground, background,
+                                             end):
+            if not (first <= k <= last or k in wanted):
+                continue
+            base = frame if frame is not None else _blank(sequence)
+            gt = _gt_of(sequence, k) if show_gt else None
+            panels = []
+            for name, out in tracks.items():
+                p = draw_tracks(base, out, TRACKER_STYLES.get(name, "auto"), gt,
+                                f"{name}  frame {k}")
+                if scale != 1.0:
+                    p = cv2.resize(p, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+                panels.append(p)
+            if k in wanted:
+                rows[k] = panels
+            if video is not None and first <= k <= last:
+                image = grid(panels, columns)
+                if writer is None:
+                    Path(video).parent.mkdir(parents=True, exist_ok=True)
+                    fps = sequence.info.fps or 25.0
+                    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), fps,
+                                             (image.shape[1], image.shape[0]))
+                    if not writer.isOpened():
+                        raise OSError(f"cannot open a video writer for {video}")
+                writer.write(image)
+    finally:
+        if writer is not None:
+            writer.release()
+            written["video"] = Path(video)
+    if sheet is not None:
+        sheet_img = grid([p for k in sorted(rows) for p in rows[k]], len(trackers))
+        Path(sheet).parent.mkdir(parents=True, exist_ok=True)
+        if not cv2.imwrite(str(sheet), sheet_img):
+            raise OSError(f"cannot write {sheet}")
+        written["sheet"] = Path(sheet)
+    return written
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def compose_config(overrides: Sequence[str], run_dir: Path | None = None) -> Any:
+    """The app's config composed with ``overrides``, or a finished run's saved config."""
+    from omegaconf import OmegaConf
+
+    if run_dir is not None:
+        path = run_dir / "config.yaml"
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} not found (a run directory of python -m harness)")
+        cfg = OmegaConf.load(path)
+        return OmegaConf.merge(cfg, OmegaConf.from_dotlist(list(overrides)))
+    from hydra import compose, initialize_config_dir
+
+    conf = Path(__file__).resolve().parents[2] / "conf"
+    with initialize_config_dir(str(conf), version_base="1.3"):
+        return compose("config", overrides=list(overrides))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m harness.report.video",
+                                description="Annotated side-by-side video and contact sheet.")
+    p.add_argument("overrides", nargs="*", help="config overrides, e.g. dataset=synthetic")
+    p.add_argument("--run", type=Path, help="use the config saved in this run directory")
+    p.add_argument("--sequence", help="sequence name (default: the first)")
+    p.add_argument("--out", type=Path, help="MP4 to write")
+    p.add_argument("--sheet", type=Path, help="contact-sheet PNG to write")
+    p.add_argument("--sheet-frames", type=int, nargs="+", help="frames of the sheet's rows")
+    p.add_argument("--frames", type=int, nargs=2, metavar=("FIRST", "LAST"))
+    p.add_argument("--no-gt", action="store_true", help="do not draw the ground truth")
+    p.add_argument("--scale", type=float, default=1.0)
+    p.add_argument("--columns", type=int, default=None)
+    args = p.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    if args.out is None and args.sheet is None:
+        p.error("give --out and/or --sheet")
+    from harness.run import build_source, build_tracker, load_sequences, tracker_configs
+
+    try:
+        cfg = compose_config(args.overrides, args.run)
+        sequences = load_sequences(cfg.dataset)
+        if args.sequence:
+            by_name = {s.info.name: s for s in sequences}
+            if args.sequence not in by_name:
+                raise ValueError(f"no sequence {args.sequence!r}; have {sorted(by_name)}")
+            seq = by_name[args.sequence]
+        else:
+            seq = sequences[0]
+        trackers = {n: build_tracker(n, node) for n, node in tracker_configs(cfg.tracker).items()}
+        written = render(trackers, seq, build_source(cfg.detector), args.out, args.sheet,
+                         args.sheet_frames, not args.no_gt, tuple(args.frames) if args.frames
+                         else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
+                         cfg.get("background") or {})
+    except (OSError, ValueError, RuntimeError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    for kind, path in written.items():
+        print(f"{kind}: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
