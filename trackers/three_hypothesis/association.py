@@ -77,6 +77,7 @@ def associate(
     delta: np.ndarray | None = None,
     sqrt_q: np.ndarray | None = None,
     sqrt_p: np.ndarray | None = None,
+    gated: np.ndarray | None = None,
 ) -> Association:
     """Match measurements to persons in two stages.
 
@@ -103,6 +104,7 @@ def associate(
         mu_g: gate radius mu_g in pixels.
         delta: optional precomputed (B, D) region similarity of nodes and measurements.
         sqrt_q, sqrt_p: optional element-wise square roots of q and p (rho = sqrt_q sqrt_p').
+        gated: optional (P,) bool: persons that may take part in stage 2 (default all).
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
@@ -136,6 +138,8 @@ def associate(
     # stage 2: leftovers inside the gate, cost (1 - rho) + d / mu_g
     d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
     free = ~matched_p[owners][:, None] & ~matched_d[None, :]
+    if gated is not None:
+        free &= np.asarray(gated, dtype=bool)[owners][:, None]
     c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
     cost2, best2 = _person_costs(c2, starts)
     m2 = _hungarian(cost2, 2.0)

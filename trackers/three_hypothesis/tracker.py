@@ -16,7 +16,9 @@ Algorithm 1 per frame t:
 7. an unmatched person continues each hypothesis; at its first total occlusion (behind a
    visible person in O) hypotheses 2 (occluder) and 3 (still) are added;
 8. an unmatched measurement starts a tentative track, confirmed after ``confirm_frames``
-   matches, dropped as a false positive after ``m`` frames without one;
+   matches, dropped as a false positive after more than ``tentative_misses`` frames
+   without one; a tentative track is matched only in stage 1 (its measurement must
+   intersect its prediction: it has no velocity yet to justify a gated jump);
 9. pruning after m frames (PruneHypothesis): a hypothesis in plain view (less than
    ``cover`` of its region hidden by a visible person) for m consecutive frames contradicts the missing
    detection and is removed; a hypothesis whose centre leaves the image ends; a person
@@ -120,6 +122,8 @@ class RetaTracker:
         region_samples: grid points per side integrating ellipse overlaps (eqs. 2, 5).
         pixel_stride: histogram every pixel_stride-th row and column of an ellipse (1 =
             every pixel, as in the paper; 2 is four times cheaper for large people).
+        tentative_misses: frames a tentative track may go unmatched before it is dropped as
+            a false positive (0: its tracking ends at the first miss, as in Fig. 3; 2 tolerates missed detections).
     """
 
     def __init__(
@@ -140,6 +144,7 @@ class RetaTracker:
         cover: float = 0.5,
         region_samples: int = 12,
         pixel_stride: int = 1,
+        tentative_misses: int = 2,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -155,6 +160,8 @@ class RetaTracker:
             raise ValueError(f"region_samples must be >= 2, got {region_samples}")
         if pixel_stride < 1:
             raise ValueError(f"pixel_stride must be >= 1, got {pixel_stride}")
+        if tentative_misses < 0:
+            raise ValueError(f"tentative_misses must be >= 0, got {tentative_misses}")
         if confirm_frames < 1:
             raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
         if max_hidden < 1:
@@ -170,6 +177,7 @@ class RetaTracker:
         self.lam = lam
         self.confirm_frames = confirm_frames
         self.cover = cover
+        self.tentative_misses = tentative_misses
         self.region_samples = region_samples
         self.max_hidden = max_hidden
         self.min_score = min_score
@@ -251,7 +259,8 @@ class RetaTracker:
         q = np.array([person.q for person in persons]).reshape(len(persons), p.shape[1])
         sqrt_q = np.array([person.sqrt_q for person in persons]).reshape(q.shape)
         assoc = associate(pred, owners, q, dets, p, self.mu_rho, self.mu_g,
-                          delta=rs[:, n_nodes:], sqrt_q=sqrt_q, sqrt_p=sqrt_p)
+                          delta=rs[:, n_nodes:], sqrt_q=sqrt_q, sqrt_p=sqrt_p,
+                          gated=np.array([person.confirmed for person in persons], dtype=bool))
         matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
                        in zip(assoc.matches, assoc.stages, assoc.rho)}
 
@@ -357,7 +366,7 @@ class RetaTracker:
                         continue  # the same place twice: keep the preferred kind
                     kept.append(b)
                     kept_boxes.append(box)
-                if not person.confirmed and person.misses >= self.m:
+                if not person.confirmed and person.misses > self.tentative_misses:
                     kept = []  # false-positive track
                 if person.misses > self.max_hidden:
                     kept = []

@@ -1,0 +1,389 @@
+"""Reta et al. 2015 three-hypothesis tracker: parts (eqs. 1-5, Kalman, graph) and behaviour."""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from filterpy.kalman import KalmanFilter
+from scipy.optimize import linear_sum_assignment
+
+from trackers.baseline import BaselineTracker
+from trackers.frontend.features import ellipse_histograms, region_similarity
+from trackers.geometry import iou_matrix
+from trackers.records import Detections, TrackState
+from trackers.three_hypothesis import RetaTracker
+from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
+from trackers.three_hypothesis.association import associate
+from trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
+from trackers.three_hypothesis.occlusion import area_above, depth_order, occlusion_pairs, overlap_ratio
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# --------------------------------------------------------------------------- parts
+
+
+def test_histograms_equal_the_front_end_definition():
+    rng = np.random.default_rng(0)
+    frame = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    boxes = np.array([[-5.3, 10.2, 30.6, 50.1], [40.0, 30.0, 21.0, 61.0], [150.0, 100.0, 30, 40]])
+    fg = rng.random((120, 160)) > 0.3
+    h = EllipseHistogrammer()
+    for mask in (None, fg):
+        ours = h(frame, boxes, mask)
+        ref = ellipse_histograms(frame, snap_boxes(boxes), mask)
+        np.testing.assert_array_equal(ours, ref)
+        np.testing.assert_allclose(ours.sum(axis=1), 1.0)
+
+
+def test_histogram_uses_foreground_pixels_only_when_enough():
+    frame = np.zeros((40, 40, 3), np.uint8)
+    frame[:, 20:] = (255, 0, 0)  # right half blue
+    box = np.array([[0.0, 0.0, 40.0, 40.0]])
+    fg = np.zeros((40, 40), bool)
+    fg[:, 20:] = True
+    h = EllipseHistogrammer(min_foreground=0.2)
+    assert h(frame, box)[0].max() == pytest.approx(0.5, abs=0.02)  # half black, half blue
+    assert h(frame, box, fg)[0].max() == 1.0  # only the blue foreground
+    tiny = np.zeros((40, 40), bool)
+    tiny[0, 20] = True  # 1 pixel of foreground: below min_foreground, whole ellipse used
+    np.testing.assert_array_equal(h(frame, box, tiny), h(frame, box))
+
+
+def test_batched_kalman_equals_filterpy():
+    model = MotionModel()
+    rng = np.random.default_rng(1)
+    boxes = rng.uniform(10, 100, (3, 4))
+    states = [model.init(b) for b in boxes]
+    kfs = []
+    for b, (x, P, F, H, Q, R) in zip(boxes, states):
+        kf = KalmanFilter(dim_x=8, dim_z=4)
+        kf.x, kf.P, kf.F, kf.H, kf.Q, kf.R = x[:, None].copy(), P.copy(), F, H, Q, R
+        kfs.append(kf)
+    X = np.array([s[0] for s in states])
+    Ps = np.array([s[1] for s in states])
+    F, H = states[0][2], states[0][3]
+    Qs = np.array([s[4] for s in states])
+    Rs = np.array([s[5] for s in states])
+    for _ in range(4):
+        z = box_measurements(boxes + rng.normal(0, 2, boxes.shape))
+        X, Ps = predict(X, Ps, F, Qs)
+        X, Ps = correct(X, Ps, z, H, Rs)
+        for kf, zi in zip(kfs, z):
+            kf.predict()
+            kf.update(zi[:, None])
+    np.testing.assert_allclose(X, np.array([kf.x[:, 0] for kf in kfs]), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(Ps, np.array([kf.P for kf in kfs]), rtol=1e-9, atol=1e-9)
+
+
+def test_eq2_overlap_ratio_and_occlusion_pairs():
+    a = np.array([[0.0, 0.0, 40.0, 80.0]])
+    assert overlap_ratio(a, a)[0, 0] == pytest.approx(0.5, abs=0.01)  # identical: 1/2
+    assert overlap_ratio(a, a + [100, 0, 0, 0])[0, 0] == 0.0
+    small = np.array([[10.0, 20.0, 20.0, 40.0]])  # inside a, a quarter of its area
+    assert overlap_ratio(small, a)[0, 0] == pytest.approx(0.25 / 1.25, abs=0.01)
+    boxes = np.vstack([a, a + [5, 0, 0, 0], a + [200, 0, 0, 0]])
+    # the first two overlap; the same person's hypotheses never occlude each other
+    np.testing.assert_array_equal(occlusion_pairs(boxes, np.array([0, 1, 2]), 0.1), [[0, 1]])
+    assert len(occlusion_pairs(boxes, np.array([0, 0, 1]), 0.1)) == 0
+
+
+def test_area_above_is_exact_and_depth_order_follows_eq3():
+    box = np.array([[0.0, 0.0, 20.0, 40.0]])  # centre y 20, area 200 pi
+    full = np.pi * 10 * 20
+    assert area_above(box, np.array([20.0]))[0] == pytest.approx(full / 2)
+    assert area_above(box, np.array([40.0]))[0] == pytest.approx(full)
+    assert area_above(box, np.array([-1.0]))[0] == 0.0
+    near = np.array([0.0, 100.0, 40.0, 100.0])  # lower in the image: nearer
+    far = np.array([10.0, 60.0, 20.0, 50.0])
+    assert depth_order(True, False, near, far, 0) == 1  # visible one in front
+    assert depth_order(False, True, near, far, 0) == -1
+    assert depth_order(True, True, near, far, 0) == 1  # far's region lies above near's centre
+    assert depth_order(True, True, far, near, 0) == -1
+    assert depth_order(False, False, near, far, -1) == -1  # inherited
+    assert depth_order(False, False, near, far, 1) == 1
+
+
+def _hist(colour_index: int, bins: int = 4096) -> np.ndarray:
+    h = np.zeros(bins)
+    h[colour_index] = 1.0
+    return h
+
+
+def test_association_stage1_appearance_decides_between_intersecting_pairs():
+    # two predictions at the same place; the measurements' colours tell them apart
+    node_boxes = np.array([[100.0, 100, 30, 80], [102.0, 100, 30, 80]])
+    q = np.array([_hist(1), _hist(2)])
+    meas = np.array([[101.0, 100, 30, 80], [101.0, 101, 30, 80]])
+    p = np.array([_hist(2), _hist(1)])
+    a = associate(node_boxes, np.array([0, 1]), q, meas, p, mu_rho=0.5, mu_g=50)
+    assert sorted(map(tuple, a.matches[:, :2])) == [(0, 1), (1, 0)]
+    assert set(a.stages) == {1}
+    # nobody looks like anybody: every pair rejected by mu_rho
+    a = associate(node_boxes, np.array([0, 1]), q, meas, np.array([_hist(3), _hist(4)]), 0.5, 50)
+    assert len(a.matches) == 0 and len(a.unmatched_measurements) == 2
+
+
+def test_association_stage2_gate_and_best_hypothesis():
+    # person 0 owns two hypotheses, neither intersecting the measurement
+    node_boxes = np.array([[0.0, 0, 20, 40], [200.0, 0, 20, 40]])
+    meas = np.array([[240.0, 0, 20, 40]])
+    q, p = np.array([_hist(1)]), np.array([_hist(1)])
+    a = associate(node_boxes, np.array([0, 0]), q, meas, p, mu_rho=0.5, mu_g=50)
+    np.testing.assert_array_equal(a.matches, [[0, 0, 1]])  # matched through node 1
+    assert a.stages[0] == 2
+    a = associate(node_boxes, np.array([0, 0]), q, meas, p, mu_rho=0.5, mu_g=30)
+    assert len(a.matches) == 0  # outside the gate
+
+
+def test_association_keeps_one_good_pair_rather_than_two_poor_ones():
+    # person 0 fits measurement 0 perfectly; person 1 only weakly fits measurement 0 and
+    # person 0 weakly fits measurement 1: the good pair must win
+    node_boxes = np.array([[100.0, 100, 40, 100], [130.0, 100, 40, 100]])
+    meas = np.array([[100.0, 100, 40, 100], [300.0, 100, 40, 100]])
+    base = np.full(4096, 1 / 4096)
+    q = np.array([_hist(1), 0.5 * _hist(1) + 0.5 * base])
+    p = np.array([_hist(1), 0.6 * _hist(1) + 0.4 * base])
+    a = associate(node_boxes, np.array([0, 1]), q, meas, p, mu_rho=0.3, mu_g=10)
+    assert (0, 0) in set(map(tuple, a.matches[:, :2]))
+
+
+def test_bad_input_raises_clear_errors():
+    with pytest.raises(ValueError, match="frame"):
+        RetaTracker().update(None, Detections.empty())
+    with pytest.raises(ValueError, match="mu_rho"):
+        RetaTracker(mu_rho=1.5)
+    with pytest.raises(ValueError, match="lam"):
+        RetaTracker(lam=0.5)
+    with pytest.raises(ValueError, match="m must"):
+        RetaTracker(m=0)
+
+
+def test_config_maps_onto_the_constructor():
+    from hydra.utils import instantiate
+    from omegaconf import OmegaConf
+
+    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "reta.yaml")
+    params = set(inspect.signature(RetaTracker.__init__).parameters) - {"self"}
+    assert set(cfg.keys()) - {"_target_"} == params
+    tracker = instantiate(cfg)
+    assert isinstance(tracker, RetaTracker)
+    assert tracker.mu_rho == cfg.mu_rho and tracker.m == cfg.m
+
+
+# --------------------------------------------------------------------------- small scenes
+
+W, H = 320, 240
+
+
+def _scene(paths, colours, seed=0, fps=None):
+    """Frames of people drawn as two-colour ellipses (far to near) and their exact detections
+    (people at least 30 % visible); ``fps``: frame -> list of false-positive boxes."""
+    rng = np.random.default_rng(seed)
+    fps = fps or {}
+    out = []
+    for t in range(len(paths[0])):
+        img = np.full((H, W, 3), 90, np.uint8)
+        img += rng.integers(0, 6, img.shape, dtype=np.uint8)
+        label = np.zeros((H, W), np.int32)
+        boxes = np.array([[p[t][0] - 15, p[t][1] - 80, 30, 80] for p in paths])
+        for k in np.argsort(boxes[:, 1]):
+            x, y, w, h = boxes[k]
+            c = (int(x + w / 2), int(y + h / 2))
+            cv2.ellipse(img, (c, (int(w), int(h)), 0), colours[k][1], -1)
+            cv2.ellipse(img, ((c[0], int(y + h * 0.3)), (int(w * 0.9), int(h * 0.55)), 0),
+                        colours[k][0], -1)
+            cv2.ellipse(label, (c, (int(w), int(h)), 0), int(k + 1), -1)
+        area = np.pi * 15 * 40
+        vis = np.bincount(label.ravel(), minlength=len(paths) + 1)[1:] / area
+        det = boxes[vis >= 0.3]
+        extra = np.array(fps.get(t, []), dtype=float).reshape(-1, 4)
+        det = np.vstack([det, extra])
+        out.append((img, label, Detections(det, np.ones(len(det))), boxes))
+    return out
+
+
+RED = ((40, 40, 200), (60, 60, 120))
+BLUE = ((200, 60, 40), (120, 50, 30))
+
+
+def _line(p0, v, n):
+    return np.array(p0, float) + np.outer(np.arange(n), v)
+
+
+def _identities(frames, tracker):
+    """gt index -> list of reported ids matched by IoU >= 0.5, and reported boxes on no gt."""
+    tracker.reset()
+    ids: dict[int, list[int]] = {}
+    unmatched = 0
+    for img, label, dets, gt in frames:
+        rep = [t for t in tracker.update(img, dets, label > 0) if t.state.reported]
+        if not rep:
+            continue
+        iou = iou_matrix(gt, np.array([t.box for t in rep]))
+        r, c = linear_sum_assignment(-iou)
+        good = {(i, j) for i, j in zip(r, c) if iou[i, j] >= 0.5}
+        for i, j in good:
+            ids.setdefault(int(i), []).append(rep[j].id)
+        unmatched += len(rep) - len(good)
+    return ids, unmatched
+
+
+def test_small_crossing_keeps_both_ids_baseline_fragments():
+    frames = _scene([_line((50, 150), (1.5, 0), 150), _line((270, 152), (-1.5, 0), 150)],
+                    [RED, BLUE])
+    assert min(len(f[2]) for f in frames) == 1  # somebody really disappears
+    ids, _ = _identities(frames, RetaTracker())
+    assert {k: len(set(v)) for k, v in ids.items()} == {0: 1, 1: 1}
+    assert ids[0][0] != ids[1][0]
+    base, _ = _identities(frames, BaselineTracker())
+    assert max(len(set(v)) for v in base.values()) > 1
+
+
+def test_isolated_false_positives_never_become_confirmed_tracks():
+    # one false positive every 4 frames, anywhere: isolated in time (beyond
+    # tentative_misses) though they all look alike (background)
+    rng = np.random.default_rng(3)
+    fps = {t: [[rng.uniform(0, W - 30), rng.uniform(0, H - 80), 30, 80]] for t in range(0, 60, 4)}
+    frames = _scene([_line((40, 150), (2, 0), 60)], [RED], fps=fps)
+    tracker = RetaTracker()
+    confirmed_ids = set()
+    tentative_seen = 0
+    for img, label, dets, gt in frames:
+        for t in tracker.update(img, dets, label > 0):
+            if t.state == TrackState.CONFIRMED:
+                confirmed_ids.add(t.id)
+                assert iou_matrix(t.box[None], gt)[0, 0] > 0.5
+            tentative_seen += t.state == TrackState.TENTATIVE
+    assert confirmed_ids == {1}
+    assert tentative_seen > 0  # false positives did start tentative tracks
+    # the baseline reports unconfirmed tracks during its warm-up: the false positive of frame 0
+    _, base_fp = _identities(frames, BaselineTracker())
+    _, reta_fp = _identities(frames, RetaTracker())
+    assert base_fp > 0 and reta_fp == 0
+
+
+# --------------------------------------------------------------------------- synthetic suite
+
+
+def _suite_run(name: str, tracker):
+    from harness.datasets.synthetic import load_scenario
+    from harness.detection_sources import NoisyGroundTruth
+
+    seq = load_scenario(name)
+    src = NoisyGroundTruth(seed=0)
+    src.start(seq)
+    ids: dict[int, set[int]] = {}
+    winners: list[str] = []
+    previous: dict[int, dict] = {}
+    for k in range(1, seq.info.length + 1):
+        frame = seq.frame(k)
+        dets, _ = src.detect(k, frame)
+        out = [t for t in tracker.update(frame, dets, seq.foreground(k)) if t.state.reported]
+        if hasattr(tracker, "graph_snapshot"):
+            snap = tracker.graph_snapshot()
+            for n in snap["nodes"]:  # which hypothesis a re-found person came back through
+                parent = previous.get(n["parent"])
+                if n["kind"] == "visible" and parent is not None and parent["hypothesis"]:
+                    winners.append(parent["hypothesis"])
+            previous = {n["node"]: n for n in snap["nodes"]}
+        rows = seq.gt.rows_of(k)
+        if not len(rows) or not out:
+            continue
+        iou = iou_matrix(seq.gt.table.boxes[rows], np.array([t.box for t in out]))
+        r, c = linear_sum_assignment(-iou)
+        for i, j in zip(r, c):
+            if iou[i, j] >= 0.5:
+                ids.setdefault(int(seq.gt.table.ids[rows[i]]), set()).add(out[j].id)
+    return ids, winners
+
+
+@pytest.mark.parametrize(
+    "scenario, hypothesis",
+    [("crossing", None), ("stop_behind", "still"), ("follow_occluder", "occluder")],
+)
+def test_suite_scenarios_keep_ids_through_the_right_hypothesis(scenario, hypothesis):
+    ids, winners = _suite_run(scenario, RetaTracker())
+    assert len(ids) == 2
+    assert all(len(v) == 1 for v in ids.values()), ids  # no fragment, no switch
+    assert len(set.union(*ids.values())) == 2
+    if hypothesis is not None:
+        assert hypothesis in winners, winners
+    else:
+        assert set(winners) <= {"velocity"}
+    base, _ = _suite_run(scenario, BaselineTracker())
+    assert any(len(v) > 1 for v in base.values()), base  # the baseline loses someone
+
+
+# --------------------------------------------------------------------------- graph output
+
+
+def test_graph_snapshot_export_and_drawing(tmp_path):
+    from harness.report.graph import GraphRecorder, draw_graph, read_graph_csv
+
+    frames = _scene([_line((50, 150), (1.5, 0), 110), _line((270, 152), (-1.5, 0), 110)],
+                    [RED, BLUE])
+    tracker = RetaTracker()
+    rec = GraphRecorder("crossing")
+    kinds = set()
+    hyp_snapshot = None
+    for k, (img, label, dets, gt) in enumerate(frames, start=1):
+        tracker.update(img, dets)
+        snap = tracker.graph_snapshot()
+        rec.add(snap, frame=k)
+        kinds |= {n["kind"] for n in snap["nodes"]}
+        if any(n["kind"] == "hypothesis" for n in snap["nodes"]):
+            hyp_snapshot = (img, snap)
+        node_keys = {n["node"] for n in snap["nodes"]}
+        assert all(e["target"] in node_keys for e in snap["edges"])
+    assert kinds == {"visible", "tentative", "hypothesis"}
+    files = rec.write(tmp_path / "crossing.csv")
+    nodes, edges = read_graph_csv(tmp_path / "crossing.csv")
+    assert [f.name for f in files] == ["crossing_nodes.csv", "crossing_edges.csv"]
+    assert len(nodes) == len(rec.nodes) and len(edges) == len(rec.edges)
+    assert {"frame", "id", "kind", "hypothesis", "xc", "yc", "rx", "ry", "occluder"} <= set(nodes[0])
+    rec.write(tmp_path / "crossing.json")
+    doc = json.loads((tmp_path / "crossing.json").read_text())
+    assert len(doc["nodes"]) == len(nodes)
+    img, snap = hyp_snapshot
+    drawn = draw_graph(img, snap)
+    assert drawn.shape == img.shape and (drawn != img).any()
+    # a hypothesis is dashed: it paints fewer pixels than the same node drawn solid
+    node = next(n for n in snap["nodes"] if n["kind"] == "hypothesis")
+    blank = np.zeros_like(img)
+    dashed = (draw_graph(blank, {"nodes": [{**node, "id": 1}]}) != 0).any(axis=2).sum()
+    solid = (draw_graph(blank, {"nodes": [{**node, "id": 1, "kind": "visible",
+                                           "hypothesis": ""}]}) != 0).any(axis=2).sum()
+    assert dashed < solid
+    with pytest.raises(ValueError, match="suffix"):
+        rec.write(tmp_path / "x.txt")
+
+
+def test_memory_stays_flat_over_a_long_run():
+    """10,000 frames of people entering, crossing and leaving plus false positives."""
+    w, h = 96, 64
+    rng = np.random.default_rng(5)
+    frame = np.full((h, w, 3), 80, np.uint8)
+    frame[:, ::2] = 120
+    tracker = RetaTracker(mu_g=20.0)
+    most_nodes = most_persons = 0
+    for t in range(10_000):
+        phase = t % 100
+        boxes = []
+        if phase < 40:
+            boxes.append([2.5 * phase - 10, 10, 8, 20])  # walks left to right and leaves
+            boxes.append([w - 2.5 * phase, 30, 8, 20])  # walks right to left and leaves
+        if rng.random() < 0.05:
+            boxes.append([rng.uniform(0, w - 8), rng.uniform(0, h - 20), 8, 20])
+        dets = Detections(np.array(boxes, float).reshape(-1, 4), np.ones(len(boxes)))
+        tracker.update(frame, dets)
+        most_nodes = max(most_nodes, tracker.graph.node_count)
+        most_persons = max(most_persons, len(tracker._persons))
+    assert most_persons <= 12
+    assert most_nodes <= (tracker.m + 1) * 3 * most_persons
+    assert len(tracker._pi) <= 4 * most_persons**2 + 16
