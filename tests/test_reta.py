@@ -13,14 +13,19 @@ from filterpy.kalman import KalmanFilter
 from scipy.optimize import linear_sum_assignment
 
 from trackers.baseline import BaselineTracker
-from trackers.frontend.features import ellipse_histograms, region_similarity
+from trackers.frontend.features import ellipse_histograms
 from trackers.geometry import iou_matrix
 from trackers.records import Detections, TrackState
 from trackers.three_hypothesis import RetaTracker
 from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
 from trackers.three_hypothesis.association import associate
 from trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
-from trackers.three_hypothesis.occlusion import area_above, depth_order, occlusion_pairs, overlap_ratio
+from trackers.three_hypothesis.occlusion import (
+    area_above,
+    depth_order,
+    occlusion_pairs,
+    overlap_ratio,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 

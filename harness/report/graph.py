@@ -89,7 +89,7 @@ class GraphRecorder:
 
 def _fmt(v):
     if isinstance(v, float):
-        return "nan" if v != v else f"{v:.3f}"
+        return "nan" if np.isnan(v) else f"{v:.3f}"
     return v
 
 
@@ -106,9 +106,9 @@ def read_graph_csv(path: str | Path) -> tuple[list[dict], list[dict]]:
 
 def _dashed_ellipse(img: np.ndarray, centre, axes, angle: float, colour, thickness: int) -> None:
     """An ellipse drawn as 24 dashes (OpenCV has no dashed line style)."""
-    pts = cv2.ellipse2Poly((int(round(centre[0])), int(round(centre[1]))),
-                           (max(int(round(axes[0])), 1), max(int(round(axes[1])), 1)),
-                           int(round(angle)), 0, 360, 360 // 48)
+    pts = cv2.ellipse2Poly((round(centre[0]), round(centre[1])),
+                           (max(round(axes[0]), 1), max(round(axes[1]), 1)),
+                           round(angle), 0, 360, 360 // 48)
     for k in range(0, len(pts) - 1, 2):
         cv2.line(img, tuple(int(v) for v in pts[k]), tuple(int(v) for v in pts[k + 1]), colour,
                  thickness, cv2.LINE_AA)
