@@ -37,7 +37,12 @@ class AppError(CompactHydraException):
     """A run that failed with a clear message: Hydra prints it (no traceback), exit code 1."""
 
 
-@hydra.main(version_base="1.3", config_path="../conf", config_name="config")
+# An absolute path: relative config paths resolve against the calling *module* when the app
+# is started as the console script `occbench` (pkg://conf, not a package), and fail there.
+CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
+
+
+@hydra.main(version_base="1.3", config_path=CONF_DIR, config_name="config")
 def app(cfg: DictConfig) -> float:
     """The Hydra task: run the experiment, print the table, return the objective.
 

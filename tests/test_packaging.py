@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import importlib
 import importlib.metadata
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -46,8 +48,18 @@ def test_installed_console_script_points_to_the_app():
 
 
 def test_app_finds_its_configs():
-    # hydra.main(config_path="../conf") is relative to harness/__main__.py
     import harness.__main__ as app
 
-    conf = Path(app.__file__).resolve().parent.parent / "conf"
-    assert (conf / "config.yaml").is_file()
+    assert Path(app.CONF_DIR).is_absolute()
+    assert (Path(app.CONF_DIR) / "config.yaml").is_file()
+
+
+def test_console_script_runs_from_anywhere(tmp_path):
+    """``occbench`` (not ``python -m harness``) finds conf/ from another working directory."""
+    script = Path(sys.executable).parent / "occbench"
+    if not script.is_file():
+        pytest.skip(f"no console script at {script} (pip install -e .)")
+    p = subprocess.run([str(script), "--cfg", "job", "tracker=baseline"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=120, check=False)
+    assert p.returncode == 0, p.stderr
+    assert "_target_: trackers.baseline.BaselineTracker" in p.stdout
