@@ -51,17 +51,20 @@ def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndar
     return np.clip(d, 0.0, None)
 
 
-def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray,
+                   spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 12-13.
 
     Args:
         d: (..., 6, 5) differences. omega: (6,) feature weights; gamma: (5,) part weights
             (both normalised to sum 1 here).
+        spread: the models are applied to d / spread, i.e. stretched by ``spread``: tracking
+            sees larger differences than the clean annotated pairs the models were fitted on
+            (detection noise, partial overlaps by other people).
     Returns:
         part scores p_j (..., 5) and global scores p (...,), all in [0, 1].
     """
-    prob = models.match_probability(d)  # p(d_ij | theta_ij)
+    prob = models.match_probability(np.asarray(d) / spread)  # p(d_ij | theta_ij)
     w = np.asarray(omega, dtype=np.float64) / np.sum(omega)
     g = np.asarray(gamma, dtype=np.float64) / np.sum(gamma)
     p_parts = np.einsum("...ij,i->...j", prob, w)  # eq. 12

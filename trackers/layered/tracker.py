@@ -50,7 +50,7 @@ from trackers.frontend.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.geometry import iou_matrix
+from trackers.geometry import box_slices, iou_matrix
 from trackers.layered.association import ambiguous, feature_differences, layered_scores
 from trackers.layered.model import Target, dof_from_box, dof_from_head
 from trackers.layered.models import FEATURES, FeatureModels
@@ -105,7 +105,10 @@ class PBMTracker:
         min_height: smallest candidate height that may start a target (pixels).
         head_separation: smallest distance between two heads in a blob, x blob height.
         head_min_fill: foreground fraction a head rectangle needs for alignment (PBM 3.1).
+        model_spread: the difference models are stretched by this factor (1 = as fitted).
         histogram_bins: bins per channel of the HSV and XYZ part histograms.
+        grid_rows, grid_cols: sample grid each box is measured on (``PartFeatureExtractor``).
+        blob_downsample: connected components run on the mask subsampled by this factor.
         template_threshold: normalised correlation needed by head-template pruning.
         prune_radius: ambiguous candidates closer than this many head widths are "nearby".
         min_hits: matches in a row that confirm a new target.
@@ -148,7 +151,11 @@ class PBMTracker:
         min_height: float = 12.0,
         head_separation: float = 0.12,
         head_min_fill: float = 0.2,
+        model_spread: float = 1.0,
         histogram_bins: int = 4,
+        grid_rows: int = 35,
+        grid_cols: int = 15,
+        blob_downsample: int = 2,
         template_threshold: float = 0.6,
         prune_radius: float = 3.0,
         min_hits: int = 3,
@@ -229,7 +236,13 @@ class PBMTracker:
         self.new_track_iou = new_track_iou
         self.report_occluded = bool(report_occluded)
         self.max_report_misses = int(max_report_misses)
-        self._extractor = PartFeatureExtractor(int(histogram_bins))
+        if int(blob_downsample) < 1:
+            raise ValueError(f"blob_downsample must be >= 1, got {blob_downsample}")
+        self.blob_downsample = int(blob_downsample)
+        if model_spread <= 0:
+            raise ValueError(f"model_spread must be > 0, got {model_spread}")
+        self.model_spread = float(model_spread)
+        self._extractor = PartFeatureExtractor(int(histogram_bins), int(grid_rows), int(grid_cols))
         self.reset()
 
     def reset(self) -> None:
@@ -254,14 +267,25 @@ class PBMTracker:
             anchors.append(Anchor(box.copy(), box.copy(), head, region_centroid(fg, box), "detection"))
         if fg is None:
             return anchors
-        labels, bboxes, numbers = blobs_boxes(fg, self.min_blob_area)
-        for bbox, lab in zip(bboxes, numbers):
-            x, y, w, h = (int(v) for v in bbox)
+        if len(det_boxes):
+            # blobs matter only where foreground is left unexplained by the detections
+            resid = fg.copy()
+            for b in det_boxes:
+                rs, cs = box_slices(b, fg.shape)
+                resid[rs, cs] = False
+            if np.count_nonzero(resid) < self.min_blob_area:
+                return anchors
+        s = self.blob_downsample
+        small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
+        labels, bboxes, numbers = blobs_boxes(small, max(self.min_blob_area // (s * s), 1))
+        for sbox, lab in zip(bboxes, numbers):
+            x, y, w, h = (int(v) for v in sbox)
             mask = labels[y:y + h, x:x + w] == lab
-            peaks = top_profile_heads(mask, max(self.head_separation * h, 3.0),
-                                      max(0.06 * h, 2.0))
-            hx = peaks[:, 0] + x + 0.5
-            hy = peaks[:, 1] + y
+            peaks = top_profile_heads(mask, max(self.head_separation * h, 3.0 / s),
+                                      max(0.06 * h, 2.0 / s))
+            bbox = sbox * s
+            hx = (peaks[:, 0] + x + 0.5) * s
+            hy = (peaks[:, 1] + y) * s
             # heads explained by a detection: inside a detection box's top third
             explained = np.zeros(len(peaks), dtype=bool)
             for b in det_boxes:
@@ -270,9 +294,10 @@ class PBMTracker:
             if explained.all():
                 continue
             n = len(peaks)
+            head_w = max(self.head_separation * bbox[3], 3.0)
             for k in np.nonzero(~explained)[0]:
-                own = bbox.copy() if n == 1 else split_blob_box(mask, bbox[:2], peaks[:, 0], int(k))
-                head_w = max(self.head_separation * h, 3.0)
+                own = (bbox.copy() if n == 1
+                       else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
                 anchors.append(Anchor(own, bbox.copy(), np.array([hx[k], hy[k], head_w]),
                                       region_centroid(fg, own), "blob", n))
         return anchors
@@ -286,16 +311,14 @@ class PBMTracker:
         """
         if kind > 0:
             boxes = search_boxes(a.head, pred_wh, t.alpha, self.search_step, self.search_range)
-            region = a.region
         else:
             box = aligned_box(a.head, pred_wh, t.alpha)
             if head_fill(fg, box) < self.head_min_fill:
                 return None
             boxes = box[None]
-            region = None
-        feats = self._extractor.extract(boxes, t.alpha, t.beta, region=region)
+        feats = self._extractor.extract(boxes, t.alpha, t.beta)
         d = feature_differences(t.parts, feats, np.array([t.misses]))
-        pj, p = layered_scores(self.models, d, self.omega, self.gamma)
+        pj, p = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
         k = int(np.argmax(p[0]))
         w, h = boxes[k, 2], boxes[k, 3]
         dof = dof_from_head(a.head, w, h, t.alpha, t.beta)
@@ -369,7 +392,7 @@ class PBMTracker:
             model = PartFeatures.concatenate([t.parts for t in targets], self._extractor.bins)
             misses = np.array([t.misses for t in targets])
             d = feature_differences(model, feats, misses)
-            pj_all, p_all = layered_scores(self.models, d, self.omega, self.gamma)
+            pj_all, p_all = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
             gates = np.array([t.gate_box() for t in targets])
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
             inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
@@ -382,6 +405,11 @@ class PBMTracker:
                 if kind == 0:
                     S[ti, n] = p_all[ti, n]
                     hyp[(ti, n)] = (pj_all[ti, n], feats.take(n), dof_from_box(a.box, a.centroid), False)
+                    continue
+                # the carved (head-anchored) candidate must itself lie in the gate (PBM 3)
+                hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
+                g = gates[ti]
+                if not (g[0] <= hc[0] <= g[0] + g[2] and g[1] <= hc[1] <= g[1] + g[3]):
                     continue
                 res = self._occluded_hypothesis(targets[ti], a, kind, fg, pred_wh[ti])
                 if res is None:
@@ -397,11 +425,14 @@ class PBMTracker:
                     continue
                 lo = self.match_threshold if amb else self.weak_threshold
                 cands = [int(n) for n in np.nonzero(row >= lo)[0]]
-                if amb:
-                    hw = max(anchors[best].head[2], 1.0)
-                    cands = [n for n in cands if n == best or np.linalg.norm(
-                        anchors[n].head[:2] - anchors[best].head[:2]) <= self.prune_radius * hw
-                        or row[n] * self.margin_ratio > row[best]]
+                # only nearby candidates are multiple responses of one person (PBM 4.1);
+                # distant rivals are left to the one-to-one assignment
+                hw = max(anchors[best if best >= 0 else int(np.argmax(row))].head[2], 1.0)
+                ref = anchors[best if best >= 0 else int(np.argmax(row))].head[:2]
+                cands = [n for n in cands
+                         if np.linalg.norm(anchors[n].head[:2] - ref) <= self.prune_radius * hw]
+                if amb and len(cands) < 2:
+                    continue
                 if gray is None:
                     gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
                 chosen = self._prune(t, cands, anchors, gray)

@@ -1,0 +1,148 @@
+"""The five-part split and per-part features (trackers.frontend.parts, PBM 2.1-2.2)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from trackers.frontend.parts import (
+    DEFAULT_ALPHA,
+    DEFAULT_BETA,
+    HEAD_FRACTION,
+    N_PARTS,
+    PartFeatureExtractor,
+    centroid_ratios,
+    part_boxes,
+    part_displacement,
+    part_overlap,
+)
+from trackers.histograms import colour_histogram
+
+
+def test_part_boxes_hand_case():
+    # 70 x 140 box: head = top 20 rows; centroid at the centre -> split at x = 35, y = 70
+    p = part_boxes(np.array([[10.0, 5.0, 70.0, 140.0]]))[0]
+    np.testing.assert_allclose(p[0], [10, 5, 70, 20])
+    np.testing.assert_allclose(p[1], [10, 25, 35, 50])
+    np.testing.assert_allclose(p[2], [45, 25, 35, 50])
+    np.testing.assert_allclose(p[3], [10, 75, 35, 70])
+    np.testing.assert_allclose(p[4], [45, 75, 35, 70])
+
+
+def test_parts_tile_the_box_for_any_ratios():
+    rng = np.random.default_rng(0)
+    boxes = np.column_stack([rng.uniform(0, 100, (20, 2)), rng.uniform(5, 80, (20, 2))])
+    alpha, beta = rng.uniform(0.1, 0.9, 20), rng.uniform(0.1, 0.9, 20)
+    p = part_boxes(boxes, alpha, beta)
+    np.testing.assert_allclose((p[:, :, 2] * p[:, :, 3]).sum(1), boxes[:, 2] * boxes[:, 3])
+    np.testing.assert_allclose(p[:, 0, 3], HEAD_FRACTION * boxes[:, 3])
+    # the split point is the centroid: ratios recovered by centroid_ratios (eqs. 1-2)
+    xc = p[:, 1, 0] + p[:, 1, 2]
+    yc = p[:, 1, 1] + p[:, 1, 3]
+    a, b = centroid_ratios(boxes, np.column_stack([xc, yc]))
+    np.testing.assert_allclose(a, alpha)
+    np.testing.assert_allclose(b, beta)
+
+
+def test_centroid_at_centre_gives_default_ratios():
+    a, b = centroid_ratios(np.array([[0.0, 0, 40, 70]]), np.array([[20.0, 35.0]]))
+    assert a[0] == pytest.approx(DEFAULT_ALPHA) and b[0] == pytest.approx(DEFAULT_BETA)
+
+
+def _painted(colours, fg_left_only=False):
+    """A 70 x 140 box at (20, 10) in a 200 x 200 frame, each part painted one colour."""
+    frame = np.zeros((200, 200, 3), np.uint8)
+    box = np.array([20.0, 10.0, 70.0, 140.0])
+    p = part_boxes(box[None])[0]
+    for j, (x, y, w, h) in enumerate(p.astype(int)):
+        frame[y:y + h, x:x + w] = colours[j]
+    fg = np.zeros((200, 200), bool)
+    fg[10:150, 20:55 if fg_left_only else 90] = True
+    return frame, fg, box
+
+
+COLOURS = [(30, 60, 200), (200, 40, 40), (40, 200, 40), (220, 220, 30), (90, 90, 90)]
+
+
+def test_histograms_equal_colour_histogram_of_the_part_pixels():
+    frame, fg, box = _painted(COLOURS)
+    ex = PartFeatureExtractor(bins=4)
+    ex.start(frame, fg)
+    f = ex.extract(box[None])
+    for j in range(N_PARTS):
+        px = np.array([COLOURS[j]], np.uint8)[None]
+        xyz = cv2.cvtColor(px, cv2.COLOR_BGR2XYZ).reshape(-1, 3)
+        np.testing.assert_allclose(f.xyz[0, j], colour_histogram(xyz, bins=4))
+        hsv = cv2.cvtColor(px, cv2.COLOR_BGR2HSV).reshape(-1, 3).astype(np.float64)
+        hsv[:, 0] *= 256.0 / 180.0  # OpenCV hue is 0..179
+        np.testing.assert_allclose(f.hsv[0, j], colour_histogram(hsv, bins=4))
+    np.testing.assert_allclose(f.area[0], 1.0)
+
+
+def test_area_centroid_and_outline_follow_the_foreground():
+    frame, fg, box = _painted(COLOURS, fg_left_only=True)
+    ex = PartFeatureExtractor(bins=4, grid_rows=35, grid_cols=14)
+    ex.start(frame, fg)
+    f = ex.extract(box[None])
+    np.testing.assert_allclose(f.area[0], [0.5, 1.0, 0.0, 1.0, 0.0])
+    assert f.hsv[0, 2].sum() == 0 and f.xyz[0, 4].sum() == 0  # no foreground, empty histograms
+    # the left torso's foreground centroid is the centre of its rectangle
+    p = f.parts[0, 1]
+    np.testing.assert_allclose(f.centroid[0, 1], p[:2] + p[2:] / 2, atol=1.0)
+    # a full rectangle of foreground: outline samples only along its border
+    ex.start(frame, np.ones((200, 200), bool))
+    full = ex.extract(box[None])
+    assert (full.perimeter[0] > 0).all()
+    ex.start(frame, np.zeros((200, 200), bool))
+    assert (ex.extract(box[None]).perimeter[0] == 0).all()
+
+
+def test_extract_is_vectorised_consistently():
+    rng = np.random.default_rng(1)
+    frame = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    fg = rng.random((120, 160)) < 0.6
+    boxes = np.column_stack([rng.uniform(-10, 120, (6, 2)), rng.uniform(10, 60, (6, 2))])
+    ex = PartFeatureExtractor(bins=4)
+    ex.start(frame, fg)
+    together = ex.extract(boxes, 0.4, 0.6)
+    for k in range(len(boxes)):
+        alone = ex.extract(boxes[k:k + 1], 0.4, 0.6)
+        for name in ("area", "perimeter", "hsv", "xyz", "centroid", "parts"):
+            np.testing.assert_allclose(getattr(together, name)[k], getattr(alone, name)[0])
+    np.testing.assert_allclose(together.hsv.sum(-1)[together.area > 0], 1.0)
+
+
+def test_samples_outside_the_image_are_background():
+    frame = np.full((50, 50, 3), 128, np.uint8)
+    ex = PartFeatureExtractor(bins=2)
+    ex.start(frame, None)  # no foreground: the whole box counts, but only inside the image
+    f = ex.extract(np.array([[25.0, 0.0, 50.0, 49.0]]))
+    np.testing.assert_allclose(f.area[0, [1, 3]], 1.0)
+    np.testing.assert_allclose(f.area[0, [2, 4]], 0.0)
+
+
+def test_displacement_and_overlap():
+    frame = np.full((100, 100, 3), 100, np.uint8)
+    ex = PartFeatureExtractor()
+    ex.start(frame, None)
+    a = ex.extract(np.array([[10.0, 10, 20, 70]]))
+    b = ex.extract(np.array([[10.0, 10, 20, 70], [17.0, 10, 20, 70]]))
+    d = part_displacement(b, a)[:, 0]
+    np.testing.assert_allclose(d[0], 0.0)
+    np.testing.assert_allclose(d[1], 7.0 / 70.0)
+    o = part_overlap(a, b)[0]
+    np.testing.assert_allclose(o[0], 1.0)
+    np.testing.assert_allclose(o[1, 0], 13.0 / 27.0)  # head: 13 of 27 columns shared
+
+
+def test_bad_input():
+    ex = PartFeatureExtractor()
+    with pytest.raises(RuntimeError):
+        ex.extract(np.zeros((1, 4)))
+    with pytest.raises(ValueError, match="uint8"):
+        ex.start(np.zeros((10, 10)), None)
+    with pytest.raises(ValueError, match="foreground shape"):
+        ex.start(np.zeros((10, 10, 3), np.uint8), np.zeros((5, 5), bool))
+    with pytest.raises(ValueError, match="bins"):
+        PartFeatureExtractor(bins=0)
