@@ -34,7 +34,7 @@ from harness.run import (
 )
 from harness.run import run_experiment as _run_experiment
 from trackers.baseline import BaselineTracker
-from trackers.records import Detections, SequenceInfo
+from trackers.records import Detections, SequenceInfo, Track
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = ROOT / "conf"
@@ -204,6 +204,21 @@ def test_bad_detections_are_dropped_and_counted(caplog):
         res = run_tracker(BaselineTracker(), seq, NanSource())
     assert np.isfinite(res.boxes).all()
     assert "60 detections" in caplog.text  # 2 per frame x 30 frames, counted once
+
+
+class NanTracker(BaselineTracker):
+    """Reports one NaN box per frame beside its real tracks."""
+
+    def update(self, frame, detections, foreground=None):
+        return [*super().update(frame, detections, foreground),
+                Track(99, np.array([np.nan, 0.0, 10.0, 10.0]))]
+
+
+def test_non_finite_tracker_boxes_are_dropped_and_counted():
+    seq = BoxSequence("cross", crossing_rows(10), 10)
+    out = run_sequence({"nan": NanTracker()}, seq, NoisyGroundTruth())["nan"]
+    assert out.dropped == 10 and out.error is None
+    assert 99 not in out.table.ids and np.isfinite(out.table.boxes).all()
 
 
 def test_foreground_modes():
