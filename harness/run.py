@@ -36,7 +36,7 @@ import pandas as pd
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable, read_mot, write_mot
 from harness.report.bars import DEFAULT_METRICS, metric_bars
-from harness.report.tables import comparison, direction, per_sequence, to_markdown
+from harness.report.tables import comparison, direction, per_sequence, to_latex, to_markdown
 from harness.sources import DetectionSource
 from trackers.records import Detections, Track
 
@@ -399,9 +399,9 @@ class RunWriter:
     """Writes a run directory as results arrive, so that a later failure loses nothing.
 
     Layout: ``config.yaml`` (resolved config), ``tracks/<tracker>/<sequence>.txt`` (MOT
-    results, written as each tracker finishes a sequence), ``metrics.csv`` (rewritten after
-    each sequence), ``timings.csv``, ``errors.txt`` (only when something failed),
-    ``summary.md`` and ``plots/metrics.png`` (at the end).
+    results, written as each tracker finishes a sequence), ``metrics.csv`` and ``summary.md``
+    (rewritten after each sequence), ``timings.csv``, ``errors.txt`` (only when something
+    failed), ``summary.tex`` (COMBINED LaTeX table) and ``plots/metrics.png`` (at the end).
     """
 
     def __init__(self, out_dir: str | Path) -> None:
@@ -606,7 +606,7 @@ def read_external(name: str, folder: Path, sequence: str) -> MotTable:
 
 def run_experiment(
     cfg: Any,
-    out_dir: str | Path,
+    out_dir: str | Path | None = None,
     tracker_name: str | None = None,
     progress: ProgressFactory | None = None,
 ) -> ExperimentResult:
@@ -615,7 +615,8 @@ def run_experiment(
     Args:
         cfg: the composed config (``conf/config.yaml``): ``dataset``, ``detector``,
             ``tracker``, ``evaluation``, ``external``, ``foreground``, ``background``.
-        out_dir: the run directory (see ``RunWriter`` for its layout).
+        out_dir: the run directory (see ``RunWriter`` for its layout); None = the output
+            directory of the running Hydra app.
         tracker_name: the name of a single selected tracker config (Hydra's choice).
         progress: progress-bar factory; None shows nothing.
     Returns:
@@ -625,6 +626,12 @@ def run_experiment(
     """
     from omegaconf import OmegaConf
 
+    if out_dir is None:
+        from hydra.core.hydra_config import HydraConfig
+
+        if not HydraConfig.initialized():
+            raise RunError("run_experiment needs out_dir outside a Hydra app")
+        out_dir = HydraConfig.get().runtime.output_dir
     writer = RunWriter(out_dir)
     if OmegaConf.is_config(cfg):
         writer.text("config.yaml", OmegaConf.to_yaml(cfg, resolve=True))
@@ -719,6 +726,9 @@ def run_experiment(
         metrics = pd.DataFrame(columns=["tracker", "sequence", *_metrics().COLUMNS])
         writer.metrics(metrics)
     writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
+    if not metrics.empty:
+        writer.text("summary.tex", to_latex(comparison(metrics, table_columns),
+                                            caption=f"occbench: {title} (COMBINED)"))
     try:
         metric_bars(metrics, writer.out_dir / "plots" / "metrics.png", plot_metrics, title)
     except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for

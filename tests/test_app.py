@@ -301,7 +301,7 @@ def test_experiment_writes_run_directory(tmp_path, mot_root):
     out = tmp_path / "run"
     result = run_experiment(mot_cfg(mot_root), out)
     assert result.ok, result.failures
-    for name in ("config.yaml", "metrics.csv", "summary.md", "timings.csv",
+    for name in ("config.yaml", "metrics.csv", "summary.md", "summary.tex", "timings.csv",
                  "plots/metrics.png", "tracks/baseline/cross-a.txt",
                  "tracks/baseline/cross-b.txt"):
         assert (out / name).is_file(), name
