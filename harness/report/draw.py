@@ -92,7 +92,7 @@ def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) 
         c = _colour(t)
         if t.state in (TrackState.HYPOTHESIS, TrackState.OCCLUDED):
             poly = cv2.ellipse2Poly(_pt(xc, yc), (max(int(rx), 1), max(int(ry), 1)),
-                                    round(np.degrees(phi)), 0, 360, 8)
+                                    round(np.degrees(phi)), 0, 360, 15)
             dashed_polyline(img, poly, c, thickness)
         else:
             cv2.ellipse(img, ((xc, yc), (2 * rx, 2 * ry), float(np.degrees(phi))), c, thickness,
