@@ -78,12 +78,12 @@ class EllipseHistogrammer:
         Returns:
             (N, bins**3) float64 rows summing to 1 (all zero where no pixel is counted).
         """
-        b = snap_boxes(boxes).astype(np.int64)
+        b = snap_boxes(boxes).astype(np.int64).tolist()
         n = len(b)
         height, width = frame.shape[:2]
         out = np.zeros((n, self.bins**3), dtype=np.float64)
         for i in range(n):
-            x, y, w, h = (int(v) for v in b[i])
+            x, y, w, h = b[i]
             r0, r1 = max(y, 0), min(y + h, height)
             c0, c1 = max(x, 0), min(x + w, width)
             if r1 <= r0 or c1 <= c0:

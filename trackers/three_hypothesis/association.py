@@ -41,6 +41,8 @@ def _person_costs(cost_nodes: np.ndarray, starts: np.ndarray) -> tuple[np.ndarra
     """Reduce (B, D) node costs to (P, D) person costs (min over each person's nodes) and
     the (P, D) index of the node attaining it. Nodes are grouped by person: person k owns
     rows ``starts[k]:starts[k + 1]``."""
+    if len(starts) == len(cost_nodes):  # one node per person
+        return cost_nodes, np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
     cost = np.minimum.reduceat(cost_nodes, starts, axis=0)
     best = np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
     sizes = np.diff(np.r_[starts, len(cost_nodes)])
@@ -108,8 +110,9 @@ def associate(
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
-    if len(owners) and not (np.all(np.diff(owners) >= 0) and owners[0] == 0
-                            and owners[-1] == n_persons - 1 and np.all(np.diff(owners) <= 1)):
+    steps = np.diff(owners)
+    if len(owners) and not (owners[0] == 0 and owners[-1] == n_persons - 1
+                            and ((steps == 0) | (steps == 1)).all()):
         raise ValueError("associate: owners must be sorted and cover persons 0..P-1")
     empty = np.zeros(0, dtype=int)
     if n_persons == 0 or n_meas == 0:
@@ -126,7 +129,7 @@ def associate(
     if delta is None:
         delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
-    starts = np.flatnonzero(np.r_[True, np.diff(owners) > 0])
+    starts = np.flatnonzero(np.r_[True, steps > 0])
     cost1, best1 = _person_costs(c1, starts)
     m1 = _hungarian(cost1, 2.0)
 
@@ -136,13 +139,16 @@ def associate(
     matched_d[m1[:, 1]] = True
 
     # stage 2: leftovers inside the gate, cost (1 - rho) + d / mu_g
-    d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
-    free = ~matched_p[owners][:, None] & ~matched_d[None, :]
-    if gated is not None:
-        free &= np.asarray(gated, dtype=bool)[owners][:, None]
-    c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
-    cost2, best2 = _person_costs(c2, starts)
-    m2 = _hungarian(cost2, 2.0)
+    eligible = ~matched_p if gated is None else ~matched_p & np.asarray(gated, dtype=bool)
+    if eligible.any() and not matched_d.all():
+        d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
+        free = eligible[owners][:, None] & ~matched_d[None, :]
+        c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
+        cost2, best2 = _person_costs(c2, starts)
+        m2 = _hungarian(cost2, 2.0)
+    else:
+        m2 = np.zeros((0, 2), dtype=int)
+        best2 = np.zeros((n_persons, n_meas), dtype=int)
 
     rows = [np.column_stack([m1, best1[m1[:, 0], m1[:, 1]]]),
             np.column_stack([m2, best2[m2[:, 0], m2[:, 1]]])]

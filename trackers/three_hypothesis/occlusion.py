@@ -6,6 +6,8 @@ shape S = (xc, yc, 0, w/2, h/2) of ``trackers.geometry.box_ellipses``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from trackers.frontend.features import region_similarity
@@ -96,10 +98,12 @@ def depth_order(
     if visible_j and not visible_i:
         return -1
     if visible_i and visible_j:
-        yc = shape_i[1] + shape_i[3] / 2
-        up = float(area_above(predicted_j[None], np.array([yc]))[0])
-        total = np.pi / 4 * predicted_j[2] * predicted_j[3]
-        down = total - up
+        # scalar form of area_above (this runs once per occlusion pair per frame)
+        yc = float(shape_i[1] + shape_i[3] / 2)
+        rx, ry = float(predicted_j[2]) / 2, float(predicted_j[3]) / 2
+        t = min(max((yc - float(predicted_j[1]) - ry) / ry, -1.0), 1.0) if ry > 0 else 0.0
+        up = rx * ry * (t * math.sqrt(1.0 - t * t) + math.asin(t) + math.pi / 2)
+        down = math.pi * rx * ry - up
         if up > down:
             return 1
         if up < down:

@@ -320,6 +320,7 @@ class RetaTracker:
 
         # 7. unmatched persons: continue each hypothesis, spawn at the first total occlusion
         pending: list[tuple[_Person, list[_Branch]]] = []
+        sources: list[int] = []  # node of t-1 each new branch continues, -1 when spawned
         for i, person in enumerate(persons):
             if i in matched_det:
                 continue
@@ -333,6 +334,7 @@ class RetaTracker:
                     persons[fronts[0]].key if fronts else None)
                 new.append(_Branch(kind, Xp[n], Pp[n], node=old.node, occluder=occluder,
                                    exposed=old.exposed, depth=len(fronts)))
+                sources.append(int(n))
                 seen = [f for f in fronts if f in matched_det]
                 if person.confirmed and not person.spawned and seen:
                     # FirstOcclusion: hidden behind a visible person for the first time
@@ -340,8 +342,10 @@ class RetaTracker:
                     for kind2, x2 in hyp.spawn(x_prev[n], matched_velocity(occ)).items():
                         new.append(_Branch(kind2, x2, Pp[n].copy(), node=old.node,
                                            occluder=occ.key, depth=len(fronts)))
+                        sources.append(-1)
                     person.spawned = True
             if not person.confirmed:
+                del sources[len(sources) - len(new) + 1:]
                 new = new[:1]
             pending.append((person, new))
 
@@ -350,7 +354,21 @@ class RetaTracker:
         if pending:
             hyp_boxes = state_boxes(np.array([b.x for _, new in pending for b in new]))
             gone = hyp.outside_image(hyp_boxes, width, height)
-            cover = covered_fraction(hyp_boxes, visible_boxes, self.region_samples) >= self.cover
+            src = np.array(sources)
+            fraction = np.zeros(len(src))
+            cont = src >= 0
+            if len(visible_boxes) and cont.any():
+                # continuing branches sit at their prediction: reuse eq. 5's delta
+                d_cols = n_nodes + np.array([d for _, (d, _, _, _) in rows])
+                delta = rs[src[cont]][:, d_cols]
+                area_n = pred[src[cont], 2] * pred[src[cont], 3]
+                area_v = visible_boxes[:, 2] * visible_boxes[:, 3]
+                fraction[cont] = (delta * (area_n[:, None] + area_v[None, :]) / 2
+                                  / np.maximum(area_n, 1e-9)[:, None]).max(axis=1)
+            if (~cont).any():
+                fraction[~cont] = covered_fraction(hyp_boxes[~cont], visible_boxes,
+                                                   self.region_samples)
+            cover = fraction >= self.cover
             k = 0
             for person, new in pending:
                 kept: list[_Branch] = []
