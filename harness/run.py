@@ -738,6 +738,9 @@ def run_experiment(
 
 def _title(cfg: Any, sequences: list[Sequence]) -> str:
     def target(key: str) -> str:
+        choice = _hydra_choice(key)
+        if choice is not None:
+            return choice
         node = _cfg_get(cfg, key, {})
         return str(_cfg_get(node, "_target_", "?")).rsplit(".", 1)[-1]
 

@@ -42,8 +42,8 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
                        for t in trackers])
     width = 0.8 / len(trackers)
     x = np.arange(len(names))
-    fig, ax = plt.subplots(figsize=(max(4.0, 1.2 * len(names) * max(1, len(trackers)) ** 0.5 + 2),
-                                    3.6), dpi=120)
+    size = (min(12.0, max(4.0, 1.0 + len(names) * (0.5 + 0.35 * len(trackers)))), 3.6)
+    fig, ax = plt.subplots(figsize=size, dpi=120)
     for i, t in enumerate(trackers):
         pos = x - 0.4 + width * (i + 0.5)
         bars = ax.bar(pos, np.nan_to_num(values[i]), width, label=t)
