@@ -29,7 +29,7 @@ GREY = (190, 190, 190)
 
 def id_colour(track_id: int) -> tuple[int, int, int]:
     """A stable, saturated BGR colour per identity."""
-    hue = (int(track_id) * 47) % 180
+    hue = int((int(track_id) * 0.618034 % 1.0) * 180)  # golden-ratio spacing of hues
     hsv = np.uint8([[[hue, 220, 230]]])
     b, g, r = cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)[0, 0]
     return int(b), int(g), int(r)
@@ -147,3 +147,45 @@ def draw_graph(frame: np.ndarray, snapshot: dict, previous: dict | None = None,
         cv2.putText(img, label, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
         cv2.putText(img, label, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
     return img
+
+
+def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str | Path | None = None,
+                    every: int = 1, foreground: bool = True) -> list[Path]:
+    """Run ``tracker`` over ``sequence`` with detections from ``source`` and export its graph.
+
+    Args:
+        tracker: a tracker with ``reset``, ``update`` and ``graph_snapshot``.
+        sequence: a ``harness.datasets.base.Sequence`` (frames 1..length are read in order).
+        source: a ``DetectionSource``; ``start(sequence)`` is called here.
+        path: graph file, ``.csv`` (two files) or ``.json``; put it beside the tracks, e.g.
+            ``tracks/<tracker>/<sequence>_graph.csv``.
+        frames_dir: when given, every ``every``-th frame is drawn there as ``%06d.png``.
+        foreground: pass the source's mask, else the sequence's exact foreground, if any.
+    Returns:
+        the files written (graph files first, then drawn frames).
+    Raises:
+        TypeError: the tracker keeps no graph.
+    """
+    if not hasattr(tracker, "graph_snapshot"):
+        raise TypeError(f"{type(tracker).__name__} has no graph_snapshot(): it keeps no graph")
+    tracker.reset()
+    source.start(sequence)
+    recorder = GraphRecorder(sequence.info.name)
+    drawn: list[Path] = []
+    if frames_dir is not None:
+        frames_dir = Path(frames_dir)
+        frames_dir.mkdir(parents=True, exist_ok=True)
+    previous: dict | None = None
+    for k in range(1, sequence.info.length + 1):
+        frame = sequence.frame(k)
+        dets, mask = source.detect(k, frame)
+        fg = (mask if mask is not None else sequence.foreground(k)) if foreground else None
+        tracker.update(frame, dets, fg)
+        snap = tracker.graph_snapshot()
+        recorder.add(snap, frame=k)
+        if frames_dir is not None and frame is not None and (k - 1) % max(every, 1) == 0:
+            target = frames_dir / f"{k:06d}.png"
+            cv2.imwrite(str(target), draw_graph(frame, snap, previous))
+            drawn.append(target)
+        previous = snap
+    return recorder.write(path) + drawn
