@@ -324,7 +324,7 @@ def test_experiment_writes_run_directory(tmp_path, mot_root):
 
 def test_results_are_reproducible_byte_for_byte(tmp_path, mot_root):
     cfg = mot_cfg(mot_root, "detector.miss_rate=0.2", "detector.jitter=0.05",
-                  "detector.fp_rate=0.5", "seed=7")
+                  "detector.fp_rate=0.5", "seed=7", "evaluation.plot=[]")
     run_experiment(cfg, tmp_path / "one")
     run_experiment(cfg, tmp_path / "two")
     files = ["metrics.csv", "summary.md", "tracks/baseline/cross-a.txt",
@@ -333,7 +333,8 @@ def test_results_are_reproducible_byte_for_byte(tmp_path, mot_root):
         assert (tmp_path / "one" / f).read_bytes() == (tmp_path / "two" / f).read_bytes(), f
     # and the seed matters
     run_experiment(mot_cfg(mot_root, "detector.miss_rate=0.2", "detector.jitter=0.05",
-                           "detector.fp_rate=0.5", "seed=8"), tmp_path / "three")
+                           "detector.fp_rate=0.5", "seed=8", "evaluation.plot=[]"),
+                   tmp_path / "three")
     assert ((tmp_path / "one" / files[2]).read_bytes()
             != (tmp_path / "three" / files[2]).read_bytes())
 
@@ -545,7 +546,8 @@ def test_every_tracker_is_reproducible_on_synthetic(tmp_path):
     """All built trackers (pixels, exact foreground, noisy detections): same bytes twice."""
     cfg = compose_cfg("dataset.length=24", "dataset.scenarios=[crossing]",
                       "dataset.width=320", "dataset.height=240",
-                      "detector.miss_rate=0.1", "detector.jitter=0.03", "detector.fp_rate=0.3")
+                      "detector.miss_rate=0.1", "detector.jitter=0.03", "detector.fp_rate=0.3",
+                      "evaluation.plot=[]")
     a = _run_experiment(cfg, tmp_path / "a", tracker_name="all")
     b = _run_experiment(cfg, tmp_path / "b", tracker_name="all")
     assert a.ok and b.ok, (a.failures, b.failures)

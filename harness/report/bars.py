@@ -27,16 +27,15 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
         The written path, or None when there is nothing to draw (no COMBINED row or none of
         ``names`` present).
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
     rows = metrics[metrics["sequence"] == COMBINED]
     names = [m for m in names if m in rows.columns]
     if rows.empty or not names:
         log.info("no COMBINED rows or metrics to plot: %s not written", path)
         return None
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
     trackers = list(dict.fromkeys(rows["tracker"]))
     values = np.array([[float(rows.loc[rows["tracker"] == t, m].iloc[0]) for m in names]
                        for t in trackers])
