@@ -30,7 +30,7 @@ log = logging.getLogger("harness")
 
 # Columns of the table printed at the end (all columns are in summary.md and metrics.csv).
 PRINTED = ("HOTA", "DetA", "AssA", "IDF1", "MOTA", "MOTP", "Recall", "Precision", "MT", "ML",
-           "FP", "FN", "IDs", "Frag")
+           "FP", "FN", "IDs", "Frag", "ReID")
 
 
 class AppError(CompactHydraException):
