@@ -392,3 +392,34 @@ def test_memory_stays_flat_over_a_long_run():
     assert most_persons <= 12
     assert most_nodes <= (tracker.m + 1) * 3 * most_persons
     assert len(tracker._pi) <= 4 * most_persons**2 + 16
+
+
+def test_record_sequence_writes_graph_beside_tracks_and_draws_frames(tmp_path):
+    from harness.datasets.base import Sequence
+    from harness.report.graph import record_sequence
+    from trackers.records import SequenceInfo
+
+    frames = _scene([_line((50, 150), (1.5, 0), 40), _line((120, 152), (-1.5, 0), 40)],
+                    [RED, BLUE])
+
+    class Tiny(Sequence):
+        info = SequenceInfo("tiny", W, H, 25.0, len(frames))
+
+        def frame(self, index):
+            return frames[index - 1][0]
+
+    class Exact:
+        def start(self, sequence):
+            pass
+
+        def detect(self, index, frame):
+            return frames[index - 1][2], frames[index - 1][1] > 0
+
+    files = record_sequence(RetaTracker(), Tiny(), Exact(), tmp_path / "tracks" / "tiny_graph.json",
+                            frames_dir=tmp_path / "frames", every=10)
+    assert files[0].name == "tiny_graph.json"
+    assert [f.name for f in files[1:]] == ["000001.png", "000011.png", "000021.png", "000031.png"]
+    doc = json.loads(files[0].read_text())
+    assert {n["frame"] for n in doc["nodes"]} == set(range(1, 41))
+    with pytest.raises(TypeError, match="graph"):
+        record_sequence(BaselineTracker(), Tiny(), Exact(), tmp_path / "x.json")

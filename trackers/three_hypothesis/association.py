@@ -99,7 +99,8 @@ def associate(
         node_boxes: (B, 4) xywh predicted regions of the nodes.
         owners: (B,) int person index of each node, sorted, covering 0..P-1 (every
             person owns at least one node).
-        q: (P, bins) person appearance histograms.
+        q: (P, bins) person appearance histograms (only its length is read when
+            ``sqrt_q`` and ``sqrt_p`` are given).
         measurement_boxes: (D, 4) xywh.
         p: (D, bins) measurement histograms.
         mu_rho: appearance threshold mu_rho in [0, 1].

@@ -256,9 +256,9 @@ class RetaTracker:
         pairs = occlusion_pairs(pred, owners, self.lam, ratio=0.5 * rs[:, :n_nodes])
 
         # 4. two-stage association (3.3.2)
-        q = np.array([person.q for person in persons]).reshape(len(persons), p.shape[1])
-        sqrt_q = np.array([person.sqrt_q for person in persons]).reshape(q.shape)
-        assoc = associate(pred, owners, q, dets, p, self.mu_rho, self.mu_g,
+        # rho = sqrt(q) . sqrt(p) (eq. 4); sqrt(q) is kept per person, so q is not restacked
+        sqrt_q = np.array([person.sqrt_q for person in persons]).reshape(len(persons), p.shape[1])
+        assoc = associate(pred, owners, sqrt_q, dets, p, self.mu_rho, self.mu_g,
                           delta=rs[:, n_nodes:], sqrt_q=sqrt_q, sqrt_p=sqrt_p,
                           gated=np.array([person.confirmed for person in persons], dtype=bool))
         matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
