@@ -225,3 +225,26 @@ def test_bench_times_every_stage():
     rows = [t.row() for t in timings]
     assert [r["stage"] for r in rows] == ["decode", "front end", "tracker baseline"]
     assert all(r["frames"] == 6 and r["runs"] == 2 and r["fps_median"] > 0 for r in rows)
+
+
+def test_experiment_run_writes_paper_table_with_our_rows(tmp_path):
+    import subprocess
+    import sys
+
+    seq = tmp_path / "data" / "walk"
+    (seq / "gt").mkdir(parents=True)
+    rows = [f"{k},{i},{10 + 4 * k if i == 1 else 150 - 4 * k},20,20,50,1,-1,-1,-1"
+            for k in range(1, 21) for i in (1, 2)]
+    (seq / "gt" / "gt.txt").write_text("\n".join(rows) + "\n")
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=walk\nimWidth=200\nimHeight=100\n"
+                                     "frameRate=10\nseqLength=20\n")
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "harness", "+experiment=reta_table2", "tracker=baseline",
+           "detector=noisy_gt", "dataset=mot", f"dataset.root={tmp_path / 'data'}",
+           "progress=false", f"hydra.run.dir={out}"]
+    proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    md = (out / "paper_table.md").read_text()
+    assert "| ours: baseline (dataset mot, noisy_gt detections) | 2 | 100 |" in md
+    assert "reported: Stochastic graph evolution framework [22]" in md
