@@ -249,6 +249,9 @@ class PBMTracker:
         """Forget every target and restart ids at 1."""
         self.targets: list[Target] = []
         self._next_id = 1
+        self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
+        self._blob_pairs = 0
+        self._whole_detections = False
         self._frame = 0
 
     # ------------------------------------------------------------------ candidates
@@ -291,6 +294,8 @@ class PBMTracker:
             for b in det_boxes:
                 explained |= ((hx >= b[0]) & (hx <= b[0] + b[2]) & (hy >= b[1] - 0.1 * b[3])
                               & (hy <= b[1] + b[3] / 3.0))
+            if len(peaks) == 1 and explained[0]:
+                self._calibrate(bbox, det_boxes)
             if explained.all():
                 continue
             n = len(peaks)
@@ -298,9 +303,35 @@ class PBMTracker:
             for k in np.nonzero(~explained)[0]:
                 own = (bbox.copy() if n == 1
                        else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
+                own = self._blob_box_as_detection(own)
                 anchors.append(Anchor(own, bbox.copy(), np.array([hx[k], hy[k], head_w]),
                                       region_centroid(fg, own), "blob", n))
         return anchors
+
+    def _calibrate(self, blob_box: np.ndarray, det_boxes: np.ndarray) -> None:
+        """Learn the ratio of detection box size to blob span from isolated people.
+
+        A detector's boxes and a foreground blob's span differ systematically (limbs, box
+        margins); a blob holding one head and overlapping exactly one detection (IoU >
+        0.5) gives one sample of (w_det / w_blob, h_det / h_blob); the first 20 samples
+        are averaged, later ones enter a running average with weight 0.05.
+        """
+        iou = iou_matrix(blob_box[None], det_boxes)[0]
+        if (iou > 0.3).sum() != 1 or iou.max() < 0.5:
+            return
+        d = det_boxes[int(np.argmax(iou))]
+        r = d[2:] / np.maximum(blob_box[2:], 1.0)
+        self._blob_pairs += 1
+        rate = max(1.0 / self._blob_pairs, 0.05)
+        self._blob_to_box += rate * (r - self._blob_to_box)
+
+    def _blob_box_as_detection(self, box: np.ndarray) -> np.ndarray:
+        """A blob box rescaled about its centre to the detections' box convention."""
+        if self._blob_pairs == 0:
+            return box
+        c = box[:2] + 0.5 * box[2:]
+        wh = box[2:] * self._blob_to_box
+        return np.array([c[0] - 0.5 * wh[0], box[1], wh[0], wh[1]])
 
     # ------------------------------------------------------------------ hypotheses
     def _occluded_hypothesis(self, t: Target, a: Anchor, kind: int, fg: np.ndarray | None,
@@ -402,16 +433,32 @@ class PBMTracker:
                 kind = occlusion_kind(a.region[2:], pred_wh[ti], self.occlusion_threshold)
                 if kind == 0 and a.heads_in_region > 1:
                     kind = 1  # a blob holding several heads is a merge: search it
+                whole = None
+                if kind == 0 or (a.source == "detection" and self._whole_detections):
+                    # the candidate taken whole; a detection is one person, so it competes
+                    # with its carved (searched or aligned) version, best score wins
+                    whole = (p_all[ti, n], (pj_all[ti, n], feats.take(n),
+                                            dof_from_box(a.box, a.centroid), False))
                 if kind == 0:
                     S[ti, n] = p_all[ti, n]
-                    hyp[(ti, n)] = (pj_all[ti, n], feats.take(n), dof_from_box(a.box, a.centroid), False)
+                    dof = dof_from_box(a.box, a.centroid)
+                    if a.source == "blob":
+                        # a blob's span follows the swinging limbs: keep KF2's width (PBM 3)
+                        w = pred_wh[ti][0]
+                        dof[0], dof[4] = a.centroid[0] - targets[ti].alpha * w, w
+                    hyp[(ti, n)] = (pj_all[ti, n], feats.take(n), dof, False)
                     continue
                 # the carved (head-anchored) candidate must itself lie in the gate (PBM 3)
                 hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
                 g = gates[ti]
                 if not (g[0] <= hc[0] <= g[0] + g[2] and g[1] <= hc[1] <= g[1] + g[3]):
+                    if whole is not None:
+                        S[ti, n], hyp[(ti, n)] = whole
                     continue
                 res = self._occluded_hypothesis(targets[ti], a, kind, fg, pred_wh[ti])
+                if whole is not None and (res is None or whole[0] >= res[0]):
+                    S[ti, n], hyp[(ti, n)] = whole
+                    continue
                 if res is None:
                     continue
                 S[ti, n] = res[0]
