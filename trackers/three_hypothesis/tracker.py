@@ -16,7 +16,8 @@ Algorithm 1 per frame t:
 7. an unmatched person continues each hypothesis; at its first total occlusion (behind a
    visible person in O) hypotheses 2 (occluder) and 3 (still) are added;
 8. an unmatched measurement starts a tentative track, confirmed after ``confirm_frames``
-   matches, dropped as a false positive after more than ``tentative_misses`` frames
+   matches (when it then stands on a hypothesis of a hidden person, IoU >= 0.5, it is that
+   person come back, as ID -14 in the paper's Fig. 3: the person keeps its id), dropped as a false positive after more than ``tentative_misses`` frames
    without one; a tentative track is matched only in stage 1 (its measurement must
    intersect its prediction: it has no velocity yet to justify a gated jump);
 9. pruning after m frames (PruneHypothesis): a hypothesis in plain view (less than
@@ -43,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackers.frontend.features import region_similarity
-from trackers.geometry import valid_boxes
+from trackers.geometry import iou_matrix, valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
@@ -285,6 +286,7 @@ class RetaTracker:
 
         # 6. attribute update of matched persons (3.3.3)
         rows = sorted(matched_det.items())
+        absorbed: set[int] = set()  # hidden persons whose hypothesis a new track confirmed
         visible_boxes = np.zeros((0, 4))
         if rows:
             idx = np.array([n for _, (_, n, _, _) in rows])
@@ -308,8 +310,17 @@ class RetaTracker:
                 person.misses = 0
                 person.spawned = False
                 if not person.confirmed and person.hits >= self.confirm_frames:
-                    person.id = self._next_id
-                    self._next_id += 1
+                    hidden = self._hypothesis_under(shape, persons, owners, pred, matched_det,
+                                                    absorbed)
+                    if hidden is not None:
+                        # the tentative track confirms a hypothesis of a hidden person: that
+                        # person keeps its id, its other hypotheses are pruned (Fig. 3, ID -14)
+                        person.id = persons[hidden].id
+                        absorbed.add(hidden)
+                        log.debug("tentative %d confirms hidden person %d", person.key, person.id)
+                    else:
+                        person.id = self._next_id
+                        self._next_id += 1
                     self._public[person.key] = person.id
                 fronts = in_front.get(n, [])
                 branch = _Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
@@ -322,7 +333,7 @@ class RetaTracker:
         pending: list[tuple[_Person, list[_Branch]]] = []
         sources: list[int] = []  # node of t-1 each new branch continues, -1 when spawned
         for i, person in enumerate(persons):
-            if i in matched_det:
+            if i in matched_det or i in absorbed:
                 continue
             person.misses += 1
             new: list[_Branch] = []
@@ -416,6 +427,21 @@ class RetaTracker:
         return self._outputs()
 
     # ------------------------------------------------------------------ helpers
+    def _hypothesis_under(self, shape: np.ndarray, persons: list[_Person], owners: np.ndarray,
+                          pred: np.ndarray, matched: dict, taken: set[int]) -> int | None:
+        """Index of the hidden confirmed person (unmatched this frame) one of whose
+        hypotheses lies where a newly confirmed track stands (IoU >= 0.5), else None."""
+        best, best_iou = None, 0.5
+        for n in range(len(pred)):
+            i = int(owners[n])
+            person = persons[i]
+            if i in matched or i in taken or not person.confirmed:
+                continue
+            iou = float(iou_matrix(shape[None], pred[n][None])[0, 0])
+            if iou >= best_iou:
+                best, best_iou = i, iou
+        return best
+
     def _add_node(self, person: _Person, branch: _Branch, box: np.ndarray,
                   parent: int | None, stage: int, rho: float) -> int:
         """AddNodeToGraph + AddEdgeToGraph for one branch; returns the node key."""
