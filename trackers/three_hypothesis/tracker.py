@@ -15,20 +15,27 @@ Algorithm 1 per frame t:
    loses its other hypotheses;
 7. an unmatched person continues each hypothesis; at its first total occlusion (behind a
    visible person in O) hypotheses 2 (occluder) and 3 (still) are added;
-8. an unmatched measurement starts a tentative track, confirmed after ``confirm_frames``
-   matches (when it then stands on a hypothesis of a hidden person, IoU >= 0.5, it is that
-   person come back, as ID -14 in the paper's Fig. 3: the person keeps its id), dropped as a false positive after more than ``tentative_misses`` frames
-   without one; a tentative track is matched only in stage 1 (its measurement must
-   intersect its prediction: it has no velocity yet to justify a gated jump);
+8. an unmatched measurement starts a tentative track (3.3), confirmed after
+   ``confirm_frames`` matches and dropped as a false positive after more than
+   ``tentative_misses`` frames without one; a tentative track is matched in stage 1 only
+   (it has no velocity yet to justify a jump through the gate). A track confirmed where a
+   hidden person's hypothesis stands (IoU >= 0.5) is that person come back (the paper's
+   Fig. 3, ID -14): the person keeps its id and its other hypotheses are pruned;
 9. pruning after m frames (PruneHypothesis): a hypothesis in plain view (less than
-   ``cover`` of its region hidden by a visible person) for m consecutive frames contradicts the missing
-   detection and is removed; a hypothesis whose centre leaves the image ends; a person
-   with no hypothesis left ends.
+   ``cover`` of its region hidden by a visible person) for m consecutive frames is
+   contradicted by the missing detection and removed; a hypothesis whose centre leaves
+   the image ends (the person left the scene); a person with no hypothesis left ends.
 
-Adaptations (also in the README): the person detector is whatever ``detector=`` gives;
-shapes are axis-aligned ellipses inscribed in boxes (phi = 0); pairs below mu_rho are
-excluded before the Hungarian step rather than rejected after it; ``max_hidden`` bounds how
-long a hidden person is kept (the paper has no such limit; it keeps memory flat).
+Adaptations of what the paper leaves open (also listed in the README):
+* the person detector is whatever ``detector=`` provides; shapes are the axis-aligned
+  ellipses inscribed in the boxes (phi = 0);
+* pairs with rho < mu_rho are excluded before the Hungarian step rather than rejected
+  after it, and leaving a person unmatched costs the largest acceptable pair cost, so a
+  good pair is never split into two poor ones just to match more;
+* "contradictory" hypotheses are read as hypotheses in plain view without a detection
+  (``cover``), and their pruning as m such frames in a row;
+* ``max_hidden`` bounds how long a hidden person is kept (the paper sets no limit);
+* eq. 3 on a tie or an unknown order puts the region with the lower bottom edge in front.
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a
 hidden confirmed person: covered by a visible person first, then fewest frames in plain
