@@ -4,8 +4,10 @@ The result files hold only the scored boxes; the drawings need every output of e
 (hypotheses, tentative tracks, ellipses, part rectangles), so ``render`` runs the trackers
 again, exactly as the runner does (same detection source, same foreground, each tracker its
 own copy of the inputs: the tracks are the ones of the run with the same config and seed),
-and draws each frame as one panel per tracker (``harness.report.draw``), ground truth thin
-white underneath when asked.
+and draws each frame as one panel per tracker (``harness.report.draw``; a tracker that exposes
+its tracking graph, Reta et al.'s, is drawn by ``harness.report.graph.draw_graph``: solid,
+dashed and grey ellipses with the edges from the previous frame), ground truth thin white
+underneath when asked.
 
 Outputs: an MP4 (``cv2.VideoWriter``, fourcc mp4v) of the panels, and a contact sheet: a PNG
 grid with one row per chosen frame and one column per tracker.
@@ -67,6 +69,33 @@ def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: De
         yield k, frame, out
 
 
+class _GraphDrawing:
+    """Draws a tracker that exposes its tracking graph (``graph_snapshot()``, Reta et al.)
+    with ``harness.report.graph.draw_graph``; ``step()`` must be called after every frame so
+    that edges join each node to its predecessor of the previous frame."""
+
+    def __init__(self, tracker: Any, draw_graph: Any) -> None:
+        self.tracker, self.draw_graph = tracker, draw_graph
+        self.previous: dict | None = None
+        self.current: dict | None = None
+
+    @classmethod
+    def of(cls, tracker: Any) -> _GraphDrawing | None:
+        if not callable(getattr(tracker, "graph_snapshot", None)):
+            return None
+        try:
+            from harness.report.graph import draw_graph
+        except ImportError:
+            return None
+        return cls(tracker, draw_graph)
+
+    def step(self) -> None:
+        self.previous, self.current = self.current, self.tracker.graph_snapshot()
+
+    def draw(self, base: np.ndarray) -> np.ndarray:
+        return self.draw_graph(base, self.current or {}, self.previous)
+
+
 def _gt_of(sequence: DataSequence, k: int) -> tuple[np.ndarray, np.ndarray] | None:
     if sequence.gt is None:
         return None
@@ -115,20 +144,28 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
     if bad:
         raise ValueError(f"sheet_frames outside 1..{n}: {bad}")
     end = max([last, *wanted])
+    graphs = {name: _GraphDrawing.of(t) for name, t in trackers.items()}
     writer = None
     rows: dict[int, list[np.ndarray]] = {}
     written: dict[str, Path] = {}
     try:
         for k, frame, tracks in track_frames(trackers, sequence, source, foreground, background,
                                              end):
+            for g in graphs.values():
+                if g is not None:
+                    g.step()
             if not (first <= k <= last or k in wanted):
                 continue
             base = frame if frame is not None else _blank(sequence)
             gt = _gt_of(sequence, k) if show_gt else None
             panels = []
             for name, out in tracks.items():
-                p = draw_tracks(base, out, TRACKER_STYLES.get(name, "auto"), gt,
-                                f"{name}  frame {k}")
+                if graphs[name] is not None:  # the tracker's own graph drawing (Reta Figs. 3-5)
+                    p = draw_tracks(graphs[name].draw(base), [], "boxes", gt,
+                                    f"{name}  frame {k}")
+                else:
+                    p = draw_tracks(base, out, TRACKER_STYLES.get(name, "auto"), gt,
+                                    f"{name}  frame {k}")
                 if scale != 1.0:
                     p = cv2.resize(p, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
                 panels.append(p)
