@@ -99,8 +99,8 @@ def draw_person(img: np.ndarray | None, lab: np.ndarray, p: Person, box: np.ndar
     x, y, w, h = (float(v) for v in box)
 
     def rect(x0, y0, x1, y1, colour):
-        r0, r1 = int(round(y0)), int(round(y1))
-        c0, c1 = int(round(x0)), int(round(x1))
+        r0, r1 = round(y0), round(y1)
+        c0, c1 = round(x0), round(x1)
         r0, c0 = max(r0, 0), max(c0, 0)
         if r1 <= r0 or c1 <= c0:
             return
@@ -111,16 +111,16 @@ def draw_person(img: np.ndarray | None, lab: np.ndarray, p: Person, box: np.ndar
     hh = h / 7.0
     cx = x + w / 2
     # head: hair cap over skin face
-    rx = max(int(round(0.22 * w)), 2)
-    ry = max(int(round(hh / 2)), 2)
-    centre = (int(round(cx)), int(round(y + hh / 2)))
+    rx = max(round(0.22 * w), 2)
+    ry = max(round(hh / 2), 2)
+    centre = (round(cx), round(y + hh / 2))
     m = np.zeros(lab.shape, np.uint8)
     cv2.ellipse(m, centre, (rx, ry), 0, 0, 360, 1, -1)
     sel = m.astype(bool)
     if img is not None:
         img[sel] = p.skin
         top = sel.copy()
-        top[int(round(y + hh * 0.4)):] = False
+        top[round(y + hh * 0.4):] = False
         img[top] = p.hair
     lab[sel] = p.id
     # neck + shirt with arms

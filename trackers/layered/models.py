@@ -212,7 +212,7 @@ class FeatureModels:
         for f in FEATURES:
             per = data["models"].get(f)
             if not isinstance(per, dict):
-                raise ValueError(f"{source}: models.{f} missing or not a mapping")
+                raise ValueError(f"{source}: models.{f} missing or not a mapping")  # noqa: TRY004
             row = []
             for p in PART_NAMES:
                 if p not in per:

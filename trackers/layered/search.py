@@ -59,7 +59,7 @@ def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, 
         labels (H, W) int32, boxes (K, 4) xywh float64, label numbers (K,) of the blobs with
         at least ``min_area`` pixels.
     """
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8)
     keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area)[0] + 1
     boxes = stats[keep, :4].astype(np.float64)
     return labels, boxes, keep
@@ -137,8 +137,8 @@ def region_centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
     x, y, w, h = box
     if fg is not None:
         H, W = fg.shape
-        r0, r1 = max(int(round(y)), 0), min(int(round(y + h)), H)
-        c0, c1 = max(int(round(x)), 0), min(int(round(x + w)), W)
+        r0, r1 = max(round(y), 0), min(round(y + h), H)
+        c0, c1 = max(round(x), 0), min(round(x + w), W)
         if r1 > r0 and c1 > c0:
             crop = fg[r0:r1, c0:c1]
             n = crop.sum()
@@ -159,8 +159,8 @@ def split_blob_box(mask: np.ndarray, offset: np.ndarray, heads_x: np.ndarray, k:
     order = np.sort(heads_x)
     xk = heads_x[k]
     i = int(np.searchsorted(order, xk))
-    lo = 0 if i == 0 else int(round(0.5 * (order[i - 1] + xk)))
-    hi = w if i == len(order) - 1 else int(round(0.5 * (order[i + 1] + xk)))
+    lo = 0 if i == 0 else round(0.5 * (order[i - 1] + xk))
+    hi = w if i == len(order) - 1 else round(0.5 * (order[i + 1] + xk))
     sub = mask[:, lo:hi]
     rows = np.nonzero(sub.any(axis=1))[0]
     cols = np.nonzero(sub.any(axis=0))[0]
@@ -211,8 +211,8 @@ def head_fill(fg: np.ndarray | None, box: np.ndarray) -> float:
         return 1.0
     x, y, w, h = box
     H, W = fg.shape
-    r0, r1 = max(int(round(y)), 0), min(int(round(y + HEAD_FRACTION * h)), H)
-    c0, c1 = max(int(round(x + 0.25 * w)), 0), min(int(round(x + 0.75 * w)), W)
+    r0, r1 = max(round(y), 0), min(round(y + HEAD_FRACTION * h), H)
+    c0, c1 = max(round(x + 0.25 * w), 0), min(round(x + 0.75 * w), W)
     if r1 <= r0 or c1 <= c0:
         return 0.0
     return float(fg[r0:r1, c0:c1].mean())
@@ -222,8 +222,8 @@ def head_patch(gray: np.ndarray, box: np.ndarray) -> np.ndarray | None:
     """Grey head template: the top 1/7 of a box, or None when it leaves the image."""
     x, y, w, h = box
     H, W = gray.shape
-    r0, r1 = int(round(y)), int(round(y + HEAD_FRACTION * h))
-    c0, c1 = int(round(x)), int(round(x + w))
+    r0, r1 = round(y), round(y + HEAD_FRACTION * h)
+    c0, c1 = round(x), round(x + w)
     if r0 < 0 or c0 < 0 or r1 > H or c1 > W or r1 - r0 < 3 or c1 - c0 < 3:
         return None
     return gray[r0:r1, c0:c1].copy()
@@ -242,7 +242,7 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
     th, tw = template.shape
     H, W = gray.shape
     r = int(np.ceil(radius))
-    x0, y0 = int(round(centre[0])) - r, int(round(centre[1])) - r
+    x0, y0 = round(centre[0]) - r, round(centre[1]) - r
     c0, r0 = max(x0, 0), max(y0, 0)
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
     if c1 - c0 < tw or r1 - r0 < th:

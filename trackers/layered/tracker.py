@@ -126,8 +126,8 @@ class PBMTracker:
         models: FeatureModels | Mapping | None = None,
         feature_weights: Mapping[str, float] | None = None,
         part_weights: Sequence[float] = DEFAULT_PART_WEIGHTS,
-        match_threshold: float = 0.35,
-        weak_threshold: float = 0.2,
+        match_threshold: float = 0.25,
+        weak_threshold: float = 0.1,
         margin_ratio: float = 1.1,
         part_match_threshold: float = 0.4,
         update_rate: float = 0.3,
@@ -151,7 +151,7 @@ class PBMTracker:
         min_height: float = 12.0,
         head_separation: float = 0.12,
         head_min_fill: float = 0.2,
-        model_spread: float = 1.0,
+        model_spread: float = 3.0,
         histogram_bins: int = 4,
         grid_rows: int = 35,
         grid_cols: int = 15,
@@ -159,10 +159,10 @@ class PBMTracker:
         template_threshold: float = 0.6,
         prune_radius: float = 3.0,
         min_hits: int = 3,
-        max_misses: int = 40,
+        max_misses: int = 90,
         exit_margin: float = 8.0,
         exit_misses: int = 3,
-        new_track_iou: float = 0.3,
+        new_track_iou: float = 0.6,
         report_occluded: bool = True,
         max_report_misses: int = 15,
     ) -> None:
@@ -216,13 +216,15 @@ class PBMTracker:
         self.search_range = int(search_range)
         self.ratio_window = int(ratio_window)
         self.occluded_window = int(occluded_window)
-        self._gate_args = dict(
-            position_noise=kf1_position_noise, velocity_noise=kf1_velocity_noise,
-            measurement_noise=kf1_measurement_noise, speed_factor=gate_speed_factor,
-            min_fraction=gate_min_fraction, miss_factor=gate_miss_factor, growth=gate_growth,
-            max_fraction=gate_max_fraction)
-        self._size_args = dict(position_noise=kf2_position_noise, velocity_noise=kf2_velocity_noise,
-                               measurement_noise=kf2_measurement_noise)
+        self._gate_args = {
+            "position_noise": kf1_position_noise, "velocity_noise": kf1_velocity_noise,
+            "measurement_noise": kf1_measurement_noise, "speed_factor": gate_speed_factor,
+            "min_fraction": gate_min_fraction, "miss_factor": gate_miss_factor,
+            "growth": gate_growth, "max_fraction": gate_max_fraction,
+        }
+        self._size_args = {"position_noise": kf2_position_noise,
+                           "velocity_noise": kf2_velocity_noise,
+                           "measurement_noise": kf2_measurement_noise}
         self.min_blob_area = int(min_blob_area)
         self.min_height = float(min_height)
         self.head_separation = float(head_separation)
@@ -251,7 +253,6 @@ class PBMTracker:
         self._next_id = 1
         self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
         self._blob_pairs = 0
-        self._whole_detections = False
         self._frame = 0
 
     # ------------------------------------------------------------------ candidates
@@ -361,7 +362,7 @@ class PBMTracker:
         best local match, or -1 when the template does not match."""
         if t.head_template is None or not cands:
             return -1
-        th, tw = t.head_template.shape
+        tw = t.head_template.shape[1]
         hs = np.array([anchors[n].head[:2] for n in cands])
         centre = hs.mean(axis=0)
         radius = float(np.max(np.linalg.norm(hs - centre, axis=1))) + 0.5 * tw + 2
@@ -433,12 +434,6 @@ class PBMTracker:
                 kind = occlusion_kind(a.region[2:], pred_wh[ti], self.occlusion_threshold)
                 if kind == 0 and a.heads_in_region > 1:
                     kind = 1  # a blob holding several heads is a merge: search it
-                whole = None
-                if kind == 0 or (a.source == "detection" and self._whole_detections):
-                    # the candidate taken whole; a detection is one person, so it competes
-                    # with its carved (searched or aligned) version, best score wins
-                    whole = (p_all[ti, n], (pj_all[ti, n], feats.take(n),
-                                            dof_from_box(a.box, a.centroid), False))
                 if kind == 0:
                     S[ti, n] = p_all[ti, n]
                     dof = dof_from_box(a.box, a.centroid)
@@ -452,13 +447,8 @@ class PBMTracker:
                 hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
                 g = gates[ti]
                 if not (g[0] <= hc[0] <= g[0] + g[2] and g[1] <= hc[1] <= g[1] + g[3]):
-                    if whole is not None:
-                        S[ti, n], hyp[(ti, n)] = whole
                     continue
                 res = self._occluded_hypothesis(targets[ti], a, kind, fg, pred_wh[ti])
-                if whole is not None and (res is None or whole[0] >= res[0]):
-                    S[ti, n], hyp[(ti, n)] = whole
-                    continue
                 if res is None:
                     continue
                 S[ti, n] = res[0]
@@ -466,7 +456,7 @@ class PBMTracker:
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             for ti, t in enumerate(targets):
                 row = S[ti]
-                best, runner, amb = ambiguous(row, self.match_threshold, self.margin_ratio)
+                best, _, amb = ambiguous(row, self.match_threshold, self.margin_ratio)
                 weak = best < 0 and np.isfinite(row).any() and row.max() >= self.weak_threshold
                 if not (amb or weak):
                     continue

@@ -1,0 +1,294 @@
+"""PBM tracker (trackers.layered): models, layers, dynamics, search and behaviour on scenes."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pbm_scenes as S
+import pytest
+import yaml
+from hydra.utils import instantiate
+from omegaconf import OmegaConf
+
+from trackers.baseline import BaselineTracker
+from trackers.frontend.parts import N_PARTS
+from trackers.geometry import iou_matrix
+from trackers.layered import FeatureModels, PBMTracker, load_feature_models
+from trackers.layered.association import ambiguous, layered_scores
+from trackers.layered.dynamics import GateFilter
+from trackers.layered.models import (
+    FEATURES,
+    FoldedMixture,
+    fit_difference_model,
+    fit_half_normal,
+    save_feature_models,
+)
+from trackers.layered.search import occlusion_kind, search_boxes, top_profile_heads
+from trackers.records import Detections, TrackState
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(tracker, scene, hidden=None, use_fg=True, min_visible=0.5):
+    """Per gt id: the list of reported track ids matched with IoU >= 0.5, per frame."""
+    matched: dict[int, list[int]] = {}
+    outputs = []
+    for k in range(scene.length):
+        img, lab = scene.render(k)
+        det = scene.detections(k, lab, min_visible, hidden(k) if hidden else None)
+        tracks = tracker.update(img, det, lab if use_fg else None)
+        outputs.append(tracks)
+        rep = [t for t in tracks if t.state.reported]
+        for gid, gb in scene.gt(k).items():
+            if not rep:
+                continue
+            iou = iou_matrix(gb[None], np.array([t.box for t in rep]))[0]
+            j = int(np.argmax(iou))
+            if iou[j] >= 0.5:
+                matched.setdefault(gid, []).append(rep[j].id)
+    return matched, outputs
+
+
+# ---------------------------------------------------------------- configuration, input
+
+
+def test_imports_from_this_repository():
+    import trackers.layered
+
+    assert Path(trackers.layered.__file__).resolve().is_relative_to(ROOT)
+
+
+def test_config_instantiates_with_shipped_models_and_is_in_all():
+    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    tracker = instantiate(cfg)
+    assert isinstance(tracker, PBMTracker)
+    assert "synthetic" in tracker.models.description
+    all_cfg = yaml.safe_load((ROOT / "conf" / "tracker" / "all.yaml").read_text())
+    assert "pbm@pbm" in all_cfg["defaults"]
+
+
+def test_shipped_models_header_says_synthetic():
+    text = (ROOT / "trackers" / "layered" / "data" / "default_models.yaml").read_text()
+    assert text.startswith("#") and "synthetic" in text.splitlines()[1]
+
+
+def test_bad_input_raises_clear_errors():
+    t = PBMTracker()
+    with pytest.raises(ValueError, match="frame is None"):
+        t.update(None, Detections.empty())
+    with pytest.raises(ValueError, match="foreground shape"):
+        t.update(np.zeros((20, 30, 3), np.uint8), Detections.empty(), np.zeros((5, 5), bool))
+    with pytest.raises(ValueError, match="margin_ratio"):
+        PBMTracker(margin_ratio=0.5)
+    with pytest.raises(ValueError, match="part_weights"):
+        PBMTracker(part_weights=[1, 1, 1, 1])
+    with pytest.raises(ValueError, match="unknown features"):
+        PBMTracker(feature_weights={"colour": 1.0})
+
+
+def test_models_roundtrip_and_malformed_file(tmp_path):
+    m = FeatureModels.default()
+    path = tmp_path / "m.yaml"
+    save_feature_models(m, path, "header line")
+    back = load_feature_models(path)
+    d = np.random.default_rng(0).uniform(0, 0.5, (3, len(FEATURES), N_PARTS))
+    np.testing.assert_allclose(back.match_probability(d), m.match_probability(d), atol=1e-5)
+    data = yaml.safe_load(path.read_text())
+    del data["models"]["hsv"]["left_leg"]
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ValueError, match=r"m\.yaml: models\.hsv\.left_leg missing"):
+        load_feature_models(path)
+    with pytest.raises(ValueError, match="cannot read"):
+        load_feature_models(tmp_path / "absent.yaml")
+
+
+# ---------------------------------------------------------------- difference models (2.2)
+
+
+def test_half_normal_fit_and_survival():
+    rng = np.random.default_rng(0)
+    d = np.abs(rng.normal(0, 0.2, 20000))
+    m = fit_half_normal(d)
+    assert m.sigmas[0] == pytest.approx(0.2, rel=0.03)
+    assert m.survival(np.array(0.0)) == pytest.approx(1.0)
+    # P(|X| >= sigma) = erfc(1 / sqrt 2)
+    assert m.survival(np.array(0.2)) == pytest.approx(math.erfc(1 / math.sqrt(2)), rel=0.05)
+    assert fit_difference_model(d).kind == "half_normal"
+
+
+def test_mixture_chosen_where_differences_are_not_unimodal():
+    rng = np.random.default_rng(1)
+    d = np.abs(np.concatenate([rng.normal(0, 0.02, 3000), rng.normal(0.5, 0.05, 3000)]))
+    m = fit_difference_model(d)
+    assert m.kind == "mixture"
+    np.testing.assert_allclose(np.sort(m.means), [0.0, 0.5], atol=0.03)
+    np.testing.assert_allclose(m.weights, [0.5, 0.5], atol=0.05)
+    x = np.linspace(0, 2, 4001)
+    assert np.trapezoid(m.pdf(x), x) == pytest.approx(1.0, abs=1e-3)
+
+
+def test_layered_scores_hand_case():
+    unit = [FoldedMixture([1.0], [0.0], [1.0])] * N_PARTS
+    models = FeatureModels({f: unit for f in FEATURES})
+    omega = np.array([1, 1, 2, 2, 1, 3], float)  # normalised inside: sum 10
+    gamma = np.array([3, 2, 2, 1, 2], float)  # sum 10
+    d = np.zeros((len(FEATURES), N_PARTS))
+    pj, p = layered_scores(models, d, omega, gamma)
+    np.testing.assert_allclose(pj, 1.0)
+    assert p == pytest.approx(1.0)
+    d[5, 0] = 1e3  # the overlap of the head fails completely
+    pj, p = layered_scores(models, d, omega, gamma)
+    assert pj[0] == pytest.approx(1 - 0.3)  # eq. 12: 1 - omega_overlap
+    assert p == pytest.approx(1 - 0.3 * 0.3)  # eq. 13: 1 - gamma_head * 0.3
+
+
+def test_best_candidate_needs_threshold_and_margin():
+    assert ambiguous(np.array([0.9, 0.3, -np.inf]), 0.5, 1.2) == (0, 1, False)
+    assert ambiguous(np.array([0.6, 0.55]), 0.5, 1.2)[2] is True
+    assert ambiguous(np.array([0.4, 0.3]), 0.5, 1.2) == (-1, -1, False)
+
+
+# ---------------------------------------------------------------- dynamics and search (3, 3.1)
+
+
+def test_gate_is_zero_order_and_doubles_after_a_miss():
+    g = GateFilter(np.array([100.0, 50.0]), 100.0, 0.5, 0.2, 0.5, speed_factor=3.0,
+                   min_fraction=0.5, miss_factor=2.0, growth=1.5, max_fraction=100.0)
+    for x in (104.0, 108.0, 112.0, 116.0):
+        g.predict()
+        g.correct(np.array([x, 50.0]))
+    g.predict()
+    box = g.gate(np.array([20.0, 100.0]), 0)
+    assert box[0] + box[2] / 2 == pytest.approx(116.0)  # centred on the last position
+    h0 = g.half_size(np.array([20.0, 100.0]), 0)
+    assert h0[0] > 10.0 + 3 * 3.0  # grows with the speed (about 4 px / frame)
+    np.testing.assert_allclose(g.half_size(np.array([20.0, 100.0]), 1), 2 * h0)
+    np.testing.assert_allclose(g.half_size(np.array([20.0, 100.0]), 3), 2 * 1.5**2 * h0)
+
+
+def test_occlusion_rule_and_search_sizes():
+    wh = np.array([40.0, 100.0])
+    assert occlusion_kind(np.array([55.0, 120.0]), wh, 0.5) == 0
+    assert occlusion_kind(np.array([70.0, 100.0]), wh, 0.5) == 1
+    assert occlusion_kind(np.array([40.0, 45.0]), wh, 0.5) == -1
+    boxes = search_boxes(np.array([200.0, 30.0, 10.0]), wh, 0.5, 0.05, 2)
+    assert len(boxes) == 25
+    np.testing.assert_allclose(np.unique(boxes[:, 2]), 40 * (1 + 0.05 * np.arange(-2, 3)))
+    np.testing.assert_allclose(np.unique(boxes[:, 3]), 100 * (1 + 0.05 * np.arange(-2, 3)))
+    np.testing.assert_allclose(boxes[:, 1], 30.0)  # hanging from the head top
+    np.testing.assert_allclose(boxes[:, 0] + 0.5 * boxes[:, 2], 200.0)  # xc on the head (eq. 1)
+
+
+def test_two_heads_in_one_blob():
+    mask = np.zeros((100, 80), bool)
+    mask[20:100, 5:35] = True  # left body
+    mask[5:20, 14:26] = True  # its head, top row 5, centre column 19.5
+    mask[28:100, 35:75] = True  # right body (touching: one blob)
+    mask[12:28, 48:62] = True  # its head, top row 12
+    heads = top_profile_heads(mask, 12.0, 5.0)
+    np.testing.assert_allclose(heads, [[19.5, 5.0], [54.5, 12.0]])
+    single = np.zeros((60, 30), bool)
+    single[10:60, :] = True
+    single[0:10, 10:20] = True
+    assert len(top_profile_heads(single, 7.0, 3.0)) == 1
+
+
+# ---------------------------------------------------------------- behaviour on scenes
+
+
+def test_uturn_behind_keeps_the_id_and_baseline_does_not():
+    scene, (uturner,) = S.uturn_behind()[0], tuple(S.uturn_behind()[1])
+    pbm, _ = run(PBMTracker(), scene)
+    base, _ = run(BaselineTracker(), scene)
+    assert set(pbm[uturner]) == {pbm[uturner][0]}  # one id before and after the u-turn
+    assert len(pbm[uturner]) >= 55  # found before and after the occlusion
+    assert len(set(pbm[2])) == 1
+    assert len(set(base[uturner])) > 1  # the constant-velocity baseline fragments
+
+
+def test_uturn_without_foreground_uses_detection_boxes():
+    scene, _ = S.uturn_behind()
+    pbm, _ = run(PBMTracker(), scene, use_fg=False)
+    assert len(set(pbm[1])) == 1 and len(set(pbm[2])) == 1
+
+
+def test_two_people_in_one_blob_are_kept_by_their_heads():
+    scene = S.merge_pair()
+    merged = range(25, 56)
+
+    def hidden(k: int) -> set[int]:
+        return {1, 2} if k in merged else set()  # no detections at all while merged
+
+    lab = scene.render(40)[1]
+    n, _ = cv2.connectedComponents((lab != 0).astype(np.uint8))
+    assert n == 2  # background + one blob holding both people
+    pbm, _ = run(PBMTracker(), scene, hidden)
+    base, _ = run(BaselineTracker(), scene, hidden)
+    for gid in (1, 2):
+        assert len(set(pbm[gid])) == 1
+        assert len(pbm[gid]) == scene.length  # located in every frame, merged ones included
+    assert pbm[1][0] != pbm[2][0]
+    assert len(set(base[1])) > 1 or len(base[1]) < scene.length - 20
+
+
+def test_a_hidden_part_is_frozen_while_hidden():
+    scene, (h0, h1) = S.legs_behind_wall()
+    tracker = PBMTracker()
+    snap = {}
+    legs_flag = []
+    for k in range(scene.length):
+        img, lab = scene.render(k)
+        out = tracker.update(img, scene.detections(k, lab, 0.0), lab)
+        t = tracker.targets[0]
+        if k in (h0 + 2, h1 - 2):
+            snap[k] = (t.parts.hsv[0].copy(), t.parts.xyz[0].copy(), t.parts.area[0].copy())
+        if h0 + 2 <= k <= h1 - 2:
+            legs_flag.append(out[0].extra["occluded_parts"].copy())
+    assert out[0].extra["parts"].shape == (5, 4)
+    a, b = snap[h0 + 2], snap[h1 - 2]
+    for arr_a, arr_b in zip(a, b):
+        np.testing.assert_array_equal(arr_a[3:], arr_b[3:])  # both legs frozen
+    assert np.abs(a[0][:3] - b[0][:3]).sum() > 0  # head and torso kept updating
+    legs_flag = np.array(legs_flag)
+    assert legs_flag[:, 3:].all() and not legs_flag[:, :3].any()
+
+
+def test_deterministic():
+    scene, _ = S.uturn_behind(40)
+    outs = []
+    for _ in range(2):
+        _, o = run(PBMTracker(), scene)
+        outs.append([(t.id, t.state, tuple(np.round(t.box, 9))) for f in o for t in f])
+    assert outs[0] == outs[1]
+
+
+def test_tentative_before_confirmation():
+    scene, _ = S.uturn_behind(12)
+    tracker = PBMTracker(min_hits=3)
+    states = []
+    for k in range(8):
+        img, lab = scene.render(k)
+        if k < 4:  # nobody visible at first: the tracker starts after the sequence start
+            img, lab = scene.background(), np.zeros_like(lab)
+            det = Detections.empty()
+        else:
+            det = scene.detections(k, lab)
+        states.append({t.state for t in tracker.update(img, det, lab)})
+    assert states[4] == {TrackState.TENTATIVE} and states[6] == {TrackState.CONFIRMED}
+
+
+def test_synthetic_uturn_behind_beats_baseline():
+    synthetic = pytest.importorskip("harness.datasets.synthetic")
+    from harness.detection_sources import NoisyGroundTruth
+    from harness.run import run_sequence, score
+
+    seq = synthetic.load_scenario("uturn_behind", seed=0, length=150)
+    out = run_sequence({"pbm": PBMTracker(), "baseline": BaselineTracker()}, seq,
+                       NoisyGroundTruth(seed=0))
+    s_pbm = score(seq.gt, out["pbm"].table).row()
+    s_base = score(seq.gt, out["baseline"].table).row()
+    assert s_pbm["IDs"] == 0 and s_base["IDs"] + s_base["Frag"] > 0
+    assert s_pbm["IDF1"] > s_base["IDF1"]
