@@ -292,3 +292,33 @@ def test_synthetic_uturn_behind_beats_baseline():
     s_base = score(seq.gt, out["baseline"].table).row()
     assert s_pbm["IDs"] == 0 and s_base["IDs"] + s_base["Frag"] > 0
     assert s_pbm["IDF1"] > s_base["IDF1"]
+
+
+def test_drawing_parts_marks_frozen_parts():
+    from harness.report.draw import draw_tracks
+    from harness.report.parts import draw_parts
+    from trackers.records import Track
+
+    img = np.zeros((100, 100, 3), np.uint8)
+    parts = np.array([[40, 10, 20, 10], [40, 20, 10, 30], [50, 20, 10, 30], [40, 50, 10, 40],
+                      [50, 50, 10, 40]], float)
+    t = Track(3, np.array([40.0, 10, 20, 80]), extra={
+        "parts": parts, "occluded_parts": np.array([0, 0, 0, 1, 1], bool)})
+    out = draw_parts(img.copy(), [t], tint=0.0)
+    assert out[10, 45:56].any() and out[20, 40:60].any()  # solid head and torso edges
+    legs_edge = out[90, 40:61].any(axis=1)  # bottom edge of the frozen legs: dashed
+    assert 0 < legs_edge.sum() < 21
+    via = draw_tracks(img, [t], "parts")
+    assert via.shape == img.shape and via.any()
+
+
+def test_fit_command_writes_models_and_plot(tmp_path):
+    pytest.importorskip("harness.datasets.synthetic")
+    from harness.fit.__main__ import main
+
+    out, png = tmp_path / "m.yaml", tmp_path / "m.png"
+    assert main(["pbm", "--synthetic", "crossing", "--length", "12", "--out", str(out),
+                 "--plot", str(png)]) == 0
+    models = load_feature_models(out)
+    assert "crossing" in models.description and png.stat().st_size > 1000
+    assert out.read_text().startswith("# PBM feature-difference models")
