@@ -117,8 +117,11 @@ class BackgroundModel:
             (``warmup_passes`` times, rate 1/len), "median" feeds their per-pixel median,
             "inpaint" feeds the median with high-spread pixels inpainted
             (``background_estimate``: for people who stay in one place).
-        warmup_passes: times the sample is fed for "samples".
+        warmup_passes: times the sample is fed.
         spread_threshold: grey-level MAD above which a pixel is inpainted ("inpaint").
+        shadow_threshold: MOG2/KNN shadow threshold tau: a pixel darker than the background
+            by a factor in [tau, 1] with the same chromaticity is shadow (OpenCV 0.5); lower
+            values also catch stronger shadows and floor reflections.
     """
 
     def __init__(
@@ -136,6 +139,7 @@ class BackgroundModel:
         warmup: str = "median",
         warmup_passes: int = 1,
         spread_threshold: float = 12.0,
+        shadow_threshold: float = 0.5,
     ) -> None:
         if method not in ("mog2", "knn"):
             raise ValueError(f"method must be 'mog2' or 'knn', got {method!r}")
@@ -167,6 +171,9 @@ class BackgroundModel:
         self.warmup = warmup
         self.warmup_passes = int(warmup_passes)
         self.spread_threshold = float(spread_threshold)
+        if not 0.0 < shadow_threshold < 1.0:
+            raise ValueError(f"shadow_threshold must be in (0, 1), got {shadow_threshold}")
+        self.shadow_threshold = float(shadow_threshold)
         self.reset()
 
     def reset(self) -> None:
@@ -183,6 +190,7 @@ class BackgroundModel:
             )
         if self.background_ratio is not None:
             self._model.setBackgroundRatio(float(self.background_ratio))
+        self._model.setShadowThreshold(self.shadow_threshold)
 
     def warm_up(self, frames: Sequence[np.ndarray]) -> None:
         """Learn the background from ``frames`` ((H, W, 3) uint8 each) before tracking
@@ -198,15 +206,32 @@ class BackgroundModel:
         else:
             bg = background_estimate(frames, inpaint=self.warmup == "inpaint",
                                      spread_threshold=self.spread_threshold)
-            for _ in range(30):
-                self._model.apply(bg, learningRate=0.1)
+            for _ in range(5):
+                self._model.apply(bg, learningRate=0.2)
+            # then the samples with their people replaced by the estimate, so that the model
+            # learns the camera's real pixel noise (30 identical frames would collapse the
+            # variances and make every flicker foreground)
+            rate = 1.0 / max(len(frames), 2)
+            bg16 = bg.astype(np.int16)
+            for _ in range(self.warmup_passes):
+                for f in frames:
+                    moving = (np.abs(f.astype(np.int16) - bg16).sum(axis=2) > 3 * 20)[..., None]
+                    self._model.apply(np.where(moving, bg, f), learningRate=rate)
         log.debug("background warm-up (%s) on %d frames", self.warmup, len(frames))
     def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
         """Warm up from ``warmup_frames`` frames sampled evenly over 1..length (1-based)."""
+        self.warm_up(self.sample_frames(length, frame))
+
+    def sample_frames(self, length: int, frame: Callable[[int], np.ndarray | None]) -> list:
+        """The ``warmup_frames`` frames sampled evenly over 1..length (empty when 0)."""
         if self.warmup_frames <= 0 or length <= 0:
-            return
+            return []
         ks = np.unique(np.linspace(1, length, min(self.warmup_frames, length)).round().astype(int))
-        self.warm_up([frame(int(k)) for k in ks])
+        return [f for f in (frame(int(k)) for k in ks) if f is not None]
+
+    def peek(self, frame: np.ndarray) -> np.ndarray:
+        """(H, W) bool clean foreground of ``frame`` without updating the model."""
+        return self.clean(self._model.apply(frame, learningRate=0.0)) > 0
 
     def raw(self, frame: np.ndarray) -> np.ndarray:
         """Raw model output (H, W) uint8: 255 foreground, 127 shadow, 0 background."""

@@ -180,10 +180,21 @@ class ForegroundDetector(_ForegroundPipeline):
 class SilhouetteDetector(_ForegroundPipeline):
     """Reta 3.1 adapted: greedy multi-scale silhouette-template fitting on the foreground.
 
+    With ``calibrate``, a ground-plane height prior (person height linear in the foot row,
+    ``silhouette.fit_height_model``) is learnt without annotations from isolated
+    single-person-like blobs (aspect within ``calibration_aspect``, filling at least
+    ``calibration_fill`` of their box): first in the warm-up sample, then from every frame,
+    refitted every ``recalibrate_every`` frames. Until enough samples exist, no prior is used.
+
     Args:
         background: the background model.
-        matcher: the ``SilhouetteMatcher`` (template, scales, beta, threshold, min_visible).
+        matcher: the ``SilhouetteMatcher`` (template, scales, alpha, beta, threshold, ...).
         heads: optional head detector to report one head per detection.
+        calibrate: learn the height prior.
+        calibration_aspect: [min, max] width / height of blobs taken as single people.
+        calibration_fill: smallest blob area / box area of such blobs.
+        calibration_min_samples: samples needed before the prior is used.
+        recalibrate_every: frames between refits of the prior (0: warm-up only).
     """
 
     def __init__(
@@ -191,12 +202,64 @@ class SilhouetteDetector(_ForegroundPipeline):
         background: BackgroundModel | None = None,
         matcher: SilhouetteMatcher | None = None,
         heads: HeadDetector | None = None,
+        calibrate: bool = False,
+        calibration_aspect: Sequence[float] = (0.2, 0.6),
+        calibration_fill: float = 0.45,
+        calibration_min_samples: int = 30,
+        recalibrate_every: int = 25,
     ) -> None:
         super().__init__(background)
         self.matcher = matcher if matcher is not None else SilhouetteMatcher()
         self.heads = heads
+        self.calibrate = bool(calibrate)
+        lo, hi = (float(v) for v in calibration_aspect)
+        if not 0 < lo < hi:
+            raise ValueError(f"calibration_aspect must be [min, max] with 0 < min < max, got {calibration_aspect}")
+        self.calibration_aspect = (lo, hi)
+        self.calibration_fill = float(calibration_fill)
+        self.calibration_min_samples = int(calibration_min_samples)
+        self.recalibrate_every = int(recalibrate_every)
+        self.reset()
+
+    def reset(self) -> None:
+        super().reset()
+        self._feet: list[float] = []
+        self._heights: list[float] = []
+        self._frames = 0
+        self.matcher.set_height_model(None)
+
+    def _collect(self, fg: np.ndarray) -> None:
+        lo, hi = self.calibration_aspect
+        for b in blobs_from_mask(fg, min_area=20, perimeter=False):
+            x, y, w, h = b.box
+            if (h >= self.matcher.min_height and lo <= w / h <= hi
+                    and b.area >= self.calibration_fill * w * h and y > 0
+                    and y + h < fg.shape[0]):
+                self._feet.append(y + h)
+                self._heights.append(h)
+
+    def _refit(self) -> None:
+        from trackers.frontend.silhouette import fit_height_model
+
+        model = fit_height_model(np.array(self._feet), np.array(self._heights),
+                                 min_samples=self.calibration_min_samples)
+        self.matcher.set_height_model(model)
+        log.debug("height model %s from %d samples", model, len(self._feet))
+
+    def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
+        frames = self.background.sample_frames(length, frame)
+        self.background.warm_up(frames)
+        if self.calibrate and frames:
+            for f in frames:
+                self._collect(self.background.peek(f))
+            self._refit()
 
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
+        if self.calibrate:
+            self._frames += 1
+            self._collect(fg)
+            if self.recalibrate_every and self._frames % self.recalibrate_every == 0:
+                self._refit()
         boxes, scores = self.matcher.fit(fg)
         if len(boxes) == 0:
             return Detections.empty()

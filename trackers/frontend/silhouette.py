@@ -109,6 +109,14 @@ class SilhouetteMatcher:
         min_visible: smallest fraction of template mass not already occupied.
         max_people: safety bound of fits per region.
         margin: pixels (full resolution) added around each foreground region searched.
+        occupy_level: template values above which a fit's pixels are marked occupied (its
+            silhouette; lower marks a wider region, so arms and bags are not fitted again).
+        height_tolerance: with a height model (``set_height_model``: expected person height
+            as a linear function of the foot row, a ground-plane prior), a fit of height h
+            whose expected height is e is allowed only when 1/tol <= h / e <= tol.
+        max_overlap: a fit whose box lies more than this fraction inside (the smaller of it
+            and) an earlier fit's box in the same region is a part of that person: its pixels
+            are marked occupied but it is not reported (1 keeps every fit).
     """
 
     def __init__(
@@ -124,6 +132,9 @@ class SilhouetteMatcher:
         min_visible: float = 0.3,
         max_people: int = 20,
         margin: int = 8,
+        occupy_level: float = 0.2,
+        height_tolerance: float = 1.4,
+        max_overlap: float = 0.5,
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
@@ -136,6 +147,16 @@ class SilhouetteMatcher:
         self.n_scales, self.downscale = int(n_scales), int(downscale)
         self.alpha, self.beta, self.threshold = float(alpha), float(beta), float(threshold)
         self.min_visible, self.max_people, self.margin = float(min_visible), int(max_people), int(margin)
+        if not 0.0 <= occupy_level < 1.0:
+            raise ValueError(f"occupy_level must be in [0, 1), got {occupy_level}")
+        self.occupy_level = float(occupy_level)
+        if height_tolerance < 1.0:
+            raise ValueError(f"height_tolerance must be >= 1, got {height_tolerance}")
+        self.height_tolerance = float(height_tolerance)
+        self.height_model: tuple[float, float] | None = None
+        if not 0.0 < max_overlap <= 1.0:
+            raise ValueError(f"max_overlap must be in (0, 1], got {max_overlap}")
+        self.max_overlap = float(max_overlap)
         heights = np.geomspace(min_height, max_height, n_scales) / downscale
         aspect = self.template.shape[1] / self.template.shape[0]
         self._kernels = []
@@ -144,6 +165,10 @@ class SilhouetteMatcher:
             tw = max(round(h * aspect), 2)
             t = cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA)
             self._kernels.append((t, (1.0 - t), float(t.sum())))
+
+    def set_height_model(self, model: tuple[float, float] | None) -> None:
+        """Expected person height = a * foot_row + b (full-resolution pixels); None: no prior."""
+        self.height_model = None if model is None else (float(model[0]), float(model[1]))
 
     def fit(self, foreground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Greedy fits over a (H, W) foreground mask (nonzero = foreground).
@@ -172,7 +197,7 @@ class SilhouetteMatcher:
             x1, y1 = min(x + w + m + wmax // 2, small.shape[1]), min(y + h + m + hmax // 2, small.shape[0])
             # only this component's pixels in the crop (others are found from their own)
             crop = (lab[y0:y1, x0:x1] == i).astype(np.float32)
-            b, s = self._greedy(crop, region_height=h)
+            b, s = self._greedy(crop, region_height=h, row0=y0)
             for bx, sc in zip(b, s):
                 boxes.append([(bx[0] + x0) * d, (bx[1] + y0) * d, bx[2] * d, bx[3] * d])
                 scores.append(sc)
@@ -180,15 +205,37 @@ class SilhouetteMatcher:
             return np.zeros((0, 4)), np.zeros(0)
         return np.asarray(boxes, dtype=np.float64), np.asarray(scores, dtype=np.float64)
 
-    def _greedy(self, vacant: np.ndarray, region_height: int) -> tuple[list, list]:
+    @staticmethod
+    def _overlap(box: list, boxes: list) -> float:
+        """Largest |box & b| / min(|box|, |b|) over ``boxes``."""
+        from trackers.geometry import intersection_matrix
+
+        b = np.asarray(boxes, dtype=np.float64)
+        inter = intersection_matrix(np.asarray([box], dtype=np.float64), b)[0]
+        smaller = np.minimum(box[2] * box[3], b[:, 2] * b[:, 3])
+        return float((inter / np.maximum(smaller, 1e-9)).max())
+
+    def _allowed_rows(self, th: int, rows: int, row0: int) -> np.ndarray | None:
+        """(rows, 1) bool: centre rows where a template th rows high fits the height model."""
+        if self.height_model is None:
+            return None
+        a, b = self.height_model
+        d = self.downscale
+        foot = (np.arange(rows) + row0 + th - th // 2) * d  # full-resolution foot row
+        expected = (a * foot + b) / d
+        ratio = th / np.maximum(expected, 1e-6)
+        ok = (expected > 0) & (ratio >= 1 / self.height_tolerance) & (ratio <= self.height_tolerance)
+        return ok[:, None]
+
+    def _greedy(self, vacant: np.ndarray, region_height: int, row0: int = 0) -> tuple[list, list]:
         occupied = np.zeros_like(vacant)
+        allowed = [self._allowed_rows(k[0].shape[0], vacant.shape[0], row0) for k in self._kernels]
         boxes, scores = [], []
-        kernels = [k for k in self._kernels if k[0].shape[0] <= 1.5 * region_height + 4]
-        if not kernels:
-            kernels = self._kernels[:1]
+        kernels = [(k, al) for k, al in zip(self._kernels, allowed)
+                   if k[0].shape[0] <= 1.5 * region_height + 4 and (al is None or al.any())]
         for _ in range(self.max_people):
             best = (0.0, None)
-            for t, inv, tsum in kernels:
+            for (t, inv, tsum), rows_ok in kernels:
                 tv = cv2.filter2D(vacant, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
                 iv = cv2.filter2D(vacant, cv2.CV_32F, inv, borderType=cv2.BORDER_CONSTANT)
                 visible = tsum - (cv2.filter2D(occupied, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
@@ -197,6 +244,8 @@ class SilhouetteMatcher:
                 explained = tv - self.alpha * (visible - tv) - self.beta * iv
                 ok = (explained >= self.threshold * np.maximum(visible, 1e-6)) & (
                     visible >= self.min_visible * tsum)
+                if rows_ok is not None:
+                    ok &= rows_ok
                 if not ok.any():
                     continue
                 e = np.where(ok, explained, -np.inf)
@@ -210,12 +259,40 @@ class SilhouetteMatcher:
             th, tw = t.shape
             # filter2D anchors the kernel at its centre (th // 2, tw // 2)
             top, left = r - th // 2, c - tw // 2
-            boxes.append([left, top, tw, th])
-            scores.append(score)
+            box = [left, top, tw, th]
+            if not boxes or self._overlap(box, boxes) <= self.max_overlap:
+                boxes.append(box)
+                scores.append(score)
+            # a part of a person already found is not reported, but its pixels are used up
             rr0, cc0 = max(top, 0), max(left, 0)
             rr1, cc1 = min(top + th, vacant.shape[0]), min(left + tw, vacant.shape[1])
-            sil = t[rr0 - top : rr1 - top, cc0 - left : cc1 - left] > 0.5
+            sil = t[rr0 - top : rr1 - top, cc0 - left : cc1 - left] > self.occupy_level
             region = vacant[rr0:rr1, cc0:cc1]
             occupied[rr0:rr1, cc0:cc1] = np.maximum(occupied[rr0:rr1, cc0:cc1], sil & (region > 0))
             region[sil] = 0.0
         return boxes, scores
+
+
+def fit_height_model(
+    feet: np.ndarray, heights: np.ndarray, min_samples: int = 20, min_span: float = 30.0,
+) -> tuple[float, float] | None:
+    """Robust line height = a * foot_row + b through single-person samples (pixels).
+
+    Least squares, then twice more without samples further than 2.5 MADs from the line.
+    Returns None with fewer than ``min_samples`` samples, a foot-row span under
+    ``min_span`` pixels, or a negative slope (a camera above the ground sees nearer people
+    lower in the image and larger).
+    """
+    y = np.asarray(feet, dtype=np.float64)
+    h = np.asarray(heights, dtype=np.float64)
+    if len(y) < min_samples or np.ptp(y) < min_span:
+        return None
+    keep = np.ones(len(y), dtype=bool)
+    for _ in range(3):
+        a, b = np.polyfit(y[keep], h[keep], 1)
+        res = np.abs(h - (a * y + b))
+        mad = np.median(res[keep]) + 1e-6
+        keep = res <= 2.5 * 1.4826 * mad
+        if keep.sum() < min_samples // 2:
+            return None
+    return (float(a), float(b)) if a >= 0 else None
