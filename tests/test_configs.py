@@ -175,7 +175,12 @@ def test_evaluation_config(name):
 
 @pytest.mark.parametrize("name", _configs("experiment"))
 def test_experiment_config_instantiates(name, fixtures):
-    cfg = _compose("config", [f"+experiment={name}"])
+    try:
+        cfg = _compose("config", [f"+experiment={name}"])
+    except MissingConfigException as err:  # e.g. tune_*: Optuna sweeper (extra `tune`) absent
+        if not str(err.missing_cfg_file).startswith("hydra/"):
+            raise
+        pytest.skip(f"experiment {name} needs {err.missing_cfg_file}: plugin not installed")
     for group in ("tracker", "detector"):
         node = cfg[group]
         nodes = [node] if "_target_" in node else list(node.values())
