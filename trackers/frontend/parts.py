@@ -230,6 +230,35 @@ class PartFeatureExtractor:
         self._frame = frame
         self._fg = None if foreground is None else np.asarray(foreground, dtype=bool)
 
+    def _grid(self, b: np.ndarray):
+        H, W = self._frame.shape[:2]
+        ys = b[:, 1, None] + self._fr[None] * b[:, 3, None]  # (N, R) sample rows
+        xs = b[:, 0, None] + self._fc[None] * b[:, 2, None]  # (N, C) sample columns
+        yi = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
+        xi = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+        inside = ((ys >= 0) & (ys < H))[:, :, None] & ((xs >= 0) & (xs < W))[:, None, :]
+        if self._fg is None:
+            fg = inside
+        else:
+            fg = self._fg[yi[:, :, None], xi[:, None, :]] & inside
+        return ys, xs, yi, xi, fg
+
+    def centroids(self, boxes: np.ndarray) -> np.ndarray:
+        """(N, 2) foreground centroid (xc, yc) of each xywh box from its sample grid (the
+        box centre where a box has no foreground)."""
+        if self._frame is None:
+            raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
+        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+        if len(b) == 0:
+            return np.zeros((0, 2))
+        ys, xs, _, _, fg = self._grid(b)
+        n = fg.sum(axis=(1, 2)).astype(np.float64)
+        cx = (fg.sum(axis=1) * xs).sum(1)
+        cy = (fg.sum(axis=2) * ys).sum(1)
+        centre = b[:, :2] + 0.5 * b[:, 2:]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(n[:, None] > 0, np.column_stack([cx, cy]) / n[:, None], centre)
+
     def extract(
         self,
         boxes: np.ndarray,
@@ -251,17 +280,8 @@ class PartFeatureExtractor:
         parts = part_boxes(b, alpha, beta)
         if n == 0:
             return PartFeatures.concatenate([], self.bins)
-        H, W = self._frame.shape[:2]
-        ys = b[:, 1, None] + self._fr[None] * b[:, 3, None]  # (N, R) sample rows
-        xs = b[:, 0, None] + self._fc[None] * b[:, 2, None]  # (N, C) sample columns
-        yi = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
-        xi = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
-        inside = ((ys >= 0) & (ys < H))[:, :, None] & ((xs >= 0) & (xs < W))[:, None, :]
+        ys, xs, yi, xi, fg = self._grid(b)
         pix = self._frame[yi[:, :, None], xi[:, None, :]]  # (N, R, C, 3)
-        if self._fg is None:
-            fg = inside
-        else:
-            fg = self._fg[yi[:, :, None], xi[:, None, :]] & inside
         flat = np.ascontiguousarray(pix.reshape(n * R, C, 3))
         hsv = _joint_index(cv2.cvtColor(flat, cv2.COLOR_BGR2HSV), self.bins, HSV_RANGES).reshape(n, R, C)
         xyz = _joint_index(cv2.cvtColor(flat, cv2.COLOR_BGR2XYZ), self.bins, XYZ_RANGES).reshape(n, R, C)

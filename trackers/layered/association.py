@@ -51,6 +51,39 @@ def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndar
     return np.clip(d, 0.0, None)
 
 
+def paired_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
+                       ) -> np.ndarray:
+    """Eq. 11 for M aligned pairs (model k against candidate k): (M, 6, 5).
+
+    Same definitions as ``feature_differences``, without the all-pairs product (the
+    head-anchored search scores each target against its own carved boxes only).
+    """
+    M = len(model)
+    d = np.empty((M, len(FEATURES), N_PARTS))
+    d[:, 0] = np.abs(model.area - cand.area)
+    d[:, 1] = np.abs(model.perimeter - cand.perimeter)
+    d[:, 2] = 1.0 - np.sqrt(model.hsv * cand.hsv).sum(-1)  # 1 - rho (Bhattacharyya)
+    d[:, 3] = 1.0 - np.sqrt(model.xyz * cand.xyz).sum(-1)
+    d[:, 4] = np.linalg.norm(cand.centroid - model.centroid, axis=2) / np.maximum(
+        model.height, 1.0)[:, None]
+    a, b = model.parts, cand.parts
+    iw = np.clip(np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2])
+                 - np.maximum(a[..., 0], b[..., 0]), 0, None)
+    ih = np.clip(np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3])
+                 - np.maximum(a[..., 1], b[..., 1]), 0, None)
+    inter = iw * ih
+    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
+    d[:, 5] = 1.0 - np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+    empty = cand.area <= 0
+    d[:, 2] = np.where(empty, 1.0, d[:, 2])
+    d[:, 3] = np.where(empty, 1.0, d[:, 3])
+    if misses is not None:
+        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[:, None]
+        d[:, 4] *= g
+        d[:, 5] *= g
+    return np.clip(d, 0.0, None)
+
+
 def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray,
                    spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 12-13.

@@ -63,6 +63,7 @@ class Target:
         self.dof = np.asarray(dof, dtype=np.float64).copy()
         self._alphas: deque[float] = deque([alpha], maxlen=ratio_window)
         self._betas: deque[float] = deque([beta], maxlen=ratio_window)
+        self._alpha, self._beta = float(alpha), float(beta)
         self._history: deque[np.ndarray] = deque([self.dof.copy()], maxlen=occluded_window)
         self.parts = parts.copy()
         xc, yc, w, h = self.dof[2], self.dof[3], self.dof[4], self.dof[5]
@@ -80,11 +81,13 @@ class Target:
 
     @property
     def alpha(self) -> float:
-        return float(np.mean(self._alphas))
+        """Running average of eq. 1 over ``ratio_window`` frames."""
+        return self._alpha
 
     @property
     def beta(self) -> float:
-        return float(np.mean(self._betas))
+        """Running average of eq. 2 over ``ratio_window`` frames."""
+        return self._beta
 
     @property
     def box(self) -> np.ndarray:
@@ -97,8 +100,8 @@ class Target:
         return np.array([self.dof[2], self.dof[1], self.dof[4] * 0.5])
 
     def part_rectangles(self) -> np.ndarray:
-        """(5, 4) part boxes of the global model."""
-        return part_boxes(self.box[None], self.alpha, self.beta)[0]
+        """(5, 4) part boxes of the global model (the parts model's rectangles)."""
+        return self.parts.parts[0].copy()
 
     def predict(self) -> np.ndarray:
         """Advance KF1 and KF2 one frame; returns the predicted (w, h) (KF2)."""
@@ -134,6 +137,8 @@ class Target:
                 a, b = centroid_ratios(self.box[None], self.dof[None, 2:4])
                 self._alphas.append(float(a[0]))
                 self._betas.append(float(b[0]))
+                self._alpha = sum(self._alphas) / len(self._alphas)
+                self._beta = sum(self._betas) / len(self._betas)
         xc, yc, w, h = self.dof[2:]
         self.gate.correct(np.array([xc, yc]))
         self.size.correct(w, h)
@@ -147,7 +152,7 @@ class Target:
         P.xyz[0] += eta[:, None] * (cand.xyz[0] - P.xyz[0])
         # geometry follows the global model; centroids of frozen parts move with it
         shift = np.array([xc, yc]) - old_centre
-        new_parts = self.part_rectangles()
+        new_parts = part_boxes(self.box[None], self._alpha, self._beta)[0]
         P.centroid[0] = np.where(matched[:, None], cand.centroid[0], P.centroid[0] + shift)
         P.parts[0] = new_parts
         P.height[0] = h

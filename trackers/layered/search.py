@@ -39,7 +39,8 @@ class Anchor:
         box: (4,) xywh own box (the detection, the blob, or the blob's slice for this head).
         region: (4,) xywh candidate region the occlusion test compares (detection or blob).
         head: (3,) head top-centre x, top y, head width (pixels).
-        centroid: (2,) foreground centroid of ``box`` (its centre without foreground).
+        centroid: (2,) foreground centroid of ``box`` (its centre without foreground);
+            None until the tracker measures all candidates at once.
         source: "detection" or "blob".
         heads_in_region: number of heads found in the region.
     """
@@ -47,7 +48,7 @@ class Anchor:
     box: np.ndarray
     region: np.ndarray
     head: np.ndarray
-    centroid: np.ndarray
+    centroid: np.ndarray | None
     source: str
     heads_in_region: int = 1
 

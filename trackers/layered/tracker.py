@@ -51,7 +51,12 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import box_slices, iou_matrix
-from trackers.layered.association import ambiguous, feature_differences, layered_scores
+from trackers.layered.association import (
+    ambiguous,
+    feature_differences,
+    layered_scores,
+    paired_differences,
+)
 from trackers.layered.model import Target, dof_from_box, dof_from_head
 from trackers.layered.models import FEATURES, FeatureModels
 from trackers.layered.search import (
@@ -63,7 +68,6 @@ from trackers.layered.search import (
     head_patch,
     match_head_template,
     occlusion_kind,
-    region_centroid,
     search_boxes,
     split_blob_box,
     top_profile_heads,
@@ -268,7 +272,7 @@ class PBMTracker:
                 head = np.array([hx + 0.5 * hw, hy, hw])
             else:
                 head = head_from_band(fg, box)
-            anchors.append(Anchor(box.copy(), box.copy(), head, region_centroid(fg, box), "detection"))
+            anchors.append(Anchor(box.copy(), box.copy(), head, None, "detection"))
         if fg is None:
             return anchors
         if len(det_boxes):
@@ -306,7 +310,7 @@ class PBMTracker:
                        else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
                 own = self._blob_box_as_detection(own)
                 anchors.append(Anchor(own, bbox.copy(), np.array([hx[k], hy[k], head_w]),
-                                      region_centroid(fg, own), "blob", n))
+                                      None, "blob", n))
         return anchors
 
     def _calibrate(self, blob_box: np.ndarray, det_boxes: np.ndarray) -> None:
@@ -335,26 +339,47 @@ class PBMTracker:
         return np.array([c[0] - 0.5 * wh[0], box[1], wh[0], wh[1]])
 
     # ------------------------------------------------------------------ hypotheses
-    def _occluded_hypothesis(self, t: Target, a: Anchor, kind: int, fg: np.ndarray | None,
-                             pred_wh: np.ndarray):
-        """Head-anchored search (larger) or alignment (smaller) of PBM 3.1.
+    def _occluded_hypotheses(self, pairs: list[tuple[int, int, int]], anchors: list[Anchor],
+                             fg: np.ndarray | None, pred_wh: np.ndarray) -> list:
+        """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for every
+        (target, candidate, kind) pair of the frame, with one feature extraction for all.
 
-        Returns (score, part scores, features (1 box), dof) or None when dismissed.
+        Returns, per pair, (score, part scores, features (1 box), dof) or None (dismissed).
         """
-        if kind > 0:
-            boxes = search_boxes(a.head, pred_wh, t.alpha, self.search_step, self.search_range)
-        else:
-            box = aligned_box(a.head, pred_wh, t.alpha)
-            if head_fill(fg, box) < self.head_min_fill:
-                return None
-            boxes = box[None]
-        feats = self._extractor.extract(boxes, t.alpha, t.beta)
-        d = feature_differences(t.parts, feats, np.array([t.misses]))
+        targets = self.targets
+        boxes, alphas, betas, owner = [], [], [], []
+        for q, (ti, n, kind) in enumerate(pairs):
+            t, a = targets[ti], anchors[n]
+            if kind > 0:
+                b = search_boxes(a.head, pred_wh[ti], t.alpha, self.search_step, self.search_range)
+            else:
+                b = aligned_box(a.head, pred_wh[ti], t.alpha)[None]
+                if head_fill(fg, b[0]) < self.head_min_fill:
+                    continue
+            boxes.append(b)
+            alphas.append(np.full(len(b), t.alpha))
+            betas.append(np.full(len(b), t.beta))
+            owner.append(np.full(len(b), q))
+        out: list = [None] * len(pairs)
+        if not boxes:
+            return out
+        B = np.concatenate(boxes)
+        own = np.concatenate(owner)
+        feats = self._extractor.extract(B, np.concatenate(alphas), np.concatenate(betas))
+        tis = np.array([pairs[q][0] for q in own])
+        model = PartFeatures.concatenate([targets[i].parts for i in range(len(targets))],
+                                         self._extractor.bins).take(tis)
+        misses = np.array([targets[i].misses for i in tis])
+        d = paired_differences(model, feats, misses)
         pj, p = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
-        k = int(np.argmax(p[0]))
-        w, h = boxes[k, 2], boxes[k, 3]
-        dof = dof_from_head(a.head, w, h, t.alpha, t.beta)
-        return float(p[0, k]), pj[0, k], feats.take(k), dof
+        for q in np.unique(own):
+            idx = np.nonzero(own == q)[0]
+            k = int(idx[np.argmax(p[idx])])
+            ti, n, _ = pairs[q]
+            t = targets[ti]
+            dof = dof_from_head(anchors[n].head, B[k, 2], B[k, 3], t.alpha, t.beta)
+            out[q] = (float(p[k]), pj[k], feats.take(k), dof)
+        return out
 
     # ------------------------------------------------------------------ pruning
     def _prune(self, t: Target, cands: list[int], anchors: list[Anchor], gray: np.ndarray) -> int:
@@ -403,13 +428,15 @@ class PBMTracker:
             detections = Detections.empty()
         self._frame += 1
         H, W = frame.shape[:2]
-        anchors = self._anchors(fg, detections)
         self._extractor.start(frame, fg)
+        anchors = self._anchors(fg, detections)
         gray = None
         n_a = len(anchors)
         if n_a:
             boxes = np.array([a.box for a in anchors])
-            cents = np.array([a.centroid for a in anchors])
+            cents = self._extractor.centroids(boxes)  # foreground centroids (PBM 2.1)
+            for a, c in zip(anchors, cents):
+                a.centroid = c
             al, be = centroid_ratios(boxes, cents)
             feats = self._extractor.extract(boxes, al, be)
         else:
@@ -429,6 +456,7 @@ class PBMTracker:
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
             inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
+            pairs: list[tuple[int, int, int]] = []
             for ti, n in zip(*np.nonzero(inside)):
                 a = anchors[n]
                 kind = occlusion_kind(a.region[2:], pred_wh[ti], self.occlusion_threshold)
@@ -448,11 +476,11 @@ class PBMTracker:
                 g = gates[ti]
                 if not (g[0] <= hc[0] <= g[0] + g[2] and g[1] <= hc[1] <= g[1] + g[3]):
                     continue
-                res = self._occluded_hypothesis(targets[ti], a, kind, fg, pred_wh[ti])
-                if res is None:
-                    continue
-                S[ti, n] = res[0]
-                hyp[(ti, n)] = (res[1], res[2], res[3], True)
+                pairs.append((int(ti), int(n), kind))
+            for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh)):
+                if res is not None:
+                    S[ti, n] = res[0]
+                    hyp[(ti, n)] = (res[1], res[2], res[3], True)
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             for ti, t in enumerate(targets):
                 row = S[ti]
