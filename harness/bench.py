@@ -152,7 +152,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     table = pd.DataFrame([t.row() for t in timings])
-    detector = str(cfg.detector.get("_target_", "?")).rsplit(".", 1)[-1]
+    node = cfg.detector.get("detector") or cfg.detector  # a FrontendSource wraps a detector
+    detector = str(node.get("_target_", "?")).rsplit(".", 1)[-1]
     print(f"{seq.info.name} ({seq.info.width}x{seq.info.height}), detector {detector}, "
           f"one core, median of {args.repeats} runs")
     print(table.to_string(index=False))
