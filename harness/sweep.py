@@ -378,7 +378,11 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
                 fig, axes = plt.subplots(1, len(trackers), figsize=(4 * len(trackers), 3.4),
                                          squeeze=False)
                 for ax, t in zip(axes[0], trackers):
-                    g = agg if t is None else agg[agg["tracker"] == t]
+                    g = (agg if t is None else agg[agg["tracker"] == t]).copy()
+                    for col in (a, b):  # numeric values in numeric order (10 after 9)
+                        num = pd.to_numeric(g[col], errors="coerce")
+                        if num.notna().all():
+                            g[col] = num
                     grid = g.pivot_table(index=a, columns=b, values=m, aggfunc="mean",
                                          sort=True)
                     im = ax.imshow(grid.to_numpy(dtype=float), cmap="viridis", aspect="auto")
@@ -386,7 +390,7 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
                     ax.set_yticks(range(grid.shape[0]), [str(v) for v in grid.index])
                     ax.set_xlabel(b)
                     ax.set_ylabel(a)
-                    ax.set_title(f"{t or ''} {m}".strip())
+                    ax.set_title(f"{t or ''} {m} (mean over the rest)".strip(), fontsize=9)
                     for (r, c), v in np.ndenumerate(grid.to_numpy(dtype=float)):
                         if np.isfinite(v):
                             ax.text(c, r, f"{v:.3g}", ha="center", va="center", fontsize=7,
