@@ -70,8 +70,8 @@ def person_masks(sequences, step: int = 5, min_visibility: float = 0.95, min_hei
                     continue
                 if seq.gt.occluded is not None and seq.gt.occluded[r]:
                     continue
-                r0, c0 = int(round(y)), int(round(x))
-                r1, c1 = int(round(y + h)), int(round(x + w))
+                r0, c0 = round(y), round(x)
+                r1, c1 = round(y + h), round(x + w)
                 if r0 < 0 or c0 < 0 or r1 > H or c1 > W:  # cut by the image border
                     continue
                 crop = (labels[r0:r1, c0:c1] == table.ids[r]) if labels is not None else fg[r0:r1, c0:c1]

@@ -231,7 +231,7 @@ class SilhouetteDetector(_ForegroundPipeline):
     def _collect(self, fg: np.ndarray) -> None:
         lo, hi = self.calibration_aspect
         for b in blobs_from_mask(fg, min_area=20, perimeter=False):
-            x, y, w, h = b.box
+            _x, y, w, h = b.box
             if (h >= self.matcher.min_height and lo <= w / h <= hi
                     and b.area >= self.calibration_fill * w * h and y > 0
                     and y + h < fg.shape[0]):
@@ -276,9 +276,11 @@ class HogDetector(_ForegroundPipeline):
         full_frame: ignore the foreground and scan the whole frame.
         min_blob_area: smallest foreground blob that gets a crop, pixels.
         margin: crop margin around a blob as a fraction of its height (plus 8 pixels).
-        target_height: blobs are upscaled so that their height reaches this many pixels
-            (HOG's 64x128 window sees a ~96-pixel person), at most ``max_upscale``.
-        max_upscale: largest upscaling factor.
+        target_height: crops are resized so that their blob is this many pixels high
+            (HOG's 64x128 window holds a ~96-pixel person; the pyramid then searches larger
+            sizes), by a factor in [``min_scale``, ``max_upscale``].
+        max_upscale: largest resize factor (small people).
+        min_scale: smallest resize factor (large people).
         hit_threshold: SVM decision threshold (``detectMultiScale`` hitThreshold).
         win_stride: window stride in pixels of the (upscaled) crop.
         scale: pyramid scale step.
@@ -294,8 +296,9 @@ class HogDetector(_ForegroundPipeline):
         full_frame: bool = False,
         min_blob_area: int = 60,
         margin: float = 0.25,
-        target_height: float = 128.0,
+        target_height: float = 100.0,
         max_upscale: float = 4.0,
+        min_scale: float = 0.25,
         hit_threshold: float = 0.0,
         win_stride: int = 8,
         scale: float = 1.05,
@@ -311,6 +314,9 @@ class HogDetector(_ForegroundPipeline):
         self.full_frame = bool(full_frame)
         self.min_blob_area, self.margin = int(min_blob_area), float(margin)
         self.target_height, self.max_upscale = float(target_height), float(max_upscale)
+        if not 0 < min_scale <= 1:
+            raise ValueError(f"min_scale must be in (0, 1], got {min_scale}")
+        self.min_scale = float(min_scale)
         self.hit_threshold, self.win_stride = float(hit_threshold), int(win_stride)
         self.scale, self.nms_iou = float(scale), float(nms_iou)
         self.box_scale = np.asarray(box_scale, dtype=np.float64).reshape(2)
@@ -354,7 +360,7 @@ class HogDetector(_ForegroundPipeline):
                 mg = self.margin * h + 8
                 x0, y0 = int(max(x - mg, 0)), int(max(y - mg, 0))
                 x1, y1 = int(min(x + w + mg, W)), int(min(y + h + mg, H))
-                up = float(np.clip(self.target_height / max(h, 1.0), 1.0, self.max_upscale))
+                up = float(np.clip(self.target_height / max(h, 1.0), self.min_scale, self.max_upscale))
                 regions.append((x0, y0, x1, y1, up))
         boxes, scores = [], []
         for x0, y0, x1, y1, up in regions:

@@ -98,11 +98,17 @@ def part_boxes(
     xs = x + a * w  # split column = centroid column xc
     ys = y + hh + be * (h - hh)  # split row = centroid row yc
     out = np.empty((n, N_PARTS, 4))
-    out[:, 0] = np.column_stack([x, y, w, hh])
-    out[:, 1] = np.column_stack([x, y + hh, xs - x, ys - y - hh])
-    out[:, 2] = np.column_stack([xs, y + hh, x + w - xs, ys - y - hh])
-    out[:, 3] = np.column_stack([x, ys, xs - x, y + h - ys])
-    out[:, 4] = np.column_stack([xs, ys, x + w - xs, y + h - ys])
+    out[:, :, 0] = x[:, None]
+    out[:, [2, 4], 0] = xs[:, None]
+    out[:, 0, 1] = y
+    out[:, 1:3, 1] = (y + hh)[:, None]
+    out[:, 3:, 1] = ys[:, None]
+    out[:, 0, 2] = w
+    out[:, [1, 3], 2] = (xs - x)[:, None]
+    out[:, [2, 4], 2] = (x + w - xs)[:, None]
+    out[:, 0, 3] = hh
+    out[:, 1:3, 3] = (ys - y - hh)[:, None]
+    out[:, 3:, 3] = (y + h - ys)[:, None]
     return out
 
 

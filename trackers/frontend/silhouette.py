@@ -114,9 +114,11 @@ class SilhouetteMatcher:
         height_tolerance: with a height model (``set_height_model``: expected person height
             as a linear function of the foot row, a ground-plane prior), a fit of height h
             whose expected height is e is allowed only when 1/tol <= h / e <= tol.
-        max_overlap: a fit whose box lies more than this fraction inside (the smaller of it
-            and) an earlier fit's box in the same region is a part of that person: its pixels
-            are marked occupied but it is not reported (1 keeps every fit).
+        max_overlap: a fit whose box lies more than this fraction inside an earlier fit's box
+            in the same region, and is shorter than ``part_height`` times it, is a part of
+            that person (an arm, a bag, a hollow in the foreground): its pixels are marked
+            occupied but it is not reported (1 keeps every fit).
+        part_height: see ``max_overlap``.
     """
 
     def __init__(
@@ -135,6 +137,7 @@ class SilhouetteMatcher:
         occupy_level: float = 0.2,
         height_tolerance: float = 1.4,
         max_overlap: float = 0.5,
+        part_height: float = 0.8,
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
@@ -157,6 +160,7 @@ class SilhouetteMatcher:
         if not 0.0 < max_overlap <= 1.0:
             raise ValueError(f"max_overlap must be in (0, 1], got {max_overlap}")
         self.max_overlap = float(max_overlap)
+        self.part_height = float(part_height)
         heights = np.geomspace(min_height, max_height, n_scales) / downscale
         aspect = self.template.shape[1] / self.template.shape[0]
         self._kernels = []
@@ -205,15 +209,15 @@ class SilhouetteMatcher:
             return np.zeros((0, 4)), np.zeros(0)
         return np.asarray(boxes, dtype=np.float64), np.asarray(scores, dtype=np.float64)
 
-    @staticmethod
-    def _overlap(box: list, boxes: list) -> float:
-        """Largest |box & b| / min(|box|, |b|) over ``boxes``."""
+    def _is_part(self, box: list, boxes: list) -> bool:
+        """Whether ``box`` lies more than ``max_overlap`` inside an earlier, taller fit
+        (its height under ``part_height`` times that fit's)."""
         from trackers.geometry import intersection_matrix
 
         b = np.asarray(boxes, dtype=np.float64)
         inter = intersection_matrix(np.asarray([box], dtype=np.float64), b)[0]
-        smaller = np.minimum(box[2] * box[3], b[:, 2] * b[:, 3])
-        return float((inter / np.maximum(smaller, 1e-9)).max())
+        inside = inter / max(box[2] * box[3], 1e-9)
+        return bool(((inside > self.max_overlap) & (box[3] < self.part_height * b[:, 3])).any())
 
     def _allowed_rows(self, th: int, rows: int, row0: int) -> np.ndarray | None:
         """(rows, 1) bool: centre rows where a template th rows high fits the height model."""
@@ -260,7 +264,7 @@ class SilhouetteMatcher:
             # filter2D anchors the kernel at its centre (th // 2, tw // 2)
             top, left = r - th // 2, c - tw // 2
             box = [left, top, tw, th]
-            if not boxes or self._overlap(box, boxes) <= self.max_overlap:
+            if not boxes or not self._is_part(box, boxes):
                 boxes.append(box)
                 scores.append(score)
             # a part of a person already found is not reported, but its pixels are used up

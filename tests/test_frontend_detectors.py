@@ -1,0 +1,173 @@
+"""Person detectors on frames with known people: foreground blobs, silhouette, HOG."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from trackers.frontend.background import BackgroundModel
+from trackers.frontend.detectors import (
+    ForegroundDetector,
+    HogDetector,
+    SilhouetteDetector,
+    nms,
+)
+from trackers.frontend.heads import HeadDetector
+from trackers.frontend.silhouette import (
+    SilhouetteMatcher,
+    analytic_template,
+    fit_height_model,
+    fit_template,
+    load_template,
+)
+from trackers.geometry import iou_matrix
+
+
+def _person_mask(shape, box):
+    """Paint the shipped template (thresholded) into a (H, W) mask at xywh ``box``."""
+    m = np.zeros(shape, dtype=np.uint8)
+    x, y, w, h = box
+    m[y : y + h, x : x + w] = cv2.resize(load_template(), (w, h)) > 0.5
+    return m
+
+
+def test_silhouette_finds_one_person_at_its_place():
+    box = (50, 100, 34, 84)
+    boxes, scores = SilhouetteMatcher(min_height=40, max_height=120, n_scales=10,
+                                      downscale=1).fit(_person_mask((288, 384), box))
+    assert len(boxes) == 1
+    assert iou_matrix(boxes, np.array([box]))[0, 0] > 0.8 and scores[0] > 0.5
+
+
+def test_silhouette_separates_two_touching_people():
+    a, b = (100, 60, 34, 84), (116, 66, 31, 78)  # side by side, masks touching
+    mask = _person_mask((240, 320), a) | _person_mask((240, 320), b)
+    n, _ = cv2.connectedComponents(mask)
+    assert n - 1 == 1  # one blob
+    boxes, _ = SilhouetteMatcher(min_height=40, max_height=120, n_scales=10, downscale=1).fit(mask)
+    assert len(boxes) == 2
+    iou = iou_matrix(np.array([a, b]), boxes)
+    assert (iou.max(axis=1) > 0.6).all()
+
+
+def test_silhouette_ignores_specks_and_empty_masks():
+    m = SilhouetteMatcher(min_height=40, max_height=120)
+    mask = np.zeros((200, 200), dtype=np.uint8)
+    assert len(m.fit(mask)[0]) == 0
+    mask[10:13, 10:13] = 1
+    assert len(m.fit(mask)[0]) == 0
+
+
+def test_height_prior_restricts_scales():
+    m = SilhouetteMatcher(min_height=30, max_height=120, n_scales=10, downscale=1)
+    mask = _person_mask((288, 384), (50, 100, 34, 84))
+    m.set_height_model((0.0, 40.0))  # people here are 40 pixels high
+    boxes, _ = m.fit(mask)
+    assert len(boxes) and (boxes[:, 3] <= 40 * 1.4 + 1).all()
+
+
+def test_fit_template_and_height_model():
+    masks = [np.ones((40, 16), bool), np.zeros((80, 32), bool), np.ones((80, 32), bool)]
+    t = fit_template(masks, height=20)
+    assert t.shape == (20, 8) and np.allclose(t, 1.0)  # the empty mask is skipped
+    assert 0.0 <= analytic_template().min() and analytic_template().max() <= 1.0
+    rng = np.random.default_rng(0)
+    feet = rng.uniform(50, 280, 100)
+    heights = 0.2 * feet + 20 + rng.normal(0, 1, 100)
+    heights[:10] *= 2.5  # outliers (a person with its reflection)
+    a, b = fit_height_model(feet, heights)
+    assert a == pytest.approx(0.2, abs=0.02) and b == pytest.approx(20, abs=3)
+    assert fit_height_model(feet[:5], heights[:5]) is None
+
+
+def _scene(people: list[tuple[int, int, int, int]], seed: int = 0):
+    """Textured background and a frame with filled person shapes at xywh boxes."""
+    rng = np.random.default_rng(seed)
+    bg = cv2.GaussianBlur(rng.integers(60, 200, (240, 320, 3), dtype=np.uint8), (5, 5), 0)
+    frame = bg.copy()
+    for x, y, w, h in people:
+        m = _person_mask(bg.shape[:2], (x, y, w, h)).astype(bool)
+        frame[m] = (40, 40, 170)
+    return bg, frame
+
+
+def test_foreground_detector_boxes_of_moving_people():
+    people = [(40, 50, 30, 80), (200, 100, 40, 100)]
+    bg, frame = _scene(people)
+    det = ForegroundDetector(BackgroundModel(history=50, open_kernel=3, close_kernel=5))
+    for _ in range(20):
+        det.detect(bg)
+    dets, fg = det.detect(frame)
+    assert fg.dtype == bool and fg.shape == frame.shape[:2]
+    assert len(dets) == 2
+    tight = []  # the painted shapes' own boxes
+    for box in people:
+        ys, xs = np.nonzero(_person_mask(fg.shape, box))
+        tight.append([xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1])
+    assert (iou_matrix(np.array(tight, float), dets.boxes).max(axis=1) > 0.85).all()
+    assert dets.labels is not None and set(np.unique(dets.labels)) == {0, 1, 2}
+
+
+def test_foreground_detector_splits_a_group_at_its_heads():
+    img = np.full((200, 300, 3), (90, 110, 100), dtype=np.uint8)
+    fg = np.zeros((200, 300), dtype=np.uint8)
+    for cx in (120, 160):  # two people side by side: one blob
+        h, top = 140, 40
+        hh = h / 7
+        cv2.rectangle(img, (int(cx - 0.14 * h), int(top + hh)), (int(cx + 0.14 * h), top + h), (150, 40, 40), -1)
+        cv2.rectangle(fg, (int(cx - 0.14 * h), int(top + hh)), (int(cx + 0.14 * h), top + h), 1, -1)
+        cv2.ellipse(img, (cx, int(top + hh / 2)), (int(hh * 0.4), int(hh / 2)), 0, 0, 360, (130, 160, 210), -1)
+        cv2.ellipse(fg, (cx, int(top + hh / 2)), (int(hh * 0.4), int(hh / 2)), 0, 0, 360, 1, -1)
+    det = ForegroundDetector(max_aspect=0.5, heads=HeadDetector(), report_heads=True)
+    dets = det.detect_on(img, fg.astype(bool))
+    assert len(dets) == 2
+    centres = np.sort(dets.boxes[:, 0] + dets.boxes[:, 2] / 2)
+    np.testing.assert_allclose(centres, [120, 160], atol=6)
+    assert np.isfinite(dets.heads).all()
+    whole = ForegroundDetector(max_aspect=0.5, heads=None).detect_on(img, fg.astype(bool))
+    assert len(whole) == 1
+
+
+def test_silhouette_detector_end_to_end():
+    people = [(40, 50, 30, 80), (200, 100, 40, 100)]
+    bg, frame = _scene(people, seed=1)
+    det = SilhouetteDetector(BackgroundModel(history=50),
+                             SilhouetteMatcher(min_height=50, max_height=130, downscale=1))
+    for _ in range(20):
+        det.detect(bg)
+    dets, _ = det.detect(frame)
+    assert len(dets) == 2
+    assert (iou_matrix(np.array(people, float), dets.boxes).max(axis=1) > 0.6).all()
+    assert ((dets.scores >= 0) & (dets.scores <= 1)).all()
+
+
+def test_nms_keeps_best_of_overlapping():
+    boxes = np.array([[0, 0, 10, 10], [1, 1, 10, 10], [50, 50, 10, 10]], float)
+    np.testing.assert_array_equal(nms(boxes, np.array([0.5, 0.9, 0.1]), 0.3), [1, 2])
+
+
+def test_hog_runs_and_returns_frame_coordinates():
+    synthetic = pytest.importorskip("harness.datasets.synthetic")
+    seq = synthetic.load_scenario("crossing", length=10)
+    frame, labels = seq.frame(5), seq.foreground(5)
+    gt = seq.gt.table.boxes[seq.gt.rows_of(5)]
+    big = gt[np.argmax(gt[:, 3])]
+    full = HogDetector(full_frame=True).detect(frame)[0]
+    crop = HogDetector(target_height=128).detect_on(frame, labels > 0)
+    assert len(full) >= 1 and len(crop) >= 1
+    # the person is found in the crop path at the same frame position as in the full frame
+    assert iou_matrix(big[None], crop.boxes).max() > 0.4
+    assert iou_matrix(full.boxes, crop.boxes).max() > 0.6
+    assert ((crop.scores > 0) & (crop.scores < 1)).all()
+    shrunk = HogDetector(target_height=128, box_scale=(0.5, 0.5)).detect_on(frame, labels > 0)
+    np.testing.assert_allclose(shrunk.boxes[0, 2:], crop.boxes[0, 2:] * 0.5)
+
+
+def test_detector_arguments_validated():
+    with pytest.raises(ValueError, match="min_aspect"):
+        ForegroundDetector(min_aspect=0.9, max_aspect=0.5)
+    with pytest.raises(ValueError, match="scale"):
+        HogDetector(scale=1.0)
+    with pytest.raises(ValueError, match="min_height"):
+        SilhouetteMatcher(min_height=100, max_height=50)
