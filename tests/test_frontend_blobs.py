@@ -90,3 +90,19 @@ def test_warm_up_learns_background_behind_standing_person():
     assert mask[:, 20:].mean() < 0.02  # the rest is background
     cold = BackgroundModel(history=100, open_kernel=0, close_kernel=0)
     assert cold.apply(frames[0]).sum() == 0  # without warm-up the first frame is background
+
+
+def test_work_scale_gives_full_size_mask():
+    model = BackgroundModel(history=50, open_kernel=0, close_kernel=0, work_scale=0.5)
+    bg, f = _scene(230, shadow=False)
+    for _ in range(30):
+        model.apply(bg)
+    mask = model.apply(f)
+    assert mask.shape == f.shape[:2]
+    assert mask[12:38, 22:28].all() and mask.sum() < 1.3 * 300
+    with pytest.raises(ValueError, match="work_scale"):
+        BackgroundModel(work_scale=0)
+
+
+def test_empty_mask_has_no_blobs():
+    assert blobs_from_mask(np.zeros((5, 5), bool)) == []

@@ -119,6 +119,9 @@ class BackgroundModel:
             (``background_estimate``: for people who stay in one place).
         warmup_passes: times the sample is fed.
         spread_threshold: grey-level MAD above which a pixel is inpainted ("inpaint").
+        work_scale: run the model on frames resized by this factor in (0, 1] (speed); the
+            mask is resized back to the frame with nearest-neighbour interpolation before
+            the morphology.
         shadow_threshold: MOG2/KNN shadow threshold tau: a pixel darker than the background
             by a factor in [tau, 1] with the same chromaticity is shadow (OpenCV 0.5); lower
             values also catch stronger shadows and floor reflections.
@@ -140,6 +143,7 @@ class BackgroundModel:
         warmup_passes: int = 1,
         spread_threshold: float = 12.0,
         shadow_threshold: float = 0.5,
+        work_scale: float = 1.0,
     ) -> None:
         if method not in ("mog2", "knn"):
             raise ValueError(f"method must be 'mog2' or 'knn', got {method!r}")
@@ -174,6 +178,9 @@ class BackgroundModel:
         if not 0.0 < shadow_threshold < 1.0:
             raise ValueError(f"shadow_threshold must be in (0, 1), got {shadow_threshold}")
         self.shadow_threshold = float(shadow_threshold)
+        if not 0.0 < work_scale <= 1.0:
+            raise ValueError(f"work_scale must be in (0, 1], got {work_scale}")
+        self.work_scale = float(work_scale)
         self.reset()
 
     def reset(self) -> None:
@@ -198,6 +205,7 @@ class BackgroundModel:
         frames = [f for f in frames if f is not None]
         if not frames:
             return
+        frames = [self._small(f) for f in frames]
         if self.warmup == "samples":
             rate = 1.0 / max(len(frames), 2)
             for _ in range(self.warmup_passes):
@@ -229,13 +237,26 @@ class BackgroundModel:
         ks = np.unique(np.linspace(1, length, min(self.warmup_frames, length)).round().astype(int))
         return [f for f in (frame(int(k)) for k in ks) if f is not None]
 
+    def _small(self, frame: np.ndarray) -> np.ndarray:
+        if self.work_scale == 1.0:
+            return frame
+        h, w = frame.shape[:2]
+        size = (max(int(round(w * self.work_scale)), 1), max(int(round(h * self.work_scale)), 1))
+        return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
+
+    def _apply(self, frame: np.ndarray, rate: float) -> np.ndarray:
+        out = self._model.apply(self._small(frame), learningRate=rate)
+        if self.work_scale != 1.0:
+            out = cv2.resize(out, (frame.shape[1], frame.shape[0]), interpolation=cv2.INTER_NEAREST)
+        return out
+
     def peek(self, frame: np.ndarray) -> np.ndarray:
         """(H, W) bool clean foreground of ``frame`` without updating the model."""
-        return self.clean(self._model.apply(frame, learningRate=0.0)) > 0
+        return self.clean(self._apply(frame, 0.0)) > 0
 
     def raw(self, frame: np.ndarray) -> np.ndarray:
         """Raw model output (H, W) uint8: 255 foreground, 127 shadow, 0 background."""
-        return self._model.apply(frame, learningRate=self.learning_rate)
+        return self._apply(frame, self.learning_rate)
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
         """Update with one (H, W, 3) uint8 BGR frame; (H, W) bool clean foreground mask."""

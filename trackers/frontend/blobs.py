@@ -66,15 +66,26 @@ def blobs_from_mask(
         raise ValueError(f"blobs_from_mask: mask must be 2-D (H, W), got shape {m.shape}")
     if connectivity not in (4, 8):
         raise ValueError(f"blobs_from_mask: connectivity must be 4 or 8, got {connectivity}")
-    fg = (m != 0).astype(np.uint8)
-    n, lab, stats, cents = cv2.connectedComponentsWithStats(fg, connectivity=connectivity,
-                                                           ltype=cv2.CV_32S)
+    fg = m.view(np.uint8) if m.dtype == np.bool_ else (m != 0).astype(np.uint8)
+    H, W = fg.shape
+    labels = np.zeros((H, W), dtype=np.int32)
+    # label only the bounding rectangle of the foreground (usually a small part of a frame)
+    rows, cols = np.flatnonzero(fg.any(axis=1)), np.flatnonzero(fg.any(axis=0))
+    if len(rows) == 0:
+        return []
+    r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+    n, lab, stats, cents = cv2.connectedComponentsWithStatsWithAlgorithm(
+        np.ascontiguousarray(fg[r0:r1, c0:c1]), connectivity, cv2.CV_32S, cv2.CCL_GRANA
+    )
+    stats[:, 0] += c0
+    stats[:, 1] += r0
+    cents += (c0, r0)
     areas = stats[1:, cv2.CC_STAT_AREA]
     keep = np.flatnonzero(areas >= max(int(min_area), 1)) + 1
     keep = keep[np.argsort(-stats[keep, cv2.CC_STAT_AREA], kind="stable")]
     lut = np.zeros(n, dtype=np.int32)
     lut[keep] = np.arange(1, len(keep) + 1, dtype=np.int32)
-    labels = lut[lab]
+    labels[r0:r1, c0:c1] = np.take(lut, lab)
     blobs: list[Blob] = []
     for new, old in enumerate(keep, 1):
         x, y, w, h, area = (int(v) for v in stats[old])
