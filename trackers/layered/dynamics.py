@@ -54,7 +54,9 @@ class ConstantVelocity2D:
         """y = z - H x; S = H P H' + R; K = P H' S^-1; x += K y; P = (I - K H) P."""
         y = np.asarray(z, dtype=np.float64) - self.x[:2]
         S = self.P[:2, :2] + self.R
-        K = self.P[:, :2] @ np.linalg.inv(S)
+        det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+        S_inv = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
+        K = self.P[:, :2] @ S_inv
         self.x = self.x + K @ y
         self.P = self.P - K @ self.P[:2, :]
 

@@ -121,6 +121,10 @@ class PBMTracker:
         exit_misses: frames unfound after which a leaving target is dropped.
         new_track_iou: a free candidate overlapping a live target by more IoU than this
             does not start a new target.
+        blob_births: free foreground blobs (heads no detection explains) start targets too;
+            off, blobs only keep existing targets (clutter-prone masks, e.g. MOG2, would
+            otherwise start false targets). With ``foreground`` but no detections at all,
+            turn it on.
         report_occluded: report unfound confirmed targets as OCCLUDED.
         max_report_misses: frames an unfound target is reported.
     """
@@ -167,8 +171,9 @@ class PBMTracker:
         exit_margin: float = 8.0,
         exit_misses: int = 3,
         new_track_iou: float = 0.6,
+        blob_births: bool = False,
         report_occluded: bool = True,
-        max_report_misses: int = 15,
+        max_report_misses: int = 5,
     ) -> None:
         if models is None:
             models = FeatureModels.default()
@@ -240,6 +245,7 @@ class PBMTracker:
         self.exit_margin = float(exit_margin)
         self.exit_misses = int(exit_misses)
         self.new_track_iou = new_track_iou
+        self.blob_births = bool(blob_births)
         self.report_occluded = bool(report_occluded)
         self.max_report_misses = int(max_report_misses)
         if int(blob_downsample) < 1:
@@ -547,6 +553,8 @@ class PBMTracker:
         for n in free:
             a = anchors[n]
             if taken[n] or a.box[3] < self.min_height:
+                continue
+            if a.source == "blob" and not self.blob_births:
                 continue
             if len(live_boxes) and iou_matrix(a.box[None], live_boxes).max() > self.new_track_iou:
                 continue
