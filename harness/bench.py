@@ -132,7 +132,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import pandas as pd
 
     cv2.setNumThreads(1)
-    from harness.report.video import compose_config
+    from harness.report.video import compose_config, tracker_choice
     from harness.run import build_source, build_tracker, load_sequences, tracker_configs
 
     try:
@@ -142,7 +142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.sequence and args.sequence not in by_name:
             raise ValueError(f"no sequence {args.sequence!r}; have {sorted(by_name)}")
         seq = by_name[args.sequence] if args.sequence else sequences[0]
-        configs = tracker_configs(cfg.tracker)
+        configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
         timings = bench_sequence(
             seq, lambda: build_source(cfg.detector),
             lambda: {n: build_tracker(n, node) for n, node in configs.items()},

@@ -214,6 +214,15 @@ def compose_config(overrides: Sequence[str], run_dir: Path | None = None) -> Any
         return compose("config", overrides=list(overrides))
 
 
+def tracker_choice(overrides: Sequence[str]) -> str | None:
+    """The ``tracker=<name>`` choice among command-line overrides (names a single tracker)."""
+    for o in overrides:
+        key, _, value = o.partition("=")
+        if key.lstrip("+") == "tracker" and value:
+            return value
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m harness.report.video",
                                 description="Annotated side-by-side video and contact sheet.")
@@ -243,7 +252,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             seq = by_name[args.sequence]
         else:
             seq = sequences[0]
-        trackers = {n: build_tracker(n, node) for n, node in tracker_configs(cfg.tracker).items()}
+        trackers = {n: build_tracker(n, node) for n, node in tracker_configs(cfg.tracker, tracker_choice(args.overrides)).items()}
         written = render(trackers, seq, build_source(cfg.detector), args.out, args.sheet,
                          args.sheet_frames, not args.no_gt, tuple(args.frames) if args.frames
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
