@@ -252,7 +252,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             seq = by_name[args.sequence]
         else:
             seq = sequences[0]
-        trackers = {n: build_tracker(n, node) for n, node in tracker_configs(cfg.tracker, tracker_choice(args.overrides)).items()}
+        configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
+        trackers = {n: build_tracker(n, node) for n, node in configs.items()}
         written = render(trackers, seq, build_source(cfg.detector), args.out, args.sheet,
                          args.sheet_frames, not args.no_gt, tuple(args.frames) if args.frames
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
