@@ -66,7 +66,7 @@ def quality() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             row = run_detection(cfg, Path(tmp)).iloc[-1]
         print(f"{label:<44} {row.precision:6.3f} {row.recall:6.3f} {row.F1:6.3f} "
-              f"{int(row.detections):6d} {int(row.TP):6d} {int(row.gt):6d}")
+              f"{int(row['detections']):6d} {int(row['TP']):6d} {int(row['gt']):6d}")
 
 
 def _timed(fn, *args):

@@ -241,7 +241,7 @@ class BackgroundModel:
         if self.work_scale == 1.0:
             return frame
         h, w = frame.shape[:2]
-        size = (max(int(round(w * self.work_scale)), 1), max(int(round(h * self.work_scale)), 1))
+        size = (max(round(w * self.work_scale), 1), max(round(h * self.work_scale), 1))
         return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
 
     def _apply(self, frame: np.ndarray, rate: float) -> np.ndarray:
