@@ -81,12 +81,13 @@ class EllipseHistogrammer:
         b = snap_boxes(boxes).astype(np.int64).tolist()
         n = len(b)
         height, width = frame.shape[:2]
-        out = np.zeros((n, self.bins**3), dtype=np.float64)
+        out = np.empty((n, self.bins**3), dtype=np.float64)
         for i in range(n):
             x, y, w, h = b[i]
             r0, r1 = max(y, 0), min(y + h, height)
             c0, c1 = max(x, 0), min(x + w, width)
             if r1 <= r0 or c1 <= c0:
+                out[i] = 0.0
                 continue
             m = self._mask(h, w)[r0 - y : r1 - y, c0 - x : c1 - x]
             if foreground is not None:
@@ -99,7 +100,9 @@ class EllipseHistogrammer:
                 m = np.ascontiguousarray(m[:: self.stride, :: self.stride])
             # cv2.calcHist: same joint bin order as trackers.histograms.colour_histogram
             counts = cv2.calcHist([crop], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges)
-            out[i] = counts.ravel()
-        total = out.sum(axis=1, keepdims=True)
-        np.divide(out, total, out=out, where=total > 0)
+            total = np.count_nonzero(m)
+            if total:  # eq. 1: divide by |S| (in float64, as the front end does)
+                np.divide(counts.ravel(), float(total), out=out[i], dtype=np.float64)
+            else:
+                out[i] = 0.0
         return out

@@ -308,8 +308,8 @@ class RetaTracker:
             for r, (i, (d, n, stage, rho)) in enumerate(rows):
                 person = persons[i]
                 if not behind[r]:
-                    person.q = p[d]  # appearance updated only when not occluded
-                    person.sqrt_q = sqrt_p[d]
+                    person.q = p[d].copy()  # appearance updated only when not occluded
+                    person.sqrt_q = sqrt_p[d].copy()
                     shape = dbox[r]
                 else:
                     shape = pred[n]
@@ -417,7 +417,8 @@ class RetaTracker:
         # 8. unmatched measurements start tentative tracks (3.3)
         for d in assoc.unmatched_measurements:
             x0, P0, _, _, Q0, R0 = self.motion.init(dets[d])
-            person = _Person(self._next_key, p[d], sqrt_p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)],
+            person = _Person(self._next_key, p[d].copy(), sqrt_p[d].copy(), Q0, R0,
+                             [_Branch(VISIBLE, x0, P0)],
                              shape=dets[d])
             self._next_key += 1
             if self.confirm_frames <= 1:
