@@ -33,6 +33,24 @@ frames when its box touches the image border (it left).
 
 Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
 parts), ``part_scores`` (5,), ``gate`` (4,) xywh.
+
+Adaptations (where the paper is vague or relies on what we do not have):
+
+- Heads: without ``Detections.heads`` a head is the top 1/7 band of a detection's
+  foreground, or a peak of a blob's top profile (not the hair/skin detector of PBM 2.3).
+- Features are measured on a fixed grid of samples per box (``PartFeatureExtractor``):
+  scale-free area/perimeter/colour, one vectorised pass for all candidates of a frame.
+- p(d | theta) of eq. 12 is the model's survival function P(D >= d) (``models``), applied
+  to d / ``model_spread``: models fitted on clean annotated pairs are stretched for the
+  larger differences of live tracking (overlapping people, detection noise).
+- delta of eqs. 9-10 is relative (w (1 + delta i)); eq. 2 is used sign-corrected.
+- Detection boxes and blob spans differ systematically (box margins, swinging limbs):
+  blob-born boxes are rescaled by a ratio learned online from isolated person/detection
+  pairs, and a blob candidate keeps KF2's width.
+- The occlusion test applies to every candidate as in the paper; a blob with several
+  heads counts as merged (searched) whatever its size.
+- After a gap of m frames the displacement and overlap differences are divided by 1 + m.
+- Targets are born from detections (and from free blobs when ``blob_births``).
 """
 
 from __future__ import annotations
@@ -155,7 +173,7 @@ class PBMTracker:
         kf2_position_noise: float = 0.2,
         kf2_velocity_noise: float = 0.02,
         kf2_measurement_noise: float = 0.5,
-        min_blob_area: int = 80,
+        min_blob_area: int = 300,
         min_height: float = 12.0,
         head_separation: float = 0.12,
         head_min_fill: float = 0.2,
