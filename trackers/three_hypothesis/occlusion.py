@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from trackers.frontend.features import region_similarity
+from trackers.geometry import intersection_matrix
 
 
 def overlap_ratio(a: np.ndarray, b: np.ndarray, samples: int = 24) -> np.ndarray:
@@ -29,7 +30,7 @@ def overlap_ratio(a: np.ndarray, b: np.ndarray, samples: int = 24) -> np.ndarray
 
 
 def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
-                    ratio: np.ndarray | None = None) -> np.ndarray:
+                    ratio: np.ndarray | None = None, samples: int = 24) -> np.ndarray:
     """Occlusion relation O of eq. 2 over predicted regions of nodes.
 
     O = {(n_i, n_j) | id_i != id_j, |S_i & S_j| / (|S_i| + |S_j|) > lambda}.
@@ -39,16 +40,27 @@ def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
         owners: (N,) person key of each node (hypotheses of one person never occlude
             each other).
         lam: overlap threshold lambda in [0, 0.5).
-        ratio: optional precomputed (N, N) ``overlap_ratio(boxes, boxes)``.
+        ratio: optional precomputed (N, N) ``overlap_ratio(boxes, boxes)``; else only
+            pairs of different people with intersecting boxes are integrated.
+        samples: integration grid per side (``region_similarity``).
     Returns:
         (K, 2) int rows (i, j) with i < j, node indices into ``boxes``.
     """
     n = len(boxes)
     if n < 2:
         return np.zeros((0, 2), dtype=int)
-    if ratio is None:
-        ratio = overlap_ratio(boxes, boxes)
     owners = np.asarray(owners)
+    if ratio is None:
+        # only pairs of different people whose bounding boxes meet can overlap
+        cand = (intersection_matrix(boxes, boxes) > 0) & (owners[:, None] != owners[None, :])
+        ci, cj = np.nonzero(np.triu(cand, k=1))
+        if len(ci) == 0:
+            return np.zeros((0, 2), dtype=int)
+        ui, uj = np.unique(ci), np.unique(cj)
+        sub = overlap_ratio(boxes[ui], boxes[uj], samples)
+        ratio = np.zeros((n, n))
+        ratio[np.ix_(ui, uj)] = sub
+        ratio *= cand
     mask = (ratio > lam) & (owners[:, None] != owners[None, :])
     i, j = np.nonzero(np.triu(mask, k=1))
     return np.column_stack([i, j]).astype(int)

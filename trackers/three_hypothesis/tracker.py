@@ -256,18 +256,17 @@ class RetaTracker:
             x_prev = Xp = np.zeros((0, 8))
             Pp = np.zeros((0, 8, 8))
             pred = np.zeros((0, 4))
-        n_nodes = len(pred)
-        # one region-similarity matrix per frame: predictions x (predictions, measurements)
-        rs = region_similarity(pred, np.vstack([pred, dets]), samples=self.region_samples)
+        # eq. 5 region similarity of predictions and measurements, once per frame
+        rs = region_similarity(pred, dets, samples=self.region_samples)
 
         # 2. occlusion relations O over predicted regions (eq. 2: ratio = delta / 2)
-        pairs = occlusion_pairs(pred, owners, self.lam, ratio=0.5 * rs[:, :n_nodes])
+        pairs = occlusion_pairs(pred, owners, self.lam, samples=self.region_samples)
 
         # 4. two-stage association (3.3.2)
         # rho = sqrt(q) . sqrt(p) (eq. 4); sqrt(q) is kept per person, so q is not restacked
         sqrt_q = np.array([person.sqrt_q for person in persons]).reshape(len(persons), p.shape[1])
         assoc = associate(pred, owners, sqrt_q, dets, p, self.mu_rho, self.mu_g,
-                          delta=rs[:, n_nodes:], sqrt_q=sqrt_q, sqrt_p=sqrt_p,
+                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p,
                           gated=np.array([person.confirmed for person in persons], dtype=bool))
         matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
                        in zip(assoc.matches, assoc.stages, assoc.rho)}
@@ -377,7 +376,7 @@ class RetaTracker:
             cont = src >= 0
             if len(visible_boxes) and cont.any():
                 # continuing branches sit at their prediction: reuse eq. 5's delta
-                d_cols = n_nodes + np.array([d for _, (d, _, _, _) in rows])
+                d_cols = np.array([d for _, (d, _, _, _) in rows])
                 delta = rs[src[cont]][:, d_cols]
                 area_n = pred[src[cont], 2] * pred[src[cont], 3]
                 area_v = visible_boxes[:, 2] * visible_boxes[:, 3]
