@@ -25,9 +25,9 @@ def assign(
     big = max_cost + 1.0 + (np.abs(cost[allowed]).max() if allowed.any() else 0.0) * (n + m)
     rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
     keep = allowed[rows, cols]
-    matches = np.column_stack([rows[keep], cols[keep]]).astype(int)
-    return (
-        matches,
-        np.setdiff1d(np.arange(n), matches[:, 0]),
-        np.setdiff1d(np.arange(m), matches[:, 1]),
-    )
+    rows, cols = rows[keep], cols[keep]
+    free_rows = np.ones(n, dtype=bool)
+    free_cols = np.ones(m, dtype=bool)
+    free_rows[rows] = False
+    free_cols[cols] = False
+    return np.column_stack([rows, cols]).astype(int), np.flatnonzero(free_rows), np.flatnonzero(free_cols)
