@@ -68,7 +68,7 @@ from trackers.frontend.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.geometry import box_slices, iou_matrix
+from trackers.geometry import box_slices, iou_matrix, overlap_ratio_matrix
 from trackers.layered.association import (
     ambiguous,
     feature_differences,
@@ -116,6 +116,8 @@ class PBMTracker:
         occlusion_threshold: relative size change that flags an occlusion (PBM 3.1, 50%).
         search_step: delta of eqs. 9-10 (relative to the predicted size).
         search_range: i runs over -range..range in eqs. 9-10.
+        search_overlap: a larger region is searched for a found target only when at least
+            this fraction of the target's last box lies inside it (0 = always).
         ratio_window: frames of the running averages of alpha and beta (PBM 2.1, 3-5).
         occluded_window: DOF vectors averaged under occlusion (PBM 4.2).
         gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
@@ -130,6 +132,8 @@ class PBMTracker:
         model_spread: the difference models are stretched by this factor (1 = as fitted).
         histogram_bins: bins per channel of the HSV and XYZ part histograms.
         grid_rows, grid_cols: sample grid each box is measured on (``PartFeatureExtractor``).
+        search_grid: (rows, cols) sample grid of the head-anchored search's 25 boxes per
+            head (coarser than ``grid_*``: the features are scale-free fractions).
         blob_downsample: connected components run on the mask subsampled by this factor.
         template_threshold: normalised correlation needed by head-template pruning.
         prune_radius: ambiguous candidates closer than this many head widths are "nearby".
@@ -160,6 +164,7 @@ class PBMTracker:
         occlusion_threshold: float = 0.5,
         search_step: float = 0.05,
         search_range: int = 2,
+        search_overlap: float = 0.5,
         ratio_window: int = 4,
         occluded_window: int = 3,
         gate_speed_factor: float = 3.0,
@@ -181,6 +186,7 @@ class PBMTracker:
         histogram_bins: int = 4,
         grid_rows: int = 35,
         grid_cols: int = 15,
+        search_grid: Sequence[int] = (21, 9),
         blob_downsample: int = 2,
         template_threshold: float = 0.6,
         prune_radius: float = 3.0,
@@ -241,6 +247,9 @@ class PBMTracker:
         self.occlusion_threshold = occlusion_threshold
         self.search_step = search_step
         self.search_range = int(search_range)
+        if not 0.0 <= search_overlap <= 1.0:
+            raise ValueError(f"search_overlap must lie in [0, 1], got {search_overlap}")
+        self.search_overlap = float(search_overlap)
         self.ratio_window = int(ratio_window)
         self.occluded_window = int(occluded_window)
         self._gate_args = {
@@ -273,6 +282,8 @@ class PBMTracker:
             raise ValueError(f"model_spread must be > 0, got {model_spread}")
         self.model_spread = float(model_spread)
         self._extractor = PartFeatureExtractor(int(histogram_bins), int(grid_rows), int(grid_cols))
+        sr, sc = (int(v) for v in search_grid)
+        self._search_extractor = PartFeatureExtractor(int(histogram_bins), sr, sc)
         self.reset()
 
     def reset(self) -> None:
@@ -389,7 +400,7 @@ class PBMTracker:
             return out
         B = np.concatenate(boxes)
         own = np.concatenate(owner)
-        feats = self._extractor.extract(B, np.concatenate(alphas), np.concatenate(betas))
+        feats = self._search_extractor.extract(B, np.concatenate(alphas), np.concatenate(betas))
         tis = np.array([pairs[q][0] for q in own])
         model = PartFeatures.concatenate([targets[i].parts for i in range(len(targets))],
                                          self._extractor.bins).take(tis)
@@ -453,6 +464,7 @@ class PBMTracker:
         self._frame += 1
         H, W = frame.shape[:2]
         self._extractor.start(frame, fg)
+        self._search_extractor.start(frame, fg)
         anchors = self._anchors(fg, detections)
         gray = None
         n_a = len(anchors)
@@ -499,6 +511,13 @@ class PBMTracker:
                 hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
                 g = gates[ti]
                 if not (g[0] <= hc[0] <= g[0] + g[2] and g[1] <= hc[1] <= g[1] + g[3]):
+                    continue
+                # a larger region is searched for a target it holds (PBM 3.1: "the target
+                # needs to be located within the blob"): a found target's last box must
+                # lie at least ``search_overlap`` inside it
+                if (kind > 0 and targets[ti].misses == 0 and self.search_overlap > 0
+                        and overlap_ratio_matrix(targets[ti].box[None], a.region[None])[0, 0]
+                        < self.search_overlap):
                     continue
                 pairs.append((int(ti), int(n), kind))
             for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh)):
