@@ -10,8 +10,59 @@ import math
 
 import numpy as np
 
-from trackers.frontend.features import region_similarity
 from trackers.geometry import intersection_matrix
+
+
+def region_overlaps(
+    a: np.ndarray, b: np.ndarray, samples: int = 24, near: np.ndarray | None = None
+) -> np.ndarray:
+    """Region similarity delta of eq. 5 for ellipse regions, integrated only where needed.
+
+    delta(Sp, Sq) = 2 |Sp & Sq| / (|Sp| + |Sq|). The values are exactly those of
+    ``trackers.frontend.features.region_similarity(a, b, "ellipse", samples)`` (the
+    definition; ``tests/test_reta.py`` checks equality): |Sa & Sb| is the share of a
+    ``samples`` x ``samples`` grid over a's box lying in both ellipses, times |Sa| = pi/4 w h.
+    Two things make it cheaper per frame: the grid is separable, so each ellipse test is
+    an outer sum of a row term and a column term, and a's own ellipse test is done once per
+    box instead of once per pair; and ``near`` restricts the integration to the pairs the
+    caller needs (pairs outside it get delta 0).
+
+    Args:
+        a: (N, 4) xywh; b: (M, 4) xywh.
+        samples: grid points per side.
+        near: optional (N, M) bool pairs to integrate; default: pairs whose boxes meet
+            (the only ones that can overlap). Pairs outside ``near`` must not overlap or
+            are not wanted.
+    Returns:
+        (N, M) float64 in [0, 1].
+    """
+    a = np.asarray(a, dtype=np.float64).reshape(-1, 4)
+    b = np.asarray(b, dtype=np.float64).reshape(-1, 4)
+    total = np.pi / 4 * ((a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :])
+    inter = np.zeros((len(a), len(b)))
+    if near is None:
+        near = intersection_matrix(a, b) > 0
+    ia, ib = np.nonzero(near)
+    if len(ia):
+        t = (np.arange(samples) + 0.5) / samples
+        gx = a[:, 0:1] + a[:, 2:3] * t  # (N, S) grid columns over a's box
+        gy = a[:, 1:2] + a[:, 3:4] * t  # (N, S) grid rows
+
+        def inside(boxes: np.ndarray, rows: np.ndarray | slice) -> np.ndarray:
+            """(K, S, S) [k, row, col]: grid point of a[rows][k] inside the ellipse of boxes[k]."""
+            rx = np.maximum(boxes[:, 2:3] / 2, 1e-9)
+            ry = np.maximum(boxes[:, 3:4] / 2, 1e-9)
+            u = (gx[rows] - boxes[:, 0:1] - rx) / rx
+            v = (gy[rows] - boxes[:, 1:2] - ry) / ry
+            return (u**2)[:, None, :] + (v**2)[:, :, None] <= 1.0
+
+        in_a = inside(a, slice(None))  # (N, S, S): each a-ellipse once
+        count_a = in_a.sum(axis=(1, 2))
+        both = (in_a[ia] & inside(b[ib], ia)).sum(axis=(1, 2))
+        frac = both / np.maximum(count_a[ia], 1)
+        inter[ia, ib] = frac * np.pi / 4 * a[ia, 2] * a[ia, 3]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.clip(np.where(total > 0, 2 * inter / total, 0.0), 0.0, 1.0)
 
 
 def overlap_ratio(a: np.ndarray, b: np.ndarray, samples: int = 24) -> np.ndarray:
@@ -22,11 +73,11 @@ def overlap_ratio(a: np.ndarray, b: np.ndarray, samples: int = 24) -> np.ndarray
 
     Args:
         a: (N, 4) xywh; b: (M, 4) xywh.
-        samples: integration grid per side (``region_similarity``).
+        samples: integration grid per side (``region_overlaps``).
     Returns:
         (N, M) float64.
     """
-    return 0.5 * region_similarity(a, b, samples=samples)
+    return 0.5 * region_overlaps(a, b, samples=samples)
 
 
 def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
@@ -40,9 +91,10 @@ def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
         owners: (N,) person key of each node (hypotheses of one person never occlude
             each other).
         lam: overlap threshold lambda in [0, 0.5).
-        ratio: optional precomputed (N, N) ``overlap_ratio(boxes, boxes)``; else only
-            pairs of different people with intersecting boxes are integrated.
-        samples: integration grid per side (``region_similarity``).
+        ratio: optional precomputed (N, N) ``overlap_ratio(boxes, boxes)`` (only its
+            entries i < j are read); else only pairs of different people with
+            intersecting boxes are integrated.
+        samples: integration grid per side (``region_overlaps``).
     Returns:
         (K, 2) int rows (i, j) with i < j, node indices into ``boxes``.
     """
@@ -50,19 +102,13 @@ def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
     if n < 2:
         return np.zeros((0, 2), dtype=int)
     owners = np.asarray(owners)
+    k = np.arange(n)
+    cand = (owners[:, None] != owners[None, :]) & (k[:, None] < k[None, :])
     if ratio is None:
         # only pairs of different people whose bounding boxes meet can overlap
-        cand = (intersection_matrix(boxes, boxes) > 0) & (owners[:, None] != owners[None, :])
-        ci, cj = np.nonzero(np.triu(cand, k=1))
-        if len(ci) == 0:
-            return np.zeros((0, 2), dtype=int)
-        ui, uj = np.unique(ci), np.unique(cj)
-        sub = overlap_ratio(boxes[ui], boxes[uj], samples)
-        ratio = np.zeros((n, n))
-        ratio[np.ix_(ui, uj)] = sub
-        ratio *= cand
-    mask = (ratio > lam) & (owners[:, None] != owners[None, :])
-    i, j = np.nonzero(np.triu(mask, k=1))
+        cand &= intersection_matrix(boxes, boxes) > 0
+        ratio = 0.5 * region_overlaps(boxes, boxes, samples, near=cand)
+    i, j = np.nonzero((ratio > lam) & cand)
     return np.column_stack([i, j]).astype(int)
 
 

@@ -50,8 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.frontend.features import region_similarity
-from trackers.geometry import iou_matrix, valid_boxes
+from trackers.geometry import intersection_matrix, iou_matrix, valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
@@ -64,7 +63,12 @@ from trackers.three_hypothesis.motion import (
     predict,
     state_boxes,
 )
-from trackers.three_hypothesis.occlusion import depth_order, occlusion_pairs, overlap_ratio
+from trackers.three_hypothesis.occlusion import (
+    depth_order,
+    occlusion_pairs,
+    overlap_ratio,
+    region_overlaps,
+)
 
 log = logging.getLogger(__name__)
 
@@ -256,11 +260,17 @@ class RetaTracker:
             x_prev = Xp = np.zeros((0, 8))
             Pp = np.zeros((0, 8, 8))
             pred = np.zeros((0, 4))
-        # eq. 5 region similarity of predictions and measurements, once per frame
-        rs = region_similarity(pred, dets, samples=self.region_samples)
+        # eq. 5 region similarity delta of the predictions against the measurements and
+        # against each other (eq. 2's ratio is delta / 2), in one integration per frame
+        nb = len(pred)
+        regions = np.concatenate([pred, dets])
+        near = intersection_matrix(pred, regions) > 0  # only meeting boxes can overlap
+        near[:, :nb] &= (owners[:, None] != owners[None, :]) & self._upper(nb)
+        delta = region_overlaps(pred, regions, self.region_samples, near)
+        rs = delta[:, nb:]
 
         # 2. occlusion relations O over predicted regions (eq. 2: ratio = delta / 2)
-        pairs = occlusion_pairs(pred, owners, self.lam, samples=self.region_samples)
+        pairs = occlusion_pairs(pred, owners, self.lam, ratio=0.5 * delta[:, :nb])
 
         # 4. two-stage association (3.3.2)
         # rho = sqrt(q) . sqrt(p) (eq. 4); sqrt(q) is kept per person, so q is not restacked
@@ -434,6 +444,12 @@ class RetaTracker:
         return self._outputs()
 
     # ------------------------------------------------------------------ helpers
+    @staticmethod
+    def _upper(n: int) -> np.ndarray:
+        """(n, n) bool: True above the diagonal (pairs i < j)."""
+        k = np.arange(n)
+        return k[:, None] < k[None, :]
+
     def _hypothesis_under(self, shape: np.ndarray, persons: list[_Person], owners: np.ndarray,
                           pred: np.ndarray, matched: dict, taken: set[int]) -> int | None:
         """Index of the hidden confirmed person (unmatched this frame) one of whose
