@@ -78,16 +78,30 @@ class EllipseHistogrammer:
         Returns:
             (N, bins**3) float64 rows summing to 1 (all zero where no pixel is counted).
         """
+        return self.with_roots(frame, boxes, foreground)[0]
+
+    def with_roots(
+        self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Histograms p (eq. 1) and their element-wise square roots sqrt(p), the factors of
+        the Bhattacharyya coefficient rho = sum sqrt(q p) (eq. 4).
+
+        A person's histogram fills few of the bins**3 bins, so both are written only at
+        the nonzero bins of each row (the values are those of ``__call__`` and ``np.sqrt``).
+
+        Returns:
+            p, sqrt_p: two (N, bins**3) float64 arrays (arguments as ``__call__``).
+        """
         b = snap_boxes(boxes).astype(np.int64).tolist()
         n = len(b)
         height, width = frame.shape[:2]
-        out = np.empty((n, self.bins**3), dtype=np.float64)
+        out = np.zeros((n, self.bins**3), dtype=np.float64)
+        roots = np.zeros((n, self.bins**3), dtype=np.float64)
         for i in range(n):
             x, y, w, h = b[i]
             r0, r1 = max(y, 0), min(y + h, height)
             c0, c1 = max(x, 0), min(x + w, width)
             if r1 <= r0 or c1 <= c0:
-                out[i] = 0.0
                 continue
             m = self._mask(h, w)[r0 - y : r1 - y, c0 - x : c1 - x]
             if foreground is not None:
@@ -98,11 +112,14 @@ class EllipseHistogrammer:
             if self.stride > 1:
                 crop = np.ascontiguousarray(crop[:: self.stride, :: self.stride])
                 m = np.ascontiguousarray(m[:: self.stride, :: self.stride])
+            total = np.count_nonzero(m)
+            if not total:
+                continue
             # cv2.calcHist: same joint bin order as trackers.histograms.colour_histogram
             counts = cv2.calcHist([crop], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges)
-            total = np.count_nonzero(m)
-            if total:  # eq. 1: divide by |S| (in float64, as the front end does)
-                np.divide(counts.ravel(), float(total), out=out[i], dtype=np.float64)
-            else:
-                out[i] = 0.0
-        return out
+            counts = counts.ravel()
+            nz = (counts > 0).nonzero()[0]
+            share = counts[nz].astype(np.float64) / float(total)  # eq. 1: divide by |S|
+            out[i, nz] = share
+            roots[i, nz] = np.sqrt(share)
+        return out, roots

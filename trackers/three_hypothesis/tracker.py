@@ -237,8 +237,7 @@ class RetaTracker:
         self.graph.begin_frame(self._frame)
         keep = valid_boxes(detections.boxes) & (detections.scores >= self.min_score)
         dets = detections.boxes[keep]
-        p = self.histograms(frame, dets, foreground)  # eq. 1 per measurement
-        sqrt_p = np.sqrt(p)
+        p, sqrt_p = self.histograms.with_roots(frame, dets, foreground)  # eq. 1 per measurement
         persons = self._persons
         self._public = {person.key: person.public_id for person in persons}
 
