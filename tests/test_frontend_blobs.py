@@ -106,3 +106,22 @@ def test_work_scale_gives_full_size_mask():
 
 def test_empty_mask_has_no_blobs():
     assert blobs_from_mask(np.zeros((5, 5), bool)) == []
+
+
+def test_inpainted_estimate_removes_a_person_who_never_leaves():
+    from trackers.frontend.background import background_estimate
+
+    yy, xx = np.mgrid[0:80, 0:100]
+    bg = np.dstack([100 + xx // 2, 120 + yy // 4, np.full_like(xx, 140)]).astype(np.uint8)
+    frames = []
+    for k in range(30):  # a dark person swaying in place, present in every frame
+        f = bg.copy()
+        x = 40 + int(round(4 * np.sin(k / 3)))
+        y = 20 + int(round(3 * np.cos(k / 2)))
+        f[y : y + 40, x : x + 14] = 30
+        frames.append(f)
+    median = background_estimate(frames, inpaint=False)
+    assert np.abs(median[30:50, 45:50].astype(int) - bg[30:50, 45:50]).max() > 50  # the person
+    est = background_estimate(frames, inpaint=True, spread_threshold=12, spread_quantile=0.75)
+    assert np.abs(est[30:50, 45:50].astype(int) - bg[30:50, 45:50]).max() < 15
+    assert np.abs(est[:, :20].astype(int) - bg[:, :20]).max() <= 1  # elsewhere: the median
