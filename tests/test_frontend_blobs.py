@@ -116,8 +116,8 @@ def test_inpainted_estimate_removes_a_person_who_never_leaves():
     frames = []
     for k in range(30):  # a dark person swaying in place, present in every frame
         f = bg.copy()
-        x = 40 + int(round(4 * np.sin(k / 3)))
-        y = 20 + int(round(3 * np.cos(k / 2)))
+        x = 40 + round(4 * np.sin(k / 3))
+        y = 20 + round(3 * np.cos(k / 2))
         f[y : y + 40, x : x + 14] = 30
         frames.append(f)
     median = background_estimate(frames, inpaint=False)
