@@ -12,8 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
-from trackers.common.assignment import assign
 from trackers.frontend.features import bhattacharyya, region_similarity
 from trackers.geometry import centre_distance_matrix
 
@@ -45,7 +45,7 @@ def _person_costs(cost_nodes: np.ndarray, starts: np.ndarray) -> tuple[np.ndarra
         return cost_nodes, np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
     cost = np.minimum.reduceat(cost_nodes, starts, axis=0)
     best = np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
-    sizes = np.diff(np.r_[starts, len(cost_nodes)])
+    sizes = np.diff(starts, append=len(cost_nodes))
     for k in np.flatnonzero(sizes > 1):
         a = starts[k]
         best[k] = a + np.argmin(cost_nodes[a : a + sizes[k]], axis=0)
@@ -55,17 +55,34 @@ def _person_costs(cost_nodes: np.ndarray, starts: np.ndarray) -> tuple[np.ndarra
 def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
     """Hungarian method where leaving a person unmatched costs ``leave`` (the largest
     cost an accepted pair can have), so one good pair is never traded for two poor ones
-    just to match more. Returns (K, 2) rows (person, measurement)."""
-    n = len(cost)
+    just to match more. Returns (K, 2) rows (person, measurement), sorted by person.
+
+    A person and a measurement acceptable only to each other form a problem of their own
+    whose answer is immediate (match them: the pair costs less than leaving both); the
+    Hungarian method runs only over the people and measurements that compete."""
     allowed = np.isfinite(cost) & (cost <= leave)
-    if not allowed.any():
-        return np.zeros((0, 2), dtype=int)
-    if allowed.sum(axis=0).max() <= 1 and allowed.sum(axis=1).max() <= 1:
-        return np.argwhere(allowed)  # no competing pairs: the assignment is immediate
-    dummy = np.full((n, n), np.inf)
-    np.fill_diagonal(dummy, leave)
-    matches, _, _ = assign(np.hstack([cost, dummy]), leave)
-    return matches[matches[:, 1] < cost.shape[1]]
+    row_degree = allowed.sum(axis=1)
+    col_degree = allowed.sum(axis=0)
+    alone = allowed & (row_degree == 1)[:, None] & (col_degree == 1)[None, :]
+    pairs = np.argwhere(alone)
+    rows = np.flatnonzero(row_degree > alone.any(axis=1))  # people with a competitor
+    if len(rows) == 0:
+        return pairs
+    cols = np.flatnonzero(col_degree > alone.any(axis=0))
+    # person i may stay unmatched through its own dummy column m + i at cost ``leave``;
+    # forbidden pairs cost more than any complete assignment of allowed ones (as in
+    # ``trackers.common.assignment.assign``), so the optimum never takes one
+    n, m = len(rows), len(cols)
+    sub = cost[np.ix_(rows, cols)]
+    ok = allowed[np.ix_(rows, cols)]
+    big = leave + 1.0 + max(np.abs(sub[ok]).max(initial=0.0), abs(leave)) * (2 * n + m)
+    full = np.full((n, m + n), big)
+    full[:, :m] = np.where(ok, sub, big)
+    full[np.arange(n), m + np.arange(n)] = leave
+    r, c = linear_sum_assignment(full)
+    keep = c < m
+    matches = np.concatenate([pairs, np.column_stack([rows[r[keep]], cols[c[keep]]])])
+    return matches[np.argsort(matches[:, 0], kind="stable")]
 
 
 def associate(
@@ -111,9 +128,9 @@ def associate(
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
-    steps = np.diff(owners)
+    steps = owners[1:] - owners[:-1]
     if len(owners) and not (owners[0] == 0 and owners[-1] == n_persons - 1
-                            and ((steps == 0) | (steps == 1)).all()):
+                            and (len(steps) == 0 or (steps.min() >= 0 and steps.max() <= 1))):
         raise ValueError("associate: owners must be sorted and cover persons 0..P-1")
     empty = np.zeros(0, dtype=int)
     if n_persons == 0 or n_meas == 0:
@@ -130,7 +147,8 @@ def associate(
     if delta is None:
         delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
-    starts = np.flatnonzero(np.r_[True, steps > 0])
+    # first node of each person
+    starts = np.arange(n_persons) if len(owners) == n_persons else np.searchsorted(owners, np.arange(n_persons))
     cost1, best1 = _person_costs(c1, starts)
     m1 = _hungarian(cost1, 2.0)
 
