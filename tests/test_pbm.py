@@ -322,3 +322,15 @@ def test_fit_command_writes_models_and_plot(tmp_path):
     models = load_feature_models(out)
     assert "crossing" in models.description and png.stat().st_size > 1000
     assert out.read_text().startswith("# PBM feature-difference models")
+
+
+def test_detection_heads_are_used_when_given():
+    t = PBMTracker()
+    boxes = np.array([[10.0, 20, 30, 90], [60.0, 20, 30, 90]])
+    heads = np.array([[18.0, 22, 12, 12], [np.nan] * 4])
+    fg = np.zeros((150, 120), bool)
+    fg[25:110, 68:82] = True  # second person: its top 1/7 band has foreground from row 25
+    anchors = t._anchors(fg, Detections(boxes, np.ones(2), heads=heads))
+    np.testing.assert_allclose(anchors[0].head, [24.0, 22.0, 12.0])  # from Detections.heads
+    assert anchors[1].head[1] == 25 and anchors[1].head[0] == pytest.approx(75.0)
+    assert [a.source for a in anchors] == ["detection", "detection"]
