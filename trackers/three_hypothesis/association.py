@@ -37,12 +37,15 @@ class Association:
     unmatched_measurements: np.ndarray
 
 
-def _person_costs(cost_nodes: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _person_costs(
+    cost_nodes: np.ndarray, starts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | None]:
     """Reduce (B, D) node costs to (P, D) person costs (min over each person's nodes) and
-    the (P, D) index of the node attaining it. Nodes are grouped by person: person k owns
-    rows ``starts[k]:starts[k + 1]``."""
+    the (P, D) index of the node attaining it (None when every person owns one node: the
+    node is the person). Nodes are grouped by person: person k owns rows
+    ``starts[k]:starts[k + 1]``."""
     if len(starts) == len(cost_nodes):  # one node per person
-        return cost_nodes, np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
+        return cost_nodes, None
     cost = np.minimum.reduceat(cost_nodes, starts, axis=0)
     best = np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
     sizes = np.diff(starts, append=len(cost_nodes))
@@ -57,32 +60,23 @@ def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
     cost an accepted pair can have), so one good pair is never traded for two poor ones
     just to match more. Returns (K, 2) rows (person, measurement), sorted by person.
 
-    A person and a measurement acceptable only to each other form a problem of their own
-    whose answer is immediate (match them: the pair costs less than leaving both); the
-    Hungarian method runs only over the people and measurements that compete."""
+    Person i stays unmatched through its own dummy column D + i of cost ``leave``;
+    forbidden pairs (inf, NaN or above ``leave``) get a cost larger than any complete
+    assignment of allowed ones, as in ``trackers.common.assignment.assign``."""
+    n, m = cost.shape
     allowed = np.isfinite(cost) & (cost <= leave)
-    row_degree = allowed.sum(axis=1)
-    col_degree = allowed.sum(axis=0)
-    alone = allowed & (row_degree == 1)[:, None] & (col_degree == 1)[None, :]
-    pairs = np.argwhere(alone)
-    rows = np.flatnonzero(row_degree > alone.any(axis=1))  # people with a competitor
-    if len(rows) == 0:
-        return pairs
-    cols = np.flatnonzero(col_degree > alone.any(axis=0))
-    # person i may stay unmatched through its own dummy column m + i at cost ``leave``;
-    # forbidden pairs cost more than any complete assignment of allowed ones (as in
-    # ``trackers.common.assignment.assign``), so the optimum never takes one
-    n, m = len(rows), len(cols)
-    sub = cost[np.ix_(rows, cols)]
-    ok = allowed[np.ix_(rows, cols)]
-    big = leave + 1.0 + max(np.abs(sub[ok]).max(initial=0.0), abs(leave)) * (2 * n + m)
+    if not allowed.any():
+        return np.zeros((0, 2), dtype=int)
+    if allowed.sum(axis=0).max() <= 1 and allowed.sum(axis=1).max() <= 1:
+        return np.argwhere(allowed)  # no competing pairs: the assignment is immediate
+    big = leave + 1.0 + max(np.abs(cost[allowed]).max(), abs(leave)) * (2 * n + m)
     full = np.full((n, m + n), big)
-    full[:, :m] = np.where(ok, sub, big)
-    full[np.arange(n), m + np.arange(n)] = leave
+    np.copyto(full[:, :m], cost, where=allowed)
+    k = np.arange(n)
+    full[k, m + k] = leave
     r, c = linear_sum_assignment(full)
     keep = c < m
-    matches = np.concatenate([pairs, np.column_stack([rows[r[keep]], cols[c[keep]]])])
-    return matches[np.argsort(matches[:, 0], kind="stable")]
+    return np.column_stack([r[keep], c[keep]])
 
 
 def associate(
@@ -137,18 +131,19 @@ def associate(
         return Association(np.zeros((0, 3), dtype=int), empty, np.zeros(0), np.arange(n_persons),
                            np.arange(n_meas))
     if sqrt_q is not None and sqrt_p is not None:
-        rho = np.clip(sqrt_q @ sqrt_p.T, 0.0, 1.0)  # (P, D) eq. 4
+        rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4
     else:
-        rho = np.clip(bhattacharyya(q, p), 0.0, 1.0)  # (P, D) eq. 4
-    rho_nodes = rho[owners]  # (B, D)
+        rho = bhattacharyya(q, p)  # (P, D) eq. 4
+    np.clip(rho, 0.0, 1.0, out=rho)
+    one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
+    rho_nodes = rho if one_node else rho[owners]  # (B, D)
     appearance_ok = rho_nodes >= mu_rho
+    starts = np.arange(n_persons) if one_node else np.searchsorted(owners, np.arange(n_persons))
 
     # stage 1: intersecting regions, cost (1 - rho) + (1 - delta)
     if delta is None:
         delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
-    # first node of each person
-    starts = np.arange(n_persons) if len(owners) == n_persons else np.searchsorted(owners, np.arange(n_persons))
     cost1, best1 = _person_costs(c1, starts)
     m1 = _hungarian(cost1, 2.0)
 
@@ -159,26 +154,23 @@ def associate(
 
     # stage 2: leftovers inside the gate, cost (1 - rho) + d / mu_g
     eligible = ~matched_p if gated is None else ~matched_p & np.asarray(gated, dtype=bool)
+    m2, best2 = np.zeros((0, 2), dtype=int), None
     if eligible.any() and not matched_d.all():
         d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
         free = eligible[owners][:, None] & ~matched_d[None, :]
         c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
         cost2, best2 = _person_costs(c2, starts)
         m2 = _hungarian(cost2, 2.0)
-    else:
-        m2 = np.zeros((0, 2), dtype=int)
-        best2 = np.zeros((n_persons, n_meas), dtype=int)
+        matched_p[m2[:, 0]] = True
+        matched_d[m2[:, 1]] = True
 
-    rows = [np.column_stack([m1, best1[m1[:, 0], m1[:, 1]]]),
-            np.column_stack([m2, best2[m2[:, 0], m2[:, 1]]])]
-    matches = np.concatenate(rows).astype(int).reshape(-1, 3)
-    stages = np.concatenate([np.full(len(m1), 1), np.full(len(m2), 2)]).astype(int)
-    matched_p[m2[:, 0]] = True
-    matched_d[m2[:, 1]] = True
+    m12 = np.concatenate([m1, m2])
+    nodes = np.concatenate([m[:, 0] if best is None else best[m[:, 0], m[:, 1]]
+                            for m, best in ((m1, best1), (m2, best2))])
     return Association(
-        matches,
-        stages,
-        rho[matches[:, 0], matches[:, 1]] if len(matches) else np.zeros(0),
+        np.column_stack([m12, nodes]).astype(int),
+        np.repeat([1, 2], [len(m1), len(m2)]),
+        rho[m12[:, 0], m12[:, 1]],
         np.flatnonzero(~matched_p),
         np.flatnonzero(~matched_d),
     )
