@@ -334,3 +334,16 @@ def test_detection_heads_are_used_when_given():
     np.testing.assert_allclose(anchors[0].head, [24.0, 22.0, 12.0])  # from Detections.heads
     assert anchors[1].head[1] == 25 and anchors[1].head[0] == pytest.approx(75.0)
     assert [a.source for a in anchors] == ["detection", "detection"]
+
+
+def test_head_detector_fills_missing_heads():
+    class Fixed:
+        def detect(self, frame, foreground, boxes):
+            return np.array([[12.0, 21, 10, 10]] * len(boxes))
+
+    t = PBMTracker(head_detector=Fixed())
+    anchors = t._anchors(None, Detections(np.array([[10.0, 20, 30, 90]]), np.ones(1)),
+                         np.zeros((150, 120, 3), np.uint8))
+    np.testing.assert_allclose(anchors[0].head, [17.0, 21.0, 10.0])
+    with pytest.raises(ValueError, match="head_detector"):
+        PBMTracker(head_detector=object())

@@ -36,8 +36,9 @@ parts), ``part_scores`` (5,), ``gate`` (4,) xywh.
 
 Adaptations (where the paper is vague or relies on what we do not have):
 
-- Heads: without ``Detections.heads`` a head is the top 1/7 band of a detection's
-  foreground, or a peak of a blob's top profile (not the hair/skin detector of PBM 2.3).
+- Heads: ``Detections.heads`` when given, else the PBM 2.3 hair/skin detector when
+  ``head_detector`` is set, else the top 1/7 band of a detection's foreground; on blobs,
+  the peaks of the top profile.
 - Features are measured on a fixed grid of samples per box (``PartFeatureExtractor``):
   scale-free area/perimeter/colour, one vectorised pass for all candidates of a frame.
 - p(d | theta) of eq. 12 is the model's survival function P(D >= d) (``models``), applied
@@ -143,6 +144,9 @@ class PBMTracker:
         exit_misses: frames unfound after which a leaving target is dropped.
         new_track_iou: a free candidate overlapping a live target by more IoU than this
             does not start a new target.
+        head_detector: optional PBM 2.3 head detector (``trackers.frontend.heads.HeadDetector``)
+            locating the head in each detection box that ``Detections.heads`` leaves
+            without one; None: the top 1/7 band of the box's foreground.
         blob_births: free foreground blobs (heads no detection explains) start targets too;
             off, blobs only keep existing targets (clutter-prone masks, e.g. MOG2, would
             otherwise start false targets). With ``foreground`` but no detections at all,
@@ -195,6 +199,7 @@ class PBMTracker:
         exit_margin: float = 8.0,
         exit_misses: int = 3,
         new_track_iou: float = 0.6,
+        head_detector=None,
         blob_births: bool = False,
         report_occluded: bool = True,
         max_report_misses: int = 5,
@@ -272,6 +277,9 @@ class PBMTracker:
         self.exit_margin = float(exit_margin)
         self.exit_misses = int(exit_misses)
         self.new_track_iou = new_track_iou
+        if head_detector is not None and not callable(getattr(head_detector, "detect", None)):
+            raise ValueError("head_detector must have a detect(frame, foreground, boxes) method")
+        self.head_detector = head_detector
         self.blob_births = bool(blob_births)
         self.report_occluded = bool(report_occluded)
         self.max_report_misses = int(max_report_misses)
@@ -295,10 +303,13 @@ class PBMTracker:
         self._frame = 0
 
     # ------------------------------------------------------------------ candidates
-    def _anchors(self, fg: np.ndarray | None, detections: Detections) -> list[Anchor]:
+    def _anchors(self, fg: np.ndarray | None, detections: Detections,
+                 frame: np.ndarray | None = None) -> list[Anchor]:
         anchors: list[Anchor] = []
         det_boxes = detections.boxes
         heads = detections.heads
+        if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
+            heads = np.asarray(self.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
         for k, box in enumerate(det_boxes):
             if not (box[2] > 1 and box[3] > 1 and np.isfinite(box).all()):
                 continue
@@ -465,7 +476,7 @@ class PBMTracker:
         H, W = frame.shape[:2]
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
-        anchors = self._anchors(fg, detections)
+        anchors = self._anchors(fg, detections, frame)
         gray = None
         n_a = len(anchors)
         if n_a:
