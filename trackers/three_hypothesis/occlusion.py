@@ -10,8 +10,6 @@ import math
 
 import numpy as np
 
-from trackers.geometry import intersection_matrix
-
 
 def region_overlaps(
     a: np.ndarray, b: np.ndarray, samples: int = 24, near: np.ndarray | None = None
@@ -30,39 +28,52 @@ def region_overlaps(
     Args:
         a: (N, 4) xywh; b: (M, 4) xywh.
         samples: grid points per side.
-        near: optional (N, M) bool pairs to integrate; default: pairs whose boxes meet
-            (the only ones that can overlap). Pairs outside ``near`` must not overlap or
-            are not wanted.
+        near: optional (N, M) bool pairs to integrate; default ``boxes_meet(a, b)``
+            (the only pairs that can overlap). Pairs outside ``near`` get 0: they must
+            not overlap or not be wanted.
     Returns:
         (N, M) float64 in [0, 1].
     """
     a = np.asarray(a, dtype=np.float64).reshape(-1, 4)
     b = np.asarray(b, dtype=np.float64).reshape(-1, 4)
-    total = np.pi / 4 * ((a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :])
-    inter = np.zeros((len(a), len(b)))
+    out = np.zeros((len(a), len(b)))
     if near is None:
-        near = intersection_matrix(a, b) > 0
+        near = boxes_meet(a, b)
     ia, ib = np.nonzero(near)
-    if len(ia):
-        t = (np.arange(samples) + 0.5) / samples
-        gx = a[:, 0:1] + a[:, 2:3] * t  # (N, S) grid columns over a's box
-        gy = a[:, 1:2] + a[:, 3:4] * t  # (N, S) grid rows
-
-        def inside(boxes: np.ndarray, rows: np.ndarray | slice) -> np.ndarray:
-            """(K, S, S) [k, row, col]: grid point of a[rows][k] inside the ellipse of boxes[k]."""
-            rx = np.maximum(boxes[:, 2:3] / 2, 1e-9)
-            ry = np.maximum(boxes[:, 3:4] / 2, 1e-9)
-            u = (gx[rows] - boxes[:, 0:1] - rx) / rx
-            v = (gy[rows] - boxes[:, 1:2] - ry) / ry
-            return (u**2)[:, None, :] + (v**2)[:, :, None] <= 1.0
-
-        in_a = inside(a, slice(None))  # (N, S, S): each a-ellipse once
-        count_a = in_a.sum(axis=(1, 2))
-        both = (in_a[ia] & inside(b[ib], ia)).sum(axis=(1, 2))
-        frac = both / np.maximum(count_a[ia], 1)
-        inter[ia, ib] = frac * np.pi / 4 * a[ia, 2] * a[ia, 3]
+    if len(ia) == 0:
+        return out
+    n = len(a)
+    t = (np.arange(samples) + 0.5) / samples
+    # one pass over K + N (box, grid) couples: a's own ellipse on its grid (rows 0..N-1,
+    # once per box), then b's ellipse on a's grid for every pair
+    rows = np.concatenate([np.arange(n), ia])
+    boxes = np.concatenate([a, b[ib]])
+    gx = a[rows, 0:1] + a[rows, 2:3] * t  # (N + K, S) grid columns over a's box
+    gy = a[rows, 1:2] + a[rows, 3:4] * t  # (N + K, S) grid rows
+    rx = np.maximum(boxes[:, 2:3] / 2, 1e-9)
+    ry = np.maximum(boxes[:, 3:4] / 2, 1e-9)
+    u = (gx - boxes[:, 0:1] - rx) / rx
+    v = (gy - boxes[:, 1:2] - ry) / ry
+    inside = (u**2)[:, None, :] + (v**2)[:, :, None] <= 1.0  # (N + K, S, S) [., row, col]
+    count_a = inside[:n].sum(axis=(1, 2))
+    both = (inside[ia] & inside[n:]).sum(axis=(1, 2))
+    # share of Sa's grid points inside Sb, times the exact |Sa| = pi/4 w h
+    frac = both / np.maximum(count_a[ia], 1)
+    inter = frac * np.pi / 4 * a[ia, 2] * a[ia, 3]
+    total = np.pi / 4 * (a[ia, 2] * a[ia, 3] + b[ib, 2] * b[ib, 3])  # |Sa| + |Sb|
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.clip(np.where(total > 0, 2 * inter / total, 0.0), 0.0, 1.0)
+        out[ia, ib] = np.clip(np.where(total > 0, 2 * inter / total, 0.0), 0.0, 1.0)
+    return out
+
+
+def boxes_meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, M) bool: xywh boxes a (N, 4) and b (M, 4) share a positive area (the pairs whose
+    ``trackers.geometry.intersection_matrix`` is positive)."""
+    ax1, ay1 = a[:, 0:1], a[:, 1:2]
+    bx1, by1 = b[:, 0], b[:, 1]
+    w = np.minimum(ax1 + a[:, 2:3], bx1 + b[:, 2]) - np.maximum(ax1, bx1)
+    h = np.minimum(ay1 + a[:, 3:4], by1 + b[:, 3]) - np.maximum(ay1, by1)
+    return (w > 0) & (h > 0)
 
 
 def overlap_ratio(a: np.ndarray, b: np.ndarray, samples: int = 24) -> np.ndarray:
@@ -106,7 +117,7 @@ def occlusion_pairs(boxes: np.ndarray, owners: np.ndarray, lam: float,
     cand = (owners[:, None] != owners[None, :]) & (k[:, None] < k[None, :])
     if ratio is None:
         # only pairs of different people whose bounding boxes meet can overlap
-        cand &= intersection_matrix(boxes, boxes) > 0
+        cand &= boxes_meet(boxes, boxes)
         ratio = 0.5 * region_overlaps(boxes, boxes, samples, near=cand)
     i, j = np.nonzero((ratio > lam) & cand)
     return np.column_stack([i, j]).astype(int)

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.geometry import intersection_matrix, iou_matrix, valid_boxes
+from trackers.geometry import iou_matrix, valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
@@ -64,6 +64,7 @@ from trackers.three_hypothesis.motion import (
     state_boxes,
 )
 from trackers.three_hypothesis.occlusion import (
+    boxes_meet,
     depth_order,
     occlusion_pairs,
     overlap_ratio,
@@ -263,7 +264,7 @@ class RetaTracker:
         # against each other (eq. 2's ratio is delta / 2), in one integration per frame
         nb = len(pred)
         regions = np.concatenate([pred, dets])
-        near = intersection_matrix(pred, regions) > 0  # only meeting boxes can overlap
+        near = boxes_meet(pred, regions)  # only meeting boxes can overlap
         near[:, :nb] &= (owners[:, None] != owners[None, :]) & self._upper(nb)
         delta = region_overlaps(pred, regions, self.region_samples, near)
         rs = delta[:, nb:]
