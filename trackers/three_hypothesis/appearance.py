@@ -82,21 +82,24 @@ class EllipseHistogrammer:
 
     def with_roots(
         self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Histograms p (eq. 1) and their element-wise square roots sqrt(p), the factors of
-        the Bhattacharyya coefficient rho = sum sqrt(q p) (eq. 4).
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Histograms p (eq. 1), their element-wise square roots sqrt(p), the factors of
+        the Bhattacharyya coefficient rho = sum sqrt(q p) (eq. 4), and the bins they occupy.
 
-        A person's histogram fills few of the bins**3 bins, so both are written only at
-        the nonzero bins of each row (the values are those of ``__call__`` and ``np.sqrt``).
+        A person's histogram fills few of the bins**3 bins, so p and sqrt(p) are written
+        only at the nonzero bins of each row (the values are those of ``__call__`` and
+        ``np.sqrt``), and rho against these measurements needs only the ``support`` bins.
 
         Returns:
-            p, sqrt_p: two (N, bins**3) float64 arrays (arguments as ``__call__``).
+            p, sqrt_p: two (N, bins**3) float64 arrays (arguments as ``__call__``);
+            support: (K,) int sorted bins where at least one row of p is nonzero.
         """
         b = snap_boxes(boxes).astype(np.int64).tolist()
         n = len(b)
         height, width = frame.shape[:2]
         out = np.zeros((n, self.bins**3), dtype=np.float64)
         roots = np.zeros((n, self.bins**3), dtype=np.float64)
+        occupied = np.zeros(self.bins**3, dtype=bool)
         for i in range(n):
             x, y, w, h = b[i]
             r0, r1 = max(y, 0), min(y + h, height)
@@ -122,4 +125,5 @@ class EllipseHistogrammer:
             share = counts[nz].astype(np.float64) / float(total)  # eq. 1: divide by |S|
             out[i, nz] = share
             roots[i, nz] = np.sqrt(share)
-        return out, roots
+            occupied[nz] = True
+        return out, roots, np.flatnonzero(occupied)

@@ -238,7 +238,8 @@ class RetaTracker:
         self.graph.begin_frame(self._frame)
         keep = valid_boxes(detections.boxes) & (detections.scores >= self.min_score)
         dets = detections.boxes[keep]
-        p, sqrt_p = self.histograms.with_roots(frame, dets, foreground)  # eq. 1 per measurement
+        # eq. 1 per measurement; ``support``: the bins where some measurement has pixels
+        p, sqrt_p, support = self.histograms.with_roots(frame, dets, foreground)
         persons = self._persons
         self._public = {person.key: person.public_id for person in persons}
 
@@ -273,10 +274,12 @@ class RetaTracker:
         pairs = occlusion_pairs(pred, owners, self.lam, ratio=0.5 * delta[:, :nb])
 
         # 4. two-stage association (3.3.2)
-        # rho = sqrt(q) . sqrt(p) (eq. 4); sqrt(q) is kept per person, so q is not restacked
-        sqrt_q = np.array([person.sqrt_q for person in persons]).reshape(len(persons), p.shape[1])
+        # rho = sqrt(q) . sqrt(p) (eq. 4), summed over the support of the measurements only
+        # (the other terms are 0); sqrt(q) is kept per person, so q is not restacked
+        sqrt_q = np.array([person.sqrt_q[support] for person in persons]).reshape(
+            len(persons), len(support))
         assoc = associate(pred, owners, sqrt_q, dets, p, self.mu_rho, self.mu_g,
-                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p,
+                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p[:, support],
                           gated=np.array([person.confirmed for person in persons], dtype=bool))
         matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
                        in zip(assoc.matches, assoc.stages, assoc.rho)}
