@@ -23,7 +23,7 @@ TENTATIVE = "tentative"
 HYPOTHESIS = "hypothesis"
 
 
-@dataclass
+@dataclass(slots=True)
 class Node:
     """One node n^t_k of the tracking graph.
 
@@ -73,7 +73,7 @@ class Node:
         }
 
 
-@dataclass
+@dataclass(slots=True)
 class Edge:
     """Directed edge (n^{t-1}_i, n^t_j): kind 'match' (similarity association) or
     'hypothesis' (predicted successor of a missing or occluded person)."""
@@ -111,14 +111,17 @@ class TrackingGraph:
         """Open the layer of frame t (drops the oldest layer beyond the window)."""
         self._layers.append(_Layer(frame))
 
-    def add_node(self, **attributes) -> Node:
-        """AddNodeToGraph: a new node in the current layer; returns it."""
-        node = Node(key=self._next_key, frame=self._layers[-1].frame, **attributes)
+    def add_node(self, *attributes, **named) -> Node:
+        """AddNodeToGraph (+ AddEdgeToGraph from its parent): a new node in the current
+        layer with the attributes of ``Node`` after ``key`` and ``frame`` (given in that
+        order or by name); returns it."""
+        layer = self._layers[-1]
+        node = Node(self._next_key, layer.frame, *attributes, **named)
         self._next_key += 1
-        self._layers[-1].nodes.append(node)
+        layer.nodes.append(node)
         if node.parent is not None:
             kind = "hypothesis" if node.kind == HYPOTHESIS else "match"
-            self._layers[-1].edges.append(Edge(node.frame, node.parent, node.key, kind))
+            layer.edges.append(Edge(node.frame, node.parent, node.key, kind))
         return node
 
     def snapshot(self) -> dict:

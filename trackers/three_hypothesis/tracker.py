@@ -74,7 +74,7 @@ from trackers.three_hypothesis.occlusion import (
 log = logging.getLogger(__name__)
 
 
-@dataclass
+@dataclass(slots=True)
 class _Branch:
     """One live node of a person: kind is 'visible' or a hypothesis kind."""
 
@@ -478,12 +478,11 @@ class RetaTracker:
             kind = HYPOTHESIS if person.confirmed else TENTATIVE
             hypothesis = branch.kind
         occluder = None if branch.occluder is None else self._public.get(branch.occluder)
-        x, y, w, h = (float(v) for v in box)
+        x, y, w, h = box.tolist()
         node = self.graph.add_node(
-            person=person.key, id=person.public_id, kind=kind, hypothesis=hypothesis,
-            S=np.array([x + w / 2, y + h / 2, 0.0, w / 2, h / 2]), q=person.q, x=branch.x,
-            P=branch.P, occluder=occluder, depth=branch.depth, parent=parent, stage=stage,
-            rho=rho,
+            person.key, person.public_id, kind, hypothesis,
+            np.array([x + w / 2, y + h / 2, 0.0, w / 2, h / 2]), person.q, branch.x, branch.P,
+            occluder, branch.depth, parent, stage, rho,
         )
         branch.graph_node = node
         return node.key
