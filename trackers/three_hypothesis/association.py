@@ -169,7 +169,7 @@ def associate(
                             for m, best in ((m1, best1), (m2, best2))])
     return Association(
         np.column_stack([m12, nodes]).astype(int),
-        np.repeat([1, 2], [len(m1), len(m2)]),
+        np.array([1] * len(m1) + [2] * len(m2), dtype=int),
         rho[m12[:, 0], m12[:, 1]],
         np.flatnonzero(~matched_p),
         np.flatnonzero(~matched_d),

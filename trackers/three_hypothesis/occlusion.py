@@ -42,25 +42,23 @@ def region_overlaps(
     ia, ib = np.nonzero(near)
     if len(ia) == 0:
         return out
-    n = len(a)
+    n, k = len(a), len(ia)
     t = (np.arange(samples) + 0.5) / samples
-    # one pass over K + N (box, grid) couples: a's own ellipse on its grid (rows 0..N-1,
-    # once per box), then b's ellipse on a's grid for every pair
-    rows = np.concatenate([np.arange(n), ia])
-    boxes = np.concatenate([a, b[ib]])
-    gx = a[rows, 0:1] + a[rows, 2:3] * t  # (N + K, S) grid columns over a's box
-    gy = a[rows, 1:2] + a[rows, 3:4] * t  # (N + K, S) grid rows
-    rx = np.maximum(boxes[:, 2:3] / 2, 1e-9)
-    ry = np.maximum(boxes[:, 3:4] / 2, 1e-9)
-    u = (gx - boxes[:, 0:1] - rx) / rx
-    v = (gy - boxes[:, 1:2] - ry) / ry
-    inside = (u**2)[:, None, :] + (v**2)[:, :, None] <= 1.0  # (N + K, S, S) [., row, col]
-    count_a = inside[:n].sum(axis=(1, 2))
-    both = (inside[ia] & inside[n:]).sum(axis=(1, 2))
+    # one pass over N + K (grid, ellipse) couples: each a-ellipse on its own grid (rows
+    # 0..N-1, once per box), then each pair's b-ellipse on a's grid; [:, 0] is x, [:, 1] y
+    grid = a[np.concatenate([np.arange(n), ia])]
+    shape = np.concatenate([a, b[ib]])
+    g = grid[:, :2, None] + grid[:, 2:, None] * t  # (N + K, 2, S) grid coordinates
+    r = np.maximum(shape[:, 2:, None] / 2, 1e-9)  # (N + K, 2, 1) radii
+    u2 = ((g - shape[:, :2, None] - r) / r) ** 2  # squared normalised offsets from the centre
+    inside = (u2[:, 0, None, :] + u2[:, 1, :, None] <= 1.0).reshape(n + k, -1)  # [., row*S+col]
+    count_a = inside[:n].sum(axis=1)
+    both = (inside[ia] & inside[n:]).sum(axis=1)
     # share of Sa's grid points inside Sb, times the exact |Sa| = pi/4 w h
     frac = both / np.maximum(count_a[ia], 1)
-    inter = frac * np.pi / 4 * a[ia, 2] * a[ia, 3]
-    total = np.pi / 4 * (a[ia, 2] * a[ia, 3] + b[ib, 2] * b[ib, 3])  # |Sa| + |Sb|
+    wa, ha = a[ia, 2], a[ia, 3]
+    inter = frac * np.pi / 4 * wa * ha
+    total = np.pi / 4 * (wa * ha + b[ib, 2] * b[ib, 3])  # |Sa| + |Sb|
     with np.errstate(invalid="ignore", divide="ignore"):
         out[ia, ib] = np.clip(np.where(total > 0, 2 * inter / total, 0.0), 0.0, 1.0)
     return out
