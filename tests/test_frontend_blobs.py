@@ -125,3 +125,22 @@ def test_inpainted_estimate_removes_a_person_who_never_leaves():
     est = background_estimate(frames, inpaint=True, spread_threshold=12, spread_quantile=0.75)
     assert np.abs(est[30:50, 45:50].astype(int) - bg[30:50, 45:50]).max() < 15
     assert np.abs(est[:, :20].astype(int) - bg[:, :20]).max() <= 1  # elsewhere: the median
+
+
+@pytest.mark.parametrize("compensate", [True, False])
+def test_gain_compensation_ignores_global_brightening(compensate):
+    rng = np.random.default_rng(2)
+    bg = rng.integers(50, 150, size=(60, 80, 3), dtype=np.uint8)
+    model = BackgroundModel(history=50, open_kernel=0, close_kernel=0,
+                            gain_compensation=compensate)
+    for _ in range(30):
+        model.apply(bg)
+    bright = (bg * 1.4).astype(np.uint8)  # (a darker scene would pass as shadow)
+    bright[10:40, 20:30] = 10  # a person in the brighter scene
+    mask = model.apply(bright)
+    assert mask[12:38, 22:28].all()
+    if compensate:
+        np.testing.assert_allclose(model.last_gain, 1.4, atol=0.02)
+        assert mask.mean() < 0.1
+    else:
+        assert mask.mean() > 0.5

@@ -124,6 +124,10 @@ class BackgroundModel:
             (``background_estimate``: for people who stay in one place).
         warmup_passes: times the sample is fed.
         spread_threshold: grey-level spread above which a pixel is inpainted ("inpaint").
+        gain_compensation: divide each frame, per channel, by its gain against a reference
+            background (the warm-up estimate, else the first frame): the median of
+            frame / reference over a sparse pixel grid, robust to the people in view. Global
+            illumination and camera-gain changes then do not turn the scene to foreground.
         work_scale: run the model on frames resized by this factor in (0, 1] (speed); the
             mask is resized back to the frame with nearest-neighbour interpolation before
             the morphology.
@@ -149,6 +153,7 @@ class BackgroundModel:
         spread_threshold: float = 12.0,
         shadow_threshold: float = 0.5,
         work_scale: float = 1.0,
+        gain_compensation: bool = True,
     ) -> None:
         if method not in ("mog2", "knn"):
             raise ValueError(f"method must be 'mog2' or 'knn', got {method!r}")
@@ -186,6 +191,7 @@ class BackgroundModel:
         if not 0.0 < work_scale <= 1.0:
             raise ValueError(f"work_scale must be in (0, 1], got {work_scale}")
         self.work_scale = float(work_scale)
+        self.gain_compensation = bool(gain_compensation)
         self.reset()
 
     def reset(self) -> None:
@@ -203,6 +209,8 @@ class BackgroundModel:
         if self.background_ratio is not None:
             self._model.setBackgroundRatio(float(self.background_ratio))
         self._model.setShadowThreshold(self.shadow_threshold)
+        self._reference: np.ndarray | None = None  # grid samples of the reference background
+        self.last_gain = np.ones(3)
 
     def warm_up(self, frames: Sequence[np.ndarray]) -> None:
         """Learn the background from ``frames`` ((H, W, 3) uint8 each) before tracking
@@ -211,6 +219,9 @@ class BackgroundModel:
         if not frames:
             return
         frames = [self._small(f) for f in frames]
+        if self.gain_compensation:  # bring the sample to the first frame's brightness
+            self._reference = None
+            frames = [self._compensate(f) for f in frames]
         if self.warmup == "samples":
             rate = 1.0 / max(len(frames), 2)
             for _ in range(self.warmup_passes):
@@ -219,6 +230,8 @@ class BackgroundModel:
         else:
             bg = background_estimate(frames, inpaint=self.warmup == "inpaint",
                                      spread_threshold=self.spread_threshold)
+            if self.gain_compensation:
+                self._reference = self._grid(bg)
             for _ in range(5):
                 self._model.apply(bg, learningRate=0.2)
             # then the samples with their people replaced by the estimate, so that the model
@@ -249,8 +262,29 @@ class BackgroundModel:
         size = (max(round(w * self.work_scale), 1), max(round(h * self.work_scale), 1))
         return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
 
+    GRID = 8  # pixel step of the gain estimate's sample grid
+
+    def _grid(self, img: np.ndarray) -> np.ndarray:
+        return img[:: self.GRID, :: self.GRID].reshape(-1, 3).astype(np.float32) + 1.0
+
+    def _compensate(self, frame: np.ndarray) -> np.ndarray:
+        """``frame`` scaled per channel to the reference brightness (gain_compensation)."""
+        if not self.gain_compensation:
+            return frame
+        if self._reference is None:
+            self._reference = self._grid(frame)
+            return frame
+        gain = np.median(self._grid(frame) / self._reference, axis=0)
+        self.last_gain = gain
+        if np.all(np.abs(gain - 1.0) < 0.01):
+            return frame
+        lut = np.clip(np.arange(256, dtype=np.float32)[:, None] / gain[None, :] + 0.5, 0, 255)
+        lut = lut.astype(np.uint8)
+        return cv2.merge([cv2.LUT(frame[..., c], np.ascontiguousarray(lut[:, c]))
+                          for c in range(3)])
+
     def _apply(self, frame: np.ndarray, rate: float) -> np.ndarray:
-        out = self._model.apply(self._small(frame), learningRate=rate)
+        out = self._model.apply(self._compensate(self._small(frame)), learningRate=rate)
         if self.work_scale != 1.0:
             out = cv2.resize(out, (frame.shape[1], frame.shape[0]), interpolation=cv2.INTER_NEAREST)
         return out
