@@ -78,30 +78,35 @@ class EllipseHistogrammer:
         Returns:
             (N, bins**3) float64 rows summing to 1 (all zero where no pixel is counted).
         """
-        return self.with_roots(frame, boxes, foreground)[0]
+        p = self.with_roots(frame, boxes, foreground)[0]
+        return np.array(p).reshape(len(p), self.bins**3)
 
     def with_roots(
         self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray]:
         """Histograms p (eq. 1), their element-wise square roots sqrt(p), the factors of
         the Bhattacharyya coefficient rho = sum sqrt(q p) (eq. 4), and the bins they occupy.
 
         A person's histogram fills few of the bins**3 bins, so p and sqrt(p) are written
         only at the nonzero bins of each row (the values are those of ``__call__`` and
         ``np.sqrt``), and rho against these measurements needs only the ``support`` bins.
+        Every histogram is an array of its own, so a person can keep a measurement's
+        histogram as its appearance without a copy.
 
         Returns:
-            p, sqrt_p: two (N, bins**3) float64 arrays (arguments as ``__call__``);
-            support: (K,) int sorted bins where at least one row of p is nonzero.
+            p, sqrt_p: two lists of N (bins**3,) float64 arrays (arguments as ``__call__``);
+            support: (K,) int sorted bins where at least one p is nonzero.
         """
         b = snap_boxes(boxes).astype(np.int64).tolist()
-        n = len(b)
         height, width = frame.shape[:2]
-        out = np.zeros((n, self.bins**3), dtype=np.float64)
-        roots = np.zeros((n, self.bins**3), dtype=np.float64)
-        occupied = np.zeros(self.bins**3, dtype=bool)
-        for i in range(n):
-            x, y, w, h = b[i]
+        size = self.bins**3
+        out: list[np.ndarray] = []
+        roots: list[np.ndarray] = []
+        occupied = np.zeros(size, dtype=bool)
+        for x, y, w, h in b:
+            hist, root = np.zeros(size), np.zeros(size)
+            out.append(hist)
+            roots.append(root)
             r0, r1 = max(y, 0), min(y + h, height)
             c0, c1 = max(x, 0), min(x + w, width)
             if r1 <= r0 or c1 <= c0:
@@ -123,7 +128,7 @@ class EllipseHistogrammer:
             counts = counts.ravel()
             nz = (counts > 0).nonzero()[0]
             share = counts[nz].astype(np.float64) / float(total)  # eq. 1: divide by |S|
-            out[i, nz] = share
-            roots[i, nz] = np.sqrt(share)
+            hist[nz] = share
+            root[nz] = np.sqrt(share)
             occupied[nz] = True
         return out, roots, np.flatnonzero(occupied)

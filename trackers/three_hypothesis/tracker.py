@@ -238,7 +238,8 @@ class RetaTracker:
         self.graph.begin_frame(self._frame)
         keep = valid_boxes(detections.boxes) & (detections.scores >= self.min_score)
         dets = detections.boxes[keep]
-        # eq. 1 per measurement; ``support``: the bins where some measurement has pixels
+        # eq. 1 per measurement (one array each); ``support``: the bins where some
+        # measurement has pixels
         p, sqrt_p, support = self.histograms.with_roots(frame, dets, foreground)
         persons = self._persons
         self._public = {person.key: person.public_id for person in persons}
@@ -278,8 +279,9 @@ class RetaTracker:
         # (the other terms are 0); sqrt(q) is kept per person, so q is not restacked
         sqrt_q = np.array([person.sqrt_q[support] for person in persons]).reshape(
             len(persons), len(support))
-        assoc = associate(pred, owners, sqrt_q, dets, p, self.mu_rho, self.mu_g,
-                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p[:, support],
+        sqrt_ps = np.array([r[support] for r in sqrt_p]).reshape(len(dets), len(support))
+        assoc = associate(pred, owners, sqrt_q, dets, sqrt_ps, self.mu_rho, self.mu_g,
+                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_ps,
                           gated=np.array([person.confirmed for person in persons], dtype=bool))
         matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
                        in zip(assoc.matches, assoc.stages, assoc.rho)}
@@ -320,8 +322,8 @@ class RetaTracker:
             for r, (i, (d, n, stage, rho)) in enumerate(rows):
                 person = persons[i]
                 if not behind[r]:
-                    person.q = p[d].copy()  # appearance updated only when not occluded
-                    person.sqrt_q = sqrt_p[d].copy()
+                    person.q = p[d]  # appearance updated only when not occluded
+                    person.sqrt_q = sqrt_p[d]
                     shape = dbox[r]
                 else:
                     shape = pred[n]
@@ -429,7 +431,7 @@ class RetaTracker:
         # 8. unmatched measurements start tentative tracks (3.3)
         for d in assoc.unmatched_measurements:
             x0, P0, _, _, Q0, R0 = self.motion.init(dets[d])
-            person = _Person(self._next_key, p[d].copy(), sqrt_p[d].copy(), Q0, R0,
+            person = _Person(self._next_key, p[d], sqrt_p[d], Q0, R0,
                              [_Branch(VISIBLE, x0, P0)],
                              shape=dets[d])
             self._next_key += 1
