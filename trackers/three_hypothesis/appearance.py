@@ -24,7 +24,7 @@ def snap_boxes(boxes: np.ndarray) -> np.ndarray:
     b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     x0 = np.round(b[:, :2])
     x1 = np.round(b[:, :2] + b[:, 2:])
-    return np.column_stack([x0, np.maximum(x1 - x0, 1.0)])
+    return np.concatenate([x0, np.maximum(x1 - x0, 1.0)], axis=1)
 
 
 class EllipseHistogrammer:
@@ -127,7 +127,7 @@ class EllipseHistogrammer:
             counts = cv2.calcHist([crop], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges)
             counts = counts.ravel()
             nz = (counts > 0).nonzero()[0]
-            share = counts[nz].astype(np.float64) / float(total)  # eq. 1: divide by |S|
+            share = np.divide(counts[nz], float(total), dtype=np.float64)  # eq. 1: / |S|
             hist[nz] = share
             root[nz] = np.sqrt(share)
             occupied[nz] = True

@@ -134,7 +134,7 @@ def associate(
         rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4
     else:
         rho = bhattacharyya(q, p)  # (P, D) eq. 4
-    np.clip(rho, 0.0, 1.0, out=rho)
+    np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)  # clipped to [0, 1]
     one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
     rho_nodes = rho if one_node else rho[owners]  # (B, D)
     appearance_ok = rho_nodes >= mu_rho

@@ -6,6 +6,7 @@ shape S = (xc, yc, 0, w/2, h/2) of ``trackers.geometry.box_ellipses``.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -43,7 +44,7 @@ def region_overlaps(
     if len(ia) == 0:
         return out
     n, k = len(a), len(ia)
-    t = (np.arange(samples) + 0.5) / samples
+    t = _grid(samples)
     # one pass over N + K (grid, ellipse) couples: each a-ellipse on its own grid (rows
     # 0..N-1, once per box), then each pair's b-ellipse on a's grid; [:, 0] is x, [:, 1] y
     grid = a[np.concatenate([np.arange(n), ia])]
@@ -59,9 +60,18 @@ def region_overlaps(
     wa, ha = a[ia, 2], a[ia, 3]
     inter = frac * np.pi / 4 * wa * ha
     total = np.pi / 4 * (wa * ha + b[ib, 2] * b[ib, 3])  # |Sa| + |Sb|
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out[ia, ib] = np.clip(np.where(total > 0, 2 * inter / total, 0.0), 0.0, 1.0)
+    positive = total > 0
+    delta = np.where(positive, 2 * inter / np.where(positive, total, 1.0), 0.0)
+    out[ia, ib] = np.minimum(np.maximum(delta, 0.0), 1.0)  # clipped to [0, 1]
     return out
+
+
+@functools.cache
+def _grid(samples: int) -> np.ndarray:
+    """(samples,) read-only positions (k + 1/2) / samples of the integration grid in [0, 1]."""
+    t = (np.arange(samples) + 0.5) / samples
+    t.flags.writeable = False
+    return t
 
 
 def boxes_meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -283,21 +283,23 @@ class RetaTracker:
         assoc = associate(pred, owners, sqrt_q, dets, sqrt_ps, self.mu_rho, self.mu_g,
                           delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_ps,
                           gated=np.array([person.confirmed for person in persons], dtype=bool))
-        matched_det = {int(pi): (int(d), int(n), int(s), float(r)) for (pi, d, n), s, r
-                       in zip(assoc.matches, assoc.stages, assoc.rho)}
+        matched_det = {pi: (d, n, s, r) for (pi, d, n), s, r
+                       in zip(assoc.matches.tolist(), assoc.stages.tolist(), assoc.rho.tolist())}
 
         # 5. depth order pi (eq. 3) of the pairs in O; who is hidden behind whom
         visible_node = {matched_det[pi][1] for pi in matched_det}
         in_front: dict[int, list[int]] = {}  # node index -> person indices in front of it
-        for a, b in pairs:
-            i, j = owners[a], owners[b]
+        own = owners.tolist()
+        boxes = pred.tolist()  # (B,) [x, y, w, h] lists: scalar work below
+        for a, b in pairs.tolist():
+            i, j = own[a], own[b]
             ki, kj = persons[i].key, persons[j].key
             vi, vj = a in visible_node, b in visible_node
-            shape_i = dets[matched_det[i][0]] if vi else pred[a]
+            shape_i = dets[matched_det[i][0]] if vi else boxes[a]
             prev = self._pi.get((ki, kj), 0)
-            order = depth_order(vi, vj, shape_i, pred[b], prev)
+            order = depth_order(vi, vj, shape_i, boxes[b], prev)
             if order == 0:  # unknown and neither visible: the lower region is in front
-                order = 1 if pred[a, 1] + pred[a, 3] >= pred[b, 1] + pred[b, 3] else -1
+                order = 1 if boxes[a][1] + boxes[a][3] >= boxes[b][1] + boxes[b][3] else -1
             self._pi[(ki, kj)] = order
             self._pi[(kj, ki)] = -order
             if order > 0:
@@ -513,9 +515,11 @@ class RetaTracker:
         S = node.S
         if box is None:
             box = np.array([S[0] - S[3], S[1] - S[4], 2 * S[3], 2 * S[4]])
+        else:
+            box = np.array(box, dtype=np.float64)  # a copy: the caller may keep it
         extra = {"ellipse": S, "hypothesis": node.hypothesis, "occluder": node.occluder,
                  "depth": node.depth, "node": node.key}
-        return Track(person.public_id, np.array(box, dtype=np.float64), state, 1.0, extra)
+        return Track(person.public_id, box, state, 1.0, extra)
 
 
 def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24) -> np.ndarray:
