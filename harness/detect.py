@@ -10,12 +10,14 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
   matching of detections to ground truth per frame;
 * with ``overlays.frames=[first,last]``: ``overlays/<sequence>/<frame>.png`` showing the
   foreground (tinted), blobs (blue), detections (green), ground truth (white) and heads
-  (yellow, when the detections carry heads).
+  (yellow ellipses: the detections' own, else with ``overlays.heads`` the PBM head
+  detector's search in each detection box).
 
 Examples::
 
     python -m harness.detect detector=silhouette
     python -m harness.detect dataset=caviar detector=hog overlays.frames=[10,20]
+    python -m harness.detect dataset=synthetic dataset.scenarios=[crowd] detector=foreground
 """
 
 from __future__ import annotations
@@ -134,6 +136,11 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
         if len(ov_frames) != 2 or int(ov_frames[0]) > int(ov_frames[1]):
             raise ValueError(f"overlays.frames must be [first, last], got {list(ov_frames)}")
         ov_frames = (int(ov_frames[0]), int(ov_frames[1]))
+    head_detector = None
+    if ov_frames is not None and ov.get("heads", True):
+        from trackers.frontend.heads import HeadDetector
+
+        head_detector = HeadDetector()
     counts: dict[str, DetectionCounts] = {}
     for seq in sequences:
         name = seq.info.name
@@ -163,6 +170,9 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
                 c.tp += match_count(gt, dets.boxes, iou)
             if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
                 bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
+                if dets.heads is None and head_detector is not None and len(dets):
+                    dets = type(dets)(dets.boxes, dets.scores, dets.labels,
+                                      head_detector.detect(frame, fg, dets.boxes))
                 path = out_dir / "overlays" / name / f"{k:06d}.png"
                 path.parent.mkdir(parents=True, exist_ok=True)
                 cv2.imwrite(str(path), draw_overlay(frame, fg, dets, gt, bb))

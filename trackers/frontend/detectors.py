@@ -230,9 +230,10 @@ class SilhouetteDetector(_ForegroundPipeline):
 
     def _collect(self, fg: np.ndarray) -> None:
         lo, hi = self.calibration_aspect
+        min_height = self.matcher.pixel_heights(fg.shape[0])[0]
         for b in blobs_from_mask(fg, min_area=20, perimeter=False):
             _x, y, w, h = b.box
-            if (h >= self.matcher.min_height and lo <= w / h <= hi
+            if (h >= min_height and lo <= w / h <= hi
                     and b.area >= self.calibration_fill * w * h and y > 0
                     and y + h < fg.shape[0]):
                 self._feet.append(y + h)

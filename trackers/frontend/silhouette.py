@@ -99,8 +99,8 @@ class SilhouetteMatcher:
 
     Args:
         template: path of a template ``.npy`` (None: shipped default).
-        min_height: smallest person height searched, pixels (full resolution).
-        max_height: largest person height searched, pixels.
+        min_height: smallest person height searched (see ``height_unit``).
+        max_height: largest person height searched (see ``height_unit``).
         n_scales: number of heights, geometrically spaced.
         downscale: work on the foreground reduced by this integer factor (speed).
         alpha: penalty weight for template pixels without foreground.
@@ -119,6 +119,8 @@ class SilhouetteMatcher:
             that person (an arm, a bag, a hollow in the foreground): its pixels are marked
             occupied but it is not reported (1 keeps every fit).
         part_height: see ``max_overlap``.
+        height_unit: "pixels" (full resolution) or "frame" (fractions of the frame height,
+            so that one config serves every frame size).
     """
 
     def __init__(
@@ -138,9 +140,15 @@ class SilhouetteMatcher:
         height_tolerance: float = 1.4,
         max_overlap: float = 0.5,
         part_height: float = 0.8,
+        height_unit: str = "pixels",
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
+        if height_unit not in ("pixels", "frame"):
+            raise ValueError(f"height_unit must be 'pixels' or 'frame', got {height_unit!r}")
+        if height_unit == "frame" and max_height > 1:
+            raise ValueError(f"height_unit 'frame' takes fractions <= 1, got max_height {max_height}")
+        self.height_unit = height_unit
         if n_scales < 1 or downscale < 1:
             raise ValueError(f"n_scales and downscale must be >= 1, got {n_scales}, {downscale}")
         if not 0.0 < min_visible <= 1.0:
@@ -161,14 +169,28 @@ class SilhouetteMatcher:
             raise ValueError(f"max_overlap must be in (0, 1], got {max_overlap}")
         self.max_overlap = float(max_overlap)
         self.part_height = float(part_height)
-        heights = np.geomspace(min_height, max_height, n_scales) / downscale
-        aspect = self.template.shape[1] / self.template.shape[0]
-        self._kernels = []
-        for h in heights:
-            th = max(round(h), 3)
-            tw = max(round(h * aspect), 2)
-            t = cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA)
-            self._kernels.append((t, (1.0 - t), float(t.sum())))
+        self._cache: dict[int, list] = {}
+        self._kernels: list = []
+
+    def pixel_heights(self, frame_height: int) -> tuple[float, float]:
+        """(min, max) person height searched in a frame ``frame_height`` rows high, pixels."""
+        f = float(frame_height) if self.height_unit == "frame" else 1.0
+        return self.min_height * f, self.max_height * f
+
+    def _kernels_for(self, frame_height: int) -> list:
+        key = int(frame_height) if self.height_unit == "frame" else 0
+        if key not in self._cache:
+            lo, hi = self.pixel_heights(frame_height)
+            heights = np.geomspace(lo, hi, self.n_scales) / self.downscale
+            aspect = self.template.shape[1] / self.template.shape[0]
+            kernels = []
+            for h in heights:
+                th = max(round(h), 3)
+                tw = max(round(h * aspect), 2)
+                t = cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA)
+                kernels.append((t, (1.0 - t), float(t.sum())))
+            self._cache[key] = kernels
+        return self._cache[key]
 
     def set_height_model(self, model: tuple[float, float] | None) -> None:
         """Expected person height = a * foot_row + b (full-resolution pixels); None: no prior."""
@@ -183,6 +205,7 @@ class SilhouetteMatcher:
         d = self.downscale
         fg = (np.asarray(foreground) != 0).astype(np.uint8)
         H, W = fg.shape
+        self._kernels = self._kernels_for(H)
         small = fg if d == 1 else cv2.resize(fg, (W // d, H // d), interpolation=cv2.INTER_AREA)
         if d > 1:  # INTER_AREA on 0/1 uint8 rounds: keep cells at least half foreground
             small = cv2.resize(fg * np.uint8(255), (W // d, H // d), interpolation=cv2.INTER_AREA)
