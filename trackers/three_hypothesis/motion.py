@@ -78,12 +78,11 @@ def correct(
 def state_boxes(x: np.ndarray) -> np.ndarray:
     """(N, 8) states -> (N, 4) xywh boxes (sizes floored at 1 pixel)."""
     x = np.asarray(x, dtype=np.float64).reshape(-1, 8)
-    w = np.maximum(x[:, 2], 1.0)
-    h = np.maximum(x[:, 3], 1.0)
-    return np.column_stack([x[:, 0] - w / 2, x[:, 1] - h / 2, w, h])
+    wh = np.maximum(x[:, 2:4], 1.0)
+    return np.concatenate([x[:, :2] - wh / 2, wh], axis=1)
 
 
 def box_measurements(boxes: np.ndarray) -> np.ndarray:
     """(N, 4) xywh -> (N, 4) measurements z = (xc, yc, w, h)."""
     b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    return np.column_stack([b[:, :2] + b[:, 2:] / 2, b[:, 2:]])
+    return np.concatenate([b[:, :2] + b[:, 2:] / 2, b[:, 2:]], axis=1)

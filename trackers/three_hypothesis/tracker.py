@@ -255,7 +255,7 @@ class RetaTracker:
             occ_v = np.array([velocity.get(b.occluder, zero) if b.occluder is not None else zero
                               for b in branches])
             x_set = hyp.set_motion(x_prev, [b.kind for b in branches], occ_v)
-            Qs = np.array([persons[o].Q for o in owners])
+            Qs = np.array([person.Q for person in persons for _ in person.branches])
             Xp, Pp = predict(x_set, P_prev, self._F, Qs)
             pred = state_boxes(Xp)
         else:
