@@ -171,3 +171,50 @@ def test_detector_arguments_validated():
         HogDetector(scale=1.0)
     with pytest.raises(ValueError, match="min_height"):
         SilhouetteMatcher(min_height=100, max_height=50)
+
+
+def _greedy_reference(m: SilhouetteMatcher, vacant: np.ndarray) -> list:
+    """The greedy loop recomputing every sum over the whole crop (no windows, no parts)."""
+    occupied = np.zeros_like(vacant)
+    out = []
+    for _ in range(m.max_people):
+        best = (0.0, None)
+        for t, _inv, tsum in m._kernels:
+            tv = cv2.filter2D(vacant, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
+            iv = cv2.filter2D(vacant, cv2.CV_32F, 1.0 - t, borderType=cv2.BORDER_CONSTANT)
+            vis = tsum - cv2.filter2D(occupied, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
+            e = tv - m.alpha * (vis - tv) - m.beta * iv
+            ok = (e >= m.threshold * np.maximum(vis, 1e-6)) & (vis >= m.min_visible * tsum)
+            if ok.any():
+                e = np.where(ok, e, -np.inf)
+                r, c = np.unravel_index(np.argmax(e), e.shape)
+                if e[r, c] > best[0]:
+                    best = (e[r, c], (r, c, t))
+        if best[1] is None:
+            return out
+        r, c, t = best[1]
+        top, left = r - t.shape[0] // 2, c - t.shape[1] // 2
+        out.append([left, top, t.shape[1], t.shape[0]])
+        r0, c0 = max(top, 0), max(left, 0)
+        r1, c1 = min(top + t.shape[0], vacant.shape[0]), min(left + t.shape[1], vacant.shape[1])
+        sil = t[r0 - top : r1 - top, c0 - left : c1 - left] > m.occupy_level
+        reg = vacant[r0:r1, c0:c1]
+        occupied[r0:r1, c0:c1] = np.maximum(occupied[r0:r1, c0:c1], sil & (reg > 0))
+        reg[sil] = 0.0
+    return out
+
+
+def test_windowed_greedy_equals_full_recompute():
+    rng = np.random.default_rng(5)
+    mask = np.zeros((120, 160), dtype=np.float32)
+    for _ in range(5):  # a cluster of overlapping people and a few specks
+        h = int(rng.integers(40, 80))
+        x, y = int(rng.integers(10, 110)), int(rng.integers(5, 120 - h))
+        mask[y : y + h, x : x + int(0.4 * h)] = _person_mask((h, int(0.4 * h)), (0, 0, int(0.4 * h), h))
+    mask[rng.random(mask.shape) < 0.01] = 1.0
+    m = SilhouetteMatcher(min_height=30, max_height=100, n_scales=6, downscale=1, max_overlap=1.0)
+    m._kernels = m._kernels_for(120)
+    got, _ = m._greedy(mask.copy(), region_height=120)
+    want = _greedy_reference(m, mask.copy())
+    assert len(want) >= 3
+    np.testing.assert_array_equal(np.array(got), np.array(want))

@@ -255,23 +255,52 @@ class SilhouetteMatcher:
         return ok[:, None]
 
     def _greedy(self, vacant: np.ndarray, region_height: int, row0: int = 0) -> tuple[list, list]:
-        occupied = np.zeros_like(vacant)
-        allowed = [self._allowed_rows(k[0].shape[0], vacant.shape[0], row0) for k in self._kernels]
+        """Greedy fits in one (h, w) float32 0/1 crop; boxes in crop coordinates.
+
+        The per-scale sums (sum T V, box sum of V, sum T O) are computed once over the crop
+        and, after each fit, recomputed only in the window its marked pixels can affect.
+        """
+        H, W = vacant.shape
+        kernels = []
+        for t, _inv, tsum in self._kernels:
+            rows_ok = self._allowed_rows(t.shape[0], H, row0)
+            if t.shape[0] <= 1.5 * region_height + 4 and (rows_ok is None or rows_ok.any()):
+                kernels.append((t, tsum, rows_ok))
+        if not kernels:
+            return [], []
+        # zero-padded storage so that any window's kernel support is inside the array
+        py = max(t.shape[0] for t, _, _ in kernels)
+        px = max(t.shape[1] for t, _, _ in kernels)
+        vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.float32)
+        op = np.zeros_like(vp)
+        vp[py : py + H, px : px + W] = vacant
+        V, O = vp[py : py + H, px : px + W], op[py : py + H, px : px + W]
+
+        def sums(t, r0, r1, c0, c1):
+            """(sum T V, box sum V, sum T O) at output rows [r0, r1), cols [c0, c1)."""
+            th, tw = t.shape
+            ay, ax = th // 2, tw // 2  # filter2D's default anchor: the kernel centre
+            ys = slice(py + r0 - ay, py + r1 + th - 1 - ay)
+            xs = slice(px + c0 - ax, px + c1 + tw - 1 - ax)
+            inner = (slice(ay, ay + r1 - r0), slice(ax, ax + c1 - c0))
+            win = vp[ys, xs]
+            tv = cv2.filter2D(win, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)[inner]
+            bx = cv2.boxFilter(win, cv2.CV_32F, (tw, th), anchor=(ax, ay), normalize=False,
+                               borderType=cv2.BORDER_CONSTANT)[inner]
+            owin = op[ys, xs]
+            to = (cv2.filter2D(owin, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)[inner]
+                  if owin.any() else np.zeros_like(tv))
+            return tv, bx, to
+
+        maps = [list(sums(t, 0, H, 0, W)) for t, _, _ in kernels]
         boxes, scores = [], []
-        kernels = [(k, al) for k, al in zip(self._kernels, allowed)
-                   if k[0].shape[0] <= 1.5 * region_height + 4 and (al is None or al.any())]
         for _ in range(self.max_people):
             best = (0.0, None)
-            for (t, inv, tsum), rows_ok in kernels:
-                tv = cv2.filter2D(vacant, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
-                # sum (1 - T) V = box sum of V - sum T V (a box filter is much cheaper)
-                iv = cv2.boxFilter(vacant, cv2.CV_32F, (t.shape[1], t.shape[0]),
-                                   anchor=(t.shape[1] // 2, t.shape[0] // 2), normalize=False,
-                                   borderType=cv2.BORDER_CONSTANT) - tv
-                visible = tsum - (cv2.filter2D(occupied, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
-                                  if occupied.any() else 0.0)
-                # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V
-                explained = tv - self.alpha * (visible - tv) - self.beta * iv
+            for (t, tsum, rows_ok), (tv, bx, to) in zip(kernels, maps):
+                visible = tsum - to
+                # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V,
+                # with sum (1 - T) V = box sum of V - sum T V
+                explained = tv - self.alpha * (visible - tv) - self.beta * (bx - tv)
                 ok = (explained >= self.threshold * np.maximum(visible, 1e-6)) & (
                     visible >= self.min_visible * tsum)
                 if rows_ok is not None:
@@ -280,26 +309,34 @@ class SilhouetteMatcher:
                     continue
                 e = np.where(ok, explained, -np.inf)
                 j = int(np.argmax(e))
-                r, c = divmod(j, e.shape[1])
+                r, c = divmod(j, W)
                 if e[r, c] > best[0]:
-                    best = (float(e[r, c]), (r, c, t, float(e[r, c] / max(visible if np.isscalar(visible) else visible[r, c], 1e-6))))
+                    best = (float(e[r, c]), (r, c, t, float(e[r, c] / max(visible[r, c], 1e-6))))
             if best[1] is None:
                 break
             r, c, t, score = best[1]
             th, tw = t.shape
-            # filter2D anchors the kernel at its centre (th // 2, tw // 2)
-            top, left = r - th // 2, c - tw // 2
+            top, left = r - th // 2, c - tw // 2  # filter2D anchors kernels at their centre
             box = [left, top, tw, th]
             if not boxes or not self._is_part(box, boxes):
                 boxes.append(box)
                 scores.append(score)
             # a part of a person already found is not reported, but its pixels are used up
             rr0, cc0 = max(top, 0), max(left, 0)
-            rr1, cc1 = min(top + th, vacant.shape[0]), min(left + tw, vacant.shape[1])
+            rr1, cc1 = min(top + th, H), min(left + tw, W)
             sil = t[rr0 - top : rr1 - top, cc0 - left : cc1 - left] > self.occupy_level
-            region = vacant[rr0:rr1, cc0:cc1]
-            occupied[rr0:rr1, cc0:cc1] = np.maximum(occupied[rr0:rr1, cc0:cc1], sil & (region > 0))
+            region = V[rr0:rr1, cc0:cc1]
+            O[rr0:rr1, cc0:cc1] = np.maximum(O[rr0:rr1, cc0:cc1], sil & (region > 0))
             region[sil] = 0.0
+            for (k, _, _), m in zip(kernels, maps):  # refresh the affected window only
+                kh, kw = k.shape
+                o0, o1 = max(rr0 - (kh - 1 - kh // 2), 0), min(rr1 + kh // 2, H)
+                q0, q1 = max(cc0 - (kw - 1 - kw // 2), 0), min(cc1 + kw // 2, W)
+                if o1 > o0 and q1 > q0:
+                    tv, bx, to = sums(k, o0, o1, q0, q1)
+                    m[0][o0:o1, q0:q1] = tv
+                    m[1][o0:o1, q0:q1] = bx
+                    m[2][o0:o1, q0:q1] = to
         return boxes, scores
 
 
