@@ -36,6 +36,7 @@ import pandas as pd
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable, read_mot, write_mot
 from harness.report.bars import DEFAULT_METRICS, metric_bars
+from harness.report.graph import GraphExport
 from harness.report.tables import comparison, direction, per_sequence, to_latex, to_markdown
 from harness.sources import DetectionSource
 from trackers.records import Detections, Track
@@ -225,6 +226,7 @@ def run_sequence(
     foreground: str = "auto",
     background: Mapping[str, Any] | None = None,
     progress: ProgressFactory | None = None,
+    on_update: Callable[[str, int, Tracker], None] | None = None,
 ) -> dict[str, TrackerOutput]:
     """Run several trackers side by side on one sequence.
 
@@ -238,6 +240,8 @@ def run_sequence(
         foreground: foreground mode (see ``ForegroundProvider``).
         background: keyword arguments of the background model for ``foreground="mog2"``.
         progress: progress-bar factory ``(total=, desc=)``; None shows nothing.
+        on_update: called as ``on_update(name, k, tracker)`` after each successful update
+            of frame k, outside the timed section (e.g. ``GraphExport.record``).
     Returns:
         name -> ``TrackerOutput``. A tracker raising an exception is stopped there (its
         ``error`` set, the exception logged) while the others go on.
@@ -279,6 +283,8 @@ def run_sequence(
                 out[t].seconds += time.perf_counter() - t0
                 out[t].frames += 1
                 rows[t].add(k, tracks)
+                if on_update is not None:
+                    on_update(t, k, tracker)
             bar.update(1)
     finally:
         bar.close()
@@ -643,6 +649,11 @@ def run_experiment(
     iou_threshold = float(_cfg_get(evaluation, "iou_threshold", 0.5))
     table_columns = list(_container(_cfg_get(evaluation, "table", [])) or []) or None
     plot_metrics = list(_container(_cfg_get(evaluation, "plot", DEFAULT_METRICS)))
+    try:  # per-frame tracking graphs beside the tracks (config key ``graph``)
+        graphs = GraphExport.from_config(_container(_cfg_get(cfg, "graph", {})),
+                                         writer.out_dir / "tracks")
+    except ValueError as err:
+        raise RunError(str(err)) from None
 
     # check everything that can be checked before the first frame
     configs = tracker_configs(_cfg_get(cfg, "tracker"), tracker_name)
@@ -680,7 +691,9 @@ def run_experiment(
         try:
             trackers = {n: build_tracker(n, node) for n, node in configs.items()}
             source = build_source(_cfg_get(cfg, "detector"))
-            outputs = run_sequence(trackers, seq, source, foreground, background, progress)
+            outputs = run_sequence(trackers, seq, source, foreground, background, progress,
+                                   on_update=graphs.hook())
+            graphs.write(sname)
         except Exception as err:  # noqa: BLE001 - the sequence fails, the next goes on
             fail("*", sname, "sequence", err, traceback.format_exc())
             overall.update(1)

@@ -6,7 +6,10 @@ A tracker that keeps a graph exposes ``graph_snapshot()`` returning
 writes them beside the tracks as CSV (``<stem>_nodes.csv`` and ``<stem>_edges.csv``) or JSON
 (``<stem>.json``); ``draw_graph`` draws one frame the paper's way: solid ellipses for nodes
 matched by a detection, dashed ellipses for hypotheses, light grey for tentative nodes, ids
-as labels, edges as lines from the predecessor's centre.
+as labels, edges as lines from the predecessor's centre. ``GraphExport`` is the runner's
+hook (config key ``graph``): it records every graph-keeping tracker of a normal run and
+writes ``tracks/<tracker>/<sequence>.graph.json`` (or ``.graph_nodes.csv`` and
+``.graph_edges.csv``) beside the tracks.
 """
 
 from __future__ import annotations
@@ -14,7 +17,9 @@ from __future__ import annotations
 import csv
 import json
 import logging
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -85,6 +90,68 @@ class GraphRecorder:
         log.info("graph of %d nodes, %d edges written to %s", len(self.nodes), len(self.edges),
                  ", ".join(str(p) for p in out))
         return out
+
+
+GRAPH_FORMATS = ("json", "csv")
+
+
+class GraphExport:
+    """Graph export of a run (config key ``graph: {export, format}``).
+
+    ``record`` is the runner's per-frame hook: after a tracker's ``update`` it adds the
+    tracker's ``graph_snapshot()`` (trackers without one are skipped); ``write`` then writes
+    one file per tracker for the sequence, beside its tracks:
+    ``<tracks_dir>/<tracker>/<sequence>.graph.json``, or with ``format: csv``
+    ``<sequence>.graph_nodes.csv`` and ``<sequence>.graph_edges.csv``.
+
+    Args:
+        tracks_dir: the run's ``tracks`` folder.
+        export: record and write (False: ``hook()`` is None and ``write`` writes nothing).
+        format: "json" or "csv".
+    Raises:
+        ValueError: an unknown format (naming the key ``graph.format``).
+    """
+
+    def __init__(self, tracks_dir: str | Path, export: bool = False, format: str = "json") -> None:
+        if format not in GRAPH_FORMATS:
+            raise ValueError(f"graph.format must be one of {GRAPH_FORMATS}, got {format!r}")
+        self.tracks_dir = Path(tracks_dir)
+        self.export = bool(export)
+        self.format = format
+        self._recorders: dict[str, GraphRecorder] = {}
+
+    @classmethod
+    def from_config(cls, node: Mapping[str, Any] | None, tracks_dir: str | Path) -> GraphExport:
+        """Build from the ``graph`` config node (None or missing keys: defaults)."""
+        node = dict(node or {})
+        unknown = set(node) - {"export", "format"}
+        if unknown:
+            raise ValueError(f"graph: unknown key(s) {sorted(unknown)}; known: export, format")
+        return cls(tracks_dir, bool(node.get("export", False)), str(node.get("format", "json")))
+
+    def hook(self):
+        """The per-frame callback ``(tracker_name, frame, tracker)`` for the runner, or None
+        when export is off."""
+        return self.record if self.export else None
+
+    def record(self, tracker_name: str, frame: int, tracker: Any) -> None:
+        """Add ``tracker.graph_snapshot()`` of frame ``frame`` (1-based) to its recorder."""
+        snapshot = getattr(tracker, "graph_snapshot", None)
+        if snapshot is None:
+            return
+        recorder = self._recorders.setdefault(tracker_name, GraphRecorder())
+        recorder.add(snapshot(), frame=frame)
+
+    def write(self, sequence: str) -> list[Path]:
+        """Write the recorded graphs of ``sequence`` (one file, or two for CSV, per tracker)
+        and start afresh for the next sequence. Returns the files written."""
+        files: list[Path] = []
+        for name, recorder in self._recorders.items():
+            recorder.sequence = sequence
+            path = self.tracks_dir / name / f"{sequence}.graph.{self.format}"
+            files += recorder.write(path)
+        self._recorders = {}
+        return files
 
 
 def _fmt(v):
