@@ -23,7 +23,6 @@ from trackers.frontend.parts import (
     HEAD_FRACTION,
     N_PARTS,
     PartFeatures,
-    centroid_ratios,
     part_boxes,
 )
 from trackers.layered.dynamics import GateFilter, SizeFilter
@@ -78,6 +77,7 @@ class Target:
         self.part_scores = np.ones(N_PARTS)
         self.head_template: np.ndarray | None = None
         self.score = 0.0
+        self.last_gate: np.ndarray | None = None
 
     @property
     def alpha(self) -> float:
@@ -133,14 +133,17 @@ class Target:
             self.dof = np.mean(np.stack(self._history), axis=0)
         else:
             self.dof = np.asarray(dof, dtype=np.float64).copy()
-            if centroid_measured:
-                a, b = centroid_ratios(self.box[None], self.dof[None, 2:4])
-                self._alphas.append(float(a[0]))
-                self._betas.append(float(b[0]))
+            if centroid_measured:  # eqs. 1-2 (as ``centroid_ratios``, scalar)
+                x, y, xc, yc, w, h = (float(v) for v in self.dof)
+                hh = HEAD_FRACTION * h
+                a = min(max((xc - x) / max(w, 1e-9), 0.05), 0.95)
+                b = min(max((yc - y - hh) / max(h - hh, 1e-9), 0.05), 0.95)
+                self._alphas.append(a)
+                self._betas.append(b)
                 self._alpha = sum(self._alphas) / len(self._alphas)
                 self._beta = sum(self._betas) / len(self._betas)
         xc, yc, w, h = self.dof[2:]
-        self.gate.correct(np.array([xc, yc]))
+        self.gate.correct(self.dof[2:4])
         self.size.correct(w, h)
         # parts model (PBM 4.2)
         matched = part_scores >= part_match_threshold
@@ -151,7 +154,7 @@ class Target:
         P.hsv[0] += eta[:, None] * (cand.hsv[0] - P.hsv[0])
         P.xyz[0] += eta[:, None] * (cand.xyz[0] - P.xyz[0])
         # geometry follows the global model; centroids of frozen parts move with it
-        shift = np.array([xc, yc]) - old_centre
+        shift = self.dof[2:4] - old_centre
         new_parts = part_boxes(self.box[None], self._alpha, self._beta)[0]
         P.centroid[0] = np.where(matched[:, None], cand.centroid[0], P.centroid[0] + shift)
         P.parts[0] = new_parts

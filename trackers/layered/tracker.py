@@ -32,7 +32,8 @@ validated box (zero-order, as the gate) for up to ``max_report_misses`` frames w
 frames when its box touches the image border (it left).
 
 Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
-parts), ``part_scores`` (5,), ``gate`` (4,) xywh.
+parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates were
+validated in (None for a target born this frame).
 
 Adaptations (where the paper is vague or relies on what we do not have):
 
@@ -500,6 +501,8 @@ class PBMTracker:
             d = feature_differences(model, feats, misses)
             pj_all, p_all = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
             gates = np.array([t.gate_box() for t in targets])
+            for t, g in zip(targets, gates):
+                t.last_gate = g  # the gate this frame's candidates were validated in
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
             inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
@@ -626,7 +629,7 @@ class PBMTracker:
         out = []
         for t in self.targets:
             extra = {"parts": t.part_rectangles(), "occluded_parts": t.occluded_parts.copy(),
-                     "part_scores": t.part_scores.copy(), "gate": t.gate_box()}
+                     "part_scores": t.part_scores.copy(), "gate": t.last_gate}
             if t.misses == 0:
                 state = TrackState.CONFIRMED if t.confirmed else TrackState.TENTATIVE
                 out.append(Track(t.id, t.box, state, float(np.clip(t.score, 0, 1)), extra))
