@@ -66,7 +66,6 @@ from trackers.three_hypothesis.motion import (
 from trackers.three_hypothesis.occlusion import (
     boxes_meet,
     depth_order,
-    occlusion_pairs,
     overlap_ratio,
     region_overlaps,
 )
@@ -250,11 +249,14 @@ class RetaTracker:
         if branches:
             x_prev = np.array([b.x for b in branches])
             P_prev = np.array([b.P for b in branches])
-            velocity = {person.key: person.branches[0].x[4:6] for person in persons}
-            zero = np.zeros(2)
-            occ_v = np.array([velocity.get(b.occluder, zero) if b.occluder is not None else zero
-                              for b in branches])
-            x_set = hyp.set_motion(x_prev, [b.kind for b in branches], occ_v)
+            kinds = [b.kind for b in branches]
+            occ_v = np.zeros((len(branches), 2))  # read by 'occluder' hypotheses only
+            if hyp.OCCLUDER in kinds:
+                velocity = {person.key: person.branches[0].x[4:6] for person in persons}
+                for r, b in enumerate(branches):
+                    if b.kind == hyp.OCCLUDER and b.occluder in velocity:
+                        occ_v[r] = velocity[b.occluder]
+            x_set = hyp.set_motion(x_prev, kinds, occ_v)
             Qs = np.array([person.Q for person in persons for _ in person.branches])
             Xp, Pp = predict(x_set, P_prev, self._F, Qs)
             pred = state_boxes(Xp)
@@ -271,8 +273,9 @@ class RetaTracker:
         delta = region_overlaps(pred, regions, self.region_samples, near)
         rs = delta[:, nb:]
 
-        # 2. occlusion relations O over predicted regions (eq. 2: ratio = delta / 2)
-        pairs = occlusion_pairs(pred, owners, self.lam, ratio=0.5 * delta[:, :nb])
+        # 2. occlusion relations O over predicted regions (eq. 2: ratio = delta / 2 > lambda,
+        # as ``occlusion_pairs``; ``near`` holds its pairs i < j of different people)
+        pairs = np.argwhere((0.5 * delta[:, :nb] > self.lam) & near[:, :nb])
 
         # 4. two-stage association (3.3.2)
         # rho = sqrt(q) . sqrt(p) (eq. 4), summed over the support of the measurements only
@@ -317,8 +320,7 @@ class RetaTracker:
             visible_boxes = dbox
             behind = np.array([n in in_front for _, (_, n, _, _) in rows])
             z = box_measurements(dbox)
-            zp = box_measurements(pred[idx])
-            z[behind, 2:] = zp[behind, 2:]  # occluded: shape from the prediction
+            z[behind, 2:] = pred[idx[behind], 2:]  # occluded: shape (w, h) from the prediction
             Rs = np.array([persons[i].R for i, _ in rows])
             Xc, Pc = correct(Xp[idx], Pp[idx], z, self._H, Rs)
             for r, (i, (d, n, stage, rho)) in enumerate(rows):
