@@ -429,11 +429,14 @@ class PBMTracker:
         return out
 
     # ------------------------------------------------------------------ pruning
-    def _prune(self, t: Target, cands: list[int], anchors: list[Anchor], gray: np.ndarray) -> int:
-        """Multiple-response pruning (PBM 4.1): the candidate nearest the head template's
-        best local match, or -1 when the template does not match."""
+    def _prune(self, t: Target, cands: list[int], anchors: list[Anchor], gray: np.ndarray
+               ) -> tuple[int, np.ndarray | None]:
+        """Multiple-response pruning (PBM 4.1): the target's head template is matched
+        exhaustively around the candidates' heads; returns the candidate nearest the
+        refined head and that head (x top-centre, y top), or (-1, None) when the template
+        does not match."""
         if t.head_template is None or not cands:
-            return -1
+            return -1, None
         tw = t.head_template.shape[1]
         hs = np.array([anchors[n].head[:2] for n in cands])
         centre = hs.mean(axis=0)
@@ -441,10 +444,10 @@ class PBMTracker:
         tl, corr = match_head_template(gray, t.head_template,
                                        np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
         if corr < self.template_threshold:
-            return -1
+            return -1, None
         refined = np.array([tl[0] + 0.5 * tw, tl[1]])
         dist = np.linalg.norm(hs - refined, axis=1)
-        return cands[int(np.argmin(dist))]
+        return cands[int(np.argmin(dist))], refined
 
     # ------------------------------------------------------------------ update
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -557,11 +560,18 @@ class PBMTracker:
                     continue
                 if gray is None:
                     gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-                chosen = self._prune(t, cands, anchors, gray)
+                chosen, refined = self._prune(t, cands, anchors, gray)
                 if chosen < 0:
                     if weak:
                         continue
                     chosen = best
+                elif (ti, chosen) in hyp and hyp[(ti, chosen)][3]:
+                    # "the matching candidate is then updated accordingly": a carved
+                    # (occluded) candidate is re-anchored on the refined head
+                    pj_c, f_c, dof_c, _ = hyp[(ti, chosen)]
+                    head = np.array([refined[0], refined[1], anchors[chosen].head[2]])
+                    hyp[(ti, chosen)] = (pj_c, f_c, dof_from_head(head, dof_c[4], dof_c[5],
+                                                                  t.alpha, t.beta), True)
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
                 S[ti, chosen] = max(keep, self.match_threshold)
