@@ -131,4 +131,4 @@ class EllipseHistogrammer:
             hist[nz] = share
             root[nz] = np.sqrt(share)
             occupied[nz] = True
-        return out, roots, np.flatnonzero(occupied)
+        return out, roots, occupied.nonzero()[0]

@@ -48,11 +48,19 @@ def _person_costs(
         return cost_nodes, None
     cost = np.minimum.reduceat(cost_nodes, starts, axis=0)
     best = np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
-    sizes = np.diff(starts, append=len(cost_nodes))
-    for k in np.flatnonzero(sizes > 1):
+    sizes = np.concatenate((starts[1:], [len(cost_nodes)])) - starts
+    for k in (sizes > 1).nonzero()[0]:
         a = starts[k]
         best[k] = a + np.argmin(cost_nodes[a : a + sizes[k]], axis=0)
     return cost, best
+
+
+def _rows(*columns: np.ndarray) -> np.ndarray:
+    """(K, len(columns)) int array whose columns are the given (K,) arrays."""
+    out = np.empty((len(columns[0]), len(columns)), dtype=int)
+    for k, column in enumerate(columns):
+        out[:, k] = column
+    return out
 
 
 def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
@@ -76,7 +84,7 @@ def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
     full[k, m + k] = leave
     r, c = linear_sum_assignment(full)
     keep = c < m
-    return np.column_stack([r[keep], c[keep]])
+    return _rows(r[keep], c[keep])
 
 
 def associate(
@@ -168,9 +176,9 @@ def associate(
     nodes = np.concatenate([m[:, 0] if best is None else best[m[:, 0], m[:, 1]]
                             for m, best in ((m1, best1), (m2, best2))])
     return Association(
-        np.column_stack([m12, nodes]).astype(int),
+        _rows(m12[:, 0], m12[:, 1], nodes),
         np.array([1] * len(m1) + [2] * len(m2), dtype=int),
         rho[m12[:, 0], m12[:, 1]],
-        np.flatnonzero(~matched_p),
-        np.flatnonzero(~matched_d),
+        (~matched_p).nonzero()[0],
+        (~matched_d).nonzero()[0],
     )

@@ -362,7 +362,7 @@ class RetaTracker:
                 continue
             person.misses += 1
             new: list[_Branch] = []
-            for n in np.flatnonzero(owners == i):
+            for n in (owners == i).nonzero()[0]:
                 old = branches[n]
                 kind = hyp.VELOCITY if old.kind == VISIBLE else old.kind
                 fronts = in_front.get(n, [])
