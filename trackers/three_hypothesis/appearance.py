@@ -78,35 +78,31 @@ class EllipseHistogrammer:
         Returns:
             (N, bins**3) float64 rows summing to 1 (all zero where no pixel is counted).
         """
-        p = self.with_roots(frame, boxes, foreground)[0]
+        p = self.measure(frame, boxes, foreground)[0]
         return np.array(p).reshape(len(p), self.bins**3)
 
-    def with_roots(
+    def measure(
         self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
-    ) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray]:
-        """Histograms p (eq. 1), their element-wise square roots sqrt(p), the factors of
-        the Bhattacharyya coefficient rho = sum sqrt(q p) (eq. 4), and the bins they occupy.
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        """Histograms p (eq. 1), each an array of its own (a person can keep a measurement's
+        histogram as its appearance q without a copy), and the bins they occupy.
 
-        A person's histogram fills few of the bins**3 bins, so p and sqrt(p) are written
-        only at the nonzero bins of each row (the values are those of ``__call__`` and
-        ``np.sqrt``), and rho against these measurements needs only the ``support`` bins.
-        Every histogram is an array of its own, so a person can keep a measurement's
-        histogram as its appearance without a copy.
+        A person's histogram fills few of the bins**3 bins; the Bhattacharyya coefficient
+        rho = sum_b sqrt(q_b p_b) (eq. 4) against these measurements only needs the
+        ``support`` bins (elsewhere every p_b is 0).
 
         Returns:
-            p, sqrt_p: two lists of N (bins**3,) float64 arrays (arguments as ``__call__``);
+            p: list of N (bins**3,) float64 arrays (arguments as ``__call__``);
             support: (K,) int sorted bins where at least one p is nonzero.
         """
         b = snap_boxes(boxes).astype(np.int64).tolist()
         height, width = frame.shape[:2]
         size = self.bins**3
         out: list[np.ndarray] = []
-        roots: list[np.ndarray] = []
         occupied = np.zeros(size, dtype=bool)
         for x, y, w, h in b:
-            hist, root = np.zeros(size), np.zeros(size)
+            hist = np.zeros(size)
             out.append(hist)
-            roots.append(root)
             r0, r1 = max(y, 0), min(y + h, height)
             c0, c1 = max(x, 0), min(x + w, width)
             if r1 <= r0 or c1 <= c0:
@@ -127,8 +123,6 @@ class EllipseHistogrammer:
             counts = cv2.calcHist([crop], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges)
             counts = counts.ravel()
             nz = (counts > 0).nonzero()[0]
-            share = np.divide(counts[nz], float(total), dtype=np.float64)  # eq. 1: / |S|
-            hist[nz] = share
-            root[nz] = np.sqrt(share)
+            hist[nz] = np.divide(counts[nz], float(total), dtype=np.float64)  # eq. 1: / |S|
             occupied[nz] = True
-        return out, roots, occupied.nonzero()[0]
+        return out, occupied.nonzero()[0]

@@ -92,7 +92,6 @@ class _Branch:
 class _Person:
     key: int
     q: np.ndarray
-    sqrt_q: np.ndarray
     Q: np.ndarray
     R: np.ndarray
     branches: list[_Branch]
@@ -239,7 +238,7 @@ class RetaTracker:
         dets = detections.boxes[keep]
         # eq. 1 per measurement (one array each); ``support``: the bins where some
         # measurement has pixels
-        p, sqrt_p, support = self.histograms.with_roots(frame, dets, foreground)
+        p, support = self.histograms.measure(frame, dets, foreground)
         persons = self._persons
         self._public = {person.key: person.public_id for person in persons}
 
@@ -269,7 +268,8 @@ class RetaTracker:
         nb = len(pred)
         regions = np.concatenate([pred, dets])
         near = boxes_meet(pred, regions)  # only meeting boxes can overlap
-        near[:, :nb] &= (owners[:, None] != owners[None, :]) & self._upper(nb)
+        # pairs i < j of nodes of different people: owners is sorted, so owner_i < owner_j
+        near[:, :nb] &= owners[:, None] < owners[None, :]
         delta = region_overlaps(pred, regions, self.region_samples, near)
         rs = delta[:, nb:]
 
@@ -279,12 +279,12 @@ class RetaTracker:
 
         # 4. two-stage association (3.3.2)
         # rho = sqrt(q) . sqrt(p) (eq. 4), summed over the support of the measurements only
-        # (the other terms are 0); sqrt(q) is kept per person, so q is not restacked
-        sqrt_q = np.array([person.sqrt_q[support] for person in persons]).reshape(
-            len(persons), len(support))
-        sqrt_ps = np.array([r[support] for r in sqrt_p]).reshape(len(dets), len(support))
-        assoc = associate(pred, owners, sqrt_q, dets, sqrt_ps, self.mu_rho, self.mu_g,
-                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_ps,
+        # (the other terms are 0)
+        sqrt_q = np.sqrt(np.array([person.q[support] for person in persons]).reshape(
+            len(persons), len(support)))
+        sqrt_p = np.sqrt(np.array([h[support] for h in p]).reshape(len(dets), len(support)))
+        assoc = associate(pred, owners, sqrt_q, dets, sqrt_p, self.mu_rho, self.mu_g,
+                          delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p,
                           gated=np.array([person.confirmed for person in persons], dtype=bool))
         matched_det = {pi: (d, n, s, r) for (pi, d, n), s, r
                        in zip(assoc.matches.tolist(), assoc.stages.tolist(), assoc.rho.tolist())}
@@ -327,7 +327,6 @@ class RetaTracker:
                 person = persons[i]
                 if not behind[r]:
                     person.q = p[d]  # appearance updated only when not occluded
-                    person.sqrt_q = sqrt_p[d]
                     shape = dbox[r]
                 else:
                     shape = pred[n]
@@ -435,7 +434,7 @@ class RetaTracker:
         # 8. unmatched measurements start tentative tracks (3.3)
         for d in assoc.unmatched_measurements:
             x0, P0, _, _, Q0, R0 = self.motion.init(dets[d])
-            person = _Person(self._next_key, p[d], sqrt_p[d], Q0, R0,
+            person = _Person(self._next_key, p[d], Q0, R0,
                              [_Branch(VISIBLE, x0, P0)],
                              shape=dets[d])
             self._next_key += 1
@@ -453,12 +452,6 @@ class RetaTracker:
         return self._outputs()
 
     # ------------------------------------------------------------------ helpers
-    @staticmethod
-    def _upper(n: int) -> np.ndarray:
-        """(n, n) bool: True above the diagonal (pairs i < j)."""
-        k = np.arange(n)
-        return k[:, None] < k[None, :]
-
     def _hypothesis_under(self, shape: np.ndarray, persons: list[_Person], owners: np.ndarray,
                           pred: np.ndarray, matched: dict, taken: set[int]) -> int | None:
         """Index of the hidden confirmed person (unmatched this frame) one of whose
@@ -477,16 +470,17 @@ class RetaTracker:
     def _add_node(self, person: _Person, branch: _Branch, box: np.ndarray,
                   parent: int | None, stage: int, rho: float) -> int:
         """AddNodeToGraph + AddEdgeToGraph for one branch; returns the node key."""
+        confirmed = person.confirmed
         if branch.kind == VISIBLE:
-            kind = VISIBLE if person.confirmed else TENTATIVE
+            kind = VISIBLE if confirmed else TENTATIVE
             hypothesis = None
         else:
-            kind = HYPOTHESIS if person.confirmed else TENTATIVE
+            kind = HYPOTHESIS if confirmed else TENTATIVE
             hypothesis = branch.kind
         occluder = None if branch.occluder is None else self._public.get(branch.occluder)
         x, y, w, h = box.tolist()
         node = self.graph.add_node(
-            person.key, person.public_id, kind, hypothesis,
+            person.key, person.id if confirmed else -person.key, kind, hypothesis,
             np.array([x + w / 2, y + h / 2, 0.0, w / 2, h / 2]), person.q, branch.x, branch.P,
             occluder, branch.depth, parent, stage, rho,
         )
@@ -516,7 +510,8 @@ class RetaTracker:
         node = branch.graph_node
         S = node.S
         if box is None:
-            box = np.array([S[0] - S[3], S[1] - S[4], 2 * S[3], 2 * S[4]])
+            xc, yc, _, rx, ry = S.tolist()
+            box = np.array([xc - rx, yc - ry, 2 * rx, 2 * ry])
         else:
             box = np.array(box, dtype=np.float64)  # a copy: the caller may keep it
         extra = {"ellipse": S, "hypothesis": node.hypothesis, "occluder": node.occluder,
