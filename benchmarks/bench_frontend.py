@@ -92,7 +92,7 @@ def speed(n_frames: int) -> None:
             jpegs.append(cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 90])[1])
         frames = [cv2.imdecode(j, cv2.IMREAD_COLOR) for j in jpegs]
         h, w = frames[0].shape[:2]
-        size = ["detector.detector.background.warmup_frames=0"]
+        size: list[str] = []
         k = scale  # detector sizes scale with the frame
         dets = {}
         for name, extra in (("foreground", [f"detector.detector.min_area={80 * k * k}",
@@ -105,6 +105,8 @@ def speed(n_frames: int) -> None:
         half = instantiate(compose_config(
             ["detector=foreground", *size, "detector.detector.background.work_scale=0.5"],
             config_name="detect").detector).detector.background
+        for model in (bg, half):  # learn the background first (not timed)
+            model.warm_up_sequence(len(frames), lambda i: frames[i - 1])
         t = dict.fromkeys(stages, 0.0)
         for i, jpg in enumerate(jpegs):
             frame, dt = _timed(cv2.imdecode, jpg, cv2.IMREAD_COLOR)
