@@ -106,7 +106,7 @@ def speed(n_frames: int) -> None:
             ["detector=foreground", *size, "detector.detector.background.work_scale=0.5"],
             config_name="detect").detector).detector.background
         for model in (bg, half):  # learn the background first (not timed)
-            model.warm_up_sequence(len(frames), lambda i: frames[i - 1])
+            model.warm_up_sequence(len(frames), lambda i, fr=frames: fr[i - 1])
         t = dict.fromkeys(stages, 0.0)
         for i, jpg in enumerate(jpegs):
             frame, dt = _timed(cv2.imdecode, jpg, cv2.IMREAD_COLOR)
