@@ -49,22 +49,24 @@ class EllipseHistogrammer:
         self.stride = stride
         self.min_foreground = min_foreground
         self.cache_size = cache_size
-        self._masks: dict[tuple[int, int], np.ndarray] = {}
+        self._masks: dict[tuple[int, int], tuple[np.ndarray, int]] = {}
         self._sizes = [bins, bins, bins]
         self._ranges = [0, 256, 0, 256, 0, 256]
 
-    def _mask(self, h: int, w: int) -> np.ndarray:
+    def _mask(self, h: int, w: int) -> tuple[np.ndarray, int]:
+        """(h, w) uint8 mask (1 = pixel centre inside the ellipse inscribed in an h x w box)
+        and its number of pixels |S|, cached by box size."""
         key = (h, w)
-        m = self._masks.get(key)
-        if m is None:
+        cached = self._masks.get(key)
+        if cached is None:
             if len(self._masks) >= self.cache_size:
                 self._masks.clear()
             rx, ry = max(w / 2, 0.5), max(h / 2, 0.5)
             xs = (np.arange(w) + 0.5 - w / 2) / rx
             ys = (np.arange(h) + 0.5 - h / 2) / ry
-            m = ys[:, None] ** 2 + xs[None, :] ** 2 <= 1.0
-            self._masks[key] = m
-        return m
+            m = (ys[:, None] ** 2 + xs[None, :] ** 2 <= 1.0).view(np.uint8)
+            cached = self._masks[key] = (m, int(np.count_nonzero(m)))
+        return cached
 
     def __call__(
         self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
@@ -107,20 +109,24 @@ class EllipseHistogrammer:
             c0, c1 = max(x, 0), min(x + w, width)
             if r1 <= r0 or c1 <= c0:
                 continue
-            m = self._mask(h, w)[r0 - y : r1 - y, c0 - x : c1 - x]
+            m, total = self._mask(h, w)  # total: |S|, the pixels counted
+            if r1 - r0 < h or c1 - c0 < w:  # cut by the image border
+                m = m[r0 - y : r1 - y, c0 - x : c1 - x]
+                total = np.count_nonzero(m)
             if foreground is not None:
                 fm = m & (foreground[r0:r1, c0:c1] != 0)
-                if np.count_nonzero(fm) >= self.min_foreground * np.count_nonzero(m):
-                    m = fm
+                kept = np.count_nonzero(fm)
+                if kept >= self.min_foreground * total:
+                    m, total = fm, kept
             crop = frame[r0:r1, c0:c1]
             if self.stride > 1:
                 crop = np.ascontiguousarray(crop[:: self.stride, :: self.stride])
                 m = np.ascontiguousarray(m[:: self.stride, :: self.stride])
-            total = np.count_nonzero(m)
+                total = np.count_nonzero(m)
             if not total:
                 continue
             # cv2.calcHist: same joint bin order as trackers.histograms.colour_histogram
-            counts = cv2.calcHist([crop], [0, 1, 2], m.view(np.uint8), self._sizes, self._ranges)
+            counts = cv2.calcHist([crop], [0, 1, 2], m, self._sizes, self._ranges)
             counts = counts.ravel()
             nz = (counts > 0).nonzero()[0]
             hist[nz] = np.divide(counts[nz], float(total), dtype=np.float64)  # eq. 1: / |S|
