@@ -275,7 +275,7 @@ class RetaTracker:
 
         # 2. occlusion relations O over predicted regions (eq. 2: ratio = delta / 2 > lambda,
         # as ``occlusion_pairs``; ``near`` holds its pairs i < j of different people)
-        pairs = np.argwhere((0.5 * delta[:, :nb] > self.lam) & near[:, :nb])
+        first, second = ((0.5 * delta[:, :nb] > self.lam) & near[:, :nb]).nonzero()
 
         # 4. two-stage association (3.3.2)
         # rho = sqrt(q) . sqrt(p) (eq. 4), summed over the support of the measurements only
@@ -294,7 +294,7 @@ class RetaTracker:
         in_front: dict[int, list[int]] = {}  # node index -> person indices in front of it
         own = owners.tolist()
         boxes = pred.tolist()  # (B,) [x, y, w, h] lists: scalar work below
-        for a, b in pairs.tolist():
+        for a, b in zip(first.tolist(), second.tolist()):
             i, j = own[a], own[b]
             ki, kj = persons[i].key, persons[j].key
             vi, vj = a in visible_node, b in visible_node
@@ -403,22 +403,27 @@ class RetaTracker:
             if (~cont).any():
                 fraction[~cont] = covered_fraction(hyp_boxes[~cont], visible_boxes,
                                                    self.region_samples)
-            cover = fraction >= self.cover
+            cover = (fraction >= self.cover).tolist()
+            gone = gone.tolist()
+            corners = hyp_boxes.tolist()
             k = 0
             for person, new in pending:
                 kept: list[_Branch] = []
                 kept_boxes: list[np.ndarray] = []
+                kept_corners: list[list[float]] = []
                 for b in new:
-                    box, g, c = hyp_boxes[k], gone[k], cover[k]
+                    box, corner, g, c = hyp_boxes[k], corners[k], gone[k], cover[k]
                     k += 1
-                    b.covered = bool(c)
+                    b.covered = c
                     b.exposed = 0 if c else b.exposed + 1
                     if g or b.exposed >= self.m:
                         continue
-                    if any(np.abs(box - kb).max() < 0.5 for kb in kept_boxes):
+                    if any(max(abs(u - v) for u, v in zip(corner, kc)) < 0.5
+                           for kc in kept_corners):
                         continue  # the same place twice: keep the preferred kind
                     kept.append(b)
                     kept_boxes.append(box)
+                    kept_corners.append(corner)
                 if not person.confirmed and person.misses > self.tentative_misses:
                     kept = []  # false-positive track
                 if person.misses > self.max_hidden:
@@ -457,12 +462,10 @@ class RetaTracker:
         """Index of the hidden confirmed person (unmatched this frame) one of whose
         hypotheses lies where a newly confirmed track stands (IoU >= 0.5), else None."""
         best, best_iou = None, 0.5
-        for n in range(len(pred)):
-            i = int(owners[n])
-            person = persons[i]
-            if i in matched or i in taken or not person.confirmed:
+        ious = iou_matrix(shape[None], pred)[0].tolist()
+        for i, iou in zip(owners.tolist(), ious):
+            if i in matched or i in taken or not persons[i].confirmed:
                 continue
-            iou = float(iou_matrix(shape[None], pred[n][None])[0, 0])
             if iou >= best_iou:
                 best, best_iou = i, iou
         return best
