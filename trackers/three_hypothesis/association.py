@@ -38,21 +38,19 @@ class Association:
 
 
 def _person_costs(
-    cost_nodes: np.ndarray, starts: np.ndarray
+    cost_nodes: np.ndarray, starts: np.ndarray, owners: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """Reduce (B, D) node costs to (P, D) person costs (min over each person's nodes) and
     the (P, D) index of the node attaining it (None when every person owns one node: the
     node is the person). Nodes are grouped by person: person k owns rows
-    ``starts[k]:starts[k + 1]``."""
+    ``starts[k]:starts[k + 1]``; ``owners`` (B,) is the person of each row."""
     if len(starts) == len(cost_nodes):  # one node per person
         return cost_nodes, None
     cost = np.minimum.reduceat(cost_nodes, starts, axis=0)
-    best = np.repeat(starts[:, None], cost_nodes.shape[1], axis=1)
-    sizes = np.concatenate((starts[1:], [len(cost_nodes)])) - starts
-    for k in (sizes > 1).nonzero()[0]:
-        a = starts[k]
-        best[k] = a + np.argmin(cost_nodes[a : a + sizes[k]], axis=0)
-    return cost, best
+    # first node of each person attaining its minimum (as np.argmin; costs are never NaN)
+    rows = np.where(cost_nodes == cost[owners], np.arange(len(cost_nodes))[:, None],
+                    len(cost_nodes))
+    return cost, np.minimum.reduceat(rows, starts, axis=0)
 
 
 def _rows(*columns: np.ndarray) -> np.ndarray:
@@ -152,7 +150,7 @@ def associate(
     if delta is None:
         delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
-    cost1, best1 = _person_costs(c1, starts)
+    cost1, best1 = _person_costs(c1, starts, owners)
     m1 = _hungarian(cost1, 2.0)
 
     matched_p = np.zeros(n_persons, dtype=bool)
@@ -167,7 +165,7 @@ def associate(
         d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
         free = eligible[owners][:, None] & ~matched_d[None, :]
         c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
-        cost2, best2 = _person_costs(c2, starts)
+        cost2, best2 = _person_costs(c2, starts, owners)
         m2 = _hungarian(cost2, 2.0)
         matched_p[m2[:, 0]] = True
         matched_d[m2[:, 1]] = True
