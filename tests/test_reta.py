@@ -13,18 +13,21 @@ from filterpy.kalman import KalmanFilter
 from scipy.optimize import linear_sum_assignment
 
 from trackers.baseline import BaselineTracker
-from trackers.frontend.features import ellipse_histograms
-from trackers.geometry import iou_matrix
+from trackers.common.assignment import assign
+from trackers.frontend.features import ellipse_histograms, region_similarity
+from trackers.geometry import intersection_matrix, iou_matrix
 from trackers.records import Detections, TrackState
 from trackers.three_hypothesis import RetaTracker
 from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
-from trackers.three_hypothesis.association import associate
+from trackers.three_hypothesis.association import _hungarian, _person_costs, associate
 from trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
 from trackers.three_hypothesis.occlusion import (
     area_above,
+    boxes_meet,
     depth_order,
     occlusion_pairs,
     overlap_ratio,
+    region_overlaps,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -58,6 +61,62 @@ def test_histogram_uses_foreground_pixels_only_when_enough():
     tiny = np.zeros((40, 40), bool)
     tiny[0, 20] = True  # 1 pixel of foreground: below min_foreground, whole ellipse used
     np.testing.assert_array_equal(h(frame, box, tiny), h(frame, box))
+
+
+def test_measure_gives_one_histogram_array_each_and_their_support():
+    rng = np.random.default_rng(4)
+    frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8) // 64 * 64  # few colours
+    boxes = np.array([[10.0, 5.0, 30.0, 60.0], [70.0, 20.0, 40.0, 50.0], [200.0, 0, 10, 10]])
+    h = EllipseHistogrammer()
+    p, support = h.measure(frame, boxes)
+    assert len(p) == 3 and all(row.shape == (4096,) for row in p)
+    assert not np.shares_memory(p[0], p[1])
+    np.testing.assert_array_equal(np.array(p), h(frame, boxes))
+    np.testing.assert_array_equal(support, np.flatnonzero(np.array(p).any(axis=0)))
+    assert 0 < len(support) <= 4**3 and not p[2].any()  # box 3 lies outside the frame
+
+
+def test_region_overlaps_equal_the_front_end_definition_exactly():
+    rng = np.random.default_rng(2)
+    for k in range(60):
+        n, m = rng.integers(0, 9, 2)
+        a = np.column_stack([rng.uniform(-40, 200, (n, 2)), rng.uniform(0.5, 90, (n, 2))])
+        b = np.column_stack([rng.uniform(-40, 200, (m, 2)), rng.uniform(0.5, 90, (m, 2))])
+        if k % 2:  # pixel-aligned boxes: edges that touch exactly
+            a, b = a.round(), np.maximum(b.round(), 1.0)
+        if n and m:
+            b[0] = a[0]
+        samples = (12, 24)[k % 2]
+        np.testing.assert_array_equal(region_overlaps(a, b, samples),
+                                      region_similarity(a, b, samples=samples))
+        np.testing.assert_array_equal(boxes_meet(a, b), intersection_matrix(a, b) > 0)
+        # integrating only some pairs gives those pairs' values and 0 elsewhere
+        near = boxes_meet(a, b) & (rng.random((n, m)) < 0.5)
+        np.testing.assert_array_equal(region_overlaps(a, b, samples, near),
+                                      np.where(near, region_similarity(a, b, samples=samples), 0))
+
+
+def test_hungarian_with_unmatched_cost_equals_the_padded_assignment():
+    rng = np.random.default_rng(6)
+    for _ in range(200):
+        n, m = rng.integers(1, 7, 2)
+        cost = np.where(rng.random((n, m)) < 0.5, rng.uniform(0, 2.5, (n, m)), np.inf)
+        dummy = np.full((n, n), np.inf)
+        np.fill_diagonal(dummy, 2.0)
+        ref, _, _ = assign(np.hstack([cost, dummy]), 2.0)  # the former formulation
+        ref = ref[ref[:, 1] < m]
+        np.testing.assert_array_equal(_hungarian(cost, 2.0), ref)
+
+
+def test_person_costs_take_each_persons_best_node():
+    rng = np.random.default_rng(7)
+    owners = np.array([0, 0, 1, 2, 2, 2, 3])
+    starts = np.array([0, 2, 3, 6])
+    cost = np.where(rng.random((7, 5)) < 0.6, rng.integers(0, 4, (7, 5)).astype(float), np.inf)
+    person, best = _person_costs(cost, starts, owners)
+    for k, (a, b) in enumerate(zip(starts, [*starts[1:], 7])):
+        np.testing.assert_array_equal(person[k], cost[a:b].min(axis=0))
+        np.testing.assert_array_equal(best[k], a + np.argmin(cost[a:b], axis=0))  # first on ties
 
 
 def test_batched_kalman_equals_filterpy():
