@@ -123,7 +123,8 @@ def associate(
         mu_rho: appearance threshold mu_rho in [0, 1].
         mu_g: gate radius mu_g in pixels.
         delta: optional precomputed (B, D) region similarity of nodes and measurements.
-        sqrt_q, sqrt_p: optional element-wise square roots of q and p (rho = sqrt_q sqrt_p').
+        sqrt_q, sqrt_p: optional element-wise square roots of q and p (rho = sqrt_q sqrt_p'),
+            possibly restricted to the same columns, e.g. the bins where some p is nonzero.
         gated: optional (P,) bool: persons that may take part in stage 2 (default all).
     """
     owners = np.asarray(owners, dtype=int)

@@ -483,7 +483,7 @@ class RetaTracker:
         occluder = None if branch.occluder is None else self._public.get(branch.occluder)
         x, y, w, h = box.tolist()
         node = self.graph.add_node(
-            person.key, person.id if confirmed else -person.key, kind, hypothesis,
+            person.key, person.public_id, kind, hypothesis,
             np.array([x + w / 2, y + h / 2, 0.0, w / 2, h / 2]), person.q, branch.x, branch.P,
             occluder, branch.depth, parent, stage, rho,
         )
