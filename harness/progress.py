@@ -14,8 +14,7 @@ def progress_factory(enabled: bool = True):
         return None
     from tqdm.auto import tqdm
 
-    def make(total: int = 0, desc: str = "", **kwargs: Any):
-        return tqdm(total=total, desc=desc, unit="frame", leave=False, dynamic_ncols=True,
-                    **kwargs)
+    def make(total: int = 0, desc: str = "", unit: str = "frame", **kwargs: Any):
+        return tqdm(total=total, desc=desc, unit=unit, leave=False, dynamic_ncols=True, **kwargs)
 
     return make

@@ -75,7 +75,7 @@ class _NoProgress:
         pass
 
 
-def _no_progress(total: int = 0, desc: str = "") -> Progress:
+def _no_progress(total: int = 0, desc: str = "", unit: str = "frame") -> Progress:
     return _NoProgress()
 
 
@@ -685,7 +685,7 @@ def run_experiment(
         writer.failure(f)
         log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
 
-    overall = (progress or _no_progress)(total=len(sequences), desc="sequences")
+    overall = (progress or _no_progress)(total=len(sequences), desc="sequences", unit="seq")
     for seq in sequences:
         sname = seq.info.name
         try:
