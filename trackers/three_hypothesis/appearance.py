@@ -99,12 +99,14 @@ class EllipseHistogrammer:
             p: list of N (bins**3,) float64 arrays (arguments as ``__call__``);
             support: (K,) int sorted bins where at least one p is nonzero.
         """
-        b = snap_boxes(boxes).astype(np.int64).tolist()
         height, width = frame.shape[:2]
         size = self.bins**3
         out: list[np.ndarray] = []
         occupied = np.zeros(size, dtype=bool)
-        for x, y, w, h in b:
+        for bx, by, bw, bh in np.asarray(boxes, dtype=np.float64).reshape(-1, 4).tolist():
+            # snap_boxes in scalars (round() rounds half to even, as np.round)
+            x, y = round(bx), round(by)
+            w, h = max(round(bx + bw) - x, 1), max(round(by + bh) - y, 1)
             hist = np.zeros(size)
             out.append(hist)
             r0, r1 = max(y, 0), min(y + h, height)
