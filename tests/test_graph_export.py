@@ -27,8 +27,11 @@ def test_reta_run_writes_graph_beside_tracks_with_all_node_kinds(tmp_path):
     tracks = tmp_path / "tracks"
     path = tracks / "reta" / "stop_behind.graph.json"
     assert (tracks / "reta" / "stop_behind.txt").is_file() and path.is_file()
-    doc = json.loads(path.read_text())
+    text = path.read_text()
+    assert "NaN" not in text  # strict JSON: rho of unmatched nodes is null
+    doc = json.loads(text)
     assert doc["sequence"] == "stop_behind"
+    assert any(n["rho"] is None for n in doc["nodes"]) and any(n["rho"] for n in doc["nodes"])
     kinds = {n["kind"] for n in doc["nodes"]}
     assert kinds == {"visible", "hypothesis", "tentative"}
     assert {n["frame"] for n in doc["nodes"]} == set(range(1, 61))

@@ -71,8 +71,11 @@ class GraphRecorder:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         if path.suffix == ".json":
-            doc = {"sequence": self.sequence, "nodes": self.nodes, "edges": self.edges}
-            path.write_text(json.dumps(doc, allow_nan=True, indent=None, separators=(",", ":")))
+            # strict JSON: a missing float (NaN, e.g. rho of an unmatched node) is null
+            doc = {"sequence": self.sequence,
+                   "nodes": [{k: _json_value(v) for k, v in row.items()} for row in self.nodes],
+                   "edges": [{k: _json_value(v) for k, v in row.items()} for row in self.edges]}
+            path.write_text(json.dumps(doc, allow_nan=False, indent=None, separators=(",", ":")))
             return [path]
         if path.suffix != ".csv":
             raise ValueError(f"graph export: {path}: suffix must be .csv or .json")
@@ -152,6 +155,10 @@ class GraphExport:
             files += recorder.write(path)
         self._recorders = {}
         return files
+
+
+def _json_value(v):
+    return None if isinstance(v, float) and not np.isfinite(v) else v
 
 
 def _fmt(v):
