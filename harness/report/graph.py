@@ -17,7 +17,7 @@ from __future__ import annotations
 import csv
 import json
 import logging
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -132,9 +132,11 @@ class GraphExport:
             raise ValueError(f"graph: unknown key(s) {sorted(unknown)}; known: export, format")
         return cls(tracks_dir, bool(node.get("export", False)), str(node.get("format", "json")))
 
-    def hook(self):
-        """The per-frame callback ``(tracker_name, frame, tracker)`` for the runner, or None
-        when export is off."""
+    def hook(self) -> Callable[[str, int, Any], None] | None:
+        """Start a sequence (anything recorded and not written, e.g. of a sequence that
+        failed, is dropped) and return the runner's per-frame callback
+        ``(tracker_name, frame, tracker)``, or None when export is off."""
+        self._recorders = {}
         return self.record if self.export else None
 
     def record(self, tracker_name: str, frame: int, tracker: Any) -> None:
