@@ -146,3 +146,29 @@ def test_bad_input():
         ex.start(np.zeros((10, 10, 3), np.uint8), np.zeros((5, 5), bool))
     with pytest.raises(ValueError, match="bins"):
         PartFeatureExtractor(bins=0)
+
+
+def test_lut_bins_equal_the_joint_index_formula():
+    # the cv2.LUT quantisation used by the extractor equals min(v * bins // range, bins - 1)
+    from trackers.frontend.parts import HSV_RANGES, XYZ_RANGES, _joint_index, _joint_lut
+
+    img = np.random.default_rng(3).integers(0, 256, (40, 30, 3), dtype=np.uint8)
+    for bins in (2, 4, 8):
+        for ranges in (HSV_RANGES, XYZ_RANGES):
+            q = cv2.LUT(img, _joint_lut(bins, ranges)).astype(np.int64)
+            np.testing.assert_array_equal(q.sum(-1), _joint_index(img, bins, ranges))
+
+
+def test_extract_at_centroids_equals_centroids_then_extract():
+    rng = np.random.default_rng(2)
+    frame = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    fg = rng.random((120, 160)) < 0.6
+    boxes = np.column_stack([rng.uniform(-10, 120, (5, 2)), rng.uniform(10, 60, (5, 2))])
+    ex = PartFeatureExtractor(bins=4)
+    ex.start(frame, fg)
+    c = ex.centroids(boxes)
+    ref = ex.extract(boxes, *centroid_ratios(boxes, c))
+    c2, got = ex.extract_at_centroids(boxes)
+    np.testing.assert_array_equal(c2, c)
+    for name in ("area", "perimeter", "hsv", "xyz", "centroid", "parts", "height"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(ref, name))

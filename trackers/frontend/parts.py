@@ -188,6 +188,16 @@ def _joint_index(img: np.ndarray, bins: int, ranges: tuple[float, float, float])
     return luts[0][img[..., 0]] + luts[1][img[..., 1]] + luts[2][img[..., 2]]
 
 
+def _joint_lut(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
+    """(256, 1, 3) ``cv2.LUT`` table whose channel sum is ``_joint_index``'s joint bin:
+    channel c maps v to min(v * bins // range_c, bins - 1) * bins ** (2 - c). uint8 when
+    ``bins**3 <= 256`` (the usual 4 bins), else uint16."""
+    v = np.arange(256, dtype=np.int64)
+    lut = np.stack([np.minimum(v * bins // int(r), bins - 1) * bins ** (2 - c)
+                    for c, r in enumerate(ranges)], axis=1)
+    return lut.astype(np.uint8 if bins**3 <= 256 else np.uint16).reshape(256, 1, 3)
+
+
 HSV_RANGES = (180.0, 256.0, 256.0)
 """Channel ranges of OpenCV's 8-bit HSV (hue is 0..179)."""
 XYZ_RANGES = (256.0, 256.0, 256.0)
@@ -198,14 +208,16 @@ class PartFeatureExtractor:
 
     Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
     pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour):
-    one fancy-indexing gather for all boxes, one ``cv2.cvtColor`` to HSV and one to XYZ for
-    all samples, one ``np.bincount`` per feature for all (box, part) pairs. Features are
-    thus scale-free by construction, and the 25 sizes of the head-anchored search (PBM 3.1)
+    one gather (``np.take`` on flat pixel indices) for all boxes, one ``cv2.cvtColor`` to
+    HSV and one to XYZ for all samples, one ``cv2.LUT`` per colour space for the quantised
+    bins, one ``np.bincount`` per feature for all (box, part) pairs. Features are thus
+    scale-free by construction, and the 25 sizes of the head-anchored search (PBM 3.1)
     cost one call. Outline (perimeter) samples are foreground samples with a background
     4-neighbour on the grid (outside the box counts as background). Samples outside the
     image count as background.
 
-    Usage: ``ex.start(frame, fg)`` once per frame, then ``ex.extract(boxes, alpha, beta)``.
+    Usage: ``ex.start(frame, fg)`` once per frame, then ``ex.extract(boxes, alpha, beta)``
+    (or ``ex.extract_at_centroids(boxes)``, which measures the centroids on the same grid).
 
     Args:
         bins: histogram bins per channel (joint histograms have ``bins**3`` bins).
@@ -223,8 +235,12 @@ class PartFeatureExtractor:
         self.grid_cols = grid_cols
         self._fr = (np.arange(grid_rows) + 0.5) / grid_rows
         self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
+        self._hsv_lut = _joint_lut(bins, HSV_RANGES)
+        self._xyz_lut = _joint_lut(bins, XYZ_RANGES)
         self._frame: np.ndarray | None = None
+        self._pixels: np.ndarray | None = None  # (H * W, 3) view of the frame
         self._fg: np.ndarray | None = None
+        self._fg_flat: np.ndarray | None = None
 
     def start(self, frame: np.ndarray, foreground: np.ndarray | None) -> None:
         """Set the frame ((H, W, 3) uint8 BGR) and foreground ((H, W) bool or None = all)."""
@@ -234,20 +250,34 @@ class PartFeatureExtractor:
             raise ValueError(
                 f"foreground shape {foreground.shape} differs from frame {frame.shape[:2]}")
         self._frame = frame
+        self._pixels = frame.reshape(-1, 3)
         self._fg = None if foreground is None else np.asarray(foreground, dtype=bool)
+        self._fg_flat = None if self._fg is None else self._fg.reshape(-1)
 
     def _grid(self, b: np.ndarray):
+        """Sample rows ys (N, R) and columns xs (N, C), flat pixel index (N, R, C) of each
+        sample (clipped into the image) and its foreground flag (N, R, C)."""
         H, W = self._frame.shape[:2]
         ys = b[:, 1, None] + self._fr[None] * b[:, 3, None]  # (N, R) sample rows
         xs = b[:, 0, None] + self._fc[None] * b[:, 2, None]  # (N, C) sample columns
         yi = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
         xi = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+        flat = (yi * W)[:, :, None] + xi[:, None, :]
         inside = ((ys >= 0) & (ys < H))[:, :, None] & ((xs >= 0) & (xs < W))[:, None, :]
-        if self._fg is None:
+        if self._fg_flat is None:
             fg = inside
         else:
-            fg = self._fg[yi[:, :, None], xi[:, None, :]] & inside
-        return ys, xs, yi, xi, fg
+            fg = self._fg_flat.take(flat) & inside
+        return ys, xs, flat, fg
+
+    @staticmethod
+    def _centroids(b: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
+        n = fg.sum(axis=(1, 2)).astype(np.float64)
+        cx = (fg.sum(axis=1) * xs).sum(1)
+        cy = (fg.sum(axis=2) * ys).sum(1)
+        centre = b[:, :2] + 0.5 * b[:, 2:]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(n[:, None] > 0, np.column_stack([cx, cy]) / n[:, None], centre)
 
     def centroids(self, boxes: np.ndarray) -> np.ndarray:
         """(N, 2) foreground centroid (xc, yc) of each xywh box from its sample grid (the
@@ -257,13 +287,26 @@ class PartFeatureExtractor:
         b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
         if len(b) == 0:
             return np.zeros((0, 2))
-        ys, xs, _, _, fg = self._grid(b)
-        n = fg.sum(axis=(1, 2)).astype(np.float64)
-        cx = (fg.sum(axis=1) * xs).sum(1)
-        cy = (fg.sum(axis=2) * ys).sum(1)
-        centre = b[:, :2] + 0.5 * b[:, 2:]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(n[:, None] > 0, np.column_stack([cx, cy]) / n[:, None], centre)
+        ys, xs, _, fg = self._grid(b)
+        return self._centroids(b, ys, xs, fg)
+
+    def extract_at_centroids(self, boxes: np.ndarray) -> tuple[np.ndarray, PartFeatures]:
+        """Centroids of the boxes and their part features split at them (PBM 2.1): the
+        same as ``c = centroids(boxes); extract(boxes, *centroid_ratios(boxes, c))``
+        with one sample grid.
+
+        Returns:
+            (N, 2) centroids and PartFeatures of N boxes.
+        """
+        if self._frame is None:
+            raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
+        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+        if len(b) == 0:
+            return np.zeros((0, 2)), PartFeatures.concatenate([], self.bins)
+        grid = self._grid(b)
+        cents = self._centroids(b, grid[0], grid[1], grid[3])
+        alpha, beta = centroid_ratios(b, cents)
+        return cents, self._features(b, alpha, beta, grid)
 
     def extract(
         self,
@@ -281,30 +324,36 @@ class PartFeatureExtractor:
         if self._frame is None:
             raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
         b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+        if len(b) == 0:
+            return PartFeatures.concatenate([], self.bins)
+        return self._features(b, alpha, beta, self._grid(b))
+
+    def _features(self, b: np.ndarray, alpha, beta, grid) -> PartFeatures:
+        ys, xs, flat, fg = grid
         n, R, C, P = len(b), self.grid_rows, self.grid_cols, N_PARTS
         nb = self.bins**3
         parts = part_boxes(b, alpha, beta)
-        if n == 0:
-            return PartFeatures.concatenate([], self.bins)
-        ys, xs, yi, xi, fg = self._grid(b)
-        pix = self._frame[yi[:, :, None], xi[:, None, :]]  # (N, R, C, 3)
-        flat = np.ascontiguousarray(pix.reshape(n * R, C, 3))
-        hsv = _joint_index(cv2.cvtColor(flat, cv2.COLOR_BGR2HSV), self.bins, HSV_RANGES).reshape(n, R, C)
-        xyz = _joint_index(cv2.cvtColor(flat, cv2.COLOR_BGR2XYZ), self.bins, XYZ_RANGES).reshape(n, R, C)
+        pix = self._pixels.take(flat.reshape(n * R, C), axis=0)  # (N R, C, 3) BGR samples
+        hsv_q = cv2.LUT(cv2.cvtColor(pix, cv2.COLOR_BGR2HSV), self._hsv_lut)
+        xyz_q = cv2.LUT(cv2.cvtColor(pix, cv2.COLOR_BGR2XYZ), self._xyz_lut)
         # part label of every sample (PBM 2.1): head band, torso rows, leg rows; left/right of xc
         head_end = parts[:, 0, 1] + parts[:, 0, 3]
         torso_end = parts[:, 1, 1] + parts[:, 1, 3]
         split = parts[:, 1, 0] + parts[:, 1, 2]
         band = np.where(ys < head_end[:, None], 0, np.where(ys < torso_end[:, None], 1, 3))
         side = (xs >= split[:, None]).astype(np.int64)
-        label = band[:, :, None] + np.where(band[:, :, None] == 0, 0, side[:, None, :])
-        key = np.arange(n)[:, None, None] * P + label  # (N, R, C) in 0..N*P
+        row_key = np.arange(n)[:, None] * P + band  # (N, R): box and band of each row
+        key = row_key[:, :, None] + (band > 0)[:, :, None] * side[:, None, :]  # (N, R, C) in 0..N*P
         kf = key[fg]
         cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
         total = np.bincount(key.ravel(), minlength=n * P).astype(np.float64)
         norm = np.maximum(cnt, 1.0)
-        h_hsv = np.bincount(kf * nb + hsv[fg], minlength=n * P * nb).reshape(n, P, nb)
-        h_xyz = np.bincount(kf * nb + xyz[fg], minlength=n * P * nb).reshape(n, P, nb)
+        fgq = fg.reshape(n * R, C)
+        kb = kf * nb
+        hsv_j = hsv_q[..., 0][fgq] + hsv_q[..., 1][fgq] + hsv_q[..., 2][fgq]
+        xyz_j = xyz_q[..., 0][fgq] + xyz_q[..., 1][fgq] + xyz_q[..., 2][fgq]
+        h_hsv = np.bincount(kb + hsv_j, minlength=n * P * nb).reshape(n, P, nb)
+        h_xyz = np.bincount(kb + xyz_j, minlength=n * P * nb).reshape(n, P, nb)
         X = np.broadcast_to(xs[:, None, :], fg.shape)[fg]
         Y = np.broadcast_to(ys[:, :, None], fg.shape)[fg]
         cx = np.bincount(kf, weights=X, minlength=n * P)

@@ -485,11 +485,10 @@ class PBMTracker:
         n_a = len(anchors)
         if n_a:
             boxes = np.array([a.box for a in anchors])
-            cents = self._extractor.centroids(boxes)  # foreground centroids (PBM 2.1)
+            # foreground centroids (PBM 2.1) and the parts split at them, on one grid
+            cents, feats = self._extractor.extract_at_centroids(boxes)
             for a, c in zip(anchors, cents):
                 a.centroid = c
-            al, be = centroid_ratios(boxes, cents)
-            feats = self._extractor.extract(boxes, al, be)
         else:
             boxes = np.zeros((0, 4))
             feats = PartFeatures.concatenate([], self._extractor.bins)
