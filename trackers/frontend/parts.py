@@ -201,6 +201,7 @@ def _joint_lut(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 HSV_RANGES = (180.0, 256.0, 256.0)
 """Channel ranges of OpenCV's 8-bit HSV (hue is 0..179)."""
 XYZ_RANGES = (256.0, 256.0, 256.0)
+_ONES_1x3 = np.ones((1, 3))
 
 
 class PartFeatureExtractor:
@@ -328,14 +329,24 @@ class PartFeatureExtractor:
             return PartFeatures.concatenate([], self.bins)
         return self._features(b, alpha, beta, self._grid(b))
 
+    @staticmethod
+    def _bins_of(pix: np.ndarray, code: int, lut: np.ndarray) -> np.ndarray:
+        """(M,) joint bin index of a (1, M, 3) uint8 BGR row converted by ``code``
+        (``cv2.cvtColor``): per-channel bins by ``cv2.LUT``, summed over the channels by
+        ``cv2.transform`` (exact integers)."""
+        if pix.size == 0:
+            return np.zeros(0, dtype=np.int64)
+        return cv2.transform(cv2.LUT(cv2.cvtColor(pix, code), lut), _ONES_1x3).reshape(-1)
+
     def _features(self, b: np.ndarray, alpha, beta, grid) -> PartFeatures:
         ys, xs, flat, fg = grid
         n, R, C, P = len(b), self.grid_rows, self.grid_cols, N_PARTS
         nb = self.bins**3
         parts = part_boxes(b, alpha, beta)
-        pix = self._pixels.take(flat.reshape(n * R, C), axis=0)  # (N R, C, 3) BGR samples
-        hsv_q = cv2.LUT(cv2.cvtColor(pix, cv2.COLOR_BGR2HSV), self._hsv_lut)
-        xyz_q = cv2.LUT(cv2.cvtColor(pix, cv2.COLOR_BGR2XYZ), self._xyz_lut)
+        # colour bins of the foreground samples only (the histograms count nothing else)
+        pix = self._pixels.take(flat[fg], axis=0)[None]  # (1, M, 3) BGR: one image row
+        hsv_j = self._bins_of(pix, cv2.COLOR_BGR2HSV, self._hsv_lut)
+        xyz_j = self._bins_of(pix, cv2.COLOR_BGR2XYZ, self._xyz_lut)
         # part label of every sample (PBM 2.1): head band, torso rows, leg rows; left/right of xc
         head_end = parts[:, 0, 1] + parts[:, 0, 3]
         torso_end = parts[:, 1, 1] + parts[:, 1, 3]
@@ -348,10 +359,7 @@ class PartFeatureExtractor:
         cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
         total = np.bincount(key.ravel(), minlength=n * P).astype(np.float64)
         norm = np.maximum(cnt, 1.0)
-        fgq = fg.reshape(n * R, C)
         kb = kf * nb
-        hsv_j = hsv_q[..., 0][fgq] + hsv_q[..., 1][fgq] + hsv_q[..., 2][fgq]
-        xyz_j = xyz_q[..., 0][fgq] + xyz_q[..., 1][fgq] + xyz_q[..., 2][fgq]
         h_hsv = np.bincount(kb + hsv_j, minlength=n * P * nb).reshape(n, P, nb)
         h_xyz = np.bincount(kb + xyz_j, minlength=n * P * nb).reshape(n, P, nb)
         X = np.broadcast_to(xs[:, None, :], fg.shape)[fg]
