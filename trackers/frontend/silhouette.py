@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import logging
 from importlib import resources
+from collections.abc import Sequence
 from pathlib import Path
 
 import cv2
@@ -121,6 +122,17 @@ class SilhouetteMatcher:
         part_height: see ``max_overlap``.
         height_unit: "pixels" (full resolution) or "frame" (fractions of the frame height,
             so that one config serves every frame size).
+        aspect: width / height of the template as matched (None: the template's own); the
+            template is resized to it, so boxes follow a tighter or looser box convention.
+        height_model: fixed ground-plane height prior [a, b] (expected height = a * foot row
+            + b, full-resolution pixels), e.g. from a camera calibration; None: no prior
+            until ``set_height_model`` gives one.
+        frame_border: template pixels outside the frame are unknown rather than background:
+            they are left out of the visible mass M (a person cut by the image border is
+            scored on its visible part) and boxes are clipped to the frame.
+        box_scale: [width, height] factors mapping a fitted template box to the reported
+            box (the box convention of the annotations): the width about the box centre,
+            the height from the top (the head stays put).
     """
 
     def __init__(
@@ -141,6 +153,10 @@ class SilhouetteMatcher:
         max_overlap: float = 0.5,
         part_height: float = 0.8,
         height_unit: str = "pixels",
+        aspect: float | None = None,
+        height_model: Sequence[float] | None = None,
+        frame_border: bool = False,
+        box_scale: Sequence[float] = (1.0, 1.0),
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
@@ -164,7 +180,21 @@ class SilhouetteMatcher:
         if height_tolerance < 1.0:
             raise ValueError(f"height_tolerance must be >= 1, got {height_tolerance}")
         self.height_tolerance = float(height_tolerance)
+        if aspect is not None and not 0.05 <= aspect <= 2.0:
+            raise ValueError(f"aspect must be in [0.05, 2] or None, got {aspect}")
+        self.aspect = None if aspect is None else float(aspect)
+        self.frame_border = bool(frame_border)
+        bs = np.asarray(box_scale, dtype=np.float64).reshape(-1)
+        if bs.shape != (2,) or not ((bs > 0.2) & (bs <= 2.0)).all():
+            raise ValueError(f"box_scale must be [w, h] factors in (0.2, 2], got {list(box_scale)}")
+        self.box_scale = bs
         self.height_model: tuple[float, float] | None = None
+        self.fixed_height_model: tuple[float, float] | None = None
+        if height_model is not None:
+            if len(height_model) != 2:
+                raise ValueError(f"height_model must be [a, b], got {height_model}")
+            self.fixed_height_model = (float(height_model[0]), float(height_model[1]))
+            self.height_model = self.fixed_height_model
         if not 0.0 < max_overlap <= 1.0:
             raise ValueError(f"max_overlap must be in (0, 1], got {max_overlap}")
         self.max_overlap = float(max_overlap)
@@ -182,7 +212,7 @@ class SilhouetteMatcher:
         if key not in self._cache:
             lo, hi = self.pixel_heights(frame_height)
             heights = np.geomspace(lo, hi, self.n_scales) / self.downscale
-            aspect = self.template.shape[1] / self.template.shape[0]
+            aspect = self.aspect or self.template.shape[1] / self.template.shape[0]
             kernels = []
             for h in heights:
                 th = max(round(h), 3)
@@ -193,8 +223,12 @@ class SilhouetteMatcher:
         return self._cache[key]
 
     def set_height_model(self, model: tuple[float, float] | None) -> None:
-        """Expected person height = a * foot_row + b (full-resolution pixels); None: no prior."""
-        self.height_model = None if model is None else (float(model[0]), float(model[1]))
+        """Expected person height = a * foot_row + b (full-resolution pixels); None: no prior
+        (or the fixed ``height_model`` given to the constructor, which a learnt one overrides)."""
+        if model is None:
+            self.height_model = self.fixed_height_model
+        else:
+            self.height_model = (float(model[0]), float(model[1]))
 
     def fit(self, foreground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Greedy fits over a (H, W) foreground mask (nonzero = foreground).
@@ -224,13 +258,27 @@ class SilhouetteMatcher:
             x1, y1 = min(x + w + m + wmax // 2, small.shape[1]), min(y + h + m + hmax // 2, small.shape[0])
             # only this component's pixels in the crop (others are found from their own)
             crop = (lab[y0:y1, x0:x1] == i).astype(np.float32)
-            b, s = self._greedy(crop, region_height=h, row0=y0)
+            edges = None
+            if self.frame_border:  # which crop sides are the frame's border
+                edges = (y0 == 0, y1 == small.shape[0], x0 == 0, x1 == small.shape[1])
+            b, s = self._greedy(crop, region_height=h, row0=y0, edges=edges)
             for bx, sc in zip(b, s):
                 boxes.append([(bx[0] + x0) * d, (bx[1] + y0) * d, bx[2] * d, bx[3] * d])
                 scores.append(sc)
         if not boxes:
             return np.zeros((0, 4)), np.zeros(0)
-        return np.asarray(boxes, dtype=np.float64), np.asarray(scores, dtype=np.float64)
+        out = np.asarray(boxes, dtype=np.float64)
+        if (self.box_scale != 1.0).any():
+            sw, sh = self.box_scale
+            out[:, 0] += out[:, 2] * (1.0 - sw) / 2
+            out[:, 2] *= sw
+            out[:, 3] *= sh
+        if self.frame_border:  # clip to the frame
+            x0c, y0c = np.clip(out[:, 0], 0, W), np.clip(out[:, 1], 0, H)
+            x1c = np.clip(out[:, 0] + out[:, 2], 0, W)
+            y1c = np.clip(out[:, 1] + out[:, 3], 0, H)
+            out = np.column_stack([x0c, y0c, x1c - x0c, y1c - y0c])
+        return out, np.asarray(scores, dtype=np.float64)
 
     def _is_part(self, box: list, boxes: list) -> bool:
         """Whether ``box`` lies more than ``max_overlap`` inside an earlier, taller fit
@@ -254,17 +302,27 @@ class SilhouetteMatcher:
         ok = (expected > 0) & (ratio >= 1 / self.height_tolerance) & (ratio <= self.height_tolerance)
         return ok[:, None]
 
-    def _greedy(self, vacant: np.ndarray, region_height: int, row0: int = 0) -> tuple[list, list]:
+    def _greedy(self, vacant: np.ndarray, region_height: int, row0: int = 0,
+                edges: tuple[bool, bool, bool, bool] | None = None) -> tuple[list, list]:
         """Greedy fits in one (h, w) float32 0/1 crop; boxes in crop coordinates.
+
+        ``edges`` (top, bottom, left, right): crop sides on the frame border, beyond which
+        template pixels are unknown (counted as occupied: outside the visible mass).
 
         The per-scale sums (sum T V, box sum of V, sum T O) are computed once over the crop
         and, after each fit, recomputed only in the window its marked pixels can affect.
         """
         H, W = vacant.shape
+        cut = False  # a region cut by (or within margin of) the frame's top or bottom: its
+        # height does not bound the template heights tried
+        if edges is not None:
+            rows = np.flatnonzero(vacant.any(axis=1))
+            near = max(self.margin // self.downscale, 1)  # frames may have a dark border strip
+            cut = bool(len(rows) and ((edges[0] and rows[0] < near) or (edges[1] and rows[-1] >= H - near)))
         kernels = []
         for t, _inv, tsum in self._kernels:
             rows_ok = self._allowed_rows(t.shape[0], H, row0)
-            if t.shape[0] <= 1.5 * region_height + 4 and (rows_ok is None or rows_ok.any()):
+            if (t.shape[0] <= 1.5 * region_height + 4 or cut) and (rows_ok is None or rows_ok.any()):
                 kernels.append((t, tsum, rows_ok))
         if not kernels:
             return [], []
@@ -274,6 +332,16 @@ class SilhouetteMatcher:
         vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.float32)
         op = np.zeros_like(vp)
         vp[py : py + H, px : px + W] = vacant
+        if edges is not None:
+            top, bottom, left, right = edges
+            if top:
+                op[:py] = 1.0
+            if bottom:
+                op[py + H :] = 1.0
+            if left:
+                op[:, :px] = 1.0
+            if right:
+                op[:, px + W :] = 1.0
         V, O = vp[py : py + H, px : px + W], op[py : py + H, px : px + W]
 
         def sums(t, r0, r1, c0, c1):
