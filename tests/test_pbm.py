@@ -26,7 +26,13 @@ from trackers.layered.models import (
     fit_half_normal,
     save_feature_models,
 )
-from trackers.layered.search import occlusion_kind, search_boxes, top_profile_heads
+from trackers.layered.search import (
+    occlusion_kind,
+    occlusion_kinds,
+    search_boxes,
+    search_boxes_many,
+    top_profile_heads,
+)
 from trackers.records import Detections, TrackState
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -180,6 +186,22 @@ def test_occlusion_rule_and_search_sizes():
     np.testing.assert_allclose(np.unique(boxes[:, 3]), 100 * (1 + 0.05 * np.arange(-2, 3)))
     np.testing.assert_allclose(boxes[:, 1], 30.0)  # hanging from the head top
     np.testing.assert_allclose(boxes[:, 0] + 0.5 * boxes[:, 2], 200.0)  # xc on the head (eq. 1)
+
+
+def test_batched_occlusion_rule_and_search_equal_the_single_ones():
+    rng = np.random.default_rng(4)
+    heads = rng.uniform(0, 300, (6, 3))
+    wh = rng.uniform(10, 100, (6, 2))
+    alpha = rng.uniform(0.1, 0.9, 6)
+    many = search_boxes_many(heads, wh, alpha, 0.05, 2)
+    for s in range(6):
+        np.testing.assert_array_equal(many[s], search_boxes(heads[s], wh[s], alpha[s], 0.05, 2))
+    regions = rng.uniform(5, 150, (9, 2))
+    kinds = occlusion_kinds(regions, wh, 0.5)
+    assert set(np.unique(kinds)) == {-1, 0, 1}
+    for t in range(6):
+        for n in range(9):
+            assert kinds[t, n] == occlusion_kind(regions[n], wh[t], 0.5)
 
 
 def test_two_heads_in_one_blob():

@@ -185,6 +185,40 @@ def occlusion_kind(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: f
     return 0
 
 
+def occlusion_kinds(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> np.ndarray:
+    """``occlusion_kind`` of N candidate regions against T targets at once: (T, N) int
+    (0 unoccluded, +1 larger, -1 smaller; PBM 3.1).
+
+    Args:
+        region_wh: (N, 2) candidate region sizes. predicted_wh: (T, 2) KF2 predictions.
+    """
+    pred = np.asarray(predicted_wh, dtype=np.float64)[:, None, :]
+    rel = (np.asarray(region_wh, dtype=np.float64)[None] - pred) / np.maximum(pred, 1.0)
+    larger = (rel > threshold).any(axis=2)
+    smaller = (rel < -threshold).any(axis=2)
+    return np.where(larger, 1, np.where(smaller, -1, 0))
+
+
+def search_boxes_many(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray,
+                      step: float, search_range: int) -> np.ndarray:
+    """``search_boxes`` (eqs. 9-10) of S heads at once: (S, (2 r + 1)^2, 4) xywh, box
+    i * (2 r + 1) + k of head s having width w_s (1 + step i) and height h_s (1 + step k).
+
+    Args:
+        heads: (S, 3) heads. predicted_wh: (S, 2) KF2 sizes. alpha: (S,) eq. 1 ratios.
+    """
+    i = np.arange(-search_range, search_range + 1, dtype=np.float64)
+    m = len(i)
+    ws = predicted_wh[:, 0, None] * (1.0 + step * i)  # (S, m)
+    hs = predicted_wh[:, 1, None] * (1.0 + step * i)
+    out = np.empty((len(heads), m, m, 4))
+    out[:, :, :, 2] = ws[:, :, None]
+    out[:, :, :, 3] = hs[:, None, :]
+    out[:, :, :, 0] = heads[:, 0, None, None] - alpha[:, None, None] * out[:, :, :, 2]
+    out[:, :, :, 1] = heads[:, 1, None, None]
+    return out.reshape(len(heads), m * m, 4)
+
+
 def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step: float,
                  search_range: int) -> np.ndarray:
     """Head-anchored boxes of eqs. 9-10: ((2 r + 1)^2, 4) xywh.

@@ -87,8 +87,8 @@ from trackers.layered.search import (
     head_from_band,
     head_patch,
     match_head_template,
-    occlusion_kind,
-    search_boxes,
+    occlusion_kinds,
+    search_boxes_many,
     split_blob_box,
     top_profile_heads,
 )
@@ -387,45 +387,58 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ hypotheses
     def _occluded_hypotheses(self, pairs: list[tuple[int, int, int]], anchors: list[Anchor],
-                             fg: np.ndarray | None, pred_wh: np.ndarray) -> list:
+                             fg: np.ndarray | None, pred_wh: np.ndarray, model: PartFeatures) -> list:
         """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for every
-        (target, candidate, kind) pair of the frame, with one feature extraction for all.
+        (target, candidate, kind) pair of the frame, with one feature extraction for all:
+        the (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the aligned box of
+        every smaller candidate whose head is supported by foreground.
 
-        Returns, per pair, (score, part scores, features (1 box), dof) or None (dismissed).
+        Args:
+            model: the parts models of all targets (``PartFeatures``, target order).
+        Returns:
+            per pair, (score, part scores, features, index of the best box in them, dof),
+            or None (dismissed).
         """
         targets = self.targets
-        boxes, alphas, betas, owner = [], [], [], []
-        for q, (ti, n, kind) in enumerate(pairs):
-            t, a = targets[ti], anchors[n]
-            if kind > 0:
-                b = search_boxes(a.head, pred_wh[ti], t.alpha, self.search_step, self.search_range)
-            else:
-                b = aligned_box(a.head, pred_wh[ti], t.alpha)[None]
-                if head_fill(fg, b[0]) < self.head_min_fill:
-                    continue
-            boxes.append(b)
-            alphas.append(np.full(len(b), t.alpha))
-            betas.append(np.full(len(b), t.beta))
-            owner.append(np.full(len(b), q))
         out: list = [None] * len(pairs)
-        if not boxes:
+        search_q = [q for q, (_, _, kind) in enumerate(pairs) if kind > 0]
+        align_q, align_boxes = [], []
+        for q, (ti, n, kind) in enumerate(pairs):
+            if kind > 0:
+                continue
+            box = aligned_box(anchors[n].head, pred_wh[ti], targets[ti].alpha)
+            if head_fill(fg, box) >= self.head_min_fill:
+                align_q.append(q)
+                align_boxes.append(box)
+        if not search_q and not align_q:
             return out
-        B = np.concatenate(boxes)
-        own = np.concatenate(owner)
-        feats = self._search_extractor.extract(B, np.concatenate(alphas), np.concatenate(betas))
-        tis = np.array([pairs[q][0] for q in own])
-        model = PartFeatures.concatenate([targets[i].parts for i in range(len(targets))],
-                                         self._extractor.bins).take(tis)
-        misses = np.array([targets[i].misses for i in tis])
-        d = paired_differences(model, feats, misses)
+        alpha_t = np.array([t.alpha for t in targets])
+        beta_t = np.array([t.beta for t in targets])
+        pair_ti = np.array([ti for ti, _, _ in pairs])
+        m = (2 * self.search_range + 1) ** 2
+        blocks = []
+        if search_q:
+            sti = pair_ti[search_q]
+            heads = np.array([anchors[pairs[q][1]].head for q in search_q])
+            blocks.append(search_boxes_many(heads, pred_wh[sti], alpha_t[sti], self.search_step,
+                                            self.search_range).reshape(-1, 4))
+        if align_q:
+            blocks.append(np.array(align_boxes))
+        B = np.concatenate(blocks)
+        tis = pair_ti[np.concatenate([np.repeat(np.array(search_q, dtype=np.intp), m),
+                                      np.array(align_q, dtype=np.intp)])]
+        feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
+        misses = np.array([t.misses for t in targets])[tis]
+        d = paired_differences(model.take(tis), feats, misses)
         pj, p = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
-        for q in np.unique(own):
-            idx = np.nonzero(own == q)[0]
-            k = int(idx[np.argmax(p[idx])])
+        ns = len(search_q)
+        best = np.concatenate([np.argmax(p[:ns * m].reshape(ns, m), axis=1) + m * np.arange(ns),
+                               ns * m + np.arange(len(align_q))])
+        for q, k in zip(search_q + align_q, best):
             ti, n, _ = pairs[q]
             t = targets[ti]
             dof = dof_from_head(anchors[n].head, B[k, 2], B[k, 3], t.alpha, t.beta)
-            out[q] = (float(p[k]), pj[k], feats.take(k), dof)
+            out[q] = (float(p[k]), pj[k], feats, int(k), dof)
         return out
 
     # ------------------------------------------------------------------ pruning
@@ -496,7 +509,7 @@ class PBMTracker:
         pred_wh = np.array([t.predict() for t in targets]).reshape(-1, 2)
         T = len(targets)
         S = np.full((T, n_a), -np.inf)
-        hyp: dict[tuple[int, int], tuple] = {}
+        hyp: dict[tuple[int, int], tuple] = {}  # (ti, n) -> (p_j, features, index, dof, occluded)
         if T and n_a:
             model = PartFeatures.concatenate([t.parts for t in targets], self._extractor.bins)
             misses = np.array([t.misses for t in targets])
@@ -508,10 +521,12 @@ class PBMTracker:
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
             inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
+            kinds = occlusion_kinds(np.array([a.region[2:] for a in anchors]), pred_wh,
+                                    self.occlusion_threshold)
             pairs: list[tuple[int, int, int]] = []
             for ti, n in zip(*np.nonzero(inside)):
                 a = anchors[n]
-                kind = occlusion_kind(a.region[2:], pred_wh[ti], self.occlusion_threshold)
+                kind = int(kinds[ti, n])
                 if kind == 0 and a.heads_in_region > 1:
                     kind = 1  # a blob holding several heads is a merge: search it
                 if kind == 0:
@@ -521,7 +536,7 @@ class PBMTracker:
                         # a blob's span follows the swinging limbs: keep KF2's width (PBM 3)
                         w = pred_wh[ti][0]
                         dof[0], dof[4] = a.centroid[0] - targets[ti].alpha * w, w
-                    hyp[(ti, n)] = (pj_all[ti, n], feats.take(n), dof, False)
+                    hyp[(ti, n)] = (pj_all[ti, n], feats, n, dof, False)
                     continue
                 # the carved (head-anchored) candidate must itself lie in the gate (PBM 3)
                 hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
@@ -536,10 +551,11 @@ class PBMTracker:
                         < self.search_overlap):
                     continue
                 pairs.append((int(ti), int(n), kind))
-            for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh)):
+            for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh,
+                                                                         model)):
                 if res is not None:
                     S[ti, n] = res[0]
-                    hyp[(ti, n)] = (res[1], res[2], res[3], True)
+                    hyp[(ti, n)] = (res[1], res[2], res[3], res[4], True)
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             for ti, t in enumerate(targets):
                 row = S[ti]
@@ -564,13 +580,13 @@ class PBMTracker:
                     if weak:
                         continue
                     chosen = best
-                elif (ti, chosen) in hyp and hyp[(ti, chosen)][3]:
+                elif (ti, chosen) in hyp and hyp[(ti, chosen)][4]:
                     # "the matching candidate is then updated accordingly": a carved
                     # (occluded) candidate is re-anchored on the refined head
-                    pj_c, f_c, dof_c, _ = hyp[(ti, chosen)]
+                    pj_c, f_c, k_c, dof_c, _ = hyp[(ti, chosen)]
                     head = np.array([refined[0], refined[1], anchors[chosen].head[2]])
-                    hyp[(ti, chosen)] = (pj_c, f_c, dof_from_head(head, dof_c[4], dof_c[5],
-                                                                  t.alpha, t.beta), True)
+                    hyp[(ti, chosen)] = (pj_c, f_c, k_c, dof_from_head(head, dof_c[4], dof_c[5],
+                                                                       t.alpha, t.beta), True)
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
                 S[ti, chosen] = max(keep, self.match_threshold)
@@ -579,7 +595,8 @@ class PBMTracker:
         taken = np.zeros(n_a, dtype=bool)
         for ti, n in matches:
             t = targets[ti]
-            pj, f1, dof, occl = hyp[(ti, n)]
+            pj, f_all, k, dof, occl = hyp[(ti, n)]
+            f1 = f_all.take(k)  # the chosen candidate's (or carved box's) part features
             t.update(dof, fg is not None and not occl, occl, f1, pj, self.part_match_threshold,
                      self.update_rate)
             t.score = float(S[ti, n])
