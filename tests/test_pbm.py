@@ -369,3 +369,17 @@ def test_head_detector_fills_missing_heads():
     np.testing.assert_allclose(anchors[0].head, [17.0, 21.0, 10.0])
     with pytest.raises(ValueError, match="head_detector"):
         PBMTracker(head_detector=object())
+
+
+def test_blobs_equal_opencv_default_labelling():
+    from trackers.layered.search import blobs_boxes
+
+    rng = np.random.default_rng(5)
+    fg = cv2.dilate((rng.random((120, 160)) < 0.02).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    labels, boxes, numbers = blobs_boxes(fg, 10)
+    _, ref_labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8)
+    np.testing.assert_array_equal(labels, ref_labels)
+    keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= 10)[0] + 1
+    assert len(keep) > 3
+    np.testing.assert_array_equal(numbers, keep)
+    np.testing.assert_array_equal(boxes, stats[keep, :4])

@@ -56,11 +56,17 @@ class Anchor:
 def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Connected components of a bool mask (PBM 2).
 
+    Labels are 16-bit when the mask cannot hold 65,535 components (8-connected blobs are
+    at least 2 pixels apart): OpenCV's 16-bit path is the same labelling, and faster.
+
     Returns:
-        labels (H, W) int32, boxes (K, 4) xywh float64, label numbers (K,) of the blobs with
-        at least ``min_area`` pixels.
+        labels (H, W) uint16 or int32, boxes (K, 4) xywh float64, label numbers (K,) of the
+        blobs with at least ``min_area`` pixels.
     """
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8)
+    h, w = fg.shape
+    ltype = cv2.CV_16U if ((h + 1) // 2) * ((w + 1) // 2) < 65535 else cv2.CV_32S
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8,
+                                                           ltype=ltype)
     keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area)[0] + 1
     boxes = stats[keep, :4].astype(np.float64)
     return labels, boxes, keep
