@@ -383,3 +383,40 @@ def test_blobs_equal_opencv_default_labelling():
     assert len(keep) > 3
     np.testing.assert_array_equal(numbers, keep)
     np.testing.assert_array_equal(boxes, stats[keep, :4])
+
+
+def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
+    from filterpy.kalman import KalmanFilter
+
+    from trackers.layered.dynamics import ConstantVelocity2D
+
+    rng = np.random.default_rng(6)
+    kf = ConstantVelocity2D(np.array([50.0, 80.0]), 12.0, 0.5, 0.2, 0.5)
+    F = np.array([[1.0, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0], [0, 0, 0, 1]])
+    H = np.eye(2, 4)
+    x, P = kf.x, kf.P
+    Q = np.diag([0.5**2] * 2 + [0.2**2] * 2) * 144.0
+    R = np.eye(2) * 0.5**2 * 144.0
+    fp = KalmanFilter(dim_x=4, dim_z=2)
+    fp.F, fp.H, fp.Q, fp.R = F, H, Q, R
+    fp.x, fp.P = x.reshape(4, 1).copy(), P.copy()
+    for _ in range(40):
+        # the matrix form, operation for operation: equal bit for bit
+        kf.predict()
+        x, P = F @ x, F @ P @ F.T + Q
+        fp.predict()
+        np.testing.assert_array_equal(kf.x, x)
+        np.testing.assert_array_equal(kf.P, P)
+        z = x[:2] + rng.normal(0, 5, 2)
+        kf.update(z)
+        S = P[:2, :2] + R
+        det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+        K = P[:, :2] @ (np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det)
+        x, P = x + K @ (z - x[:2]), P - K @ P[:2, :]
+        fp.update(z.reshape(2, 1))
+        np.testing.assert_array_equal(kf.x, x)
+        np.testing.assert_array_equal(kf.P, P)
+        # filterpy (Joseph-form covariance update): equal up to rounding
+        np.testing.assert_allclose(kf.x, fp.x[:, 0], rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(kf.P, fp.P, rtol=1e-9, atol=1e-9)
+    assert abs(kf.x[2]) + abs(kf.x[3]) > 0  # the rates moved

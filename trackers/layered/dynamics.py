@@ -29,6 +29,16 @@ class ConstantVelocity2D:
     setting serves near and far people: Q = diag(q_p^2, q_p^2, q_v^2, q_v^2) scale^2,
     R = r^2 scale^2 I.
 
+    The equations are the textbook ones (F = [[I, I], [0, I]], H = [I, 0]):
+    predict x = F x, P = F P F' + Q; update y = z - H x, S = H P H' + R, K = P H' S^-1,
+    x += K y, P = (I - K H) P. With diagonal P0, Q and R the two axes never couple, so P
+    is kept as one 2 x 2 block per axis, (P[a, a], P[a, a'], P[a', a], P[a', a']), and
+    the arithmetic is written out on Python floats (a tracker runs two filters per target
+    per frame: numpy's per-call overhead dominated the 4 x 4 products). Every sum is
+    grouped as the 4 x 4 matrix products group it (their other terms are exact zeros),
+    so ``x`` and ``P`` equal the matrix form bit for bit (tests/test_pbm.py checks this,
+    and agreement with filterpy's KalmanFilter).
+
     Args:
         z: (2,) first measurement. scale: pixels per unit noise (e.g. height / 10).
         position_noise, velocity_noise, measurement_noise: q_p, q_v, r.
@@ -39,30 +49,57 @@ class ConstantVelocity2D:
                  velocity_noise: float, measurement_noise: float,
                  initial_velocity_std: float = 1.0) -> None:
         s2 = max(scale, 1e-3) ** 2
-        self.x = np.array([z[0], z[1], 0.0, 0.0], dtype=np.float64)
-        self.P = np.diag([measurement_noise**2] * 2 + [initial_velocity_std**2] * 2) * s2
-        self.Q = np.diag([position_noise**2] * 2 + [velocity_noise**2] * 2) * s2
-        self.R = np.eye(2) * measurement_noise**2 * s2
+        self._x = [float(z[0]), float(z[1]), 0.0, 0.0]
+        pp, pv = measurement_noise**2 * s2, initial_velocity_std**2 * s2
+        self._p = [[pp, 0.0, 0.0, pv], [pp, 0.0, 0.0, pv]]  # per axis: A, B, C, D
+        self._qp, self._qv = position_noise**2 * s2, velocity_noise**2 * s2
+        self._r = measurement_noise**2 * s2
+
+    @property
+    def x(self) -> np.ndarray:
+        """(4,) state (a, b, a', b') (a copy)."""
+        return np.array(self._x)
+
+    @property
+    def P(self) -> np.ndarray:
+        """(4, 4) state covariance (a copy)."""
+        P = np.zeros((4, 4))
+        for i, (A, B, C, D) in enumerate(self._p):
+            P[i, i], P[i, i + 2], P[i + 2, i], P[i + 2, i + 2] = A, B, C, D
+        return P
+
+    def zero_rates(self) -> None:
+        """Set a' = b' = 0 (the covariance is kept)."""
+        self._x[2] = self._x[3] = 0.0
 
     def predict(self) -> np.ndarray:
         """x = F x; P = F P F' + Q. Returns the predicted (a, b)."""
-        self.x = _F @ self.x
-        self.P = _F @ self.P @ _F.T + self.Q
-        return self.x[:2]
+        x = self._x
+        x[0], x[1] = x[0] + x[2], x[1] + x[3]
+        for blk in self._p:
+            A, B, C, D = blk
+            blk[0] = (A + C) + (B + D) + self._qp
+            blk[1] = B + D
+            blk[2] = C + D
+            blk[3] = D + self._qv
+        return np.array(x[:2])
 
     def update(self, z: np.ndarray) -> None:
         """y = z - H x; S = H P H' + R; K = P H' S^-1; x += K y; P = (I - K H) P."""
-        y = np.asarray(z, dtype=np.float64) - self.x[:2]
-        S = self.P[:2, :2] + self.R
-        det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
-        S_inv = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
-        K = self.P[:, :2] @ S_inv
-        self.x = self.x + K @ y
-        self.P = self.P - K @ self.P[:2, :]
+        x, (p0, p1) = self._x, self._p
+        y0, y1 = float(z[0]) - x[0], float(z[1]) - x[1]
+        s0, s1 = p0[0] + self._r, p1[0] + self._r
+        det = s0 * s1
+        for blk, inv, y, i in ((p0, s1 / det, y0, 0), (p1, s0 / det, y1, 1)):
+            A, B, C, D = blk
+            kp, kv = A * inv, C * inv
+            x[i] += kp * y
+            x[i + 2] += kv * y
+            blk[0], blk[1], blk[2], blk[3] = A - kp * A, B - kp * B, C - kv * A, D - kv * B
 
     @property
     def rate(self) -> np.ndarray:
-        return self.x[2:]
+        return np.array(self._x[2:])
 
 
 class GateFilter:
@@ -95,20 +132,22 @@ class GateFilter:
 
     @property
     def speed(self) -> float:
-        return float(np.hypot(*self.kf.rate))
+        return float(np.hypot(self.kf._x[2], self.kf._x[3]))
 
     def half_size(self, size_wh: np.ndarray, misses: int) -> np.ndarray:
         """(2,) gate half-width and half-height for a target of size (w, h)."""
-        wh = np.asarray(size_wh, dtype=np.float64)
-        half = self.speed_factor * self.speed + self.min_fraction * wh
+        sp = self.speed_factor * self.speed
+        half = [sp + self.min_fraction * float(v) for v in size_wh]
         if misses > 0:
-            half = half * self.miss_factor * self.growth ** (misses - 1)
-        return np.minimum(half, self.max_fraction * np.maximum(wh, 1.0))
+            g = self.growth ** (misses - 1)
+            half = [v * self.miss_factor * g for v in half]
+        return np.array([min(v, self.max_fraction * max(float(s), 1.0))
+                         for v, s in zip(half, size_wh)])
 
     def gate(self, size_wh: np.ndarray, misses: int) -> np.ndarray:
         """(4,) xywh gate rectangle."""
-        half = self.half_size(size_wh, misses)
-        return np.array([*(self.centre - half), *(2 * half)])
+        hx, hy = self.half_size(size_wh, misses)
+        return np.array([self.centre[0] - hx, self.centre[1] - hy, 2 * hx, 2 * hy])
 
 
 class SizeFilter:
@@ -121,15 +160,16 @@ class SizeFilter:
 
     def predict(self) -> np.ndarray:
         """Predicted (w, h), floored at 2 pixels (rates are zeroed if they would shrink it)."""
-        if self.kf.x[0] + self.kf.x[2] < 2 or self.kf.x[1] + self.kf.x[3] < 2:
-            self.kf.x[2:] = 0.0
+        x = self.kf._x
+        if x[0] + x[2] < 2 or x[1] + x[3] < 2:
+            self.kf.zero_rates()
         self.kf.predict()
         return self.predicted
 
     def correct(self, w: float, h: float) -> None:
-        self.kf.update(np.array([h, w]))
+        self.kf.update((h, w))
 
     @property
     def predicted(self) -> np.ndarray:
-        h, w = self.kf.x[:2]
+        h, w = self.kf._x[:2]
         return np.array([max(w, 2.0), max(h, 2.0)])
