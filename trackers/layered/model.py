@@ -23,7 +23,7 @@ from trackers.frontend.parts import (
     HEAD_FRACTION,
     N_PARTS,
     PartFeatures,
-    part_boxes,
+    part_boxes_one,
 )
 from trackers.layered.dynamics import GateFilter, SizeFilter
 
@@ -155,7 +155,7 @@ class Target:
         P.xyz[0] += eta[:, None] * (cand.xyz[0] - P.xyz[0])
         # geometry follows the global model; centroids of frozen parts move with it
         shift = self.dof[2:4] - old_centre
-        new_parts = part_boxes(self.box[None], self._alpha, self._beta)[0]
+        new_parts = part_boxes_one(self.dof[[0, 1, 4, 5]], self._alpha, self._beta)
         P.centroid[0] = np.where(matched[:, None], cand.centroid[0], P.centroid[0] + shift)
         P.parts[0] = new_parts
         P.height[0] = h
