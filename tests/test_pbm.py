@@ -420,3 +420,19 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
         np.testing.assert_allclose(kf.x, fp.x[:, 0], rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(kf.P, fp.P, rtol=1e-9, atol=1e-9)
     assert abs(kf.x[2]) + abs(kf.x[3]) > 0  # the rates moved
+
+
+def test_selected_differences_equal_the_all_pairs_ones():
+    from trackers.frontend.parts import PartFeatureExtractor
+    from trackers.layered.association import feature_differences, selected_differences
+
+    rng = np.random.default_rng(8)
+    frame = rng.integers(0, 256, (200, 300, 3), dtype=np.uint8)
+    ex = PartFeatureExtractor()
+    ex.start(frame, rng.random((200, 300)) < 0.6)
+    model = ex.extract(np.column_stack([rng.uniform(0, 250, (6, 2)), rng.uniform(10, 80, (6, 2))]), 0.4, 0.5)
+    cand = ex.extract(np.column_stack([rng.uniform(0, 250, (7, 2)), rng.uniform(10, 80, (7, 2))]), 0.5, 0.6)
+    misses = rng.integers(0, 3, 6)
+    ti, n = np.nonzero(rng.random((6, 7)) < 0.4)
+    np.testing.assert_array_equal(selected_differences(model, cand, ti, n, misses),
+                                  feature_differences(model, cand, misses)[ti, n])

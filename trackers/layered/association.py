@@ -51,6 +51,44 @@ def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndar
     return np.clip(d, 0.0, None)
 
 
+def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
+                         misses: np.ndarray | None = None) -> np.ndarray:
+    """Eq. 11 for the selected pairs (target ti[k], candidate n[k]) only: (K, 6, 5), equal
+    to ``feature_differences(model, cand, misses)[ti, n]`` value for value (the same
+    operations; the histogram terms take the same T x N Bhattacharyya products). The
+    tracker scores only the candidates inside a target's gate (PBM 3).
+    """
+    ti = np.asarray(ti, dtype=np.intp)
+    n = np.asarray(n, dtype=np.intp)
+    T, N = len(model), len(cand)
+    d = np.empty((len(ti), len(FEATURES), N_PARTS))
+    d[:, 0] = np.abs(model.area[ti] - cand.area[n])
+    d[:, 1] = np.abs(model.perimeter[ti] - cand.perimeter[n])
+    for i, name in ((2, "hsv"), (3, "xyz")):
+        a, b = getattr(model, name), getattr(cand, name)
+        for j in range(N_PARTS):
+            d[:, i, j] = 1.0 - bhattacharyya(a[:, j], b[:, j]).reshape(T, N)[ti, n]
+    # part_displacement(cand, model): |c_n - C_t| / max(H_t, 1)
+    d[:, 4] = (np.linalg.norm(cand.centroid[n] - model.centroid[ti], axis=2)
+               / np.maximum(model.height, 1.0)[ti, None])
+    # part_overlap(model, cand): IoU as ``trackers.geometry.iou_matrix`` computes it
+    a, b = model.parts[ti], cand.parts[n]
+    iw = np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2]) - np.maximum(a[..., 0], b[..., 0])
+    ih = np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3]) - np.maximum(a[..., 1], b[..., 1])
+    inter = np.clip(iw, 0.0, None) * np.clip(ih, 0.0, None)
+    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d[:, 5] = 1.0 - np.where(union > 0, inter / union, 0.0)
+    empty = cand.area[n] <= 0
+    d[:, 2] = np.where(empty, 1.0, d[:, 2])
+    d[:, 3] = np.where(empty, 1.0, d[:, 3])
+    if misses is not None:
+        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[ti, None]
+        d[:, 4] *= g
+        d[:, 5] *= g
+    return np.clip(d, 0.0, None)
+
+
 def paired_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
                        ) -> np.ndarray:
     """Eq. 11 for M aligned pairs (model k against candidate k): (M, 6, 5).
@@ -97,11 +135,22 @@ def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamm
     Returns:
         part scores p_j (..., 5) and global scores p (...,), all in [0, 1].
     """
+    p_parts = part_scores(models, d, omega, spread)
+    return p_parts, global_scores(p_parts, gamma)
+
+
+def part_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, spread: float = 1.0
+                ) -> np.ndarray:
+    """Eq. 12 alone (see ``layered_scores``): (..., 6, 5) differences -> (..., 5) p_j."""
     prob = models.match_probability(np.asarray(d) / spread)  # p(d_ij | theta_ij)
     w = np.asarray(omega, dtype=np.float64) / np.sum(omega)
+    return np.einsum("...ij,i->...j", prob, w)  # eq. 12
+
+
+def global_scores(p_parts: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+    """Eq. 13 alone (see ``layered_scores``): (..., 5) p_j -> (...,) p."""
     g = np.asarray(gamma, dtype=np.float64) / np.sum(gamma)
-    p_parts = np.einsum("...ij,i->...j", prob, w)  # eq. 12
-    return p_parts, p_parts @ g  # eq. 13
+    return p_parts @ g  # eq. 13
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:

@@ -73,9 +73,11 @@ from trackers.frontend.parts import (
 from trackers.geometry import box_slices, iou_matrix, overlap_ratio_matrix
 from trackers.layered.association import (
     ambiguous,
-    feature_differences,
+    global_scores,
     layered_scores,
     paired_differences,
+    part_scores,
+    selected_differences,
 )
 from trackers.layered.model import Target, dof_from_box, dof_from_head
 from trackers.layered.models import FEATURES, FeatureModels
@@ -512,9 +514,6 @@ class PBMTracker:
         hyp: dict[tuple[int, int], tuple] = {}  # (ti, n) -> (p_j, features, index, dof, occluded)
         if T and n_a:
             model = PartFeatures.concatenate([t.parts for t in targets], self._extractor.bins)
-            misses = np.array([t.misses for t in targets])
-            d = feature_differences(model, feats, misses)
-            pj_all, p_all = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
             gates = np.array([t.gate_box() for t in targets])
             for t, g in zip(targets, gates):
                 t.last_gate = g  # the gate this frame's candidates were validated in
@@ -523,12 +522,20 @@ class PBMTracker:
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
             kinds = occlusion_kinds(np.array([a.region[2:] for a in anchors]), pred_wh,
                                     self.occlusion_threshold)
+            merged = np.array([a.heads_in_region > 1 for a in anchors])
+            # a blob holding several heads is a merge: search it
+            kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
+            # eqs. 11-12 for the unoccluded candidates inside each target's gate (PBM 3);
+            # eq. 13 on the whole (T, N) grid (zeros elsewhere): one product of fixed shape
+            ti_in, n_in = np.nonzero(inside & (kinds == 0))
+            d = selected_differences(model, feats, ti_in, n_in, np.array([t.misses for t in targets]))
+            pj_all = np.zeros((T, n_a, N_PARTS))
+            pj_all[ti_in, n_in] = part_scores(self.models, d, self.omega, self.model_spread)
+            p_all = global_scores(pj_all, self.gamma)
             pairs: list[tuple[int, int, int]] = []
             for ti, n in zip(*np.nonzero(inside)):
                 a = anchors[n]
                 kind = int(kinds[ti, n])
-                if kind == 0 and a.heads_in_region > 1:
-                    kind = 1  # a blob holding several heads is a merge: search it
                 if kind == 0:
                     S[ti, n] = p_all[ti, n]
                     dof = dof_from_box(a.box, a.centroid)
