@@ -97,18 +97,14 @@ def part_boxes(
     hh = HEAD_FRACTION * h
     xs = x + a * w  # split column = centroid column xc
     ys = y + hh + be * (h - hh)  # split row = centroid row yc
+    top, left_w, right_w = y + hh, xs - x, x + w - xs
+    torso_h, leg_h = ys - y - hh, y + h - ys
     out = np.empty((n, N_PARTS, 4))
-    out[:, :, 0] = x[:, None]
-    out[:, [2, 4], 0] = xs[:, None]
-    out[:, 0, 1] = y
-    out[:, 1:3, 1] = (y + hh)[:, None]
-    out[:, 3:, 1] = ys[:, None]
-    out[:, 0, 2] = w
-    out[:, [1, 3], 2] = (xs - x)[:, None]
-    out[:, [2, 4], 2] = (x + w - xs)[:, None]
-    out[:, 0, 3] = hh
-    out[:, 1:3, 3] = (ys - y - hh)[:, None]
-    out[:, 3:, 3] = (y + h - ys)[:, None]
+    out[:, 0] = np.column_stack([x, y, w, hh])
+    out[:, 1] = np.column_stack([x, top, left_w, torso_h])
+    out[:, 2] = np.column_stack([xs, top, right_w, torso_h])
+    out[:, 3] = np.column_stack([x, ys, left_w, leg_h])
+    out[:, 4] = np.column_stack([xs, ys, right_w, leg_h])
     return out
 
 
@@ -371,7 +367,6 @@ class PartFeatureExtractor:
         key = row_key[:, :, None] + (band > 0)[:, :, None] * side[:, None, :]  # (N, R, C) in 0..N*P
         kf = key[fg]
         cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
-        total = np.bincount(key.ravel(), minlength=n * P).astype(np.float64)
         norm = np.maximum(cnt, 1.0)
         kb = kf * nb
         h_hsv = np.bincount(kb + hsv_j, minlength=n * P * nb).reshape(n, P, nb)
@@ -386,15 +381,14 @@ class PartFeatureExtractor:
         interior = pad[:, :-2, 1:-1] & pad[:, 2:, 1:-1] & pad[:, 1:-1, :-2] & pad[:, 1:-1, 2:]
         edge = fg & ~interior
         perim = np.bincount(key[edge], minlength=n * P).astype(np.float64)
-        # half perimeter of each part in samples: rows in its band + columns on its side
+        # samples of each part (rows in its band x columns on its side) and its half
+        # perimeter in samples (rows in its band + columns on its side)
         rows_band = np.stack([(band == 0).sum(1), (band == 1).sum(1), (band == 3).sum(1)], axis=1)
         cols_right = side.sum(1)
-        half = np.empty((n, P))
-        half[:, 0] = rows_band[:, 0] + C
-        half[:, 1] = rows_band[:, 1] + C - cols_right
-        half[:, 2] = rows_band[:, 1] + cols_right
-        half[:, 3] = rows_band[:, 2] + C - cols_right
-        half[:, 4] = rows_band[:, 2] + cols_right
+        rows = rows_band[:, [0, 1, 1, 2, 2]]
+        cols = np.column_stack([np.full(n, C), C - cols_right, cols_right, C - cols_right, cols_right])
+        total = (rows * cols).astype(np.float64).reshape(-1)
+        half = (rows + cols).astype(np.float64)
         cen = parts[:, :, :2] + 0.5 * parts[:, :, 2:]
         has = (cnt > 0).reshape(n, P)
         cen = np.where(has[:, :, None], np.stack([cx, cy], axis=1).reshape(n, P, 2)
