@@ -335,7 +335,13 @@ class PBMTracker:
         s = self.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
         labels, bboxes, numbers = blobs_boxes(small, max(self.min_blob_area // (s * s), 1))
-        for sbox, lab in zip(bboxes, numbers):
+        if len(bboxes) and len(det_boxes):
+            blob_iou = iou_matrix(bboxes * s, det_boxes)  # for ``_calibrate``
+            # the head zone of each detection: its top third (and a tenth above)
+            zx0, zx1 = det_boxes[:, 0, None], (det_boxes[:, 0] + det_boxes[:, 2])[:, None]
+            zy0 = (det_boxes[:, 1] - 0.1 * det_boxes[:, 3])[:, None]
+            zy1 = (det_boxes[:, 1] + det_boxes[:, 3] / 3.0)[:, None]
+        for i, (sbox, lab) in enumerate(zip(bboxes, numbers)):
             x, y, w, h = (int(v) for v in sbox)
             mask = labels[y:y + h, x:x + w] == lab
             peaks = top_profile_heads(mask, max(self.head_separation * h, 3.0 / s),
@@ -344,12 +350,12 @@ class PBMTracker:
             hx = (peaks[:, 0] + x + 0.5) * s
             hy = (peaks[:, 1] + y) * s
             # heads explained by a detection: inside a detection box's top third
-            explained = np.zeros(len(peaks), dtype=bool)
-            for b in det_boxes:
-                explained |= ((hx >= b[0]) & (hx <= b[0] + b[2]) & (hy >= b[1] - 0.1 * b[3])
-                              & (hy <= b[1] + b[3] / 3.0))
+            if len(det_boxes):
+                explained = ((hx >= zx0) & (hx <= zx1) & (hy >= zy0) & (hy <= zy1)).any(axis=0)
+            else:
+                explained = np.zeros(len(peaks), dtype=bool)
             if len(peaks) == 1 and explained[0]:
-                self._calibrate(bbox, det_boxes)
+                self._calibrate(bbox, blob_iou[i], det_boxes)
             if explained.all():
                 continue
             n = len(peaks)
@@ -362,15 +368,16 @@ class PBMTracker:
                                       None, "blob", n))
         return anchors
 
-    def _calibrate(self, blob_box: np.ndarray, det_boxes: np.ndarray) -> None:
+    def _calibrate(self, blob_box: np.ndarray, iou: np.ndarray, det_boxes: np.ndarray) -> None:
         """Learn the ratio of detection box size to blob span from isolated people.
+
+        ``iou``: (D,) IoU of ``blob_box`` with each of ``det_boxes``.
 
         A detector's boxes and a foreground blob's span differ systematically (limbs, box
         margins); a blob holding one head and overlapping exactly one detection (IoU >
         0.5) gives one sample of (w_det / w_blob, h_det / h_blob); the first 20 samples
         are averaged, later ones enter a running average with weight 0.05.
         """
-        iou = iou_matrix(blob_box[None], det_boxes)[0]
         if (iou > 0.3).sum() != 1 or iou.max() < 0.5:
             return
         d = det_boxes[int(np.argmax(iou))]
