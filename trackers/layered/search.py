@@ -26,7 +26,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.ndimage import minimum_filter1d
 
 from trackers.frontend.parts import HEAD_FRACTION
 
@@ -89,23 +88,28 @@ def top_profile_heads(mask: np.ndarray, min_separation: float, min_prominence: f
     has = mask.any(axis=0)
     top = np.where(has, mask.argmax(axis=0), h).astype(np.float64)
     r = max(int(min_separation // 2), 1)
-    local = minimum_filter1d(top, size=2 * r + 1, mode="nearest")
+    # running minimum over 2 r + 1 columns, edges replicated (scipy's minimum_filter1d,
+    # mode "nearest"; a grey erosion)
+    local = cv2.erode(top[None], np.ones((1, 2 * r + 1), np.uint8),
+                      borderType=cv2.BORDER_REPLICATE)[0]
     is_min = (top == local) & has
     cols = np.nonzero(is_min)[0]
     if len(cols) == 0:
         return np.zeros((0, 2))
-    # group consecutive plateau columns into one peak
-    groups = np.split(cols, np.nonzero(np.diff(cols) > 1)[0] + 1)
+    # group consecutive plateau columns into one peak: first and last column of each run
+    breaks = np.nonzero(np.diff(cols) > 1)[0]
+    firsts = cols[np.concatenate([[0], breaks + 1])].tolist()
+    lasts = cols[np.concatenate([breaks, [len(cols) - 1]])].tolist()
     peaks = []
     span = int(2 * min_separation)
-    for g in groups:
-        c = 0.5 * (g[0] + g[-1])
-        t = top[g[0]]
-        lo, hi = max(g[0] - span, 0), min(g[-1] + span + 1, w)
-        left = top[lo : g[0]]
-        right = top[g[-1] + 1 : hi]
-        ok_left = g[0] - span <= 0 or (len(left) and left.max() - t >= min_prominence)
-        ok_right = g[-1] + span >= w - 1 or (len(right) and right.max() - t >= min_prominence)
+    for g0, g1 in zip(firsts, lasts):
+        c = 0.5 * (g0 + g1)
+        t = top[g0]
+        lo, hi = max(g0 - span, 0), min(g1 + span + 1, w)
+        left = top[lo:g0]
+        right = top[g1 + 1 : hi]
+        ok_left = g0 - span <= 0 or (len(left) and left.max() - t >= min_prominence)
+        ok_right = g1 + span >= w - 1 or (len(right) and right.max() - t >= min_prominence)
         if ok_left and ok_right:
             peaks.append((c, t))
     if not peaks:
