@@ -99,13 +99,8 @@ def part_boxes(
     ys = y + hh + be * (h - hh)  # split row = centroid row yc
     top, left_w, right_w = y + hh, xs - x, x + w - xs
     torso_h, leg_h = ys - y - hh, y + h - ys
-    out = np.empty((n, N_PARTS, 4))
-    out[:, 0] = np.column_stack([x, y, w, hh])
-    out[:, 1] = np.column_stack([x, top, left_w, torso_h])
-    out[:, 2] = np.column_stack([xs, top, right_w, torso_h])
-    out[:, 3] = np.column_stack([x, ys, left_w, leg_h])
-    out[:, 4] = np.column_stack([xs, ys, right_w, leg_h])
-    return out
+    return np.stack([x, y, w, hh, x, top, left_w, torso_h, xs, top, right_w, torso_h,
+                     x, ys, left_w, leg_h, xs, ys, right_w, leg_h], axis=1).reshape(n, N_PARTS, 4)
 
 
 def part_boxes_one(box, alpha: float, beta: float) -> np.ndarray:

@@ -136,17 +136,19 @@ class GateFilter:
 
     def half_size(self, size_wh: np.ndarray, misses: int) -> np.ndarray:
         """(2,) gate half-width and half-height for a target of size (w, h)."""
+        return np.array(self._half(float(size_wh[0]), float(size_wh[1]), misses))
+
+    def _half(self, w: float, h: float, misses: int) -> tuple[float, float]:
         sp = self.speed_factor * self.speed
-        half = [sp + self.min_fraction * float(v) for v in size_wh]
+        hx, hy = sp + self.min_fraction * w, sp + self.min_fraction * h
         if misses > 0:
             g = self.growth ** (misses - 1)
-            half = [v * self.miss_factor * g for v in half]
-        return np.array([min(v, self.max_fraction * max(float(s), 1.0))
-                         for v, s in zip(half, size_wh)])
+            hx, hy = hx * self.miss_factor * g, hy * self.miss_factor * g
+        return (min(hx, self.max_fraction * max(w, 1.0)), min(hy, self.max_fraction * max(h, 1.0)))
 
     def gate(self, size_wh: np.ndarray, misses: int) -> np.ndarray:
         """(4,) xywh gate rectangle."""
-        hx, hy = self.half_size(size_wh, misses)
+        hx, hy = self._half(float(size_wh[0]), float(size_wh[1]), misses)
         return np.array([self.centre[0] - hx, self.centre[1] - hy, 2 * hx, 2 * hy])
 
 
