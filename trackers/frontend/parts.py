@@ -269,7 +269,10 @@ class PartFeatureExtractor:
         yi = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
         xi = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
         flat = (yi * W)[:, :, None] + xi[:, None, :]
-        inside = ((ys >= 0) & (ys < H))[:, :, None] & ((xs >= 0) & (xs < W))[:, None, :]
+        row_in, col_in = (ys >= 0) & (ys < H), (xs >= 0) & (xs < W)
+        if self._fg_flat is not None and row_in.all() and col_in.all():
+            return ys, xs, flat, self._fg_flat.take(flat)  # every sample inside the image
+        inside = row_in[:, :, None] & col_in[:, None, :]
         if self._fg_flat is None:
             fg = inside
         else:
@@ -345,7 +348,7 @@ class PartFeatureExtractor:
 
     def _features(self, b: np.ndarray, alpha, beta, grid) -> PartFeatures:
         ys, xs, flat, fg = grid
-        n, R, C, P = len(b), self.grid_rows, self.grid_cols, N_PARTS
+        n, C, P = len(b), self.grid_cols, N_PARTS
         nb = self.bins**3
         parts = part_boxes(b, alpha, beta)
         # colour bins of the foreground samples only (the histograms count nothing else)
@@ -364,16 +367,19 @@ class PartFeatureExtractor:
         cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
         norm = np.maximum(cnt, 1.0)
         kb = kf * nb
-        h_hsv = np.bincount(kb + hsv_j, minlength=n * P * nb).reshape(n, P, nb)
-        h_xyz = np.bincount(kb + xyz_j, minlength=n * P * nb).reshape(n, P, nb)
+        # joint histograms of each (box, part), normalised in place by its foreground count
+        h_hsv = np.bincount(kb + hsv_j, minlength=n * P * nb).astype(np.float64).reshape(n, P, nb)
+        h_hsv /= norm.reshape(n, P, 1)
+        h_xyz = np.bincount(kb + xyz_j, minlength=n * P * nb).astype(np.float64).reshape(n, P, nb)
+        h_xyz /= norm.reshape(n, P, 1)
         X = np.broadcast_to(xs[:, None, :], fg.shape)[fg]
         Y = np.broadcast_to(ys[:, :, None], fg.shape)[fg]
         cx = np.bincount(kf, weights=X, minlength=n * P)
         cy = np.bincount(kf, weights=Y, minlength=n * P)
         # outline: foreground samples with a background 4-neighbour (outside = background)
-        pad = np.zeros((n, R + 2, C + 2), dtype=bool)
-        pad[:, 1:-1, 1:-1] = fg
-        interior = pad[:, :-2, 1:-1] & pad[:, 2:, 1:-1] & pad[:, 1:-1, :-2] & pad[:, 1:-1, 2:]
+        # (samples on the grid border have an outside neighbour: never interior)
+        interior = np.zeros_like(fg)
+        interior[:, 1:-1, 1:-1] = fg[:, :-2, 1:-1] & fg[:, 2:, 1:-1] & fg[:, 1:-1, :-2] & fg[:, 1:-1, 2:]
         edge = fg & ~interior
         perim = np.bincount(key[edge], minlength=n * P).astype(np.float64)
         # samples of each part (rows in its band x columns on its side) and its half
@@ -392,8 +398,8 @@ class PartFeatureExtractor:
             parts,
             (cnt / np.maximum(total, 1.0)).reshape(n, P),
             perim.reshape(n, P) / np.maximum(half, 1.0),
-            h_hsv / norm.reshape(n, P, 1),
-            h_xyz / norm.reshape(n, P, 1),
+            h_hsv,
+            h_xyz,
             cen,
             b[:, 3].copy(),
         )
