@@ -3,14 +3,15 @@
 Speed: the ``crowd`` preset (10 people, 640x480) is rendered once into memory with exact
 detections (the gt boxes of people at least 30% visible) and exact foreground; then only
 ``PBMTracker.update`` is timed, on one core (``cv2.setNumThreads(1)``), with the foreground
-mask and without it (detection boxes as candidates). Target: >= 1,000 frames/s.
+mask and without it (detection boxes as candidates), as CPU time (``time.process_time``,
+best of ``--repeats`` runs: the machine may be shared). Target: >= 1,000 frames/s.
 
 Accuracy: IDF1, HOTA, MOTA, IDs and Frag of ``pbm`` and ``baseline`` (both with their
 ``conf/tracker`` defaults) on the synthetic suite and, when ``../shared/data`` is present,
 on CAVIAR OneLeaveShop1cor, with ``NoisyGroundTruth(miss_rate, seed)`` detections.
 
-    .venv/bin/python benchmarks/bench_pbm.py [--speed-frames 300] [--miss 0.3] [--seed 0]
-        [--skip-speed] [--skip-accuracy] [--length 150]
+    .venv/bin/python benchmarks/bench_pbm.py [--speed-frames 300] [--repeats 3] [--miss 0.3]
+        [--seed 0] [--skip-speed] [--skip-accuracy] [--length 150]
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ def build(name: str):
     return instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / f"{name}.yaml"))
 
 
-def speed(frames: int, people: int, seed: int) -> None:
+def speed(frames: int, people: int, seed: int, repeats: int = 3) -> None:
     seq = load_scenario("crowd", seed=seed, length=frames, people=people)
     src = NoisyGroundTruth(seed=seed)
     src.start(seq)
@@ -50,14 +51,18 @@ def speed(frames: int, people: int, seed: int) -> None:
         data.append((img, dets, seq.foreground(k)))
     mean_people = np.mean([len(d) for _, d, _ in data])
     for label, use_fg in (("foreground mask", True), ("no foreground", False)):
-        tracker = build("pbm")
-        t0 = time.perf_counter()
-        n_out = 0
-        for img, dets, fg in data:
-            n_out += len(tracker.update(img, dets, fg if use_fg else None))
-        dt = time.perf_counter() - t0
-        print(f"speed, {label:16s}: {frames / dt:8.1f} frames/s  ({1e3 * dt / frames:.2f} ms/frame, "
-              f"{mean_people:.1f} detections/frame, {n_out / frames:.1f} tracks/frame)")
+        best_cpu, best_wall = np.inf, np.inf
+        for _ in range(repeats):  # the machine may be shared: keep the best of a few runs
+            tracker = build("pbm")
+            n_out = 0
+            t0, c0 = time.perf_counter(), time.process_time()
+            for img, dets, fg in data:
+                n_out += len(tracker.update(img, dets, fg if use_fg else None))
+            best_cpu = min(best_cpu, time.process_time() - c0)
+            best_wall = min(best_wall, time.perf_counter() - t0)
+        print(f"speed, {label:16s}: {frames / best_cpu:8.1f} frames/s CPU ({1e3 * best_cpu / frames:.2f} ms/frame; "
+              f"wall {frames / best_wall:.1f} frames/s), {mean_people:.1f} detections/frame, "
+              f"{n_out / frames:.1f} tracks/frame")
 
 
 def accuracy(sequences, miss: float, seed: int, foreground: str, title: str) -> pd.DataFrame:
@@ -83,6 +88,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speed-frames", type=int, default=300)
     ap.add_argument("--people", type=int, default=10)
+    ap.add_argument("--repeats", type=int, default=3, help="speed runs; the best is shown")
     ap.add_argument("--length", type=int, default=150, help="frames per synthetic scene")
     ap.add_argument("--miss", type=float, default=0.3, help="noisy-gt miss rate")
     ap.add_argument("--seed", type=int, default=0)
@@ -92,7 +98,7 @@ def main() -> None:
     logging.basicConfig(level=logging.WARNING)
     cv2.setNumThreads(1)
     if not args.skip_speed:
-        speed(args.speed_frames, args.people, args.seed)
+        speed(args.speed_frames, args.people, args.seed, args.repeats)
     if args.skip_accuracy:
         return
     suite = load_suite(DEFAULT_SCENARIOS, seed=args.seed, length=args.length)

@@ -134,12 +134,10 @@ def head_from_band(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
         r0, r1 = max(int(y), 0), min(int(np.ceil(y + HEAD_FRACTION * h)) + 1, H)
         c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
         if r1 > r0 and c1 > c0:
-            band = fg[r0:r1, c0:c1]
-            cols = np.nonzero(band.any(axis=0))[0]
-            if len(cols):
-                rows = np.nonzero(band.any(axis=1))[0]
-                return np.array([c0 + 0.5 * (cols[0] + cols[-1] + 1), r0 + rows[0],
-                                 max(cols[-1] + 1 - cols[0], 1)], dtype=np.float64)
+            # bounding rectangle of the band's foreground: first column bx, width bw
+            bx, by, bw, _ = cv2.boundingRect(fg[r0:r1, c0:c1].view(np.uint8))
+            if bw > 0:
+                return np.array([c0 + 0.5 * (2 * bx + bw), r0 + by, max(bw, 1)], dtype=np.float64)
     return np.array([x + 0.5 * w, y, 0.5 * w])
 
 
