@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import csv
 import importlib
-import inspect
 import logging
 import math
 import time
@@ -35,6 +34,7 @@ import pandas as pd
 
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable, read_mot, write_mot
+from harness.metrics import COLUMNS, SequenceScore, score_sequence, summarize
 from harness.report.bars import DEFAULT_METRICS, metric_bars
 from harness.report.graph import GraphExport
 from harness.report.tables import comparison, direction, per_sequence, to_latex, to_markdown
@@ -316,34 +316,14 @@ def run_tracker(tracker: Tracker, sequence: Sequence, source: DetectionSource,
 # --------------------------------------------------------------------------- scoring
 
 
-def _metrics():
-    try:
-        from harness import metrics
-    except ImportError as err:
-        raise RunError(f"harness.metrics is not available: {err}") from err
-    return metrics
-
-
-def score(gt: Any, result: MotTable, iou_threshold: float = 0.5):
-    """``harness.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth.
-
-    Optional keyword arguments of ``score_sequence`` that the ground truth can fill
-    (``occluded``, ``labels``) are passed when the metrics accept them.
-    """
-    metrics = _metrics()
-    fn = metrics.score_sequence
-    kwargs: dict[str, Any] = {"iou_threshold": iou_threshold}
-    params = inspect.signature(fn).parameters
-    for key in ("occluded", "labels"):
-        value = getattr(gt, key, None)
-        if key in params and value is not None:
-            kwargs[key] = value
-    return fn(gt.table, result, **kwargs)
+def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScore:
+    """``harness.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth."""
+    return score_sequence(gt.table, result, iou_threshold=iou_threshold)
 
 
 def summary_rows(tracker: str, scores: Mapping[str, Any]) -> pd.DataFrame:
     """``summarize(scores)`` with a leading ``tracker`` column."""
-    frame = _metrics().summarize(dict(scores)).reset_index(drop=True)
+    frame = summarize(dict(scores)).reset_index(drop=True)
     if "sequence" not in frame.columns:
         raise RunError("harness.metrics.summarize returned no 'sequence' column")
     frame.insert(0, "tracker", tracker)
@@ -662,7 +642,6 @@ def run_experiment(
     externals = external_folders(_cfg_get(cfg, "external", {}), configs)
     build_source(_cfg_get(cfg, "detector"))
     sequences = load_sequences(_cfg_get(cfg, "dataset"))
-    _metrics()
     names = [*configs, *externals]
     title = _title(cfg, sequences)
     log.info("%d sequence(s) x %d tracker(s) %s, foreground=%s", len(sequences), len(names),
@@ -736,7 +715,7 @@ def run_experiment(
     overall.close()
     if metrics.empty:
         log.warning("no sequence was scored: metrics.csv has no rows")
-        metrics = pd.DataFrame(columns=["tracker", "sequence", *_metrics().COLUMNS])
+        metrics = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS])
         writer.metrics(metrics)
     writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
     if not metrics.empty:
