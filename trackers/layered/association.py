@@ -100,8 +100,9 @@ def paired_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarr
     d = np.empty((M, len(FEATURES), N_PARTS))
     d[:, 0] = np.abs(model.area - cand.area)
     d[:, 1] = np.abs(model.perimeter - cand.perimeter)
-    d[:, 2] = 1.0 - np.sqrt(model.hsv * cand.hsv).sum(-1)  # 1 - rho (Bhattacharyya)
-    d[:, 3] = 1.0 - np.sqrt(model.xyz * cand.xyz).sum(-1)
+    for i, name in ((2, "hsv"), (3, "xyz")):  # 1 - rho (Bhattacharyya), in place
+        prod = getattr(model, name) * getattr(cand, name)
+        d[:, i] = 1.0 - np.sqrt(prod, out=prod).sum(-1)
     d[:, 4] = np.linalg.norm(cand.centroid - model.centroid, axis=2) / np.maximum(
         model.height, 1.0)[:, None]
     a, b = model.parts, cand.parts

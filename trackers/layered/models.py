@@ -193,7 +193,10 @@ class FeatureModels:
         """
         d = np.maximum(np.asarray(d, dtype=np.float64), 0.0)[..., None]
         s = ndtr((self._mu - d) / self._s) + ndtr((-self._mu - d) / self._s)
-        return np.clip((self._w * s).sum(-1), 0.0, 1.0)
+        ws = self._w * s
+        if ws.shape[-1] == 2:  # the sum over 2 components, as ``sum(-1)`` adds them
+            return np.clip(ws[..., 0] + ws[..., 1], 0.0, 1.0)
+        return np.clip(ws.sum(-1), 0.0, 1.0)
 
     def to_dict(self) -> dict:
         return {
