@@ -351,8 +351,11 @@ class PartFeatureExtractor:
         n, C, P = len(b), self.grid_cols, N_PARTS
         nb = self.bins**3
         parts = part_boxes(b, alpha, beta)
+        # the M foreground samples as flat indices into (N, R, C), in row-major order (the
+        # order a boolean mask selects them in); every per-sample gather is a ``take``
+        idx = np.flatnonzero(fg)
         # colour bins of the foreground samples only (the histograms count nothing else)
-        pix = self._pixels.take(flat[fg], axis=0)[None]  # (1, M, 3) BGR: one image row
+        pix = self._pixels.take(flat.reshape(-1).take(idx), axis=0)[None]  # (1, M, 3) BGR: one image row
         hsv_j = self._bins_of(pix, cv2.COLOR_BGR2HSV, self._hsv_lut)
         xyz_j = self._bins_of(pix, cv2.COLOR_BGR2XYZ, self._xyz_lut)
         # part label of every sample (PBM 2.1): head band, torso rows, leg rows; left/right of xc
@@ -363,7 +366,7 @@ class PartFeatureExtractor:
         side = (xs >= split[:, None]).astype(np.int64)
         row_key = np.arange(n)[:, None] * P + band  # (N, R): box and band of each row
         key = row_key[:, :, None] + (band > 0)[:, :, None] * side[:, None, :]  # (N, R, C) in 0..N*P
-        kf = key[fg]
+        kf = key.reshape(-1).take(idx)
         cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
         norm = np.maximum(cnt, 1.0)
         kb = kf * nb
@@ -372,8 +375,9 @@ class PartFeatureExtractor:
         h_hsv /= norm.reshape(n, P, 1)
         h_xyz = np.bincount(kb + xyz_j, minlength=n * P * nb).astype(np.float64).reshape(n, P, nb)
         h_xyz /= norm.reshape(n, P, 1)
-        X = np.broadcast_to(xs[:, None, :], fg.shape)[fg]
-        Y = np.broadcast_to(ys[:, :, None], fg.shape)[fg]
+        nr = idx // C  # box * R + row of each foreground sample
+        X = xs.reshape(-1).take(nr // fg.shape[1] * C + (idx - nr * C))
+        Y = ys.reshape(-1).take(nr)
         cx = np.bincount(kf, weights=X, minlength=n * P)
         cy = np.bincount(kf, weights=Y, minlength=n * P)
         # outline: foreground samples with a background 4-neighbour (outside = background)
@@ -381,7 +385,7 @@ class PartFeatureExtractor:
         interior = np.zeros_like(fg)
         interior[:, 1:-1, 1:-1] = fg[:, :-2, 1:-1] & fg[:, 2:, 1:-1] & fg[:, 1:-1, :-2] & fg[:, 1:-1, 2:]
         edge = fg & ~interior
-        perim = np.bincount(key[edge], minlength=n * P).astype(np.float64)
+        perim = np.bincount(key.reshape(-1).take(np.flatnonzero(edge)), minlength=n * P).astype(np.float64)
         # samples of each part (rows in its band x columns on its side) and its half
         # perimeter in samples (rows in its band + columns on its side)
         rows_band = np.stack([(band == 0).sum(1), (band == 1).sum(1), (band == 3).sum(1)], axis=1)
