@@ -481,3 +481,15 @@ def test_top_profile_heads_equal_the_reference_on_random_blobs():
         np.testing.assert_array_equal(got, _top_profile_heads_reference(mask, sep, prom))
         found += len(got) > 1
     assert found > 10  # several multi-head profiles were compared
+
+
+def test_bool_and_label_foreground_give_the_same_tracks():
+    # a bool mask is used as is (made contiguous); a label image is compared with 0
+    scene = S.merge_pair()
+    a, b = PBMTracker(), PBMTracker()
+    for k in range(25):
+        img, lab = scene.render(k)
+        det = scene.detections(k, lab, 0.5)
+        ta = a.update(img, det, lab)
+        tb = b.update(img, det, np.asfortranarray(lab != 0))
+        assert [(t.id, tuple(t.box), t.state) for t in ta] == [(t.id, tuple(t.box), t.state) for t in tb]

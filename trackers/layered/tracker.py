@@ -495,7 +495,7 @@ class PBMTracker:
             if foreground.shape != frame.shape[:2]:
                 raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
                                  f"differs from frame {frame.shape[:2]}")
-            fg = foreground if foreground.dtype == bool else foreground != 0
+            fg = np.ascontiguousarray(foreground) if foreground.dtype == bool else foreground != 0
         if detections is None:
             detections = Detections.empty()
         self._frame += 1
