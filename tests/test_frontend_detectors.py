@@ -218,3 +218,47 @@ def test_windowed_greedy_equals_full_recompute():
     want = _greedy_reference(m, mask.copy())
     assert len(want) >= 3
     np.testing.assert_array_equal(np.array(got), np.array(want))
+
+
+def test_frame_border_finds_a_person_cut_by_the_bottom_edge():
+    # a person 100 rows high whose legs are outside a 240-row frame (only 60 rows visible)
+    full = _person_mask((340, 320), (140, 180, 40, 100))
+    mask = full[:240]
+    kw = dict(min_height=60, max_height=120, n_scales=12, downscale=1)
+    plain = SilhouetteMatcher(**kw).fit(mask)[0]
+    cut = SilhouetteMatcher(**kw, frame_border=True).fit(mask)[0]
+    visible = np.array([[140, 180, 40, 60]], float)  # the annotation convention: clipped box
+    assert len(cut) == 1
+    assert (cut[:, 1] + cut[:, 3] <= 240).all()  # clipped to the frame
+    assert iou_matrix(visible, cut)[0, 0] > 0.9
+    # without it, the missing legs count against every tall fit: a smaller, shifted box
+    assert len(plain) == 0 or iou_matrix(visible, plain).max() < 0.8
+
+
+def test_box_scale_aspect_and_fixed_height_model():
+    box = (50, 100, 34, 84)
+    mask = _person_mask((288, 384), box)
+    kw = dict(min_height=40, max_height=120, n_scales=10, downscale=1)
+    ref = SilhouetteMatcher(**kw).fit(mask)[0]
+    scaled = SilhouetteMatcher(**kw, box_scale=(0.8, 0.9)).fit(mask)[0]
+    assert len(ref) == 1 and len(scaled) == 1
+    np.testing.assert_allclose(scaled[0, 2:], ref[0, 2:] * [0.8, 0.9])
+    np.testing.assert_allclose(scaled[0, 0] + scaled[0, 2] / 2, ref[0, 0] + ref[0, 2] / 2)  # same centre
+    assert scaled[0, 1] == ref[0, 1]  # same top
+    narrow = SilhouetteMatcher(**kw, aspect=0.3)
+    narrow._kernels_for(288)
+    assert all(abs(t.shape[1] / t.shape[0] - 0.3) < 0.1 for t, _, _ in narrow._cache[0])
+    # a fixed prior (camera calibration) survives set_height_model(None), e.g. a detector reset
+    fixed = SilhouetteMatcher(**kw, height_model=(0.0, 40.0))
+    fixed.set_height_model(None)
+    assert fixed.height_model == (0.0, 40.0)
+    b = fixed.fit(mask)[0]
+    assert len(b) and (b[:, 3] <= 40 * 1.4 + 1).all()
+    fixed.set_height_model((0.0, 84.0))  # a learnt prior overrides it
+    assert fixed.height_model == (0.0, 84.0)
+    with pytest.raises(ValueError, match="box_scale"):
+        SilhouetteMatcher(box_scale=(0.0, 1.0))
+    with pytest.raises(ValueError, match="aspect"):
+        SilhouetteMatcher(aspect=5.0)
+    with pytest.raises(ValueError, match="height_model"):
+        SilhouetteMatcher(height_model=(1.0,))
