@@ -60,14 +60,15 @@ def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray
     """
     ti = np.asarray(ti, dtype=np.intp)
     n = np.asarray(n, dtype=np.intp)
-    T, N = len(model), len(cand)
     d = np.empty((len(ti), len(FEATURES), N_PARTS))
     d[:, 0] = np.abs(model.area[ti] - cand.area[n])
     d[:, 1] = np.abs(model.perimeter[ti] - cand.perimeter[n])
     for i, name in ((2, "hsv"), (3, "xyz")):
-        a, b = getattr(model, name), getattr(cand, name)
-        for j in range(N_PARTS):
-            d[:, i, j] = 1.0 - bhattacharyya(a[:, j], b[:, j]).reshape(T, N)[ti, n]
+        # rho of every part of every (target, candidate): the products of ``bhattacharyya``
+        # (sqrt(p) @ sqrt(q)'), one (T, B) @ (B, N) matrix product per part, stacked
+        a = np.sqrt(np.ascontiguousarray(getattr(model, name).transpose(1, 0, 2)))  # (5, T, B)
+        b = np.sqrt(np.ascontiguousarray(getattr(cand, name).transpose(1, 0, 2)))  # (5, N, B)
+        d[:, i] = 1.0 - (a @ b.transpose(0, 2, 1))[:, ti, n].T
     # part_displacement(cand, model): |c_n - C_t| / max(H_t, 1)
     d[:, 4] = (np.linalg.norm(cand.centroid[n] - model.centroid[ti], axis=2)
                / np.maximum(model.height, 1.0)[ti, None])
