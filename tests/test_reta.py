@@ -332,6 +332,39 @@ def test_isolated_false_positives_never_become_confirmed_tracks():
     assert base_fp > 0 and reta_fp == 0
 
 
+def _by_id(tracks, track_id):
+    return [t for t in tracks if t.id == track_id]
+
+
+def test_person_detected_half_behind_another_keeps_its_measured_size():
+    # A stands still; its detected width shrinks 0.5 px a frame (a size rate) until B, nearer
+    # the camera, walks half in front of it; from then on A is measured at a constant 30 px.
+    # A person behind another once took its size from the bare prediction, whose size rate
+    # nothing corrected: A kept shrinking under a constant measurement.
+    n = 42  # A is detected (at least 30 % visible) in every frame
+    frames = _scene([_line((150, 150), (0, 0), n), _line((70, 153), (1.8, 0), n)], [RED, BLUE])
+    tracker = RetaTracker()
+    behind, widths = 0, []
+    for t, (img, label, dets, gt) in enumerate(frames):
+        boxes = dets.boxes.copy()
+        a = int(np.argmin(np.abs(boxes[:, 0] - 135) + np.abs(boxes[:, 1] - 70)))
+        w = 30 + 0.5 * max(0, 31 - t)
+        boxes[a] = [150 - w / 2, 70, w, 80]
+        out = tracker.update(img, Detections(boxes, dets.scores), label > 0)
+        if t < 5:
+            continue
+        if t == 5:
+            (mine,) = [x for x in out if iou_matrix(x.box[None], boxes[a][None])[0, 0] > 0.5]
+            a_id = mine.id
+        (mine,) = _by_id(out, a_id)
+        assert mine.state == TrackState.CONFIRMED
+        if t > 31:
+            behind += mine.extra["depth"] > 0
+            widths.append(mine.box[2])
+    assert behind >= 5  # A really was matched behind B
+    assert max(abs(np.array(widths) - 30)) < 2.0, widths
+
+
 # --------------------------------------------------------------------------- synthetic suite
 
 

@@ -10,9 +10,10 @@ Algorithm 1 per frame t:
    mu_rho, mu_g);
 5. depth order pi of every pair in O (eq. 3), inherited when neither is visible;
 6. attribute update (3.3.3): a matched person not occluded takes the measurement's q, S
-   and corrects M; a matched person behind another keeps q, takes S from the prediction
-   and corrects only its position; a person matched through a hypothesis keeps its id and
-   loses its other hypotheses;
+   and corrects M; a matched person behind another keeps q and takes S from its
+   prediction area corrected by the (possibly partial) measurement (the Kalman estimate:
+   a bare prediction would carry a size rate nothing corrects); a person matched through
+   a hypothesis keeps its id and loses its other hypotheses;
 7. an unmatched person continues each hypothesis; at its first total occlusion (behind a
    visible person in O) hypotheses 2 (occluder) and 3 (still) are added;
 8. an unmatched measurement starts a tentative track (3.3), confirmed after
@@ -319,17 +320,23 @@ class RetaTracker:
             dbox = dets[[d for _, (d, _, _, _) in rows]]
             visible_boxes = dbox
             behind = np.array([n in in_front for _, (_, n, _, _) in rows])
+            # every matched node corrects its motion model M with the whole measurement
+            # (centre and size), so the size and its rate stay tied to what is measured
             z = box_measurements(dbox)
-            z[behind, 2:] = pred[idx[behind], 2:]  # occluded: shape (w, h) from the prediction
             Rs = np.array([persons[i].R for i, _ in rows])
             Xc, Pc = correct(Xp[idx], Pp[idx], z, self._H, Rs)
+            # the region of a person behind another (3.3.3: "updated with the model of his
+            # prediction area"): the prediction corrected by the (possibly partial)
+            # measurement. The prediction alone drifts: its size rate could never be
+            # corrected while hidden, so a person half behind another shrank or swelled.
+            estimate = state_boxes(Xc).tolist()
             for r, (i, (d, n, stage, rho)) in enumerate(rows):
                 person = persons[i]
                 if not behind[r]:
                     person.q = p[d]  # appearance updated only when not occluded
                     shape = dbox[r]
                 else:
-                    shape = pred[n]
+                    shape = np.array(estimate[r])
                 person.hits += 1
                 person.misses = 0
                 person.spawned = False
