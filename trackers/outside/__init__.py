@@ -1,0 +1,31 @@
+"""Thin adapters around outside (PyPI) trackers, so they run in the harness on exactly the
+same detections as ours.
+
+Each module wraps one library in a class with ``reset()`` and
+``update(frame, detections, foreground=None) -> list[Track]``: our ``Detections`` (xywh,
+0-based, float64, with scores) are converted to the library's input and its output back to
+``Track`` records. The library is imported in the constructor, so importing this package
+never needs it; a missing library raises ``ImportError`` naming the extra to install
+(``pip install -e ".[outside]"``).
+
+Identities are renumbered 1, 2, ... in order of first report, per adapter instance: some
+libraries draw ids from a class-level counter (OC-SORT) or from ``uuid4`` (motpy), which
+would make result files depend on what else ran in the process.
+
+Modules:
+    norfair: ``NorfairTracker`` (tryolabs norfair, IoU distance on the two box corners).
+    motpy: ``MotpyTracker`` (wmuron motpy, Kalman box tracker with IoU matching).
+    ocsort: ``OCSortTracker`` (Cao et al. 2023, official code as packaged by ``ocsort``).
+    bytetrack: ``ByteTrackTracker`` (Zhang et al. 2022, OUR re-implementation of BYTE on
+        the project's Kalman filter and Hungarian assignment: no installable package
+        implements it without torch or a second OpenCV).
+"""
+
+from __future__ import annotations
+
+from trackers.outside.bytetrack import ByteTrackTracker
+from trackers.outside.motpy import MotpyTracker
+from trackers.outside.norfair import NorfairTracker
+from trackers.outside.ocsort import OCSortTracker
+
+__all__ = ["ByteTrackTracker", "MotpyTracker", "NorfairTracker", "OCSortTracker"]

@@ -1,0 +1,58 @@
+"""Helpers shared by the outside-tracker adapters: guarded imports, id renumbering, boxes."""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+import numpy as np
+
+EXTRA = "outside"
+
+
+def require(module: str, package: str, tracker: str) -> ModuleType:
+    """Import ``module`` or raise an ImportError naming the pip package and the extra.
+
+    Args:
+        module: import name, e.g. ``"norfair"``.
+        package: PyPI name and version pin, e.g. ``"norfair==2.3.0"``.
+        tracker: adapter class name, for the message.
+    """
+    try:
+        return importlib.import_module(module)
+    except ImportError as err:
+        raise ImportError(
+            f"{tracker} needs the outside library '{module}' (PyPI {package}), which is not "
+            f'installed: pip install -e ".[{EXTRA}]" (or pip install {package}); '
+            f"import failed with: {err}"
+        ) from err
+
+
+class IdMap:
+    """Library identity (any hashable) -> our positive int id, 1, 2, ... in order of first use."""
+
+    def __init__(self) -> None:
+        self._ids: dict = {}
+
+    def __call__(self, key) -> int:
+        if key not in self._ids:
+            self._ids[key] = len(self._ids) + 1
+        return self._ids[key]
+
+
+def xywh_to_xyxy(boxes: np.ndarray) -> np.ndarray:
+    """(N, 4) xywh -> (N, 4) x1, y1, x2, y2 (same 0-based pixel frame)."""
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    return np.column_stack([boxes[:, :2], boxes[:, :2] + boxes[:, 2:]])
+
+
+def xyxy_to_xywh(box) -> np.ndarray:
+    """(4,) x1, y1, x2, y2 -> (4,) float64 xywh."""
+    x1, y1, x2, y2 = (float(v) for v in np.asarray(box).reshape(-1)[:4])
+    return np.array([x1, y1, x2 - x1, y2 - y1])
+
+
+def check_min_score(min_score: float) -> float:
+    if not 0.0 <= min_score <= 1.0:
+        raise ValueError(f"min_score must lie in [0, 1], got {min_score}")
+    return float(min_score)
