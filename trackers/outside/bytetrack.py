@@ -119,15 +119,19 @@ class ByteTrackTracker:
         initial_velocity_variance: float = 100.0,
     ) -> None:
         for name, value in (
-            ("track_thresh", track_thresh), ("low_thresh", low_thresh),
-            ("new_track_thresh", new_track_thresh), ("match_thresh", match_thresh),
+            ("track_thresh", track_thresh),
+            ("low_thresh", low_thresh),
+            ("new_track_thresh", new_track_thresh),
+            ("match_thresh", match_thresh),
             ("second_match_thresh", second_match_thresh),
             ("unconfirmed_match_thresh", unconfirmed_match_thresh),
         ):
             if not 0.0 <= value <= 1.0:
                 raise ValueError(f"{name} must lie in [0, 1], got {value}")
         if low_thresh > track_thresh:
-            raise ValueError(f"low_thresh ({low_thresh}) must not exceed track_thresh ({track_thresh})")
+            raise ValueError(
+                f"low_thresh ({low_thresh}) must not exceed track_thresh ({track_thresh})"
+            )
         if track_buffer < 0:
             raise ValueError(f"track_buffer must be >= 0, got {track_buffer}")
         if report_lost < 0:

@@ -60,20 +60,32 @@ class MotpyTracker:
         if not 0.0 <= min_iou <= 1.0:
             raise ValueError(f"min_iou must lie in [0, 1], got {min_iou}")
         if order_pos not in (0, 1, 2) or order_size not in (0, 1, 2):
-            raise ValueError(f"order_pos and order_size must be 0, 1 or 2, got {order_pos}, {order_size}")
+            raise ValueError(
+                f"order_pos and order_size must be 0, 1 or 2, got {order_pos}, {order_size}"
+            )
         self.dt = float(dt)
         self.model_spec = {
-            "order_pos": int(order_pos), "dim_pos": 2, "order_size": int(order_size), "dim_size": 2,
-            "q_var_pos": float(q_var_pos), "q_var_size": float(q_var_size),
-            "r_var_pos": float(r_var_pos), "r_var_size": float(r_var_size),
+            "order_pos": int(order_pos),
+            "dim_pos": 2,
+            "order_size": int(order_size),
+            "dim_size": 2,
+            "q_var_pos": float(q_var_pos),
+            "q_var_size": float(q_var_size),
+            "r_var_pos": float(r_var_pos),
+            "r_var_size": float(r_var_size),
             "p_cov_p0": float(p_cov_p0),
         }
-        self.matching = {"min_iou": float(min_iou), "multi_match_min_iou": float(multi_match_min_iou)}
+        self.matching = {
+            "min_iou": float(min_iou),
+            "multi_match_min_iou": float(multi_match_min_iou),
+        }
         self.track_kwargs = {
-            "max_staleness": float(max_staleness), "smooth_score_gamma": float(smooth_score_gamma)
+            "max_staleness": float(max_staleness),
+            "smooth_score_gamma": float(smooth_score_gamma),
         }
         self.active = {
-            "min_steps_alive": int(min_steps_alive), "max_staleness": float(active_max_staleness)
+            "min_steps_alive": int(min_steps_alive),
+            "max_staleness": float(active_max_staleness),
         }
         self.min_score = check_min_score(min_score)
         self.reset()
