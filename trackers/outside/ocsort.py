@@ -12,10 +12,16 @@ renumbered here.
 Install: ``pip install --no-deps ocsort==0.0.2``. Its metadata pins filterpy==1.4.5,
 lap==0.4.0 and scipy==1.9.3, which do not build on Python 3.11 / numpy 2; the code itself
 only needs numpy, scipy and filterpy (``lap`` is optional: scipy's Hungarian is used when
-it is missing).
+it is missing). One numpy-2 incompatibility is shimmed: the observation-centric re-update
+(ORU, ``KalmanFilterNew.unfreeze``) calls ``float()`` on 1-element arrays, which numpy 2
+refuses; the adapter gives ``ocsort.kalmanfilter`` a module-level ``float`` that takes the
+single element, exactly what numpy 1 did (the library's arithmetic is untouched).
 """
 
 from __future__ import annotations
+
+import builtins
+import importlib
 
 import numpy as np
 
@@ -23,6 +29,13 @@ from trackers.outside._common import IdMap, check_min_score, require, xywh_to_xy
 from trackers.records import Detections, Track, TrackState
 
 ASSOCIATION_COSTS = ("iou", "giou", "ciou", "diou", "ct_dist")
+
+
+def _size_one_float(value) -> float:
+    """``float`` as numpy 1 had it: a 1-element array of any shape gives its element."""
+    if isinstance(value, np.ndarray) and value.size == 1:
+        return builtins.float(value.reshape(-1)[0])
+    return builtins.float(value)
 
 
 class _TensorLike(np.ndarray):
@@ -64,6 +77,8 @@ class OCSortTracker:
         min_score: float = 0.0,
     ) -> None:
         self._oc = require("ocsort", "ocsort==0.0.2 (pip install --no-deps)", type(self).__name__)
+        kalman_module = importlib.import_module("ocsort.kalmanfilter")
+        kalman_module.float = _size_one_float  # numpy-2 shim for ORU (see module docstring)
         if asso_func not in ASSOCIATION_COSTS:
             raise ValueError(f"asso_func must be one of {ASSOCIATION_COSTS}, got {asso_func!r}")
         if max_age < 0:
