@@ -224,7 +224,7 @@ def test_frame_border_finds_a_person_cut_by_the_bottom_edge():
     # a person 100 rows high whose legs are outside a 240-row frame (only 60 rows visible)
     full = _person_mask((340, 320), (140, 180, 40, 100))
     mask = full[:240]
-    kw = dict(min_height=60, max_height=120, n_scales=12, downscale=1)
+    kw = {"min_height": 60, "max_height": 120, "n_scales": 12, "downscale": 1}
     plain = SilhouetteMatcher(**kw).fit(mask)[0]
     cut = SilhouetteMatcher(**kw, frame_border=True).fit(mask)[0]
     visible = np.array([[140, 180, 40, 60]], float)  # the annotation convention: clipped box
@@ -238,7 +238,7 @@ def test_frame_border_finds_a_person_cut_by_the_bottom_edge():
 def test_box_scale_aspect_and_fixed_height_model():
     box = (50, 100, 34, 84)
     mask = _person_mask((288, 384), box)
-    kw = dict(min_height=40, max_height=120, n_scales=10, downscale=1)
+    kw = {"min_height": 40, "max_height": 120, "n_scales": 10, "downscale": 1}
     ref = SilhouetteMatcher(**kw).fit(mask)[0]
     scaled = SilhouetteMatcher(**kw, box_scale=(0.8, 0.9)).fit(mask)[0]
     assert len(ref) == 1 and len(scaled) == 1

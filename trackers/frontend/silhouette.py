@@ -25,8 +25,8 @@ M / sum T >= ``min_visible`` (Reta: people more than 30% visible). Every sum is 
 from __future__ import annotations
 
 import logging
-from importlib import resources
 from collections.abc import Sequence
+from importlib import resources
 from pathlib import Path
 
 import cv2
