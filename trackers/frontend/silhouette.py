@@ -20,6 +20,13 @@ step takes the placement and scale of largest E (the active basis' log-likelihoo
 grows with the template's size), among placements with ``score >= threshold`` and
 M / sum T >= ``min_visible`` (Reta: people more than 30% visible). Every sum is one
 ``cv2.filter2D`` per scale over a foreground crop, never a Python loop over pixels.
+
+Scene knowledge, all optional: a ground-plane height prior (expected height linear in the
+foot row; fixed from a calibration, ``height_model``, or learnt by the detector), template
+pixels beyond the frame border treated as unknown (``frame_border``: people cut by the image
+edge), and a box convention (``box_scale``: reported box = fitted template box scaled to the
+annotations' tighter or looser boxes). On CAVIAR the height prior matters most: without it the
+largest-E rule prefers tall fits spanning a group or a person with its floor reflection.
 """
 
 from __future__ import annotations
