@@ -98,7 +98,7 @@ def test_adapter_ignores_detections_below_min_score(name):
 
 
 def test_missing_library_names_the_extra():
-    with pytest.raises(ImportError, match=r"outside.*no_such_tracker_lib==1\.0"):
+    with pytest.raises(ImportError, match=r"outside.*pip install no_such_tracker_lib==1\.0"):
         require("no_such_tracker_lib", "no_such_tracker_lib==1.0", "Demo")
 
 

@@ -5,8 +5,18 @@ Each module wraps one library in a class with ``reset()`` and
 ``update(frame, detections, foreground=None) -> list[Track]``: our ``Detections`` (xywh,
 0-based, float64, with scores) are converted to the library's input and its output back to
 ``Track`` records. The library is imported in the constructor, so importing this package
-never needs it; a missing library raises ``ImportError`` naming the extra to install
-(``pip install -e ".[outside]"``).
+never needs it; a missing library raises ``ImportError`` saying how to install it:
+
+    pip install -e ".[outside]"                               # motpy (and rich for norfair)
+    pip install --no-deps norfair==2.3.0 ocsort==0.0.2       # pins numpy<2 / scipy==1.9.3
+
+norfair and ocsort are installed without their dependencies because their metadata pins
+numpy<2 (norfair) or scipy==1.9.3, lap, filterpy==1.4.5 (ocsort), which would downgrade
+numpy, OpenCV and pandas; their code runs on the project's numpy 2 (tested).
+
+Run them beside ours on the same detections: ``python -m harness tracker=everyone`` (ours
+plus all outside trackers, conf/tracker/everyone.yaml), or pick with a multirun, e.g.
+``python -m harness -m tracker=baseline,reta,pbm,bytetrack,ocsort,norfair,motpy``.
 
 Identities are renumbered 1, 2, ... in order of first report, per adapter instance: some
 libraries draw ids from a class-level counter (OC-SORT) or from ``uuid4`` (motpy), which

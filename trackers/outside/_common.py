@@ -8,23 +8,28 @@ from types import ModuleType
 import numpy as np
 
 EXTRA = "outside"
+# libraries whose metadata pins numpy<2 / old scipy but whose code runs on numpy 2: they
+# cannot be in the extra (pip would downgrade numpy, OpenCV and pandas) and are installed
+# without their pinned dependencies
+NO_DEPS = "norfair==2.3.0 ocsort==0.0.2"
 
 
-def require(module: str, package: str, tracker: str) -> ModuleType:
-    """Import ``module`` or raise an ImportError naming the pip package and the extra.
+def require(module: str, install: str, tracker: str) -> ModuleType:
+    """Import ``module`` or raise an ImportError saying how to install it.
 
     Args:
         module: import name, e.g. ``"norfair"``.
-        package: PyPI name and version pin, e.g. ``"norfair==2.3.0"``.
+        install: pip arguments that install it, e.g. ``"--no-deps norfair==2.3.0"``.
         tracker: adapter class name, for the message.
     """
     try:
         return importlib.import_module(module)
     except ImportError as err:
         raise ImportError(
-            f"{tracker} needs the outside library '{module}' (PyPI {package}), which is not "
-            f'installed: pip install -e ".[{EXTRA}]" (or pip install {package}); '
-            f"import failed with: {err}"
+            f"{tracker} needs the outside library '{module}', which is not installed. "
+            f'Install the outside trackers: pip install -e ".[{EXTRA}]" && pip install '
+            f"--no-deps {NO_DEPS}; or this one alone: pip install {install} "
+            f"(import failed with: {err})"
         ) from err
 
 

@@ -46,7 +46,7 @@ class NorfairTracker:
         past_detections_length: int = 4,
         min_score: float = 0.0,
     ) -> None:
-        self._nf = require("norfair", "norfair==2.3.0", type(self).__name__)
+        self._nf = require("norfair", "--no-deps norfair==2.3.0", type(self).__name__)
         if distance_threshold <= 0:
             raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
         if hit_counter_max < 1:

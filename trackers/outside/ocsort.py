@@ -76,7 +76,7 @@ class OCSortTracker:
         use_byte: bool = False,
         min_score: float = 0.0,
     ) -> None:
-        self._oc = require("ocsort", "ocsort==0.0.2 (pip install --no-deps)", type(self).__name__)
+        self._oc = require("ocsort", "--no-deps ocsort==0.0.2", type(self).__name__)
         kalman_module = importlib.import_module("ocsort.kalmanfilter")
         kalman_module.float = _size_one_float  # numpy-2 shim for ORU (see module docstring)
         if asso_func not in ASSOCIATION_COSTS:
