@@ -365,6 +365,27 @@ def test_person_detected_half_behind_another_keeps_its_measured_size():
     assert max(abs(np.array(widths) - 30)) < 2.0, widths
 
 
+def test_hypothesis_in_plain_view_is_reported_briefly_then_only_drawn_and_keeps_the_id():
+    # a lone walker's detections stop at frame 20 (it stepped behind the scenery) and come
+    # back at frame 27: no visible person covers its hypotheses, so after report_exposed
+    # frames they are contradicted (only drawn); the person keeps its id when found again
+    frames = _scene([_line((40, 150), (2, 0), 40)], [RED])
+    tracker = RetaTracker(report_exposed=2, m=8)
+    states = []
+    for t, (img, label, dets, gt) in enumerate(frames):
+        if 20 <= t < 27:
+            dets = Detections(np.zeros((0, 4)), np.zeros(0))
+        out = tracker.update(img, dets, label > 0)
+        assert {x.id for x in out} == {1} or t < 2
+        states.append([x.state for x in out])
+    hidden = states[20:27]
+    assert [TrackState.OCCLUDED in s for s in hidden] == [True, True] + [False] * 5
+    assert all(TrackState.HYPOTHESIS in s for s in hidden[2:])  # still in the graph
+    assert states[27] == [TrackState.CONFIRMED]  # re-found with its id (1)
+    with pytest.raises(ValueError, match="report_exposed"):
+        RetaTracker(report_exposed=-1)
+
+
 # --------------------------------------------------------------------------- synthetic suite
 
 

@@ -40,7 +40,9 @@ Adaptations of what the paper leaves open (also listed in the README):
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a
 hidden confirmed person: covered by a visible person first, then fewest frames in plain
-view, then velocity > occluder > still), HYPOTHESIS (its other hypotheses), TENTATIVE.
+view, then velocity > occluder > still; one in plain view for more than ``report_exposed``
+frames is contradicted by the missing detection and only drawn), HYPOTHESIS (its other
+hypotheses), TENTATIVE.
 ``Track.extra`` holds {'ellipse', 'hypothesis', 'occluder', 'depth', 'node'}.
 """
 
@@ -136,6 +138,11 @@ class RetaTracker:
             every pixel, as in the paper; 2 is four times cheaper for large people).
         tentative_misses: frames a tentative track may go unmatched before it is dropped as
             a false positive (0: its tracking ends at the first miss, as in Fig. 3; 2 tolerates missed detections).
+        report_exposed: frames a hidden person's best hypothesis may stand in plain view (not
+            covered by a visible person) and still be reported as OCCLUDED: a missed
+            detection is bridged, but a person who left behind the scenery (a door, a
+            pillar, the frame edge) is no longer reported; it stays in the graph as a
+            HYPOTHESIS (and is re-identified if detected again) until pruned after m frames.
     """
 
     def __init__(
@@ -157,6 +164,7 @@ class RetaTracker:
         region_samples: int = 12,
         pixel_stride: int = 1,
         tentative_misses: int = 2,
+        report_exposed: int = 4,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -174,6 +182,8 @@ class RetaTracker:
             raise ValueError(f"pixel_stride must be >= 1, got {pixel_stride}")
         if tentative_misses < 0:
             raise ValueError(f"tentative_misses must be >= 0, got {tentative_misses}")
+        if report_exposed < 0:
+            raise ValueError(f"report_exposed must be >= 0, got {report_exposed}")
         if confirm_frames < 1:
             raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
         if max_hidden < 1:
@@ -190,6 +200,7 @@ class RetaTracker:
         self.confirm_frames = confirm_frames
         self.cover = cover
         self.tentative_misses = tentative_misses
+        self.report_exposed = report_exposed
         self.region_samples = region_samples
         self.max_hidden = max_hidden
         self.min_score = min_score
@@ -510,6 +521,9 @@ class RetaTracker:
                 continue
             best = hyp.best_hypothesis([b.kind for b in branches], [b.exposed for b in branches],
                                        [b.covered for b in branches])
+            top = branches[best]
+            if not top.covered and top.exposed > self.report_exposed:
+                best = -1  # in plain view without a detection: drawn, not reported
             for k, b in enumerate(branches):
                 state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS
                 out.append(self._track(person, b, None, state))
