@@ -118,14 +118,15 @@ class Target:
 
     def update(self, dof: np.ndarray, centroid_measured: bool, occluded: bool,
                cand: PartFeatures, part_scores: np.ndarray, part_match_threshold: float,
-               update_rate: float) -> None:
+               update_rate: float, index: int = 0) -> None:
         """PBM 4.2 model update from the chosen candidate.
 
         Args:
             dof: (6,) the candidate's global model. centroid_measured: xc, yc come from the
                 candidate's own foreground (then alpha, beta are re-measured, eqs. 1-2).
             occluded: the candidate was occluded (window-average the DOF).
-            cand: the candidate's PartFeatures (one box). part_scores: (5,) p_j (eq. 12).
+            cand: PartFeatures holding the candidate at ``index`` (the frame's candidates or
+                search boxes: no copy). part_scores: (5,) p_j (eq. 12).
         """
         old_centre = self.dof[2:4].copy()
         self._history.append(np.asarray(dof, dtype=np.float64).copy())
@@ -149,14 +150,15 @@ class Target:
         matched = part_scores >= part_match_threshold
         eta = np.where(matched, update_rate * part_scores, 0.0)
         P = self.parts
-        P.area[0] += eta * (cand.area[0] - P.area[0])
-        P.perimeter[0] += eta * (cand.perimeter[0] - P.perimeter[0])
-        P.hsv[0] += eta[:, None] * (cand.hsv[0] - P.hsv[0])
-        P.xyz[0] += eta[:, None] * (cand.xyz[0] - P.xyz[0])
+        k = index
+        P.area[0] += eta * (cand.area[k] - P.area[0])
+        P.perimeter[0] += eta * (cand.perimeter[k] - P.perimeter[0])
+        P.hsv[0] += eta[:, None] * (cand.hsv[k] - P.hsv[0])
+        P.xyz[0] += eta[:, None] * (cand.xyz[k] - P.xyz[0])
         # geometry follows the global model; centroids of frozen parts move with it
         shift = self.dof[2:4] - old_centre
         new_parts = part_boxes_one(self.dof[[0, 1, 4, 5]], self._alpha, self._beta)
-        P.centroid[0] = np.where(matched[:, None], cand.centroid[0], P.centroid[0] + shift)
+        P.centroid[0] = np.where(matched[:, None], cand.centroid[k], P.centroid[0] + shift)
         P.parts[0] = new_parts
         P.height[0] = h
         self.part_scores = np.asarray(part_scores, dtype=np.float64).copy()

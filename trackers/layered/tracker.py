@@ -371,12 +371,13 @@ class PBMTracker:
     def _calibrate(self, blob_box: np.ndarray, iou: np.ndarray, det_boxes: np.ndarray) -> None:
         """Learn the ratio of detection box size to blob span from isolated people.
 
-        ``iou``: (D,) IoU of ``blob_box`` with each of ``det_boxes``.
-
         A detector's boxes and a foreground blob's span differ systematically (limbs, box
         margins); a blob holding one head and overlapping exactly one detection (IoU >
         0.5) gives one sample of (w_det / w_blob, h_det / h_blob); the first 20 samples
         are averaged, later ones enter a running average with weight 0.05.
+
+        Args:
+            blob_box: (4,) xywh blob. iou: (D,) its IoU with each of ``det_boxes`` (D, 4).
         """
         if (iou > 0.3).sum() != 1 or iou.max() < 0.5:
             return
@@ -609,10 +610,9 @@ class PBMTracker:
         taken = np.zeros(n_a, dtype=bool)
         for ti, n in matches:
             t = targets[ti]
-            pj, f_all, k, dof, occl = hyp[(ti, n)]
-            f1 = f_all.take(k)  # the chosen candidate's (or carved box's) part features
-            t.update(dof, fg is not None and not occl, occl, f1, pj, self.part_match_threshold,
-                     self.update_rate)
+            pj, f_all, k, dof, occl = hyp[(ti, n)]  # features: f_all at index k
+            t.update(dof, fg is not None and not occl, occl, f_all, pj, self.part_match_threshold,
+                     self.update_rate, k)
             t.score = float(S[ti, n])
             taken[n] = True
             if not t.occluded and pj[0] >= self.part_match_threshold:
