@@ -11,17 +11,19 @@ def _run(tracker, frames):
     return [tracker.update(None, Detections(b, np.ones(len(b)))) for b in frames]
 
 
-def test_two_parallel_walkers_keep_ids():
+def test_two_walkers_on_separate_rows_keep_their_ids():
     frames = [np.array([[10 + 3 * t, 50, 20, 40], [200 - 3 * t, 150, 20, 40]]) for t in range(30)]
     out = _run(BaselineTracker(), frames)
-    ids = {(t.id, round(t.box[1] / 100)) for t in out[-1]}
-    assert ids == {(1, 0), (2, 2)} or ids == {(1, 0), (2, 1)} or len({i for i, _ in ids}) == 2
     assert all(len(o) == 2 for o in out)
-    assert {t.id for o in out for t in o} == {1, 2}
+    upper = {t.id for o in out for t in o if t.box[1] < 100}
+    lower = {t.id for o in out for t in o if t.box[1] >= 100}
+    assert len(upper) == 1 and len(lower) == 1 and upper != lower
 
 
 def test_gap_longer_than_max_age_starts_a_new_id():
-    box = lambda t: np.array([[10 + 2 * t, 50, 20, 40]])  # noqa: E731
+    def box(t):
+        return np.array([[10 + 2 * t, 50, 20, 40]])
+
     frames = [box(t) for t in range(10)] + [np.zeros((0, 4))] * 5 + [box(t) for t in range(15, 25)]
     out = _run(BaselineTracker(max_age=3), frames)
     assert {t.id for t in out[5]} == {1}
