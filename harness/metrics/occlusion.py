@@ -45,6 +45,7 @@ import pandas as pd
 
 from harness.datasets.base import GroundTruth
 from harness.io.mot import MotTable
+from harness.metrics.counts import combine_counts
 from harness.metrics.paper import COLUMNS as PAPER_COLUMNS
 from harness.metrics.paper import PaperCounts, considered_mask, match_rows, paper_counts
 from trackers.common.assignment import assign
@@ -211,12 +212,7 @@ def occlusion_metrics(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: 
 
 def combine(counts: dict[str, OcclusionCounts]) -> dict[str, dict[str, float]]:
     """Per-sequence columns plus a ``COMBINED`` entry computed from the summed counts."""
-    out = {name: c.columns() for name, c in counts.items()}
-    total = OcclusionCounts()
-    for c in counts.values():
-        total = total + c
-    out["COMBINED"] = total.columns()
-    return out
+    return combine_counts(counts, OcclusionCounts())
 
 
 # --------------------------------------------------------------------------- metrics.csv rows

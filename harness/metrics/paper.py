@@ -68,6 +68,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from harness.io.mot import MotTable
+from harness.metrics.counts import combine_counts
 from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
 
@@ -340,9 +341,4 @@ def paper_metrics(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> di
 
 def combine(counts: dict[str, PaperCounts]) -> dict[str, dict[str, float]]:
     """Per-sequence columns plus a ``COMBINED`` entry from the summed counts."""
-    out = {name: c.columns() for name, c in counts.items()}
-    total = PaperCounts()
-    for c in counts.values():
-        total = total + c
-    out["COMBINED"] = total.columns()
-    return out
+    return combine_counts(counts, PaperCounts())
