@@ -17,6 +17,7 @@ import motmetrics
 import numpy as np
 import pandas as pd
 import pytest
+from mot_tables import table
 
 from harness.evaluate import main, pair_files
 from harness.io.mot import MotTable, read_mot
@@ -38,22 +39,6 @@ DEVKIT = {
 }  # fmt: skip
 DEVKIT_COLUMNS = ["IDF1", "IDP", "IDR", "Recall", "Precision", "GT", "MT", "PT", "ML",
                   "FP", "FN", "IDs", "Frag", "MOTA", "MOTP"]  # fmt: skip
-
-
-def table(rows, conf=None, classes=None) -> MotTable:
-    """MotTable from (frame, id, x, y, w, h) rows (0-based boxes)."""
-    if not rows:
-        return MotTable.empty()
-    a = np.asarray(rows, dtype=np.float64)
-    n = len(a)
-    return MotTable(
-        a[:, 0].astype(np.int64),
-        a[:, 1].astype(np.int64),
-        a[:, 2:6].copy(),
-        np.ones(n) if conf is None else np.asarray(conf, dtype=np.float64),
-        np.full(n, -1, dtype=np.int64) if classes is None else np.asarray(classes, np.int64),
-        np.full(n, np.nan),
-    )
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ import os
 import motmetrics
 import numpy as np
 import pytest
+from mot_tables import table
 from scipy.optimize import linear_sum_assignment
 
 from harness.io.mot import MotTable, read_mot
@@ -16,22 +17,6 @@ from harness.metrics.hota import ALPHAS, HotaCounts, combine_hota, hota_counts
 from trackers.geometry import iou_matrix
 
 MM_DATA = os.path.join(os.path.dirname(motmetrics.__file__), "data")
-
-
-def table(rows: list[tuple[int, int, float, float, float, float]]) -> MotTable:
-    """MotTable from (frame, id, x, y, w, h) rows (0-based boxes), conf 1, no class."""
-    if not rows:
-        return MotTable.empty()
-    a = np.asarray(rows, dtype=np.float64)
-    n = len(a)
-    return MotTable(
-        a[:, 0].astype(np.int64),
-        a[:, 1].astype(np.int64),
-        a[:, 2:6].copy(),
-        np.ones(n),
-        np.full(n, -1, dtype=np.int64),
-        np.full(n, np.nan),
-    )
 
 
 def hota_of(gt: MotTable, res: MotTable) -> dict[str, float]:
