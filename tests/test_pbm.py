@@ -264,9 +264,10 @@ def test_a_hidden_part_is_frozen_while_hidden():
     for k in range(scene.length):
         img, lab = scene.render(k)
         out = tracker.update(img, scene.detections(k, lab, 0.0), lab)
-        t = tracker.targets[0]
+        m = tracker.parts  # row 0: the only target
+        assert len(m) == len(tracker.targets)  # one parts model per target
         if k in (h0 + 2, h1 - 2):
-            snap[k] = (t.parts.hsv[0].copy(), t.parts.xyz[0].copy(), t.parts.area[0].copy())
+            snap[k] = (m.hsv[0].copy(), m.xyz[0].copy(), m.area[0].copy())
         if h0 + 2 <= k <= h1 - 2:
             legs_flag.append(out[0].extra["occluded_parts"].copy())
     assert out[0].extra["parts"].shape == (5, 4)

@@ -23,7 +23,7 @@ from trackers.frontend.parts import (
     HEAD_FRACTION,
     N_PARTS,
     PartFeatures,
-    part_boxes_one,
+    part_boxes,
 )
 from trackers.layered.dynamics import GateFilter, SizeFilter
 
@@ -48,7 +48,8 @@ class Target:
 
     Attributes:
         id: track id. dof: (6,) global model. alpha, beta: averaged centroid ratios.
-        parts: PartFeatures of one box: the parts model.
+        (The parts models of all targets are stacked in one PartFeatures by the tracker,
+        row i for target i, and updated together by ``update_parts``.)
         hits, misses, age: life-cycle counters; confirmed: passed ``min_hits``.
         occluded_parts: (5,) bool, parts frozen at the last update.
         occluded: the last match was an occluded candidate.
@@ -56,15 +57,13 @@ class Target:
     """
 
     def __init__(self, track_id: int, dof: np.ndarray, alpha: float, beta: float,
-                 parts: PartFeatures, gate_args: dict, size_args: dict, ratio_window: int,
-                 occluded_window: int) -> None:
+                 gate_args: dict, size_args: dict, ratio_window: int, occluded_window: int) -> None:
         self.id = track_id
         self.dof = np.asarray(dof, dtype=np.float64).copy()
         self._alphas: deque[float] = deque([alpha], maxlen=ratio_window)
         self._betas: deque[float] = deque([beta], maxlen=ratio_window)
         self._alpha, self._beta = float(alpha), float(beta)
         self._history: deque[np.ndarray] = deque([self.dof.copy()], maxlen=occluded_window)
-        self.parts = parts.copy()
         xc, yc, w, h = self.dof[2], self.dof[3], self.dof[4], self.dof[5]
         self.gate = GateFilter(np.array([xc, yc]), h, **gate_args)
         self.size = SizeFilter(w, h, **size_args)
@@ -99,10 +98,6 @@ class Target:
         """(3,) head top-centre x, top y, head width of the global model."""
         return np.array([self.dof[2], self.dof[1], self.dof[4] * 0.5])
 
-    def part_rectangles(self) -> np.ndarray:
-        """(5, 4) part boxes of the global model (the parts model's rectangles)."""
-        return self.parts.parts[0].copy()
-
     def predict(self) -> np.ndarray:
         """Advance KF1 and KF2 one frame; returns the predicted (w, h) (KF2)."""
         self.gate.predict()
@@ -117,16 +112,17 @@ class Target:
         self.occluded_parts[:] = True
 
     def update(self, dof: np.ndarray, centroid_measured: bool, occluded: bool,
-               cand: PartFeatures, part_scores: np.ndarray, part_match_threshold: float,
-               update_rate: float, index: int = 0) -> None:
-        """PBM 4.2 model update from the chosen candidate.
+               part_scores: np.ndarray, part_match_threshold: float) -> np.ndarray:
+        """PBM 4.2 update of the global model and the filters from the chosen candidate
+        (the parts model, stacked over all targets, is updated by ``update_parts``).
 
         Args:
             dof: (6,) the candidate's global model. centroid_measured: xc, yc come from the
                 candidate's own foreground (then alpha, beta are re-measured, eqs. 1-2).
             occluded: the candidate was occluded (window-average the DOF).
-            cand: PartFeatures holding the candidate at ``index`` (the frame's candidates or
-                search boxes: no copy). part_scores: (5,) p_j (eq. 12).
+            part_scores: (5,) p_j (eq. 12); a part below ``part_match_threshold`` is frozen.
+        Returns:
+            (2,) shift of the centroid (xc, yc), which frozen parts' centroids follow.
         """
         old_centre = self.dof[2:4].copy()
         self._history.append(np.asarray(dof, dtype=np.float64).copy())
@@ -143,26 +139,40 @@ class Target:
                 self._betas.append(b)
                 self._alpha = sum(self._alphas) / len(self._alphas)
                 self._beta = sum(self._betas) / len(self._betas)
-        xc, yc, w, h = self.dof[2:]
         self.gate.correct(self.dof[2:4])
-        self.size.correct(w, h)
-        # parts model (PBM 4.2)
-        matched = part_scores >= part_match_threshold
-        eta = np.where(matched, update_rate * part_scores, 0.0)
-        P = self.parts
-        k = index
-        P.area[0] += eta * (cand.area[k] - P.area[0])
-        P.perimeter[0] += eta * (cand.perimeter[k] - P.perimeter[0])
-        P.hsv[0] += eta[:, None] * (cand.hsv[k] - P.hsv[0])
-        P.xyz[0] += eta[:, None] * (cand.xyz[k] - P.xyz[0])
-        # geometry follows the global model; centroids of frozen parts move with it
-        shift = self.dof[2:4] - old_centre
-        new_parts = part_boxes_one(self.dof[[0, 1, 4, 5]], self._alpha, self._beta)
-        P.centroid[0] = np.where(matched[:, None], cand.centroid[k], P.centroid[0] + shift)
-        P.parts[0] = new_parts
-        P.height[0] = h
+        self.size.correct(self.dof[4], self.dof[5])
         self.part_scores = np.asarray(part_scores, dtype=np.float64).copy()
-        self.occluded_parts = ~matched
+        self.occluded_parts = ~(self.part_scores >= part_match_threshold)
         self.occluded = occluded
         self.hits += 1
         self.misses = 0
+        return self.dof[2:4] - old_centre
+
+
+def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
+                 part_scores: np.ndarray, part_match_threshold: float, update_rate: float,
+                 shift: np.ndarray, boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray) -> None:
+    """PBM 4.2 parts-model update of several targets at once, in place.
+
+    Each part whose score p_j reaches ``part_match_threshold`` moves its area, perimeter
+    and colour histograms towards the candidate's by a running average with weight
+    ``update_rate * p_j``, and takes the candidate's centroid; a part below it keeps its
+    model frozen, its centroid following the global model's ``shift``. The rectangles
+    follow the (updated) global model.
+
+    Args:
+        model: the parts models of all targets. rows: (M,) the updated targets' rows.
+        cand: features holding the chosen candidates at ``ks`` (M,) (no copy).
+        part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Target.update``).
+        boxes: (M, 4) xywh, alpha, beta: (M,) the updated global models.
+    """
+    matched = part_scores >= part_match_threshold
+    eta = np.where(matched, update_rate * part_scores, 0.0)
+    model.area[rows] += eta * (cand.area[ks] - model.area[rows])
+    model.perimeter[rows] += eta * (cand.perimeter[ks] - model.perimeter[rows])
+    model.hsv[rows] += eta[:, :, None] * (cand.hsv[ks] - model.hsv[rows])
+    model.xyz[rows] += eta[:, :, None] * (cand.xyz[ks] - model.xyz[rows])
+    model.centroid[rows] = np.where(matched[:, :, None], cand.centroid[ks],
+                                    model.centroid[rows] + shift[:, None, :])
+    model.parts[rows] = part_boxes(boxes, alpha, beta)
+    model.height[rows] = boxes[:, 3]

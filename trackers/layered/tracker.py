@@ -79,7 +79,7 @@ from trackers.layered.association import (
     part_scores,
     selected_differences,
 )
-from trackers.layered.model import Target, dof_from_box, dof_from_head
+from trackers.layered.model import Target, dof_from_box, dof_from_head, update_parts
 from trackers.layered.models import FEATURES, FeatureModels
 from trackers.layered.search import (
     Anchor,
@@ -300,6 +300,7 @@ class PBMTracker:
     def reset(self) -> None:
         """Forget every target and restart ids at 1."""
         self.targets: list[Target] = []
+        self.parts = PartFeatures.concatenate([], self._extractor.bins)  # row i: targets[i] (PBM 2.2)
         self._next_id = 1
         self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
         self._blob_pairs = 0
@@ -521,7 +522,7 @@ class PBMTracker:
         S = np.full((T, n_a), -np.inf)
         hyp: dict[tuple[int, int], tuple] = {}  # (ti, n) -> (p_j, features, index, dof, occluded)
         if T and n_a:
-            model = PartFeatures.concatenate([t.parts for t in targets], self._extractor.bins)
+            model = self.parts
             gates = np.array([t.gate_box() for t in targets])
             for t, g in zip(targets, gates):
                 t.last_gate = g  # the gate this frame's candidates were validated in
@@ -608,11 +609,12 @@ class PBMTracker:
         cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.match_threshold)
         taken = np.zeros(n_a, dtype=bool)
+        by_source: dict[int, tuple[PartFeatures, list]] = {}  # the parts updates, per feature array
         for ti, n in matches:
             t = targets[ti]
             pj, f_all, k, dof, occl = hyp[(ti, n)]  # features: f_all at index k
-            t.update(dof, fg is not None and not occl, occl, f_all, pj, self.part_match_threshold,
-                     self.update_rate, k)
+            shift = t.update(dof, fg is not None and not occl, occl, pj, self.part_match_threshold)
+            by_source.setdefault(id(f_all), (f_all, []))[1].append((ti, k, pj, shift))
             t.score = float(S[ti, n])
             taken[n] = True
             if not t.occluded and pj[0] >= self.part_match_threshold:
@@ -623,13 +625,22 @@ class PBMTracker:
                     t.head_template = tpl
             if not t.confirmed and t.hits >= self.min_hits:
                 t.confirmed = True
+        for f_all, rows in by_source.values():
+            ti = np.array([r[0] for r in rows])
+            update_parts(self.parts, ti, f_all, np.array([r[1] for r in rows]),
+                         np.array([r[2] for r in rows]), self.part_match_threshold,
+                         self.update_rate, np.array([r[3] for r in rows]),
+                         np.array([targets[i].box for i in ti]),
+                         np.array([targets[i].alpha for i in ti]),
+                         np.array([targets[i].beta for i in ti]))
         for ti in lost:
             targets[ti].mark_missed()
         # drop tentative misses, long-lost and leaving targets
-        alive = []
-        for t in targets:
+        alive, rows = [], []
+        for ti, t in enumerate(targets):
             if t.misses == 0:
                 alive.append(t)
+                rows.append(ti)
                 continue
             if not t.confirmed or t.misses > self.max_misses:
                 continue
@@ -639,6 +650,10 @@ class PBMTracker:
             if near_border and t.misses >= self.exit_misses:
                 continue
             alive.append(t)
+            rows.append(ti)
+        if len(rows) < len(targets):
+            self.parts = self.parts.take(rows)
+        born = []
         # new targets from free candidates (new blobs, split heads)
         live_boxes = np.array([t.box for t in alive]).reshape(-1, 4)
         for n in free:
@@ -651,8 +666,9 @@ class PBMTracker:
                 continue
             al_n, be_n = centroid_ratios(a.box[None], a.centroid[None])
             t = Target(self._next_id, dof_from_box(a.box, a.centroid), float(al_n[0]),
-                       float(be_n[0]), feats.take(n), self._gate_args, self._size_args,
-                       self.ratio_window, self.occluded_window)
+                       float(be_n[0]), self._gate_args, self._size_args, self.ratio_window,
+                       self.occluded_window)
+            born.append(n)
             t.score = 0.0
             self._next_id += 1
             if gray is None:
@@ -662,13 +678,15 @@ class PBMTracker:
                 t.confirmed = True  # people present from the start are reported at once
             alive.append(t)
             live_boxes = np.vstack([live_boxes, a.box[None]])
+        if born:
+            self.parts = PartFeatures.concatenate([self.parts, feats.take(born)], self._extractor.bins)
         self.targets = alive
         return self._output()
 
     def _output(self) -> list[Track]:
         out = []
-        for t in self.targets:
-            extra = {"parts": t.part_rectangles(), "occluded_parts": t.occluded_parts.copy(),
+        for t, rect in zip(self.targets, self.parts.parts):
+            extra = {"parts": rect.copy(), "occluded_parts": t.occluded_parts.copy(),
                      "part_scores": t.part_scores.copy(), "gate": t.last_gate}
             if t.misses == 0:
                 state = TrackState.CONFIRMED if t.confirmed else TrackState.TENTATIVE
