@@ -91,7 +91,7 @@ class Target:
     @property
     def box(self) -> np.ndarray:
         """(4,) xywh of the global model."""
-        return self.dof[[0, 1, 4, 5]].copy()
+        return self.dof[[0, 1, 4, 5]]  # fancy indexing: a copy
 
     @property
     def head(self) -> np.ndarray:
@@ -109,7 +109,7 @@ class Target:
 
     def mark_missed(self) -> None:
         self.misses += 1
-        self.occluded_parts[:] = True
+        self.occluded_parts = np.ones(N_PARTS, dtype=bool)  # replaced, never modified in place
 
     def update(self, dof: np.ndarray, centroid_measured: bool, occluded: bool,
                part_scores: np.ndarray, part_match_threshold: float) -> np.ndarray:

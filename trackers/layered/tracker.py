@@ -70,7 +70,7 @@ from trackers.frontend.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.geometry import box_slices, iou_matrix, overlap_ratio_matrix
+from trackers.geometry import box_spans, iou_matrix, overlap_ratio_matrix
 from trackers.layered.association import (
     ambiguous,
     global_scores,
@@ -314,10 +314,13 @@ class PBMTracker:
         heads = detections.heads
         if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
             heads = np.asarray(self.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
-        for k, box in enumerate(det_boxes):
-            if not (box[2] > 1 and box[3] > 1 and np.isfinite(box).all()):
-                continue
-            if heads is not None and np.isfinite(heads[k]).all():
+        finite = np.isfinite(det_boxes).all(axis=1)
+        valid = finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)
+        has_head = (np.zeros(len(det_boxes), dtype=bool) if heads is None
+                    else np.isfinite(heads).all(axis=1))
+        for k in np.flatnonzero(valid):
+            box = det_boxes[k]
+            if has_head[k]:
                 hx, hy, hw, _ = heads[k]
                 head = np.array([hx + 0.5 * hw, hy, hw])
             else:
@@ -328,9 +331,8 @@ class PBMTracker:
         if len(det_boxes):
             # blobs matter only where foreground is left unexplained by the detections
             resid = fg.copy()
-            for b in det_boxes:
-                rs, cs = box_slices(b, fg.shape)
-                resid[rs, cs] = False
+            for r0, r1, c0, c1 in box_spans(det_boxes[finite], fg.shape).tolist():
+                resid[r0:r1, c0:c1] = False
             if np.count_nonzero(resid) < self.min_blob_area:
                 return anchors
         s = self.blob_downsample
@@ -685,12 +687,13 @@ class PBMTracker:
 
     def _output(self) -> list[Track]:
         out = []
-        for t, rect in zip(self.targets, self.parts.parts):
-            extra = {"parts": rect.copy(), "occluded_parts": t.occluded_parts.copy(),
-                     "part_scores": t.part_scores.copy(), "gate": t.last_gate}
+        # the targets replace (never modify) occluded_parts and part_scores: no copies
+        for t, rect in zip(self.targets, self.parts.parts.copy()):
+            extra = {"parts": rect, "occluded_parts": t.occluded_parts,
+                     "part_scores": t.part_scores, "gate": t.last_gate}
             if t.misses == 0:
                 state = TrackState.CONFIRMED if t.confirmed else TrackState.TENTATIVE
-                out.append(Track(t.id, t.box, state, float(np.clip(t.score, 0, 1)), extra))
+                out.append(Track(t.id, t.box, state, min(max(float(t.score), 0.0), 1.0), extra))
             elif t.confirmed and self.report_occluded and t.misses <= self.max_report_misses:
                 out.append(Track(t.id, t.box, TrackState.OCCLUDED, 0.0, extra))
         return out
