@@ -14,11 +14,12 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from trackers.baseline import BaselineTracker
-from trackers.frontend.parts import N_PARTS
+from trackers.frontend.parts import N_PARTS, PartFeatureExtractor
 from trackers.geometry import iou_matrix
 from trackers.layered import FeatureModels, PBMTracker, load_feature_models
 from trackers.layered.association import ambiguous, layered_scores
-from trackers.layered.dynamics import GateFilter
+from trackers.layered.dynamics import Gate
+from trackers.layered.model import Targets
 from trackers.layered.models import (
     FEATURES,
     FoldedMixture,
@@ -161,18 +162,29 @@ def test_best_candidate_needs_threshold_and_margin():
 
 
 def test_gate_is_zero_order_and_doubles_after_a_miss():
-    g = GateFilter(np.array([100.0, 50.0]), 100.0, 0.5, 0.2, 0.5, speed_factor=3.0,
-                   min_fraction=0.5, miss_factor=2.0, growth=1.5, max_fraction=100.0)
-    for x in (104.0, 108.0, 112.0, 116.0):
-        g.predict()
-        g.correct(np.array([x, 50.0]))
-    g.predict()
-    box = g.gate(np.array([20.0, 100.0]), 0)
-    assert box[0] + box[2] / 2 == pytest.approx(116.0)  # centred on the last position
-    h0 = g.half_size(np.array([20.0, 100.0]), 0)
+    gate = Gate(speed_factor=3.0, min_fraction=0.5, miss_factor=2.0, growth=1.5, max_fraction=100.0)
+    tg = Targets(gate, (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
+    ex = PartFeatureExtractor()
+    ex.start(np.zeros((200, 300, 3), np.uint8), None)
+    for k, x0 in enumerate((90.0, 150.0)):  # a moving target and a still one
+        tg.add(k + 1, [x0 - 10, 0, x0, 50, 20, 100], 0.5, 0.5, ex.extract(np.array([[x0 - 10, 0, 20, 100]])), None)
+    for x in (4.0, 8.0, 12.0, 16.0):
+        tg.predict()
+        tg.update(np.array([0]), [[90 + x - 10, 0, 90 + x, 50, 20, 100]], [True], [False], np.ones((1, 5)), 0.4)
+    tg.predict()
+    box = tg.gate_boxes()
+    assert box[0, 0] + box[0, 2] / 2 == pytest.approx(106.0)  # centred on the last position
+    assert box[1, 0] + box[1, 2] / 2 == pytest.approx(150.0)
+    wh = np.array([[20.0, 100.0]])
+    h0 = gate.half_sizes(tg.kf1.x[:1, 2:], wh, np.array([0]))[0]
     assert h0[0] > 10.0 + 3 * 3.0  # grows with the speed (about 4 px / frame)
-    np.testing.assert_allclose(g.half_size(np.array([20.0, 100.0]), 1), 2 * h0)
-    np.testing.assert_allclose(g.half_size(np.array([20.0, 100.0]), 3), 2 * 1.5**2 * h0)
+    assert box[1, 2] / 2 == pytest.approx(10.0)  # the still target: min_fraction * w only
+    np.testing.assert_allclose(gate.half_sizes(tg.kf1.x[:1, 2:], wh, np.array([1]))[0], 2 * h0)
+    np.testing.assert_allclose(gate.half_sizes(tg.kf1.x[:1, 2:], wh, np.array([3]))[0], 2 * 1.5**2 * h0)
+    tg.mark_missed(np.array([1]))
+    assert tg.occluded_parts[1].all() and tg.misses[1] == 1
+    tg.take([1])
+    assert list(tg.id) == [2] and len(tg.kf1) == len(tg.parts) == len(tg.head_template) == 1
 
 
 def test_occlusion_rule_and_search_sizes():
@@ -264,7 +276,7 @@ def test_a_hidden_part_is_frozen_while_hidden():
     for k in range(scene.length):
         img, lab = scene.render(k)
         out = tracker.update(img, scene.detections(k, lab, 0.0), lab)
-        m = tracker.parts  # row 0: the only target
+        m = tracker.targets.parts  # row 0: the only target
         assert len(m) == len(tracker.targets)  # one parts model per target
         if k in (h0 + 2, h1 - 2):
             snap[k] = (m.hsv[0].copy(), m.xyz[0].copy(), m.area[0].copy())
@@ -392,10 +404,12 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
     from trackers.layered.dynamics import ConstantVelocity2D
 
     rng = np.random.default_rng(6)
-    kf = ConstantVelocity2D(np.array([50.0, 80.0]), 12.0, 0.5, 0.2, 0.5)
+    kf = ConstantVelocity2D(0.5, 0.2, 0.5)
+    kf.add(np.array([7.0, -3.0]), 30.0)  # a second filter, never updated: rows stay apart
+    kf.add(np.array([50.0, 80.0]), 12.0)
     F = np.array([[1.0, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0], [0, 0, 0, 1]])
     H = np.eye(2, 4)
-    x, P = kf.x, kf.P
+    x, P = kf.state(1)
     Q = np.diag([0.5**2] * 2 + [0.2**2] * 2) * 144.0
     R = np.eye(2) * 0.5**2 * 144.0
     fp = KalmanFilter(dim_x=4, dim_z=2)
@@ -406,21 +420,22 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
         kf.predict()
         x, P = F @ x, F @ P @ F.T + Q
         fp.predict()
-        np.testing.assert_array_equal(kf.x, x)
-        np.testing.assert_array_equal(kf.P, P)
+        np.testing.assert_array_equal(kf.state(1)[0], x)
+        np.testing.assert_array_equal(kf.state(1)[1], P)
         z = x[:2] + rng.normal(0, 5, 2)
-        kf.update(z)
+        kf.update(np.array([1]), z[None])
         S = P[:2, :2] + R
         det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
         K = P[:, :2] @ (np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det)
         x, P = x + K @ (z - x[:2]), P - K @ P[:2, :]
         fp.update(z.reshape(2, 1))
-        np.testing.assert_array_equal(kf.x, x)
-        np.testing.assert_array_equal(kf.P, P)
+        np.testing.assert_array_equal(kf.state(1)[0], x)
+        np.testing.assert_array_equal(kf.state(1)[1], P)
         # filterpy (Joseph-form covariance update): equal up to rounding
-        np.testing.assert_allclose(kf.x, fp.x[:, 0], rtol=1e-9, atol=1e-9)
-        np.testing.assert_allclose(kf.P, fp.P, rtol=1e-9, atol=1e-9)
-    assert abs(kf.x[2]) + abs(kf.x[3]) > 0  # the rates moved
+        np.testing.assert_allclose(kf.state(1)[0], fp.x[:, 0], rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(kf.state(1)[1], fp.P, rtol=1e-9, atol=1e-9)
+    assert abs(kf.x[1, 2]) + abs(kf.x[1, 3]) > 0  # the rates moved
+    np.testing.assert_array_equal(kf.x[0], [7.0, -3.0, 0.0, 0.0])  # predicted only: still
 
 
 def test_selected_differences_equal_the_all_pairs_ones():

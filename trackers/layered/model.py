@@ -15,8 +15,6 @@ Update (PBM 4.2):
 
 from __future__ import annotations
 
-from collections import deque
-
 import numpy as np
 
 from trackers.frontend.parts import (
@@ -25,7 +23,7 @@ from trackers.frontend.parts import (
     PartFeatures,
     part_boxes,
 )
-from trackers.layered.dynamics import GateFilter, SizeFilter
+from trackers.layered.dynamics import ConstantVelocity2D, Gate
 
 
 def dof_from_box(box: np.ndarray, centroid: np.ndarray) -> np.ndarray:
@@ -43,110 +41,193 @@ def dof_from_head(head: np.ndarray, w: float, h: float, alpha: float, beta: floa
     return np.array([xtl, ytl, xc, yc, w, h], dtype=np.float64)
 
 
-class Target:
-    """One tracked person.
+class Targets:
+    """Every tracked person, one row each (the tracker's state, stepped for all at once).
 
-    Attributes:
-        id: track id. dof: (6,) global model. alpha, beta: averaged centroid ratios.
-        (The parts models of all targets are stacked in one PartFeatures by the tracker,
-        row i for target i, and updated together by ``update_parts``.)
-        hits, misses, age: life-cycle counters; confirmed: passed ``min_hits``.
-        occluded_parts: (5,) bool, parts frozen at the last update.
-        occluded: the last match was an occluded candidate.
-        head_template: grey head patch for multiple-response pruning, or None.
+    Attributes (T rows, in the tracker's target order):
+        id: (T,) track ids. dof: (T, 6) global models (xtl, ytl, xc, yc, w, h).
+        alpha, beta: (T,) centroid ratios, each the running average of its last
+            ``ratio_window`` measurements (eqs. 1-2).
+        kf1, kf2: ``ConstantVelocity2D`` of (xc, yc) and (h, w) (PBM 3, eqs. 7-8).
+        parts: PartFeatures of T rows: the parts models (PBM 2.2), updated by ``update_parts``.
+        hits, misses, age: (T,) life-cycle counters. confirmed: (T,) passed ``min_hits``.
+        occluded: (T,) the last match was an occluded candidate.
+        occluded_parts: (T, 5) parts frozen at the last update. part_scores: (T, 5) p_j.
+        score: (T,) global score of the last match. last_gate: (T, 4) the gate the last
+            frame's candidates were validated in (NaN before the first).
+        head_template: per target, a grey head patch for multiple-response pruning or None.
+
+    Args:
+        gate: the gate rule. gate_noise, size_noise: (position, velocity, measurement)
+            noise of KF1 and KF2. ratio_window, occluded_window: running-average windows of
+            alpha/beta and of the DOF under occlusion. bins: histogram bins of the parts.
     """
 
-    def __init__(self, track_id: int, dof: np.ndarray, alpha: float, beta: float,
-                 gate_args: dict, size_args: dict, ratio_window: int, occluded_window: int) -> None:
-        self.id = track_id
-        self.dof = np.asarray(dof, dtype=np.float64).copy()
-        self._alphas: deque[float] = deque([alpha], maxlen=ratio_window)
-        self._betas: deque[float] = deque([beta], maxlen=ratio_window)
-        self._alpha, self._beta = float(alpha), float(beta)
-        self._history: deque[np.ndarray] = deque([self.dof.copy()], maxlen=occluded_window)
-        xc, yc, w, h = self.dof[2], self.dof[3], self.dof[4], self.dof[5]
-        self.gate = GateFilter(np.array([xc, yc]), h, **gate_args)
-        self.size = SizeFilter(w, h, **size_args)
-        self.hits = 1
-        self.misses = 0
-        self.age = 1
-        self.confirmed = False
-        self.occluded = False
-        self.occluded_parts = np.zeros(N_PARTS, dtype=bool)
-        self.part_scores = np.ones(N_PARTS)
-        self.head_template: np.ndarray | None = None
-        self.score = 0.0
-        self.last_gate: np.ndarray | None = None
+    def __init__(self, gate: Gate, gate_noise: tuple[float, float, float],
+                 size_noise: tuple[float, float, float], ratio_window: int,
+                 occluded_window: int, bins: int) -> None:
+        self.gate = gate
+        self.kf1 = ConstantVelocity2D(*gate_noise)
+        self.kf2 = ConstantVelocity2D(*size_noise, initial_velocity_std=0.1)
+        self.id = np.zeros(0, dtype=np.int64)
+        self.dof = np.zeros((0, 6))
+        # windows (T, L, K), newest entry last; a young target's first entries are unused
+        self._bins = int(bins)
+        self._ratios = np.zeros((0, int(ratio_window), 2))
+        self._n_ratios = np.zeros(0, dtype=np.int64)
+        self.alpha = np.zeros(0)
+        self.beta = np.zeros(0)
+        self._history = np.zeros((0, int(occluded_window), 6))
+        self._n_history = np.zeros(0, dtype=np.int64)
+        self.parts = PartFeatures.concatenate([], self._bins)
+        self.hits = np.zeros(0, dtype=np.int64)
+        self.misses = np.zeros(0, dtype=np.int64)
+        self.age = np.zeros(0, dtype=np.int64)
+        self.confirmed = np.zeros(0, dtype=bool)
+        self.occluded = np.zeros(0, dtype=bool)
+        self.occluded_parts = np.zeros((0, N_PARTS), dtype=bool)
+        self.part_scores = np.zeros((0, N_PARTS))
+        self.score = np.zeros(0)
+        self.last_gate = np.zeros((0, 4))
+        self.head_template: list[np.ndarray | None] = []
+
+    def __len__(self) -> int:
+        return len(self.id)
 
     @property
-    def alpha(self) -> float:
-        """Running average of eq. 1 over ``ratio_window`` frames."""
-        return self._alpha
+    def boxes(self) -> np.ndarray:
+        """(T, 4) xywh of the global models (a copy)."""
+        return self.dof[:, [0, 1, 4, 5]]
 
-    @property
-    def beta(self) -> float:
-        """Running average of eq. 2 over ``ratio_window`` frames."""
-        return self._beta
+    def add(self, track_id: int, dof: np.ndarray, alpha: float, beta: float,
+            parts: PartFeatures, head_template: np.ndarray | None) -> None:
+        """Append a new target (its first match: hits 1, unconfirmed)."""
+        dof = np.asarray(dof, dtype=np.float64)
+        self.kf1.add(dof[2:4], dof[5] / 10.0)
+        self.kf2.add(dof[[5, 4]], dof[5] / 10.0)
+        self.id = np.append(self.id, track_id)
+        self.dof = np.vstack([self.dof, dof])
+        r = np.zeros((1,) + self._ratios.shape[1:])
+        r[0, -1] = alpha, beta
+        self._ratios = np.concatenate([self._ratios, r])
+        self._n_ratios = np.append(self._n_ratios, 1)
+        self.alpha = np.append(self.alpha, float(alpha))
+        self.beta = np.append(self.beta, float(beta))
+        h = np.zeros((1,) + self._history.shape[1:])
+        h[0, -1] = dof
+        self._history = np.concatenate([self._history, h])
+        self._n_history = np.append(self._n_history, 1)
+        self.parts = PartFeatures.concatenate([self.parts, parts], self._bins)
+        self.hits = np.append(self.hits, 1)
+        self.misses = np.append(self.misses, 0)
+        self.age = np.append(self.age, 1)
+        self.confirmed = np.append(self.confirmed, False)
+        self.occluded = np.append(self.occluded, False)
+        self.occluded_parts = np.vstack([self.occluded_parts, np.zeros(N_PARTS, dtype=bool)])
+        self.part_scores = np.vstack([self.part_scores, np.ones(N_PARTS)])
+        self.score = np.append(self.score, 0.0)
+        self.last_gate = np.vstack([self.last_gate, np.full(4, np.nan)])
+        self.head_template.append(head_template)
 
-    @property
-    def box(self) -> np.ndarray:
-        """(4,) xywh of the global model."""
-        return self.dof[[0, 1, 4, 5]]  # fancy indexing: a copy
-
-    @property
-    def head(self) -> np.ndarray:
-        """(3,) head top-centre x, top y, head width of the global model."""
-        return np.array([self.dof[2], self.dof[1], self.dof[4] * 0.5])
+    def take(self, rows) -> None:
+        """Keep only the targets at ``rows`` (in that order)."""
+        rows = np.asarray(rows, dtype=np.intp)
+        self.kf1.take(rows)
+        self.kf2.take(rows)
+        for name in ("id", "dof", "_ratios", "_n_ratios", "alpha", "beta", "_history",
+                     "_n_history", "hits", "misses", "age", "confirmed", "occluded",
+                     "occluded_parts", "part_scores", "score", "last_gate"):
+            setattr(self, name, getattr(self, name)[rows])
+        self.parts = self.parts.take(rows)
+        self.head_template = [self.head_template[i] for i in rows]
 
     def predict(self) -> np.ndarray:
-        """Advance KF1 and KF2 one frame; returns the predicted (w, h) (KF2)."""
-        self.gate.predict()
+        """Advance KF1 and KF2 one frame; returns the predicted (w, h) (T, 2) (KF2), floored
+        at 2 pixels (KF2's rates are zeroed where they would shrink it below)."""
+        x = self.kf2.x
+        x[((x[:, 0] + x[:, 2]) < 2) | ((x[:, 1] + x[:, 3]) < 2), 2:] = 0.0
+        self.kf1.predict()
+        self.kf2.predict()
         self.age += 1
-        return self.size.predict()
+        return self.predicted_size()
 
-    def gate_box(self) -> np.ndarray:
-        return self.gate.gate(self.size.predicted, self.misses)
+    def predicted_size(self) -> np.ndarray:
+        """(T, 2) KF2's (w, h), floored at 2 pixels."""
+        return np.maximum(self.kf2.x[:, 1::-1], 2.0)
 
-    def mark_missed(self) -> None:
-        self.misses += 1
-        self.occluded_parts = np.ones(N_PARTS, dtype=bool)  # replaced, never modified in place
+    def gate_boxes(self) -> np.ndarray:
+        """(T, 4) xywh gates (PBM 3): centred on the last validated centroid."""
+        return self.gate.boxes(self.dof[:, 2:4], self.kf1.x[:, 2:], self.predicted_size(),
+                               self.misses)
 
-    def update(self, dof: np.ndarray, centroid_measured: bool, occluded: bool,
-               part_scores: np.ndarray, part_match_threshold: float) -> np.ndarray:
-        """PBM 4.2 update of the global model and the filters from the chosen candidate
-        (the parts model, stacked over all targets, is updated by ``update_parts``).
+    def mark_missed(self, rows: np.ndarray) -> None:
+        """The targets at ``rows`` were not found: every part counts as occluded."""
+        self.misses[rows] += 1
+        self.occluded_parts[rows] = True
+
+    def update(self, rows: np.ndarray, dof: np.ndarray, centroid_measured: np.ndarray,
+               occluded: np.ndarray, part_scores: np.ndarray, part_match_threshold: float
+               ) -> np.ndarray:
+        """PBM 4.2 update of the global models and the filters of the targets at ``rows``
+        (unique) from their chosen candidates (the parts models: ``update_parts``).
 
         Args:
-            dof: (6,) the candidate's global model. centroid_measured: xc, yc come from the
-                candidate's own foreground (then alpha, beta are re-measured, eqs. 1-2).
-            occluded: the candidate was occluded (window-average the DOF).
-            part_scores: (5,) p_j (eq. 12); a part below ``part_match_threshold`` is frozen.
+            dof: (M, 6) the candidates' global models. centroid_measured: (M,) xc, yc come
+                from the candidate's own foreground (then alpha, beta are re-measured,
+                eqs. 1-2). occluded: (M,) the candidate was occluded: the DOF becomes the
+                mean of the last ``occluded_window`` ones (this one included).
+            part_scores: (M, 5) p_j (eq. 12); a part below ``part_match_threshold`` is frozen.
         Returns:
-            (2,) shift of the centroid (xc, yc), which frozen parts' centroids follow.
+            (M, 2) shift of the centroid (xc, yc), which frozen parts' centroids follow.
         """
-        old_centre = self.dof[2:4].copy()
-        self._history.append(np.asarray(dof, dtype=np.float64).copy())
-        if occluded:
-            self.dof = np.mean(np.stack(self._history), axis=0)
-        else:
-            self.dof = np.asarray(dof, dtype=np.float64).copy()
-            if centroid_measured:  # eqs. 1-2 (as ``centroid_ratios``, scalar)
-                x, y, xc, yc, w, h = (float(v) for v in self.dof)
-                hh = HEAD_FRACTION * h
-                a = min(max((xc - x) / max(w, 1e-9), 0.05), 0.95)
-                b = min(max((yc - y - hh) / max(h - hh, 1e-9), 0.05), 0.95)
-                self._alphas.append(a)
-                self._betas.append(b)
-                self._alpha = sum(self._alphas) / len(self._alphas)
-                self._beta = sum(self._betas) / len(self._betas)
-        self.gate.correct(self.dof[2:4])
-        self.size.correct(self.dof[4], self.dof[5])
-        self.part_scores = np.asarray(part_scores, dtype=np.float64).copy()
-        self.occluded_parts = ~(self.part_scores >= part_match_threshold)
-        self.occluded = occluded
-        self.hits += 1
-        self.misses = 0
-        return self.dof[2:4] - old_centre
+        rows = np.asarray(rows, dtype=np.intp)
+        occluded = np.asarray(occluded, dtype=bool)
+        old_centre = self.dof[rows, 2:4]
+        dof = np.array(dof, dtype=np.float64).reshape(-1, 6)
+        hist, n_hist = _push(self._history, self._n_history, rows, dof)
+        if occluded.any():
+            dof[occluded] = _window_mean(hist[occluded], n_hist[occluded])
+        self.dof[rows] = dof
+        measured = ~occluded & np.asarray(centroid_measured, dtype=bool)
+        if measured.any():  # eqs. 1-2 (as ``centroid_ratios``)
+            x, y, xc, yc, w, h = dof[measured].T
+            hh = HEAD_FRACTION * h
+            a = np.minimum(np.maximum((xc - x) / np.maximum(w, 1e-9), 0.05), 0.95)
+            b = np.minimum(np.maximum((yc - y - hh) / np.maximum(h - hh, 1e-9), 0.05), 0.95)
+            m = rows[measured]
+            ratios, n = _push(self._ratios, self._n_ratios, m, np.column_stack([a, b]))
+            mean = _window_mean(ratios, n)
+            self.alpha[m], self.beta[m] = mean[:, 0], mean[:, 1]
+        self.kf1.update(rows, dof[:, 2:4])
+        self.kf2.update(rows, dof[:, [5, 4]])
+        self.part_scores[rows] = part_scores
+        self.occluded_parts[rows] = ~(np.asarray(part_scores) >= part_match_threshold)
+        self.occluded[rows] = occluded
+        self.hits[rows] += 1
+        self.misses[rows] = 0
+        return dof[:, 2:4] - old_centre
+
+
+def _push(window: np.ndarray, count: np.ndarray, rows: np.ndarray, values: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """Append ``values`` (M, K) as the newest entries of the windows (T, L, K) at ``rows``
+    (in place, with their counts (T,)); returns those windows and counts."""
+    w = np.roll(window[rows], -1, axis=1)
+    w[:, -1] = values
+    n = np.minimum(count[rows] + 1, window.shape[1])
+    window[rows] = w
+    count[rows] = n
+    return w, n
+
+
+def _window_mean(window: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """(M, K) mean of the newest ``count`` (M,) entries of each window (M, L, K), summed
+    oldest first, as ``sum`` of a list of the entries."""
+    L = window.shape[1]
+    total = np.zeros(window.shape[::2])
+    for j in range(L):
+        total = np.where((j >= L - count)[:, None], total + window[:, j], total)
+    return total / count[:, None]
 
 
 def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,

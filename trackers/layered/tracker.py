@@ -79,7 +79,8 @@ from trackers.layered.association import (
     part_scores,
     selected_differences,
 )
-from trackers.layered.model import Target, dof_from_box, dof_from_head, update_parts
+from trackers.layered.dynamics import Gate
+from trackers.layered.model import Targets, dof_from_box, dof_from_head, update_parts
 from trackers.layered.models import FEATURES, FeatureModels
 from trackers.layered.search import (
     Anchor,
@@ -260,15 +261,10 @@ class PBMTracker:
         self.search_overlap = float(search_overlap)
         self.ratio_window = int(ratio_window)
         self.occluded_window = int(occluded_window)
-        self._gate_args = {
-            "position_noise": kf1_position_noise, "velocity_noise": kf1_velocity_noise,
-            "measurement_noise": kf1_measurement_noise, "speed_factor": gate_speed_factor,
-            "min_fraction": gate_min_fraction, "miss_factor": gate_miss_factor,
-            "growth": gate_growth, "max_fraction": gate_max_fraction,
-        }
-        self._size_args = {"position_noise": kf2_position_noise,
-                           "velocity_noise": kf2_velocity_noise,
-                           "measurement_noise": kf2_measurement_noise}
+        self._gate = Gate(gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
+                          gate_max_fraction)
+        self._gate_noise = (kf1_position_noise, kf1_velocity_noise, kf1_measurement_noise)
+        self._size_noise = (kf2_position_noise, kf2_velocity_noise, kf2_measurement_noise)
         self.min_blob_area = int(min_blob_area)
         self.min_height = float(min_height)
         self.head_separation = float(head_separation)
@@ -299,8 +295,8 @@ class PBMTracker:
 
     def reset(self) -> None:
         """Forget every target and restart ids at 1."""
-        self.targets: list[Target] = []
-        self.parts = PartFeatures.concatenate([], self._extractor.bins)  # row i: targets[i] (PBM 2.2)
+        self.targets = Targets(self._gate, self._gate_noise, self._size_noise, self.ratio_window,
+                               self.occluded_window, self._extractor.bins)
         self._next_id = 1
         self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
         self._blob_pairs = 0
@@ -419,14 +415,13 @@ class PBMTracker:
         for q, (ti, n, kind) in enumerate(pairs):
             if kind > 0:
                 continue
-            box = aligned_box(anchors[n].head, pred_wh[ti], targets[ti].alpha)
+            box = aligned_box(anchors[n].head, pred_wh[ti], targets.alpha[ti])
             if head_fill(fg, box) >= self.head_min_fill:
                 align_q.append(q)
                 align_boxes.append(box)
         if not search_q and not align_q:
             return out
-        alpha_t = np.array([t.alpha for t in targets])
-        beta_t = np.array([t.beta for t in targets])
+        alpha_t, beta_t = targets.alpha, targets.beta
         pair_ti = np.array([ti for ti, _, _ in pairs])
         m = (2 * self.search_range + 1) ** 2
         blocks = []
@@ -441,7 +436,7 @@ class PBMTracker:
         tis = pair_ti[np.concatenate([np.repeat(np.array(search_q, dtype=np.intp), m),
                                       np.array(align_q, dtype=np.intp)])]
         feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
-        misses = np.array([t.misses for t in targets])[tis]
+        misses = targets.misses[tis]
         d = paired_differences(model.take(tis), feats, misses)
         pj, p = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
         ns = len(search_q)
@@ -449,25 +444,24 @@ class PBMTracker:
                                ns * m + np.arange(len(align_q))])
         for q, k in zip(search_q + align_q, best):
             ti, n, _ = pairs[q]
-            t = targets[ti]
-            dof = dof_from_head(anchors[n].head, B[k, 2], B[k, 3], t.alpha, t.beta)
+            dof = dof_from_head(anchors[n].head, B[k, 2], B[k, 3], alpha_t[ti], beta_t[ti])
             out[q] = (float(p[k]), pj[k], feats, int(k), dof)
         return out
 
     # ------------------------------------------------------------------ pruning
-    def _prune(self, t: Target, cands: list[int], anchors: list[Anchor], gray: np.ndarray
-               ) -> tuple[int, np.ndarray | None]:
+    def _prune(self, template: np.ndarray | None, cands: list[int], anchors: list[Anchor],
+               gray: np.ndarray) -> tuple[int, np.ndarray | None]:
         """Multiple-response pruning (PBM 4.1): the target's head template is matched
         exhaustively around the candidates' heads; returns the candidate nearest the
         refined head and that head (x top-centre, y top), or (-1, None) when the template
         does not match."""
-        if t.head_template is None or not cands:
+        if template is None or not cands:
             return -1, None
-        tw = t.head_template.shape[1]
+        tw = template.shape[1]
         hs = np.array([anchors[n].head[:2] for n in cands])
         centre = hs.mean(axis=0)
         radius = float(np.max(np.linalg.norm(hs - centre, axis=1))) + 0.5 * tw + 2
-        tl, corr = match_head_template(gray, t.head_template,
+        tl, corr = match_head_template(gray, template,
                                        np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
         if corr < self.template_threshold:
             return -1, None
@@ -519,15 +513,14 @@ class PBMTracker:
             boxes = np.zeros((0, 4))
             feats = PartFeatures.concatenate([], self._extractor.bins)
         targets = self.targets
-        pred_wh = np.array([t.predict() for t in targets]).reshape(-1, 2)
+        pred_wh = targets.predict()
         T = len(targets)
         S = np.full((T, n_a), -np.inf)
         hyp: dict[tuple[int, int], tuple] = {}  # (ti, n) -> (p_j, features, index, dof, occluded)
         if T and n_a:
-            model = self.parts
-            gates = np.array([t.gate_box() for t in targets])
-            for t, g in zip(targets, gates):
-                t.last_gate = g  # the gate this frame's candidates were validated in
+            model = targets.parts
+            gates = targets.gate_boxes()
+            targets.last_gate = gates  # the gates this frame's candidates were validated in
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
             inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
@@ -539,7 +532,7 @@ class PBMTracker:
             # eqs. 11-12 for the unoccluded candidates inside each target's gate (PBM 3);
             # eq. 13 on the whole (T, N) grid (zeros elsewhere): one product of fixed shape
             ti_in, n_in = np.nonzero(inside & (kinds == 0))
-            d = selected_differences(model, feats, ti_in, n_in, np.array([t.misses for t in targets]))
+            d = selected_differences(model, feats, ti_in, n_in, targets.misses)
             pj_all = np.zeros((T, n_a, N_PARTS))
             pj_all[ti_in, n_in] = part_scores(self.models, d, self.omega, self.model_spread)
             p_all = global_scores(pj_all, self.gamma)
@@ -553,7 +546,7 @@ class PBMTracker:
                     if a.source == "blob":
                         # a blob's span follows the swinging limbs: keep KF2's width (PBM 3)
                         w = pred_wh[ti][0]
-                        dof[0], dof[4] = a.centroid[0] - targets[ti].alpha * w, w
+                        dof[0], dof[4] = a.centroid[0] - targets.alpha[ti] * w, w
                     hyp[(ti, n)] = (pj_all[ti, n], feats, n, dof, False)
                     continue
                 # the carved (head-anchored) candidate must itself lie in the gate (PBM 3)
@@ -564,8 +557,8 @@ class PBMTracker:
                 # a larger region is searched for a target it holds (PBM 3.1: "the target
                 # needs to be located within the blob"): a found target's last box must
                 # lie at least ``search_overlap`` inside it
-                if (kind > 0 and targets[ti].misses == 0 and self.search_overlap > 0
-                        and overlap_ratio_matrix(targets[ti].box[None], a.region[None])[0, 0]
+                if (kind > 0 and targets.misses[ti] == 0 and self.search_overlap > 0
+                        and overlap_ratio_matrix(targets.dof[ti, [0, 1, 4, 5]][None], a.region[None])[0, 0]
                         < self.search_overlap):
                     continue
                 pairs.append((int(ti), int(n), kind))
@@ -575,7 +568,7 @@ class PBMTracker:
                     S[ti, n] = res[0]
                     hyp[(ti, n)] = (res[1], res[2], res[3], res[4], True)
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
-            for ti, t in enumerate(targets):
+            for ti in range(T):
                 row = S[ti]
                 best, _, amb = ambiguous(row, self.match_threshold, self.margin_ratio)
                 weak = best < 0 and np.isfinite(row).any() and row.max() >= self.weak_threshold
@@ -593,7 +586,7 @@ class PBMTracker:
                     continue
                 if gray is None:
                     gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-                chosen, refined = self._prune(t, cands, anchors, gray)
+                chosen, refined = self._prune(targets.head_template[ti], cands, anchors, gray)
                 if chosen < 0:
                     if weak:
                         continue
@@ -603,61 +596,56 @@ class PBMTracker:
                     # (occluded) candidate is re-anchored on the refined head
                     pj_c, f_c, k_c, dof_c, _ = hyp[(ti, chosen)]
                     head = np.array([refined[0], refined[1], anchors[chosen].head[2]])
-                    hyp[(ti, chosen)] = (pj_c, f_c, k_c, dof_from_head(head, dof_c[4], dof_c[5],
-                                                                       t.alpha, t.beta), True)
+                    hyp[(ti, chosen)] = (pj_c, f_c, k_c, dof_from_head(
+                        head, dof_c[4], dof_c[5], targets.alpha[ti], targets.beta[ti]), True)
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
                 S[ti, chosen] = max(keep, self.match_threshold)
         cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.match_threshold)
         taken = np.zeros(n_a, dtype=bool)
-        by_source: dict[int, tuple[PartFeatures, list]] = {}  # the parts updates, per feature array
-        for ti, n in matches:
-            t = targets[ti]
-            pj, f_all, k, dof, occl = hyp[(ti, n)]  # features: f_all at index k
-            shift = t.update(dof, fg is not None and not occl, occl, pj, self.part_match_threshold)
-            by_source.setdefault(id(f_all), (f_all, []))[1].append((ti, k, pj, shift))
-            t.score = float(S[ti, n])
-            taken[n] = True
-            if not t.occluded and pj[0] >= self.part_match_threshold:
-                if gray is None:
-                    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-                tpl = head_patch(gray, t.box)
-                if tpl is not None:
-                    t.head_template = tpl
-            if not t.confirmed and t.hits >= self.min_hits:
-                t.confirmed = True
-        for f_all, rows in by_source.values():
-            ti = np.array([r[0] for r in rows])
-            update_parts(self.parts, ti, f_all, np.array([r[1] for r in rows]),
-                         np.array([r[2] for r in rows]), self.part_match_threshold,
-                         self.update_rate, np.array([r[3] for r in rows]),
-                         np.array([targets[i].box for i in ti]),
-                         np.array([targets[i].alpha for i in ti]),
-                         np.array([targets[i].beta for i in ti]))
-        for ti in lost:
-            targets[ti].mark_missed()
+        if len(matches):
+            # model update (PBM 4.2): global models and filters of all matched targets at once
+            mt = np.array([ti for ti, _ in matches])
+            chosen_hyp = [hyp[(ti, n)] for ti, n in matches]  # (p_j, features, index, dof, occluded)
+            occl = np.array([h[4] for h in chosen_hyp])
+            pj = np.array([h[0] for h in chosen_hyp])
+            shift = targets.update(mt, np.array([h[3] for h in chosen_hyp]),
+                                   np.full(len(mt), fg is not None) & ~occl, occl, pj,
+                                   self.part_match_threshold)
+            # then the parts models, once per feature array the candidates were measured in
+            sources: dict[int, list[int]] = {}
+            for q, h in enumerate(chosen_hyp):
+                sources.setdefault(id(h[1]), []).append(q)
+            for qs in sources.values():
+                r = mt[qs]
+                update_parts(targets.parts, r, chosen_hyp[qs[0]][1],
+                             np.array([chosen_hyp[q][2] for q in qs]), pj[qs],
+                             self.part_match_threshold, self.update_rate, shift[qs],
+                             targets.boxes[r], targets.alpha[r], targets.beta[r])
+            targets.score[mt] = S[mt, [n for _, n in matches]]
+            taken[[n for _, n in matches]] = True
+            for q, ti in enumerate(mt):
+                if not occl[q] and pj[q, 0] >= self.part_match_threshold:
+                    if gray is None:
+                        gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+                    tpl = head_patch(gray, targets.dof[ti, [0, 1, 4, 5]])
+                    if tpl is not None:
+                        targets.head_template[ti] = tpl
+            targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
+        if len(lost):
+            targets.mark_missed(np.asarray(lost))
         # drop tentative misses, long-lost and leaving targets
-        alive, rows = [], []
-        for ti, t in enumerate(targets):
-            if t.misses == 0:
-                alive.append(t)
-                rows.append(ti)
-                continue
-            if not t.confirmed or t.misses > self.max_misses:
-                continue
-            x, y, w, h = t.box
-            near_border = (x <= self.exit_margin or y <= self.exit_margin
-                           or x + w >= W - self.exit_margin or y + h >= H - self.exit_margin)
-            if near_border and t.misses >= self.exit_misses:
-                continue
-            alive.append(t)
-            rows.append(ti)
-        if len(rows) < len(targets):
-            self.parts = self.parts.take(rows)
-        born = []
+        x, y, w, h = targets.boxes.T
+        m = self.exit_margin
+        near_border = (x <= m) | (y <= m) | (x + w >= W - m) | (y + h >= H - m)
+        alive = ((targets.misses == 0)
+                 | (targets.confirmed & (targets.misses <= self.max_misses)
+                    & ~(near_border & (targets.misses >= self.exit_misses))))
+        if not alive.all():
+            targets.take(np.flatnonzero(alive))
         # new targets from free candidates (new blobs, split heads)
-        live_boxes = np.array([t.box for t in alive]).reshape(-1, 4)
+        live_boxes = targets.boxes
         for n in free:
             a = anchors[n]
             if taken[n] or a.box[3] < self.min_height:
@@ -667,33 +655,31 @@ class PBMTracker:
             if len(live_boxes) and iou_matrix(a.box[None], live_boxes).max() > self.new_track_iou:
                 continue
             al_n, be_n = centroid_ratios(a.box[None], a.centroid[None])
-            t = Target(self._next_id, dof_from_box(a.box, a.centroid), float(al_n[0]),
-                       float(be_n[0]), self._gate_args, self._size_args, self.ratio_window,
-                       self.occluded_window)
-            born.append(n)
-            t.score = 0.0
-            self._next_id += 1
             if gray is None:
                 gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-            t.head_template = head_patch(gray, t.box)
+            dof = dof_from_box(a.box, a.centroid)
+            targets.add(self._next_id, dof, float(al_n[0]), float(be_n[0]), feats.take(n),
+                        head_patch(gray, dof[[0, 1, 4, 5]]))
+            self._next_id += 1
             if self._frame <= self.min_hits:
-                t.confirmed = True  # people present from the start are reported at once
-            alive.append(t)
+                targets.confirmed[-1] = True  # people present from the start are reported at once
             live_boxes = np.vstack([live_boxes, a.box[None]])
-        if born:
-            self.parts = PartFeatures.concatenate([self.parts, feats.take(born)], self._extractor.bins)
-        self.targets = alive
         return self._output()
 
     def _output(self) -> list[Track]:
+        tg = self.targets
         out = []
-        # the targets replace (never modify) occluded_parts and part_scores: no copies
-        for t, rect in zip(self.targets, self.parts.parts.copy()):
-            extra = {"parts": rect, "occluded_parts": t.occluded_parts,
-                     "part_scores": t.part_scores, "gate": t.last_gate}
-            if t.misses == 0:
-                state = TrackState.CONFIRMED if t.confirmed else TrackState.TENTATIVE
-                out.append(Track(t.id, t.box, state, min(max(float(t.score), 0.0), 1.0), extra))
-            elif t.confirmed and self.report_occluded and t.misses <= self.max_report_misses:
-                out.append(Track(t.id, t.box, TrackState.OCCLUDED, 0.0, extra))
+        # copies: the rows of the state arrays change in place in later frames
+        boxes, rects = tg.boxes, tg.parts.parts.copy()
+        occluded_parts, part_scores, gates = tg.occluded_parts.copy(), tg.part_scores.copy(), tg.last_gate.copy()
+        for i in range(len(tg)):
+            gate = gates[i] if np.isfinite(gates[i, 0]) else None
+            extra = {"parts": rects[i], "occluded_parts": occluded_parts[i],
+                     "part_scores": part_scores[i], "gate": gate}
+            misses = tg.misses[i]
+            if misses == 0:
+                state = TrackState.CONFIRMED if tg.confirmed[i] else TrackState.TENTATIVE
+                out.append(Track(int(tg.id[i]), boxes[i], state, min(max(float(tg.score[i]), 0.0), 1.0), extra))
+            elif tg.confirmed[i] and self.report_occluded and misses <= self.max_report_misses:
+                out.append(Track(int(tg.id[i]), boxes[i], TrackState.OCCLUDED, 0.0, extra))
         return out
