@@ -212,7 +212,8 @@ def _push(window: np.ndarray, count: np.ndarray, rows: np.ndarray, values: np.nd
           ) -> tuple[np.ndarray, np.ndarray]:
     """Append ``values`` (M, K) as the newest entries of the windows (T, L, K) at ``rows``
     (in place, with their counts (T,)); returns those windows and counts."""
-    w = np.roll(window[rows], -1, axis=1)
+    w = window[rows]  # a copy (fancy indexing)
+    w[:, :-1] = w[:, 1:]  # numpy buffers overlapping copies
     w[:, -1] = values
     n = np.minimum(count[rows] + 1, window.shape[1])
     window[rows] = w

@@ -448,6 +448,17 @@ class PBMTracker:
             out[q] = (float(p[k]), pj[k], feats, int(k), dof)
         return out
 
+    def _unoccluded(self, ti: int, n: int, anchors: list[Anchor], pj_all: np.ndarray,
+                    feats: PartFeatures, pred_wh: np.ndarray) -> tuple:
+        """(p_j, features, index in them, dof) of the unoccluded candidate n for target ti."""
+        a = anchors[n]
+        dof = dof_from_box(a.box, a.centroid)
+        if a.source == "blob":
+            # a blob's span follows the swinging limbs: keep KF2's width (PBM 3)
+            w = pred_wh[ti][0]
+            dof[0], dof[4] = a.centroid[0] - self.targets.alpha[ti] * w, w
+        return pj_all[ti, n], feats, n, dof
+
     # ------------------------------------------------------------------ pruning
     def _prune(self, template: np.ndarray | None, cands: list[int], anchors: list[Anchor],
                gray: np.ndarray) -> tuple[int, np.ndarray | None]:
@@ -516,7 +527,9 @@ class PBMTracker:
         pred_wh = targets.predict()
         T = len(targets)
         S = np.full((T, n_a), -np.inf)
-        hyp: dict[tuple[int, int], tuple] = {}  # (ti, n) -> (p_j, features, index, dof, occluded)
+        # occluded candidates: (ti, n) -> (p_j, features, index in them, dof); the unoccluded
+        # ones are read from the frame's arrays (``_unoccluded``)
+        hyp: dict[tuple[int, int], tuple] = {}
         if T and n_a:
             model = targets.parts
             gates = targets.gate_boxes()
@@ -536,19 +549,11 @@ class PBMTracker:
             pj_all = np.zeros((T, n_a, N_PARTS))
             pj_all[ti_in, n_in] = part_scores(self.models, d, self.omega, self.model_spread)
             p_all = global_scores(pj_all, self.gamma)
+            S[ti_in, n_in] = p_all[ti_in, n_in]
             pairs: list[tuple[int, int, int]] = []
-            for ti, n in zip(*np.nonzero(inside)):
+            for ti, n in zip(*np.nonzero(inside & (kinds != 0))):
                 a = anchors[n]
                 kind = int(kinds[ti, n])
-                if kind == 0:
-                    S[ti, n] = p_all[ti, n]
-                    dof = dof_from_box(a.box, a.centroid)
-                    if a.source == "blob":
-                        # a blob's span follows the swinging limbs: keep KF2's width (PBM 3)
-                        w = pred_wh[ti][0]
-                        dof[0], dof[4] = a.centroid[0] - targets.alpha[ti] * w, w
-                    hyp[(ti, n)] = (pj_all[ti, n], feats, n, dof, False)
-                    continue
                 # the carved (head-anchored) candidate must itself lie in the gate (PBM 3)
                 hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
                 g = gates[ti]
@@ -566,7 +571,7 @@ class PBMTracker:
                                                                          model)):
                 if res is not None:
                     S[ti, n] = res[0]
-                    hyp[(ti, n)] = (res[1], res[2], res[3], res[4], True)
+                    hyp[(ti, n)] = (res[1], res[2], res[3], res[4])
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             for ti in range(T):
                 row = S[ti]
@@ -591,13 +596,13 @@ class PBMTracker:
                     if weak:
                         continue
                     chosen = best
-                elif (ti, chosen) in hyp and hyp[(ti, chosen)][4]:
+                elif (ti, chosen) in hyp:
                     # "the matching candidate is then updated accordingly": a carved
                     # (occluded) candidate is re-anchored on the refined head
-                    pj_c, f_c, k_c, dof_c, _ = hyp[(ti, chosen)]
+                    pj_c, f_c, k_c, dof_c = hyp[(ti, chosen)]
                     head = np.array([refined[0], refined[1], anchors[chosen].head[2]])
                     hyp[(ti, chosen)] = (pj_c, f_c, k_c, dof_from_head(
-                        head, dof_c[4], dof_c[5], targets.alpha[ti], targets.beta[ti]), True)
+                        head, dof_c[4], dof_c[5], targets.alpha[ti], targets.beta[ti]))
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
                 S[ti, chosen] = max(keep, self.match_threshold)
@@ -607,8 +612,9 @@ class PBMTracker:
         if len(matches):
             # model update (PBM 4.2): global models and filters of all matched targets at once
             mt = np.array([ti for ti, _ in matches])
-            chosen_hyp = [hyp[(ti, n)] for ti, n in matches]  # (p_j, features, index, dof, occluded)
-            occl = np.array([h[4] for h in chosen_hyp])
+            occl = np.array([(ti, n) in hyp for ti, n in matches], dtype=bool)
+            chosen_hyp = [hyp[(ti, n)] if o else self._unoccluded(ti, n, anchors, pj_all, feats, pred_wh)
+                          for (ti, n), o in zip(matches, occl)]  # (p_j, features, index, dof)
             pj = np.array([h[0] for h in chosen_hyp])
             shift = targets.update(mt, np.array([h[3] for h in chosen_hyp]),
                                    np.full(len(mt), fg is not None) & ~occl, occl, pj,
@@ -672,14 +678,14 @@ class PBMTracker:
         # copies: the rows of the state arrays change in place in later frames
         boxes, rects = tg.boxes, tg.parts.parts.copy()
         occluded_parts, part_scores, gates = tg.occluded_parts.copy(), tg.part_scores.copy(), tg.last_gate.copy()
-        for i in range(len(tg)):
-            gate = gates[i] if np.isfinite(gates[i, 0]) else None
+        ids, misses, confirmed, score = (tg.id.tolist(), tg.misses.tolist(), tg.confirmed.tolist(),
+                                         np.clip(tg.score, 0.0, 1.0).tolist())
+        for i, has_gate in enumerate(np.isfinite(gates[:, 0]).tolist()):
             extra = {"parts": rects[i], "occluded_parts": occluded_parts[i],
-                     "part_scores": part_scores[i], "gate": gate}
-            misses = tg.misses[i]
-            if misses == 0:
-                state = TrackState.CONFIRMED if tg.confirmed[i] else TrackState.TENTATIVE
-                out.append(Track(int(tg.id[i]), boxes[i], state, min(max(float(tg.score[i]), 0.0), 1.0), extra))
-            elif tg.confirmed[i] and self.report_occluded and misses <= self.max_report_misses:
-                out.append(Track(int(tg.id[i]), boxes[i], TrackState.OCCLUDED, 0.0, extra))
+                     "part_scores": part_scores[i], "gate": gates[i] if has_gate else None}
+            if misses[i] == 0:
+                state = TrackState.CONFIRMED if confirmed[i] else TrackState.TENTATIVE
+                out.append(Track(ids[i], boxes[i], state, score[i], extra))
+            elif confirmed[i] and self.report_occluded and misses[i] <= self.max_report_misses:
+                out.append(Track(ids[i], boxes[i], TrackState.OCCLUDED, 0.0, extra))
         return out
