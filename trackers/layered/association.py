@@ -2,21 +2,375 @@
 
 Feature layer (eq. 11): d_ij = |f_ij - F_ij| for feature i of part j of a candidate (f)
 and of the target's parts model (F). Histograms differ by 1 - rho (Bhattacharyya
-coefficient, ``trackers.histograms.bhattacharyya``), overlap by 1 - IoU.
+coefficient rho = sum_u sqrt(p_u q_u)), overlap by 1 - IoU.
 Part layer (eq. 12): p_j = sum_i omega_i p(d_ij | theta_ij), p(. | theta) the match
 probability of ``FeatureModels``.
 Global layer (eq. 13): p = sum_j gamma_j p_j.
 
-Everything is vectorised over T targets x N candidates.
+The layers run in small numba kernels, one loop over the scored (target, candidate) pairs
+with no (pairs, 6, 5, components) temporaries; ``pair_scores`` fuses eqs. 11-13. Every
+kernel fixes its floating-point order, the same as the numpy expression quoted in its
+docstring (the tests compare them value for value):
+
+- rho: ``np.sqrt(p * q).sum(-1)`` (numpy's pairwise sum, ``_pairwise_rho``); no BLAS
+  product, whose rounding depends on the CPU's kernel;
+- eq. 12: ``np.einsum("...ij,i->...j", prob, omega)`` (i = 0..5 left to right from 0);
+- eq. 13: sum_j p_j gamma_j, j = 0..4 left to right from 0.
 """
 
 from __future__ import annotations
 
-import numpy as np
+import ctypes
+import functools
 
-from trackers.frontend.parts import N_PARTS, PartFeatures, part_displacement, part_overlap
-from trackers.histograms import bhattacharyya
+import numba
+import numpy as np
+from llvmlite import binding as llvm_binding
+from numba import types
+from numba.extending import get_cython_function_address
+from scipy.special import cython_special
+
+from trackers.frontend.parts import N_PARTS, PartFeatures
 from trackers.layered.models import FEATURES, FeatureModels
+
+N_FEATURES = len(FEATURES)
+_UNUSED_GAMMA = np.ones(N_PARTS)  # part_scores skips eq. 13
+
+# ----------------------------------------------------------------------------- kernels
+# Small numba kernels. The helpers are inlined into the loops that call them
+# (``inline="always"``) and index the feature arrays directly, so no array view is built or
+# reference-counted per pair. All kernels live in this one file: numba's cache checks only
+# the file of the function it compiled, so a kernel calling a kernel of another file could
+# be loaded stale after that file changed.
+
+# scipy's own compiled ndtr (the function behind ``scipy.special.ndtr`` for float64), called
+# by symbol name: the kernels' values equal ``ndtr``'s bit for bit, and ``cache=True`` works
+# (a symbol resolved when this module is imported, not a pointer baked into the cache).
+_NDTR_CAPSULE = "__pyx_fuse_1ndtr"
+_NDTR_SIGNATURE = b"double (double, int __pyx_skip_dispatch)"
+_NDTR_SYMBOL = "occbench_scipy_special_ndtr"
+
+
+def _bind_scipy_ndtr() -> types.ExternalFunction:
+    """Register scipy.special.cython_special's float64 ndtr under ``_NDTR_SYMBOL``."""
+    capsule = cython_special.__pyx_capi__.get(_NDTR_CAPSULE)
+    get_name = ctypes.pythonapi.PyCapsule_GetName
+    get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
+    if capsule is None or get_name(capsule) != _NDTR_SIGNATURE:
+        raise ImportError(f"scipy.special.cython_special.{_NDTR_CAPSULE} is missing or is not "
+                          f"{_NDTR_SIGNATURE.decode()!r} in this scipy version; the PBM scoring "
+                          "kernels call it")
+    llvm_binding.add_symbol(_NDTR_SYMBOL,
+                            get_cython_function_address("scipy.special.cython_special", _NDTR_CAPSULE))
+    return types.ExternalFunction(_NDTR_SYMBOL, types.float64(types.float64, types.intc))
+
+
+_scipy_ndtr = _bind_scipy_ndtr()
+
+
+@numba.njit(cache=True, inline="always")
+def _survival(x: float, w: np.ndarray, mu: np.ndarray, s: np.ndarray, i: int, j: int) -> float:
+    """P(D >= x) of model (i, j) of padded (6, 5, K) mixture arrays (``FeatureModels``):
+    ``FeatureModels.match_probability`` of one difference, the same operations in the same
+    order: clip x at 0; per component w (ndtr((mu - x) / s) + ndtr((-mu - x) / s)), summed
+    left to right from 0 (numpy's sum below 8 components); clip to [0, 1]. Zero-weight
+    padding adds exact zeros and is skipped; a zero mean needs one ndtr (both terms equal).
+    """
+    if x < 0.0:  # np.maximum(x, 0): NaN stays NaN  # noqa: PLR1730
+        x = 0.0
+    total = 0.0
+    for c in range(w.shape[2]):
+        wc = w[i, j, c]
+        if wc == 0.0:
+            continue
+        m, sc = mu[i, j, c], s[i, j, c]
+        if m == 0.0:
+            a = _scipy_ndtr((m - x) / sc, 0)
+            total += wc * (a + a)
+        else:
+            total += wc * (_scipy_ndtr((m - x) / sc, 0) + _scipy_ndtr((-m - x) / sc, 0))
+    if total < 0.0:
+        return 0.0
+    if total > 1.0:
+        return 1.0
+    return total
+
+
+@numba.njit(cache=True)
+def survival_kernel(d: np.ndarray, w: np.ndarray, mu: np.ndarray, s: np.ndarray, out: np.ndarray
+                    ) -> None:
+    """``_survival`` of (n, 6, 5) differences into out (n, 6, 5)."""
+    for k in range(d.shape[0]):
+        for i in range(d.shape[1]):
+            for j in range(d.shape[2]):
+                out[k, i, j] = _survival(d[k, i, j], w, mu, s, i, j)
+
+
+@numba.njit(cache=True, inline="always")
+def _leaf_rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, lo: int, count: int) -> float:
+    """sum of sqrt(a[t, j, u] b[n, j, u]) over u in [lo, lo + count), count <= 128, in the
+    order of numpy's pairwise sum (``np.sqrt(p * q).sum()``): below 8 values left to right,
+    else 8 interleaved partial sums added as a tree, then the count % 8 last values. Zero
+    products are skipped (the histograms are sparse): adding +0.0 to a sum of non-negative
+    terms leaves it unchanged."""
+    if count < 8:
+        res = 0.0
+        for u in range(lo, lo + count):
+            x = a[t, j, u] * b[n, j, u]
+            if x != 0.0:
+                res += np.sqrt(x)
+        return res
+    r0 = r1 = r2 = r3 = r4 = r5 = r6 = r7 = 0.0
+    full = count - count % 8
+    for u in range(lo, lo + full, 8):
+        x = a[t, j, u] * b[n, j, u]
+        if x != 0.0:
+            r0 += np.sqrt(x)
+        x = a[t, j, u + 1] * b[n, j, u + 1]
+        if x != 0.0:
+            r1 += np.sqrt(x)
+        x = a[t, j, u + 2] * b[n, j, u + 2]
+        if x != 0.0:
+            r2 += np.sqrt(x)
+        x = a[t, j, u + 3] * b[n, j, u + 3]
+        if x != 0.0:
+            r3 += np.sqrt(x)
+        x = a[t, j, u + 4] * b[n, j, u + 4]
+        if x != 0.0:
+            r4 += np.sqrt(x)
+        x = a[t, j, u + 5] * b[n, j, u + 5]
+        if x != 0.0:
+            r5 += np.sqrt(x)
+        x = a[t, j, u + 6] * b[n, j, u + 6]
+        if x != 0.0:
+            r6 += np.sqrt(x)
+        x = a[t, j, u + 7] * b[n, j, u + 7]
+        if x != 0.0:
+            r7 += np.sqrt(x)
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    for u in range(lo + full, lo + count):
+        x = a[t, j, u] * b[n, j, u]
+        if x != 0.0:
+            res += np.sqrt(x)
+    return res
+
+
+@functools.cache
+def _pairwise_plan(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """numpy's pairwise-sum tree over n values (ranges above 128 split in halves rounded
+    down to a multiple of 8) as leaves (L, 2) of (start, length) and a postfix program: a
+    leaf index pushes that leaf's sum, -1 pops two sums and pushes their sum."""
+    leaves: list[tuple[int, int]] = []
+    program: list[int] = []
+
+    def walk(lo: int, m: int) -> None:
+        if m <= 128:
+            program.append(len(leaves))
+            leaves.append((lo, m))
+            return
+        m2 = m // 2 - (m // 2) % 8
+        walk(lo, m2)
+        walk(lo + m2, m - m2)
+        program.append(-1)
+
+    walk(0, n)
+    return np.array(leaves, dtype=np.intp).reshape(-1, 2), np.array(program, dtype=np.intp)
+
+
+@numba.njit(cache=True, inline="always")
+def _rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, leaves: np.ndarray,
+         program: np.ndarray, stack: np.ndarray) -> float:
+    """Bhattacharyya coefficient of histograms a[t, j] and b[n, j] (B bins), equal to
+    ``np.sqrt(a[t, j] * b[n, j]).sum()`` (``leaves, program = _pairwise_plan(B)``;
+    scratch stack of len(program))."""
+    if program.shape[0] == 1:  # B <= 128 (bins <= 5): one leaf
+        return _leaf_rho(a, b, t, n, j, 0, a.shape[2])
+    top = 0
+    for op in program:
+        if op >= 0:
+            stack[top] = _leaf_rho(a, b, t, n, j, leaves[op, 0], leaves[op, 1])
+            top += 1
+        else:
+            stack[top - 2] = stack[top - 2] + stack[top - 1]
+            top -= 1
+    return stack[0]
+
+
+@numba.njit(cache=True, inline="always")
+def _pair_differences(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.ndarray,
+                      m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
+                      m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
+                      c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
+                      c_centroid: np.ndarray, t: int, n: int, g: float, union_floor: float,
+                      leaves: np.ndarray, program: np.ndarray, stack: np.ndarray,
+                      d: np.ndarray, k: int) -> None:
+    """Eq. 11 for model t against candidate n into d[k] (6, 5).
+
+    Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
+    no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (inter / max(union, union_floor),
+    0 when union <= 0), the last two times g = 1 / (1 + misses); all clipped at 0.
+    """
+    hgt = max(m_height[t], 1.0)
+    for j in range(m_area.shape[1]):
+        d[k, 0, j] = abs(m_area[t, j] - c_area[n, j])
+        d[k, 1, j] = abs(m_perimeter[t, j] - c_perimeter[n, j])
+        if c_area[n, j] <= 0:  # an empty histogram (part without foreground) never matches
+            d[k, 2, j] = 1.0
+            d[k, 3, j] = 1.0
+        else:
+            d[k, 2, j] = 1.0 - _rho(m_hsv, c_hsv, t, n, j, leaves, program, stack)
+            d[k, 3, j] = 1.0 - _rho(m_xyz, c_xyz, t, n, j, leaves, program, stack)
+        dx = c_centroid[n, j, 0] - m_centroid[t, j, 0]
+        dy = c_centroid[n, j, 1] - m_centroid[t, j, 1]
+        d[k, 4, j] = np.sqrt(dx * dx + dy * dy) / hgt * g
+        ax, ay, aw, ah = m_parts[t, j, 0], m_parts[t, j, 1], m_parts[t, j, 2], m_parts[t, j, 3]
+        bx, by, bw, bh = c_parts[n, j, 0], c_parts[n, j, 1], c_parts[n, j, 2], c_parts[n, j, 3]
+        iw = max(min(ax + aw, bx + bw) - max(ax, bx), 0.0)
+        ih = max(min(ay + ah, by + bh) - max(ay, by), 0.0)
+        inter = iw * ih
+        union = aw * ah + bw * bh - inter
+        iou = inter / max(union, union_floor) if union > 0 else 0.0
+        d[k, 5, j] = (1.0 - iou) * g
+        for i in range(d.shape[1]):
+            if d[k, i, j] < 0.0:  # np.clip(d, 0, None)  # noqa: PLR1730
+                d[k, i, j] = 0.0
+
+
+@numba.njit(cache=True)
+def _differences_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.ndarray,
+                        m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
+                        m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
+                        c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
+                        c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, g: np.ndarray,
+                        union_floor: float, leaves: np.ndarray, program: np.ndarray,
+                        out: np.ndarray) -> None:
+    """``_pair_differences`` of pairs (ti[k], n[k]) into out (K, 6, 5); g (T,) per target."""
+    stack = np.empty(program.shape[0])
+    for k in range(ti.shape[0]):
+        _pair_differences(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
+                          c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid,
+                          ti[k], n[k], g[ti[k]], union_floor, leaves, program, stack, out, k)
+
+
+@numba.njit(cache=True, inline="always")
+def _normalised(weights: np.ndarray) -> np.ndarray:
+    """weights / sum(weights), the sum left to right from 0 (numpy's sum below 8 values)."""
+    total = 0.0
+    for x in weights:
+        total += x
+    return weights / total
+
+
+@numba.njit(cache=True, inline="always")
+def _scores_one(d: np.ndarray, kd: int, spread: float, omega: np.ndarray, gamma: np.ndarray,
+                w: np.ndarray, mu: np.ndarray, s: np.ndarray, pj: np.ndarray, p: np.ndarray,
+                k: int, with_global: bool) -> None:
+    """Eq. 12 for the (6, 5) differences d[kd] into pj[k]: p_j = sum_i omega_i
+    P(D_ij >= d_ij / spread), i left to right from 0 (as ``np.einsum("...ij,i->...j")``);
+    with ``with_global`` eq. 13 into p[k]: sum_j p_j gamma_j, j left to right from 0.
+    omega and gamma already normalised."""
+    total = 0.0
+    for j in range(pj.shape[1]):
+        acc = 0.0
+        for i in range(d.shape[1]):
+            acc += _survival(d[kd, i, j] / spread, w, mu, s, i, j) * omega[i]
+        pj[k, j] = acc
+        total += acc * gamma[j]
+    if with_global:
+        p[k] = total
+
+
+@numba.njit(cache=True)
+def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.ndarray,
+                   w: np.ndarray, mu: np.ndarray, s: np.ndarray, with_global: bool,
+                   pj: np.ndarray, p: np.ndarray) -> None:
+    """Eqs. 12 (and 13 when ``with_global``) for (K, 6, 5) differences into pj (K, 5), p (K,);
+    omega and gamma are normalised here."""
+    omega, gamma = _normalised(omega), _normalised(gamma)
+    for k in range(d.shape[0]):
+        _scores_one(d, k, spread, omega, gamma, w, mu, s, pj, p, k, with_global)
+
+
+@numba.njit(cache=True)
+def _global_kernel(pj: np.ndarray, gamma: np.ndarray, p: np.ndarray) -> None:
+    """Eq. 13 for (K, 5) part scores into p (K,): sum_j p_j gamma_j, j left to right from
+    0; gamma is normalised here."""
+    gamma = _normalised(gamma)
+    for k in range(pj.shape[0]):
+        total = 0.0
+        for j in range(pj.shape[1]):
+            total += pj[k, j] * gamma[j]
+        p[k] = total
+
+
+@numba.njit(cache=True)
+def _pair_scores_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.ndarray,
+                        m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
+                        m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
+                        c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
+                        c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, g: np.ndarray,
+                        union_floor: float, leaves: np.ndarray, program: np.ndarray,
+                        spread: float, omega: np.ndarray, gamma: np.ndarray, w: np.ndarray,
+                        mu: np.ndarray, s: np.ndarray, pj: np.ndarray, p: np.ndarray) -> None:
+    """Eqs. 11-13 fused for pairs (ti[k], n[k]) into pj (K, 5), p (K,), through one (6, 5)
+    scratch; omega and gamma are normalised here."""
+    omega, gamma = _normalised(omega), _normalised(gamma)
+    stack = np.empty(program.shape[0])
+    d = np.empty((1, N_FEATURES, m_area.shape[1]))
+    for k in range(ti.shape[0]):
+        _pair_differences(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
+                          c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid,
+                          ti[k], n[k], g[ti[k]], union_floor, leaves, program, stack, d, 0)
+        _scores_one(d, 0, spread, omega, gamma, w, mu, s, pj, p, k, True)
+
+
+@numba.njit(cache=True)
+def _ambiguous_kernel(scores: np.ndarray, threshold: float, margin: float
+                      ) -> tuple[int, int, bool]:
+    """``ambiguous`` in one pass: the best and runner-up are the first and second entries
+    of a stable descending sort (ties: lower index first; NaN last)."""
+    best, runner = -1, -1
+    for k in range(scores.shape[0]):
+        v = scores[k]
+        if np.isnan(v):  # NaN sorts last
+            continue
+        if best < 0 or v > scores[best]:
+            runner, best = best, k
+        elif runner < 0 or v > scores[runner]:
+            runner = k
+    if best < 0 or not np.isfinite(scores[best]) or scores[best] < threshold:
+        return -1, -1, False
+    if runner >= 0 and not np.isfinite(scores[runner]):
+        runner = -1
+    amb = runner >= 0 and scores[runner] >= threshold and scores[best] < margin * scores[runner]
+    return best, runner, amb
+
+
+# ----------------------------------------------------------------------------- public API
+
+
+def _arrays(f: PartFeatures) -> tuple[np.ndarray, ...]:
+    """The kernels' inputs of a feature set: C-contiguous float64 (no copy when already)."""
+    return tuple(np.ascontiguousarray(a, dtype=np.float64) for a in
+                 (f.parts, f.area, f.perimeter, f.hsv, f.xyz, f.centroid, f.height))
+
+
+def _miss_factors(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
+    """g = 1 / (1 + misses) per target (ones without misses: x * 1.0 == x)."""
+    if misses is None:
+        return np.ones(n_targets)
+    return 1.0 / (1.0 + np.asarray(misses, dtype=np.float64).reshape(-1))
+
+
+def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
+                 misses: np.ndarray | None, union_floor: float) -> np.ndarray:
+    ti = np.ascontiguousarray(ti, dtype=np.intp).reshape(-1)
+    n = np.ascontiguousarray(n, dtype=np.intp).reshape(-1)
+    out = np.empty((len(ti), N_FEATURES, N_PARTS))
+    m, c = _arrays(model), _arrays(cand)
+    _differences_kernel(*m, *c[:6], ti, n, _miss_factors(misses, len(model)), union_floor,
+                        *_pairwise_plan(m[3].shape[2]), out)
+    return out
 
 
 def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
@@ -31,63 +385,17 @@ def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndar
         (T, N, 6, 5) differences, features in ``FEATURES`` order.
     """
     T, N = len(model), len(cand)
-    d = np.empty((T, N, len(FEATURES), N_PARTS))
-    d[:, :, 0] = np.abs(model.area[:, None] - cand.area[None])
-    d[:, :, 1] = np.abs(model.perimeter[:, None] - cand.perimeter[None])
-    for i, name in ((2, "hsv"), (3, "xyz")):
-        a, b = getattr(model, name), getattr(cand, name)
-        for j in range(N_PARTS):
-            d[:, :, i, j] = 1.0 - bhattacharyya(a[:, j], b[:, j]).reshape(T, N)
-    d[:, :, 4] = part_displacement(cand, model).transpose(1, 0, 2)
-    d[:, :, 5] = 1.0 - part_overlap(model, cand)
-    # an empty histogram (part without foreground) never matches
-    empty = (cand.area <= 0)[None, :, :]
-    d[:, :, 2] = np.where(empty, 1.0, d[:, :, 2])
-    d[:, :, 3] = np.where(empty, 1.0, d[:, :, 3])
-    if misses is not None:
-        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[:, None, None]
-        d[:, :, 4] *= g
-        d[:, :, 5] *= g
-    return np.clip(d, 0.0, None)
+    ti, n = np.divmod(np.arange(T * N, dtype=np.intp), max(N, 1))
+    return _differences(model, cand, ti, n, misses, 0.0).reshape(T, N, N_FEATURES, N_PARTS)
 
 
 def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
                          misses: np.ndarray | None = None) -> np.ndarray:
     """Eq. 11 for the selected pairs (target ti[k], candidate n[k]) only: (K, 6, 5), equal
-    to ``feature_differences(model, cand, misses)[ti, n]`` value for value (the same
-    operations; the histogram terms take the same T x N Bhattacharyya products). The
-    tracker scores only the candidates inside a target's gate (PBM 3).
+    to ``feature_differences(model, cand, misses)[ti, n]`` value for value. The tracker
+    scores only the candidates inside a target's gate (PBM 3).
     """
-    ti = np.asarray(ti, dtype=np.intp)
-    n = np.asarray(n, dtype=np.intp)
-    d = np.empty((len(ti), len(FEATURES), N_PARTS))
-    d[:, 0] = np.abs(model.area[ti] - cand.area[n])
-    d[:, 1] = np.abs(model.perimeter[ti] - cand.perimeter[n])
-    for i, name in ((2, "hsv"), (3, "xyz")):
-        # rho of every part of every (target, candidate): the products of ``bhattacharyya``
-        # (sqrt(p) @ sqrt(q)'), one (T, B) @ (B, N) matrix product per part, stacked
-        a = np.sqrt(np.ascontiguousarray(getattr(model, name).transpose(1, 0, 2)))  # (5, T, B)
-        b = np.sqrt(np.ascontiguousarray(getattr(cand, name).transpose(1, 0, 2)))  # (5, N, B)
-        d[:, i] = 1.0 - (a @ b.transpose(0, 2, 1))[:, ti, n].T
-    # part_displacement(cand, model): |c_n - C_t| / max(H_t, 1)
-    d[:, 4] = (np.linalg.norm(cand.centroid[n] - model.centroid[ti], axis=2)
-               / np.maximum(model.height, 1.0)[ti, None])
-    # part_overlap(model, cand): IoU as ``trackers.geometry.iou_matrix`` computes it
-    a, b = model.parts[ti], cand.parts[n]
-    iw = np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2]) - np.maximum(a[..., 0], b[..., 0])
-    ih = np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3]) - np.maximum(a[..., 1], b[..., 1])
-    inter = np.clip(iw, 0.0, None) * np.clip(ih, 0.0, None)
-    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
-    with np.errstate(invalid="ignore", divide="ignore"):
-        d[:, 5] = 1.0 - np.where(union > 0, inter / union, 0.0)
-    empty = cand.area[n] <= 0
-    d[:, 2] = np.where(empty, 1.0, d[:, 2])
-    d[:, 3] = np.where(empty, 1.0, d[:, 3])
-    if misses is not None:
-        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[ti, None]
-        d[:, 4] *= g
-        d[:, 5] *= g
-    return np.clip(d, 0.0, None)
+    return _differences(model, cand, ti, n, misses, 0.0)
 
 
 def paired_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
@@ -95,33 +403,19 @@ def paired_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarr
     """Eq. 11 for M aligned pairs (model k against candidate k): (M, 6, 5).
 
     Same definitions as ``feature_differences``, without the all-pairs product (the
-    head-anchored search scores each target against its own carved boxes only).
+    head-anchored search scores each target against its own carved boxes only); the IoU
+    divides by max(union, 1e-12).
     """
-    M = len(model)
-    d = np.empty((M, len(FEATURES), N_PARTS))
-    d[:, 0] = np.abs(model.area - cand.area)
-    d[:, 1] = np.abs(model.perimeter - cand.perimeter)
-    for i, name in ((2, "hsv"), (3, "xyz")):  # 1 - rho (Bhattacharyya), in place
-        prod = getattr(model, name) * getattr(cand, name)
-        d[:, i] = 1.0 - np.sqrt(prod, out=prod).sum(-1)
-    d[:, 4] = np.linalg.norm(cand.centroid - model.centroid, axis=2) / np.maximum(
-        model.height, 1.0)[:, None]
-    a, b = model.parts, cand.parts
-    iw = np.clip(np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2])
-                 - np.maximum(a[..., 0], b[..., 0]), 0, None)
-    ih = np.clip(np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3])
-                 - np.maximum(a[..., 1], b[..., 1]), 0, None)
-    inter = iw * ih
-    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
-    d[:, 5] = 1.0 - np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
-    empty = cand.area <= 0
-    d[:, 2] = np.where(empty, 1.0, d[:, 2])
-    d[:, 3] = np.where(empty, 1.0, d[:, 3])
-    if misses is not None:
-        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[:, None]
-        d[:, 4] *= g
-        d[:, 5] *= g
-    return np.clip(d, 0.0, None)
+    k = np.arange(len(model), dtype=np.intp)
+    return _differences(model, cand, k, k, misses, 1e-12)
+
+
+def _weights(w: np.ndarray, size: int, name: str) -> np.ndarray:
+    """A (size,) float64 weight vector (the kernels normalise it to sum 1)."""
+    w = np.asarray(w, dtype=np.float64)
+    if w.shape != (size,):
+        raise ValueError(f"{name} must have shape ({size},), got {w.shape}")
+    return w
 
 
 def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray,
@@ -137,22 +431,64 @@ def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamm
     Returns:
         part scores p_j (..., 5) and global scores p (...,), all in [0, 1].
     """
-    p_parts = part_scores(models, d, omega, spread)
-    return p_parts, global_scores(p_parts, gamma)
+    return _scores(models, d, omega, gamma, spread, True)
 
 
 def part_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, spread: float = 1.0
                 ) -> np.ndarray:
     """Eq. 12 alone (see ``layered_scores``): (..., 6, 5) differences -> (..., 5) p_j."""
-    prob = models.match_probability(np.asarray(d) / spread)  # p(d_ij | theta_ij)
-    w = np.asarray(omega, dtype=np.float64) / np.sum(omega)
-    return np.einsum("...ij,i->...j", prob, w)  # eq. 12
+    return _scores(models, d, omega, _UNUSED_GAMMA, spread, False)[0]
+
+
+def _scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray,
+            spread: float, with_global: bool) -> tuple[np.ndarray, np.ndarray]:
+    d = np.asarray(d, dtype=np.float64)
+    if d.shape[-2:] != (N_FEATURES, N_PARTS):
+        raise ValueError(f"expected (..., {N_FEATURES}, {N_PARTS}) differences, got {d.shape}")
+    lead = d.shape[:-2]
+    flat = np.ascontiguousarray(d).reshape(-1, N_FEATURES, N_PARTS)
+    pj = np.empty((len(flat), N_PARTS))
+    p = np.empty(len(flat))
+    _scores_kernel(flat, float(spread), _weights(omega, N_FEATURES, "omega"),
+                   _weights(gamma, N_PARTS, "gamma"), models._w, models._mu, models._s,
+                   with_global, pj, p)
+    return pj.reshape(*lead, N_PARTS), p.reshape(lead)
 
 
 def global_scores(p_parts: np.ndarray, gamma: np.ndarray) -> np.ndarray:
     """Eq. 13 alone (see ``layered_scores``): (..., 5) p_j -> (...,) p."""
-    g = np.asarray(gamma, dtype=np.float64) / np.sum(gamma)
-    return p_parts @ g  # eq. 13
+    p_parts = np.asarray(p_parts, dtype=np.float64)
+    if p_parts.ndim == 0 or p_parts.shape[-1] != N_PARTS:
+        raise ValueError(f"expected (..., {N_PARTS}) part scores, got {p_parts.shape}")
+    flat = np.ascontiguousarray(p_parts).reshape(-1, N_PARTS)
+    p = np.empty(len(flat))
+    _global_kernel(flat, _weights(gamma, N_PARTS, "gamma"), p)
+    return p.reshape(p_parts.shape[:-1])
+
+
+def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, ti: np.ndarray,
+                n: np.ndarray, misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
+                spread: float = 1.0, union_floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 11-13 fused for the pairs (target ti[k], candidate n[k]).
+
+    Equal value for value to ``layered_scores(models, selected_differences(model, cand,
+    ti, n, misses), omega, gamma, spread)``; with ``union_floor=1e-12`` and ti = the
+    targets of the carved boxes n = arange(M), to ``paired_differences(model.take(ti),
+    cand, misses[ti])`` scored the same way (without copying the models).
+
+    Returns:
+        part scores p_j (K, 5) and global scores p (K,).
+    """
+    ti = np.ascontiguousarray(ti, dtype=np.intp).reshape(-1)
+    n = np.ascontiguousarray(n, dtype=np.intp).reshape(-1)
+    pj = np.empty((len(ti), N_PARTS))
+    p = np.empty(len(ti))
+    m, c = _arrays(model), _arrays(cand)
+    _pair_scores_kernel(*m, *c[:6], ti, n, _miss_factors(misses, len(model)), float(union_floor),
+                        *_pairwise_plan(m[3].shape[2]), float(spread), _weights(omega, N_FEATURES, "omega"),
+                        _weights(gamma, N_PARTS, "gamma"), models._w,
+                        models._mu, models._s, pj, p)
+    return pj, p
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:
@@ -164,12 +500,7 @@ def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int,
         (best index or -1, runner-up index or -1, ambiguous) where ambiguous means the best
         does not exceed ``margin`` times the runner-up while both pass ``threshold``.
     """
-    if len(scores) == 0:
-        return -1, -1, False
-    order = np.argsort(-scores, kind="stable")
-    best = int(order[0])
-    if not np.isfinite(scores[best]) or scores[best] < threshold:
-        return -1, -1, False
-    runner = int(order[1]) if len(order) > 1 and np.isfinite(scores[order[1]]) else -1
-    amb = runner >= 0 and scores[runner] >= threshold and scores[best] < margin * scores[runner]
-    return best, runner, bool(amb)
+    scores = np.asarray(scores, dtype=np.float64)
+    if scores.ndim != 1:
+        raise ValueError(f"ambiguous: expected (N,) scores, got {scores.shape}")
+    return _ambiguous_kernel(scores, float(threshold), float(margin))

@@ -191,12 +191,17 @@ class FeatureModels:
         Returns:
             (..., 6, 5) probabilities in [0, 1].
         """
-        d = np.maximum(np.asarray(d, dtype=np.float64), 0.0)[..., None]
-        s = ndtr((self._mu - d) / self._s) + ndtr((-self._mu - d) / self._s)
-        ws = self._w * s
-        if ws.shape[-1] == 2:  # the sum over 2 components, as ``sum(-1)`` adds them
-            return np.clip(ws[..., 0] + ws[..., 1], 0.0, 1.0)
-        return np.clip(ws.sum(-1), 0.0, 1.0)
+        d = np.asarray(d, dtype=np.float64)
+        if d.shape[-2:] != self._w.shape[:2]:
+            raise ValueError(f"match_probability: expected (..., {len(FEATURES)}, {N_PARTS}) "
+                             f"differences, got {d.shape}")
+        # the compiled kernel lives with the layers it is fused into (association.py)
+        from trackers.layered.association import survival_kernel
+
+        flat = np.ascontiguousarray(d).reshape(-1, *self._w.shape[:2])
+        out = np.empty_like(flat)
+        survival_kernel(flat, self._w, self._mu, self._s, out)
+        return out.reshape(d.shape)
 
     def to_dict(self) -> dict:
         return {

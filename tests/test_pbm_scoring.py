@@ -1,0 +1,262 @@
+"""PBM layered-association scoring (eqs. 11-13): the compiled kernels of
+``trackers.layered.association`` against straightforward numpy references.
+
+The references are the numpy implementations the kernels replaced. Where the kernels fix a
+floating-point order that numpy left to BLAS (the Bhattacharyya products of
+``selected_differences`` and the eq. 13 sum), the reference is written with that order and
+the original BLAS expression is compared within 1e-15.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.special import ndtr
+
+from trackers.frontend.parts import N_PARTS, PartFeatures
+from trackers.layered.association import (
+    ambiguous,
+    feature_differences,
+    global_scores,
+    layered_scores,
+    pair_scores,
+    paired_differences,
+    part_scores,
+    selected_differences,
+)
+from trackers.layered.models import FEATURES, FeatureModels, FoldedMixture
+
+NF = len(FEATURES)
+
+
+# ----------------------------------------------------------------------------- references
+
+
+def ref_match_probability(models: FeatureModels, d: np.ndarray) -> np.ndarray:
+    """The numpy ``FeatureModels.match_probability`` the kernel replaced."""
+    d = np.maximum(np.asarray(d, dtype=np.float64), 0.0)[..., None]
+    s = ndtr((models._mu - d) / models._s) + ndtr((-models._mu - d) / models._s)
+    ws = models._w * s
+    if ws.shape[-1] == 2:
+        return np.clip(ws[..., 0] + ws[..., 1], 0.0, 1.0)
+    return np.clip(ws.sum(-1), 0.0, 1.0)
+
+
+def ref_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
+                    misses: np.ndarray | None, union_floor: float, blas_rho: bool = False
+                    ) -> np.ndarray:
+    """Eq. 11 for pairs (ti[k], n[k]), as the numpy ``selected_differences`` (union_floor 0)
+    and ``paired_differences`` (union_floor 1e-12) computed it; rho = sqrt(p q).sum(-1), or
+    with ``blas_rho`` the original sqrt(p) @ sqrt(q)' products."""
+    d = np.empty((len(ti), NF, N_PARTS))
+    d[:, 0] = np.abs(model.area[ti] - cand.area[n])
+    d[:, 1] = np.abs(model.perimeter[ti] - cand.perimeter[n])
+    for i, name in ((2, "hsv"), (3, "xyz")):
+        a, b = getattr(model, name), getattr(cand, name)
+        if blas_rho:
+            sa = np.sqrt(np.ascontiguousarray(a.transpose(1, 0, 2)))
+            sb = np.sqrt(np.ascontiguousarray(b.transpose(1, 0, 2)))
+            d[:, i] = 1.0 - (sa @ sb.transpose(0, 2, 1))[:, ti, n].T
+        else:
+            d[:, i] = 1.0 - np.sqrt(a[ti] * b[n]).sum(-1)
+    d[:, 4] = (np.linalg.norm(cand.centroid[n] - model.centroid[ti], axis=2)
+               / np.maximum(model.height, 1.0)[ti, None])
+    a, b = model.parts[ti], cand.parts[n]
+    iw = np.clip(np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2])
+                 - np.maximum(a[..., 0], b[..., 0]), 0, None)
+    ih = np.clip(np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3])
+                 - np.maximum(a[..., 1], b[..., 1]), 0, None)
+    inter = iw * ih
+    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d[:, 5] = 1.0 - np.where(union > 0, inter / np.maximum(union, union_floor), 0.0)
+    empty = cand.area[n] <= 0
+    d[:, 2] = np.where(empty, 1.0, d[:, 2])
+    d[:, 3] = np.where(empty, 1.0, d[:, 3])
+    if misses is not None:
+        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[ti, None]
+        d[:, 4] *= g
+        d[:, 5] *= g
+    return np.clip(d, 0.0, None)
+
+
+def ref_part_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, spread: float
+                    ) -> np.ndarray:
+    prob = ref_match_probability(models, np.asarray(d) / spread)
+    return np.einsum("...ij,i->...j", prob, np.asarray(omega, float) / np.sum(omega))
+
+
+def ref_global_scores(pj: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+    """Eq. 13 summed j = 0..4 left to right from 0 (the kernels' order)."""
+    g = np.asarray(gamma, float) / np.sum(gamma)
+    out = np.zeros(pj.shape[:-1])
+    for j in range(N_PARTS):
+        out = out + pj[..., j] * g[j]
+    return out
+
+
+def ref_ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:
+    """The argsort implementation the kernel replaced."""
+    if len(scores) == 0:
+        return -1, -1, False
+    order = np.argsort(-scores, kind="stable")
+    best = int(order[0])
+    if not np.isfinite(scores[best]) or scores[best] < threshold:
+        return -1, -1, False
+    runner = int(order[1]) if len(order) > 1 and np.isfinite(scores[order[1]]) else -1
+    amb = runner >= 0 and scores[runner] >= threshold and scores[best] < margin * scores[runner]
+    return best, runner, bool(amb)
+
+
+# ----------------------------------------------------------------------------- inputs
+
+
+def random_models(rng: np.random.Generator) -> FeatureModels:
+    """Half-normals, 2-component mixtures (one with a zero mean) and 3-component mixtures
+    (so the padded arrays have zero-weight slots)."""
+    models = {}
+    for f in FEATURES:
+        row = []
+        for j in range(N_PARTS):
+            kind = (FEATURES.index(f) + j) % 3
+            if kind == 0:
+                row.append(FoldedMixture([1.0], [0.0], [rng.uniform(0.01, 0.5)]))
+            elif kind == 1:
+                w = rng.uniform(0.2, 0.8)
+                row.append(FoldedMixture([w, 1 - w], [0.0, rng.uniform(0.01, 0.5)],
+                                         rng.uniform(0.005, 0.3, 2)))
+            else:
+                w = rng.dirichlet(np.ones(3))
+                row.append(FoldedMixture(w, rng.uniform(0.0, 0.5, 3), rng.uniform(0.01, 0.3, 3)))
+        models[f] = row
+    return FeatureModels(models)
+
+
+def random_features(rng: np.random.Generator, n: int, bins: int = 4) -> PartFeatures:
+    """n boxes' part features: sparse joint histograms, some parts empty (area 0, zero
+    histograms), some part rectangles disjoint or touching."""
+    nb = bins**3
+    xy = rng.uniform(0, 60, (n, N_PARTS, 2))
+    wh = rng.uniform(0.5, 30, (n, N_PARTS, 2))
+    wh[rng.random((n, N_PARTS)) < 0.05, 0] = 0.0  # a degenerate part rectangle
+    area = rng.uniform(0, 1, (n, N_PARTS))
+    area[rng.random((n, N_PARTS)) < 0.15] = 0.0
+    hists = []
+    for _ in range(2):
+        h = rng.random((n, N_PARTS, nb)) * (rng.random((n, N_PARTS, nb)) < 0.2)
+        h[area <= 0] = 0.0
+        s = h.sum(-1, keepdims=True)
+        hists.append(np.divide(h, s, out=np.zeros_like(h), where=s > 0))
+    return PartFeatures(np.concatenate([xy, wh], axis=2), area, rng.uniform(0, 3, (n, N_PARTS)),
+                        hists[0], hists[1], rng.uniform(0, 80, (n, N_PARTS, 2)),
+                        rng.uniform(0.5, 100, n))
+
+
+@pytest.fixture(scope="module")
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20)
+
+
+# ----------------------------------------------------------------------------- tests
+
+
+def test_match_probability_equals_numpy_for_1_2_and_3_components(rng):
+    models = random_models(rng)
+    d = np.abs(rng.normal(0, 1, (400, NF, N_PARTS))) * rng.choice([1e-3, 0.05, 0.3, 3, 50],
+                                                                   (400, NF, N_PARTS))
+    d[::7] = 0.0
+    d[1::11] *= -1.0  # negative differences count as 0
+    np.testing.assert_array_equal(models.match_probability(d), ref_match_probability(models, d))
+    assert models.match_probability(d[0]).shape == (NF, N_PARTS)
+    default = FeatureModels.default()
+    np.testing.assert_array_equal(default.match_probability(d), ref_match_probability(default, d))
+
+
+@pytest.mark.parametrize("with_misses", [False, True])
+def test_selected_and_all_pairs_differences_equal_numpy(rng, with_misses):
+    model, cand = random_features(rng, 7), random_features(rng, 9)
+    misses = rng.integers(0, 4, 7) if with_misses else None
+    ti, n = np.nonzero(rng.random((7, 9)) < 0.5)
+    got = selected_differences(model, cand, ti, n, misses)
+    np.testing.assert_array_equal(got, ref_differences(model, cand, ti, n, misses, 0.0))
+    np.testing.assert_array_equal(got, feature_differences(model, cand, misses)[ti, n])
+    assert (got[:, 2:4][cand.area[n][:, None, :].repeat(2, 1) <= 0] == 1.0).all()  # empty parts
+    # the former BLAS products sqrt(p) @ sqrt(q)': the same up to rounding
+    np.testing.assert_allclose(got, ref_differences(model, cand, ti, n, misses, 0.0, True),
+                               rtol=0, atol=1e-15)
+    assert feature_differences(model, cand.take([]), misses).shape == (7, 0, NF, N_PARTS)
+
+
+@pytest.mark.parametrize("bins", [1, 2, 3, 5, 6, 8])
+def test_histogram_term_is_numpys_pairwise_sum_for_any_bins(rng, bins):
+    """B = bins**3 from 1 to 512: below 8, up to 128 (one block) and split blocks."""
+    model, cand = random_features(rng, 3, bins), random_features(rng, 4, bins)
+    ti, n = np.nonzero(np.ones((3, 4), bool))
+    np.testing.assert_array_equal(selected_differences(model, cand, ti, n),
+                                  ref_differences(model, cand, ti, n, None, 0.0))
+
+
+def test_paired_differences_equal_numpy(rng):
+    model, cand = random_features(rng, 30), random_features(rng, 30)
+    cand.parts[:5] = model.parts[:5]  # identical rectangles: IoU 1
+    misses = rng.integers(0, 3, 30)
+    k = np.arange(30)
+    for m in (None, misses):
+        np.testing.assert_array_equal(paired_differences(model, cand, m),
+                                      ref_differences(model, cand, k, k, m, 1e-12))
+
+
+def test_part_global_and_layered_scores_equal_numpy(rng):
+    models = random_models(rng)
+    d = np.abs(rng.normal(0, 0.3, (5, 8, NF, N_PARTS)))
+    d[0, 0] = 0.0
+    omega = rng.uniform(0.1, 1, NF)
+    gamma = rng.uniform(0.1, 1, N_PARTS)
+    pj = part_scores(models, d, omega, 3.0)
+    np.testing.assert_array_equal(pj, ref_part_scores(models, d, omega, 3.0))
+    np.testing.assert_array_equal(global_scores(pj, gamma), ref_global_scores(pj, gamma))
+    # the former BLAS matrix-vector product: the same up to rounding
+    np.testing.assert_allclose(global_scores(pj, gamma), pj @ (gamma / gamma.sum()), atol=1e-15)
+    pj2, p2 = layered_scores(models, d, omega, gamma, 3.0)
+    np.testing.assert_array_equal(pj2, pj)
+    np.testing.assert_array_equal(p2, global_scores(pj, gamma))
+    assert pj.shape == (5, 8, N_PARTS) and p2.shape == (5, 8)
+    pj1, p1 = layered_scores(models, d[0, 0], omega, gamma)
+    assert pj1.shape == (N_PARTS,) and p1.shape == ()
+    with pytest.raises(ValueError, match="omega"):
+        part_scores(models, d, omega[:5])
+
+
+def test_pair_scores_fuse_the_three_layers(rng):
+    models = random_models(rng)
+    model, cand = random_features(rng, 6), random_features(rng, 40)
+    misses = rng.integers(0, 3, 6)
+    omega, gamma = rng.uniform(0.1, 1, NF), rng.uniform(0.1, 1, N_PARTS)
+    ti, n = np.nonzero(rng.random((6, 40)) < 0.3)
+    pj, p = pair_scores(models, model, cand, ti, n, misses, omega, gamma, 2.5)
+    pj_ref, p_ref = layered_scores(models, selected_differences(model, cand, ti, n, misses),
+                                   omega, gamma, 2.5)
+    np.testing.assert_array_equal(pj, pj_ref)
+    np.testing.assert_array_equal(p, p_ref)
+    # the search path: every carved box k scored against the model of its target tis[k]
+    tis = rng.integers(0, 6, 40)
+    pj, p = pair_scores(models, model, cand, tis, np.arange(40), misses, omega, gamma, 2.5,
+                        union_floor=1e-12)
+    pj_ref, p_ref = layered_scores(models, paired_differences(model.take(tis), cand, misses[tis]),
+                                   omega, gamma, 2.5)
+    np.testing.assert_array_equal(pj, pj_ref)
+    np.testing.assert_array_equal(p, p_ref)
+
+
+def test_ambiguous_equals_the_sort_based_rule(rng):
+    cases = [np.array([]), np.array([0.5]), np.array([-np.inf, -np.inf]),
+             np.array([np.nan, 0.7, 0.7]), np.array([0.6, 0.6, np.nan]), np.array([np.inf, 0.3])]
+    for _ in range(300):
+        s = np.round(rng.uniform(0, 1, rng.integers(1, 12)), 1)  # ties are frequent
+        s[rng.random(len(s)) < 0.3] = -np.inf
+        cases.append(s)
+    for s in cases:
+        for threshold, margin in ((0.25, 1.1), (0.5, 1.5)):
+            got = ambiguous(s, threshold, margin)
+            assert got == ref_ambiguous(s, threshold, margin), s
+            assert type(got[0]) is int and type(got[2]) is bool
