@@ -28,6 +28,15 @@ import cv2
 import numpy as np
 
 from trackers.frontend.parts import HEAD_FRACTION
+from trackers.layered._search_kernels import coarse_peaks, ncc_all, ncc_climb
+
+# head-template match (PBM 4.1), coarse to fine: block size of the coarse pass (2 or 3),
+# coarse local maxima refined, half-size of the full-resolution neighbourhood scored
+# around each, and the largest window (in positions) scored exhaustively instead
+COARSE_FACTOR = 2
+COARSE_PEAKS = 4
+REFINE_PAD = 3
+SMALL_WINDOW = 64
 
 
 @dataclass
@@ -274,13 +283,26 @@ def head_patch(gray: np.ndarray, box: np.ndarray) -> np.ndarray | None:
 
 def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarray,
                         radius: float) -> tuple[np.ndarray, float]:
-    """Exhaustive local template matching (PBM 4.1, multiple-response pruning).
+    """Local template matching, coarse to fine (PBM 4.1, multiple-response pruning).
+
+    The search window holds the top-left positions within ``radius`` (a square) of
+    ``centre``, clipped to the image. TM_CCOEFF_NORMED (zero-mean normalised
+    correlation) is first computed on the window and the template both summed over
+    ``COARSE_FACTOR`` x ``COARSE_FACTOR`` blocks; from each of its ``COARSE_PEAKS`` best
+    local maxima the (2 ``REFINE_PAD`` + 1)^2 full-resolution positions around it are
+    scored exactly and the best climbs to a local maximum (``_search_kernels``). Windows
+    of at most ``SMALL_WINDOW`` positions, or templates under 4 pixels a side, are
+    scored exhaustively. Scores equal ``cv2.matchTemplate``'s up to its float32 rounding;
+    the position is the exhaustive maximum's unless another local maximum ranks higher
+    at the coarse level (rare; then a near-equal local maximum is returned).
 
     Args:
-        gray: (H, W) uint8 frame. template: (th, tw) head patch.
-        centre: (2,) expected top-left corner of the head patch. radius: search radius.
+        gray: (H, W) uint8 frame. template: (th, tw) uint8 head patch.
+        centre: (2,) expected top-left corner (x, y) of the head patch. radius: search
+            radius (pixels).
     Returns:
-        best top-left corner (2,) and its normalised correlation (-1..1; -1 when no room).
+        best top-left corner (2,) float64 (x, y) and its normalised correlation (-1..1;
+        -1 when the window cannot hold the template).
     """
     th, tw = template.shape
     H, W = gray.shape
@@ -290,6 +312,12 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
     if c1 - c0 < tw or r1 - r0 < th:
         return np.asarray(centre, dtype=np.float64), -1.0
-    res = cv2.matchTemplate(gray[r0:r1, c0:c1], template, cv2.TM_CCOEFF_NORMED)
-    _, best, _, loc = cv2.minMaxLoc(res)
-    return np.array([c0 + loc[0], r0 + loc[1]], dtype=np.float64), float(best)
+    win = np.ascontiguousarray(gray[r0:r1, c0:c1], dtype=np.uint8)
+    template = np.ascontiguousarray(template, dtype=np.uint8)
+    f = COARSE_FACTOR
+    if ((r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW or th < 2 * f or tw < 2 * f):
+        bx, by, best = ncc_all(win, template)
+    else:
+        xs, ys = coarse_peaks(win, template, f, COARSE_PEAKS)
+        bx, by, best = ncc_climb(win, template, xs, ys, REFINE_PAD)
+    return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
