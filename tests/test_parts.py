@@ -182,3 +182,147 @@ def test_part_boxes_one_equals_part_boxes():
         box = rng.uniform(-50, 300, 4)
         a, b = rng.uniform(0.05, 0.95, 2)
         np.testing.assert_array_equal(part_boxes_one(box, a, b), part_boxes(box[None], a, b)[0])
+
+
+# --- the compiled extractor against a straightforward per-box reference -------------------
+
+def _reference(frame, fg, boxes, alpha, beta, bins, rows, cols, at_centroids=False):
+    """PartFeatures (and centroids) of each box, one box at a time, with the operations
+    (and the order of every floating sum) of the vectorised extractor the kernels replaced:
+    a sample grid, cv2.cvtColor of the foreground samples, np.bincount per part."""
+    from trackers.frontend.parts import HSV_RANGES, XYZ_RANGES, PartFeatures, _joint_index
+
+    H, W = frame.shape[:2]
+    fr, fc = (np.arange(rows) + 0.5) / rows, (np.arange(cols) + 0.5) / cols
+    nb = bins**3
+    feats, cents = [], []
+    for i, box in enumerate(np.asarray(boxes, dtype=np.float64)):
+        x, y, w, h = box
+        ys, xs = y + fr * h, x + fc * w
+        yi = np.clip(np.floor(ys), 0, H - 1).astype(int)
+        xi = np.clip(np.floor(xs), 0, W - 1).astype(int)
+        on = ((ys >= 0) & (ys < H))[:, None] & ((xs >= 0) & (xs < W))[None, :]
+        if fg is not None:
+            on &= fg[yi][:, xi]
+        if at_centroids:
+            n = on.sum()
+            c = (np.array([(on.sum(0) * xs).sum(), (on.sum(1) * ys).sum()]) / n if n
+                 else box[:2] + 0.5 * box[2:])
+            cents.append(c)
+            a, b = centroid_ratios(box[None], c[None])
+        else:
+            a = np.broadcast_to(alpha, len(boxes))[i:i + 1]
+            b = np.broadcast_to(beta, len(boxes))[i:i + 1]
+        p = part_boxes(box[None], a, b)[0]
+        band = np.where(ys < p[0, 1] + p[0, 3], 0, np.where(ys < p[1, 1] + p[1, 3], 1, 3))
+        right = (xs >= p[1, 0] + p[1, 2]).astype(int)
+        key = np.where(band[:, None] > 0, band[:, None] + right[None, :], 0)  # (R, C) part
+        pix = frame[yi][:, xi][on][None]  # foreground samples in row-major order
+        hsv_j = xyz_j = np.zeros(0, np.int64)
+        if pix.size:
+            hsv_j = _joint_index(cv2.cvtColor(pix, cv2.COLOR_BGR2HSV)[0], bins, HSV_RANGES)
+            xyz_j = _joint_index(cv2.cvtColor(pix, cv2.COLOR_BGR2XYZ)[0], bins, XYZ_RANGES)
+        k = key[on]
+        count = np.bincount(k, minlength=N_PARTS).astype(float)
+        norm = np.maximum(count, 1.0)[:, None]
+        hist_hsv = np.bincount(k * nb + hsv_j, minlength=N_PARTS * nb).reshape(N_PARTS, nb) / norm
+        hist_xyz = np.bincount(k * nb + xyz_j, minlength=N_PARTS * nb).reshape(N_PARTS, nb) / norm
+        sx = np.bincount(k, weights=np.broadcast_to(xs, on.shape)[on], minlength=N_PARTS)
+        sy = np.bincount(k, weights=np.broadcast_to(ys[:, None], on.shape)[on], minlength=N_PARTS)
+        interior = np.zeros_like(on)
+        interior[1:-1, 1:-1] = on[:-2, 1:-1] & on[2:, 1:-1] & on[1:-1, :-2] & on[1:-1, 2:]
+        edge = np.bincount(key[on & ~interior], minlength=N_PARTS)
+        samples = np.bincount(key.reshape(-1), minlength=N_PARTS)
+        band_rows = [(band == v).sum() for v in (0, 1, 1, 3, 3)]
+        side_cols = [cols, cols - right.sum(), right.sum(), cols - right.sum(), right.sum()]
+        half = np.add(band_rows, side_cols).astype(float)
+        centre = p[:, :2] + 0.5 * p[:, 2:]
+        centroid = np.where(count[:, None] > 0, np.column_stack([sx, sy]) / norm, centre)
+        feats.append(PartFeatures(p[None], (count / np.maximum(samples, 1.0))[None],
+                                  (edge / np.maximum(half, 1.0))[None], hist_hsv[None],
+                                  hist_xyz[None], centroid[None], box[3:4].copy()))
+    out = PartFeatures.concatenate(feats, bins)
+    return (np.array(cents).reshape(-1, 2), out) if at_centroids else out
+
+
+FIELDS = ("parts", "area", "perimeter", "hsv", "xyz", "centroid", "height")
+
+
+def _assert_same(got, ref):
+    for name in FIELDS:
+        a, b = getattr(got, name), getattr(ref, name)
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+def _scene(seed, fg_kind):
+    """A 90 x 120 noisy frame of flat-coloured people, its foreground (blobs with holes,
+    empty, or None) and 12 boxes, some partly or wholly outside the image."""
+    rng = np.random.default_rng(seed)
+    frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    fg = np.zeros((90, 120), bool)
+    for _ in range(4):
+        x, y = rng.integers(0, 100), rng.integers(0, 60)
+        w, h = rng.integers(8, 30), rng.integers(20, 60)
+        frame[y:y + h, x:x + w] = rng.integers(0, 256, 3)
+        fg[y:y + h, x:x + w] = True
+    frame = np.clip(frame + rng.integers(-12, 13, frame.shape), 0, 255).astype(np.uint8)
+    fg &= rng.random(fg.shape) < 0.9
+    fg = {"mask": fg, "empty": np.zeros_like(fg), "none": None}[fg_kind]
+    boxes = np.column_stack([rng.uniform(-40, 130, 12), rng.uniform(-50, 80, 12),
+                             rng.uniform(1, 60, 12), rng.uniform(1, 90, 12)])
+    boxes[0] = [50.3, 20.7, 0.0, 0.0]  # a degenerate box
+    return frame, fg, boxes, rng.uniform(0.05, 0.95, 12), rng.uniform(0.05, 0.95, 12)
+
+
+@pytest.mark.parametrize("fg_kind", ["mask", "empty", "none"])
+@pytest.mark.parametrize("bins, grid", [(4, (35, 15)), (4, (21, 9)), (8, (21, 9)), (2, (133, 3))])
+def test_extractor_equals_reference_bit_for_bit(fg_kind, bins, grid):
+    frame, fg, boxes, alpha, beta = _scene(bins * 100 + grid[0], fg_kind)
+    ex = PartFeatureExtractor(bins, *grid)
+    ex.start(frame, fg)
+    _assert_same(ex.extract(boxes, alpha, beta), _reference(frame, fg, boxes, alpha, beta, bins, *grid))
+    _assert_same(ex.extract(boxes, 0.3, DEFAULT_BETA),
+                 _reference(frame, fg, boxes, 0.3, DEFAULT_BETA, bins, *grid))
+    cents, feats = ex.extract_at_centroids(boxes)
+    ref_cents, ref = _reference(frame, fg, boxes, None, None, bins, *grid, at_centroids=True)
+    np.testing.assert_array_equal(cents, ref_cents)
+    np.testing.assert_array_equal(ex.centroids(boxes), ref_cents)
+    _assert_same(feats, ref)
+
+
+def test_colour_table_equals_cvtcolor():
+    # every entry is OpenCV's bin of its colour: all 2**24 colours, one conversion each
+    from trackers.frontend.parts import (
+        _SPREAD,
+        HSV_RANGES,
+        XYZ_RANGES,
+        _colour_shift,
+        _colour_table,
+        _joint_index,
+    )
+
+    v = np.arange(256)
+    bgr = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).astype(np.uint8).reshape(4096, 4096, 3)
+    morton = (_SPREAD[v][:, None, None] << 2 | _SPREAD[v][None, :, None] << 1
+              | _SPREAD[v][None, None, :]).reshape(-1)
+    hsv = _joint_index(cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV), 4, HSV_RANGES).reshape(-1)
+    xyz = _joint_index(cv2.cvtColor(bgr, cv2.COLOR_BGR2XYZ), 4, XYZ_RANGES).reshape(-1)
+    table = _colour_table(4)[morton].astype(np.int64)
+    np.testing.assert_array_equal(table & 255, hsv)
+    np.testing.assert_array_equal(table >> _colour_shift(4), xyz)
+
+
+def test_extractor_accepts_readonly_and_list_inputs():
+    frame, fg, boxes, alpha, beta = _scene(5, "mask")
+    ex = PartFeatureExtractor()
+    ex.start(frame, fg)
+    ref = ex.extract(boxes, alpha, beta)
+    frame.flags.writeable = False
+    boxes.flags.writeable = False
+    alpha.flags.writeable = False
+    ex.start(frame, fg.astype(np.uint8))
+    _assert_same(ex.extract(boxes.tolist(), alpha, list(beta)), ref)
+    assert ex.extract(np.zeros((0, 4))).hsv.shape == (0, N_PARTS, 64)
+    c, f = ex.extract_at_centroids(np.zeros((0, 4)))
+    assert c.shape == (0, 2) and len(f) == 0

@@ -31,11 +31,13 @@ Every array is float64; boxes are xywh, 0-based pixels.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
+from trackers.frontend import _part_kernels
 from trackers.geometry import iou_matrix
 
 PART_NAMES: tuple[str, ...] = (
@@ -206,21 +208,72 @@ def _joint_lut(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 HSV_RANGES = (180.0, 256.0, 256.0)
 """Channel ranges of OpenCV's 8-bit HSV (hue is 0..179)."""
 XYZ_RANGES = (256.0, 256.0, 256.0)
-_ONES_1x3 = np.ones((1, 3))
+_NO_MASK = np.zeros((1, 1), bool)
+_NO_CENTRES = np.zeros((0, 2))
+
+
+def _spread_bits() -> np.ndarray:
+    """(256,) int64: the 8 bits of v moved to every third bit (bit k to bit 3k)."""
+    v = np.arange(256, dtype=np.int64)
+    return sum(((v >> k) & 1) << (3 * k) for k in range(8))
+
+
+_SPREAD = _spread_bits()
+"""Morton (Z-order) index of a BGR triple: ``_SPREAD[b] << 2 | _SPREAD[g] << 1 | _SPREAD[r]``;
+nearby colours get nearby table entries, so the pixels of one person stay in cache."""
+
+
+def _colour_shift(bins: int) -> int:
+    """Bits of the joint HSV bin in a ``_colour_table`` entry: 8 up to 6 bins, else 16."""
+    return 8 if bins**3 <= 256 else 16
+
+
+@functools.lru_cache(maxsize=4)
+def _colour_table(bins: int) -> np.ndarray:
+    """(2**24,) joint colour bins of every BGR triple, at its Morton index (``_SPREAD``):
+    ``hsv + (xyz << _colour_shift(bins))`` where hsv and xyz are the ``_joint_index`` of
+    ``cv2.cvtColor(bgr, COLOR_BGR2HSV)`` and ``(..., COLOR_BGR2XYZ)``. uint16 up to 6 bins
+    (32 MiB), else uint32.
+
+    Made once per process and bin count with OpenCV itself (``cv2.cvtColor``, then the
+    ``cv2.LUT`` bins summed by ``cv2.transform``), so a lookup equals converting the
+    pixel; a constant shared by every extractor, built in about half a second.
+    """
+    shift = _colour_shift(bins)
+    dtype = np.uint16 if shift == 8 else np.uint32
+    luts = [(_joint_lut(bins, HSV_RANGES), cv2.COLOR_BGR2HSV, 0),
+            (_joint_lut(bins, XYZ_RANGES), cv2.COLOR_BGR2XYZ, shift)]
+    v = np.arange(256, dtype=np.uint8)
+    step = 16  # blue values per block: 16 x 256 x 256 pixels
+    block = np.empty((step, 256, 256, 3), np.uint8)
+    block[..., 1] = v[None, :, None]
+    block[..., 2] = v[None, None, :]
+    low = (_SPREAD[v][:, None] << 1 | _SPREAD[v][None, :]).reshape(-1)  # Morton (g, r) part
+    table = np.zeros(1 << 24, dtype)
+    for b0 in range(0, 256, step):
+        block[..., 0] = v[b0:b0 + step, None, None]
+        img = block.reshape(step * 256, 256, 3)
+        index = (_SPREAD[b0:b0 + step, None] << 2 | low[None, :]).reshape(-1)
+        for lut, code, bit in luts:
+            joint = cv2.transform(cv2.LUT(cv2.cvtColor(img, code), lut), np.ones((1, 3)))
+            table[index] |= joint.reshape(-1).astype(dtype) << dtype(bit)
+    table.flags.writeable = False
+    return table
 
 
 class PartFeatureExtractor:
-    """Part features of many boxes of one frame, vectorised over the boxes.
+    """Part features of many boxes of one frame (PBM 2.1-2.2), by compiled kernels.
 
     Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
-    pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour):
-    one gather (``np.take`` on flat pixel indices) for all boxes, one ``cv2.cvtColor`` to
-    HSV and one to XYZ for all samples, one ``cv2.LUT`` per colour space for the quantised
-    bins, one ``np.bincount`` per feature for all (box, part) pairs. Features are thus
-    scale-free by construction, and the 25 sizes of the head-anchored search (PBM 3.1)
-    cost one call. Outline (perimeter) samples are foreground samples with a background
-    4-neighbour on the grid (outside the box counts as background). Samples outside the
-    image count as background.
+    pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour).
+    One kernel call (``trackers.frontend._part_kernels``) walks the samples of every box
+    once: foreground test, part label, counts, centroid sums, outline test, and the joint
+    HSV and XYZ bins of each foreground sample, looked up in a per-process table that
+    ``cv2.cvtColor`` made for all 2**24 BGR colours (``_colour_table``), so the bins are
+    OpenCV's exactly (and every feature equals the earlier numpy version bit for bit). Features are thus scale-free by construction, and the 25 sizes of
+    the head-anchored search (PBM 3.1) cost one call. Outline (perimeter) samples are
+    foreground samples with a background 4-neighbour on the grid (outside the box counts
+    as background). Samples outside the image count as background.
 
     Usage: ``ex.start(frame, fg)`` once per frame, then ``ex.extract(boxes, alpha, beta)``
     (or ``ex.extract_at_centroids(boxes)``, which measures the centroids on the same grid).
@@ -241,12 +294,9 @@ class PartFeatureExtractor:
         self.grid_cols = grid_cols
         self._fr = (np.arange(grid_rows) + 0.5) / grid_rows
         self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
-        self._hsv_lut = _joint_lut(bins, HSV_RANGES)
-        self._xyz_lut = _joint_lut(bins, XYZ_RANGES)
+        self._table: np.ndarray | None = None  # _colour_table, fetched on first use
         self._frame: np.ndarray | None = None
-        self._pixels: np.ndarray | None = None  # (H * W, 3) view of the frame
-        self._fg: np.ndarray | None = None
-        self._fg_flat: np.ndarray | None = None
+        self._fg: np.ndarray | None = None  # (H, W) bool, C-contiguous
 
     def start(self, frame: np.ndarray, foreground: np.ndarray | None) -> None:
         """Set the frame ((H, W, 3) uint8 BGR) and foreground ((H, W) bool or None = all)."""
@@ -255,67 +305,59 @@ class PartFeatureExtractor:
         if foreground is not None and foreground.shape != frame.shape[:2]:
             raise ValueError(
                 f"foreground shape {foreground.shape} differs from frame {frame.shape[:2]}")
-        self._frame = frame
-        self._pixels = frame.reshape(-1, 3)
-        self._fg = None if foreground is None else np.asarray(foreground, dtype=bool)
-        self._fg_flat = None if self._fg is None else self._fg.reshape(-1)
+        self._frame = np.ascontiguousarray(frame)
+        self._fg = None if foreground is None else np.ascontiguousarray(foreground, dtype=bool)
 
-    def _grid(self, b: np.ndarray):
-        """Sample rows ys (N, R) and columns xs (N, C), flat pixel index (N, R, C) of each
-        sample (clipped into the image) and its foreground flag (N, R, C)."""
-        H, W = self._frame.shape[:2]
-        ys = b[:, 1, None] + self._fr[None] * b[:, 3, None]  # (N, R) sample rows
-        xs = b[:, 0, None] + self._fc[None] * b[:, 2, None]  # (N, C) sample columns
-        yi = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
-        xi = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
-        flat = (yi * W)[:, :, None] + xi[:, None, :]
-        row_in, col_in = (ys >= 0) & (ys < H), (xs >= 0) & (xs < W)
-        if self._fg_flat is not None and row_in.all() and col_in.all():
-            return ys, xs, flat, self._fg_flat.take(flat)  # every sample inside the image
-        inside = row_in[:, :, None] & col_in[:, None, :]
-        if self._fg_flat is None:
-            fg = inside
-        else:
-            fg = self._fg_flat.take(flat) & inside
-        return ys, xs, flat, fg
+    def _colours(self) -> tuple[np.ndarray, int]:
+        """The colour table (``_colour_table``, fetched on first use) and its shift."""
+        if self._table is None:
+            self._table = _colour_table(self.bins)
+        return self._table, _colour_shift(self.bins)
 
-    @staticmethod
-    def _centroids(b: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
-        n = fg.sum(axis=(1, 2)).astype(np.float64)
-        cx = (fg.sum(axis=1) * xs).sum(1)
-        cy = (fg.sum(axis=2) * ys).sum(1)
-        centre = b[:, :2] + 0.5 * b[:, 2:]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(n[:, None] > 0, np.column_stack([cx, cy]) / n[:, None], centre)
+    def _boxes(self, boxes: np.ndarray) -> np.ndarray:
+        """The boxes as a new (N, 4) float64 array, once ``start`` was called."""
+        if self._frame is None:
+            raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
+        return np.array(boxes, dtype=np.float64).reshape(-1, 4)
+
+    def _mask(self) -> tuple[np.ndarray, bool]:
+        """The foreground mask the kernels read and whether there is one (a 1 x 1
+        placeholder when not: every sample inside the image is then foreground)."""
+        return (self._fg, True) if self._fg is not None else (_NO_MASK, False)
 
     def centroids(self, boxes: np.ndarray) -> np.ndarray:
         """(N, 2) foreground centroid (xc, yc) of each xywh box from its sample grid (the
-        box centre where a box has no foreground)."""
-        if self._frame is None:
-            raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
-        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-        if len(b) == 0:
+        box centre where a box has no foreground; PBM 2.1)."""
+        b = self._boxes(boxes)
+        n = len(b)
+        if n == 0:
             return np.zeros((0, 2))
-        ys, xs, _, fg = self._grid(b)
-        return self._centroids(b, ys, xs, fg)
+        count = np.empty(n, np.int64)
+        cx, cy = np.empty((n, self.grid_cols)), np.empty((n, self.grid_rows))
+        H, W = self._frame.shape[:2]
+        _part_kernels.grid_centroid_terms(b, self._fr, self._fc, H, W, *self._mask(), count, cx, cy)
+        centre = b[:, :2] + 0.5 * b[:, 2:]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(count[:, None] > 0,
+                            np.column_stack([cx.sum(1), cy.sum(1)]) / count[:, None], centre)
 
     def extract_at_centroids(self, boxes: np.ndarray) -> tuple[np.ndarray, PartFeatures]:
         """Centroids of the boxes and their part features split at them (PBM 2.1): the
-        same as ``c = centroids(boxes); extract(boxes, *centroid_ratios(boxes, c))``
-        with one sample grid.
+        same as ``c = centroids(boxes); extract(boxes, *centroid_ratios(boxes, c))``, in
+        one pass over the samples.
 
         Returns:
             (N, 2) centroids and PartFeatures of N boxes.
         """
-        if self._frame is None:
-            raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
-        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-        if len(b) == 0:
+        b = self._boxes(boxes)
+        n = len(b)
+        if n == 0:
             return np.zeros((0, 2)), PartFeatures.concatenate([], self.bins)
-        grid = self._grid(b)
-        cents = self._centroids(b, grid[0], grid[1], grid[3])
-        alpha, beta = centroid_ratios(b, cents)
-        return cents, self._features(b, alpha, beta, grid)
+        if max(self.grid_rows, self.grid_cols) > _part_kernels.PAIRWISE_BLOCK:
+            cents = self.centroids(b)  # numpy sums the longer rows and columns
+            return cents, self.extract(b, *centroid_ratios(b, cents))
+        cents = np.empty((n, 2))
+        return cents, self._extract(b, np.empty(n), np.empty(n), cents)
 
     def extract(
         self,
@@ -330,80 +372,28 @@ class PartFeatureExtractor:
         Returns:
             PartFeatures of N boxes.
         """
-        if self._frame is None:
-            raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
-        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-        if len(b) == 0:
+        b = self._boxes(boxes)
+        n = len(b)
+        if n == 0:
             return PartFeatures.concatenate([], self.bins)
-        return self._features(b, alpha, beta, self._grid(b))
+        a, be = np.empty(n), np.empty(n)
+        a[:], be[:] = alpha, beta  # (N,) or scalar, as part_boxes broadcasts them
+        return self._extract(b, a, be, None)
 
-    @staticmethod
-    def _bins_of(pix: np.ndarray, code: int, lut: np.ndarray) -> np.ndarray:
-        """(M,) joint bin index of a (1, M, 3) uint8 BGR row converted by ``code``
-        (``cv2.cvtColor``): per-channel bins by ``cv2.LUT``, summed over the channels by
-        ``cv2.transform`` (exact integers)."""
-        if pix.size == 0:
-            return np.zeros(0, dtype=np.int64)
-        return cv2.transform(cv2.LUT(cv2.cvtColor(pix, code), lut), _ONES_1x3).reshape(-1)
-
-    def _features(self, b: np.ndarray, alpha, beta, grid) -> PartFeatures:
-        ys, xs, flat, fg = grid
-        n, C, P = len(b), self.grid_cols, N_PARTS
-        nb = self.bins**3
-        parts = part_boxes(b, alpha, beta)
-        # the M foreground samples as flat indices into (N, R, C), in row-major order (the
-        # order a boolean mask selects them in); every per-sample gather is a ``take``
-        idx = np.flatnonzero(fg)
-        # colour bins of the foreground samples only (the histograms count nothing else)
-        pix = self._pixels.take(flat.reshape(-1).take(idx), axis=0)[None]  # (1, M, 3) BGR: one image row
-        hsv_j = self._bins_of(pix, cv2.COLOR_BGR2HSV, self._hsv_lut)
-        xyz_j = self._bins_of(pix, cv2.COLOR_BGR2XYZ, self._xyz_lut)
-        # part label of every sample (PBM 2.1): head band, torso rows, leg rows; left/right of xc
-        head_end = parts[:, 0, 1] + parts[:, 0, 3]
-        torso_end = parts[:, 1, 1] + parts[:, 1, 3]
-        split = parts[:, 1, 0] + parts[:, 1, 2]
-        band = np.where(ys < head_end[:, None], 0, np.where(ys < torso_end[:, None], 1, 3))
-        side = (xs >= split[:, None]).astype(np.int64)
-        row_key = np.arange(n)[:, None] * P + band  # (N, R): box and band of each row
-        key = row_key[:, :, None] + (band > 0)[:, :, None] * side[:, None, :]  # (N, R, C) in 0..N*P
-        kf = key.reshape(-1).take(idx)
-        cnt = np.bincount(kf, minlength=n * P).astype(np.float64)
-        norm = np.maximum(cnt, 1.0)
-        kb = kf * nb
-        # joint histograms of each (box, part), normalised in place by its foreground count
-        h_hsv = np.bincount(kb + hsv_j, minlength=n * P * nb).astype(np.float64).reshape(n, P, nb)
-        h_hsv /= norm.reshape(n, P, 1)
-        h_xyz = np.bincount(kb + xyz_j, minlength=n * P * nb).astype(np.float64).reshape(n, P, nb)
-        h_xyz /= norm.reshape(n, P, 1)
-        nr = idx // C  # box * R + row of each foreground sample
-        X = xs.reshape(-1).take(nr // fg.shape[1] * C + (idx - nr * C))
-        Y = ys.reshape(-1).take(nr)
-        cx = np.bincount(kf, weights=X, minlength=n * P)
-        cy = np.bincount(kf, weights=Y, minlength=n * P)
-        # outline: foreground samples with a background 4-neighbour (outside = background)
-        # (samples on the grid border have an outside neighbour: never interior)
-        interior = np.zeros_like(fg)
-        interior[:, 1:-1, 1:-1] = fg[:, :-2, 1:-1] & fg[:, 2:, 1:-1] & fg[:, 1:-1, :-2] & fg[:, 1:-1, 2:]
-        edge = fg & ~interior
-        perim = np.bincount(key.reshape(-1).take(np.flatnonzero(edge)), minlength=n * P).astype(np.float64)
-        # samples of each part (rows in its band x columns on its side) and its half
-        # perimeter in samples (rows in its band + columns on its side)
-        rows_band = np.stack([(band == 0).sum(1), (band == 1).sum(1), (band == 3).sum(1)], axis=1)
-        cols_right = side.sum(1)
-        rows = rows_band[:, [0, 1, 1, 2, 2]]
-        cols = np.column_stack([np.full(n, C), C - cols_right, cols_right, C - cols_right, cols_right])
-        total = (rows * cols).astype(np.float64).reshape(-1)
-        half = (rows + cols).astype(np.float64)
-        cen = parts[:, :, :2] + 0.5 * parts[:, :, 2:]
-        has = (cnt > 0).reshape(n, P)
-        cen = np.where(has[:, :, None], np.stack([cx, cy], axis=1).reshape(n, P, 2)
-                       / norm.reshape(n, P, 1), cen)
-        return PartFeatures(
-            parts,
-            (cnt / np.maximum(total, 1.0)).reshape(n, P),
-            perim.reshape(n, P) / np.maximum(half, 1.0),
-            h_hsv,
-            h_xyz,
-            cen,
-            b[:, 3].copy(),
-        )
+    def _extract(self, b: np.ndarray, alpha: np.ndarray, beta: np.ndarray,
+                 centres: np.ndarray | None) -> PartFeatures:
+        """One ``part_features`` kernel call on (N, 4) boxes and (N,) ratios; with
+        ``centres`` (N, 2) the kernel measures the centroids there and the ratios in
+        ``alpha``, ``beta`` first (``extract_at_centroids``)."""
+        n, nb = len(b), self.bins**3
+        parts = np.empty((n, N_PARTS, 4))
+        area, perimeter = np.empty((n, N_PARTS)), np.empty((n, N_PARTS))
+        hsv, xyz = np.empty((n, N_PARTS, nb)), np.empty((n, N_PARTS, nb))
+        centroid = np.empty((n, N_PARTS, 2))
+        H, W = self._frame.shape[:2]
+        at_centroids = centres is not None
+        _part_kernels.part_features(
+            b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
+            self._fr, self._fc, self._frame, H, W, *self._mask(), *self._colours(), _SPREAD,
+            parts, area, perimeter, hsv, xyz, centroid)
+        return PartFeatures(parts, area, perimeter, hsv, xyz, centroid, b[:, 3].copy())

@@ -1,0 +1,259 @@
+"""Compiled kernels of ``PartFeatureExtractor`` (trackers.frontend.parts, PBM 2.1-2.2).
+
+A kernel call walks the sample grid of every box once and writes straight into the
+output arrays, with no (N, R, C) intermediates. The grid, the part split, the outline
+test and the order of every floating sum are those of the vectorised numpy version the
+kernels replaced, so the features are equal to it bit for bit:
+
+- sample row r of box i is ``ys = y + fr[r] * h`` (column: ``xs = x + fc[c] * w``), the
+  pixel under it ``clip(floor(ys), 0, H - 1)``; a sample outside the image is background;
+- the foreground centroid of a whole box sums ``count * coordinate`` per column (row) in
+  numpy's pairwise order (``_pairwise_sum``, as ``ndarray.sum``);
+- per-part centroid sums add the coordinates of the foreground samples one by one in
+  row-major order (as ``np.bincount(weights=...)``);
+- colour bins come from a table of the joint HSV and XYZ bins of every BGR triple made
+  with ``cv2.cvtColor`` itself (``trackers.frontend.parts._colour_table``).
+
+Kernels are compiled on first use and cached on disk (``cache=True``); none recurses
+(numba's cache mishandles recursive functions).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+HEAD_FRACTION = 1.0 / 7.0
+"""The head band of PBM 2.1 (``trackers.frontend.parts.HEAD_FRACTION``)."""
+
+
+@numba.njit(cache=True)
+def _sample_grid(
+    box: np.ndarray, fr: np.ndarray, fc: np.ndarray, H: int, W: int, fg: np.ndarray,
+    has_fg: bool, ys: np.ndarray, xs: np.ndarray, yi: np.ndarray, xi: np.ndarray, on: np.ndarray,
+) -> None:
+    """Sample rows ``ys`` (R,) and columns ``xs`` (C,) of one xywh box, the pixel row
+    ``yi`` / column ``xi`` under each (clipped into the image) and the foreground flag
+    ``on`` (R, C) uint8 of each sample in an H x W image (outside = background; without
+    a mask, ``has_fg`` false, every sample inside is foreground)."""
+    R, C = fr.shape[0], fc.shape[0]
+    for r in range(R):
+        ys[r] = box[1] + fr[r] * box[3]
+        yi[r] = int(min(max(math.floor(ys[r]), 0.0), H - 1.0))
+    for c in range(C):
+        xs[c] = box[0] + fc[c] * box[2]
+        xi[c] = int(min(max(math.floor(xs[c]), 0.0), W - 1.0))
+    for r in range(R):
+        row_in = ys[r] >= 0.0 and ys[r] < H
+        for c in range(C):
+            inside = row_in and xs[c] >= 0.0 and xs[c] < W
+            if inside and has_fg:
+                inside = fg[yi[r], xi[c]]
+            on[r, c] = inside
+
+
+PAIRWISE_BLOCK = 128
+"""numpy sums up to this many items with 8 running sums; ``_pairwise_sum`` covers them."""
+
+
+@numba.njit(cache=True)
+def _pairwise_sum(a: np.ndarray, n: int) -> float:
+    """Sum of ``a[:n]``, ``n <= PAIRWISE_BLOCK``, in numpy's order (``pairwise_sum`` of
+    numpy/_core/src/umath/loops_utils.h): a plain loop below 8 items, else 8 running
+    sums over whole blocks of 8, combined as a tree, then the rest added in turn."""
+    if n < 8:
+        s = 0.0
+        for i in range(n):
+            s += a[i]
+        return s
+    r0, r1, r2, r3, r4, r5, r6, r7 = a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]
+    whole = n - n % 8
+    for i in range(8, whole, 8):
+        r0 += a[i]
+        r1 += a[i + 1]
+        r2 += a[i + 2]
+        r3 += a[i + 3]
+        r4 += a[i + 4]
+        r5 += a[i + 5]
+        r6 += a[i + 6]
+        r7 += a[i + 7]
+    s = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    for i in range(whole, n):
+        s += a[i]
+    return s
+
+
+@numba.njit(cache=True)
+def grid_centroid_terms(
+    boxes: np.ndarray, fr: np.ndarray, fc: np.ndarray, H: int, W: int, fg: np.ndarray,
+    has_fg: bool, count: np.ndarray, col_terms: np.ndarray, row_terms: np.ndarray,
+) -> None:
+    """Terms of the foreground centroid of each (N, 4) xywh box on its sample grid (PBM
+    2.1): ``count`` (N,) foreground samples, ``col_terms`` (N, C) foreground samples of a
+    column times its x, ``row_terms`` (N, R) those of a row times its y. The centroid is
+    ``(col_terms.sum(1), row_terms.sum(1)) / count``, summed by numpy (pairwise order).
+
+    ``fg`` is the (H, W) bool mask of the H x W frame (any placeholder when ``has_fg`` is
+    false).
+    """
+    R, C = fr.shape[0], fc.shape[0]
+    ys, xs = np.empty(R), np.empty(C)
+    yi, xi = np.empty(R, np.int64), np.empty(C, np.int64)
+    on = np.empty((R, C), np.uint8)
+    for i in range(boxes.shape[0]):
+        _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
+        n = 0
+        col_terms[i, :] = 0.0
+        for r in range(R):
+            k = 0
+            for c in range(C):
+                if on[r, c]:
+                    k += 1
+                    col_terms[i, c] += 1.0
+            n += k
+            row_terms[i, r] = k * ys[r]
+        for c in range(C):
+            col_terms[i, c] *= xs[c]
+        count[i] = n
+
+
+@numba.njit(cache=True)
+def part_features(
+    boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_centroids: bool,
+    centres: np.ndarray, fr: np.ndarray, fc: np.ndarray,
+    frame: np.ndarray, H: int, W: int, fg: np.ndarray, has_fg: bool,
+    colour_table: np.ndarray, shift: int, spread: np.ndarray,
+    parts: np.ndarray, area: np.ndarray, perimeter: np.ndarray, hsv: np.ndarray,
+    xyz: np.ndarray, centroid: np.ndarray,
+) -> None:
+    """Part rectangles and features of the five parts of each box (PBM 2.1-2.2).
+
+    Args:
+        boxes: (N, 4) xywh. alpha, beta: (N,) centroid ratios (eqs. 1-2); out when
+            ``at_centroids``: the ratios (``centroid_ratios``) of the foreground centroids,
+            written to ``centres`` (N, 2) (as ``PartFeatureExtractor.centroids``; needs
+            R, C <= PAIRWISE_BLOCK).
+        fr, fc: (R,), (C,) sample positions in [0, 1] along the height and width.
+        frame: (H, W, 3) uint8 BGR. fg: (H, W) bool mask (any placeholder if not ``has_fg``).
+        colour_table: (2**24,) joint HSV bin + (joint XYZ bin << shift) of every BGR
+            triple, at its Morton index ``spread[b] << 2 | spread[g] << 1 | spread[r]``.
+        parts: (N, 5, 4) out: ``part_boxes(boxes, alpha, beta)``, the same float operations.
+        area, perimeter: (N, 5) out. hsv, xyz: (N, 5, B) out. centroid: (N, 5, 2) out.
+
+    Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
+    centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
+    sample is on the outline when a 4-neighbour is background or off the grid.
+    """
+    R, C = fr.shape[0], fc.shape[0]
+    nb = hsv.shape[2]
+    ys, xs = np.empty(R), np.empty(C)
+    yi, xi = np.empty(R, np.int64), np.empty(C, np.int64)
+    on = np.empty((R, C), np.uint8)
+    hsv_bin, xyz_bin = np.empty((R, C), np.int64), np.empty((R, C), np.int64)
+    col_terms, row_terms = np.empty(C), np.empty(R)
+    mask = (1 << shift) - 1
+    band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
+    right = np.empty(C, np.int64)  # 1 if the column is right of the split
+    count, edge = np.zeros(5, np.int64), np.zeros(5, np.int64)
+    sx, sy = np.zeros(5), np.zeros(5)
+    count_hsv, count_xyz = np.zeros((5, nb), np.int64), np.zeros((5, nb), np.int64)
+    for i in range(boxes.shape[0]):
+        x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
+        _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
+        if at_centroids:  # centroids (np.where(n > 0, sums / n, centre)) and their ratios
+            n_fg = 0
+            col_terms[:] = 0.0
+            for r in range(R):
+                k = 0
+                for c in range(C):
+                    k += on[r, c]
+                    col_terms[c] += on[r, c]
+                n_fg += k
+                row_terms[r] = k * ys[r]
+            for c in range(C):
+                col_terms[c] *= xs[c]
+            if n_fg > 0:
+                cx, cy = _pairwise_sum(col_terms, C) / n_fg, _pairwise_sum(row_terms, R) / n_fg
+            else:
+                cx, cy = x + 0.5 * w, y + 0.5 * h
+            centres[i, 0], centres[i, 1] = cx, cy
+            w_pos, h_pos = max(w, 1e-9), max(h, 1e-9)
+            alpha[i] = min(max((cx - x) / w_pos, 0.05), 0.95)
+            beta[i] = min(max((cy - y - HEAD_FRACTION * h_pos) / (h_pos - HEAD_FRACTION * h_pos),
+                              0.05), 0.95)
+        # the five rectangles (part_boxes): split at the centroid (xsplit, ysplit), eqs. 1-2
+        hh = HEAD_FRACTION * h
+        xsplit = x + alpha[i] * w
+        ysplit = y + hh + beta[i] * (h - hh)
+        top, left_w, right_w = y + hh, xsplit - x, x + w - xsplit
+        torso_h, leg_h = ysplit - y - hh, y + h - ysplit
+        p = parts[i]
+        p[0, 0], p[0, 1], p[0, 2], p[0, 3] = x, y, w, hh
+        p[1, 0], p[1, 1], p[1, 2], p[1, 3] = x, top, left_w, torso_h
+        p[2, 0], p[2, 1], p[2, 2], p[2, 3] = xsplit, top, right_w, torso_h
+        p[3, 0], p[3, 1], p[3, 2], p[3, 3] = x, ysplit, left_w, leg_h
+        p[4, 0], p[4, 1], p[4, 2], p[4, 3] = xsplit, ysplit, right_w, leg_h
+        head_end, torso_end, split = y + hh, top + torso_h, x + left_w
+        rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
+        for r in range(R):
+            if ys[r] < head_end:
+                band[r] = 0
+                rows_head += 1
+            elif ys[r] < torso_end:
+                band[r] = 1
+                rows_torso += 1
+            else:
+                band[r] = 3
+                rows_legs += 1
+        for c in range(C):
+            right[c] = 1 if xs[c] >= split else 0
+            cols_right += right[c]
+        count[:] = 0
+        edge[:] = 0
+        count_hsv[:] = 0
+        count_xyz[:] = 0
+        sx[:] = 0.0
+        sy[:] = 0.0
+        # joint colour bins of every sample first, without branches, so that the frame
+        # and table loads of many samples overlap
+        for r in range(R):
+            row = frame[yi[r]]
+            for c in range(C):
+                px = xi[c]
+                both = colour_table[(spread[row[px, 0]] << 2) | (spread[row[px, 1]] << 1)
+                                    | spread[row[px, 2]]]
+                hsv_bin[r, c] = both & mask
+                xyz_bin[r, c] = both >> shift
+        for r in range(R):
+            for c in range(C):
+                if not on[r, c]:
+                    continue
+                k = band[r] + right[c] if band[r] > 0 else 0
+                count[k] += 1
+                sx[k] += xs[c]  # in sample order, as np.bincount(weights=...)
+                sy[k] += ys[r]
+                count_hsv[k, hsv_bin[r, c]] += 1
+                count_xyz[k, xyz_bin[r, c]] += 1
+                if (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
+                        or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1]):
+                    edge[k] += 1
+        # samples of each part (rows of its band x columns of its side) and its half
+        # perimeter in samples (rows + columns); histograms normalised by the count
+        for j in range(5):
+            rows = rows_head if j == 0 else (rows_torso if j < 3 else rows_legs)
+            cols = C if j == 0 else (C - cols_right if j % 2 == 1 else cols_right)
+            n = float(count[j])
+            area[i, j] = n / max(float(rows * cols), 1.0)
+            perimeter[i, j] = edge[j] / max(float(rows + cols), 1.0)
+            norm = max(n, 1.0)
+            for b in range(nb):
+                hsv[i, j, b] = count_hsv[j, b] / norm
+                xyz[i, j, b] = count_xyz[j, b] / norm
+            if n > 0:
+                centroid[i, j, 0] = sx[j] / n
+                centroid[i, j, 1] = sy[j] / n
+            else:
+                centroid[i, j, 0] = p[j, 0] + 0.5 * p[j, 2]
+                centroid[i, j, 1] = p[j, 1] + 0.5 * p[j, 3]
