@@ -509,3 +509,51 @@ def test_bool_and_label_foreground_give_the_same_tracks():
         ta = a.update(img, det, lab)
         tb = b.update(img, det, np.asfortranarray(lab != 0))
         assert [(t.id, tuple(t.box), t.state) for t in ta] == [(t.id, tuple(t.box), t.state) for t in tb]
+
+
+def test_update_parts_equals_the_numpy_running_averages():
+    from trackers.frontend.parts import part_boxes
+    from trackers.layered.model import update_parts
+
+    rng = np.random.default_rng(11)
+    ex = PartFeatureExtractor()
+    ex.start(rng.integers(0, 255, (120, 160, 3), dtype=np.uint8), rng.random((120, 160)) < 0.6)
+    boxes = np.column_stack([rng.uniform(-10, 120, 9), rng.uniform(-10, 60, 9), rng.uniform(8, 40, 9),
+                             rng.uniform(20, 80, 9)])
+    model, cand = ex.extract(boxes[:6], 0.5, 0.4), ex.extract(boxes, 0.45, 0.5)
+    rows, ks = np.array([4, 0, 2]), np.array([8, 1, 3])
+    pj = rng.random((3, 5))
+    shift, new_boxes = rng.normal(0, 3, (3, 2)), boxes[[2, 5, 7]] + 1.5
+    alpha, beta = rng.uniform(0.2, 0.8, 3), rng.uniform(0.2, 0.8, 3)
+    ref = model.copy()
+    matched = pj >= 0.4
+    eta = np.where(matched, 0.3 * pj, 0.0)
+    for name in ("area", "perimeter", "hsv", "xyz"):
+        m, c = getattr(ref, name), getattr(cand, name)
+        e = eta if m.ndim == 2 else eta[:, :, None]
+        m[rows] += e * (c[ks] - m[rows])
+    ref.centroid[rows] = np.where(matched[:, :, None], cand.centroid[ks], ref.centroid[rows] + shift[:, None])
+    ref.parts[rows] = part_boxes(new_boxes, alpha, beta)
+    ref.height[rows] = new_boxes[:, 3]
+    update_parts(model, rows, cand, ks, pj, 0.4, 0.3, shift, new_boxes, alpha, beta)
+    for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid", "height"):
+        np.testing.assert_array_equal(getattr(model, name), getattr(ref, name), err_msg=name)
+    assert (matched.any() and (~matched).any())  # both branches ran
+
+
+def test_occluded_update_averages_the_window_and_keeps_the_ratios():
+    gate = Gate(3.0, 0.5, 2.0, 1.15, 4.0)
+    tg = Targets(gate, (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
+    ex = PartFeatureExtractor()
+    ex.start(np.zeros((200, 300, 3), np.uint8), None)
+    dofs = [np.array([10.0 + 3 * k, 5, 30.0 + 3 * k, 60, 40, 120]) for k in range(4)]
+    dofs[3][2] += 10.0  # alpha 0.75 if it were measured
+    tg.add(1, dofs[0], 0.5, 0.5, ex.extract(np.array([[10, 5, 40, 120]])), None)
+    for d in dofs[1:3]:
+        tg.predict()
+        tg.update([0], [d], [True], [False], np.ones((1, 5)), 0.4)
+    alpha = tg.alpha[0]
+    tg.predict()
+    tg.update([0], [dofs[3]], [True], [True], np.ones((1, 5)), 0.4)
+    np.testing.assert_allclose(tg.dof[0], np.mean(dofs[1:], axis=0))  # window of 3 (PBM 4.2)
+    assert tg.alpha[0] == alpha and tg.occluded[0] and tg.hits[0] == 4

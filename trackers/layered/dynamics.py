@@ -2,9 +2,9 @@
 targets at once (one row per target).
 
 Both are 2-D constant-velocity filters (state = two values and their rates, measurement =
-the two values), written out in plain numpy over the rows: the tracker runs two per target
-per frame, and one vectorised step for all targets costs less than filterpy's (or any)
-per-target call.
+the two values), written out element by element in small compiled loops over the rows:
+the tracker runs two per target per frame, and one step for all targets costs less than
+filterpy's (or any) per-target call.
 
 KF1 (eq. 7): Z1 = (xc, yc), X1 = (xc, yc, xc', yc'). Its velocity estimate only sets the
 gate's size; the gate is centred on the target's last validated position (zero-order
@@ -18,8 +18,10 @@ test (PBM 3.1) and as the centre of the head-anchored size search (eqs. 9-10).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 
@@ -34,7 +36,7 @@ class ConstantVelocity2D:
     predict x = F x, P = F P F' + Q; update y = z - H x, S = H P H' + R, K = P H' S^-1,
     x += K y, P = (I - K H) P. With diagonal P0, Q and R the two axes never couple, so P
     is kept as one 2 x 2 block per axis, ``p[:, axis] = (P[a, a], P[a, a'], P[a', a],
-    P[a', a'])``, and the arithmetic is written out element-wise. Every sum is grouped as
+    P[a', a'])``, and the arithmetic is written out element-wise (small numba kernels). Every sum is grouped as
     the 4 x 4 matrix products group it (their other terms are exact zeros), so ``x`` and
     ``P`` equal the matrix form bit for bit (tests/test_pbm.py checks this, and agreement
     with filterpy's KalmanFilter).
@@ -83,29 +85,45 @@ class ConstantVelocity2D:
 
     def predict(self) -> None:
         """x = F x; P = F P F' + Q, for every filter."""
-        x, p = self.x, self.p
-        x[:, :2] += x[:, 2:]
-        A, B, C, D = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-        BD = B + D
-        p[..., 0] = (A + C) + BD + self.qp[:, None]
-        p[..., 2] = C + D
-        p[..., 1] = BD
-        p[..., 3] = D + self.qv[:, None]
+        _predict_kernel(self.x, self.p, self.qp, self.qv)
 
     def update(self, rows: np.ndarray, z: np.ndarray) -> None:
         """y = z - H x; S = H P H' + R; K = P H' S^-1; x += K y; P = (I - K H) P, for the
         filters at ``rows`` (unique) with measurements z (M, 2)."""
-        x, p = self.x[rows], self.p[rows]
-        y = np.asarray(z, dtype=np.float64) - x[:, :2]
-        s = p[..., 0] + self.r[rows][:, None]  # (M, 2): S is diagonal
-        det = s[:, 0] * s[:, 1]
-        inv = s[:, ::-1] / det[:, None]  # axis 0: s1 / det, axis 1: s0 / det
-        A, B, C, D = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-        kp, kv = A * inv, C * inv
-        x[:, :2] += kp * y
-        x[:, 2:] += kv * y
-        self.x[rows] = x
-        self.p[rows] = np.stack([A - kp * A, B - kp * B, C - kv * A, D - kv * B], axis=-1)
+        _update_kernel(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
+                       np.asarray(z, dtype=np.float64))
+
+
+@numba.njit(cache=True)
+def _predict_kernel(x, p, qp, qv):  # pragma: no cover (compiled)
+    """``ConstantVelocity2D.predict`` on every row, per axis i (block A, B, C, D):
+    x_i += x_i'; A = ((A + C) + (B + D)) + q_p; B = B + D; C = C + D; D = D + q_v."""
+    for n in range(x.shape[0]):
+        for i in range(2):
+            x[n, i] = x[n, i] + x[n, i + 2]
+            A, B, C, D = p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3]
+            p[n, i, 0] = (A + C) + (B + D) + qp[n]
+            p[n, i, 1] = B + D
+            p[n, i, 2] = C + D
+            p[n, i, 3] = D + qv[n]
+
+
+@numba.njit(cache=True)
+def _update_kernel(x, p, r, rows, z):  # pragma: no cover (compiled)
+    """``ConstantVelocity2D.update`` of ``rows``: S = diag(A_0 + r, A_1 + r); per axis i,
+    y = z_i - x_i, K = (A, C) S_other / det S; x += K y; (A, B, C, D) -= K (A, B)."""
+    for q in range(rows.shape[0]):
+        n = rows[q]
+        s0, s1 = p[n, 0, 0] + r[n], p[n, 1, 0] + r[n]
+        det = s0 * s1
+        for i in range(2):
+            inv = s1 / det if i == 0 else s0 / det
+            y = z[q, i] - x[n, i]
+            A, B, C, D = p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3]
+            kp, kv = A * inv, C * inv
+            x[n, i] += kp * y
+            x[n, i + 2] += kv * y
+            p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3] = A - kp * A, B - kp * B, C - kv * A, D - kv * B
 
 
 @dataclass(frozen=True)
@@ -127,17 +145,28 @@ class Gate:
     def half_sizes(self, rates: np.ndarray, size_wh: np.ndarray, misses: np.ndarray) -> np.ndarray:
         """(T, 2) gate half-width and half-height of targets with KF1 rates (T, 2), size
         (w, h) (T, 2) and ``misses`` (T,) frames unfound."""
-        sp = self.speed_factor * np.hypot(rates[:, 0], rates[:, 1])
-        w, h = size_wh[:, 0], size_wh[:, 1]
-        half = np.column_stack([sp + self.min_fraction * w, sp + self.min_fraction * h])
-        misses = np.asarray(misses)
-        grown = half * self.miss_factor * (self.growth ** (misses - 1.0))[:, None]
-        half = np.where((misses > 0)[:, None], grown, half)
-        cap = self.max_fraction * np.maximum(size_wh, 1.0)
-        return np.minimum(half, cap)
+        half = np.empty((len(size_wh), 2))
+        _half_kernel(np.asarray(rates, dtype=np.float64), np.asarray(size_wh, dtype=np.float64),
+                     np.asarray(misses, dtype=np.int64), self.speed_factor, self.min_fraction,
+                     self.miss_factor, self.growth, self.max_fraction, half)
+        return half
 
     def boxes(self, centres: np.ndarray, rates: np.ndarray, size_wh: np.ndarray,
               misses: np.ndarray) -> np.ndarray:
         """(T, 4) xywh gates centred on ``centres`` (T, 2)."""
         half = self.half_sizes(rates, size_wh, misses)
         return np.column_stack([centres - half, 2 * half])
+
+
+@numba.njit(cache=True)
+def _half_kernel(rates, size_wh, misses, speed_factor, min_fraction, miss_factor, growth,
+                 max_fraction, half):  # pragma: no cover (compiled)
+    """``Gate.half_sizes``: per row and axis, h = speed_factor |v| + min_fraction size;
+    after m > 0 misses h = h miss_factor growth^(m - 1); h = min(h, max_fraction max(size, 1))."""
+    for n in range(size_wh.shape[0]):
+        sp = speed_factor * math.hypot(rates[n, 0], rates[n, 1])
+        for i in range(2):
+            h = sp + min_fraction * size_wh[n, i]
+            if misses[n] > 0:
+                h = h * miss_factor * growth ** (misses[n] - 1.0)
+            half[n, i] = min(h, max_fraction * max(size_wh[n, i], 1.0))

@@ -15,13 +15,13 @@ Update (PBM 4.2):
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from trackers.frontend.parts import (
     HEAD_FRACTION,
     N_PARTS,
     PartFeatures,
-    part_boxes,
 )
 from trackers.layered.dynamics import ConstantVelocity2D, Gate
 
@@ -180,55 +180,70 @@ class Targets:
         Returns:
             (M, 2) shift of the centroid (xc, yc), which frozen parts' centroids follow.
         """
-        rows = np.asarray(rows, dtype=np.intp)
+        rows = np.asarray(rows, dtype=np.int64)
         occluded = np.asarray(occluded, dtype=bool)
-        old_centre = self.dof[rows, 2:4]
-        dof = np.array(dof, dtype=np.float64).reshape(-1, 6)
-        hist, n_hist = _push(self._history, self._n_history, rows, dof)
-        if occluded.any():
-            dof[occluded] = _window_mean(hist[occluded], n_hist[occluded])
-        self.dof[rows] = dof
-        measured = ~occluded & np.asarray(centroid_measured, dtype=bool)
-        if measured.any():  # eqs. 1-2 (as ``centroid_ratios``)
-            x, y, xc, yc, w, h = dof[measured].T
-            hh = HEAD_FRACTION * h
-            a = np.minimum(np.maximum((xc - x) / np.maximum(w, 1e-9), 0.05), 0.95)
-            b = np.minimum(np.maximum((yc - y - hh) / np.maximum(h - hh, 1e-9), 0.05), 0.95)
-            m = rows[measured]
-            ratios, n = _push(self._ratios, self._n_ratios, m, np.column_stack([a, b]))
-            mean = _window_mean(ratios, n)
-            self.alpha[m], self.beta[m] = mean[:, 0], mean[:, 1]
+        part_scores = np.asarray(part_scores, dtype=np.float64)
+        shift = np.empty((len(rows), 2))
+        _global_update_kernel(self.dof, self._history, self._n_history, self._ratios,
+                              self._n_ratios, self.alpha, self.beta, rows,
+                              np.asarray(dof, dtype=np.float64).reshape(-1, 6),
+                              np.asarray(centroid_measured, dtype=bool), occluded, shift)
+        dof = self.dof[rows]
         self.kf1.update(rows, dof[:, 2:4])
         self.kf2.update(rows, dof[:, [5, 4]])
         self.part_scores[rows] = part_scores
-        self.occluded_parts[rows] = ~(np.asarray(part_scores) >= part_match_threshold)
+        self.occluded_parts[rows] = ~(part_scores >= part_match_threshold)
         self.occluded[rows] = occluded
         self.hits[rows] += 1
         self.misses[rows] = 0
-        return dof[:, 2:4] - old_centre
+        return shift
 
 
-def _push(window: np.ndarray, count: np.ndarray, rows: np.ndarray, values: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """Append ``values`` (M, K) as the newest entries of the windows (T, L, K) at ``rows``
-    (in place, with their counts (T,)); returns those windows and counts."""
-    w = window[rows]  # a copy (fancy indexing)
-    w[:, :-1] = w[:, 1:]  # numpy buffers overlapping copies
-    w[:, -1] = values
-    n = np.minimum(count[rows] + 1, window.shape[1])
-    window[rows] = w
-    count[rows] = n
-    return w, n
+@numba.njit(cache=True)
+def _push(window, count, n, values):  # pragma: no cover (compiled)
+    """Append ``values`` (K,) as the newest entry of window n of ``window`` (T, L, K) and
+    return the mean of its newest ``count[n]`` entries, summed oldest first from 0 (as
+    ``sum`` over a list of them)."""
+    L, K = window.shape[1], window.shape[2]
+    for j in range(L - 1):
+        for k in range(K):
+            window[n, j, k] = window[n, j + 1, k]
+    for k in range(K):
+        window[n, L - 1, k] = values[k]
+    c = min(count[n] + 1, L)
+    count[n] = c
+    mean = np.empty(K)
+    for k in range(K):
+        total = 0.0
+        for j in range(L - c, L):
+            total += window[n, j, k]
+        mean[k] = total / c
+    return mean
 
 
-def _window_mean(window: np.ndarray, count: np.ndarray) -> np.ndarray:
-    """(M, K) mean of the newest ``count`` (M,) entries of each window (M, L, K), summed
-    oldest first, as ``sum`` of a list of the entries."""
-    L = window.shape[1]
-    total = np.zeros(window.shape[::2])
-    for j in range(L):
-        total = np.where((j >= L - count)[:, None], total + window[:, j], total)
-    return total / count[:, None]
+@numba.njit(cache=True)
+def _global_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, beta, rows, dof,
+                          measured, occluded, shift):  # pragma: no cover (compiled)
+    """``Targets.update`` of the global models (PBM 4.2) and the centroid ratios (eqs. 1-2):
+    per row, the DOF enters the occlusion window; an occluded row takes the window's mean;
+    an unoccluded row with a measured centroid pushes its clipped alpha, beta into the ratio
+    window, whose mean becomes the target's alpha, beta. ``shift`` gets the centroid moves."""
+    for q in range(rows.shape[0]):
+        n = rows[q]
+        x0, y0 = dof_all[n, 2], dof_all[n, 3]
+        mean = _push(history, n_history, n, dof[q])
+        new = mean if occluded[q] else dof[q]
+        for k in range(6):
+            dof_all[n, k] = new[k]
+        if measured[q] and not occluded[q]:
+            x, y, xc, yc, w, h = new[0], new[1], new[2], new[3], new[4], new[5]
+            hh = HEAD_FRACTION * h
+            a = min(max((xc - x) / max(w, 1e-9), 0.05), 0.95)
+            b = min(max((yc - y - hh) / max(h - hh, 1e-9), 0.05), 0.95)
+            ab = _push(ratios, n_ratios, n, np.array([a, b]))
+            alpha[n], beta[n] = ab[0], ab[1]
+        shift[q, 0] = dof_all[n, 2] - x0
+        shift[q, 1] = dof_all[n, 3] - y0
 
 
 def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
@@ -248,13 +263,50 @@ def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: 
         part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Target.update``).
         boxes: (M, 4) xywh, alpha, beta: (M,) the updated global models.
     """
-    matched = part_scores >= part_match_threshold
-    eta = np.where(matched, update_rate * part_scores, 0.0)
-    model.area[rows] += eta * (cand.area[ks] - model.area[rows])
-    model.perimeter[rows] += eta * (cand.perimeter[ks] - model.perimeter[rows])
-    model.hsv[rows] += eta[:, :, None] * (cand.hsv[ks] - model.hsv[rows])
-    model.xyz[rows] += eta[:, :, None] * (cand.xyz[ks] - model.xyz[rows])
-    model.centroid[rows] = np.where(matched[:, :, None], cand.centroid[ks],
-                                    model.centroid[rows] + shift[:, None, :])
-    model.parts[rows] = part_boxes(boxes, alpha, beta)
-    model.height[rows] = boxes[:, 3]
+    _update_parts_kernel(model.parts, model.area, model.perimeter, model.hsv, model.xyz,
+                         model.centroid, model.height, np.asarray(rows, dtype=np.int64),
+                         cand.area, cand.perimeter, cand.hsv, cand.xyz, cand.centroid,
+                         np.asarray(ks, dtype=np.int64), np.asarray(part_scores, dtype=np.float64),
+                         float(part_match_threshold), float(update_rate),
+                         np.asarray(shift, dtype=np.float64), np.asarray(boxes, dtype=np.float64),
+                         np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64))
+
+
+@numba.njit(cache=True)
+def _update_parts_kernel(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height, rows,
+                         c_area, c_perimeter, c_hsv, c_xyz, c_centroid, ks, part_scores,
+                         threshold, rate, shift, boxes, alpha, beta):  # pragma: no cover (compiled)
+    """``update_parts`` in one loop; each value is computed by the same operations, in the
+    same order, as the numpy expressions
+
+        eta = where(p >= threshold, rate * p, 0); m += eta * (c - m)   (area, perimeter, hsv, xyz)
+        centroid = where(p >= threshold, c_centroid, m_centroid + shift)
+        parts = part_boxes(boxes, alpha, beta); height = boxes[:, 3]
+    """
+    nb = m_hsv.shape[2]
+    for q in range(rows.shape[0]):
+        r, k = rows[q], ks[q]
+        for j in range(m_area.shape[1]):
+            p = part_scores[q, j]
+            matched = p >= threshold
+            eta = rate * p if matched else 0.0
+            m_area[r, j] += eta * (c_area[k, j] - m_area[r, j])
+            m_perimeter[r, j] += eta * (c_perimeter[k, j] - m_perimeter[r, j])
+            for u in range(nb):
+                m_hsv[r, j, u] += eta * (c_hsv[k, j, u] - m_hsv[r, j, u])
+                m_xyz[r, j, u] += eta * (c_xyz[k, j, u] - m_xyz[r, j, u])
+            for a in range(2):
+                m_centroid[r, j, a] = c_centroid[k, j, a] if matched else m_centroid[r, j, a] + shift[q, a]
+        # part_boxes (PBM 2.1), operation for operation
+        x, y, w, h = boxes[q, 0], boxes[q, 1], boxes[q, 2], boxes[q, 3]
+        hh = HEAD_FRACTION * h
+        xs = x + alpha[q] * w
+        ys = y + hh + beta[q] * (h - hh)
+        top, left_w, right_w = y + hh, xs - x, x + w - xs
+        torso_h, leg_h = ys - y - hh, y + h - ys
+        rect = ((x, y, w, hh), (x, top, left_w, torso_h), (xs, top, right_w, torso_h),
+                (x, ys, left_w, leg_h), (xs, ys, right_w, leg_h))
+        for j in range(5):
+            for a in range(4):
+                m_parts[r, j, a] = rect[j][a]
+        m_height[r] = h
