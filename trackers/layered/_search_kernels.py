@@ -314,3 +314,243 @@ def ncc_all(win: np.ndarray, tpl: np.ndarray) -> tuple[int, int, float]:
             if score[y, x] > best:
                 bx, by, best = x, y, score[y, x]
     return bx, by, best
+
+
+@numba.njit(cache=True)
+def profile_peaks(mask: np.ndarray, min_separation: float, min_prominence: float) -> np.ndarray:
+    """``search.top_profile_heads`` compiled: (K, 2) float64 (column centre, top row) of
+    the peaks of a bool blob crop's top profile, highest first (PBM 3.1 heads)."""
+    h, w = mask.shape
+    top = np.full(w, np.float64(h))
+    left_to_find = w
+    for r in range(h):  # the first foreground row of each column
+        if left_to_find == 0:
+            break
+        row = mask[r]
+        for c in range(w):
+            if row[c] and top[c] == h:
+                top[c] = r
+                left_to_find -= 1
+    if left_to_find == w:
+        return np.zeros((0, 2))
+    rad = max(int(min_separation // 2), 1)
+    span = int(2 * min_separation)
+    # plateau runs of columns equal to the running minimum over 2 rad + 1 columns (edges
+    # replicated) and holding foreground; a run's columns share one top row
+    cand = np.empty((w, 2))
+    nc = 0
+    c = 0
+    while c < w:
+        if top[c] == h or top[c] != np.min(top[max(c - rad, 0):min(c + rad + 1, w)]):
+            c += 1
+            continue
+        g0 = c
+        g1 = c
+        while (g1 + 1 < w and top[g1 + 1] != h
+               and top[g1 + 1] == np.min(top[max(g1 + 1 - rad, 0):min(g1 + rad + 2, w)])):
+            g1 += 1
+        t = top[g0]
+        ok_left = g0 - span <= 0
+        if not ok_left and g0 > max(g0 - span, 0):
+            ok_left = np.max(top[max(g0 - span, 0):g0]) - t >= min_prominence
+        ok_right = g1 + span >= w - 1
+        if not ok_right and min(g1 + span + 1, w) > g1 + 1:
+            ok_right = np.max(top[g1 + 1:min(g1 + span + 1, w)]) - t >= min_prominence
+        if ok_left and ok_right:
+            # insertion by top row, stable: the highest first, column order on ties
+            j = nc
+            while j > 0 and cand[j - 1, 1] > t:
+                cand[j, 0], cand[j, 1] = cand[j - 1, 0], cand[j - 1, 1]
+                j -= 1
+            cand[j, 0], cand[j, 1] = 0.5 * (g0 + g1), t
+            nc += 1
+        c = g1 + 1
+    if nc == 0:
+        best = int(np.argmin(top))
+        cand[0, 0], cand[0, 1] = float(best), top[best]
+        nc = 1
+    kept = np.empty((nc, 2))
+    nk = 0
+    for i in range(nc):  # non-maximum suppression, highest first
+        ok = True
+        for j in range(nk):
+            if abs(cand[i, 0] - kept[j, 0]) < min_separation:
+                ok = False
+                break
+        if ok:
+            kept[nk, 0], kept[nk, 1] = cand[i, 0], cand[i, 1]
+            nk += 1
+    return kept[:nk].copy()
+
+
+@numba.njit(cache=True)
+def mask_span(mask: np.ndarray, lo: int, hi: int) -> tuple[int, int, int, int]:
+    """First and last+1 row, first and last+1 column (relative to ``lo``) of the True
+    pixels of ``mask[:, lo:hi]``; (0, 0, 0, 0) when there are none."""
+    r0, r1, c0, c1 = -1, -1, hi - lo, -1
+    for r in range(mask.shape[0]):
+        row = mask[r]
+        for c in range(lo, hi):
+            if row[c]:
+                if r0 < 0:
+                    r0 = r
+                r1 = r
+                c0 = min(c0, c - lo)
+                c1 = max(c1, c - lo)
+    if r0 < 0:
+        return 0, 0, 0, 0
+    return r0, r1 + 1, c0, c1 + 1
+
+
+@numba.njit(cache=True)
+def kinds_matrix(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> np.ndarray:
+    """``search.occlusion_kinds`` compiled: (T, N) int64 of 0, +1 (larger), -1 (smaller)."""
+    T, N = predicted_wh.shape[0], region_wh.shape[0]
+    out = np.zeros((T, N), np.int64)
+    for t in range(T):
+        pw, ph = predicted_wh[t, 0], predicted_wh[t, 1]
+        dw, dh = max(pw, 1.0), max(ph, 1.0)
+        for n in range(N):
+            rw = (region_wh[n, 0] - pw) / dw
+            rh = (region_wh[n, 1] - ph) / dh
+            if rw > threshold or rh > threshold:
+                out[t, n] = 1
+            elif rw < -threshold or rh < -threshold:
+                out[t, n] = -1
+    return out
+
+
+@numba.njit(cache=True)
+def head_boxes(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray, step: float,
+               search_range: int) -> np.ndarray:
+    """``search.search_boxes_many`` compiled: (S, (2 r + 1)^2, 4) xywh (eqs. 9-10)."""
+    S = heads.shape[0]
+    m = 2 * search_range + 1
+    out = np.empty((S, m * m, 4))
+    for s in range(S):
+        for i in range(m):
+            w = predicted_wh[s, 0] * (1.0 + step * np.float64(i - search_range))
+            x = heads[s, 0] - alpha[s] * w
+            for k in range(m):
+                b = i * m + k
+                out[s, b, 0] = x
+                out[s, b, 1] = heads[s, 1]
+                out[s, b, 2] = w
+                out[s, b, 3] = predicted_wh[s, 1] * (1.0 + step * np.float64(k - search_range))
+    return out
+
+
+@numba.njit(cache=True)
+def band_bounds(fg: np.ndarray, r0: int, r1: int, c0: int, c1: int) -> tuple[int, int, int]:
+    """Bounding rectangle of the True pixels of ``fg[r0:r1, c0:c1]`` as (first column,
+    first row, width), relative to (c0, r0); width 0 when there are none
+    (``cv2.boundingRect``'s x, y, w). Each row is scanned only outside the columns
+    already known to hold foreground."""
+    first_r, lo, hi = -1, c1, c0 - 1
+    for r in range(r0, r1):
+        row = fg[r]
+        c = c0
+        while c < lo and not row[c]:
+            c += 1
+        if c < lo:
+            lo = c
+            if first_r < 0:
+                first_r = r - r0
+        c = c1 - 1
+        while c > hi and not row[c]:
+            c -= 1
+        hi = max(hi, c)
+    if first_r < 0:
+        return 0, 0, 0
+    return lo - c0, first_r, hi + 1 - lo
+
+
+@numba.njit(cache=True)
+def label_stats(labels: np.ndarray, n: int) -> np.ndarray:
+    """(n, 5) int64 left, top, width, height, area of labels 0..n-1 of a label image, as
+    ``cv2.connectedComponentsWithStats``, except label 0 (the background): all zeros."""
+    x0 = np.full(n, labels.shape[1], np.int64)
+    y0 = np.full(n, labels.shape[0], np.int64)
+    x1 = np.full(n, -1, np.int64)
+    y1 = np.full(n, -1, np.int64)
+    area = np.zeros(n, np.int64)
+    for y in range(labels.shape[0]):
+        row = labels[y]
+        for x in range(labels.shape[1]):
+            lab = row[x]
+            if lab == 0:
+                continue
+            area[lab] += 1
+            x0[lab] = min(x0[lab], x)
+            x1[lab] = max(x1[lab], x)
+            y0[lab] = min(y0[lab], y)
+            y1[lab] = max(y1[lab], y)
+    out = np.zeros((n, 5), np.int64)
+    for i in range(1, n):
+        out[i, 0], out[i, 1] = x0[i], y0[i]
+        out[i, 2], out[i, 3], out[i, 4] = x1[i] + 1 - x0[i], y1[i] + 1 - y0[i], area[i]
+    return out
+
+
+@numba.njit(cache=True)
+def band_heads(fg: np.ndarray, boxes: np.ndarray, fraction: float) -> np.ndarray:
+    """``search.head_from_band`` of N xywh boxes at once: (N, 3) float64 heads."""
+    H, W = fg.shape
+    out = np.empty((boxes.shape[0], 3))
+    for i in range(boxes.shape[0]):
+        x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
+        out[i, 0], out[i, 1], out[i, 2] = x + 0.5 * w, y, 0.5 * w
+        if not (np.isfinite(x) and np.isfinite(y) and np.isfinite(w) and np.isfinite(h)):
+            continue
+        r0, r1 = max(int(y), 0), min(int(np.ceil(y + fraction * h)) + 1, H)
+        c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
+        if r1 > r0 and c1 > c0:
+            bx, by, bw = band_bounds(fg, r0, r1, c0, c1)
+            if bw > 0:
+                out[i, 0], out[i, 1], out[i, 2] = c0 + 0.5 * (2 * bx + bw), r0 + by, max(bw, 1)
+    return out
+
+
+@numba.njit(cache=True)
+def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
+    """Number of nonzero pixels of a uint8 mask inside the union of N finite xywh boxes,
+    each covering the pixels of ``geometry.box_slices`` (floor of the top-left, ceil of
+    the bottom-right, clipped to the image)."""
+    H, W = fg.shape
+    n = boxes.shape[0]
+    spans = np.empty((n, 4), np.int64)  # r0, r1, c0, c1 (half-open)
+    for k in range(n):
+        x, y, w, h = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
+        c0, c1 = max(int(np.floor(x)), 0), min(int(np.ceil(x + w)), W)
+        r0, r1 = max(int(np.floor(y)), 0), min(int(np.ceil(y + h)), H)
+        spans[k, 0], spans[k, 1], spans[k, 2], spans[k, 3] = r0, max(r1, r0), c0, max(c1, c0)
+    starts = np.empty(n, np.int64)
+    ends = np.empty(n, np.int64)
+    total = 0
+    rmin, rmax = H, 0
+    for k in range(n):
+        if spans[k, 3] > spans[k, 2]:
+            rmin, rmax = min(rmin, spans[k, 0]), max(rmax, spans[k, 1])
+    for r in range(rmin, rmax):
+        row = fg[r]
+        # column intervals of the spans covering row r, sorted by start, then merged
+        m = 0
+        for k in range(n):
+            if spans[k, 0] <= r < spans[k, 1] and spans[k, 3] > spans[k, 2]:
+                j = m
+                while j > 0 and starts[j - 1] > spans[k, 2]:
+                    starts[j], ends[j] = starts[j - 1], ends[j - 1]
+                    j -= 1
+                starts[j], ends[j] = spans[k, 2], spans[k, 3]
+                m += 1
+        k = 0
+        while k < m:
+            a, b = starts[k], ends[k]
+            k += 1
+            while k < m and starts[k] <= b:
+                b = max(b, ends[k])
+                k += 1
+            seg = row[a:b]
+            for c in range(b - a):
+                total += np.int64(seg[c] != 0)
+    return total

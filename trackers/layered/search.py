@@ -22,13 +22,27 @@ neighbourhood (multiple-response pruning, PBM 4.1).
 
 from __future__ import annotations
 
+import bisect
+import math
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from trackers.frontend.parts import HEAD_FRACTION
-from trackers.layered._search_kernels import coarse_peaks, ncc_all, ncc_climb
+from trackers.layered._search_kernels import (
+    band_bounds,
+    band_heads,
+    coarse_peaks,
+    covered_count,
+    head_boxes,
+    kinds_matrix,
+    label_stats,
+    mask_span,
+    ncc_all,
+    ncc_climb,
+    profile_peaks,
+)
 
 # head-template match (PBM 4.1), coarse to fine: block size of the coarse pass (2 or 3),
 # coarse local maxima refined, half-size of the full-resolution neighbourhood scored
@@ -37,6 +51,11 @@ COARSE_FACTOR = 2
 COARSE_PEAKS = 4
 REFINE_PAD = 3
 SMALL_WINDOW = 64
+
+
+def _floats(v: np.ndarray) -> list[float]:
+    """The values of a small array as Python floats (cheaper scalar arithmetic)."""
+    return np.asarray(v, dtype=np.float64).tolist()
 
 
 @dataclass
@@ -66,6 +85,8 @@ def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, 
 
     Labels are 16-bit when the mask cannot hold 65,535 components (8-connected blobs are
     at least 2 pixels apart): OpenCV's 16-bit path is the same labelling, and faster.
+    Areas and boxes come from one compiled pass over the labels (``label_stats``; cheaper
+    than OpenCV's statistics, same values).
 
     Returns:
         labels (H, W) uint16 or int32, boxes (K, 4) xywh float64, label numbers (K,) of the
@@ -73,15 +94,23 @@ def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, 
     """
     h, w = fg.shape
     ltype = cv2.CV_16U if ((h + 1) // 2) * ((w + 1) // 2) < 65535 else cv2.CV_32S
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8,
-                                                           ltype=ltype)
-    keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area)[0] + 1
+    n, labels = cv2.connectedComponents(fg.view(np.uint8), connectivity=8, ltype=ltype)
+    stats = label_stats(labels, n)
+    keep = np.nonzero(stats[1:, 4] >= min_area)[0] + 1
     boxes = stats[keep, :4].astype(np.float64)
     return labels, boxes, keep
 
 
 def top_profile_heads(mask: np.ndarray, min_separation: float, min_prominence: float) -> np.ndarray:
-    """Heads of a blob crop as the peaks of its top profile.
+    """Heads of a blob crop as the peaks of its top profile (PBM 3.1: "the tops of the
+    heads are visible most of the time").
+
+    The top profile is the first foreground row of each column; a peak is a run of
+    columns equal to the running minimum over 2 max(min_separation // 2, 1) + 1 columns
+    (a grey erosion, edges replicated) whose profile drops by ``min_prominence`` rows on
+    both sides within ``2 * min_separation`` columns (or reaches the crop edge); without
+    any, the highest column. Peaks closer than ``min_separation`` to a higher one are
+    suppressed. Compiled (``_search_kernels.profile_peaks``).
 
     Args:
         mask: (h, w) bool crop of one blob.
@@ -94,60 +123,51 @@ def top_profile_heads(mask: np.ndarray, min_separation: float, min_prominence: f
     h, w = mask.shape
     if h == 0 or w == 0:
         return np.zeros((0, 2))
-    has = mask.any(axis=0)
-    top = np.where(has, mask.argmax(axis=0), h).astype(np.float64)
-    r = max(int(min_separation // 2), 1)
-    # running minimum over 2 r + 1 columns, edges replicated (scipy's minimum_filter1d,
-    # mode "nearest"; a grey erosion)
-    local = cv2.erode(top[None], np.ones((1, 2 * r + 1), np.uint8),
-                      borderType=cv2.BORDER_REPLICATE)[0]
-    is_min = (top == local) & has
-    cols = np.nonzero(is_min)[0]
-    if len(cols) == 0:
-        return np.zeros((0, 2))
-    # group consecutive plateau columns into one peak: first and last column of each run
-    breaks = np.nonzero(np.diff(cols) > 1)[0]
-    firsts = cols[np.concatenate([[0], breaks + 1])].tolist()
-    lasts = cols[np.concatenate([breaks, [len(cols) - 1]])].tolist()
-    peaks = []
-    span = int(2 * min_separation)
-    for g0, g1 in zip(firsts, lasts):
-        c = 0.5 * (g0 + g1)
-        t = top[g0]
-        lo, hi = max(g0 - span, 0), min(g1 + span + 1, w)
-        left = top[lo:g0]
-        right = top[g1 + 1 : hi]
-        ok_left = g0 - span <= 0 or (len(left) and left.max() - t >= min_prominence)
-        ok_right = g1 + span >= w - 1 or (len(right) and right.max() - t >= min_prominence)
-        if ok_left and ok_right:
-            peaks.append((c, t))
-    if not peaks:
-        c = int(np.argmin(top))
-        peaks = [(float(c), top[c])]
-    peaks = np.array(sorted(peaks, key=lambda p: p[1]), dtype=np.float64)
-    kept: list[np.ndarray] = []
-    for p in peaks:  # non-maximum suppression, highest first
-        if all(abs(p[0] - q[0]) >= min_separation for q in kept):
-            kept.append(p)
-    return np.array(kept).reshape(-1, 2)
+    return profile_peaks(np.ascontiguousarray(mask, dtype=np.bool_), float(min_separation),
+                         float(min_prominence))
 
 
 def head_from_band(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
-    """(3,) head (x top-centre, y top, width) of a box: the top 1/7 band's foreground.
+    """(3,) head (x top-centre, y top, width) of a box: the top 1/7 band's foreground
+    (PBM 3.1).
 
     Without foreground (or with none in the band) the band's centre.
     """
-    x, y, w, h = box
+    x, y, w, h = _floats(box)
     if fg is not None:
         H, W = fg.shape
-        r0, r1 = max(int(y), 0), min(int(np.ceil(y + HEAD_FRACTION * h)) + 1, H)
-        c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
+        r0, r1 = max(int(y), 0), min(math.ceil(y + HEAD_FRACTION * h) + 1, H)
+        c0, c1 = max(int(x), 0), min(math.ceil(x + w), W)
         if r1 > r0 and c1 > c0:
             # bounding rectangle of the band's foreground: first column bx, width bw
-            bx, by, bw, _ = cv2.boundingRect(fg[r0:r1, c0:c1].view(np.uint8))
+            bx, by, bw = band_bounds(fg, r0, r1, c0, c1)
             if bw > 0:
                 return np.array([c0 + 0.5 * (2 * bx + bw), r0 + by, max(bw, 1)], dtype=np.float64)
     return np.array([x + 0.5 * w, y, 0.5 * w])
+
+
+def heads_from_bands(fg: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """``head_from_band`` of N xywh boxes at once (PBM 3.1): (N, 3) float64 heads
+    (x top-centre, y top, width); a non-finite box gets its band centre (non-finite).
+
+    Args:
+        fg: (H, W) bool foreground. boxes: (N, 4) xywh.
+    """
+    return band_heads(np.ascontiguousarray(fg, dtype=np.bool_),
+                      np.asarray(boxes, dtype=np.float64).reshape(-1, 4), float(HEAD_FRACTION))
+
+
+def residual_foreground(fg: np.ndarray, boxes: np.ndarray) -> int:
+    """Number of foreground pixels that no box covers (PBM 2: blobs matter only where the
+    detections leave foreground unexplained); a box covers the pixels of
+    ``geometry.box_slices`` (floor of its top-left, ceil of its bottom-right, clipped).
+
+    Args:
+        fg: (H, W) bool foreground. boxes: (N, 4) finite xywh.
+    """
+    fg = np.ascontiguousarray(fg, dtype=np.bool_)
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    return np.count_nonzero(fg) - int(covered_count(fg.view(np.uint8), boxes))
 
 
 def region_centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
@@ -168,24 +188,22 @@ def region_centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
 
 
 def split_blob_box(mask: np.ndarray, offset: np.ndarray, heads_x: np.ndarray, k: int) -> np.ndarray:
-    """(4,) xywh slice of a merged blob that belongs to head k.
+    """(4,) xywh slice of a merged blob that belongs to head k (PBM 3.1).
 
     Columns are split half-way between neighbouring heads; rows run from the head's top to
     the lowest foreground pixel in those columns.
     """
     h, w = mask.shape
-    order = np.sort(heads_x)
-    xk = heads_x[k]
-    i = int(np.searchsorted(order, xk))
+    order = sorted(float(v) for v in heads_x)
+    xk = float(heads_x[k])
+    i = bisect.bisect_left(order, xk)
     lo = 0 if i == 0 else round(0.5 * (order[i - 1] + xk))
     hi = w if i == len(order) - 1 else round(0.5 * (order[i + 1] + xk))
-    sub = mask[:, lo:hi]
-    rows = np.nonzero(sub.any(axis=1))[0]
-    cols = np.nonzero(sub.any(axis=0))[0]
-    if len(rows) == 0:
-        return np.array([offset[0] + lo, offset[1], max(hi - lo, 1), h], dtype=np.float64)
-    return np.array([offset[0] + lo + cols[0], offset[1] + rows[0], cols[-1] + 1 - cols[0],
-                     rows[-1] + 1 - rows[0]], dtype=np.float64)
+    ox, oy = float(offset[0]), float(offset[1])
+    r0, r1, c0, c1 = mask_span(np.ascontiguousarray(mask, dtype=np.bool_), lo, max(hi, lo))
+    if r1 == 0:
+        return np.array([ox + lo, oy, max(hi - lo, 1), h], dtype=np.float64)
+    return np.array([ox + lo + c0, oy + r0, c1 - c0, r1 - r0], dtype=np.float64)
 
 
 def occlusion_kind(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> int:
@@ -204,36 +222,28 @@ def occlusion_kind(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: f
 
 def occlusion_kinds(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> np.ndarray:
     """``occlusion_kind`` of N candidate regions against T targets at once: (T, N) int
-    (0 unoccluded, +1 larger, -1 smaller; PBM 3.1).
+    (0 unoccluded, +1 larger, -1 smaller; PBM 3.1). Compiled (``kinds_matrix``).
 
     Args:
         region_wh: (N, 2) candidate region sizes. predicted_wh: (T, 2) KF2 predictions.
     """
-    pred = np.asarray(predicted_wh, dtype=np.float64)[:, None, :]
-    rel = (np.asarray(region_wh, dtype=np.float64)[None] - pred) / np.maximum(pred, 1.0)
-    larger = (rel > threshold).any(axis=2)
-    smaller = (rel < -threshold).any(axis=2)
-    return np.where(larger, 1, np.where(smaller, -1, 0))
+    return kinds_matrix(np.asarray(region_wh, dtype=np.float64).reshape(-1, 2),
+                        np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2), float(threshold))
 
 
 def search_boxes_many(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray,
                       step: float, search_range: int) -> np.ndarray:
     """``search_boxes`` (eqs. 9-10) of S heads at once: (S, (2 r + 1)^2, 4) xywh, box
     i * (2 r + 1) + k of head s having width w_s (1 + step i) and height h_s (1 + step k).
+    Compiled (``head_boxes``).
 
     Args:
         heads: (S, 3) heads. predicted_wh: (S, 2) KF2 sizes. alpha: (S,) eq. 1 ratios.
     """
-    i = np.arange(-search_range, search_range + 1, dtype=np.float64)
-    m = len(i)
-    ws = predicted_wh[:, 0, None] * (1.0 + step * i)  # (S, m)
-    hs = predicted_wh[:, 1, None] * (1.0 + step * i)
-    out = np.empty((len(heads), m, m, 4))
-    out[:, :, :, 2] = ws[:, :, None]
-    out[:, :, :, 3] = hs[:, None, :]
-    out[:, :, :, 0] = heads[:, 0, None, None] - alpha[:, None, None] * out[:, :, :, 2]
-    out[:, :, :, 1] = heads[:, 1, None, None]
-    return out.reshape(len(heads), m * m, 4)
+    return head_boxes(np.asarray(heads, dtype=np.float64).reshape(-1, 3),
+                      np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2),
+                      np.asarray(alpha, dtype=np.float64).reshape(-1), float(step),
+                      int(search_range))
 
 
 def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step: float,
@@ -253,26 +263,29 @@ def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step:
 
 def aligned_box(head: np.ndarray, predicted_wh: np.ndarray, alpha: float) -> np.ndarray:
     """(4,) predicted-size box aligned on a head (PBM 3.1, smaller candidate)."""
-    w, h = predicted_wh
-    return np.array([head[0] - alpha * w, head[1], w, h])
+    w, h = _floats(predicted_wh)
+    hx, hy = _floats(head)[:2]
+    return np.array([hx - float(alpha) * w, hy, w, h])
 
 
 def head_fill(fg: np.ndarray | None, box: np.ndarray) -> float:
-    """Foreground fraction of the head rectangle (top 1/7) of a box; 1 without foreground."""
+    """Foreground fraction of the head rectangle (top 1/7, middle half of the width) of a
+    box; 1 without foreground (PBM 3.1: a smaller candidate's head must be supported)."""
     if fg is None:
         return 1.0
-    x, y, w, h = box
+    x, y, w, h = _floats(box)
     H, W = fg.shape
     r0, r1 = max(round(y), 0), min(round(y + HEAD_FRACTION * h), H)
     c0, c1 = max(round(x + 0.25 * w), 0), min(round(x + 0.75 * w), W)
     if r1 <= r0 or c1 <= c0:
         return 0.0
-    return float(fg[r0:r1, c0:c1].mean())
+    return np.count_nonzero(fg[r0:r1, c0:c1]) / ((r1 - r0) * (c1 - c0))
 
 
 def head_patch(gray: np.ndarray, box: np.ndarray) -> np.ndarray | None:
-    """Grey head template: the top 1/7 of a box, or None when it leaves the image."""
-    x, y, w, h = box
+    """Grey head template (PBM 4.1): the top 1/7 of a box, or None when it leaves the
+    image."""
+    x, y, w, h = _floats(box)
     H, W = gray.shape
     r0, r1 = round(y), round(y + HEAD_FRACTION * h)
     c0, c1 = round(x), round(x + w)
