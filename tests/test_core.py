@@ -116,3 +116,9 @@ def test_box_spans_equal_box_slices():
         rs, cs = box_slices(b, (80, 100))
         assert (rs.start, rs.stop, cs.start, cs.stop) == (r0, r1, c0, c1)
     assert box_spans(np.zeros((0, 4)), (80, 100)).shape == (0, 4)
+
+
+def test_assign_without_a_gate_skips_forbidden_pairs():
+    cost = np.array([[0.2, np.inf], [np.inf, np.nan], [5.0, 0.1]])
+    matches, rows, cols = assign(cost, np.inf)  # used to fail: "cost matrix is infeasible"
+    assert matches.tolist() == [[0, 0], [2, 1]] and rows.tolist() == [1] and cols.tolist() == []

@@ -22,7 +22,10 @@ def assign(
     if n == 0 or m == 0:
         return np.zeros((0, 2), dtype=int), np.arange(n), np.arange(m)
     allowed = np.isfinite(cost) & (cost <= max_cost)
-    big = max_cost + 1.0 + (np.abs(cost[allowed]).max() if allowed.any() else 0.0) * (n + m)
+    # forbidden pairs cost more than any set of allowed ones: the optimum keeps every
+    # allowed pair it can, then the cheapest
+    base = max_cost if np.isfinite(max_cost) else 0.0  # max_cost=inf: any finite cost
+    big = base + 1.0 + np.abs(np.where(allowed, cost, 0.0)).max() * (n + m)
     rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
     keep = allowed[rows, cols]
     rows, cols = rows[keep], cols[keep]
@@ -30,4 +33,4 @@ def assign(
     free_cols = np.ones(m, dtype=bool)
     free_rows[rows] = False
     free_cols[cols] = False
-    return np.column_stack([rows, cols]).astype(int), np.flatnonzero(free_rows), np.flatnonzero(free_cols)
+    return np.column_stack([rows, cols]), np.flatnonzero(free_rows), np.flatnonzero(free_cols)
