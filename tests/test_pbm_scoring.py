@@ -16,6 +16,7 @@ from scipy.special import ndtr
 from trackers.frontend.parts import N_PARTS, PartFeatures
 from trackers.layered.association import (
     ambiguous,
+    ambiguous_rows,
     feature_differences,
     global_scores,
     layered_scores,
@@ -260,3 +261,14 @@ def test_ambiguous_equals_the_sort_based_rule(rng):
             got = ambiguous(s, threshold, margin)
             assert got == ref_ambiguous(s, threshold, margin), s
             assert type(got[0]) is int and type(got[2]) is bool
+
+
+def test_ambiguous_rows_equal_ambiguous_per_row(rng):
+    scores = np.round(rng.uniform(0, 1, (40, 9)), 1)
+    scores[rng.random(scores.shape) < 0.4] = -np.inf
+    scores[3] = -np.inf
+    best, runner, amb = ambiguous_rows(scores, 0.25, 1.1)
+    for t in range(40):
+        assert (int(best[t]), int(runner[t]), bool(amb[t])) == ambiguous(scores[t], 0.25, 1.1)
+    assert ambiguous_rows(np.zeros((0, 4)), 0.25, 1.1)[0].shape == (0,)
+    assert ambiguous_rows(np.zeros((2, 0)), 0.25, 1.1)[0].tolist() == [-1, -1]

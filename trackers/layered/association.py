@@ -8,7 +8,8 @@ probability of ``FeatureModels``.
 Global layer (eq. 13): p = sum_j gamma_j p_j.
 
 The layers run in small numba kernels, one loop over the scored (target, candidate) pairs
-with no (pairs, 6, 5, components) temporaries; ``pair_scores`` fuses eqs. 11-13. Every
+with no (pairs, 6, 5, components) temporaries; ``pair_scores`` chains eqs. 11-13 for the
+selected pairs in one call (the models indexed, not copied per pair). Every
 kernel fixes its floating-point order, the same as the numpy expression quoted in its
 docstring (the tests compare them value for value):
 
@@ -107,51 +108,30 @@ def survival_kernel(d: np.ndarray, w: np.ndarray, mu: np.ndarray, s: np.ndarray,
 
 
 @numba.njit(cache=True, inline="always")
-def _leaf_rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, lo: int, count: int) -> float:
-    """sum of sqrt(a[t, j, u] b[n, j, u]) over u in [lo, lo + count), count <= 128, in the
-    order of numpy's pairwise sum (``np.sqrt(p * q).sum()``): below 8 values left to right,
-    else 8 interleaved partial sums added as a tree, then the count % 8 last values. Zero
-    products are skipped (the histograms are sparse): adding +0.0 to a sum of non-negative
-    terms leaves it unchanged."""
+def _leaf_sum(v: np.ndarray, lo: int, count: int) -> float:
+    """sum of v[lo:lo + count], count <= 128, in the order of numpy's pairwise sum: below 8
+    values left to right, else 8 interleaved partial sums added as a tree, then the
+    count % 8 last values."""
     if count < 8:
         res = 0.0
         for u in range(lo, lo + count):
-            x = a[t, j, u] * b[n, j, u]
-            if x != 0.0:
-                res += np.sqrt(x)
+            res += v[u]
         return res
-    r0 = r1 = r2 = r3 = r4 = r5 = r6 = r7 = 0.0
+    r0, r1, r2, r3 = v[lo], v[lo + 1], v[lo + 2], v[lo + 3]
+    r4, r5, r6, r7 = v[lo + 4], v[lo + 5], v[lo + 6], v[lo + 7]
     full = count - count % 8
-    for u in range(lo, lo + full, 8):
-        x = a[t, j, u] * b[n, j, u]
-        if x != 0.0:
-            r0 += np.sqrt(x)
-        x = a[t, j, u + 1] * b[n, j, u + 1]
-        if x != 0.0:
-            r1 += np.sqrt(x)
-        x = a[t, j, u + 2] * b[n, j, u + 2]
-        if x != 0.0:
-            r2 += np.sqrt(x)
-        x = a[t, j, u + 3] * b[n, j, u + 3]
-        if x != 0.0:
-            r3 += np.sqrt(x)
-        x = a[t, j, u + 4] * b[n, j, u + 4]
-        if x != 0.0:
-            r4 += np.sqrt(x)
-        x = a[t, j, u + 5] * b[n, j, u + 5]
-        if x != 0.0:
-            r5 += np.sqrt(x)
-        x = a[t, j, u + 6] * b[n, j, u + 6]
-        if x != 0.0:
-            r6 += np.sqrt(x)
-        x = a[t, j, u + 7] * b[n, j, u + 7]
-        if x != 0.0:
-            r7 += np.sqrt(x)
+    for u in range(lo + 8, lo + full, 8):
+        r0 += v[u]
+        r1 += v[u + 1]
+        r2 += v[u + 2]
+        r3 += v[u + 3]
+        r4 += v[u + 4]
+        r5 += v[u + 5]
+        r6 += v[u + 6]
+        r7 += v[u + 7]
     res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
     for u in range(lo + full, lo + count):
-        x = a[t, j, u] * b[n, j, u]
-        if x != 0.0:
-            res += np.sqrt(x)
+        res += v[u]
     return res
 
 
@@ -179,16 +159,19 @@ def _pairwise_plan(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 @numba.njit(cache=True, inline="always")
 def _rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, leaves: np.ndarray,
-         program: np.ndarray, stack: np.ndarray) -> float:
+         program: np.ndarray, v: np.ndarray, stack: np.ndarray) -> float:
     """Bhattacharyya coefficient of histograms a[t, j] and b[n, j] (B bins), equal to
-    ``np.sqrt(a[t, j] * b[n, j]).sum()`` (``leaves, program = _pairwise_plan(B)``;
-    scratch stack of len(program))."""
+    ``np.sqrt(a[t, j] * b[n, j]).sum()``: the B square roots into scratch v (B,), then
+    summed in numpy's pairwise order (``leaves, program = _pairwise_plan(B)``; scratch
+    stack of len(program))."""
+    for u in range(v.shape[0]):
+        v[u] = np.sqrt(a[t, j, u] * b[n, j, u])
     if program.shape[0] == 1:  # B <= 128 (bins <= 5): one leaf
-        return _leaf_rho(a, b, t, n, j, 0, a.shape[2])
+        return _leaf_sum(v, 0, v.shape[0])
     top = 0
     for op in program:
         if op >= 0:
-            stack[top] = _leaf_rho(a, b, t, n, j, leaves[op, 0], leaves[op, 1])
+            stack[top] = _leaf_sum(v, leaves[op, 0], leaves[op, 1])
             top += 1
         else:
             stack[top - 2] = stack[top - 2] + stack[top - 1]
@@ -202,8 +185,8 @@ def _pair_differences(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.n
                       m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
                       c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
                       c_centroid: np.ndarray, t: int, n: int, g: float, union_floor: float,
-                      leaves: np.ndarray, program: np.ndarray, stack: np.ndarray,
-                      d: np.ndarray, k: int) -> None:
+                      leaves: np.ndarray, program: np.ndarray, v: np.ndarray,
+                      stack: np.ndarray, d: np.ndarray, k: int) -> None:
     """Eq. 11 for model t against candidate n into d[k] (6, 5).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
@@ -218,8 +201,8 @@ def _pair_differences(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.n
             d[k, 2, j] = 1.0
             d[k, 3, j] = 1.0
         else:
-            d[k, 2, j] = 1.0 - _rho(m_hsv, c_hsv, t, n, j, leaves, program, stack)
-            d[k, 3, j] = 1.0 - _rho(m_xyz, c_xyz, t, n, j, leaves, program, stack)
+            d[k, 2, j] = 1.0 - _rho(m_hsv, c_hsv, t, n, j, leaves, program, v, stack)
+            d[k, 3, j] = 1.0 - _rho(m_xyz, c_xyz, t, n, j, leaves, program, v, stack)
         dx = c_centroid[n, j, 0] - m_centroid[t, j, 0]
         dy = c_centroid[n, j, 1] - m_centroid[t, j, 1]
         d[k, 4, j] = np.sqrt(dx * dx + dy * dy) / hgt * g
@@ -241,15 +224,17 @@ def _differences_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np
                         m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
                         m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
                         c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
-                        c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, g: np.ndarray,
+                        c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
                         union_floor: float, leaves: np.ndarray, program: np.ndarray,
                         out: np.ndarray) -> None:
-    """``_pair_differences`` of pairs (ti[k], n[k]) into out (K, 6, 5); g (T,) per target."""
-    stack = np.empty(program.shape[0])
+    """``_pair_differences`` of pairs (ti[k], n[k]) into out (K, 6, 5); misses (T,) float64
+    per target, g = 1 / (1 + misses)."""
+    v, stack = np.empty(m_hsv.shape[2]), np.empty(program.shape[0])
     for k in range(ti.shape[0]):
         _pair_differences(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
                           c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid,
-                          ti[k], n[k], g[ti[k]], union_floor, leaves, program, stack, out, k)
+                          ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), union_floor, leaves, program,
+                          v, stack, out, k)
 
 
 @numba.njit(cache=True, inline="always")
@@ -263,17 +248,24 @@ def _normalised(weights: np.ndarray) -> np.ndarray:
 
 @numba.njit(cache=True, inline="always")
 def _scores_one(d: np.ndarray, kd: int, spread: float, omega: np.ndarray, gamma: np.ndarray,
-                w: np.ndarray, mu: np.ndarray, s: np.ndarray, pj: np.ndarray, p: np.ndarray,
-                k: int, with_global: bool) -> None:
+                w: np.ndarray, mu: np.ndarray, s: np.ndarray, last_x: np.ndarray,
+                last_p: np.ndarray, pj: np.ndarray, p: np.ndarray, k: int, with_global: bool
+                ) -> None:
     """Eq. 12 for the (6, 5) differences d[kd] into pj[k]: p_j = sum_i omega_i
     P(D_ij >= d_ij / spread), i left to right from 0 (as ``np.einsum("...ij,i->...j")``);
     with ``with_global`` eq. 13 into p[k]: sum_j p_j gamma_j, j left to right from 0.
-    omega and gamma already normalised."""
+    omega and gamma already normalised. last_x, last_p (6, 5): the previous argument and
+    probability of each model, reused when the argument repeats (exact zeros and ones are
+    frequent; NaN-initialised, never equal)."""
     total = 0.0
     for j in range(pj.shape[1]):
         acc = 0.0
         for i in range(d.shape[1]):
-            acc += _survival(d[kd, i, j] / spread, w, mu, s, i, j) * omega[i]
+            x = d[kd, i, j] / spread
+            if x != last_x[i, j]:
+                last_x[i, j] = x
+                last_p[i, j] = _survival(x, w, mu, s, i, j)
+            acc += last_p[i, j] * omega[i]
         pj[k, j] = acc
         total += acc * gamma[j]
     if with_global:
@@ -287,8 +279,9 @@ def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.nd
     """Eqs. 12 (and 13 when ``with_global``) for (K, 6, 5) differences into pj (K, 5), p (K,);
     omega and gamma are normalised here."""
     omega, gamma = _normalised(omega), _normalised(gamma)
+    last_x, last_p = np.full(w.shape[:2], np.nan), np.empty(w.shape[:2])
     for k in range(d.shape[0]):
-        _scores_one(d, k, spread, omega, gamma, w, mu, s, pj, p, k, with_global)
+        _scores_one(d, k, spread, omega, gamma, w, mu, s, last_x, last_p, pj, p, k, with_global)
 
 
 @numba.njit(cache=True)
@@ -301,27 +294,6 @@ def _global_kernel(pj: np.ndarray, gamma: np.ndarray, p: np.ndarray) -> None:
         for j in range(pj.shape[1]):
             total += pj[k, j] * gamma[j]
         p[k] = total
-
-
-@numba.njit(cache=True)
-def _pair_scores_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.ndarray,
-                        m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
-                        m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
-                        c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
-                        c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, g: np.ndarray,
-                        union_floor: float, leaves: np.ndarray, program: np.ndarray,
-                        spread: float, omega: np.ndarray, gamma: np.ndarray, w: np.ndarray,
-                        mu: np.ndarray, s: np.ndarray, pj: np.ndarray, p: np.ndarray) -> None:
-    """Eqs. 11-13 fused for pairs (ti[k], n[k]) into pj (K, 5), p (K,), through one (6, 5)
-    scratch; omega and gamma are normalised here."""
-    omega, gamma = _normalised(omega), _normalised(gamma)
-    stack = np.empty(program.shape[0])
-    d = np.empty((1, N_FEATURES, m_area.shape[1]))
-    for k in range(ti.shape[0]):
-        _pair_differences(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
-                          c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid,
-                          ti[k], n[k], g[ti[k]], union_floor, leaves, program, stack, d, 0)
-        _scores_one(d, 0, spread, omega, gamma, w, mu, s, pj, p, k, True)
 
 
 @numba.njit(cache=True)
@@ -346,30 +318,36 @@ def _ambiguous_kernel(scores: np.ndarray, threshold: float, margin: float
     return best, runner, amb
 
 
+@numba.njit(cache=True)
+def _ambiguous_rows_kernel(scores: np.ndarray, threshold: float, margin: float,
+                           best: np.ndarray, runner: np.ndarray, amb: np.ndarray) -> None:
+    """``_ambiguous_kernel`` of every row of (T, N) scores into best, runner, amb (T,)."""
+    for t in range(scores.shape[0]):
+        best[t], runner[t], amb[t] = _ambiguous_kernel(scores[t], threshold, margin)
+
+
 # ----------------------------------------------------------------------------- public API
 
 
 def _arrays(f: PartFeatures) -> tuple[np.ndarray, ...]:
-    """The kernels' inputs of a feature set: C-contiguous float64 (no copy when already)."""
-    return tuple(np.ascontiguousarray(a, dtype=np.float64) for a in
-                 (f.parts, f.area, f.perimeter, f.hsv, f.xyz, f.centroid, f.height))
+    """The kernels' inputs of a feature set (float64 arrays, ``PartFeatures``' contract)."""
+    return f.parts, f.area, f.perimeter, f.hsv, f.xyz, f.centroid, f.height
 
 
-def _miss_factors(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
-    """g = 1 / (1 + misses) per target (ones without misses: x * 1.0 == x)."""
+def _misses(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
+    """(T,) float64 misses (zeros when None: the factor 1 / (1 + 0) is exactly 1)."""
     if misses is None:
-        return np.ones(n_targets)
-    return 1.0 / (1.0 + np.asarray(misses, dtype=np.float64).reshape(-1))
+        return np.zeros(n_targets)
+    return np.asarray(misses, dtype=np.float64)
 
 
 def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
                  misses: np.ndarray | None, union_floor: float) -> np.ndarray:
-    ti = np.ascontiguousarray(ti, dtype=np.intp).reshape(-1)
-    n = np.ascontiguousarray(n, dtype=np.intp).reshape(-1)
+    ti = np.asarray(ti, dtype=np.intp)
+    n = np.asarray(n, dtype=np.intp)
     out = np.empty((len(ti), N_FEATURES, N_PARTS))
-    m, c = _arrays(model), _arrays(cand)
-    _differences_kernel(*m, *c[:6], ti, n, _miss_factors(misses, len(model)), union_floor,
-                        *_pairwise_plan(m[3].shape[2]), out)
+    _differences_kernel(*_arrays(model), *_arrays(cand)[:6], ti, n, _misses(misses, len(model)),
+                        union_floor, *_pairwise_plan(model.hsv.shape[2]), out)
     return out
 
 
@@ -469,7 +447,7 @@ def global_scores(p_parts: np.ndarray, gamma: np.ndarray) -> np.ndarray:
 def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, ti: np.ndarray,
                 n: np.ndarray, misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
                 spread: float = 1.0, union_floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Eqs. 11-13 fused for the pairs (target ti[k], candidate n[k]).
+    """Eqs. 11-13 in one call for the pairs (target ti[k], candidate n[k]).
 
     Equal value for value to ``layered_scores(models, selected_differences(model, cand,
     ti, n, misses), omega, gamma, spread)``; with ``union_floor=1e-12`` and ti = the
@@ -479,16 +457,8 @@ def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
     """
-    ti = np.ascontiguousarray(ti, dtype=np.intp).reshape(-1)
-    n = np.ascontiguousarray(n, dtype=np.intp).reshape(-1)
-    pj = np.empty((len(ti), N_PARTS))
-    p = np.empty(len(ti))
-    m, c = _arrays(model), _arrays(cand)
-    _pair_scores_kernel(*m, *c[:6], ti, n, _miss_factors(misses, len(model)), float(union_floor),
-                        *_pairwise_plan(m[3].shape[2]), float(spread), _weights(omega, N_FEATURES, "omega"),
-                        _weights(gamma, N_PARTS, "gamma"), models._w,
-                        models._mu, models._s, pj, p)
-    return pj, p
+    d = _differences(model, cand, ti, n, misses, float(union_floor))
+    return _scores(models, d, omega, gamma, spread, True)
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:
@@ -503,4 +473,21 @@ def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int,
     scores = np.asarray(scores, dtype=np.float64)
     if scores.ndim != 1:
         raise ValueError(f"ambiguous: expected (N,) scores, got {scores.shape}")
-    return _ambiguous_kernel(scores, float(threshold), float(margin))
+    return _ambiguous_kernel(scores, threshold, margin)
+
+
+def ambiguous_rows(scores: np.ndarray, threshold: float, margin: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``ambiguous`` of every row of (T, N) scores in one call.
+
+    Returns:
+        best (T,) and runner-up (T,) indices (-1 when none), ambiguous (T,) bool; row t
+        equals ``ambiguous(scores[t], threshold, margin)``.
+    """
+    scores = np.asarray(scores, dtype=np.float64)
+    if scores.ndim != 2:
+        raise ValueError(f"ambiguous_rows: expected (T, N) scores, got {scores.shape}")
+    T = scores.shape[0]
+    best, runner, amb = np.empty(T, dtype=np.intp), np.empty(T, dtype=np.intp), np.empty(T, bool)
+    _ambiguous_rows_kernel(scores, threshold, margin, best, runner, amb)
+    return best, runner, amb
