@@ -1,7 +1,7 @@
 """Compiled kernels of ``trackers.layered.search`` (numba, one core).
 
 The head-template match of PBM 4.1 (multiple-response pruning) runs coarse to fine:
-``coarse_peaks`` scores TM_CCOEFF_NORMED on 2 x 2 block sums of the window and template
+``coarse_peaks`` scores TM_CCOEFF_NORMED on f x f block sums of the window and template
 and keeps the best local maxima; ``ncc_climb`` climbs from each, at full resolution, to
 a local maximum of the exact score. ``ncc_all`` scores every position (small windows).
 Full-resolution scores use exact integer sums (held in float32 per row and float64
@@ -168,19 +168,20 @@ def _correlate_rows(img: np.ndarray, tpl: np.ndarray, ny: int, nx: int) -> np.nd
 
 @numba.njit(cache=True)
 def coarse_peaks(win: np.ndarray, tpl: np.ndarray, f: int, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The ``k`` best local maxima of TM_CCOEFF_NORMED on 2 x 2 block sums.
+    """The ``k`` best local maxima of TM_CCOEFF_NORMED on f x f block sums (f = 2 or 3).
 
-    Window and template are summed over 2 x 2 blocks (a last odd row or column is left
-    out); the zero-mean cross-correlation of the block images (float32) over the window
-    deviation (exact float64 integral images) ranks the positions (by the signed square
-    of the normalised correlation, which orders them alike); the 3 x 3 local maxima
-    (>= every neighbour) are kept, best first, ties in raster order.
+    Window and template are summed over f x f blocks (rows and columns that do not fill a
+    block are left out); the zero-mean cross-correlation of the block images (float32)
+    over the window deviation (exact float64 integral images) ranks the positions (by the
+    signed square of the normalised correlation, which orders them alike); the 3 x 3
+    local maxima (>= every neighbour) are kept, best first, ties in raster order.
 
     Args:
-        win: (H, W) uint8 window. tpl: (th, tw) uint8 template, 2 <= th <= H,
-            2 <= tw <= W.
+        win: (H, W) C-contiguous uint8 window. tpl: (th, tw) C-contiguous uint8 template,
+            2 f <= th <= H, 2 f <= tw <= W.
     Returns:
-        columns and rows (int64, full-resolution top-left positions, even), at most k.
+        columns and rows (int64, full-resolution top-left positions, multiples of f), at
+        most k; none when the block template is flat.
     """
     th2, tw2 = tpl.shape[0] // f, tpl.shape[1] // f
     ch, cw = win.shape[0] // f, win.shape[1] // f
@@ -193,6 +194,8 @@ def coarse_peaks(win: np.ndarray, tpl: np.ndarray, f: int, k: int) -> tuple[np.n
         for c in range(tw2):
             tz[r, c] -= mean
             t2 += np.float64(tz[r, c]) * np.float64(tz[r, c])
+    if t2 <= 0:  # flat at the coarse level: no ranking (the caller scores exhaustively)
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
     # integral images of the block image and its square (exact integers in float64)
     s1 = np.zeros((ch + 1, cw + 1))
     s2 = np.zeros((ch + 1, cw + 1))

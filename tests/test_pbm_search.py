@@ -1,0 +1,285 @@
+"""The compiled PBM search helpers (trackers/layered/search.py) against straightforward
+references (the first numpy / OpenCV implementations) on seeded random inputs."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from trackers.geometry import box_slices
+from trackers.layered import search as S
+
+# ---------------------------------------------------------------------- references
+
+
+def _split_blob_box_reference(mask, offset, heads_x, k):
+    h, w = mask.shape
+    order = np.sort(heads_x)
+    xk = heads_x[k]
+    i = int(np.searchsorted(order, xk))
+    lo = 0 if i == 0 else round(0.5 * (order[i - 1] + xk))
+    hi = w if i == len(order) - 1 else round(0.5 * (order[i + 1] + xk))
+    sub = mask[:, lo:hi]
+    rows = np.nonzero(sub.any(axis=1))[0]
+    cols = np.nonzero(sub.any(axis=0))[0]
+    if len(rows) == 0:
+        return np.array([offset[0] + lo, offset[1], max(hi - lo, 1), h], dtype=np.float64)
+    return np.array([offset[0] + lo + cols[0], offset[1] + rows[0], cols[-1] + 1 - cols[0],
+                     rows[-1] + 1 - rows[0]], dtype=np.float64)
+
+
+def _head_from_band_reference(fg, box):
+    x, y, w, h = box
+    if fg is not None:
+        H, W = fg.shape
+        r0, r1 = max(int(y), 0), min(int(np.ceil(y + S.HEAD_FRACTION * h)) + 1, H)
+        c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
+        if r1 > r0 and c1 > c0:
+            bx, by, bw, _ = cv2.boundingRect(fg[r0:r1, c0:c1].view(np.uint8))
+            if bw > 0:
+                return np.array([c0 + 0.5 * (2 * bx + bw), r0 + by, max(bw, 1)], dtype=np.float64)
+    return np.array([x + 0.5 * w, y, 0.5 * w])
+
+
+def _top_profile_heads_reference(mask, min_separation, min_prominence):
+    from scipy.ndimage import minimum_filter1d
+
+    h, w = mask.shape
+    has = mask.any(axis=0)
+    top = np.where(has, mask.argmax(axis=0), h).astype(np.float64)
+    local = minimum_filter1d(top, size=2 * max(int(min_separation // 2), 1) + 1, mode="nearest")
+    cols = np.nonzero((top == local) & has)[0]
+    if len(cols) == 0:
+        return np.zeros((0, 2))
+    peaks = []
+    span = int(2 * min_separation)
+    for g in np.split(cols, np.nonzero(np.diff(cols) > 1)[0] + 1):
+        t = top[g[0]]
+        left = top[max(g[0] - span, 0):g[0]]
+        right = top[g[-1] + 1:min(g[-1] + span + 1, w)]
+        ok_left = g[0] - span <= 0 or (len(left) and left.max() - t >= min_prominence)
+        ok_right = g[-1] + span >= w - 1 or (len(right) and right.max() - t >= min_prominence)
+        if ok_left and ok_right:
+            peaks.append((0.5 * (g[0] + g[-1]), t))
+    if not peaks:
+        c = int(np.argmin(top))
+        peaks = [(float(c), top[c])]
+    kept = []
+    for p in np.array(sorted(peaks, key=lambda p: p[1]), dtype=np.float64):
+        if all(abs(p[0] - q[0]) >= min_separation for q in kept):
+            kept.append(p)
+    return np.array(kept).reshape(-1, 2)
+
+
+def _exhaustive_match(gray, template, centre, radius):
+    """The first ``match_head_template``: cv2.matchTemplate over the whole window."""
+    th, tw = template.shape
+    H, W = gray.shape
+    r = int(np.ceil(radius))
+    x0, y0 = round(centre[0]) - r, round(centre[1]) - r
+    c0, r0 = max(x0, 0), max(y0, 0)
+    c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
+    if c1 - c0 < tw or r1 - r0 < th:
+        return np.asarray(centre, dtype=np.float64), -1.0, None
+    res = cv2.matchTemplate(gray[r0:r1, c0:c1], template, cv2.TM_CCOEFF_NORMED)
+    _, best, _, loc = cv2.minMaxLoc(res)
+    return np.array([c0 + loc[0], r0 + loc[1]], dtype=np.float64), float(best), (res, c0, r0)
+
+
+def _scene(rng, h=120, w=160):
+    """A smooth grey scene (blurred noise) with a few flat-shaded 'heads'."""
+    img = cv2.GaussianBlur(rng.integers(0, 256, (h, w)).astype(np.float32), (0, 0), 3.0)
+    img = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX)
+    for _ in range(4):
+        cx, cy = rng.integers(10, w - 10), rng.integers(10, h - 10)
+        cv2.ellipse(img, (int(cx), int(cy)), (int(rng.integers(4, 9)), int(rng.integers(5, 10))), 0, 0,
+                    360, float(rng.integers(0, 256)), -1)
+    return img.astype(np.uint8)
+
+
+# ---------------------------------------------------------------------- template matching
+
+
+def test_match_head_template_finds_a_planted_head_exactly():
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        gray = _scene(rng)
+        th, tw = int(rng.integers(6, 18)), int(rng.integers(12, 40))
+        ty, tx = int(rng.integers(0, 120 - th)), int(rng.integers(0, 160 - tw))
+        tpl = gray[ty:ty + th, tx:tx + tw].copy()
+        centre = np.array([tx + rng.integers(-12, 13), ty + rng.integers(-12, 13)], dtype=np.float64)
+        radius = float(rng.uniform(13, 40))
+        tl, corr = S.match_head_template(gray, tpl, centre, radius)
+        ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, centre, radius)
+        np.testing.assert_array_equal(tl, ref_tl)
+        assert corr == pytest.approx(ref_corr, abs=1e-4)
+        assert corr == pytest.approx(1.0, abs=1e-6)
+
+
+def test_match_head_template_scores_equal_opencv_and_never_beat_the_exhaustive_maximum():
+    rng = np.random.default_rng(1)
+    agree = 0
+    n = 60
+    for _ in range(n):
+        gray = _scene(rng)
+        th, tw = int(rng.integers(6, 16)), int(rng.integers(10, 36))
+        ty, tx = int(rng.integers(0, 120 - th)), int(rng.integers(0, 160 - tw))
+        # a template from elsewhere, lightly perturbed: no exact copy in the window
+        tpl = np.clip(gray[ty:ty + th, tx:tx + tw].astype(np.int16) + rng.integers(-20, 21, (th, tw)),
+                      0, 255).astype(np.uint8)
+        centre = rng.uniform([0, 0], [160 - tw, 120 - th])
+        radius = float(rng.uniform(4, 45))
+        tl, corr = S.match_head_template(gray, tpl, centre, radius)
+        ref_tl, ref_corr, (res, c0, r0) = _exhaustive_match(gray, tpl, centre, radius)
+        # the score is OpenCV's score at the returned position (up to its float32 rounding)
+        assert corr == pytest.approx(res[int(tl[1]) - r0, int(tl[0]) - c0], abs=1e-4)
+        assert corr <= ref_corr + 1e-4
+        agree += np.array_equal(tl, ref_tl)
+    assert agree >= 0.9 * n  # coarse to fine: the exhaustive maximum almost always
+
+
+def test_small_windows_are_scored_exhaustively_and_no_room_gives_minus_one():
+    rng = np.random.default_rng(2)
+    for _ in range(40):
+        gray = rng.integers(0, 256, (40, 50), dtype=np.uint8)
+        tpl = rng.integers(0, 256, (int(rng.integers(3, 9)), int(rng.integers(3, 12))), dtype=np.uint8)
+        centre = rng.uniform(0, 30, 2)
+        radius = float(rng.uniform(0, 3))  # at most 49 positions: the exhaustive path
+        tl, corr = S.match_head_template(gray, tpl, centre, radius)
+        ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, centre, radius)
+        np.testing.assert_array_equal(tl, ref_tl)
+        assert corr == pytest.approx(ref_corr, abs=1e-4)
+    tl, corr = S.match_head_template(gray, np.zeros((60, 5), np.uint8), np.array([3.0, 4.0]), 2.0)
+    assert corr == -1.0 and np.array_equal(tl, [3.0, 4.0])
+
+
+def test_a_flat_template_scores_one_at_the_window_corner_as_opencv():
+    gray = np.random.default_rng(3).integers(0, 256, (80, 90), dtype=np.uint8)
+    tpl = np.full((10, 20), 77, np.uint8)
+    tl, corr = S.match_head_template(gray, tpl, np.array([30.0, 30.0]), 20.0)
+    ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, np.array([30.0, 30.0]), 20.0)
+    np.testing.assert_array_equal(tl, ref_tl)
+    assert corr == ref_corr == 1.0
+
+
+# ---------------------------------------------------------------------- candidates
+
+
+def _random_blob(rng, h, w):
+    mask = np.zeros((h, w), dtype=bool)
+    for _ in range(int(rng.integers(1, 5))):
+        cx, cy = rng.integers(0, w), rng.integers(0, h)
+        rx, ry = rng.integers(2, max(3, w // 3)), rng.integers(2, max(3, h // 2))
+        cv2.ellipse(mask.view(np.uint8), (int(cx), int(cy)), (int(rx), int(ry)), 0, 0, 360, 1, -1)
+    return mask
+
+
+def test_top_profile_heads_equal_the_reference_including_edge_cases():
+    rng = np.random.default_rng(4)
+    for _ in range(300):
+        h, w = int(rng.integers(1, 60)), int(rng.integers(1, 60))
+        mask = _random_blob(rng, h, w) if rng.random() < 0.8 else rng.random((h, w)) < 0.1
+        sep = float(rng.choice([0.3, 1.0, 2.5, rng.uniform(1, 15)]))
+        prom = float(rng.uniform(0, 8))
+        np.testing.assert_array_equal(S.top_profile_heads(mask, sep, prom),
+                                      _top_profile_heads_reference(mask, sep, prom))
+    assert S.top_profile_heads(np.zeros((5, 7), bool), 2.0, 1.0).shape == (0, 2)
+    assert S.top_profile_heads(np.zeros((0, 7), bool), 2.0, 1.0).shape == (0, 2)
+
+
+def test_split_blob_box_equals_the_reference():
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        h, w = int(rng.integers(5, 60)), int(rng.integers(5, 60))
+        mask = _random_blob(rng, h, w)
+        heads_x = rng.uniform(0, w, int(rng.integers(1, 5)))
+        if rng.random() < 0.2:
+            heads_x = np.round(heads_x * 2) / 2  # half-way splits at .5: round half to even
+        offset = rng.uniform(0, 100, 2)
+        for k in range(len(heads_x)):
+            np.testing.assert_array_equal(S.split_blob_box(mask, offset, heads_x, k),
+                                          _split_blob_box_reference(mask, offset, heads_x, k))
+
+
+def test_blobs_boxes_equal_opencv_statistics():
+    rng = np.random.default_rng(6)
+    for _ in range(20):
+        fg = np.zeros((90, 120), bool)
+        for _ in range(int(rng.integers(0, 8))):
+            fg |= _random_blob(rng, 90, 120) & (rng.random() < 0.9)
+        fg |= rng.random((90, 120)) < 0.01
+        min_area = int(rng.integers(1, 40))
+        labels, boxes, numbers = S.blobs_boxes(fg, min_area)
+        _, ref_labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8,
+                                                                  ltype=cv2.CV_16U)
+        keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area)[0] + 1
+        np.testing.assert_array_equal(labels, ref_labels)
+        np.testing.assert_array_equal(numbers, keep)
+        np.testing.assert_array_equal(boxes, stats[keep, :4].astype(np.float64))
+
+
+def test_band_heads_and_residual_foreground_equal_the_references():
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        H, W = int(rng.integers(10, 90)), int(rng.integers(10, 90))
+        fg = rng.random((H, W)) < rng.uniform(0.0, 0.9)
+        n = int(rng.integers(0, 7))
+        boxes = np.column_stack([rng.uniform(-20, W, n), rng.uniform(-20, H, n),
+                                 rng.uniform(0, 50, n), rng.uniform(0, 70, n)])
+        ref_heads = np.array([_head_from_band_reference(fg, b) for b in boxes]).reshape(-1, 3)
+        np.testing.assert_array_equal(S.heads_from_bands(fg, boxes), ref_heads)
+        for b, ref in zip(boxes, ref_heads):
+            np.testing.assert_array_equal(S.head_from_band(fg, b), ref)
+        resid = fg.copy()
+        for b in boxes:
+            rs, cs = box_slices(b, fg.shape)
+            resid[rs, cs] = False
+        assert S.residual_foreground(fg, boxes) == np.count_nonzero(resid)
+    np.testing.assert_array_equal(S.head_from_band(None, np.array([10.0, 5.0, 8.0, 30.0])),
+                                  [14.0, 5.0, 4.0])
+
+
+def test_head_fill_and_head_patch_equal_the_references():
+    rng = np.random.default_rng(8)
+    gray = rng.integers(0, 256, (60, 80), dtype=np.uint8)
+    fg = rng.random((60, 80)) < 0.5
+    for _ in range(300):
+        box = np.concatenate([rng.uniform(-10, 75, 2), rng.uniform(0, 40, 2)])
+        x, y, w, h = box
+        r0, r1 = max(round(y), 0), min(round(y + S.HEAD_FRACTION * h), 60)
+        c0, c1 = max(round(x + 0.25 * w), 0), min(round(x + 0.75 * w), 80)
+        fill = 0.0 if r1 <= r0 or c1 <= c0 else float(fg[r0:r1, c0:c1].mean())
+        assert S.head_fill(fg, box) == fill
+        r0, r1, c0, c1 = round(y), round(y + S.HEAD_FRACTION * h), round(x), round(x + w)
+        patch = S.head_patch(gray, box)
+        if r0 < 0 or c0 < 0 or r1 > 60 or c1 > 80 or r1 - r0 < 3 or c1 - c0 < 3:
+            assert patch is None
+        else:
+            np.testing.assert_array_equal(patch, gray[r0:r1, c0:c1])
+    assert S.head_fill(None, np.array([0.0, 0.0, 5.0, 5.0])) == 1.0
+
+
+# ---------------------------------------------------------------------- occlusion and search
+
+
+def test_occlusion_kinds_and_search_boxes_equal_the_one_at_a_time_versions():
+    rng = np.random.default_rng(9)
+    for _ in range(50):
+        T, N = int(rng.integers(0, 6)), int(rng.integers(0, 8))
+        region = rng.uniform(0.5, 120, (N, 2))
+        pred = rng.uniform(0.5, 100, (T, 2))
+        kinds = S.occlusion_kinds(region, pred, 0.5)
+        assert kinds.shape == (T, N)
+        for t in range(T):
+            for n in range(N):
+                assert kinds[t, n] == S.occlusion_kind(region[n], pred[t], 0.5)
+        heads = rng.uniform(0, 200, (T, 3))
+        alpha = rng.uniform(0.3, 0.7, T)
+        r = int(rng.integers(0, 4))
+        many = S.search_boxes_many(heads, pred, alpha, 0.05, r)
+        assert many.shape == (T, (2 * r + 1) ** 2, 4)
+        for s in range(T):
+            np.testing.assert_array_equal(many[s], S.search_boxes(heads[s], pred[s], alpha[s], 0.05, r))
+            np.testing.assert_array_equal(S.aligned_box(heads[s], pred[s], alpha[s]),
+                                          [heads[s, 0] - alpha[s] * pred[s, 0], heads[s, 1], *pred[s]])
