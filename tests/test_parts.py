@@ -291,26 +291,21 @@ def test_extractor_equals_reference_bit_for_bit(fg_kind, bins, grid):
     _assert_same(feats, ref)
 
 
-def test_colour_table_equals_cvtcolor():
-    # every entry is OpenCV's bin of its colour: all 2**24 colours, one conversion each
-    from trackers.frontend.parts import (
-        _SPREAD,
-        HSV_RANGES,
-        XYZ_RANGES,
-        _colour_shift,
-        _colour_table,
-        _joint_index,
-    )
+@pytest.mark.parametrize("bins", [4, 8])
+def test_colour_bins_equal_cvtcolor_for_every_colour(bins):
+    # the kernels' integer HSV and XYZ formulas against OpenCV on all 2**24 BGR colours
+    from trackers.frontend import _part_kernels
+    from trackers.frontend.parts import HSV_RANGES, XYZ_RANGES, _channel_luts, _joint_index
 
-    v = np.arange(256)
-    bgr = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).astype(np.uint8).reshape(4096, 4096, 3)
-    morton = (_SPREAD[v][:, None, None] << 2 | _SPREAD[v][None, :, None] << 1
-              | _SPREAD[v][None, None, :]).reshape(-1)
-    hsv = _joint_index(cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV), 4, HSV_RANGES).reshape(-1)
-    xyz = _joint_index(cv2.cvtColor(bgr, cv2.COLOR_BGR2XYZ), 4, XYZ_RANGES).reshape(-1)
-    table = _colour_table(4)[morton].astype(np.int64)
-    np.testing.assert_array_equal(table & 255, hsv)
-    np.testing.assert_array_equal(table >> _colour_shift(4), xyz)
+    v = np.arange(256, dtype=np.uint8)
+    img = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(4096, 4096, 3)
+    hsv, xyz = np.empty(1 << 24, np.int64), np.empty(1 << 24, np.int64)
+    _part_kernels.joint_bins(img.reshape(-1, 3), _channel_luts(bins, HSV_RANGES),
+                             _channel_luts(bins, XYZ_RANGES), hsv, xyz)
+    want = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2HSV), bins, HSV_RANGES).reshape(-1)
+    np.testing.assert_array_equal(hsv, want)
+    want = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2XYZ), bins, XYZ_RANGES).reshape(-1)
+    np.testing.assert_array_equal(xyz, want)
 
 
 def test_extractor_accepts_readonly_and_list_inputs():

@@ -11,8 +11,9 @@ kernels replaced, so the features are equal to it bit for bit:
   numpy's pairwise order (``_pairwise_sum``, as ``ndarray.sum``);
 - per-part centroid sums add the coordinates of the foreground samples one by one in
   row-major order (as ``np.bincount(weights=...)``);
-- colour bins come from a table of the joint HSV and XYZ bins of every BGR triple made
-  with ``cv2.cvtColor`` itself (``trackers.frontend.parts._colour_table``).
+- colour bins come from OpenCV's own 8-bit integer formulas for BGR -> HSV (hue 0..179)
+  and BGR -> XYZ (``_hsv_xyz``), equal to ``cv2.cvtColor`` for all 2**24 colours (checked
+  by tests/test_parts.py and, on a sample, once per process by the extractor).
 
 Kernels are compiled on first use and cached on disk (``cache=True``); none recurses
 (numba's cache mishandles recursive functions).
@@ -52,6 +53,47 @@ def _sample_grid(
             if inside and has_fg:
                 inside = fg[yi[r], xi[c]]
             on[r, c] = inside
+
+
+HSV_SHIFT = 12
+"""Fixed-point bits of OpenCV's 8-bit HSV and XYZ conversions (``hsv_shift``, ``xyz_shift``)."""
+_S_DIV = np.concatenate([[0], np.rint((255 << HSV_SHIFT) / np.arange(1.0, 256.0))]).astype(np.int64)
+"""``sdiv_table`` of OpenCV's RGB2HSV_b: round(255 * 2**12 / v) (saturate_cast rounds to even)."""
+_H_DIV = np.concatenate([[0], np.rint((180 << HSV_SHIFT) / (6.0 * np.arange(1.0, 256.0)))]).astype(np.int64)
+"""``hdiv_table180`` of RGB2HSV_b: round(180 * 2**12 / (6 * diff))."""
+_XYZ = np.array([[739, 1465, 1689], [296, 2929, 871], [3892, 488, 79]], dtype=np.int64)
+"""Rows X, Y, Z, columns B, G, R: OpenCV's ``sRGB2XYZ_D65_i`` (RGB2XYZ_i<uchar>), in BGR order."""
+
+
+@numba.njit(cache=True, inline="always")
+def _hsv_xyz(b: int, g: int, r: int, hsv_lut: np.ndarray, xyz_lut: np.ndarray) -> tuple[int, int]:
+    """Joint HSV and XYZ histogram bins of one BGR pixel: ``cv2.cvtColor`` to 8-bit HSV
+    (OpenCV's RGB2HSV_b: integer division by tables, hue 0..179) and to XYZ (RGB2XYZ_i),
+    then channel c's value q adds ``lut[c, q]`` (``min(q * bins // range, bins - 1) *
+    bins ** (2 - c)``)."""
+    v, vmin = max(b, g, r), min(b, g, r)
+    diff = v - vmin
+    s = (diff * _S_DIV[v] + (1 << (HSV_SHIFT - 1))) >> HSV_SHIFT
+    # the hue sector without branches (colours are noisy): OpenCV's vr, vg masks
+    vr, vg = -np.int64(v == r), -np.int64(v == g)
+    h = (vr & (g - b)) + (~vr & ((vg & (b - r + 2 * diff)) + (~vg & (r - g + 4 * diff))))
+    h = (h * _H_DIV[diff] + (1 << (HSV_SHIFT - 1))) >> HSV_SHIFT
+    h = min(h + (180 & -np.int64(h < 0)), 255)
+    half = 1 << (HSV_SHIFT - 1)
+    x = min((b * _XYZ[0, 0] + g * _XYZ[0, 1] + r * _XYZ[0, 2] + half) >> HSV_SHIFT, 255)
+    y = min((b * _XYZ[1, 0] + g * _XYZ[1, 1] + r * _XYZ[1, 2] + half) >> HSV_SHIFT, 255)
+    z = min((b * _XYZ[2, 0] + g * _XYZ[2, 1] + r * _XYZ[2, 2] + half) >> HSV_SHIFT, 255)
+    return (hsv_lut[0, h] + hsv_lut[1, s] + hsv_lut[2, v],
+            xyz_lut[0, x] + xyz_lut[1, y] + xyz_lut[2, z])
+
+
+@numba.njit(cache=True)
+def joint_bins(pixels: np.ndarray, hsv_lut: np.ndarray, xyz_lut: np.ndarray,
+               hsv: np.ndarray, xyz: np.ndarray) -> None:
+    """Joint HSV and XYZ bins (``_hsv_xyz``) of (M, 3) uint8 BGR pixels into (M,) int64."""
+    for m in range(pixels.shape[0]):
+        hsv[m], xyz[m] = _hsv_xyz(np.int64(pixels[m, 0]), np.int64(pixels[m, 1]),
+                                  np.int64(pixels[m, 2]), hsv_lut, xyz_lut)
 
 
 PAIRWISE_BLOCK = 128
@@ -124,7 +166,7 @@ def part_features(
     boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_centroids: bool,
     centres: np.ndarray, fr: np.ndarray, fc: np.ndarray,
     frame: np.ndarray, H: int, W: int, fg: np.ndarray, has_fg: bool,
-    colour_table: np.ndarray, shift: int, spread: np.ndarray,
+    hsv_lut: np.ndarray, xyz_lut: np.ndarray,
     parts: np.ndarray, area: np.ndarray, perimeter: np.ndarray, hsv: np.ndarray,
     xyz: np.ndarray, centroid: np.ndarray,
 ) -> None:
@@ -137,8 +179,7 @@ def part_features(
             R, C <= PAIRWISE_BLOCK).
         fr, fc: (R,), (C,) sample positions in [0, 1] along the height and width.
         frame: (H, W, 3) uint8 BGR. fg: (H, W) bool mask (any placeholder if not ``has_fg``).
-        colour_table: (2**24,) joint HSV bin + (joint XYZ bin << shift) of every BGR
-            triple, at its Morton index ``spread[b] << 2 | spread[g] << 1 | spread[r]``.
+        hsv_lut, xyz_lut: (3, 256) int64 joint-bin term of each channel value (``_hsv_xyz``).
         parts: (N, 5, 4) out: ``part_boxes(boxes, alpha, beta)``, the same float operations.
         area, perimeter: (N, 5) out. hsv, xyz: (N, 5, B) out. centroid: (N, 5, 2) out.
 
@@ -153,7 +194,6 @@ def part_features(
     on = np.empty((R, C), np.uint8)
     hsv_bin, xyz_bin = np.empty((R, C), np.int64), np.empty((R, C), np.int64)
     col_terms, row_terms = np.empty(C), np.empty(R)
-    mask = (1 << shift) - 1
     band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
     right = np.empty(C, np.int64)  # 1 if the column is right of the split
     count, edge = np.zeros(5, np.int64), np.zeros(5, np.int64)
@@ -216,16 +256,16 @@ def part_features(
         count_xyz[:] = 0
         sx[:] = 0.0
         sy[:] = 0.0
-        # joint colour bins of every sample first, without branches, so that the frame
-        # and table loads of many samples overlap
+        # joint colour bins of the foreground samples first, in a loop of their own (the
+        # frame loads and the arithmetic of many samples overlap)
         for r in range(R):
             row = frame[yi[r]]
             for c in range(C):
-                px = xi[c]
-                both = colour_table[(spread[row[px, 0]] << 2) | (spread[row[px, 1]] << 1)
-                                    | spread[row[px, 2]]]
-                hsv_bin[r, c] = both & mask
-                xyz_bin[r, c] = both >> shift
+                if on[r, c]:
+                    px = xi[c]
+                    hsv_bin[r, c], xyz_bin[r, c] = _hsv_xyz(
+                        np.int64(row[px, 0]), np.int64(row[px, 1]), np.int64(row[px, 2]),
+                        hsv_lut, xyz_lut)
         for r in range(R):
             for c in range(C):
                 if not on[r, c]:

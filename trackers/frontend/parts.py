@@ -212,53 +212,29 @@ _NO_MASK = np.zeros((1, 1), bool)
 _NO_CENTRES = np.zeros((0, 2))
 
 
-def _spread_bits() -> np.ndarray:
-    """(256,) int64: the 8 bits of v moved to every third bit (bit k to bit 3k)."""
-    v = np.arange(256, dtype=np.int64)
-    return sum(((v >> k) & 1) << (3 * k) for k in range(8))
+def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
+    """(3, 256) int64: row c maps a channel value v to its joint-bin term
+    ``min(v * bins // range_c, bins - 1) * bins ** (2 - c)`` (``_joint_lut``)."""
+    return np.ascontiguousarray(_joint_lut(bins, ranges).reshape(256, 3).T, dtype=np.int64)
 
 
-_SPREAD = _spread_bits()
-"""Morton (Z-order) index of a BGR triple: ``_SPREAD[b] << 2 | _SPREAD[g] << 1 | _SPREAD[r]``;
-nearby colours get nearby table entries, so the pixels of one person stay in cache."""
-
-
-def _colour_shift(bins: int) -> int:
-    """Bits of the joint HSV bin in a ``_colour_table`` entry: 8 up to 6 bins, else 16."""
-    return 8 if bins**3 <= 256 else 16
-
-
-@functools.lru_cache(maxsize=4)
-def _colour_table(bins: int) -> np.ndarray:
-    """(2**24,) joint colour bins of every BGR triple, at its Morton index (``_SPREAD``):
-    ``hsv + (xyz << _colour_shift(bins))`` where hsv and xyz are the ``_joint_index`` of
-    ``cv2.cvtColor(bgr, COLOR_BGR2HSV)`` and ``(..., COLOR_BGR2XYZ)``. uint16 up to 6 bins
-    (32 MiB), else uint32.
-
-    Made once per process and bin count with OpenCV itself (``cv2.cvtColor``, then the
-    ``cv2.LUT`` bins summed by ``cv2.transform``), so a lookup equals converting the
-    pixel; a constant shared by every extractor, built in about half a second.
-    """
-    shift = _colour_shift(bins)
-    dtype = np.uint16 if shift == 8 else np.uint32
-    luts = [(_joint_lut(bins, HSV_RANGES), cv2.COLOR_BGR2HSV, 0),
-            (_joint_lut(bins, XYZ_RANGES), cv2.COLOR_BGR2XYZ, shift)]
-    v = np.arange(256, dtype=np.uint8)
-    step = 16  # blue values per block: 16 x 256 x 256 pixels
-    block = np.empty((step, 256, 256, 3), np.uint8)
-    block[..., 1] = v[None, :, None]
-    block[..., 2] = v[None, None, :]
-    low = (_SPREAD[v][:, None] << 1 | _SPREAD[v][None, :]).reshape(-1)  # Morton (g, r) part
-    table = np.zeros(1 << 24, dtype)
-    for b0 in range(0, 256, step):
-        block[..., 0] = v[b0:b0 + step, None, None]
-        img = block.reshape(step * 256, 256, 3)
-        index = (_SPREAD[b0:b0 + step, None] << 2 | low[None, :]).reshape(-1)
-        for lut, code, bit in luts:
-            joint = cv2.transform(cv2.LUT(cv2.cvtColor(img, code), lut), np.ones((1, 3)))
-            table[index] |= joint.reshape(-1).astype(dtype) << dtype(bit)
-    table.flags.writeable = False
-    return table
+@functools.lru_cache(maxsize=1)
+def _check_colour_formulas() -> None:
+    """Raise RuntimeError unless the kernels' HSV and XYZ bins (OpenCV's integer formulas)
+    equal ``cv2.cvtColor``'s on 65**3 colours; run once per process (~20 ms)."""
+    v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)  # 65**3 colours
+    pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
+    hsv, xyz = np.empty(len(pixels), np.int64), np.empty(len(pixels), np.int64)
+    for bins in (4, 32):
+        luts = _channel_luts(bins, HSV_RANGES), _channel_luts(bins, XYZ_RANGES)
+        _part_kernels.joint_bins(pixels, *luts, hsv, xyz)
+        img = pixels[None]
+        want_hsv = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2HSV), bins, HSV_RANGES).reshape(-1)
+        want_xyz = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2XYZ), bins, XYZ_RANGES).reshape(-1)
+        if not (np.array_equal(hsv, want_hsv) and np.array_equal(xyz, want_xyz)):
+            raise RuntimeError(
+                f"OpenCV {cv2.__version__} converts BGR to HSV or XYZ differently from the "
+                "formulas of trackers/frontend/_part_kernels.py: update _hsv_xyz")
 
 
 class PartFeatureExtractor:
@@ -268,9 +244,9 @@ class PartFeatureExtractor:
     pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour).
     One kernel call (``trackers.frontend._part_kernels``) walks the samples of every box
     once: foreground test, part label, counts, centroid sums, outline test, and the joint
-    HSV and XYZ bins of each foreground sample, looked up in a per-process table that
-    ``cv2.cvtColor`` made for all 2**24 BGR colours (``_colour_table``), so the bins are
-    OpenCV's exactly (and every feature equals the earlier numpy version bit for bit). Features are thus scale-free by construction, and the 25 sizes of
+    HSV and XYZ bins of each foreground sample by OpenCV's own integer formulas (equal to
+    ``cv2.cvtColor`` for every colour), so every feature equals the earlier numpy version
+    (``cv2.cvtColor`` of the gathered samples, ``np.bincount``) bit for bit. Features are thus scale-free by construction, and the 25 sizes of
     the head-anchored search (PBM 3.1) cost one call. Outline (perimeter) samples are
     foreground samples with a background 4-neighbour on the grid (outside the box counts
     as background). Samples outside the image count as background.
@@ -294,7 +270,7 @@ class PartFeatureExtractor:
         self.grid_cols = grid_cols
         self._fr = (np.arange(grid_rows) + 0.5) / grid_rows
         self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
-        self._table: np.ndarray | None = None  # _colour_table, fetched on first use
+        self._luts: tuple[np.ndarray, np.ndarray] | None = None  # made on first use
         self._frame: np.ndarray | None = None
         self._fg: np.ndarray | None = None  # (H, W) bool, C-contiguous
 
@@ -308,11 +284,12 @@ class PartFeatureExtractor:
         self._frame = np.ascontiguousarray(frame)
         self._fg = None if foreground is None else np.ascontiguousarray(foreground, dtype=bool)
 
-    def _colours(self) -> tuple[np.ndarray, int]:
-        """The colour table (``_colour_table``, fetched on first use) and its shift."""
-        if self._table is None:
-            self._table = _colour_table(self.bins)
-        return self._table, _colour_shift(self.bins)
+    def _colour_luts(self) -> tuple[np.ndarray, np.ndarray]:
+        """The (3, 256) HSV and XYZ channel terms of the joint bins (``_channel_luts``)."""
+        if self._luts is None:
+            _check_colour_formulas()
+            self._luts = (_channel_luts(self.bins, HSV_RANGES), _channel_luts(self.bins, XYZ_RANGES))
+        return self._luts
 
     def _boxes(self, boxes: np.ndarray) -> np.ndarray:
         """The boxes as a new (N, 4) float64 array, once ``start`` was called."""
@@ -394,6 +371,6 @@ class PartFeatureExtractor:
         at_centroids = centres is not None
         _part_kernels.part_features(
             b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
-            self._fr, self._fc, self._frame, H, W, *self._mask(), *self._colours(), _SPREAD,
+            self._fr, self._fc, self._frame, H, W, *self._mask(), *self._colour_luts(),
             parts, area, perimeter, hsv, xyz, centroid)
         return PartFeatures(parts, area, perimeter, hsv, xyz, centroid, b[:, 3].copy())
