@@ -225,7 +225,7 @@ def test_band_heads_and_residual_foreground_equal_the_references():
         H, W = int(rng.integers(10, 90)), int(rng.integers(10, 90))
         fg = rng.random((H, W)) < rng.uniform(0.0, 0.9)
         n = int(rng.integers(0, 7))
-        boxes = np.column_stack([rng.uniform(-20, W, n), rng.uniform(-20, H, n),
+        boxes = np.column_stack([rng.uniform(-20, W + 20, n), rng.uniform(-20, H + 20, n),
                                  rng.uniform(0, 50, n), rng.uniform(0, 70, n)])
         ref_heads = np.array([_head_from_band_reference(fg, b) for b in boxes]).reshape(-1, 3)
         np.testing.assert_array_equal(S.heads_from_bands(fg, boxes), ref_heads)
@@ -238,6 +238,10 @@ def test_band_heads_and_residual_foreground_equal_the_references():
         assert S.residual_foreground(fg, boxes) == np.count_nonzero(resid)
     np.testing.assert_array_equal(S.head_from_band(None, np.array([10.0, 5.0, 8.0, 30.0])),
                                   [14.0, 5.0, 4.0])
+    fg = np.ones((20, 30), bool)
+    boxes = np.array([[0.0, 0.0, 10.0, 10.0], [np.nan, 1.0, 5.0, 5.0], [40.0, 50.0, 5.0, 5.0]])
+    assert S.residual_foreground(fg, boxes) == 600 - 100  # the NaN box and the outside one: none
+    assert np.isnan(S.heads_from_bands(fg, boxes)[1]).any()
 
 
 def test_head_fill_and_head_patch_equal_the_references():

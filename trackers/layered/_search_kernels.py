@@ -516,17 +516,20 @@ def band_heads(fg: np.ndarray, boxes: np.ndarray, fraction: float) -> np.ndarray
 
 @numba.njit(cache=True)
 def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
-    """Number of nonzero pixels of a uint8 mask inside the union of N finite xywh boxes,
-    each covering the pixels of ``geometry.box_slices`` (floor of the top-left, ceil of
-    the bottom-right, clipped to the image)."""
+    """Number of nonzero pixels of a uint8 mask inside the union of N xywh boxes, each
+    covering the pixels of ``geometry.box_slices`` (floor of the top-left, ceil of the
+    bottom-right, clipped to the image); a non-finite box covers nothing."""
     H, W = fg.shape
     n = boxes.shape[0]
-    spans = np.empty((n, 4), np.int64)  # r0, r1, c0, c1 (half-open)
+    spans = np.zeros((n, 4), np.int64)  # r0, r1, c0, c1 (half-open, inside the image)
     for k in range(n):
         x, y, w, h = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
-        c0, c1 = max(int(np.floor(x)), 0), min(int(np.ceil(x + w)), W)
-        r0, r1 = max(int(np.floor(y)), 0), min(int(np.ceil(y + h)), H)
-        spans[k, 0], spans[k, 1], spans[k, 2], spans[k, 3] = r0, max(r1, r0), c0, max(c1, c0)
+        if not (np.isfinite(x) and np.isfinite(y) and np.isfinite(x + w) and np.isfinite(y + h)):
+            continue  # covers nothing
+        c0, c1 = min(max(np.floor(x), 0.0), W), min(np.ceil(x + w), W)
+        r0, r1 = min(max(np.floor(y), 0.0), H), min(np.ceil(y + h), H)
+        spans[k, 0], spans[k, 1] = int(r0), int(max(r1, r0))
+        spans[k, 2], spans[k, 3] = int(c0), int(max(c1, c0))
     starts = np.empty(n, np.int64)
     ends = np.empty(n, np.int64)
     total = 0

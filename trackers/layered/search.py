@@ -163,7 +163,7 @@ def residual_foreground(fg: np.ndarray, boxes: np.ndarray) -> int:
     ``geometry.box_slices`` (floor of its top-left, ceil of its bottom-right, clipped).
 
     Args:
-        fg: (H, W) bool foreground. boxes: (N, 4) finite xywh.
+        fg: (H, W) bool foreground. boxes: (N, 4) xywh (a non-finite box covers nothing).
     """
     fg = np.ascontiguousarray(fg, dtype=np.bool_)
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
