@@ -192,7 +192,6 @@ def part_features(
     ys, xs = np.empty(R), np.empty(C)
     yi, xi = np.empty(R, np.int64), np.empty(C, np.int64)
     on = np.empty((R, C), np.uint8)
-    hsv_bin, xyz_bin = np.empty((R, C), np.int64), np.empty((R, C), np.int64)
     col_terms, row_terms = np.empty(C), np.empty(R)
     band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
     right = np.empty(C, np.int64)  # 1 if the column is right of the split
@@ -256,26 +255,20 @@ def part_features(
         count_xyz[:] = 0
         sx[:] = 0.0
         sy[:] = 0.0
-        # joint colour bins of the foreground samples first, in a loop of their own (the
-        # frame loads and the arithmetic of many samples overlap)
         for r in range(R):
             row = frame[yi[r]]
             for c in range(C):
-                if on[r, c]:
-                    px = xi[c]
-                    hsv_bin[r, c], xyz_bin[r, c] = _hsv_xyz(
-                        np.int64(row[px, 0]), np.int64(row[px, 1]), np.int64(row[px, 2]),
-                        hsv_lut, xyz_lut)
-        for r in range(R):
-            for c in range(C):
                 if not on[r, c]:
                     continue
+                px = xi[c]
+                hsv_bin, xyz_bin = _hsv_xyz(np.int64(row[px, 0]), np.int64(row[px, 1]),
+                                            np.int64(row[px, 2]), hsv_lut, xyz_lut)
                 k = band[r] + right[c] if band[r] > 0 else 0
                 count[k] += 1
                 sx[k] += xs[c]  # in sample order, as np.bincount(weights=...)
                 sy[k] += ys[r]
-                count_hsv[k, hsv_bin[r, c]] += 1
-                count_xyz[k, xyz_bin[r, c]] += 1
+                count_hsv[k, hsv_bin] += 1
+                count_xyz[k, xyz_bin] += 1
                 if (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
                         or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1]):
                     edge[k] += 1
