@@ -291,21 +291,16 @@ def test_extractor_equals_reference_bit_for_bit(fg_kind, bins, grid):
     _assert_same(feats, ref)
 
 
-@pytest.mark.parametrize("bins", [4, 8])
-def test_colour_bins_equal_cvtcolor_for_every_colour(bins):
+def test_colour_conversion_equals_cvtcolor_for_every_colour():
     # the kernels' integer HSV and XYZ formulas against OpenCV on all 2**24 BGR colours
     from trackers.frontend import _part_kernels
-    from trackers.frontend.parts import HSV_RANGES, XYZ_RANGES, _channel_luts, _joint_index
 
     v = np.arange(256, dtype=np.uint8)
     img = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(4096, 4096, 3)
-    hsv, xyz = np.empty(1 << 24, np.int64), np.empty(1 << 24, np.int64)
-    _part_kernels.joint_bins(img.reshape(-1, 3), _channel_luts(bins, HSV_RANGES),
-                             _channel_luts(bins, XYZ_RANGES), hsv, xyz)
-    want = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2HSV), bins, HSV_RANGES).reshape(-1)
-    np.testing.assert_array_equal(hsv, want)
-    want = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2XYZ), bins, XYZ_RANGES).reshape(-1)
-    np.testing.assert_array_equal(xyz, want)
+    got = np.empty((1 << 24, 6), np.int64)
+    _part_kernels.convert(img.reshape(-1, 3), got)
+    np.testing.assert_array_equal(got[:, :3], cv2.cvtColor(img, cv2.COLOR_BGR2HSV).reshape(-1, 3))
+    np.testing.assert_array_equal(got[:, 3:], cv2.cvtColor(img, cv2.COLOR_BGR2XYZ).reshape(-1, 3))
 
 
 def test_extractor_accepts_readonly_and_list_inputs():

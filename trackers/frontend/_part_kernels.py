@@ -66,34 +66,30 @@ _XYZ = np.array([[739, 1465, 1689], [296, 2929, 871], [3892, 488, 79]], dtype=np
 
 
 @numba.njit(cache=True, inline="always")
-def _hsv_xyz(b: int, g: int, r: int, hsv_lut: np.ndarray, xyz_lut: np.ndarray) -> tuple[int, int]:
-    """Joint HSV and XYZ histogram bins of one BGR pixel: ``cv2.cvtColor`` to 8-bit HSV
-    (OpenCV's RGB2HSV_b: integer division by tables, hue 0..179) and to XYZ (RGB2XYZ_i),
-    then channel c's value q adds ``lut[c, q]`` (``min(q * bins // range, bins - 1) *
-    bins ** (2 - c)``)."""
+def _hsv_xyz(b: int, g: int, r: int) -> tuple[int, int, int, int, int, int]:
+    """OpenCV's 8-bit HSV (hue 0..179) and XYZ of one BGR pixel, as ``cv2.cvtColor`` with
+    COLOR_BGR2HSV (RGB2HSV_b: integer division by tables) and COLOR_BGR2XYZ (RGB2XYZ_i)."""
     v, vmin = max(b, g, r), min(b, g, r)
     diff = v - vmin
-    s = (diff * _S_DIV[v] + (1 << (HSV_SHIFT - 1))) >> HSV_SHIFT
+    half = 1 << (HSV_SHIFT - 1)
+    s = (diff * _S_DIV[v] + half) >> HSV_SHIFT
     # the hue sector without branches (colours are noisy): OpenCV's vr, vg masks
     vr, vg = -np.int64(v == r), -np.int64(v == g)
     h = (vr & (g - b)) + (~vr & ((vg & (b - r + 2 * diff)) + (~vg & (r - g + 4 * diff))))
-    h = (h * _H_DIV[diff] + (1 << (HSV_SHIFT - 1))) >> HSV_SHIFT
+    h = (h * _H_DIV[diff] + half) >> HSV_SHIFT
     h = min(h + (180 & -np.int64(h < 0)), 255)
-    half = 1 << (HSV_SHIFT - 1)
     x = min((b * _XYZ[0, 0] + g * _XYZ[0, 1] + r * _XYZ[0, 2] + half) >> HSV_SHIFT, 255)
     y = min((b * _XYZ[1, 0] + g * _XYZ[1, 1] + r * _XYZ[1, 2] + half) >> HSV_SHIFT, 255)
     z = min((b * _XYZ[2, 0] + g * _XYZ[2, 1] + r * _XYZ[2, 2] + half) >> HSV_SHIFT, 255)
-    return (hsv_lut[0, h] + hsv_lut[1, s] + hsv_lut[2, v],
-            xyz_lut[0, x] + xyz_lut[1, y] + xyz_lut[2, z])
+    return h, s, v, x, y, z
 
 
 @numba.njit(cache=True)
-def joint_bins(pixels: np.ndarray, hsv_lut: np.ndarray, xyz_lut: np.ndarray,
-               hsv: np.ndarray, xyz: np.ndarray) -> None:
-    """Joint HSV and XYZ bins (``_hsv_xyz``) of (M, 3) uint8 BGR pixels into (M,) int64."""
+def convert(pixels: np.ndarray, out: np.ndarray) -> None:
+    """(M, 3) uint8 BGR pixels to (M, 6) int64 H, S, V, X, Y, Z (``_hsv_xyz``)."""
     for m in range(pixels.shape[0]):
-        hsv[m], xyz[m] = _hsv_xyz(np.int64(pixels[m, 0]), np.int64(pixels[m, 1]),
-                                  np.int64(pixels[m, 2]), hsv_lut, xyz_lut)
+        out[m, 0], out[m, 1], out[m, 2], out[m, 3], out[m, 4], out[m, 5] = _hsv_xyz(
+            np.int64(pixels[m, 0]), np.int64(pixels[m, 1]), np.int64(pixels[m, 2]))
 
 
 PAIRWISE_BLOCK = 128
@@ -179,7 +175,9 @@ def part_features(
             R, C <= PAIRWISE_BLOCK).
         fr, fc: (R,), (C,) sample positions in [0, 1] along the height and width.
         frame: (H, W, 3) uint8 BGR. fg: (H, W) bool mask (any placeholder if not ``has_fg``).
-        hsv_lut, xyz_lut: (3, 256) int64 joint-bin term of each channel value (``_hsv_xyz``).
+        hsv_lut, xyz_lut: (3, 256) int64: channel c's value q (``_hsv_xyz``) adds
+            ``lut[c, q] = min(q * bins // range_c, bins - 1) * bins ** (2 - c)`` to the
+            joint bin (``parts._channel_luts``).
         parts: (N, 5, 4) out: ``part_boxes(boxes, alpha, beta)``, the same float operations.
         area, perimeter: (N, 5) out. hsv, xyz: (N, 5, B) out. centroid: (N, 5, 2) out.
 
@@ -261,8 +259,10 @@ def part_features(
                 if not on[r, c]:
                     continue
                 px = xi[c]
-                hsv_bin, xyz_bin = _hsv_xyz(np.int64(row[px, 0]), np.int64(row[px, 1]),
-                                            np.int64(row[px, 2]), hsv_lut, xyz_lut)
+                ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(row[px, 0]), np.int64(row[px, 1]),
+                                                  np.int64(row[px, 2]))
+                hsv_bin = hsv_lut[0, ch] + hsv_lut[1, cs] + hsv_lut[2, cv]
+                xyz_bin = xyz_lut[0, cx] + xyz_lut[1, cy] + xyz_lut[2, cz]
                 k = band[r] + right[c] if band[r] > 0 else 0
                 count[k] += 1
                 sx[k] += xs[c]  # in sample order, as np.bincount(weights=...)

@@ -220,21 +220,19 @@ def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 
 @functools.lru_cache(maxsize=1)
 def _check_colour_formulas() -> None:
-    """Raise RuntimeError unless the kernels' HSV and XYZ bins (OpenCV's integer formulas)
-    equal ``cv2.cvtColor``'s on 65**3 colours; run once per process (~20 ms)."""
-    v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)  # 65**3 colours
+    """Raise RuntimeError unless the kernels' HSV and XYZ values (OpenCV's integer
+    formulas, ``_part_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
+    once per process (~20 ms; tests/test_parts.py checks all 2**24)."""
+    v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
-    hsv, xyz = np.empty(len(pixels), np.int64), np.empty(len(pixels), np.int64)
-    for bins in (4, 32):
-        luts = _channel_luts(bins, HSV_RANGES), _channel_luts(bins, XYZ_RANGES)
-        _part_kernels.joint_bins(pixels, *luts, hsv, xyz)
-        img = pixels[None]
-        want_hsv = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2HSV), bins, HSV_RANGES).reshape(-1)
-        want_xyz = _joint_index(cv2.cvtColor(img, cv2.COLOR_BGR2XYZ), bins, XYZ_RANGES).reshape(-1)
-        if not (np.array_equal(hsv, want_hsv) and np.array_equal(xyz, want_xyz)):
-            raise RuntimeError(
-                f"OpenCV {cv2.__version__} converts BGR to HSV or XYZ differently from the "
-                "formulas of trackers/frontend/_part_kernels.py: update _hsv_xyz")
+    got = np.empty((len(pixels), 6), np.int64)
+    _part_kernels.convert(pixels, got)
+    want = np.concatenate([cv2.cvtColor(pixels[None], cv2.COLOR_BGR2HSV)[0],
+                           cv2.cvtColor(pixels[None], cv2.COLOR_BGR2XYZ)[0]], axis=1)
+    if not np.array_equal(got, want):
+        raise RuntimeError(
+            f"OpenCV {cv2.__version__} converts BGR to 8-bit HSV or XYZ differently from "
+            "trackers/frontend/_part_kernels._hsv_xyz: update it")
 
 
 class PartFeatureExtractor:
