@@ -287,3 +287,14 @@ def test_occlusion_kinds_and_search_boxes_equal_the_one_at_a_time_versions():
             np.testing.assert_array_equal(many[s], S.search_boxes(heads[s], pred[s], alpha[s], 0.05, r))
             np.testing.assert_array_equal(S.aligned_box(heads[s], pred[s], alpha[s]),
                                           [heads[s, 0] - alpha[s] * pred[s, 0], heads[s, 1], *pred[s]])
+
+
+def test_templates_too_small_for_blocks_are_matched_by_opencv_exhaustively():
+    rng = np.random.default_rng(10)
+    gray = _scene(rng)
+    for th, tw in ((3, 3), (3, 20), (12, 3)):
+        tpl = rng.integers(0, 256, (th, tw), dtype=np.uint8)
+        tl, corr = S.match_head_template(gray, tpl, np.array([70.0, 50.0]), 30.0)
+        ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, np.array([70.0, 50.0]), 30.0)
+        np.testing.assert_array_equal(tl, ref_tl)
+        assert corr == ref_corr

@@ -304,8 +304,9 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
     ``COARSE_FACTOR`` x ``COARSE_FACTOR`` blocks; from each of its ``COARSE_PEAKS`` best
     local maxima the (2 ``REFINE_PAD`` + 1)^2 full-resolution positions around it are
     scored exactly and the best climbs to a local maximum (``_search_kernels``). Windows
-    of at most ``SMALL_WINDOW`` positions, templates under 2 ``COARSE_FACTOR`` pixels a
-    side and templates flat over blocks are scored exhaustively. Scores equal ``cv2.matchTemplate``'s up to its float32 rounding;
+    of at most ``SMALL_WINDOW`` positions are scored exhaustively (compiled); templates
+    under 2 ``COARSE_FACTOR`` pixels a side or flat over blocks by ``cv2.matchTemplate``
+    over the whole window. Scores equal ``cv2.matchTemplate``'s up to its float32 rounding;
     the position is the exhaustive maximum's unless another local maximum ranks higher
     at the coarse level (rare; then a near-equal local maximum is returned).
 
@@ -328,11 +329,15 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
     win = np.ascontiguousarray(gray[r0:r1, c0:c1], dtype=np.uint8)
     template = np.ascontiguousarray(template, dtype=np.uint8)
     f = COARSE_FACTOR
+    if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW:
+        bx, by, best = ncc_all(win, template)
+        return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
     xs = ys = np.zeros(0, np.int64)
-    if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) > SMALL_WINDOW and th >= 2 * f and tw >= 2 * f:
+    if th >= 2 * f and tw >= 2 * f:
         xs, ys = coarse_peaks(win, template, f, COARSE_PEAKS)
     if len(xs):
         bx, by, best = ncc_climb(win, template, xs, ys, REFINE_PAD)
-    else:  # small window, small template, or a template flat over blocks
-        bx, by, best = ncc_all(win, template)
+    else:  # a template too small for blocks, or flat over blocks: OpenCV, exhaustively
+        res = cv2.matchTemplate(win, template, cv2.TM_CCOEFF_NORMED)
+        _, best, _, (bx, by) = cv2.minMaxLoc(res)
     return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
