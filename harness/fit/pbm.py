@@ -378,6 +378,8 @@ def search_weights(samples: PairSamples, models: FeatureModels, gamma: np.ndarra
         raise ValueError(f"weight search needs positive and negative pairs, got {n_pos} and {n_neg}")
     grid = weight_grid(step)
     folds = block_folds(samples.block, k)
+    log.info("searching omega: %d grid points, %d positive and %d negative pairs, %d folds",
+             len(grid), n_pos, n_neg, k)
     q = feature_scores(models, samples.d, gamma, spread)
     acc = fold_accuracies(q, samples.positive, folds, k, grid, threshold)
     mean = acc.mean(axis=1)
