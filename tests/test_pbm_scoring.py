@@ -272,3 +272,15 @@ def test_ambiguous_rows_equal_ambiguous_per_row(rng):
         assert (int(best[t]), int(runner[t]), bool(amb[t])) == ambiguous(scores[t], 0.25, 1.1)
     assert ambiguous_rows(np.zeros((0, 4)), 0.25, 1.1)[0].shape == (0,)
     assert ambiguous_rows(np.zeros((2, 0)), 0.25, 1.1)[0].tolist() == [-1, -1]
+
+
+def test_bad_pairs_raise(rng):
+    model, cand = random_features(rng, 3), random_features(rng, 4)
+    with pytest.raises(IndexError, match="out of range"):
+        selected_differences(model, cand, np.array([0, 3]), np.array([0, 1]))
+    with pytest.raises(IndexError, match="out of range"):
+        selected_differences(model, cand, np.array([0]), np.array([4]))
+    with pytest.raises(ValueError, match="equal-length"):
+        selected_differences(model, cand, np.array([0, 1]), np.array([0]))
+    with pytest.raises(ValueError, match="bins differ"):
+        selected_differences(model, random_features(rng, 4, bins=3), np.array([0]), np.array([0]))

@@ -13,8 +13,9 @@ selected pairs in one call (the models indexed, not copied per pair). Every
 kernel fixes its floating-point order, the same as the numpy expression quoted in its
 docstring (the tests compare them value for value):
 
-- rho: ``np.sqrt(p * q).sum(-1)`` (numpy's pairwise sum, ``_pairwise_rho``); no BLAS
-  product, whose rounding depends on the CPU's kernel;
+- rho: ``np.sqrt(p * q).sum(-1)`` (numpy's pairwise sum, ``_rho``); no BLAS product,
+  whose rounding depends on the CPU's kernel;
+- p(d | theta): ``scipy.special.ndtr`` itself (``_survival``);
 - eq. 12: ``np.einsum("...ij,i->...j", prob, omega)`` (i = 0..5 left to right from 0);
 - eq. 13: sum_j p_j gamma_j, j = 0..4 left to right from 0.
 """
@@ -55,8 +56,8 @@ _NDTR_SYMBOL = "occbench_scipy_special_ndtr"
 def _bind_scipy_ndtr() -> types.ExternalFunction:
     """Register scipy.special.cython_special's float64 ndtr under ``_NDTR_SYMBOL``."""
     capsule = cython_special.__pyx_capi__.get(_NDTR_CAPSULE)
-    get_name = ctypes.pythonapi.PyCapsule_GetName
-    get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
+    get_name = ctypes.PYFUNCTYPE(ctypes.c_char_p, ctypes.py_object)(
+        ("PyCapsule_GetName", ctypes.pythonapi))
     if capsule is None or get_name(capsule) != _NDTR_SIGNATURE:
         raise ImportError(f"scipy.special.cython_special.{_NDTR_CAPSULE} is missing or is not "
                           f"{_NDTR_SIGNATURE.decode()!r} in this scipy version; the PBM scoring "
@@ -229,6 +230,9 @@ def _differences_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np
                         out: np.ndarray) -> None:
     """``_pair_differences`` of pairs (ti[k], n[k]) into out (K, 6, 5); misses (T,) float64
     per target, g = 1 / (1 + misses)."""
+    for k in range(ti.shape[0]):
+        if not (0 <= ti[k] < m_area.shape[0] and 0 <= n[k] < c_area.shape[0]):
+            raise IndexError("selected pair index out of range")
     v, stack = np.empty(m_hsv.shape[2]), np.empty(program.shape[0])
     for k in range(ti.shape[0]):
         _pair_differences(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
@@ -343,8 +347,14 @@ def _misses(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
 
 def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
                  misses: np.ndarray | None, union_floor: float) -> np.ndarray:
+    """Eq. 11 of pairs (ti[k], n[k]), indices in [0, T) and [0, N) (IndexError else)."""
     ti = np.asarray(ti, dtype=np.intp)
     n = np.asarray(n, dtype=np.intp)
+    if ti.shape != n.shape or ti.ndim != 1:
+        raise ValueError(f"pair indices ti {ti.shape} and n {n.shape} must be equal-length 1-D")
+    if model.hsv.shape[2] != cand.hsv.shape[2] or model.xyz.shape[2] != cand.xyz.shape[2]:
+        raise ValueError(f"histogram bins differ: model {model.hsv.shape[2]}, "
+                         f"candidates {cand.hsv.shape[2]}")
     out = np.empty((len(ti), N_FEATURES, N_PARTS))
     _differences_kernel(*_arrays(model), *_arrays(cand)[:6], ti, n, _misses(misses, len(model)),
                         union_floor, *_pairwise_plan(model.hsv.shape[2]), out)
