@@ -1,7 +1,7 @@
 """Compiled kernels of ``trackers.layered.search`` (numba, one core).
 
 The head-template match of PBM 4.1 (multiple-response pruning) runs coarse to fine:
-``coarse_peaks`` scores TM_CCOEFF_NORMED on f x f block sums of the window and template
+``coarse_peaks`` scores TM_CCOEFF_NORMED on block sums of the window and template
 and keeps the best local maxima; ``ncc_climb`` climbs from each, at full resolution, to
 a local maximum of the exact score. ``ncc_all`` scores every position (small windows).
 Full-resolution scores use exact integer sums (held in float32 per row and float64
@@ -112,24 +112,26 @@ def _template_stats(tpl: np.ndarray) -> tuple[float, float]:
 
 
 @numba.njit(cache=True)
-def _block_sums(img: np.ndarray, f: int, h: int, w: int) -> np.ndarray:
-    """(h, w) float32 sums of the f x f blocks (f = 2 or 3) of a C-contiguous uint8
-    image (its top-left h f x w f)."""
+def _block_sums(img: np.ndarray, fy: int, fx: int, h: int, w: int) -> np.ndarray:
+    """(h, w) float32 sums of the fy x fx blocks (fy >= 1; fx = 2 or 3) of a uint8 image
+    (its top-left h fy x w fx)."""
     out = np.empty((h, w), np.float32)
+    tmp = np.empty(w * fx, np.float32)
     for y in range(h):
-        a = img[f * y]
-        b = img[f * y + 1]
+        a = img[fy * y, :w * fx]
+        for x in range(w * fx):
+            tmp[x] = np.float32(a[x])
+        for dy in range(1, fy):
+            b = img[fy * y + dy, :w * fx]
+            for x in range(w * fx):
+                tmp[x] += np.float32(b[x])
         o = out[y]
-        if f == 2:
+        if fx == 2:
             for x in range(w):
-                o[x] = ((np.float32(a[2 * x]) + np.float32(a[2 * x + 1]))
-                        + (np.float32(b[2 * x]) + np.float32(b[2 * x + 1])))
+                o[x] = tmp[2 * x] + tmp[2 * x + 1]
         else:
-            c = img[f * y + 2]
             for x in range(w):
-                o[x] = ((np.float32(a[3 * x]) + np.float32(a[3 * x + 1]) + np.float32(a[3 * x + 2]))
-                        + (np.float32(b[3 * x]) + np.float32(b[3 * x + 1]) + np.float32(b[3 * x + 2]))
-                        + (np.float32(c[3 * x]) + np.float32(c[3 * x + 1]) + np.float32(c[3 * x + 2])))
+                o[x] = tmp[3 * x] + tmp[3 * x + 1] + tmp[3 * x + 2]
     return out
 
 
@@ -167,26 +169,27 @@ def _correlate_rows(img: np.ndarray, tpl: np.ndarray, ny: int, nx: int) -> np.nd
 
 
 @numba.njit(cache=True)
-def coarse_peaks(win: np.ndarray, tpl: np.ndarray, f: int, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The ``k`` best local maxima of TM_CCOEFF_NORMED on f x f block sums (f = 2 or 3).
+def coarse_peaks(win: np.ndarray, tpl: np.ndarray, fy: int, fx: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` best local maxima of TM_CCOEFF_NORMED on fy x fx block sums.
 
-    Window and template are summed over f x f blocks (rows and columns that do not fill a
-    block are left out); the zero-mean cross-correlation of the block images (float32)
-    over the window deviation (exact float64 integral images) ranks the positions (by the
-    signed square of the normalised correlation, which orders them alike); the 3 x 3
-    local maxima (>= every neighbour) are kept, best first, ties in raster order.
+    Window and template are summed over blocks of fy rows and fx columns (fx = 2 or 3;
+    rows and columns that do not fill a block are left out); the zero-mean
+    cross-correlation of the block images (float32) over the window deviation (exact
+    float64 integral images) ranks the positions (by the signed square of the normalised
+    correlation, which orders them alike); the 3 x 3 local maxima (>= every neighbour)
+    are kept, best first, ties in raster order.
 
     Args:
         win: (H, W) C-contiguous uint8 window. tpl: (th, tw) C-contiguous uint8 template,
-            2 f <= th <= H, 2 f <= tw <= W.
+            2 fy <= th <= H, 2 fx <= tw <= W.
     Returns:
-        columns and rows (int64, full-resolution top-left positions, multiples of f), at
-        most k; none when the block template is flat.
+        columns and rows (int64, full-resolution top-left positions on the block grid),
+        at most k; none when the block template is flat.
     """
-    th2, tw2 = tpl.shape[0] // f, tpl.shape[1] // f
-    ch, cw = win.shape[0] // f, win.shape[1] // f
-    small = _block_sums(win, f, ch, cw)
-    tz = _block_sums(tpl, f, th2, tw2)
+    th2, tw2 = tpl.shape[0] // fy, tpl.shape[1] // fx
+    ch, cw = win.shape[0] // fy, win.shape[1] // fx
+    small = _block_sums(win, fy, fx, ch, cw)
+    tz = _block_sums(tpl, fy, fx, th2, tw2)
     n = th2 * tw2
     mean = tz.sum() / n
     t2 = 0.0
@@ -240,7 +243,7 @@ def coarse_peaks(win: np.ndarray, tpl: np.ndarray, f: int, k: int) -> tuple[np.n
             while j > 0 and bv[j - 1] < v:
                 bv[j], bx[j], by[j] = bv[j - 1], bx[j - 1], by[j - 1]
                 j -= 1
-            bv[j], bx[j], by[j] = v, f * x, f * y
+            bv[j], bx[j], by[j] = v, fx * x, fy * y
             m = min(m + 1, k)
     return bx[:m], by[:m]
 

@@ -44,11 +44,12 @@ from trackers.layered._search_kernels import (
     profile_peaks,
 )
 
-# head-template match (PBM 4.1), coarse to fine: block size of the coarse pass (2 or 3),
-# coarse local maxima refined, half-size of the full-resolution neighbourhood scored
-# around each, and the largest window (in positions) scored exhaustively instead
-COARSE_FACTOR = 2
-COARSE_PEAKS = 4
+# head-template match (PBM 4.1), coarse to fine: block (rows, columns) of the coarse
+# pass (heads are wide and short: 3 columns, 2 rows), coarse local maxima refined,
+# half-size of the full-resolution neighbourhood scored around each, and the largest
+# window (in positions) scored exhaustively instead
+COARSE_BLOCK = (2, 3)
+COARSE_PEAKS = 5
 REFINE_PAD = 3
 SMALL_WINDOW = 64
 
@@ -301,12 +302,12 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
     The search window holds the top-left positions within ``radius`` (a square) of
     ``centre``, clipped to the image. TM_CCOEFF_NORMED (zero-mean normalised
     correlation) is first computed on the window and the template both summed over
-    ``COARSE_FACTOR`` x ``COARSE_FACTOR`` blocks; from each of its ``COARSE_PEAKS`` best
+    ``COARSE_BLOCK`` (2 rows x 3 columns) blocks; from each of its ``COARSE_PEAKS`` best
     local maxima the (2 ``REFINE_PAD`` + 1)^2 full-resolution positions around it are
     scored exactly and the best climbs to a local maximum (``_search_kernels``). Windows
     of at most ``SMALL_WINDOW`` positions are scored exhaustively (compiled); templates
-    under 2 ``COARSE_FACTOR`` pixels a side or flat over blocks by ``cv2.matchTemplate``
-    over the whole window. Scores equal ``cv2.matchTemplate``'s up to its float32 rounding;
+    smaller than 2 x 2 blocks or flat over blocks by ``cv2.matchTemplate`` over the
+    whole window. Scores equal ``cv2.matchTemplate``'s up to its float32 rounding;
     the position is the exhaustive maximum's unless another local maximum ranks higher
     at the coarse level (rare; then a near-equal local maximum is returned).
 
@@ -328,13 +329,13 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
         return np.asarray(centre, dtype=np.float64), -1.0
     win = np.ascontiguousarray(gray[r0:r1, c0:c1], dtype=np.uint8)
     template = np.ascontiguousarray(template, dtype=np.uint8)
-    f = COARSE_FACTOR
+    fy, fx = COARSE_BLOCK
     if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW:
         bx, by, best = ncc_all(win, template)
         return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
     xs = ys = np.zeros(0, np.int64)
-    if th >= 2 * f and tw >= 2 * f:
-        xs, ys = coarse_peaks(win, template, f, COARSE_PEAKS)
+    if th >= 2 * fy and tw >= 2 * fx:
+        xs, ys = coarse_peaks(win, template, fy, fx, COARSE_PEAKS)
     if len(xs):
         bx, by, best = ncc_climb(win, template, xs, ys, REFINE_PAD)
     else:  # a template too small for blocks, or flat over blocks: OpenCV, exhaustively
