@@ -104,20 +104,6 @@ def test_detections_subset_renumbers_labels():
     assert TrackState.OCCLUDED.reported and not TrackState.HYPOTHESIS.reported
 
 
-def test_box_spans_equal_box_slices():
-    from trackers.geometry import box_slices, box_spans
-
-    rng = np.random.default_rng(3)
-    boxes = np.column_stack([rng.uniform(-30, 120, 200), rng.uniform(-30, 90, 200),
-                             rng.uniform(0, 60, 200), rng.uniform(0, 60, 200)])
-    boxes[:5] = [[0, 0, 0, 0], [99.5, 79.5, 3, 3], [-10, -10, 5, 5], [10.2, 3.7, 0.1, 0.1], [0, 0, 100, 80]]
-    spans = box_spans(boxes, (80, 100))
-    for b, (r0, r1, c0, c1) in zip(boxes, spans):
-        rs, cs = box_slices(b, (80, 100))
-        assert (rs.start, rs.stop, cs.start, cs.stop) == (r0, r1, c0, c1)
-    assert box_spans(np.zeros((0, 4)), (80, 100)).shape == (0, 4)
-
-
 def test_assign_without_a_gate_skips_forbidden_pairs():
     cost = np.array([[0.2, np.inf], [np.inf, np.nan], [5.0, 0.1]])
     matches, rows, cols = assign(cost, np.inf)  # used to fail: "cost matrix is infeasible"

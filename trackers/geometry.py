@@ -126,13 +126,3 @@ def box_slices(box: np.ndarray, shape: tuple[int, int]) -> tuple[slice, slice]:
     c0, c1 = max(int(np.floor(x)), 0), min(int(np.ceil(x + bw)), w)
     r0, r1 = max(int(np.floor(y)), 0), min(int(np.ceil(y + bh)), h)
     return slice(r0, max(r1, r0)), slice(c0, max(c1, c0))
-
-
-def box_spans(boxes: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """(N, 4) int rows r0, r1 and columns c0, c1 (r1 >= r0, c1 >= c0) of the pixels each
-    finite xywh box covers, clipped to an (H, W) image: ``box_slices`` of many boxes."""
-    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    h, w = shape
-    r0, c0 = np.maximum(np.floor(b[:, 1]), 0), np.maximum(np.floor(b[:, 0]), 0)
-    r1, c1 = np.minimum(np.ceil(b[:, 1] + b[:, 3]), h), np.minimum(np.ceil(b[:, 0] + b[:, 2]), w)
-    return np.column_stack([r0, np.maximum(r1, r0), c0, np.maximum(c1, c0)]).astype(np.intp)

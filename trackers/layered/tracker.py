@@ -70,7 +70,7 @@ from trackers.frontend.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.geometry import box_spans, iou_matrix, overlap_ratio_matrix
+from trackers.geometry import iou_matrix, overlap_ratio_matrix
 from trackers.layered.association import (
     ambiguous,
     global_scores,
@@ -89,8 +89,10 @@ from trackers.layered.search import (
     head_fill,
     head_from_band,
     head_patch,
+    heads_from_bands,
     match_head_template,
     occlusion_kinds,
+    residual_foreground,
     search_boxes_many,
     split_blob_box,
     top_profile_heads,
@@ -314,23 +316,22 @@ class PBMTracker:
         valid = finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)
         has_head = (np.zeros(len(det_boxes), dtype=bool) if heads is None
                     else np.isfinite(heads).all(axis=1))
+        # band heads (PBM 3.1) of all boxes at once, when some box needs one
+        band = (heads_from_bands(fg, det_boxes)
+                if fg is not None and len(det_boxes) and not has_head.all() else None)
         for k in np.flatnonzero(valid):
             box = det_boxes[k]
             if has_head[k]:
                 hx, hy, hw, _ = heads[k]
                 head = np.array([hx + 0.5 * hw, hy, hw])
             else:
-                head = head_from_band(fg, box)
+                head = band[k] if band is not None else head_from_band(None, box)
             anchors.append(Anchor(box.copy(), box.copy(), head, None, "detection"))
         if fg is None:
             return anchors
-        if len(det_boxes):
-            # blobs matter only where foreground is left unexplained by the detections
-            resid = fg.copy()
-            for r0, r1, c0, c1 in box_spans(det_boxes[finite], fg.shape).tolist():
-                resid[r0:r1, c0:c1] = False
-            if np.count_nonzero(resid) < self.min_blob_area:
-                return anchors
+        # blobs matter only where foreground is left unexplained by the detections
+        if len(det_boxes) and residual_foreground(fg, det_boxes) < self.min_blob_area:
+            return anchors
         s = self.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
         labels, bboxes, numbers = blobs_boxes(small, max(self.min_blob_area // (s * s), 1))
