@@ -71,14 +71,7 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
-from trackers.layered.association import (
-    ambiguous,
-    global_scores,
-    layered_scores,
-    paired_differences,
-    part_scores,
-    selected_differences,
-)
+from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import Targets, dof_from_box, dof_from_head, update_parts
 from trackers.layered.models import FEATURES, FeatureModels
@@ -437,9 +430,9 @@ class PBMTracker:
         tis = pair_ti[np.concatenate([np.repeat(np.array(search_q, dtype=np.intp), m),
                                       np.array(align_q, dtype=np.intp)])]
         feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
-        misses = targets.misses[tis]
-        d = paired_differences(model.take(tis), feats, misses)
-        pj, p = layered_scores(self.models, d, self.omega, self.gamma, self.model_spread)
+        # eqs. 11-13 of every carved box k against the model of its target tis[k]
+        pj, p = pair_scores(self.models, model, feats, tis, np.arange(len(tis)), targets.misses,
+                            self.omega, self.gamma, self.model_spread)
         ns = len(search_q)
         best = np.concatenate([np.argmax(p[:ns * m].reshape(ns, m), axis=1) + m * np.arange(ns),
                                ns * m + np.arange(len(align_q))])
@@ -543,14 +536,13 @@ class PBMTracker:
             merged = np.array([a.heads_in_region > 1 for a in anchors])
             # a blob holding several heads is a merge: search it
             kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
-            # eqs. 11-12 for the unoccluded candidates inside each target's gate (PBM 3);
-            # eq. 13 on the whole (T, N) grid (zeros elsewhere): one product of fixed shape
+            # eqs. 11-13 for the unoccluded candidates inside each target's gate (PBM 3)
             ti_in, n_in = np.nonzero(inside & (kinds == 0))
-            d = selected_differences(model, feats, ti_in, n_in, targets.misses)
+            pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
+                                      self.omega, self.gamma, self.model_spread)
             pj_all = np.zeros((T, n_a, N_PARTS))
-            pj_all[ti_in, n_in] = part_scores(self.models, d, self.omega, self.model_spread)
-            p_all = global_scores(pj_all, self.gamma)
-            S[ti_in, n_in] = p_all[ti_in, n_in]
+            pj_all[ti_in, n_in] = pj_in
+            S[ti_in, n_in] = p_in
             pairs: list[tuple[int, int, int]] = []
             for ti, n in zip(*np.nonzero(inside & (kinds != 0))):
                 a = anchors[n]
@@ -574,9 +566,11 @@ class PBMTracker:
                     S[ti, n] = res[0]
                     hyp[(ti, n)] = (res[1], res[2], res[3], res[4])
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
+            # (the loop below changes only row ti of S, after reading it)
+            bests, _, ambs = ambiguous_rows(S, self.match_threshold, self.margin_ratio)
             for ti in range(T):
                 row = S[ti]
-                best, _, amb = ambiguous(row, self.match_threshold, self.margin_ratio)
+                best, amb = int(bests[ti]), bool(ambs[ti])
                 weak = best < 0 and np.isfinite(row).any() and row.max() >= self.weak_threshold
                 if not (amb or weak):
                     continue
