@@ -298,3 +298,17 @@ def test_templates_too_small_for_blocks_are_matched_by_opencv_exhaustively():
         ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, np.array([70.0, 50.0]), 30.0)
         np.testing.assert_array_equal(tl, ref_tl)
         assert corr == ref_corr
+
+
+def test_bgr_frames_give_the_grey_frames_results():
+    rng = np.random.default_rng(21)
+    frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    frame[20:40, 30:60] = (40, 90, 200)  # a head-like blob to match
+    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    box = np.array([28.0, 18.0, 34.0, 150.0])
+    tpl = S.head_patch(frame, box)
+    np.testing.assert_array_equal(tpl, S.head_patch(gray, box))
+    for centre, radius in ((np.array([26.0, 15.0]), 9.0), (np.array([60.0, 40.0]), 30.0)):
+        a, b = S.match_head_template(frame, tpl, centre, radius), S.match_head_template(gray, tpl, centre, radius)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1] == b[1]

@@ -283,19 +283,29 @@ def head_fill(fg: np.ndarray | None, box: np.ndarray) -> float:
     return np.count_nonzero(fg[r0:r1, c0:c1]) / ((r1 - r0) * (c1 - c0))
 
 
-def head_patch(gray: np.ndarray, box: np.ndarray) -> np.ndarray | None:
+def grey_region(image: np.ndarray, r0: int, r1: int, c0: int, c1: int) -> np.ndarray:
+    """(r1 - r0, c1 - c0) uint8 grey pixels of a region of a grey (H, W) or BGR (H, W, 3)
+    image (a copy; a BGR region is converted alone, to the values of the whole frame's
+    ``cv2.cvtColor(..., COLOR_BGR2GRAY)``)."""
+    region = image[r0:r1, c0:c1]
+    if region.ndim == 3:
+        return cv2.cvtColor(region, cv2.COLOR_BGR2GRAY)
+    return np.array(region, dtype=np.uint8)
+
+
+def head_patch(image: np.ndarray, box: np.ndarray) -> np.ndarray | None:
     """Grey head template (PBM 4.1): the top 1/7 of a box, or None when it leaves the
-    image."""
+    image. ``image`` is the grey (H, W) or BGR (H, W, 3) frame."""
     x, y, w, h = _floats(box)
-    H, W = gray.shape
+    H, W = image.shape[:2]
     r0, r1 = round(y), round(y + HEAD_FRACTION * h)
     c0, c1 = round(x), round(x + w)
     if r0 < 0 or c0 < 0 or r1 > H or c1 > W or r1 - r0 < 3 or c1 - c0 < 3:
         return None
-    return gray[r0:r1, c0:c1].copy()
+    return grey_region(image, r0, r1, c0, c1)
 
 
-def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarray,
+def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndarray,
                         radius: float) -> tuple[np.ndarray, float]:
     """Local template matching, coarse to fine (PBM 4.1, multiple-response pruning).
 
@@ -312,7 +322,8 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
     at the coarse level (rare; then a near-equal local maximum is returned).
 
     Args:
-        gray: (H, W) uint8 frame. template: (th, tw) uint8 head patch.
+        image: (H, W) uint8 grey or (H, W, 3) BGR frame (only the window is converted).
+            template: (th, tw) uint8 head patch.
         centre: (2,) expected top-left corner (x, y) of the head patch. radius: search
             radius (pixels).
     Returns:
@@ -320,14 +331,14 @@ def match_head_template(gray: np.ndarray, template: np.ndarray, centre: np.ndarr
         -1 when the window cannot hold the template).
     """
     th, tw = template.shape
-    H, W = gray.shape
+    H, W = image.shape[:2]
     r = int(np.ceil(radius))
     x0, y0 = round(centre[0]) - r, round(centre[1]) - r
     c0, r0 = max(x0, 0), max(y0, 0)
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
     if c1 - c0 < tw or r1 - r0 < th:
         return np.asarray(centre, dtype=np.float64), -1.0
-    win = np.ascontiguousarray(gray[r0:r1, c0:c1], dtype=np.uint8)
+    win = grey_region(image, r0, r1, c0, c1)
     template = np.ascontiguousarray(template, dtype=np.uint8)
     fy, fx = COARSE_BLOCK
     if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW:

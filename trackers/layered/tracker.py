@@ -60,7 +60,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping, Sequence
 
-import cv2
 import numpy as np
 
 from trackers.common.assignment import assign
@@ -455,9 +454,10 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ pruning
     def _prune(self, template: np.ndarray | None, cands: list[int], anchors: list[Anchor],
-               gray: np.ndarray) -> tuple[int, np.ndarray | None]:
+               frame: np.ndarray) -> tuple[int, np.ndarray | None]:
         """Multiple-response pruning (PBM 4.1): the target's head template is matched
-        exhaustively around the candidates' heads; returns the candidate nearest the
+        around the candidates' heads (``match_head_template``, on the grey of the BGR
+        ``frame``'s search window only); returns the candidate nearest the
         refined head and that head (x top-centre, y top), or (-1, None) when the template
         does not match."""
         if template is None or not cands:
@@ -466,7 +466,7 @@ class PBMTracker:
         hs = np.array([anchors[n].head[:2] for n in cands])
         centre = hs.mean(axis=0)
         radius = float(np.max(np.linalg.norm(hs - centre, axis=1))) + 0.5 * tw + 2
-        tl, corr = match_head_template(gray, template,
+        tl, corr = match_head_template(frame, template,
                                        np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
         if corr < self.template_threshold:
             return -1, None
@@ -506,7 +506,6 @@ class PBMTracker:
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
         anchors = self._anchors(fg, detections, frame)
-        gray = None
         n_a = len(anchors)
         if n_a:
             boxes = np.array([a.box for a in anchors])
@@ -584,9 +583,7 @@ class PBMTracker:
                          if np.linalg.norm(anchors[n].head[:2] - ref) <= self.prune_radius * hw]
                 if amb and len(cands) < 2:
                     continue
-                if gray is None:
-                    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-                chosen, refined = self._prune(targets.head_template[ti], cands, anchors, gray)
+                chosen, refined = self._prune(targets.head_template[ti], cands, anchors, frame)
                 if chosen < 0:
                     if weak:
                         continue
@@ -628,9 +625,7 @@ class PBMTracker:
             taken[[n for _, n in matches]] = True
             for q, ti in enumerate(mt):
                 if not occl[q] and pj[q, 0] >= self.part_match_threshold:
-                    if gray is None:
-                        gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-                    tpl = head_patch(gray, targets.dof[ti, [0, 1, 4, 5]])
+                    tpl = head_patch(frame, targets.dof[ti, [0, 1, 4, 5]])
                     if tpl is not None:
                         targets.head_template[ti] = tpl
             targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
@@ -656,11 +651,9 @@ class PBMTracker:
             if len(live_boxes) and iou_matrix(a.box[None], live_boxes).max() > self.new_track_iou:
                 continue
             al_n, be_n = centroid_ratios(a.box[None], a.centroid[None])
-            if gray is None:
-                gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
             dof = dof_from_box(a.box, a.centroid)
             targets.add(self._next_id, dof, float(al_n[0]), float(be_n[0]), feats.take(n),
-                        head_patch(gray, dof[[0, 1, 4, 5]]))
+                        head_patch(frame, dof[[0, 1, 4, 5]]))
             self._next_id += 1
             if self._frame <= self.min_hits:
                 targets.confirmed[-1] = True  # people present from the start are reported at once
