@@ -276,7 +276,8 @@ def _scene(seed, fg_kind):
 
 
 @pytest.mark.parametrize("fg_kind", ["mask", "empty", "none"])
-@pytest.mark.parametrize("bins, grid", [(4, (35, 15)), (4, (21, 9)), (8, (21, 9)), (2, (133, 3))])
+@pytest.mark.parametrize(
+    "bins, grid", [(4, (35, 15)), (4, (21, 9)), (8, (21, 9)), (3, (14, 5)), (2, (133, 3))])
 def test_extractor_equals_reference_bit_for_bit(fg_kind, bins, grid):
     frame, fg, boxes, alpha, beta = _scene(bins * 100 + grid[0], fg_kind)
     ex = PartFeatureExtractor(bins, *grid)

@@ -27,7 +27,7 @@ import numba
 import numpy as np
 
 HEAD_FRACTION = 1.0 / 7.0
-"""The head band of PBM 2.1 (``trackers.frontend.parts.HEAD_FRACTION``)."""
+"""The head occupies one seventh of the person height (PBM 2.1; ``parts.HEAD_FRACTION``)."""
 
 
 @numba.njit(cache=True)

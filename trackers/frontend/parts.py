@@ -50,7 +50,7 @@ PART_NAMES: tuple[str, ...] = (
 """The five parts of PBM 2.1, in the order used by every (N, 5, ...) array."""
 
 N_PARTS = len(PART_NAMES)
-HEAD_FRACTION = 1.0 / 7.0
+HEAD_FRACTION = _part_kernels.HEAD_FRACTION
 """The head occupies one seventh of the person height (PBM 2.1)."""
 
 DEFAULT_ALPHA = 0.5
@@ -209,7 +209,9 @@ HSV_RANGES = (180.0, 256.0, 256.0)
 """Channel ranges of OpenCV's 8-bit HSV (hue is 0..179)."""
 XYZ_RANGES = (256.0, 256.0, 256.0)
 _NO_MASK = np.zeros((1, 1), bool)
+"""The kernels' mask argument when there is no foreground (never read)."""
 _NO_CENTRES = np.zeros((0, 2))
+"""The kernels' centroid output when ``extract`` is given the ratios (never written)."""
 
 
 def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
@@ -244,10 +246,11 @@ class PartFeatureExtractor:
     once: foreground test, part label, counts, centroid sums, outline test, and the joint
     HSV and XYZ bins of each foreground sample by OpenCV's own integer formulas (equal to
     ``cv2.cvtColor`` for every colour), so every feature equals the earlier numpy version
-    (``cv2.cvtColor`` of the gathered samples, ``np.bincount``) bit for bit. Features are thus scale-free by construction, and the 25 sizes of
-    the head-anchored search (PBM 3.1) cost one call. Outline (perimeter) samples are
-    foreground samples with a background 4-neighbour on the grid (outside the box counts
-    as background). Samples outside the image count as background.
+    (``cv2.cvtColor`` of the gathered samples, ``np.bincount``) bit for bit. Features are
+    thus scale-free by construction, and the 25 sizes of the head-anchored search (PBM
+    3.1) cost one call. Outline (perimeter) samples are foreground samples with a
+    background 4-neighbour on the grid (outside the box counts as background). Samples
+    outside the image count as background.
 
     Usage: ``ex.start(frame, fg)`` once per frame, then ``ex.extract(boxes, alpha, beta)``
     (or ``ex.extract_at_centroids(boxes)``, which measures the centroids on the same grid).
