@@ -86,7 +86,7 @@ def _hsv_xyz(b: int, g: int, r: int) -> tuple[int, int, int, int, int, int]:
 
 @numba.njit(cache=True)
 def convert(pixels: np.ndarray, out: np.ndarray) -> None:
-    """(M, 3) uint8 BGR pixels to (M, 6) int64 H, S, V, X, Y, Z (``_hsv_xyz``)."""
+    """(M, 3) uint8 BGR pixels to (M, 6) uint8 H, S, V, X, Y, Z (``_hsv_xyz``)."""
     for m in range(pixels.shape[0]):
         out[m, 0], out[m, 1], out[m, 2], out[m, 3], out[m, 4], out[m, 5] = _hsv_xyz(
             np.int64(pixels[m, 0]), np.int64(pixels[m, 1]), np.int64(pixels[m, 2]))

@@ -227,7 +227,7 @@ def _check_colour_formulas() -> None:
     once per process (~20 ms; tests/test_parts.py checks all 2**24)."""
     v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
-    got = np.empty((len(pixels), 6), np.int64)
+    got = np.empty((len(pixels), 6), np.uint8)
     _part_kernels.convert(pixels, got)
     want = np.concatenate([cv2.cvtColor(pixels[None], cv2.COLOR_BGR2HSV)[0],
                            cv2.cvtColor(pixels[None], cv2.COLOR_BGR2XYZ)[0]], axis=1)
