@@ -322,3 +322,18 @@ def test_extractor_accepts_readonly_and_list_inputs():
     assert ex.extract(np.zeros((0, 4))).hsv.shape == (0, N_PARTS, 64)
     c, f = ex.extract_at_centroids(np.zeros((0, 4)))
     assert c.shape == (0, 2) and len(f) == 0
+
+
+def test_boxes_that_are_not_finite_read_nothing_outside_the_image():
+    frame, fg = _scene(6, "mask")[:2]
+    bad = np.array([[np.nan, 10.0, 20.0, 40.0], [5.0, -np.inf, 20.0, 40.0],
+                    [5.0, 10.0, np.inf, 1e300], [-1e300, 1e300, 20.0, 40.0]])
+    for foreground in (fg, None):
+        ex = PartFeatureExtractor()
+        ex.start(frame, foreground)
+        f = ex.extract(bad, 0.5, 0.5)
+        assert f.hsv.shape == (4, N_PARTS, 64)
+        assert (f.area[:2] == 0).all() and (f.hsv[:2] == 0).all()  # no sample is in the image
+        assert ex.extract_at_centroids(bad)[0].shape == (4, 2)
+    with pytest.raises(ValueError, match="non-empty"):
+        ex.start(np.zeros((0, 5, 3), np.uint8), None)

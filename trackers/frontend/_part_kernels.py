@@ -21,13 +21,22 @@ Kernels are compiled on first use and cached on disk (``cache=True``); none recu
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 
 HEAD_FRACTION = 1.0 / 7.0
 """The head occupies one seventh of the person height (PBM 2.1; ``parts.HEAD_FRACTION``)."""
+
+
+@numba.njit(cache=True, inline="always")
+def _clip_index(v: float, n: int) -> int:
+    """``clip(floor(v), 0, n - 1)`` as an index, for any float (NaN gives 0): the kernels
+    never read outside the image, whatever the box."""
+    if not v >= 0.0:  # negative or NaN
+        return 0
+    if v >= n - 1.0:  # also +inf and values beyond int64
+        return n - 1
+    return int(v)  # 0 <= v < n - 1: truncation is floor
 
 
 @numba.njit(cache=True)
@@ -42,10 +51,10 @@ def _sample_grid(
     R, C = fr.shape[0], fc.shape[0]
     for r in range(R):
         ys[r] = box[1] + fr[r] * box[3]
-        yi[r] = int(min(max(math.floor(ys[r]), 0.0), H - 1.0))
+        yi[r] = _clip_index(ys[r], H)
     for c in range(C):
         xs[c] = box[0] + fc[c] * box[2]
-        xi[c] = int(min(max(math.floor(xs[c]), 0.0), W - 1.0))
+        xi[c] = _clip_index(xs[c], W)
     for r in range(R):
         row_in = ys[r] >= 0.0 and ys[r] < H
         for c in range(C):

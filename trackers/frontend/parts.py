@@ -277,8 +277,9 @@ class PartFeatureExtractor:
 
     def start(self, frame: np.ndarray, foreground: np.ndarray | None) -> None:
         """Set the frame ((H, W, 3) uint8 BGR) and foreground ((H, W) bool or None = all)."""
-        if frame is None or frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
-            raise ValueError("frame must be an (H, W, 3) uint8 BGR image")
+        if (frame is None or frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8
+                or frame.size == 0):
+            raise ValueError("frame must be a non-empty (H, W, 3) uint8 BGR image")
         if foreground is not None and foreground.shape != frame.shape[:2]:
             raise ValueError(
                 f"foreground shape {foreground.shape} differs from frame {frame.shape[:2]}")
