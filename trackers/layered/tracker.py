@@ -530,8 +530,8 @@ class PBMTracker:
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
             inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
-            kinds = occlusion_kinds(np.array([a.region[2:] for a in anchors]), pred_wh,
-                                    self.occlusion_threshold)
+            regions = np.array([a.region for a in anchors])
+            kinds = occlusion_kinds(regions[:, 2:], pred_wh, self.occlusion_threshold)
             merged = np.array([a.heads_in_region > 1 for a in anchors])
             # a blob holding several heads is a merge: search it
             kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
@@ -542,23 +542,22 @@ class PBMTracker:
             pj_all = np.zeros((T, n_a, N_PARTS))
             pj_all[ti_in, n_in] = pj_in
             S[ti_in, n_in] = p_in
-            pairs: list[tuple[int, int, int]] = []
-            for ti, n in zip(*np.nonzero(inside & (kinds != 0))):
-                a = anchors[n]
-                kind = int(kinds[ti, n])
-                # the carved (head-anchored) candidate must itself lie in the gate (PBM 3)
-                hc = np.array([a.head[0], a.head[1] + 0.5 * pred_wh[ti][1]])
-                g = gates[ti]
-                if not (g[0] <= hc[0] <= g[0] + g[2] and g[1] <= hc[1] <= g[1] + g[3]):
-                    continue
-                # a larger region is searched for a target it holds (PBM 3.1: "the target
-                # needs to be located within the blob"): a found target's last box must
-                # lie at least ``search_overlap`` inside it
-                if (kind > 0 and targets.misses[ti] == 0 and self.search_overlap > 0
-                        and overlap_ratio_matrix(targets.dof[ti, [0, 1, 4, 5]][None], a.region[None])[0, 0]
-                        < self.search_overlap):
-                    continue
-                pairs.append((int(ti), int(n), kind))
+            # the carved (head-anchored) candidate must itself lie in the gate (PBM 3): its
+            # centre hangs half a predicted height below the candidate's head
+            heads = np.array([a.head[:2] for a in anchors])
+            hx = heads[None, :, 0]
+            hy = heads[None, :, 1] + 0.5 * pred_wh[:, 1, None]
+            carved_in = ((gates[:, None, 0] <= hx) & (hx <= gates[:, None, 0] + gates[:, None, 2])
+                         & (gates[:, None, 1] <= hy) & (hy <= gates[:, None, 1] + gates[:, None, 3]))
+            # a larger region is searched for a target it holds (PBM 3.1: "the target needs
+            # to be located within the blob"): a found target's last box must lie at least
+            # ``search_overlap`` inside it
+            held = np.ones((T, n_a), dtype=bool)
+            if self.search_overlap > 0:
+                held = ((kinds <= 0) | (targets.misses[:, None] > 0)
+                        | (overlap_ratio_matrix(targets.boxes, regions) >= self.search_overlap))
+            ti_s, n_s = np.nonzero(inside & (kinds != 0) & carved_in & held)
+            pairs = list(zip(ti_s.tolist(), n_s.tolist(), kinds[ti_s, n_s].tolist()))
             for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh,
                                                                          model)):
                 if res is not None:
