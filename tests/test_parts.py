@@ -174,16 +174,6 @@ def test_extract_at_centroids_equals_centroids_then_extract():
         np.testing.assert_array_equal(getattr(got, name), getattr(ref, name))
 
 
-def test_part_boxes_one_equals_part_boxes():
-    from trackers.frontend.parts import part_boxes_one
-
-    rng = np.random.default_rng(7)
-    for _ in range(50):
-        box = rng.uniform(-50, 300, 4)
-        a, b = rng.uniform(0.05, 0.95, 2)
-        np.testing.assert_array_equal(part_boxes_one(box, a, b), part_boxes(box[None], a, b)[0])
-
-
 # --- the compiled extractor against a straightforward per-box reference -------------------
 
 def _reference(frame, fg, boxes, alpha, beta, bins, rows, cols, at_centroids=False):

@@ -18,11 +18,8 @@ from trackers.layered.association import (
     ambiguous,
     ambiguous_rows,
     feature_differences,
-    global_scores,
     layered_scores,
     pair_scores,
-    paired_differences,
-    part_scores,
     selected_differences,
 )
 from trackers.layered.models import FEATURES, FeatureModels, FoldedMixture
@@ -44,11 +41,9 @@ def ref_match_probability(models: FeatureModels, d: np.ndarray) -> np.ndarray:
 
 
 def ref_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                    misses: np.ndarray | None, union_floor: float, blas_rho: bool = False
-                    ) -> np.ndarray:
-    """Eq. 11 for pairs (ti[k], n[k]), as the numpy ``selected_differences`` (union_floor 0)
-    and ``paired_differences`` (union_floor 1e-12) computed it; rho = sqrt(p q).sum(-1), or
-    with ``blas_rho`` the original sqrt(p) @ sqrt(q)' products."""
+                    misses: np.ndarray | None, blas_rho: bool = False) -> np.ndarray:
+    """Eq. 11 for pairs (ti[k], n[k]), as the numpy ``selected_differences`` computed it;
+    rho = sqrt(p q).sum(-1), or with ``blas_rho`` the original sqrt(p) @ sqrt(q)' products."""
     d = np.empty((len(ti), NF, N_PARTS))
     d[:, 0] = np.abs(model.area[ti] - cand.area[n])
     d[:, 1] = np.abs(model.perimeter[ti] - cand.perimeter[n])
@@ -70,7 +65,7 @@ def ref_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: 
     inter = iw * ih
     union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
     with np.errstate(invalid="ignore", divide="ignore"):
-        d[:, 5] = 1.0 - np.where(union > 0, inter / np.maximum(union, union_floor), 0.0)
+        d[:, 5] = 1.0 - np.where(union > 0, inter / union, 0.0)
     empty = cand.area[n] <= 0
     d[:, 2] = np.where(empty, 1.0, d[:, 2])
     d[:, 3] = np.where(empty, 1.0, d[:, 3])
@@ -179,11 +174,11 @@ def test_selected_and_all_pairs_differences_equal_numpy(rng, with_misses):
     misses = rng.integers(0, 4, 7) if with_misses else None
     ti, n = np.nonzero(rng.random((7, 9)) < 0.5)
     got = selected_differences(model, cand, ti, n, misses)
-    np.testing.assert_array_equal(got, ref_differences(model, cand, ti, n, misses, 0.0))
+    np.testing.assert_array_equal(got, ref_differences(model, cand, ti, n, misses))
     np.testing.assert_array_equal(got, feature_differences(model, cand, misses)[ti, n])
     assert (got[:, 2:4][cand.area[n][:, None, :].repeat(2, 1) <= 0] == 1.0).all()  # empty parts
     # the former BLAS products sqrt(p) @ sqrt(q)': the same up to rounding
-    np.testing.assert_allclose(got, ref_differences(model, cand, ti, n, misses, 0.0, True),
+    np.testing.assert_allclose(got, ref_differences(model, cand, ti, n, misses, True),
                                rtol=0, atol=1e-15)
     assert feature_differences(model, cand.take([]), misses).shape == (7, 0, NF, N_PARTS)
 
@@ -194,38 +189,25 @@ def test_histogram_term_is_numpys_pairwise_sum_for_any_bins(rng, bins):
     model, cand = random_features(rng, 3, bins), random_features(rng, 4, bins)
     ti, n = np.nonzero(np.ones((3, 4), bool))
     np.testing.assert_array_equal(selected_differences(model, cand, ti, n),
-                                  ref_differences(model, cand, ti, n, None, 0.0))
+                                  ref_differences(model, cand, ti, n, None))
 
 
-def test_paired_differences_equal_numpy(rng):
-    model, cand = random_features(rng, 30), random_features(rng, 30)
-    cand.parts[:5] = model.parts[:5]  # identical rectangles: IoU 1
-    misses = rng.integers(0, 3, 30)
-    k = np.arange(30)
-    for m in (None, misses):
-        np.testing.assert_array_equal(paired_differences(model, cand, m),
-                                      ref_differences(model, cand, k, k, m, 1e-12))
-
-
-def test_part_global_and_layered_scores_equal_numpy(rng):
+def test_layered_scores_equal_numpy(rng):
     models = random_models(rng)
     d = np.abs(rng.normal(0, 0.3, (5, 8, NF, N_PARTS)))
     d[0, 0] = 0.0
     omega = rng.uniform(0.1, 1, NF)
     gamma = rng.uniform(0.1, 1, N_PARTS)
-    pj = part_scores(models, d, omega, 3.0)
+    pj, p = layered_scores(models, d, omega, gamma, 3.0)
     np.testing.assert_array_equal(pj, ref_part_scores(models, d, omega, 3.0))
-    np.testing.assert_array_equal(global_scores(pj, gamma), ref_global_scores(pj, gamma))
+    np.testing.assert_array_equal(p, ref_global_scores(pj, gamma))
     # the former BLAS matrix-vector product: the same up to rounding
-    np.testing.assert_allclose(global_scores(pj, gamma), pj @ (gamma / gamma.sum()), atol=1e-15)
-    pj2, p2 = layered_scores(models, d, omega, gamma, 3.0)
-    np.testing.assert_array_equal(pj2, pj)
-    np.testing.assert_array_equal(p2, global_scores(pj, gamma))
-    assert pj.shape == (5, 8, N_PARTS) and p2.shape == (5, 8)
+    np.testing.assert_allclose(p, pj @ (gamma / gamma.sum()), atol=1e-15)
+    assert pj.shape == (5, 8, N_PARTS) and p.shape == (5, 8)
     pj1, p1 = layered_scores(models, d[0, 0], omega, gamma)
     assert pj1.shape == (N_PARTS,) and p1.shape == ()
     with pytest.raises(ValueError, match="omega"):
-        part_scores(models, d, omega[:5])
+        layered_scores(models, d, omega[:5], gamma)
 
 
 def test_pair_scores_fuse_the_three_layers(rng):
@@ -241,10 +223,10 @@ def test_pair_scores_fuse_the_three_layers(rng):
     np.testing.assert_array_equal(p, p_ref)
     # the search path: every carved box k scored against the model of its target tis[k]
     tis = rng.integers(0, 6, 40)
-    pj, p = pair_scores(models, model, cand, tis, np.arange(40), misses, omega, gamma, 2.5,
-                        union_floor=1e-12)
-    pj_ref, p_ref = layered_scores(models, paired_differences(model.take(tis), cand, misses[tis]),
-                                   omega, gamma, 2.5)
+    cand.parts[:5] = model.parts[tis[:5]]  # identical rectangles: IoU 1
+    pj, p = pair_scores(models, model, cand, tis, np.arange(40), misses, omega, gamma, 2.5)
+    d_ref = ref_differences(model.take(tis), cand, np.arange(40), np.arange(40), misses[tis])
+    pj_ref, p_ref = layered_scores(models, d_ref, omega, gamma, 2.5)
     np.testing.assert_array_equal(pj, pj_ref)
     np.testing.assert_array_equal(p, p_ref)
 

@@ -105,20 +105,6 @@ def part_boxes(
                      x, ys, left_w, leg_h, xs, ys, right_w, leg_h], axis=1).reshape(n, N_PARTS, 4)
 
 
-def part_boxes_one(box, alpha: float, beta: float) -> np.ndarray:
-    """``part_boxes`` of one xywh box and scalar ratios: (5, 4), the same values computed
-    on floats (the per-target model update of PBM 4.2 calls it once per target)."""
-    x, y, w, h = (float(v) for v in box)
-    alpha, beta = float(alpha), float(beta)
-    hh = HEAD_FRACTION * h
-    xs = x + alpha * w
-    ys = y + hh + beta * (h - hh)
-    top, left_w, right_w = y + hh, xs - x, x + w - xs
-    torso_h, leg_h = ys - y - hh, y + h - ys
-    return np.array([[x, y, w, hh], [x, top, left_w, torso_h], [xs, top, right_w, torso_h],
-                     [x, ys, left_w, leg_h], [xs, ys, right_w, leg_h]])
-
-
 @dataclass
 class PartFeatures:
     """Features of the five parts of N boxes (PBM 2.2).

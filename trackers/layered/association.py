@@ -36,7 +36,6 @@ from trackers.frontend.parts import N_PARTS, PartFeatures
 from trackers.layered.models import FEATURES, FeatureModels
 
 N_FEATURES = len(FEATURES)
-_UNUSED_GAMMA = np.ones(N_PARTS)  # part_scores skips eq. 13
 
 # ----------------------------------------------------------------------------- kernels
 # Small numba kernels. The helpers are inlined into the loops that call them
@@ -185,14 +184,14 @@ def _pair_differences(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.n
                       m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
                       m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
                       c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
-                      c_centroid: np.ndarray, t: int, n: int, g: float, union_floor: float,
+                      c_centroid: np.ndarray, t: int, n: int, g: float,
                       leaves: np.ndarray, program: np.ndarray, v: np.ndarray,
                       stack: np.ndarray, d: np.ndarray, k: int) -> None:
     """Eq. 11 for model t against candidate n into d[k] (6, 5).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
-    no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (inter / max(union, union_floor),
-    0 when union <= 0), the last two times g = 1 / (1 + misses); all clipped at 0.
+    no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), the
+    last two times g = 1 / (1 + misses); all clipped at 0.
     """
     hgt = max(m_height[t], 1.0)
     for j in range(m_area.shape[1]):
@@ -213,7 +212,7 @@ def _pair_differences(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.n
         ih = max(min(ay + ah, by + bh) - max(ay, by), 0.0)
         inter = iw * ih
         union = aw * ah + bw * bh - inter
-        iou = inter / max(union, union_floor) if union > 0 else 0.0
+        iou = inter / union if union > 0 else 0.0
         d[k, 5, j] = (1.0 - iou) * g
         for i in range(d.shape[1]):
             if d[k, i, j] < 0.0:  # np.clip(d, 0, None)  # noqa: PLR1730
@@ -226,7 +225,7 @@ def _differences_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np
                         m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
                         c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
                         c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
-                        union_floor: float, leaves: np.ndarray, program: np.ndarray,
+                        leaves: np.ndarray, program: np.ndarray,
                         out: np.ndarray) -> None:
     """``_pair_differences`` of pairs (ti[k], n[k]) into out (K, 6, 5); misses (T,) float64
     per target, g = 1 / (1 + misses)."""
@@ -237,7 +236,7 @@ def _differences_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np
     for k in range(ti.shape[0]):
         _pair_differences(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
                           c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid,
-                          ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), union_floor, leaves, program,
+                          ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), leaves, program,
                           v, stack, out, k)
 
 
@@ -253,11 +252,10 @@ def _normalised(weights: np.ndarray) -> np.ndarray:
 @numba.njit(cache=True, inline="always")
 def _scores_one(d: np.ndarray, kd: int, spread: float, omega: np.ndarray, gamma: np.ndarray,
                 w: np.ndarray, mu: np.ndarray, s: np.ndarray, last_x: np.ndarray,
-                last_p: np.ndarray, pj: np.ndarray, p: np.ndarray, k: int, with_global: bool
-                ) -> None:
+                last_p: np.ndarray, pj: np.ndarray, p: np.ndarray, k: int) -> None:
     """Eq. 12 for the (6, 5) differences d[kd] into pj[k]: p_j = sum_i omega_i
     P(D_ij >= d_ij / spread), i left to right from 0 (as ``np.einsum("...ij,i->...j")``);
-    with ``with_global`` eq. 13 into p[k]: sum_j p_j gamma_j, j left to right from 0.
+    and eq. 13 into p[k]: sum_j p_j gamma_j, j left to right from 0.
     omega and gamma already normalised. last_x, last_p (6, 5): the previous argument and
     probability of each model, reused when the argument repeats (exact zeros and ones are
     frequent; NaN-initialised, never equal)."""
@@ -272,32 +270,19 @@ def _scores_one(d: np.ndarray, kd: int, spread: float, omega: np.ndarray, gamma:
             acc += last_p[i, j] * omega[i]
         pj[k, j] = acc
         total += acc * gamma[j]
-    if with_global:
-        p[k] = total
+    p[k] = total
 
 
 @numba.njit(cache=True)
 def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.ndarray,
-                   w: np.ndarray, mu: np.ndarray, s: np.ndarray, with_global: bool,
-                   pj: np.ndarray, p: np.ndarray) -> None:
-    """Eqs. 12 (and 13 when ``with_global``) for (K, 6, 5) differences into pj (K, 5), p (K,);
+                   w: np.ndarray, mu: np.ndarray, s: np.ndarray, pj: np.ndarray, p: np.ndarray
+                   ) -> None:
+    """Eqs. 12 and 13 for (K, 6, 5) differences into pj (K, 5), p (K,);
     omega and gamma are normalised here."""
     omega, gamma = _normalised(omega), _normalised(gamma)
     last_x, last_p = np.full(w.shape[:2], np.nan), np.empty(w.shape[:2])
     for k in range(d.shape[0]):
-        _scores_one(d, k, spread, omega, gamma, w, mu, s, last_x, last_p, pj, p, k, with_global)
-
-
-@numba.njit(cache=True)
-def _global_kernel(pj: np.ndarray, gamma: np.ndarray, p: np.ndarray) -> None:
-    """Eq. 13 for (K, 5) part scores into p (K,): sum_j p_j gamma_j, j left to right from
-    0; gamma is normalised here."""
-    gamma = _normalised(gamma)
-    for k in range(pj.shape[0]):
-        total = 0.0
-        for j in range(pj.shape[1]):
-            total += pj[k, j] * gamma[j]
-        p[k] = total
+        _scores_one(d, k, spread, omega, gamma, w, mu, s, last_x, last_p, pj, p, k)
 
 
 @numba.njit(cache=True)
@@ -346,7 +331,7 @@ def _misses(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
 
 
 def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                 misses: np.ndarray | None, union_floor: float) -> np.ndarray:
+                 misses: np.ndarray | None) -> np.ndarray:
     """Eq. 11 of pairs (ti[k], n[k]), indices in [0, T) and [0, N) (IndexError else)."""
     ti = np.asarray(ti, dtype=np.intp)
     n = np.asarray(n, dtype=np.intp)
@@ -357,7 +342,7 @@ def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.
                          f"candidates {cand.hsv.shape[2]}")
     out = np.empty((len(ti), N_FEATURES, N_PARTS))
     _differences_kernel(*_arrays(model), *_arrays(cand)[:6], ti, n, _misses(misses, len(model)),
-                        union_floor, *_pairwise_plan(model.hsv.shape[2]), out)
+                        *_pairwise_plan(model.hsv.shape[2]), out)
     return out
 
 
@@ -374,7 +359,7 @@ def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndar
     """
     T, N = len(model), len(cand)
     ti, n = np.divmod(np.arange(T * N, dtype=np.intp), max(N, 1))
-    return _differences(model, cand, ti, n, misses, 0.0).reshape(T, N, N_FEATURES, N_PARTS)
+    return _differences(model, cand, ti, n, misses).reshape(T, N, N_FEATURES, N_PARTS)
 
 
 def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
@@ -383,19 +368,7 @@ def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray
     to ``feature_differences(model, cand, misses)[ti, n]`` value for value. The tracker
     scores only the candidates inside a target's gate (PBM 3).
     """
-    return _differences(model, cand, ti, n, misses, 0.0)
-
-
-def paired_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
-                       ) -> np.ndarray:
-    """Eq. 11 for M aligned pairs (model k against candidate k): (M, 6, 5).
-
-    Same definitions as ``feature_differences``, without the all-pairs product (the
-    head-anchored search scores each target against its own carved boxes only); the IoU
-    divides by max(union, 1e-12).
-    """
-    k = np.arange(len(model), dtype=np.intp)
-    return _differences(model, cand, k, k, misses, 1e-12)
+    return _differences(model, cand, ti, n, misses)
 
 
 def _weights(w: np.ndarray, size: int, name: str) -> np.ndarray:
@@ -419,17 +392,11 @@ def layered_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamm
     Returns:
         part scores p_j (..., 5) and global scores p (...,), all in [0, 1].
     """
-    return _scores(models, d, omega, gamma, spread, True)
-
-
-def part_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, spread: float = 1.0
-                ) -> np.ndarray:
-    """Eq. 12 alone (see ``layered_scores``): (..., 6, 5) differences -> (..., 5) p_j."""
-    return _scores(models, d, omega, _UNUSED_GAMMA, spread, False)[0]
+    return _scores(models, d, omega, gamma, spread)
 
 
 def _scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.ndarray,
-            spread: float, with_global: bool) -> tuple[np.ndarray, np.ndarray]:
+            spread: float) -> tuple[np.ndarray, np.ndarray]:
     d = np.asarray(d, dtype=np.float64)
     if d.shape[-2:] != (N_FEATURES, N_PARTS):
         raise ValueError(f"expected (..., {N_FEATURES}, {N_PARTS}) differences, got {d.shape}")
@@ -439,36 +406,21 @@ def _scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.n
     p = np.empty(len(flat))
     _scores_kernel(flat, float(spread), _weights(omega, N_FEATURES, "omega"),
                    _weights(gamma, N_PARTS, "gamma"), models._w, models._mu, models._s,
-                   with_global, pj, p)
+                   pj, p)
     return pj.reshape(*lead, N_PARTS), p.reshape(lead)
-
-
-def global_scores(p_parts: np.ndarray, gamma: np.ndarray) -> np.ndarray:
-    """Eq. 13 alone (see ``layered_scores``): (..., 5) p_j -> (...,) p."""
-    p_parts = np.asarray(p_parts, dtype=np.float64)
-    if p_parts.ndim == 0 or p_parts.shape[-1] != N_PARTS:
-        raise ValueError(f"expected (..., {N_PARTS}) part scores, got {p_parts.shape}")
-    flat = np.ascontiguousarray(p_parts).reshape(-1, N_PARTS)
-    p = np.empty(len(flat))
-    _global_kernel(flat, _weights(gamma, N_PARTS, "gamma"), p)
-    return p.reshape(p_parts.shape[:-1])
 
 
 def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, ti: np.ndarray,
                 n: np.ndarray, misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
-                spread: float = 1.0, union_floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Eqs. 11-13 in one call for the pairs (target ti[k], candidate n[k]).
-
-    Equal value for value to ``layered_scores(models, selected_differences(model, cand,
-    ti, n, misses), omega, gamma, spread)``; with ``union_floor=1e-12`` and ti = the
-    targets of the carved boxes n = arange(M), to ``paired_differences(model.take(ti),
-    cand, misses[ti])`` scored the same way (without copying the models).
+                spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 11-13 in one call for the pairs (target ti[k], candidate n[k]), equal value for
+    value to ``layered_scores(models, selected_differences(model, cand, ti, n, misses),
+    omega, gamma, spread)``.
 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
     """
-    d = _differences(model, cand, ti, n, misses, float(union_floor))
-    return _scores(models, d, omega, gamma, spread, True)
+    return _scores(models, _differences(model, cand, ti, n, misses), omega, gamma, spread)
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:

@@ -50,7 +50,7 @@ class Targets:
             ``ratio_window`` measurements (eqs. 1-2).
         kf1, kf2: ``ConstantVelocity2D`` of (xc, yc) and (h, w) (PBM 3, eqs. 7-8).
         parts: PartFeatures of T rows: the parts models (PBM 2.2), updated by ``update_parts``.
-        hits, misses, age: (T,) life-cycle counters. confirmed: (T,) passed ``min_hits``.
+        hits, misses: (T,) life-cycle counters. confirmed: (T,) passed ``min_hits``.
         occluded: (T,) the last match was an occluded candidate.
         occluded_parts: (T, 5) parts frozen at the last update. part_scores: (T, 5) p_j.
         score: (T,) global score of the last match. last_gate: (T, 4) the gate the last
@@ -82,7 +82,6 @@ class Targets:
         self.parts = PartFeatures.concatenate([], self._bins)
         self.hits = np.zeros(0, dtype=np.int64)
         self.misses = np.zeros(0, dtype=np.int64)
-        self.age = np.zeros(0, dtype=np.int64)
         self.confirmed = np.zeros(0, dtype=bool)
         self.occluded = np.zeros(0, dtype=bool)
         self.occluded_parts = np.zeros((0, N_PARTS), dtype=bool)
@@ -120,7 +119,6 @@ class Targets:
         self.parts = PartFeatures.concatenate([self.parts, parts], self._bins)
         self.hits = np.append(self.hits, 1)
         self.misses = np.append(self.misses, 0)
-        self.age = np.append(self.age, 1)
         self.confirmed = np.append(self.confirmed, False)
         self.occluded = np.append(self.occluded, False)
         self.occluded_parts = np.vstack([self.occluded_parts, np.zeros(N_PARTS, dtype=bool)])
@@ -135,7 +133,7 @@ class Targets:
         self.kf1.take(rows)
         self.kf2.take(rows)
         for name in ("id", "dof", "_ratios", "_n_ratios", "alpha", "beta", "_history",
-                     "_n_history", "hits", "misses", "age", "confirmed", "occluded",
+                     "_n_history", "hits", "misses", "confirmed", "occluded",
                      "occluded_parts", "part_scores", "score", "last_gate"):
             setattr(self, name, getattr(self, name)[rows])
         self.parts = self.parts.take(rows)
@@ -148,7 +146,6 @@ class Targets:
         x[((x[:, 0] + x[:, 2]) < 2) | ((x[:, 1] + x[:, 3]) < 2), 2:] = 0.0
         self.kf1.predict()
         self.kf2.predict()
-        self.age += 1
         return self.predicted_size()
 
     def predicted_size(self) -> np.ndarray:
@@ -260,7 +257,7 @@ def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: 
     Args:
         model: the parts models of all targets. rows: (M,) the updated targets' rows.
         cand: features holding the chosen candidates at ``ks`` (M,) (no copy).
-        part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Target.update``).
+        part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Targets.update``).
         boxes: (M, 4) xywh, alpha, beta: (M,) the updated global models.
     """
     _update_parts_kernel(model.parts, model.area, model.perimeter, model.hsv, model.xyz,
