@@ -532,9 +532,10 @@ class PBMTracker:
                       & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
             regions = np.array([a.region for a in anchors])
             kinds = occlusion_kinds(regions[:, 2:], pred_wh, self.occlusion_threshold)
-            merged = np.array([a.heads_in_region > 1 for a in anchors])
             # a blob holding several heads is a merge: search it
-            kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
+            merged = np.array([a.heads_in_region > 1 for a in anchors])
+            if merged.any():
+                kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
             # eqs. 11-13 for the unoccluded candidates inside each target's gate (PBM 3)
             ti_in, n_in = np.nonzero(inside & (kinds == 0))
             pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
@@ -552,11 +553,11 @@ class PBMTracker:
             # a larger region is searched for a target it holds (PBM 3.1: "the target needs
             # to be located within the blob"): a found target's last box must lie at least
             # ``search_overlap`` inside it
-            held = np.ones((T, n_a), dtype=bool)
-            if self.search_overlap > 0:
-                held = ((kinds <= 0) | (targets.misses[:, None] > 0)
-                        | (overlap_ratio_matrix(targets.boxes, regions) >= self.search_overlap))
-            ti_s, n_s = np.nonzero(inside & (kinds != 0) & carved_in & held)
+            ti_s, n_s = np.nonzero(inside & (kinds != 0) & carved_in)
+            if self.search_overlap > 0 and len(ti_s):
+                ratio = overlap_ratio_matrix(targets.boxes, regions)[ti_s, n_s]
+                held = (kinds[ti_s, n_s] <= 0) | (targets.misses[ti_s] > 0) | (ratio >= self.search_overlap)
+                ti_s, n_s = ti_s[held], n_s[held]
             pairs = list(zip(ti_s.tolist(), n_s.tolist(), kinds[ti_s, n_s].tolist()))
             for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh,
                                                                          model)):
@@ -622,11 +623,12 @@ class PBMTracker:
                              targets.boxes[r], targets.alpha[r], targets.beta[r])
             targets.score[mt] = S[mt, [n for _, n in matches]]
             taken[[n for _, n in matches]] = True
-            for q, ti in enumerate(mt):
-                if not occl[q] and pj[q, 0] >= self.part_match_threshold:
-                    tpl = head_patch(frame, targets.dof[ti, [0, 1, 4, 5]])
-                    if tpl is not None:
-                        targets.head_template[ti] = tpl
+            # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
+            fresh = mt[~occl & (pj[:, 0] >= self.part_match_threshold)]
+            for ti, box in zip(fresh.tolist(), targets.boxes[fresh]):
+                tpl = head_patch(frame, box)
+                if tpl is not None:
+                    targets.head_template[ti] = tpl
             targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
         if len(lost):
             targets.mark_missed(np.asarray(lost))
