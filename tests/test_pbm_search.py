@@ -306,9 +306,10 @@ def test_bgr_frames_give_the_grey_frames_results():
     frame[20:40, 30:60] = (40, 90, 200)  # a head-like blob to match
     gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
     box = np.array([28.0, 18.0, 34.0, 150.0])
-    tpl = S.head_patch(frame, box)
-    np.testing.assert_array_equal(tpl, S.head_patch(gray, box))
+    tpl, tpl_grey = S.head_patch(frame, box), S.head_patch(gray, box)  # BGR and grey crops
+    np.testing.assert_array_equal(cv2.cvtColor(tpl, cv2.COLOR_BGR2GRAY), tpl_grey)
     for centre, radius in ((np.array([26.0, 15.0]), 9.0), (np.array([60.0, 40.0]), 30.0)):
-        a, b = S.match_head_template(frame, tpl, centre, radius), S.match_head_template(gray, tpl, centre, radius)
+        a = S.match_head_template(frame, tpl, centre, radius)
+        b = S.match_head_template(gray, tpl_grey, centre, radius)
         np.testing.assert_array_equal(a[0], b[0])
         assert a[1] == b[1]

@@ -294,15 +294,15 @@ def grey_region(image: np.ndarray, r0: int, r1: int, c0: int, c1: int) -> np.nda
 
 
 def head_patch(image: np.ndarray, box: np.ndarray) -> np.ndarray | None:
-    """Grey head template (PBM 4.1): the top 1/7 of a box, or None when it leaves the
-    image. ``image`` is the grey (H, W) or BGR (H, W, 3) frame."""
+    """Head template (PBM 4.1): the top 1/7 of a box (a copy, grey or BGR as ``image``),
+    or None when it leaves the image. ``match_head_template`` takes either."""
     x, y, w, h = _floats(box)
     H, W = image.shape[:2]
     r0, r1 = round(y), round(y + HEAD_FRACTION * h)
     c0, c1 = round(x), round(x + w)
     if r0 < 0 or c0 < 0 or r1 > H or c1 > W or r1 - r0 < 3 or c1 - c0 < 3:
         return None
-    return grey_region(image, r0, r1, c0, c1)
+    return image[r0:r1, c0:c1].copy()
 
 
 def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndarray,
@@ -323,13 +323,14 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
 
     Args:
         image: (H, W) uint8 grey or (H, W, 3) BGR frame (only the window is converted).
-            template: (th, tw) uint8 head patch.
+            template: (th, tw) grey or (th, tw, 3) BGR uint8 head patch (``head_patch``).
         centre: (2,) expected top-left corner (x, y) of the head patch. radius: search
             radius (pixels).
     Returns:
         best top-left corner (2,) float64 (x, y) and its normalised correlation (-1..1;
         -1 when the window cannot hold the template).
     """
+    template = grey_region(template, 0, template.shape[0], 0, template.shape[1])
     th, tw = template.shape
     H, W = image.shape[:2]
     r = int(np.ceil(radius))
@@ -339,7 +340,6 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     if c1 - c0 < tw or r1 - r0 < th:
         return np.asarray(centre, dtype=np.float64), -1.0
     win = grey_region(image, r0, r1, c0, c1)
-    template = np.ascontiguousarray(template, dtype=np.uint8)
     fy, fx = COARSE_BLOCK
     if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW:
         bx, by, best = ncc_all(win, template)
