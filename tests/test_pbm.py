@@ -454,51 +454,6 @@ def test_selected_differences_equal_the_all_pairs_ones():
                                   feature_differences(model, cand, misses)[ti, n])
 
 
-def _top_profile_heads_reference(mask, min_separation, min_prominence):
-    """The first implementation of ``top_profile_heads`` (scipy filter, np.split groups)."""
-    from scipy.ndimage import minimum_filter1d
-
-    h, w = mask.shape
-    has = mask.any(axis=0)
-    top = np.where(has, mask.argmax(axis=0), h).astype(np.float64)
-    local = minimum_filter1d(top, size=2 * max(int(min_separation // 2), 1) + 1, mode="nearest")
-    cols = np.nonzero((top == local) & has)[0]
-    if len(cols) == 0:
-        return np.zeros((0, 2))
-    peaks = []
-    span = int(2 * min_separation)
-    for g in np.split(cols, np.nonzero(np.diff(cols) > 1)[0] + 1):
-        t = top[g[0]]
-        left = top[max(g[0] - span, 0):g[0]]
-        right = top[g[-1] + 1:min(g[-1] + span + 1, w)]
-        ok_left = g[0] - span <= 0 or (len(left) and left.max() - t >= min_prominence)
-        ok_right = g[-1] + span >= w - 1 or (len(right) and right.max() - t >= min_prominence)
-        if ok_left and ok_right:
-            peaks.append((0.5 * (g[0] + g[-1]), t))
-    if not peaks:
-        c = int(np.argmin(top))
-        peaks = [(float(c), top[c])]
-    kept = []
-    for p in np.array(sorted(peaks, key=lambda p: p[1]), dtype=np.float64):
-        if all(abs(p[0] - q[0]) >= min_separation for q in kept):
-            kept.append(p)
-    return np.array(kept).reshape(-1, 2)
-
-
-def test_top_profile_heads_equal_the_reference_on_random_blobs():
-    rng = np.random.default_rng(9)
-    found = 0
-    for _ in range(200):
-        h, w = int(rng.integers(10, 60)), int(rng.integers(5, 80))
-        tops = np.cumsum(rng.integers(-3, 4, w)) + h // 3
-        mask = np.arange(h)[:, None] >= np.clip(tops, 0, h)[None, :]
-        sep, prom = float(rng.uniform(2, 12)), float(rng.uniform(1, 5))
-        got = top_profile_heads(mask, sep, prom)
-        np.testing.assert_array_equal(got, _top_profile_heads_reference(mask, sep, prom))
-        found += len(got) > 1
-    assert found > 10  # several multi-head profiles were compared
-
-
 def test_bool_and_label_foreground_give_the_same_tracks():
     # a bool mask is used as is (made contiguous); a label image is compared with 0
     scene = S.merge_pair()
