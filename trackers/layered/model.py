@@ -1,4 +1,4 @@
-"""The target: global model (PBM 2.1), parts model (2.2), filters (3) and update (4.2).
+"""The targets: global model (PBM 2.1), parts model (2.2), filters (3) and update (4.2).
 
 Global model (GM): six degrees of freedom (xtl, ytl, xc, yc, w, h) and the centroid
 ratios alpha (eq. 1) and beta (eq. 2), each a running average over ``ratio_window``
@@ -55,7 +55,8 @@ class Targets:
         occluded_parts: (T, 5) parts frozen at the last update. part_scores: (T, 5) p_j.
         score: (T,) global score of the last match. last_gate: (T, 4) the gate the last
             frame's candidates were validated in (NaN before the first).
-        head_template: per target, a grey head patch for multiple-response pruning or None.
+        head_template: per target, the head patch (``search.head_patch``, a BGR crop) that
+            multiple-response pruning matches, or None.
 
     Args:
         gate: the gate rule. gate_noise, size_noise: (position, velocity, measurement)

@@ -21,7 +21,8 @@ frame (PBM Fig. 1):
    a local neighbourhood and the candidate nearest the refined head is kept (multiple-
    response pruning). Targets then share candidates one-to-one by the Hungarian method on
    1 - p (a multi-target addition: the paper tracks one target at a time).
-5. Model update (PBM 4.2): ``model.Target.update``.
+5. Model update (PBM 4.2): ``model.Targets.update`` (global model, KF1, KF2) and
+   ``model.update_parts`` (the parts models), for all matched targets at once.
 
 Multi-target life cycle (an adaptation: the paper initialises by hand, PBM 3): a candidate
 that no target takes starts a TENTATIVE target (new blobs, and heads of a blob that split
