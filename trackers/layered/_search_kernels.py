@@ -45,24 +45,35 @@ def _cross(reg: np.ndarray, tplf: np.ndarray, x: int, y: int) -> float:
 
 
 @numba.njit(cache=True)
+def _integrals(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Integral images (h + 1, w + 1) of an (h, w) image of integers and of its square,
+    in float64 (exact: the sums are integers below 2**53)."""
+    h, w = img.shape
+    s1 = np.zeros((h + 1, w + 1))
+    s2 = np.zeros((h + 1, w + 1))
+    for y in range(h):
+        a1 = 0.0
+        a2 = 0.0
+        for x in range(w):
+            v = np.float64(img[y, x])
+            a1 += v
+            a2 += v * v
+            s1[y + 1, x + 1] = s1[y, x + 1] + a1
+            s2[y + 1, x + 1] = s2[y, x + 1] + a2
+    return s1, s2
+
+
+@numba.njit(cache=True)
 def _region(win: np.ndarray, x0: int, y0: int, x1: int, y1: int, th: int, tw: int
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pixels under the top-left positions [x0, x1) x [y0, y1) of a (th, tw)
     template: float32 copy and exact float64 integral images of it and its square."""
     hr, wr = y1 - y0 + th - 1, x1 - x0 + tw - 1
     reg = np.empty((hr, wr), np.float32)
-    s1 = np.zeros((hr + 1, wr + 1))
-    s2 = np.zeros((hr + 1, wr + 1))
     for y in range(hr):
-        a1 = 0.0
-        a2 = 0.0
         for x in range(wr):
-            v = win[y0 + y, x0 + x]
-            reg[y, x] = v
-            a1 += v
-            a2 += np.float64(v) * v
-            s1[y + 1, x + 1] = s1[y, x + 1] + a1
-            s2[y + 1, x + 1] = s2[y, x + 1] + a2
+            reg[y, x] = win[y0 + y, x0 + x]
+    s1, s2 = _integrals(reg)
     return reg, s1, s2
 
 
@@ -199,18 +210,7 @@ def coarse_peaks(win: np.ndarray, tpl: np.ndarray, fy: int, fx: int, k: int) -> 
             t2 += np.float64(tz[r, c]) * np.float64(tz[r, c])
     if t2 <= 0:  # flat at the coarse level: no ranking (the caller scores exhaustively)
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    # integral images of the block image and its square (exact integers in float64)
-    s1 = np.zeros((ch + 1, cw + 1))
-    s2 = np.zeros((ch + 1, cw + 1))
-    for y in range(ch):
-        a1 = 0.0
-        a2 = 0.0
-        for x in range(cw):
-            v = np.float64(small[y, x])
-            a1 += v
-            a2 += v * v
-            s1[y + 1, x + 1] = s1[y, x + 1] + a1
-            s2[y + 1, x + 1] = s2[y, x + 1] + a2
+    s1, s2 = _integrals(small)  # of the block image and its square
     ny, nx = ch - th2 + 1, cw - tw2 + 1
     num = _correlate_rows(small, tz, ny, nx)
     score = np.empty((ny, nx))  # sign(ncc) ncc^2
