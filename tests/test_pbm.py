@@ -366,9 +366,9 @@ def test_detection_heads_are_used_when_given():
     fg = np.zeros((150, 120), bool)
     fg[25:110, 68:82] = True  # second person: its top 1/7 band has foreground from row 25
     anchors = t._anchors(fg, Detections(boxes, np.ones(2), heads=heads))
-    np.testing.assert_allclose(anchors[0].head, [24.0, 22.0, 12.0])  # from Detections.heads
-    assert anchors[1].head[1] == 25 and anchors[1].head[0] == pytest.approx(75.0)
-    assert [a.source for a in anchors] == ["detection", "detection"]
+    np.testing.assert_allclose(anchors.head[0], [24.0, 22.0, 12.0])  # from Detections.heads
+    assert anchors.head[1, 1] == 25 and anchors.head[1, 0] == pytest.approx(75.0)
+    assert len(anchors) == 2 and not anchors.blob.any()
 
 
 def test_head_detector_fills_missing_heads():
@@ -379,7 +379,7 @@ def test_head_detector_fills_missing_heads():
     t = PBMTracker(head_detector=Fixed())
     anchors = t._anchors(None, Detections(np.array([[10.0, 20, 30, 90]]), np.ones(1)),
                          np.zeros((150, 120, 3), np.uint8))
-    np.testing.assert_allclose(anchors[0].head, [17.0, 21.0, 10.0])
+    np.testing.assert_allclose(anchors.head[0], [17.0, 21.0, 10.0])
     with pytest.raises(ValueError, match="head_detector"):
         PBMTracker(head_detector=object())
 
@@ -512,3 +512,22 @@ def test_occluded_update_averages_the_window_and_keeps_the_ratios():
     tg.update([0], [dofs[3]], [True], [True], np.ones((1, 5)), 0.4)
     np.testing.assert_allclose(tg.dof[0], np.mean(dofs[1:], axis=0))  # window of 3 (PBM 4.2)
     assert tg.alpha[0] == alpha and tg.occluded[0] and tg.hits[0] == 4
+
+
+def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
+    from trackers.layered.model import dof_from_head, dofs_from_heads
+    from trackers.layered.tracker import _norms
+
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(500, 2)) * rng.uniform(0.1, 300.0, size=(500, 1))
+    np.testing.assert_array_equal(_norms(v), [np.linalg.norm(r) for r in v])
+    assert _norms(np.zeros((0, 2))).shape == (0,)
+    heads = rng.uniform(0, 500, size=(50, 3))
+    w, h, a, b = rng.uniform(5, 200, 50), rng.uniform(5, 400, 50), rng.random(50), rng.random(50)
+    many = dofs_from_heads(heads, w, h, a, b)
+    for k in range(50):
+        hx, hy = heads[k, 0], heads[k, 1]
+        hh = (1.0 / 7.0) * h[k]  # HEAD_FRACTION h (eq. 2)
+        yc = hy + hh + b[k] * (h[k] - hh)
+        np.testing.assert_array_equal(many[k], [hx - a[k] * w[k], hy, hx, yc, w[k], h[k]])
+        np.testing.assert_array_equal(dof_from_head(heads[k], w[k], h[k], a[k], b[k]), many[k])

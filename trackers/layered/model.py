@@ -34,11 +34,21 @@ def dof_from_box(box: np.ndarray, centroid: np.ndarray) -> np.ndarray:
 
 def dof_from_head(head: np.ndarray, w: float, h: float, alpha: float, beta: float) -> np.ndarray:
     """(6,) DOF under occlusion (PBM 2.1): xc, ytl from the head top; xtl (eq. 1) and yc
-    (eq. 2) from the previous frame's alpha and beta."""
-    xc, ytl = head[0], head[1]
+    (eq. 2) from the previous frame's alpha and beta (``dofs_from_heads`` of one head)."""
+    return dofs_from_heads(np.asarray(head, dtype=np.float64)[None], w, h, alpha, beta)[0]
+
+
+def dofs_from_heads(heads: np.ndarray, w: np.ndarray, h: np.ndarray, alpha: np.ndarray,
+                    beta: np.ndarray) -> np.ndarray:
+    """(M, 6) DOF under occlusion (PBM 2.1) of M heads (M, >= 2) (x top-centre, y top)
+    with sizes w, h and ratios alpha, beta ((M,) or scalars): xc, ytl from the head top,
+    xtl = xc - alpha w (eq. 1), yc = ytl + hh + beta (h - hh) with hh = h / 7 (eq. 2)."""
+    xc, ytl = heads[:, 0], heads[:, 1]
     xtl = xc - alpha * w
     yc = ytl + HEAD_FRACTION * h + beta * (h - HEAD_FRACTION * h)
-    return np.array([xtl, ytl, xc, yc, w, h], dtype=np.float64)
+    out = np.empty((len(heads), 6))
+    out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4], out[:, 5] = xtl, ytl, xc, yc, w, h
+    return out
 
 
 class Targets:

@@ -1,6 +1,6 @@
 """Candidates, heads, occlusion test, head-anchored search and alignment (PBM 2.1, 3.1, 4.1).
 
-A *candidate* ("anchor") is one head in one candidate region: a detection box with its
+A *candidate* (a row of ``Candidates``) is one head in one candidate region: a detection box with its
 head, or a head found on a foreground blob. Heads come from ``Detections.heads`` when the
 source gives them; otherwise from the foreground itself: the peaks of a blob's top
 profile (the topmost foreground row of each column), the visible tops of heads that PBM
@@ -60,25 +60,28 @@ def _floats(v: np.ndarray) -> list[float]:
 
 
 @dataclass
-class Anchor:
-    """One candidate: a head in a region.
+class Candidates:
+    """The frame's candidates, one row each: a head in a region (PBM 2, 3.1).
 
     Attributes:
-        box: (4,) xywh own box (the detection, the blob, or the blob's slice for this head).
-        region: (4,) xywh candidate region the occlusion test compares (detection or blob).
-        head: (3,) head top-centre x, top y, head width (pixels).
-        centroid: (2,) foreground centroid of ``box`` (its centre without foreground);
-            None until the tracker measures all candidates at once.
-        source: "detection" or "blob".
-        heads_in_region: number of heads found in the region.
+        box: (N, 4) xywh own boxes (the detection, the blob, or the blob's slice for the head).
+        region: (N, 4) xywh candidate regions the occlusion test compares (detection or blob).
+        head: (N, 3) head top-centre x, top y, head width (pixels).
+        blob: (N,) bool, the candidate is a head of a foreground blob (else a detection).
+        heads_in_region: (N,) int, number of heads found in the region.
+        centroid: (N, 2) foreground centroids of the boxes (their centres without
+            foreground); None until the tracker measures all candidates at once.
     """
 
     box: np.ndarray
     region: np.ndarray
     head: np.ndarray
-    centroid: np.ndarray | None
-    source: str
-    heads_in_region: int = 1
+    blob: np.ndarray
+    heads_in_region: np.ndarray
+    centroid: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.box)
 
 
 def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -3,7 +3,7 @@
 Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM). Per
 frame (PBM Fig. 1):
 
-1. Candidates (``search.Anchor``): each detection box with its head, plus every head of
+1. Candidates (``search.Candidates``): each detection box with its head, plus every head of
    every foreground blob (connected components, PBM 2) that no detection explains. Heads
    come from ``Detections.heads`` when given, else from the foreground: the top band (1/7)
    of a detection box, and the peaks of a blob's top profile. With ``foreground=None`` the
@@ -73,14 +73,18 @@ from trackers.frontend.parts import (
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
 from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
-from trackers.layered.model import Targets, dof_from_box, dof_from_head, update_parts
+from trackers.layered.model import (
+    Targets,
+    dof_from_box,
+    dof_from_head,
+    dofs_from_heads,
+    update_parts,
+)
 from trackers.layered.models import FEATURES, FeatureModels
 from trackers.layered.search import (
-    Anchor,
-    aligned_box,
+    Candidates,
     blobs_boxes,
     head_fill,
-    head_from_band,
     head_patch,
     heads_from_bands,
     match_head_template,
@@ -97,6 +101,12 @@ logger = logging.getLogger(__name__)
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
 DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
+
+
+def _norms(v: np.ndarray) -> np.ndarray:
+    """(K,) Euclidean norms of the rows of v (K, 2), each equal bit for bit to
+    ``np.linalg.norm(v[k])`` (the same dot product: one per row, as a stacked matmul)."""
+    return np.sqrt(np.matmul(v[:, None, :], v[:, :, None]).reshape(-1))
 
 
 class PBMTracker:
@@ -299,32 +309,36 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ candidates
     def _anchors(self, fg: np.ndarray | None, detections: Detections,
-                 frame: np.ndarray | None = None) -> list[Anchor]:
-        anchors: list[Anchor] = []
+                 frame: np.ndarray | None = None) -> Candidates:
+        """The frame's candidates (PBM 2, 3.1): the valid detection boxes with their heads,
+        then the heads of foreground blobs that no detection explains."""
         det_boxes = detections.boxes
         heads = detections.heads
         if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
             heads = np.asarray(self.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
         finite = np.isfinite(det_boxes).all(axis=1)
-        valid = finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)
-        has_head = (np.zeros(len(det_boxes), dtype=bool) if heads is None
-                    else np.isfinite(heads).all(axis=1))
-        # band heads (PBM 3.1) of all boxes at once, when some box needs one
-        band = (heads_from_bands(fg, det_boxes)
-                if fg is not None and len(det_boxes) and not has_head.all() else None)
-        for k in np.flatnonzero(valid):
-            box = det_boxes[k]
-            if has_head[k]:
-                hx, hy, hw, _ = heads[k]
-                head = np.array([hx + 0.5 * hw, hy, hw])
-            else:
-                head = band[k] if band is not None else head_from_band(None, box)
-            anchors.append(Anchor(box.copy(), box.copy(), head, None, "detection"))
+        valid = np.flatnonzero(finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1))
+        box = det_boxes[valid]
+        has_head = (np.zeros(len(valid), dtype=bool) if heads is None
+                    else np.isfinite(heads[valid]).all(axis=1))
+        head = np.empty((len(valid), 3))
+        if has_head.any():
+            hx, hy, hw = heads[valid[has_head], :3].T
+            head[has_head] = np.column_stack([hx + 0.5 * hw, hy, hw])
+        if not has_head.all():
+            need = ~has_head
+            if fg is not None:  # the top 1/7 band's foreground (PBM 3.1)
+                head[need] = heads_from_bands(fg, box[need])
+            else:  # the band's centre
+                x, y, w = box[need, 0], box[need, 1], box[need, 2]
+                head[need] = np.column_stack([x + 0.5 * w, y, 0.5 * w])
+        rows = (box, box.copy(), head, np.zeros(len(valid), dtype=bool),
+                np.ones(len(valid), dtype=np.int64))
         if fg is None:
-            return anchors
+            return Candidates(*rows)
         # blobs matter only where foreground is left unexplained by the detections
         if len(det_boxes) and residual_foreground(fg, det_boxes) < self.min_blob_area:
-            return anchors
+            return Candidates(*rows)
         s = self.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
         labels, bboxes, numbers = blobs_boxes(small, max(self.min_blob_area // (s * s), 1))
@@ -334,6 +348,7 @@ class PBMTracker:
             zx0, zx1 = det_boxes[:, 0, None], (det_boxes[:, 0] + det_boxes[:, 2])[:, None]
             zy0 = (det_boxes[:, 1] - 0.1 * det_boxes[:, 3])[:, None]
             zy1 = (det_boxes[:, 1] + det_boxes[:, 3] / 3.0)[:, None]
+        blob_rows: list[tuple] = []
         for i, (sbox, lab) in enumerate(zip(bboxes, numbers)):
             x, y, w, h = (int(v) for v in sbox)
             mask = labels[y:y + h, x:x + w] == lab
@@ -356,10 +371,15 @@ class PBMTracker:
             for k in np.nonzero(~explained)[0]:
                 own = (bbox.copy() if n == 1
                        else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
-                own = self._blob_box_as_detection(own)
-                anchors.append(Anchor(own, bbox.copy(), np.array([hx[k], hy[k], head_w]),
-                                      None, "blob", n))
-        return anchors
+                blob_rows.append((self._blob_box_as_detection(own), bbox,
+                                  np.array([hx[k], hy[k], head_w]), n))
+        if not blob_rows:
+            return Candidates(*rows)
+        own, region, head, n = zip(*blob_rows)
+        return Candidates(np.vstack([rows[0], own]), np.vstack([rows[1], region]),
+                          np.vstack([rows[2], head]),
+                          np.concatenate([rows[3], np.ones(len(own), dtype=bool)]),
+                          np.concatenate([rows[4], np.array(n, dtype=np.int64)]))
 
     def _calibrate(self, blob_box: np.ndarray, iou: np.ndarray, det_boxes: np.ndarray) -> None:
         """Learn the ratio of detection box size to blob span from isolated people.
@@ -389,91 +409,83 @@ class PBMTracker:
         return np.array([c[0] - 0.5 * wh[0], box[1], wh[0], wh[1]])
 
     # ------------------------------------------------------------------ hypotheses
-    def _occluded_hypotheses(self, pairs: list[tuple[int, int, int]], anchors: list[Anchor],
-                             fg: np.ndarray | None, pred_wh: np.ndarray, model: PartFeatures) -> list:
-        """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for every
-        (target, candidate, kind) pair of the frame, with one feature extraction for all:
-        the (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the aligned box of
-        every smaller candidate whose head is supported by foreground.
+    def _occluded_hypotheses(self, ti: np.ndarray, n: np.ndarray, kind: np.ndarray,
+                             cand: Candidates, fg: np.ndarray | None, pred_wh: np.ndarray,
+                             model: PartFeatures) -> tuple:
+        """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for the P
+        (target ti, candidate n, kind) pairs of the frame, with one feature extraction for
+        all: the (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the aligned
+        box of every smaller candidate whose head is supported by foreground.
 
         Args:
+            ti, n, kind: (P,) the pairs (kind +1 larger, -1 smaller region).
             model: the parts models of all targets (``PartFeatures``, target order).
         Returns:
-            per pair, (score, part scores, features, index of the best box in them, dof),
-            or None (dismissed).
+            (kept (P,) bool (False: dismissed), score p (P,), part scores p_j (P, 5),
+            features, index k (P,) of each pair's best box in them, dof (P, 6)), or None
+            when every pair is dismissed.
         """
         targets = self.targets
-        out: list = [None] * len(pairs)
-        search_q = [q for q, (_, _, kind) in enumerate(pairs) if kind > 0]
-        align_q, align_boxes = [], []
-        for q, (ti, n, kind) in enumerate(pairs):
-            if kind > 0:
-                continue
-            box = aligned_box(anchors[n].head, pred_wh[ti], targets.alpha[ti])
-            if head_fill(fg, box) >= self.head_min_fill:
-                align_q.append(q)
-                align_boxes.append(box)
-        if not search_q and not align_q:
-            return out
         alpha_t, beta_t = targets.alpha, targets.beta
-        pair_ti = np.array([ti for ti, _, _ in pairs])
+        heads = cand.head[n]
+        search_q = np.flatnonzero(kind > 0)
+        align_q = np.flatnonzero(kind <= 0)
+        if len(align_q):
+            # the predicted-size box aligned on the head (``search.aligned_box``)
+            at = ti[align_q]
+            w, h = pred_wh[at, 0], pred_wh[at, 1]
+            ha = heads[align_q]
+            align_boxes = np.column_stack([ha[:, 0] - alpha_t[at] * w, ha[:, 1], w, h])
+            if fg is not None:
+                fill = np.array([head_fill(fg, b) for b in align_boxes])
+                supported = fill >= self.head_min_fill
+                align_q, align_boxes = align_q[supported], align_boxes[supported]
+        if not len(search_q) and not len(align_q):
+            return None
         m = (2 * self.search_range + 1) ** 2
-        blocks = []
-        if search_q:
-            sti = pair_ti[search_q]
-            heads = np.array([anchors[pairs[q][1]].head for q in search_q])
-            blocks.append(search_boxes_many(heads, pred_wh[sti], alpha_t[sti], self.search_step,
-                                            self.search_range).reshape(-1, 4))
-        if align_q:
-            blocks.append(np.array(align_boxes))
-        B = np.concatenate(blocks)
-        tis = pair_ti[np.concatenate([np.repeat(np.array(search_q, dtype=np.intp), m),
-                                      np.array(align_q, dtype=np.intp)])]
+        sti = ti[search_q]
+        B = np.concatenate([search_boxes_many(heads[search_q], pred_wh[sti], alpha_t[sti],
+                                              self.search_step, self.search_range).reshape(-1, 4),
+                            align_boxes if len(align_q) else np.zeros((0, 4))])
+        tis = np.concatenate([np.repeat(sti, m), ti[align_q]])
         feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
         # eqs. 11-13 of every carved box k against the model of its target tis[k]
         pj, p = pair_scores(self.models, model, feats, tis, np.arange(len(tis)), targets.misses,
                             self.omega, self.gamma, self.model_spread)
         ns = len(search_q)
+        qs = np.concatenate([search_q, align_q])
         best = np.concatenate([np.argmax(p[:ns * m].reshape(ns, m), axis=1) + m * np.arange(ns),
                                ns * m + np.arange(len(align_q))])
-        for q, k in zip(search_q + align_q, best):
-            ti, n, _ = pairs[q]
-            dof = dof_from_head(anchors[n].head, B[k, 2], B[k, 3], alpha_t[ti], beta_t[ti])
-            out[q] = (float(p[k]), pj[k], feats, int(k), dof)
-        return out
-
-    def _unoccluded(self, ti: int, n: int, anchors: list[Anchor], pj_all: np.ndarray,
-                    feats: PartFeatures, pred_wh: np.ndarray) -> tuple:
-        """(p_j, features, index in them, dof) of the unoccluded candidate n for target ti."""
-        a = anchors[n]
-        dof = dof_from_box(a.box, a.centroid)
-        if a.source == "blob":
-            # a blob's span follows the swinging limbs: keep KF2's width (PBM 3)
-            w = pred_wh[ti][0]
-            dof[0], dof[4] = a.centroid[0] - self.targets.alpha[ti] * w, w
-        return pj_all[ti, n], feats, n, dof
+        P = len(ti)
+        kept = np.zeros(P, dtype=bool)
+        kept[qs] = True
+        k = np.zeros(P, dtype=np.intp)
+        k[qs] = best
+        tq = ti[qs]
+        dof = np.zeros((P, 6))
+        dof[qs] = dofs_from_heads(heads[qs], B[best, 2], B[best, 3], alpha_t[tq], beta_t[tq])
+        return kept, p[k], pj[k], feats, k, dof
 
     # ------------------------------------------------------------------ pruning
-    def _prune(self, template: np.ndarray | None, cands: list[int], anchors: list[Anchor],
+    def _prune(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
                frame: np.ndarray) -> tuple[int, np.ndarray | None]:
         """Multiple-response pruning (PBM 4.1): the target's head template is matched
-        around the candidates' heads (``match_head_template``, on the grey of the BGR
-        ``frame``'s search window only); returns the candidate nearest the
-        refined head and that head (x top-centre, y top), or (-1, None) when the template
-        does not match."""
-        if template is None or not cands:
+        around the heads (x top-centre, y top) (K, 2) of the candidates ``cands`` (K,)
+        (``match_head_template``, on the grey of the BGR ``frame``'s search window only);
+        returns the candidate nearest the refined head and that head, or (-1, None) when
+        the template does not match."""
+        if template is None or not len(cands):
             return -1, None
         tw = template.shape[1]
-        hs = np.array([anchors[n].head[:2] for n in cands])
-        centre = hs.mean(axis=0)
-        radius = float(np.max(np.linalg.norm(hs - centre, axis=1))) + 0.5 * tw + 2
+        centre = heads.mean(axis=0)
+        radius = float(np.max(np.linalg.norm(heads - centre, axis=1))) + 0.5 * tw + 2
         tl, corr = match_head_template(frame, template,
                                        np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
         if corr < self.template_threshold:
             return -1, None
         refined = np.array([tl[0] + 0.5 * tw, tl[1]])
-        dist = np.linalg.norm(hs - refined, axis=1)
-        return cands[int(np.argmin(dist))], refined
+        dist = np.linalg.norm(heads - refined, axis=1)
+        return int(cands[int(np.argmin(dist))]), refined
 
     # ------------------------------------------------------------------ update
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -506,51 +518,44 @@ class PBMTracker:
         H, W = frame.shape[:2]
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
-        anchors = self._anchors(fg, detections, frame)
-        n_a = len(anchors)
-        if n_a:
-            boxes = np.array([a.box for a in anchors])
-            # foreground centroids (PBM 2.1) and the parts split at them, on one grid
-            cents, feats = self._extractor.extract_at_centroids(boxes)
-            for a, c in zip(anchors, cents):
-                a.centroid = c
-        else:
-            boxes = np.zeros((0, 4))
-            feats = PartFeatures.concatenate([], self._extractor.bins)
+        cand = self._anchors(fg, detections, frame)
+        n_a = len(cand)
+        boxes = cand.box
+        # foreground centroids (PBM 2.1) and the parts split at them, on one grid
+        cand.centroid, feats = self._extractor.extract_at_centroids(boxes)
         targets = self.targets
         pred_wh = targets.predict()
         T = len(targets)
         S = np.full((T, n_a), -np.inf)
-        # occluded candidates: (ti, n) -> (p_j, features, index in them, dof); the unoccluded
-        # ones are read from the frame's arrays (``_unoccluded``)
-        hyp: dict[tuple[int, int], tuple] = {}
+        # occluded candidates: hyp[ti, n] indexes the pair's row of the search's arrays
+        # (``_occluded_hypotheses``); the unoccluded ones are read from the frame's arrays
+        hyp = np.full((T, n_a), -1, dtype=np.intp)
+        pj_all = np.zeros((T, n_a, N_PARTS))
         if T and n_a:
             model = targets.parts
             gates = targets.gate_boxes()
             targets.last_gate = gates  # the gates this frame's candidates were validated in
+            gx0, gy0 = gates[:, None, 0], gates[:, None, 1]
+            gx1, gy1 = gx0 + gates[:, None, 2], gates[:, None, 3] + gy0
             c = boxes[:, :2] + 0.5 * boxes[:, 2:]
-            inside = ((c[None, :, 0] >= gates[:, None, 0]) & (c[None, :, 0] <= gates[:, None, 0] + gates[:, None, 2])
-                      & (c[None, :, 1] >= gates[:, None, 1]) & (c[None, :, 1] <= gates[:, None, 3] + gates[:, None, 1]))
-            regions = np.array([a.region for a in anchors])
+            inside = (c[:, 0] >= gx0) & (c[:, 0] <= gx1) & (c[:, 1] >= gy0) & (c[:, 1] <= gy1)
+            regions = cand.region
             kinds = occlusion_kinds(regions[:, 2:], pred_wh, self.occlusion_threshold)
             # a blob holding several heads is a merge: search it
-            merged = np.array([a.heads_in_region > 1 for a in anchors])
+            merged = cand.heads_in_region > 1
             if merged.any():
                 kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
             # eqs. 11-13 for the unoccluded candidates inside each target's gate (PBM 3)
             ti_in, n_in = np.nonzero(inside & (kinds == 0))
             pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
                                       self.omega, self.gamma, self.model_spread)
-            pj_all = np.zeros((T, n_a, N_PARTS))
             pj_all[ti_in, n_in] = pj_in
             S[ti_in, n_in] = p_in
             # the carved (head-anchored) candidate must itself lie in the gate (PBM 3): its
             # centre hangs half a predicted height below the candidate's head
-            heads = np.array([a.head[:2] for a in anchors])
-            hx = heads[None, :, 0]
-            hy = heads[None, :, 1] + 0.5 * pred_wh[:, 1, None]
-            carved_in = ((gates[:, None, 0] <= hx) & (hx <= gates[:, None, 0] + gates[:, None, 2])
-                         & (gates[:, None, 1] <= hy) & (hy <= gates[:, None, 1] + gates[:, None, 3]))
+            hx = cand.head[:, 0]
+            hy = cand.head[:, 1] + 0.5 * pred_wh[:, 1, None]
+            carved_in = (gx0 <= hx) & (hx <= gx1) & (gy0 <= hy) & (hy <= gy1)
             # a larger region is searched for a target it holds (PBM 3.1: "the target needs
             # to be located within the blob"): a found target's last box must lie at least
             # ``search_overlap`` inside it
@@ -559,43 +564,40 @@ class PBMTracker:
                 ratio = overlap_ratio_matrix(targets.boxes, regions)[ti_s, n_s]
                 held = (kinds[ti_s, n_s] <= 0) | (targets.misses[ti_s] > 0) | (ratio >= self.search_overlap)
                 ti_s, n_s = ti_s[held], n_s[held]
-            pairs = list(zip(ti_s.tolist(), n_s.tolist(), kinds[ti_s, n_s].tolist()))
-            for (ti, n, _), res in zip(pairs, self._occluded_hypotheses(pairs, anchors, fg, pred_wh,
-                                                                         model)):
-                if res is not None:
-                    S[ti, n] = res[0]
-                    hyp[(ti, n)] = (res[1], res[2], res[3], res[4])
+            found = (self._occluded_hypotheses(ti_s, n_s, kinds[ti_s, n_s], cand, fg, pred_wh, model)
+                     if len(ti_s) else None)
+            if found is not None:
+                kept, p_h, pj_h, feats_h, k_h, dof_h = found
+                S[ti_s[kept], n_s[kept]] = p_h[kept]
+                hyp[ti_s[kept], n_s[kept]] = np.flatnonzero(kept)
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             # (the loop below changes only row ti of S, after reading it)
             bests, _, ambs = ambiguous_rows(S, self.match_threshold, self.margin_ratio)
-            for ti in range(T):
+            weaks = (bests < 0) & (S.max(axis=1) >= self.weak_threshold)
+            heads_xy = cand.head[:, :2]
+            for ti in np.flatnonzero(ambs | weaks).tolist():
                 row = S[ti]
-                best, amb = int(bests[ti]), bool(ambs[ti])
-                weak = best < 0 and np.isfinite(row).any() and row.max() >= self.weak_threshold
-                if not (amb or weak):
-                    continue
+                best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
                 lo = self.match_threshold if amb else self.weak_threshold
-                cands = [int(n) for n in np.nonzero(row >= lo)[0]]
+                cands = np.flatnonzero(row >= lo)
                 # only nearby candidates are multiple responses of one person (PBM 4.1);
                 # distant rivals are left to the one-to-one assignment
-                hw = max(anchors[best if best >= 0 else int(np.argmax(row))].head[2], 1.0)
-                ref = anchors[best if best >= 0 else int(np.argmax(row))].head[:2]
-                cands = [n for n in cands
-                         if np.linalg.norm(anchors[n].head[:2] - ref) <= self.prune_radius * hw]
+                r = best if best >= 0 else int(np.argmax(row))
+                hw = max(cand.head[r, 2], 1.0)
+                cands = cands[_norms(heads_xy[cands] - heads_xy[r]) <= self.prune_radius * hw]
                 if amb and len(cands) < 2:
                     continue
-                chosen, refined = self._prune(targets.head_template[ti], cands, anchors, frame)
+                chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
                 if chosen < 0:
                     if weak:
                         continue
                     chosen = best
-                elif (ti, chosen) in hyp:
+                elif hyp[ti, chosen] >= 0:
                     # "the matching candidate is then updated accordingly": a carved
                     # (occluded) candidate is re-anchored on the refined head
-                    pj_c, f_c, k_c, dof_c = hyp[(ti, chosen)]
-                    head = np.array([refined[0], refined[1], anchors[chosen].head[2]])
-                    hyp[(ti, chosen)] = (pj_c, f_c, k_c, dof_from_head(
-                        head, dof_c[4], dof_c[5], targets.alpha[ti], targets.beta[ti]))
+                    q = hyp[ti, chosen]
+                    dof_h[q] = dof_from_head(refined, dof_h[q, 4], dof_h[q, 5], targets.alpha[ti],
+                                             targets.beta[ti])
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
                 S[ti, chosen] = max(keep, self.match_threshold)
@@ -604,37 +606,49 @@ class PBMTracker:
         taken = np.zeros(n_a, dtype=bool)
         if len(matches):
             # model update (PBM 4.2): global models and filters of all matched targets at once
-            mt = np.array([ti for ti, _ in matches])
-            occl = np.array([(ti, n) in hyp for ti, n in matches], dtype=bool)
-            chosen_hyp = [hyp[(ti, n)] if o else self._unoccluded(ti, n, anchors, pj_all, feats, pred_wh)
-                          for (ti, n), o in zip(matches, occl)]  # (p_j, features, index, dof)
-            pj = np.array([h[0] for h in chosen_hyp])
-            shift = targets.update(mt, np.array([h[3] for h in chosen_hyp]),
-                                   np.full(len(mt), fg is not None) & ~occl, occl, pj,
+            mt, mn = matches[:, 0], matches[:, 1]
+            q = hyp[mt, mn]
+            occl = q >= 0
+            # unoccluded: the candidate's own DOF; a blob's span follows the swinging
+            # limbs: it keeps KF2's width (PBM 3)
+            cents = cand.centroid[mn]
+            dof = np.column_stack([boxes[mn, :2], cents, boxes[mn, 2:]])
+            blob = cand.blob[mn] & ~occl
+            if blob.any():
+                w = pred_wh[mt[blob], 0]
+                dof[blob, 0] = cents[blob, 0] - targets.alpha[mt[blob]] * w
+                dof[blob, 4] = w
+            pj = pj_all[mt, mn]
+            if occl.any():
+                dof[occl] = dof_h[q[occl]]
+                pj[occl] = pj_h[q[occl]]
+            shift = targets.update(mt, dof, np.full(len(mt), fg is not None) & ~occl, occl, pj,
                                    self.part_match_threshold)
-            # then the parts models, once per feature array the candidates were measured in
-            sources: dict[int, list[int]] = {}
-            for q, h in enumerate(chosen_hyp):
-                sources.setdefault(id(h[1]), []).append(q)
-            for qs in sources.values():
-                r = mt[qs]
-                update_parts(targets.parts, r, chosen_hyp[qs[0]][1],
-                             np.array([chosen_hyp[q][2] for q in qs]), pj[qs],
-                             self.part_match_threshold, self.update_rate, shift[qs],
-                             targets.boxes[r], targets.alpha[r], targets.beta[r])
-            targets.score[mt] = S[mt, [n for _, n in matches]]
-            taken[[n for _, n in matches]] = True
+            # then the parts models, from the feature arrays the candidates were measured in
+            dof_t = targets.dof
+            groups = [(~occl, feats, mn)]
+            if occl.any():
+                groups.append((occl, feats_h, np.where(occl, k_h[q], 0)))
+            for rows, f, ks in groups:
+                if rows.any():
+                    r = mt[rows]
+                    update_parts(targets.parts, r, f, ks[rows], pj[rows], self.part_match_threshold,
+                                 self.update_rate, shift[rows], dof_t[r][:, [0, 1, 4, 5]],
+                                 targets.alpha[r], targets.beta[r])
+            targets.score[mt] = S[mt, mn]
+            taken[mn] = True
             # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
             fresh = mt[~occl & (pj[:, 0] >= self.part_match_threshold)]
-            for ti, box in zip(fresh.tolist(), targets.boxes[fresh]):
+            for ti, box in zip(fresh.tolist(), dof_t[fresh][:, [0, 1, 4, 5]]):
                 tpl = head_patch(frame, box)
                 if tpl is not None:
                     targets.head_template[ti] = tpl
             targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
         if len(lost):
-            targets.mark_missed(np.asarray(lost))
+            targets.mark_missed(lost)
         # drop tentative misses, long-lost and leaving targets
-        x, y, w, h = targets.boxes.T
+        dof_t = targets.dof
+        x, y, w, h = dof_t[:, 0], dof_t[:, 1], dof_t[:, 4], dof_t[:, 5]
         m = self.exit_margin
         near_border = (x <= m) | (y <= m) | (x + w >= W - m) | (y + h >= H - m)
         alive = ((targets.misses == 0)
@@ -644,22 +658,23 @@ class PBMTracker:
             targets.take(np.flatnonzero(alive))
         # new targets from free candidates (new blobs, split heads)
         live_boxes = targets.boxes
-        for n in free:
-            a = anchors[n]
-            if taken[n] or a.box[3] < self.min_height:
+        for n in free.tolist():
+            box = boxes[n]
+            if taken[n] or box[3] < self.min_height:
                 continue
-            if a.source == "blob" and not self.blob_births:
+            if cand.blob[n] and not self.blob_births:
                 continue
-            if len(live_boxes) and iou_matrix(a.box[None], live_boxes).max() > self.new_track_iou:
+            if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > self.new_track_iou:
                 continue
-            al_n, be_n = centroid_ratios(a.box[None], a.centroid[None])
-            dof = dof_from_box(a.box, a.centroid)
+            centroid = cand.centroid[n]
+            al_n, be_n = centroid_ratios(box[None], centroid[None])
+            dof = dof_from_box(box, centroid)
             targets.add(self._next_id, dof, float(al_n[0]), float(be_n[0]), feats.take(n),
                         head_patch(frame, dof[[0, 1, 4, 5]]))
             self._next_id += 1
             if self._frame <= self.min_hits:
                 targets.confirmed[-1] = True  # people present from the start are reported at once
-            live_boxes = np.vstack([live_boxes, a.box[None]])
+            live_boxes = np.vstack([live_boxes, box[None]])
         return self._output()
 
     def _output(self) -> list[Track]:
