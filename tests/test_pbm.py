@@ -531,3 +531,46 @@ def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
         yc = hy + hh + b[k] * (h[k] - hh)
         np.testing.assert_array_equal(many[k], [hx - a[k] * w[k], hy, hx, yc, w[k], h[k]])
         np.testing.assert_array_equal(dof_from_head(heads[k], w[k], h[k], a[k], b[k]), many[k])
+
+
+def test_gated_pairs_equal_the_numpy_gating():
+    """The compiled gating (PBM 3) and occlusion-test pairs (PBM 3.1) against the numpy
+    expressions they replace, on random scenes with many boundary cases."""
+    from trackers.geometry import overlap_ratio_matrix
+    from trackers.layered._glue_kernels import gated_pairs
+    from trackers.layered.search import occlusion_kinds
+
+    rng = np.random.default_rng(11)
+    for trial in range(40):
+        T, N = int(rng.integers(0, 7)), int(rng.integers(0, 9))
+        boxes = np.round(rng.uniform(0, 60, (N, 4)) * 2) / 2 + [0, 0, 5, 10]
+        regions = np.where(rng.random((N, 1)) < 0.5, boxes, boxes * [1, 1, 2, 1.6])
+        heads = np.column_stack([boxes[:, 0] + 0.5 * boxes[:, 2], boxes[:, 1], 0.3 * boxes[:, 2]])
+        nh = rng.integers(1, 3, N)
+        gates = np.round(rng.uniform(0, 60, (T, 4)) * 2) / 2 + [0, 0, 10, 20]
+        pred = rng.uniform(5, 60, (T, 2))
+        tboxes = np.round(rng.uniform(0, 60, (T, 4)) * 2) / 2 + [0, 0, 0, 5]
+        tboxes[:1, 2] = 0.0  # an empty target box
+        misses = rng.integers(0, 2, T)
+        so = 0.0 if trial % 5 == 0 else 0.5
+        kinds = occlusion_kinds(regions[:, 2:], pred, 0.5)
+        got = gated_pairs(boxes, regions, heads, nh, gates, np.ascontiguousarray(pred[:, 1]),
+                          kinds.copy(), tboxes, misses, so)
+        # the numpy reference
+        c = boxes[:, :2] + 0.5 * boxes[:, 2:]
+        g = gates[:, None]
+        inside = ((c[:, 0] >= g[..., 0]) & (c[:, 0] <= g[..., 0] + g[..., 2])
+                  & (c[:, 1] >= g[..., 1]) & (c[:, 1] <= g[..., 3] + g[..., 1]))
+        merged = nh > 1
+        kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
+        ti_in, n_in = np.nonzero(inside & (kinds == 0))
+        hx, hy = heads[:, 0], heads[:, 1] + 0.5 * pred[:, 1, None]
+        carved = ((g[..., 0] <= hx) & (hx <= g[..., 0] + g[..., 2])
+                  & (g[..., 1] <= hy) & (hy <= g[..., 1] + g[..., 3]))
+        ti_s, n_s = np.nonzero(inside & (kinds != 0) & carved)
+        if so > 0 and len(ti_s):
+            ratio = overlap_ratio_matrix(tboxes, regions)[ti_s, n_s]
+            held = (kinds[ti_s, n_s] <= 0) | (misses[ti_s] > 0) | (ratio >= so)
+            ti_s, n_s = ti_s[held], n_s[held]
+        for a, b in zip(got, (ti_in, n_in, ti_s, n_s, kinds[ti_s, n_s])):
+            np.testing.assert_array_equal(a, b)

@@ -70,7 +70,8 @@ from trackers.frontend.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.geometry import iou_matrix, overlap_ratio_matrix
+from trackers.geometry import iou_matrix
+from trackers.layered._glue_kernels import gated_pairs
 from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
@@ -535,36 +536,23 @@ class PBMTracker:
             model = targets.parts
             gates = targets.gate_boxes()
             targets.last_gate = gates  # the gates this frame's candidates were validated in
-            gx0, gy0 = gates[:, None, 0], gates[:, None, 1]
-            gx1, gy1 = gx0 + gates[:, None, 2], gates[:, None, 3] + gy0
-            c = boxes[:, :2] + 0.5 * boxes[:, 2:]
-            inside = (c[:, 0] >= gx0) & (c[:, 0] <= gx1) & (c[:, 1] >= gy0) & (c[:, 1] <= gy1)
-            regions = cand.region
-            kinds = occlusion_kinds(regions[:, 2:], pred_wh, self.occlusion_threshold)
-            # a blob holding several heads is a merge: search it
-            merged = cand.heads_in_region > 1
-            if merged.any():
-                kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
-            # eqs. 11-13 for the unoccluded candidates inside each target's gate (PBM 3)
-            ti_in, n_in = np.nonzero(inside & (kinds == 0))
+            # candidates in each target's gate (PBM 3) and the occlusion test (PBM 3.1): the
+            # unoccluded pairs; the occluded ones whose carved (head-anchored) candidate lies
+            # in the gate too (its centre hangs half a predicted height below the head) and,
+            # for a larger region, that holds the target (PBM 3.1: "the target needs to be
+            # located within the blob"): a found target's last box lies at least
+            # ``search_overlap`` inside it. A blob holding several heads is a merge: searched.
+            kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.occlusion_threshold)
+            ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
+                boxes, cand.region, cand.head, cand.heads_in_region, gates,
+                np.ascontiguousarray(pred_wh[:, 1]), kinds, targets.boxes, targets.misses,
+                self.search_overlap)
+            # eqs. 11-13 for the unoccluded candidates
             pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
                                       self.omega, self.gamma, self.model_spread)
             pj_all[ti_in, n_in] = pj_in
             S[ti_in, n_in] = p_in
-            # the carved (head-anchored) candidate must itself lie in the gate (PBM 3): its
-            # centre hangs half a predicted height below the candidate's head
-            hx = cand.head[:, 0]
-            hy = cand.head[:, 1] + 0.5 * pred_wh[:, 1, None]
-            carved_in = (gx0 <= hx) & (hx <= gx1) & (gy0 <= hy) & (hy <= gy1)
-            # a larger region is searched for a target it holds (PBM 3.1: "the target needs
-            # to be located within the blob"): a found target's last box must lie at least
-            # ``search_overlap`` inside it
-            ti_s, n_s = np.nonzero(inside & (kinds != 0) & carved_in)
-            if self.search_overlap > 0 and len(ti_s):
-                ratio = overlap_ratio_matrix(targets.boxes, regions)[ti_s, n_s]
-                held = (kinds[ti_s, n_s] <= 0) | (targets.misses[ti_s] > 0) | (ratio >= self.search_overlap)
-                ti_s, n_s = ti_s[held], n_s[held]
-            found = (self._occluded_hypotheses(ti_s, n_s, kinds[ti_s, n_s], cand, fg, pred_wh, model)
+            found = (self._occluded_hypotheses(ti_s, n_s, kind_s, cand, fg, pred_wh, model)
                      if len(ti_s) else None)
             if found is not None:
                 kept, p_h, pj_h, feats_h, k_h, dof_h = found
