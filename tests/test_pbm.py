@@ -574,3 +574,35 @@ def test_gated_pairs_equal_the_numpy_gating():
             ti_s, n_s = ti_s[held], n_s[held]
         for a, b in zip(got, (ti_in, n_in, ti_s, n_s, kinds[ti_s, n_s])):
             np.testing.assert_array_equal(a, b)
+
+
+def test_assign_equals_the_numpy_gated_hungarian():
+    """``assign``'s compiled gating against the numpy form it replaces (PBM's one-to-one
+    step), on random matrices with ties, +-inf, NaN and every kind of gate."""
+    from scipy.optimize import linear_sum_assignment
+
+    from trackers.common.assignment import assign
+
+    def reference(cost, max_cost):
+        n, m = cost.shape
+        if n == 0 or m == 0:
+            return np.zeros((0, 2), dtype=int), np.arange(n), np.arange(m)
+        allowed = np.isfinite(cost) & (cost <= max_cost)
+        base = max_cost if np.isfinite(max_cost) else 0.0
+        big = base + 1.0 + np.abs(np.where(allowed, cost, 0.0)).max() * (n + m)
+        rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
+        keep = allowed[rows, cols]
+        rows, cols = rows[keep], cols[keep]
+        return (np.column_stack([rows, cols]), np.setdiff1d(np.arange(n), rows),
+                np.setdiff1d(np.arange(m), cols))
+
+    rng = np.random.default_rng(2)
+    for t in range(400):
+        n, m = (int(v) for v in rng.integers(0, 8, 2))
+        cost = np.round(rng.random((n, m)) * 4) / 4 * rng.choice([1.0, -1.0, 100.0])
+        for value, rate in ((np.inf, 0.3), (-np.inf, 0.05), (np.nan, 0.05)):
+            cost[rng.random((n, m)) < rate] = value
+        max_cost = [0.5, 0.75, np.inf, 0.0, 100.0][t % 5]
+        for got, want in zip(assign(cost, max_cost), reference(cost, max_cost)):
+            assert got.shape == want.shape
+            np.testing.assert_array_equal(got, want)

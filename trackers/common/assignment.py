@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
@@ -11,26 +14,60 @@ def assign(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Minimum-cost assignment keeping only pairs with cost <= max_cost.
 
+    Forbidden pairs cost more than any set of allowed ones: the optimum keeps every
+    allowed pair it can, then the cheapest. The gating before and after the Hungarian
+    method (scipy's ``linear_sum_assignment``) is compiled (two small loops).
+
     Args:
         cost: (N, M) float matrix; +inf or NaN marks forbidden pairs.
         max_cost: largest accepted cost.
     Returns:
         matches (K, 2) int rows (i, j), unmatched rows (N - K,), unmatched columns (M - K,).
     """
-    cost = np.asarray(cost, dtype=np.float64)
+    cost = np.ascontiguousarray(cost, dtype=np.float64)
     n, m = cost.shape
     if n == 0 or m == 0:
         return np.zeros((0, 2), dtype=int), np.arange(n), np.arange(m)
-    allowed = np.isfinite(cost) & (cost <= max_cost)
-    # forbidden pairs cost more than any set of allowed ones: the optimum keeps every
-    # allowed pair it can, then the cheapest
-    base = max_cost if np.isfinite(max_cost) else 0.0  # max_cost=inf: any finite cost
-    big = base + 1.0 + np.abs(np.where(allowed, cost, 0.0)).max() * (n + m)
-    rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
-    keep = allowed[rows, cols]
-    rows, cols = rows[keep], cols[keep]
-    free_rows = np.ones(n, dtype=bool)
-    free_cols = np.ones(m, dtype=bool)
-    free_rows[rows] = False
-    free_cols[cols] = False
-    return np.column_stack([rows, cols]), np.flatnonzero(free_rows), np.flatnonzero(free_cols)
+    max_cost = float(max_cost)
+    base = max_cost if math.isfinite(max_cost) else 0.0  # max_cost=inf: any finite cost
+    allowed, gated = _gate(cost, max_cost, base)
+    rows, cols = linear_sum_assignment(gated)
+    return _split(allowed, rows, cols)
+
+
+@numba.njit(cache=True)
+def _gate(cost: np.ndarray, max_cost: float, base: float) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover (compiled)
+    """allowed = isfinite(cost) & (cost <= max_cost), and the cost matrix with every
+    forbidden pair at base + 1 + max|allowed cost| (N + M)."""
+    n, m = cost.shape
+    allowed = np.empty((n, m), np.bool_)
+    largest = 0.0
+    for i in range(n):
+        for j in range(m):
+            c = cost[i, j]
+            allowed[i, j] = np.isfinite(c) and c <= max_cost
+            if allowed[i, j] and abs(c) > largest:
+                largest = abs(c)
+    big = base + 1.0 + largest * (n + m)
+    gated = np.empty((n, m))
+    for i in range(n):
+        for j in range(m):
+            gated[i, j] = cost[i, j] if allowed[i, j] else big
+    return allowed, gated
+
+
+@numba.njit(cache=True)
+def _split(allowed: np.ndarray, rows: np.ndarray, cols: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover (compiled)
+    """The assigned pairs (K, 2) that are allowed, and the rows and columns left free."""
+    n, m = allowed.shape
+    free_rows, free_cols = np.ones(n, np.bool_), np.ones(m, np.bool_)
+    matches = np.empty((rows.shape[0], 2), np.int64)
+    k = 0
+    for q in range(rows.shape[0]):
+        i, j = rows[q], cols[q]
+        if allowed[i, j]:
+            matches[k, 0], matches[k, 1] = i, j
+            free_rows[i], free_cols[j] = False, False
+            k += 1
+    return matches[:k].copy(), np.flatnonzero(free_rows), np.flatnonzero(free_cols)
