@@ -666,19 +666,25 @@ class PBMTracker:
         return self._output()
 
     def _output(self) -> list[Track]:
+        """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
+        and unfound for at most ``max_report_misses`` frames (OCCLUDED, score 0)."""
         tg = self.targets
+        found = tg.misses == 0
+        rows = np.flatnonzero(found | (tg.confirmed & self.report_occluded
+                                       & (tg.misses <= self.max_report_misses)))
+        # copies (fancy indexing): the rows of the state arrays change in place later
+        boxes, rects = tg.dof[rows][:, [0, 1, 4, 5]], tg.parts.parts[rows]
+        occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
+        found, confirmed = found[rows].tolist(), tg.confirmed[rows].tolist()
+        score = np.clip(tg.score[rows], 0.0, 1.0).tolist()
         out = []
-        # copies: the rows of the state arrays change in place in later frames
-        boxes, rects = tg.boxes, tg.parts.parts.copy()
-        occluded_parts, part_scores, gates = tg.occluded_parts.copy(), tg.part_scores.copy(), tg.last_gate.copy()
-        ids, misses, confirmed, score = (tg.id.tolist(), tg.misses.tolist(), tg.confirmed.tolist(),
-                                         np.clip(tg.score, 0.0, 1.0).tolist())
-        for i, has_gate in enumerate(np.isfinite(gates[:, 0]).tolist()):
+        for i, (track_id, has_gate) in enumerate(zip(tg.id[rows].tolist(),
+                                                      np.isfinite(gates[:, 0]).tolist())):
             extra = {"parts": rects[i], "occluded_parts": occluded_parts[i],
                      "part_scores": part_scores[i], "gate": gates[i] if has_gate else None}
-            if misses[i] == 0:
+            if found[i]:
                 state = TrackState.CONFIRMED if confirmed[i] else TrackState.TENTATIVE
-                out.append(Track(ids[i], boxes[i], state, score[i], extra))
-            elif confirmed[i] and self.report_occluded and misses[i] <= self.max_report_misses:
-                out.append(Track(ids[i], boxes[i], TrackState.OCCLUDED, 0.0, extra))
+                out.append(Track(track_id, boxes[i], state, score[i], extra))
+            else:
+                out.append(Track(track_id, boxes[i], TrackState.OCCLUDED, 0.0, extra))
         return out
