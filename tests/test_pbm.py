@@ -606,3 +606,27 @@ def test_assign_equals_the_numpy_gated_hungarian():
         for got, want in zip(assign(cost, max_cost), reference(cost, max_cost)):
             assert got.shape == want.shape
             np.testing.assert_array_equal(got, want)
+
+
+def test_prune_equals_the_numpy_centre_radius_and_nearest_head():
+    """``_prune``'s scalar arithmetic (few heads) and numpy path (many) against the
+    numpy form: mean centre, largest norm as radius, nearest head to the refined one."""
+    from trackers.layered.search import head_patch, match_head_template
+
+    rng = np.random.default_rng(4)
+    frame = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (5, 5), 0)
+    t = PBMTracker(template_threshold=-1.0)  # every match counts: the refined head is used
+    for K in [1, 2, 3, 5, 7, 8, 9, 12] * 3:
+        heads = rng.uniform(20, 100, (K, 2))
+        cands = rng.permutation(40)[:K]
+        template = head_patch(frame, np.array([*rng.uniform(30, 90, 2), 18.0, 70.0]))
+        tw = template.shape[1]
+        centre = heads.mean(axis=0)
+        radius = float(np.max(np.linalg.norm(heads - centre, axis=1))) + 0.5 * tw + 2
+        tl, _ = match_head_template(frame, template, np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
+        refined = np.array([tl[0] + 0.5 * tw, tl[1]])
+        nearest = cands[int(np.argmin(np.linalg.norm(heads - refined, axis=1)))]
+        chosen, got = t._prune(template, cands, heads, frame)
+        assert chosen == nearest
+        np.testing.assert_array_equal(got, refined)
+    assert t._prune(None, cands, heads, frame) == (-1, None)

@@ -299,13 +299,23 @@ def grey_region(image: np.ndarray, r0: int, r1: int, c0: int, c1: int) -> np.nda
 def head_patch(image: np.ndarray, box: np.ndarray) -> np.ndarray | None:
     """Head template (PBM 4.1): the top 1/7 of a box (a copy, grey or BGR as ``image``),
     or None when it leaves the image. ``match_head_template`` takes either."""
-    x, y, w, h = _floats(box)
+    return head_patches(image, np.asarray(box, dtype=np.float64).reshape(1, 4))[0]
+
+
+def head_patches(image: np.ndarray, boxes: np.ndarray) -> list[np.ndarray | None]:
+    """``head_patch`` of N xywh boxes (N, 4): rows round(y) .. round(y + h / 7), columns
+    round(x) .. round(x + w) (half to even), None where that leaves the image or is
+    under 3 pixels either way."""
+    x, y, w, h = boxes[:, 0], boxes[:, 1], boxes[:, 2], boxes[:, 3]
     H, W = image.shape[:2]
-    r0, r1 = round(y), round(y + HEAD_FRACTION * h)
-    c0, c1 = round(x), round(x + w)
-    if r0 < 0 or c0 < 0 or r1 > H or c1 > W or r1 - r0 < 3 or c1 - c0 < 3:
-        return None
-    return image[r0:r1, c0:c1].copy()
+    r0, r1 = np.rint(y), np.rint(y + HEAD_FRACTION * h)
+    c0, c1 = np.rint(x), np.rint(x + w)
+    ok = (r0 >= 0) & (c0 >= 0) & (r1 <= H) & (c1 <= W) & (r1 - r0 >= 3) & (c1 - c0 >= 3)
+    out: list[np.ndarray | None] = [None] * len(boxes)
+    for k, (a, b, c, d) in zip(np.flatnonzero(ok).tolist(),
+                               np.column_stack([r0, r1, c0, c1])[ok].astype(np.int64).tolist()):
+        out[k] = image[a:b, c:d].copy()
+    return out
 
 
 def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndarray,
@@ -336,7 +346,7 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     template = grey_region(template, 0, template.shape[0], 0, template.shape[1])
     th, tw = template.shape
     H, W = image.shape[:2]
-    r = int(np.ceil(radius))
+    r = math.ceil(radius)
     x0, y0 = round(centre[0]) - r, round(centre[1]) - r
     c0, r0 = max(x0, 0), max(y0, 0)
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)

@@ -59,6 +59,7 @@ Adaptations (where the paper is vague or relies on what we do not have):
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -87,6 +88,7 @@ from trackers.layered.search import (
     blobs_boxes,
     head_fill,
     head_patch,
+    head_patches,
     heads_from_bands,
     match_head_template,
     occlusion_kinds,
@@ -474,19 +476,36 @@ class PBMTracker:
         around the heads (x top-centre, y top) (K, 2) of the candidates ``cands`` (K,)
         (``match_head_template``, on the grey of the BGR ``frame``'s search window only);
         returns the candidate nearest the refined head and that head, or (-1, None) when
-        the template does not match."""
+        the template does not match.
+
+        The centre is the heads' mean, the radius their largest distance from it (plus
+        half the template width and 2 pixels); a few heads are summed as Python floats in
+        numpy's order (row by row), more by numpy itself.
+        """
         if template is None or not len(cands):
             return -1, None
         tw = template.shape[1]
-        centre = heads.mean(axis=0)
-        radius = float(np.max(np.linalg.norm(heads - centre, axis=1))) + 0.5 * tw + 2
-        tl, corr = match_head_template(frame, template,
-                                       np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
+        if len(cands) < 8:
+            hs = heads.tolist()
+            cx, cy = hs[0]
+            for hx, hy in hs[1:]:
+                cx, cy = cx + hx, cy + hy
+            cx, cy = cx / len(hs), cy / len(hs)
+            radius = max(math.sqrt((hx - cx) * (hx - cx) + (hy - cy) * (hy - cy)) for hx, hy in hs)
+        else:
+            cx, cy = heads.mean(axis=0).tolist()
+            radius = float(np.max(np.linalg.norm(heads - [cx, cy], axis=1)))
+        tl, corr = match_head_template(frame, template, np.array([cx - 0.5 * tw, cy]),
+                                       radius + 0.5 * tw + 2)
         if corr < self.template_threshold:
             return -1, None
-        refined = np.array([tl[0] + 0.5 * tw, tl[1]])
-        dist = np.linalg.norm(heads - refined, axis=1)
-        return int(cands[int(np.argmin(dist))]), refined
+        rx, ry = tl[0] + 0.5 * tw, float(tl[1])
+        if len(cands) < 8:
+            dist = [math.sqrt((hx - rx) * (hx - rx) + (hy - ry) * (hy - ry)) for hx, hy in hs]
+            nearest = dist.index(min(dist))
+        else:
+            nearest = int(np.argmin(np.linalg.norm(heads - [rx, ry], axis=1)))
+        return int(cands[nearest]), np.array([rx, ry])
 
     # ------------------------------------------------------------------ update
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -627,8 +646,7 @@ class PBMTracker:
             taken[mn] = True
             # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
             fresh = mt[~occl & (pj[:, 0] >= self.part_match_threshold)]
-            for ti, box in zip(fresh.tolist(), dof_t[fresh][:, [0, 1, 4, 5]]):
-                tpl = head_patch(frame, box)
+            for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh][:, [0, 1, 4, 5]])):
                 if tpl is not None:
                     targets.head_template[ti] = tpl
             targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
