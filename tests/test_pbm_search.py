@@ -87,6 +87,25 @@ def _exhaustive_match(gray, template, centre, radius):
     return np.array([c0 + loc[0], r0 + loc[1]], dtype=np.float64), float(best), (res, c0, r0)
 
 
+def _ncc_reference(win, tpl):
+    """(ny, nx) TM_CCOEFF_NORMED of every position from exact int64 sums, with the
+    kernels' float64 formula and OpenCV's conventions (the same operations, elementwise)."""
+    th, tw = tpl.shape
+    n = th * tw
+    w64, t64 = win.astype(np.int64), tpl.astype(np.int64)
+    view = np.lib.stride_tricks.sliding_window_view(w64, (th, tw))
+    sc = np.einsum("yxij,ij->yx", view, t64).astype(np.float64)
+    sw = view.sum(axis=(2, 3)).astype(np.float64)
+    sw2 = (view * view).sum(axis=(2, 3)).astype(np.float64)
+    st, st2 = float(t64.sum()), float((t64 * t64).sum())
+    tnorm = np.sqrt(max(st2 - st * (st / n), 0.0))
+    num = sc - sw * st / n
+    d = np.sqrt(np.maximum(sw2 - sw * (sw / n), 0.0)) * tnorm
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(np.abs(num) < d, num / d,
+                        np.where(np.abs(num) < d * 1.125, np.where(num > 0, 1.0, -1.0), 0.0))
+
+
 def _scene(rng, h=120, w=160):
     """A smooth grey scene (blurred noise) with a few flat-shaded 'heads'."""
     img = cv2.GaussianBlur(rng.integers(0, 256, (h, w)).astype(np.float32), (0, 0), 3.0)
@@ -161,6 +180,31 @@ def test_a_flat_template_scores_one_at_the_window_corner_as_opencv():
     ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, np.array([30.0, 30.0]), 20.0)
     np.testing.assert_array_equal(tl, ref_tl)
     assert corr == ref_corr == 1.0
+
+
+def test_compiled_scores_equal_an_exact_reference_bit_for_bit():
+    """ncc_all's maximum and ncc_climb's local maxima carry the exact reference score,
+    for templates scored eight positions at a time (up to 256 wide and tall) and for
+    wider or taller ones (one position at a time), right up to the window's last column."""
+    from trackers.layered import _search_kernels as K
+
+    rng = np.random.default_rng(7)
+    shapes = [(int(rng.integers(3, 20)), int(rng.integers(3, 40))) for _ in range(20)]
+    shapes += [(6, 257), (258, 4), (3, 300)]
+    for th, tw in shapes:
+        win = rng.integers(0, 256, (th + int(rng.integers(0, 9)), tw + int(rng.integers(0, 12))),
+                           dtype=np.uint8)
+        tpl = rng.integers(0, 256, (th, tw), dtype=np.uint8)
+        ref = _ncc_reference(win, tpl)
+        bx, by, best = K.ncc_all(win, tpl)
+        assert best == ref.max() and ref[by, bx] == best
+        assert (by, bx) == np.unravel_index(np.argmax(ref), ref.shape)  # first in raster order
+        xs = rng.integers(0, ref.shape[1], 3)
+        ys = rng.integers(0, ref.shape[0], 3)
+        cx, cy, score = K.ncc_climb(win, tpl, xs, ys, 1)
+        assert ref[cy, cx] == score
+        around = ref[max(cy - 1, 0):cy + 2, max(cx - 1, 0):cx + 2]
+        assert score == around.max()  # a local maximum of the exact scores
 
 
 # ---------------------------------------------------------------------- candidates

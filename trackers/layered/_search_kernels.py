@@ -6,7 +6,8 @@ and keeps the best local maxima; ``ncc_climb`` climbs from each, at full resolut
 a local maximum of the exact score. ``ncc_all`` scores every position (small windows).
 Full-resolution scores use exact integer sums (held in float32 per row and float64
 overall; every partial sum is an integer below 2^24 or 2^53) and OpenCV's conventions,
-so they equal ``cv2.matchTemplate(..., TM_CCOEFF_NORMED)`` up to its float32 rounding.
+so they equal ``cv2.matchTemplate(..., TM_CCOEFF_NORMED)`` up to its float32 rounding;
+being exact, the sums may be formed in any order (eight positions of a row at once).
 """
 
 from __future__ import annotations
@@ -14,34 +15,97 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-_MARGIN = 3  # ncc_climb: climbing steps prepared around each start
 _CHUNK = 256  # columns per float32 row sum: 256 x 255^2 < 2^24, so the sums stay exact
 
 
-@numba.njit(cache=True, fastmath=True)
-def _cross(reg: np.ndarray, tplf: np.ndarray, x: int, y: int) -> float:
-    """sum(reg[y:y + th, x:x + tw] tplf) of float32 integers 0..255, exactly.
+_LANES = 8  # positions of a row scored together (one vector of float32)
 
-    Templates up to ``_CHUNK`` wide sum each row in float32 (every partial sum is an
-    integer below 2^24: exact in any order, so ``fastmath`` may vectorise it) and the
-    rows in float64; wider ones sum in float64 (exact below 2^53).
+
+@numba.njit(cache=True, fastmath=True)
+def _sums_row(img: np.ndarray, tplf: np.ndarray, x: int, y: int, out: np.ndarray,
+              cols: np.ndarray, pre: np.ndarray) -> None:
+    """Exact sums of the ``_LANES`` positions (x + q, y), q = 0..7, of a (th, tw)
+    template, th and tw <= ``_CHUNK``, into out (3, 8) float64: the cross-correlation
+    sum(img[y:y + th, x + q:x + q + tw] tplf), the window sum and its sum of squares.
+
+    ``img``: float32 integers 0..255 with ``_LANES - 1`` columns of padding on the
+    right (``_padded``). The cross-correlations sum each template row in float32
+    (integers below 2^24: exact in any order, so ``fastmath`` may reorder them), eight
+    positions per template value, and the rows in float64. The window sums come from
+    column sums (float32, exact) over tw + 7 columns and their float64 prefix sums.
+    Scratch: cols (2, tw + 7) float32, pre (2, tw + 8) float64.
     """
     th, tw = tplf.shape
-    total = 0.0
     for r in range(th):
-        a = reg[y + r, x:x + tw]
-        b = tplf[r]
-        if tw <= _CHUNK:
-            acc = np.float32(0.0)
-            for c in range(tw):
-                acc += a[c] * b[c]
-            total += acc
+        row = img[y + r, x:]  # indices from 0: no negative-index test
+        t = tplf[r]
+        c0 = c1 = c2 = c3 = c4 = c5 = c6 = c7 = np.float32(0.0)
+        for c in range(tw):
+            tv = t[c]
+            c0 += row[c] * tv
+            c1 += row[c + 1] * tv
+            c2 += row[c + 2] * tv
+            c3 += row[c + 3] * tv
+            c4 += row[c + 4] * tv
+            c5 += row[c + 5] * tv
+            c6 += row[c + 6] * tv
+            c7 += row[c + 7] * tv
+        if r == 0:
+            out[0, 0], out[0, 1], out[0, 2], out[0, 3] = c0, c1, c2, c3
+            out[0, 4], out[0, 5], out[0, 6], out[0, 7] = c4, c5, c6, c7
         else:
-            acc64 = 0.0
-            for c in range(tw):
-                acc64 += np.float64(a[c]) * np.float64(b[c])
-            total += acc64
-    return total
+            out[0, 0] += c0
+            out[0, 1] += c1
+            out[0, 2] += c2
+            out[0, 3] += c3
+            out[0, 4] += c4
+            out[0, 5] += c5
+            out[0, 6] += c6
+            out[0, 7] += c7
+    m = tw + _LANES - 1
+    cs, cq = cols[0], cols[1]
+    cs[:] = 0.0
+    cq[:] = 0.0
+    for r in range(th):
+        row = img[y + r, x:x + m]
+        for k in range(m):
+            v = row[k]
+            cs[k] += v
+            cq[k] += v * v
+    ps, pq = pre[0], pre[1]
+    ps[0] = pq[0] = 0.0
+    for k in range(m):
+        ps[k + 1] = ps[k] + cs[k]
+        pq[k + 1] = pq[k] + cq[k]
+    for q in range(_LANES):
+        out[1, q] = ps[q + tw] - ps[q]
+        out[2, q] = pq[q + tw] - pq[q]
+
+
+@numba.njit(cache=True)
+def _sums_one(img: np.ndarray, tplf: np.ndarray, x: int, y: int) -> tuple[float, float, float]:
+    """``_sums_row``'s three sums at one position, in float64 (any template width)."""
+    th, tw = tplf.shape
+    sc = sw = sw2 = 0.0
+    for r in range(th):
+        for c in range(tw):
+            v = np.float64(img[y + r, x + c])
+            sc += v * np.float64(tplf[r, c])
+            sw += v
+            sw2 += v * v
+    return sc, sw, sw2
+
+
+@numba.njit(cache=True)
+def _padded(win: np.ndarray) -> np.ndarray:
+    """float32 copy of a uint8 window with ``_LANES - 1`` zero columns on the right."""
+    h, w = win.shape
+    out = np.zeros((h, w + _LANES - 1), np.float32)
+    for y in range(h):
+        src, dst = win[y], out[y]
+        for x in range(w):
+            dst[x] = src[x]
+    return out
 
 
 @numba.njit(cache=True)
@@ -64,39 +128,33 @@ def _integrals(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @numba.njit(cache=True)
-def _region(win: np.ndarray, x0: int, y0: int, x1: int, y1: int, th: int, tw: int
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pixels under the top-left positions [x0, x1) x [y0, y1) of a (th, tw)
-    template: float32 copy and exact float64 integral images of it and its square."""
-    hr, wr = y1 - y0 + th - 1, x1 - x0 + tw - 1
-    reg = np.empty((hr, wr), np.float32)
-    for y in range(hr):
-        for x in range(wr):
-            reg[y, x] = win[y0 + y, x0 + x]
-    s1, s2 = _integrals(reg)
-    return reg, s1, s2
-
-
-@numba.njit(cache=True)
-def _score_in(reg: np.ndarray, s1: np.ndarray, s2: np.ndarray, ox: int, oy: int,
-              tplf: np.ndarray, xa: int, ya: int, xb: int, yb: int, st: float, tnorm: float,
-              seen: np.ndarray, score: np.ndarray) -> None:
-    """TM_CCOEFF_NORMED at the window positions [xa, xb) x [ya, yb) not yet ``seen``,
-    from a ``_region`` whose first position is (ox, oy); written into ``score``.
+def _score_in(img: np.ndarray, tplf: np.ndarray, xa: int, ya: int, xb: int, yb: int,
+              st: float, tnorm: float, seen: np.ndarray, score: np.ndarray) -> None:
+    """TM_CCOEFF_NORMED at the positions [xa, xb) x [ya, yb) not yet ``seen`` of a
+    ``_padded`` window, written into ``score``.
 
     OpenCV's conventions: |num| >= denominator gives 0, within 12.5% of it +-1.
     ``st``: template sum; ``tnorm``: sqrt of its sum of squared deviations.
     """
     th, tw = tplf.shape
     n = th * tw
+    rows = tw <= _CHUNK and th <= _CHUNK  # eight positions at once (exact float32 sums)
+    sums = np.empty((3, _LANES))
+    cols = np.empty((2, tw + _LANES - 1), np.float32)
+    pre = np.empty((2, tw + _LANES))
     for yy in range(ya, yb):
+        first = -_LANES  # sums[:, q] hold position (first + q, yy)
         for xx in range(xa, xb):
             if seen[yy, xx]:
                 continue
-            x, y = xx - ox, yy - oy
-            sc = _cross(reg, tplf, x, y)
-            sw = s1[y + th, x + tw] - s1[y, x + tw] - s1[y + th, x] + s1[y, x]
-            sw2 = s2[y + th, x + tw] - s2[y, x + tw] - s2[y + th, x] + s2[y, x]
+            if rows:
+                if xx >= first + _LANES:  # this position and the next seven
+                    _sums_row(img, tplf, xx, yy, sums, cols, pre)
+                    first = xx
+                q = xx - first
+                sc, sw, sw2 = sums[0, q], sums[1, q], sums[2, q]
+            else:
+                sc, sw, sw2 = _sums_one(img, tplf, xx, yy)
             num = sc - sw * st / n
             d = np.sqrt(max(sw2 - sw * (sw / n), 0.0)) * tnorm
             if abs(num) < d:
@@ -271,24 +329,17 @@ def ncc_climb(win: np.ndarray, tpl: np.ndarray, xs: np.ndarray, ys: np.ndarray, 
     if tnorm <= 0:
         return 0, 0, 1.0
     tplf = tpl.astype(np.float32)
+    img = _padded(win)
     seen = np.zeros((ny, nx), np.uint8)
     score = np.empty((ny, nx))
     bx, by, best = -1, -1, -np.inf
     for i in range(len(xs)):
         cx, cy = xs[i], ys[i]
         half = pad
-        # pixels for the first neighbourhood and a few climbing steps, prepared once
-        rx0, ry0 = max(cx - pad - _MARGIN, 0), max(cy - pad - _MARGIN, 0)
-        rx1, ry1 = min(cx + pad + _MARGIN + 1, nx), min(cy + pad + _MARGIN + 1, ny)
-        reg, s1, s2 = _region(win, rx0, ry0, rx1, ry1, th, tw)
         while True:
             xa, xb = max(cx - half, 0), min(cx + half + 1, nx)
             ya, yb = max(cy - half, 0), min(cy + half + 1, ny)
-            if xa < rx0 or ya < ry0 or xb > rx1 or yb > ry1:
-                rx0, ry0 = max(cx - _MARGIN, 0), max(cy - _MARGIN, 0)
-                rx1, ry1 = min(cx + _MARGIN + 1, nx), min(cy + _MARGIN + 1, ny)
-                reg, s1, s2 = _region(win, rx0, ry0, rx1, ry1, th, tw)
-            _score_in(reg, s1, s2, rx0, ry0, tplf, xa, ya, xb, yb, st, tnorm, seen, score)
+            _score_in(img, tplf, xa, ya, xb, yb, st, tnorm, seen, score)
             mx, my, mv = -1, -1, -np.inf
             for y in range(ya, yb):
                 for x in range(xa, xb):
@@ -312,8 +363,7 @@ def ncc_all(win: np.ndarray, tpl: np.ndarray) -> tuple[int, int, float]:
         return 0, 0, 1.0
     seen = np.zeros((ny, nx), np.uint8)
     score = np.empty((ny, nx))
-    reg, s1, s2 = _region(win, 0, 0, nx, ny, th, tw)
-    _score_in(reg, s1, s2, 0, 0, tpl.astype(np.float32), 0, 0, nx, ny, st, tnorm, seen, score)
+    _score_in(_padded(win), tpl.astype(np.float32), 0, 0, nx, ny, st, tnorm, seen, score)
     bx, by, best = 0, 0, -np.inf
     for y in range(ny):
         for x in range(nx):
