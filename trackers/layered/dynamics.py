@@ -155,7 +155,7 @@ class Gate:
               misses: np.ndarray) -> np.ndarray:
         """(T, 4) xywh gates centred on ``centres`` (T, 2)."""
         half = self.half_sizes(rates, size_wh, misses)
-        return np.column_stack([centres - half, 2 * half])
+        return np.concatenate([centres - half, 2 * half], axis=1)
 
 
 @numba.njit(cache=True)

@@ -304,17 +304,16 @@ def head_patch(image: np.ndarray, box: np.ndarray) -> np.ndarray | None:
 
 def head_patches(image: np.ndarray, boxes: np.ndarray) -> list[np.ndarray | None]:
     """``head_patch`` of N xywh boxes (N, 4): rows round(y) .. round(y + h / 7), columns
-    round(x) .. round(x + w) (half to even), None where that leaves the image or is
-    under 3 pixels either way."""
-    x, y, w, h = boxes[:, 0], boxes[:, 1], boxes[:, 2], boxes[:, 3]
+    round(x) .. round(x + w), None where that leaves the image or is under 3 pixels."""
     H, W = image.shape[:2]
-    r0, r1 = np.rint(y), np.rint(y + HEAD_FRACTION * h)
-    c0, c1 = np.rint(x), np.rint(x + w)
-    ok = (r0 >= 0) & (c0 >= 0) & (r1 <= H) & (c1 <= W) & (r1 - r0 >= 3) & (c1 - c0 >= 3)
-    out: list[np.ndarray | None] = [None] * len(boxes)
-    for k, (a, b, c, d) in zip(np.flatnonzero(ok).tolist(),
-                               np.column_stack([r0, r1, c0, c1])[ok].astype(np.int64).tolist()):
-        out[k] = image[a:b, c:d].copy()
+    out: list[np.ndarray | None] = []
+    for x, y, w, h in boxes.tolist():
+        r0, r1 = round(y), round(y + HEAD_FRACTION * h)
+        c0, c1 = round(x), round(x + w)
+        if r0 < 0 or c0 < 0 or r1 > H or c1 > W or r1 - r0 < 3 or c1 - c0 < 3:
+            out.append(None)
+        else:
+            out.append(image[r0:r1, c0:c1].copy())
     return out
 
 

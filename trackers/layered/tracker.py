@@ -104,6 +104,7 @@ logger = logging.getLogger(__name__)
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
 DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
+_BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
 
 
 def _norms(v: np.ndarray) -> np.ndarray:
@@ -688,19 +689,20 @@ class PBMTracker:
         and unfound for at most ``max_report_misses`` frames (OCCLUDED, score 0)."""
         tg = self.targets
         found = tg.misses == 0
-        rows = np.flatnonzero(found | (tg.confirmed & self.report_occluded
-                                       & (tg.misses <= self.max_report_misses)))
+        shown = found
+        if self.report_occluded:
+            shown = found | (tg.confirmed & (tg.misses <= self.max_report_misses))
+        rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
-        boxes, rects = tg.dof[rows][:, [0, 1, 4, 5]], tg.parts.parts[rows]
+        boxes, rects = tg.dof[rows[:, None], _BOX_COLUMNS], tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
-        found, confirmed = found[rows].tolist(), tg.confirmed[rows].tolist()
-        score = np.clip(tg.score[rows], 0.0, 1.0).tolist()
+        score = tg.score[rows].clip(0.0, 1.0).tolist()
+        confirmed, has_gate = tg.confirmed[rows].tolist(), np.isfinite(gates[:, 0]).tolist()
         out = []
-        for i, (track_id, has_gate) in enumerate(zip(tg.id[rows].tolist(),
-                                                      np.isfinite(gates[:, 0]).tolist())):
+        for i, (track_id, is_found) in enumerate(zip(tg.id[rows].tolist(), found[rows].tolist())):
             extra = {"parts": rects[i], "occluded_parts": occluded_parts[i],
-                     "part_scores": part_scores[i], "gate": gates[i] if has_gate else None}
-            if found[i]:
+                     "part_scores": part_scores[i], "gate": gates[i] if has_gate[i] else None}
+            if is_found:
                 state = TrackState.CONFIRMED if confirmed[i] else TrackState.TENTATIVE
                 out.append(Track(track_id, boxes[i], state, score[i], extra))
             else:
