@@ -110,7 +110,7 @@ _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h
 def _norms(v: np.ndarray) -> np.ndarray:
     """(K,) Euclidean norms of the rows of v (K, 2), each equal bit for bit to
     ``np.linalg.norm(v[k])`` (the same dot product: one per row, as a stacked matmul)."""
-    return np.sqrt(np.matmul(v[:, None, :], v[:, :, None]).reshape(-1))
+    return np.sqrt((v[:, None, :] @ v[:, :, None]).ravel())
 
 
 class PBMTracker:
@@ -321,15 +321,16 @@ class PBMTracker:
         if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
             heads = np.asarray(self.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
         finite = np.isfinite(det_boxes).all(axis=1)
-        valid = np.flatnonzero(finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1))
+        valid = (finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)).nonzero()[0]
         box = det_boxes[valid]
         has_head = (np.zeros(len(valid), dtype=bool) if heads is None
                     else np.isfinite(heads[valid]).all(axis=1))
         head = np.empty((len(valid), 3))
-        if has_head.any():
+        n_head = np.count_nonzero(has_head)
+        if n_head:
             hx, hy, hw = heads[valid[has_head], :3].T
             head[has_head] = np.column_stack([hx + 0.5 * hw, hy, hw])
-        if not has_head.all():
+        if n_head < len(valid):
             need = ~has_head
             if fg is not None:  # the top 1/7 band's foreground (PBM 3.1)
                 head[need] = heads_from_bands(fg, box[need])
@@ -432,8 +433,8 @@ class PBMTracker:
         targets = self.targets
         alpha_t, beta_t = targets.alpha, targets.beta
         heads = cand.head[n]
-        search_q = np.flatnonzero(kind > 0)
-        align_q = np.flatnonzero(kind <= 0)
+        search_q = (kind > 0).nonzero()[0]
+        align_q = (kind <= 0).nonzero()[0]
         if len(align_q):
             # the predicted-size box aligned on the head (``search.aligned_box``)
             at = ti[align_q]
@@ -547,10 +548,12 @@ class PBMTracker:
         targets = self.targets
         pred_wh = targets.predict()
         T = len(targets)
-        S = np.full((T, n_a), -np.inf)
+        S = np.empty((T, n_a))
+        S.fill(-np.inf)
         # occluded candidates: hyp[ti, n] indexes the pair's row of the search's arrays
         # (``_occluded_hypotheses``); the unoccluded ones are read from the frame's arrays
-        hyp = np.full((T, n_a), -1, dtype=np.intp)
+        hyp = np.empty((T, n_a), dtype=np.intp)
+        hyp.fill(-1)
         pj_all = np.zeros((T, n_a, N_PARTS))
         if T and n_a:
             model = targets.parts
@@ -577,17 +580,17 @@ class PBMTracker:
             if found is not None:
                 kept, p_h, pj_h, feats_h, k_h, dof_h = found
                 S[ti_s[kept], n_s[kept]] = p_h[kept]
-                hyp[ti_s[kept], n_s[kept]] = np.flatnonzero(kept)
+                hyp[ti_s[kept], n_s[kept]] = kept.nonzero()[0]
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             # (the loop below changes only row ti of S, after reading it)
             bests, _, ambs = ambiguous_rows(S, self.match_threshold, self.margin_ratio)
-            weaks = (bests < 0) & (S.max(axis=1) >= self.weak_threshold)
+            weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= self.weak_threshold)
             heads_xy = cand.head[:, :2]
-            for ti in np.flatnonzero(ambs | weaks).tolist():
+            for ti in (ambs | weaks).nonzero()[0].tolist():
                 row = S[ti]
                 best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
                 lo = self.match_threshold if amb else self.weak_threshold
-                cands = np.flatnonzero(row >= lo)
+                cands = (row >= lo).nonzero()[0]
                 # only nearby candidates are multiple responses of one person (PBM 4.1);
                 # distant rivals are left to the one-to-one assignment
                 r = best if best >= 0 else int(np.argmax(row))
@@ -619,35 +622,35 @@ class PBMTracker:
             occl = q >= 0
             # unoccluded: the candidate's own DOF; a blob's span follows the swinging
             # limbs: it keeps KF2's width (PBM 3)
-            cents = cand.centroid[mn]
-            dof = np.column_stack([boxes[mn, :2], cents, boxes[mn, 2:]])
+            cents, bm = cand.centroid[mn], boxes[mn]
+            dof = np.concatenate([bm[:, :2], cents, bm[:, 2:]], axis=1)
             blob = cand.blob[mn] & ~occl
-            if blob.any():
+            if np.count_nonzero(blob):
                 w = pred_wh[mt[blob], 0]
                 dof[blob, 0] = cents[blob, 0] - targets.alpha[mt[blob]] * w
                 dof[blob, 4] = w
             pj = pj_all[mt, mn]
-            if occl.any():
+            n_occl = np.count_nonzero(occl)
+            if n_occl:
                 dof[occl] = dof_h[q[occl]]
                 pj[occl] = pj_h[q[occl]]
-            shift = targets.update(mt, dof, np.full(len(mt), fg is not None) & ~occl, occl, pj,
-                                   self.part_match_threshold)
+            measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
+            shift = targets.update(mt, dof, measured, occl, pj, self.part_match_threshold)
             # then the parts models, from the feature arrays the candidates were measured in
             dof_t = targets.dof
-            groups = [(~occl, feats, mn)]
-            if occl.any():
+            groups = [(~occl, feats, mn)] if n_occl < len(mt) else []
+            if n_occl:
                 groups.append((occl, feats_h, np.where(occl, k_h[q], 0)))
             for rows, f, ks in groups:
-                if rows.any():
-                    r = mt[rows]
-                    update_parts(targets.parts, r, f, ks[rows], pj[rows], self.part_match_threshold,
-                                 self.update_rate, shift[rows], dof_t[r][:, [0, 1, 4, 5]],
-                                 targets.alpha[r], targets.beta[r])
+                r = mt[rows]
+                update_parts(targets.parts, r, f, ks[rows], pj[rows], self.part_match_threshold,
+                             self.update_rate, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
+                             targets.alpha[r], targets.beta[r])
             targets.score[mt] = S[mt, mn]
             taken[mn] = True
             # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
             fresh = mt[~occl & (pj[:, 0] >= self.part_match_threshold)]
-            for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh][:, [0, 1, 4, 5]])):
+            for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
                 if tpl is not None:
                     targets.head_template[ti] = tpl
             targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
@@ -662,7 +665,7 @@ class PBMTracker:
                  | (targets.confirmed & (targets.misses <= self.max_misses)
                     & ~(near_border & (targets.misses >= self.exit_misses))))
         if not alive.all():
-            targets.take(np.flatnonzero(alive))
+            targets.take(alive.nonzero()[0])
         # new targets from free candidates (new blobs, split heads)
         live_boxes = targets.boxes
         for n in free.tolist():
