@@ -16,7 +16,9 @@ kernels replaced, so the features are equal to it bit for bit:
   by tests/test_parts.py and, on a sample, once per process by the extractor).
 
 Kernels are compiled on first use and cached on disk (``cache=True``); none recurses
-(numba's cache mishandles recursive functions).
+(numba's cache mishandles recursive functions). In the per-sample loops, indices read
+from arrays are cast to unsigned (``np.uint64``): numba then drops its negative-index
+test, about a fifth of ``part_features``' time.
 """
 
 from __future__ import annotations
@@ -57,10 +59,11 @@ def _sample_grid(
         xi[c] = _clip_index(xs[c], W)
     for r in range(R):
         row_in = ys[r] >= 0.0 and ys[r] < H
+        mrow = fg[np.uint64(yi[r])] if has_fg else fg[0]
         for c in range(C):
             inside = row_in and xs[c] >= 0.0 and xs[c] < W
             if inside and has_fg:
-                inside = fg[yi[r], xi[c]]
+                inside = mrow[np.uint64(xi[c])]  # unsigned: no negative-index test
             on[r, c] = inside
 
 
@@ -81,11 +84,11 @@ def _hsv_xyz(b: int, g: int, r: int) -> tuple[int, int, int, int, int, int]:
     v, vmin = max(b, g, r), min(b, g, r)
     diff = v - vmin
     half = 1 << (HSV_SHIFT - 1)
-    s = (diff * _S_DIV[v] + half) >> HSV_SHIFT
+    s = (diff * _S_DIV[np.uint64(v)] + half) >> HSV_SHIFT  # unsigned: no negative-index test
     # the hue sector without branches (colours are noisy): OpenCV's vr, vg masks
     vr, vg = -np.int64(v == r), -np.int64(v == g)
     h = (vr & (g - b)) + (~vr & ((vg & (b - r + 2 * diff)) + (~vg & (r - g + 4 * diff))))
-    h = (h * _H_DIV[diff] + half) >> HSV_SHIFT
+    h = (h * _H_DIV[np.uint64(diff)] + half) >> HSV_SHIFT
     h = min(h + (180 & -np.int64(h < 0)), 255)
     x = min((b * _XYZ[0, 0] + g * _XYZ[0, 1] + r * _XYZ[0, 2] + half) >> HSV_SHIFT, 255)
     y = min((b * _XYZ[1, 0] + g * _XYZ[1, 1] + r * _XYZ[1, 2] + half) >> HSV_SHIFT, 255)
@@ -204,6 +207,9 @@ def part_features(
     band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
     right = np.empty(C, np.int64)  # 1 if the column is right of the split
     count, edge = np.zeros(5, np.int64), np.zeros(5, np.int64)
+    coff = np.empty(C, np.uint64)  # byte offset of a sample column's pixel in its row
+    pixels = frame.reshape(H * W * 3)
+    one, two = np.uint64(1), np.uint64(2)
     sx, sy = np.zeros(5), np.zeros(5)
     count_hsv, count_xyz = np.zeros((5, nb), np.int64), np.zeros((5, nb), np.int64)
     for i in range(boxes.shape[0]):
@@ -246,11 +252,13 @@ def part_features(
         # read every sample's pixel once in a loop without branches: the frame's cache
         # misses then overlap instead of stalling the conversion below sample by sample
         # (about 20% of a call on a frame not yet in cache); the sum only keeps the loads
+        for c in range(C):
+            coff[c] = np.uint64(xi[c] * 3)
         warm = 0
         for r in range(R):
-            row = frame[yi[r]]
+            roff = np.uint64(yi[r] * (W * 3))
             for c in range(C):
-                warm += row[xi[c], 0]
+                warm += pixels[roff + coff[c]]
         sink[0] = warm
         rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
         for r in range(R):
@@ -273,24 +281,42 @@ def part_features(
         sx[:] = 0.0
         sy[:] = 0.0
         for r in range(R):
-            row = frame[yi[r]]
+            # the row's left and right parts (the same part in the head band); their
+            # sums are carried in registers through the row, each in sample order
+            kl = band[r]
+            kr = kl + 1 if kl > 0 else 0
+            split_row = kr != kl
+            yr = ys[r]
+            nl, el, sxl, syl = count[kl], edge[kl], sx[kl], sy[kl]
+            nr, er, sxr, syr = count[kr], edge[kr], sx[kr], sy[kr]
+            roff = np.uint64(yi[r] * (W * 3))
             for c in range(C):
                 if not on[r, c]:
                     continue
-                px = xi[c]
-                ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(row[px, 0]), np.int64(row[px, 1]),
-                                                  np.int64(row[px, 2]))
-                hsv_bin = hsv_lut[0, ch] + hsv_lut[1, cs] + hsv_lut[2, cv]
-                xyz_bin = xyz_lut[0, cx] + xyz_lut[1, cy] + xyz_lut[2, cz]
-                k = band[r] + right[c] if band[r] > 0 else 0
-                count[k] += 1
-                sx[k] += xs[c]  # in sample order, as np.bincount(weights=...)
-                sy[k] += ys[r]
-                count_hsv[k, hsv_bin] += 1
-                count_xyz[k, xyz_bin] += 1
-                if (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
-                        or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1]):
-                    edge[k] += 1
+                o = roff + coff[c]  # unsigned: no negative-index test
+                ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
+                                                  np.int64(pixels[o + two]))
+                hsv_bin = hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)] + hsv_lut[2, np.uint64(cv)]
+                xyz_bin = xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
+                outline = (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
+                           or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1])
+                if split_row and right[c]:
+                    k = kr
+                    nr += 1
+                    er += outline
+                    sxr += xs[c]  # in sample order, as np.bincount(weights=...)
+                    syr += yr
+                else:
+                    k = kl
+                    nl += 1
+                    el += outline
+                    sxl += xs[c]
+                    syl += yr
+                count_hsv[k, np.uint64(hsv_bin)] += 1
+                count_xyz[k, np.uint64(xyz_bin)] += 1
+            count[kl], edge[kl], sx[kl], sy[kl] = nl, el, sxl, syl
+            if split_row:
+                count[kr], edge[kr], sx[kr], sy[kr] = nr, er, sxr, syr
         # samples of each part (rows of its band x columns of its side) and its half
         # perimeter in samples (rows + columns); histograms normalised by the count
         for j in range(5):
