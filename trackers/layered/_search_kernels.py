@@ -274,12 +274,15 @@ def coarse_peaks(win: np.ndarray, tpl: np.ndarray, fy: int, fx: int, k: int) -> 
     score = np.empty((ny, nx))  # sign(ncc) ncc^2
     inv = 1.0 / n
     for y in range(ny):
+        top1, bot1, top2, bot2 = s1[y], s1[y + th2], s2[y], s2[y + th2]
+        nrow, srow = num[y * cw:], score[y]
         for x in range(nx):
-            sw = s1[y + th2, x + tw2] - s1[y, x + tw2] - s1[y + th2, x] + s1[y, x]
-            sw2 = s2[y + th2, x + tw2] - s2[y, x + tw2] - s2[y + th2, x] + s2[y, x]
+            xe = np.uint64(x + tw2)  # unsigned: no negative-index test
+            sw = bot1[xe] - top1[xe] - bot1[x] + top1[x]
+            sw2 = bot2[xe] - top2[xe] - bot2[x] + top2[x]
             var = max(sw2 - sw * sw * inv, 1e-9) * t2
-            v = np.float64(num[y * cw + x])
-            score[y, x] = v * abs(v) / var
+            v = np.float64(nrow[x])
+            srow[x] = v * abs(v) / var
     # the k best 3 x 3 local maxima, kept sorted (best first, earlier raster on ties)
     bv = np.full(k, -np.inf)
     bx = np.zeros(k, np.int64)
@@ -293,7 +296,7 @@ def coarse_peaks(win: np.ndarray, tpl: np.ndarray, fy: int, fx: int, k: int) -> 
             peak = True
             for yy in range(max(y - 1, 0), min(y + 2, ny)):
                 for xx in range(max(x - 1, 0), min(x + 2, nx)):
-                    if score[yy, xx] > v:
+                    if score[np.uint64(yy), np.uint64(xx)] > v:
                         peak = False
             if not peak:
                 continue
