@@ -86,3 +86,18 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
             ti_s[b], n_s[b], kind_s[b] = t, n, kind
             b += 1
     return ti_in, n_in_, ti_s[:b], n_s[:b], kind_s[:b]
+
+
+@numba.njit(cache=True)
+def nonzero_mask(values: np.ndarray) -> tuple:  # pragma: no cover (compiled)
+    """The foreground (PBM 2) of an (H, W) label image or mask in one pass: (H, W) bool
+    ``values != 0`` and its number of True pixels (``np.count_nonzero``)."""
+    H, W = values.shape
+    mask = np.empty((H, W), np.bool_)
+    count = 0
+    for r in range(H):
+        for c in range(W):
+            v = values[r, c] != 0
+            mask[r, c] = v
+            count += v
+    return mask, count

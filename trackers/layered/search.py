@@ -161,17 +161,20 @@ def heads_from_bands(fg: np.ndarray, boxes: np.ndarray) -> np.ndarray:
                       np.asarray(boxes, dtype=np.float64).reshape(-1, 4), float(HEAD_FRACTION))
 
 
-def residual_foreground(fg: np.ndarray, boxes: np.ndarray) -> int:
+def residual_foreground(fg: np.ndarray, boxes: np.ndarray, total: int | None = None) -> int:
     """Number of foreground pixels that no box covers (PBM 2: blobs matter only where the
     detections leave foreground unexplained); a box covers the pixels of
     ``geometry.box_slices`` (floor of its top-left, ceil of its bottom-right, clipped).
 
     Args:
         fg: (H, W) bool foreground. boxes: (N, 4) xywh (a non-finite box covers nothing).
+        total: ``np.count_nonzero(fg)`` when already known.
     """
     fg = np.ascontiguousarray(fg, dtype=np.bool_)
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    return np.count_nonzero(fg) - int(covered_count(fg.view(np.uint8), boxes))
+    if total is None:
+        total = np.count_nonzero(fg)
+    return total - int(covered_count(fg.view(np.uint8), boxes))
 
 
 def region_centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:

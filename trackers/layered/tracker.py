@@ -72,7 +72,7 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import iou_matrix
-from trackers.layered._glue_kernels import gated_pairs
+from trackers.layered._glue_kernels import gated_pairs, nonzero_mask
 from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
@@ -313,9 +313,10 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ candidates
     def _anchors(self, fg: np.ndarray | None, detections: Detections,
-                 frame: np.ndarray | None = None) -> Candidates:
+                 frame: np.ndarray | None = None, fg_count: int | None = None) -> Candidates:
         """The frame's candidates (PBM 2, 3.1): the valid detection boxes with their heads,
-        then the heads of foreground blobs that no detection explains."""
+        then the heads of foreground blobs that no detection explains (``fg_count``: the
+        number of foreground pixels, when known)."""
         det_boxes = detections.boxes
         heads = detections.heads
         if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
@@ -342,7 +343,7 @@ class PBMTracker:
         if fg is None:
             return Candidates(*rows)
         # blobs matter only where foreground is left unexplained by the detections
-        if len(det_boxes) and residual_foreground(fg, det_boxes) < self.min_blob_area:
+        if len(det_boxes) and residual_foreground(fg, det_boxes, fg_count) < self.min_blob_area:
             return Candidates(*rows)
         s = self.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
@@ -527,20 +528,25 @@ class PBMTracker:
         frame = np.asarray(frame)
         if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
             raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
-        fg = None
+        fg, fg_count = None, None
         if foreground is not None:
             foreground = np.asarray(foreground)
             if foreground.shape != frame.shape[:2]:
                 raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
                                  f"differs from frame {frame.shape[:2]}")
-            fg = np.ascontiguousarray(foreground) if foreground.dtype == bool else foreground != 0
+            if foreground.dtype == bool:
+                fg = np.ascontiguousarray(foreground)
+            elif foreground.dtype.kind in "iu" and foreground.dtype.isnative:
+                fg, fg_count = nonzero_mask(foreground)  # a label image, counted on the way
+            else:
+                fg = foreground != 0
         if detections is None:
             detections = Detections.empty()
         self._frame += 1
         H, W = frame.shape[:2]
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
-        cand = self._anchors(fg, detections, frame)
+        cand = self._anchors(fg, detections, frame, fg_count)
         n_a = len(cand)
         boxes = cand.box
         # foreground centroids (PBM 2.1) and the parts split at them, on one grid
