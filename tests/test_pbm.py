@@ -554,8 +554,8 @@ def test_gated_pairs_equal_the_numpy_gating():
         misses = rng.integers(0, 2, T)
         so = 0.0 if trial % 5 == 0 else 0.5
         kinds = occlusion_kinds(regions[:, 2:], pred, 0.5)
-        got = gated_pairs(boxes, regions, heads, nh, gates, np.ascontiguousarray(pred[:, 1]),
-                          kinds.copy(), tboxes, misses, so)
+        dof = np.column_stack([tboxes[:, :2], tboxes[:, :2] + 0.5 * tboxes[:, 2:], tboxes[:, 2:]])
+        got = gated_pairs(boxes, regions, heads, nh, gates, pred, kinds.copy(), dof, misses, so)
         # the numpy reference
         c = boxes[:, :2] + 0.5 * boxes[:, 2:]
         g = gates[:, None]

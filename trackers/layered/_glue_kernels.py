@@ -14,8 +14,8 @@ import numpy as np
 
 @numba.njit(cache=True)
 def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
-                heads_in_region: np.ndarray, gates: np.ndarray, pred_h: np.ndarray,
-                kinds: np.ndarray, target_boxes: np.ndarray, misses: np.ndarray,
+                heads_in_region: np.ndarray, gates: np.ndarray, pred_wh: np.ndarray,
+                kinds: np.ndarray, dof: np.ndarray, misses: np.ndarray,
                 search_overlap: float) -> tuple:  # pragma: no cover (compiled)
     """Gating (PBM 3) and the occlusion test's pairs (PBM 3.1) of T targets and N candidates.
 
@@ -23,15 +23,15 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     ``box[:2] + 0.5 box[2:]`` lies in it (borders included). ``kinds`` (T, N) (0, +1
     larger, -1 smaller; ``search.occlusion_kinds``) is set to +1 in place where it is 0
     and the candidate's region holds several heads (a merge). The occluded pairs keep only
-    those whose carved candidate lies in the gate too (head x, head y + 0.5 ``pred_h[t]``)
+    those whose carved candidate lies in the gate too (head x, head y + 0.5 KF2 height)
     and, when ``search_overlap`` > 0, whose larger region holds the target: a smaller
-    region, a target missed last frame, or ``geometry.overlap_ratio_matrix(target_boxes,
+    region, a target missed last frame, or ``geometry.overlap_ratio_matrix(boxes of dof,
     regions)[t, n] >= search_overlap``.
 
     Args:
         boxes, regions: (N, 4) xywh candidate boxes and regions. heads: (N, 3) heads.
-        heads_in_region: (N,) int. gates, target_boxes: (T, 4) xywh. pred_h: (T,) KF2
-            heights. misses: (T,) int.
+        heads_in_region: (N,) int. gates: (T, 4) xywh. pred_wh: (T, 2) KF2 (w, h).
+        dof: (T, 6) the targets' global models (xtl, ytl, xc, yc, w, h). misses: (T,) int.
     Returns:
         (ti, n) of the unoccluded pairs in the gates, then (ti, n, kind) of the occluded
         pairs to search or align, each in row-major order (as ``np.nonzero``).
@@ -60,9 +60,9 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
         gx0, gy0 = gates[t, 0], gates[t, 1]
         gx1, gy1 = gx0 + gates[t, 2], gates[t, 1] + gates[t, 3]
         # target t's box as x1 y1 x2 y2 and area (``overlap_ratio_matrix``)
-        ax0, ay0 = target_boxes[t, 0], target_boxes[t, 1]
-        ax1, ay1 = ax0 + target_boxes[t, 2], ay0 + target_boxes[t, 3]
-        area = target_boxes[t, 2] * target_boxes[t, 3]
+        ax0, ay0 = dof[t, 0], dof[t, 1]
+        ax1, ay1 = ax0 + dof[t, 4], ay0 + dof[t, 5]
+        area = dof[t, 4] * dof[t, 5]
         for n in range(N):
             if not inside[t, n]:
                 continue
@@ -71,7 +71,7 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
                 ti_in[a], n_in_[a] = t, n
                 a += 1
                 continue
-            hx, hy = heads[n, 0], heads[n, 1] + 0.5 * pred_h[t]
+            hx, hy = heads[n, 0], heads[n, 1] + 0.5 * pred_wh[t, 1]
             if not (gx0 <= hx <= gx1 and gy0 <= hy <= gy1):
                 continue
             if search_overlap > 0 and kind > 0 and misses[t] <= 0:

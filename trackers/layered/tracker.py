@@ -109,8 +109,8 @@ _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h
 
 def _norms(v: np.ndarray) -> np.ndarray:
     """(K,) Euclidean norms of the rows of v (K, 2), each equal bit for bit to
-    ``np.linalg.norm(v[k])`` (the same dot product: one per row, as a stacked matmul)."""
-    return np.sqrt((v[:, None, :] @ v[:, :, None]).ravel())
+    ``np.linalg.norm(v[k])`` (the same dot product, one per row)."""
+    return np.sqrt(np.vecdot(v, v))
 
 
 class PBMTracker:
@@ -574,7 +574,7 @@ class PBMTracker:
             kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.occlusion_threshold)
             ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
                 boxes, cand.region, cand.head, cand.heads_in_region, gates,
-                np.ascontiguousarray(pred_wh[:, 1]), kinds, targets.boxes, targets.misses,
+                pred_wh, kinds, targets.dof, targets.misses,
                 self.search_overlap)
             # eqs. 11-13 for the unoccluded candidates
             pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
