@@ -648,3 +648,37 @@ def test_nonzero_mask_and_the_tracker_accept_every_foreground_dtype():
         t = PBMTracker()
         runs.append([(tr.id, tuple(tr.box)) for _ in range(3) for tr in t.update(frame, dets, fg)])
     assert runs[0] and all(r == runs[0] for r in runs)
+
+
+def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
+    from trackers.layered._glue_kernels import alive_rows, matched_rows
+
+    rng = np.random.default_rng(9)
+    T, N, P = 6, 8, 5
+    boxes, cents = rng.uniform(0, 200, (N, 4)), rng.uniform(0, 200, (N, 2))
+    blob, pred, alpha = rng.random(N) < 0.5, rng.uniform(10, 80, (T, 2)), rng.random(T)
+    pj_all = rng.random((T, N, N_PARTS))
+    dof_h, pj_h, k_h = rng.uniform(0, 200, (P, 6)), rng.random((P, N_PARTS)), rng.integers(0, 50, P)
+    hyp = np.full((T, N), -1, dtype=np.intp)
+    hyp[rng.integers(0, T, P), rng.integers(0, N, P)] = np.arange(P)
+    mt, mn = rng.permutation(T)[:5], rng.permutation(N)[:5]
+    hyp[mt[0], mn[0]] = 2  # at least one occluded match
+    dof, pj, occl, ks = matched_rows(mt, mn, hyp, boxes, cents, blob, pred, alpha, pj_all, dof_h, pj_h, k_h)
+    q = hyp[mt, mn]
+    want = np.column_stack([boxes[mn, :2], cents[mn], boxes[mn, 2:]])
+    b = blob[mn] & (q < 0)
+    want[b, 0] = cents[mn[b], 0] - alpha[mt[b]] * pred[mt[b], 0]
+    want[b, 4] = pred[mt[b], 0]
+    want[q >= 0] = dof_h[q[q >= 0]]
+    np.testing.assert_array_equal(occl, q >= 0)
+    np.testing.assert_array_equal(dof, want)
+    np.testing.assert_array_equal(pj, np.where((q >= 0)[:, None], pj_h[q], pj_all[mt, mn]))
+    np.testing.assert_array_equal(ks, np.where(q >= 0, k_h[q], mn))
+
+    dof = rng.uniform(-20, 660, (40, 6))
+    misses, confirmed = rng.integers(0, 5, 40), rng.random(40) < 0.6
+    x, y, w, h = dof[:, 0], dof[:, 1], dof[:, 4], dof[:, 5]
+    near = (x <= 8.0) | (y <= 8.0) | (x + w >= 640 - 8.0) | (y + h >= 480 - 8.0)
+    want = (misses == 0) | (confirmed & (misses <= 3) & ~(near & (misses >= 2)))
+    np.testing.assert_array_equal(alive_rows(dof, misses, confirmed, 640, 480, 8.0, 3, 2), want)
+    assert 0 < want.sum() < 40

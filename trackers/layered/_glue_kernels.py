@@ -101,3 +101,60 @@ def nonzero_mask(values: np.ndarray) -> tuple:  # pragma: no cover (compiled)
             mask[r, c] = v
             count += v
     return mask, count
+
+
+@numba.njit(cache=True)
+def matched_rows(mt: np.ndarray, mn: np.ndarray, hyp: np.ndarray, boxes: np.ndarray,
+                 centroid: np.ndarray, blob: np.ndarray, pred_wh: np.ndarray, alpha: np.ndarray,
+                 pj_all: np.ndarray, dof_h: np.ndarray, pj_h: np.ndarray, k_h: np.ndarray
+                 ) -> tuple:  # pragma: no cover (compiled)
+    """The chosen candidates of M matched (target mt, candidate mn) pairs, as the model
+    update (PBM 4.2) takes them: (dof (M, 6), p_j (M, 5), occluded (M,) bool, index (M,)
+    in the features the candidate was measured in).
+
+    An occluded pair (``hyp[t, n]`` >= 0, a row of the search's ``dof_h``, ``pj_h``,
+    ``k_h``) takes the carved box's; an unoccluded one its own box and centroid
+    (xtl, ytl, xc, yc, w, h) and ``pj_all[t, n]``, except that a blob keeps KF2's width
+    (its span follows the swinging limbs, PBM 3): w = ``pred_wh[t, 0]``, xtl = xc - alpha w.
+    """
+    M = mt.shape[0]
+    dof = np.empty((M, 6))
+    pj = np.empty((M, pj_all.shape[2]))
+    occluded = np.empty(M, np.bool_)
+    ks = np.empty(M, np.int64)
+    for q in range(M):
+        t, n = mt[q], mn[q]
+        h = hyp[t, n]
+        occluded[q] = h >= 0
+        if h >= 0:
+            dof[q] = dof_h[h]
+            pj[q] = pj_h[h]
+            ks[q] = k_h[h]
+            continue
+        dof[q, 0], dof[q, 1], dof[q, 4], dof[q, 5] = boxes[n, 0], boxes[n, 1], boxes[n, 2], boxes[n, 3]
+        dof[q, 2], dof[q, 3] = centroid[n, 0], centroid[n, 1]
+        if blob[n]:
+            w = pred_wh[t, 0]
+            dof[q, 0] = centroid[n, 0] - alpha[t] * w
+            dof[q, 4] = w
+        pj[q] = pj_all[t, n]
+        ks[q] = n
+    return dof, pj, occluded, ks
+
+
+@numba.njit(cache=True)
+def alive_rows(dof: np.ndarray, misses: np.ndarray, confirmed: np.ndarray, width: int,
+               height: int, margin: float, max_misses: int, exit_misses: int
+               ) -> np.ndarray:  # pragma: no cover (compiled)
+    """(T,) bool: the targets kept after this frame (the tracker's life cycle): found, or
+    confirmed and unfound for at most ``max_misses`` frames, unless unfound for
+    ``exit_misses`` frames with the box (dof columns 0, 1, 4, 5) within ``margin`` of the
+    border (it left)."""
+    T = misses.shape[0]
+    alive = np.empty(T, np.bool_)
+    for t in range(T):
+        x, y, w, h = dof[t, 0], dof[t, 1], dof[t, 4], dof[t, 5]
+        near_border = x <= margin or y <= margin or x + w >= width - margin or y + h >= height - margin
+        alive[t] = misses[t] == 0 or (confirmed[t] and misses[t] <= max_misses
+                                      and not (near_border and misses[t] >= exit_misses))
+    return alive

@@ -72,7 +72,7 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import iou_matrix
-from trackers.layered._glue_kernels import gated_pairs, nonzero_mask
+from trackers.layered._glue_kernels import alive_rows, gated_pairs, matched_rows, nonzero_mask
 from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
@@ -561,6 +561,8 @@ class PBMTracker:
         hyp = np.empty((T, n_a), dtype=np.intp)
         hyp.fill(-1)
         pj_all = np.zeros((T, n_a, N_PARTS))
+        # the search's rows (``_occluded_hypotheses``): none yet
+        feats_h, pj_h, k_h, dof_h = None, np.zeros((0, N_PARTS)), np.zeros(0, np.intp), np.zeros((0, 6))
         if T and n_a:
             model = targets.parts
             gates = targets.gate_boxes()
@@ -624,30 +626,17 @@ class PBMTracker:
         if len(matches):
             # model update (PBM 4.2): global models and filters of all matched targets at once
             mt, mn = matches[:, 0], matches[:, 1]
-            q = hyp[mt, mn]
-            occl = q >= 0
-            # unoccluded: the candidate's own DOF; a blob's span follows the swinging
-            # limbs: it keeps KF2's width (PBM 3)
-            cents, bm = cand.centroid[mn], boxes[mn]
-            dof = np.concatenate([bm[:, :2], cents, bm[:, 2:]], axis=1)
-            blob = cand.blob[mn] & ~occl
-            if np.count_nonzero(blob):
-                w = pred_wh[mt[blob], 0]
-                dof[blob, 0] = cents[blob, 0] - targets.alpha[mt[blob]] * w
-                dof[blob, 4] = w
-            pj = pj_all[mt, mn]
-            n_occl = np.count_nonzero(occl)
-            if n_occl:
-                dof[occl] = dof_h[q[occl]]
-                pj[occl] = pj_h[q[occl]]
+            dof, pj, occl, ks = matched_rows(mt, mn, hyp, boxes, cand.centroid, cand.blob, pred_wh,
+                                             targets.alpha, pj_all, dof_h, pj_h, k_h)
             measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
             shift = targets.update(mt, dof, measured, occl, pj, self.part_match_threshold)
             # then the parts models, from the feature arrays the candidates were measured in
             dof_t = targets.dof
-            groups = [(~occl, feats, mn)] if n_occl < len(mt) else []
+            n_occl = np.count_nonzero(occl)
+            groups = [(~occl, feats)] if n_occl < len(mt) else []
             if n_occl:
-                groups.append((occl, feats_h, np.where(occl, k_h[q], 0)))
-            for rows, f, ks in groups:
+                groups.append((occl, feats_h))
+            for rows, f in groups:
                 r = mt[rows]
                 update_parts(targets.parts, r, f, ks[rows], pj[rows], self.part_match_threshold,
                              self.update_rate, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
@@ -663,14 +652,9 @@ class PBMTracker:
         if len(lost):
             targets.mark_missed(lost)
         # drop tentative misses, long-lost and leaving targets
-        dof_t = targets.dof
-        x, y, w, h = dof_t[:, 0], dof_t[:, 1], dof_t[:, 4], dof_t[:, 5]
-        m = self.exit_margin
-        near_border = (x <= m) | (y <= m) | (x + w >= W - m) | (y + h >= H - m)
-        alive = ((targets.misses == 0)
-                 | (targets.confirmed & (targets.misses <= self.max_misses)
-                    & ~(near_border & (targets.misses >= self.exit_misses))))
-        if not alive.all():
+        alive = alive_rows(targets.dof, targets.misses, targets.confirmed, W, H, self.exit_margin,
+                           self.max_misses, self.exit_misses)
+        if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
         # new targets from free candidates (new blobs, split heads)
         live_boxes = targets.boxes
