@@ -24,6 +24,7 @@ from trackers.frontend.parts import (
     PartFeatures,
 )
 from trackers.layered.dynamics import ConstantVelocity2D, Gate
+from trackers.layered.dynamics import _update_kernel as _kf_update_kernel
 
 
 def dof_from_box(box: np.ndarray, centroid: np.ndarray) -> np.ndarray:
@@ -189,22 +190,47 @@ class Targets:
             (M, 2) shift of the centroid (xc, yc), which frozen parts' centroids follow.
         """
         rows = np.asarray(rows, dtype=np.int64)
-        occluded = np.asarray(occluded, dtype=bool)
-        part_scores = np.asarray(part_scores, dtype=np.float64)
         shift = np.empty((len(rows), 2))
-        _global_update_kernel(self.dof, self._history, self._n_history, self._ratios,
-                              self._n_ratios, self.alpha, self.beta, rows,
-                              np.asarray(dof, dtype=np.float64).reshape(-1, 6),
-                              np.asarray(centroid_measured, dtype=bool), occluded, shift)
-        dof = self.dof[rows]
-        self.kf1.update(rows, dof[:, 2:4])
-        self.kf2.update(rows, dof[:, [5, 4]])
-        self.part_scores[rows] = part_scores
-        self.occluded_parts[rows] = ~(part_scores >= part_match_threshold)
-        self.occluded[rows] = occluded
-        self.hits[rows] += 1
-        self.misses[rows] = 0
+        kf1, kf2 = self.kf1, self.kf2
+        _targets_update_kernel(self.dof, self._history, self._n_history, self._ratios,
+                               self._n_ratios, self.alpha, self.beta, kf1.x, kf1.p, kf1.r, kf2.x,
+                               kf2.p, kf2.r, self.part_scores, self.occluded_parts, self.occluded,
+                               self.hits, self.misses, rows,
+                               np.asarray(dof, dtype=np.float64).reshape(-1, 6),
+                               np.asarray(centroid_measured, dtype=bool),
+                               np.asarray(occluded, dtype=bool),
+                               np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
+                               float(part_match_threshold), shift)
         return shift
+
+
+@numba.njit(cache=True)
+def _targets_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, beta, x1, p1, r1,
+                           x2, p2, r2, part_scores_all, occluded_parts, occluded_all, hits, misses,
+                           rows, dof, measured, occluded, part_scores, threshold,
+                           shift):  # pragma: no cover (compiled)
+    """``Targets.update`` in one call: ``_global_update_kernel``; then KF1 with z = (xc, yc)
+    and KF2 with z = (h, w) of the updated DOF (``ConstantVelocity2D.update``); then per
+    row p_j, the frozen parts (not p_j >= threshold), the occlusion flag, hits + 1 and
+    misses = 0."""
+    _global_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, beta, rows, dof,
+                          measured, occluded, shift)
+    M = rows.shape[0]
+    z1, z2 = np.empty((M, 2)), np.empty((M, 2))
+    for q in range(M):
+        n = rows[q]
+        z1[q, 0], z1[q, 1] = dof_all[n, 2], dof_all[n, 3]
+        z2[q, 0], z2[q, 1] = dof_all[n, 5], dof_all[n, 4]
+    _kf_update_kernel(x1, p1, r1, rows, z1)
+    _kf_update_kernel(x2, p2, r2, rows, z2)
+    for q in range(M):
+        n = rows[q]
+        for j in range(part_scores.shape[1]):
+            part_scores_all[n, j] = part_scores[q, j]
+            occluded_parts[n, j] = not part_scores[q, j] >= threshold
+        occluded_all[n] = occluded[q]
+        hits[n] += 1
+        misses[n] = 0
 
 
 @numba.njit(cache=True)
