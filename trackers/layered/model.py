@@ -24,6 +24,7 @@ from trackers.frontend.parts import (
     PartFeatures,
 )
 from trackers.layered.dynamics import ConstantVelocity2D, Gate
+from trackers.layered.dynamics import _predict_kernel as _kf_predict_kernel
 from trackers.layered.dynamics import _update_kernel as _kf_update_kernel
 
 
@@ -154,10 +155,8 @@ class Targets:
     def predict(self) -> np.ndarray:
         """Advance KF1 and KF2 one frame; returns the predicted (w, h) (T, 2) (KF2), floored
         at 2 pixels (KF2's rates are zeroed where they would shrink it below)."""
-        x = self.kf2.x
-        x[((x[:, 0] + x[:, 2]) < 2) | ((x[:, 1] + x[:, 3]) < 2), 2:] = 0.0
-        self.kf1.predict()
-        self.kf2.predict()
+        kf1, kf2 = self.kf1, self.kf2
+        _targets_predict_kernel(kf1.x, kf1.p, kf1.qp, kf1.qv, kf2.x, kf2.p, kf2.qp, kf2.qv)
         return self.predicted_size()
 
     def predicted_size(self) -> np.ndarray:
@@ -202,6 +201,18 @@ class Targets:
                                np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
                                float(part_match_threshold), shift)
         return shift
+
+
+@numba.njit(cache=True)
+def _targets_predict_kernel(x1, p1, qp1, qv1, x2, p2, qp2, qv2):  # pragma: no cover (compiled)
+    """``Targets.predict``: KF2's rates are zeroed where a step would take h or w below 2
+    pixels; then KF1 and KF2 predict (``ConstantVelocity2D.predict``)."""
+    for n in range(x2.shape[0]):
+        if x2[n, 0] + x2[n, 2] < 2 or x2[n, 1] + x2[n, 3] < 2:
+            x2[n, 2] = 0.0
+            x2[n, 3] = 0.0
+    _kf_predict_kernel(x1, p1, qp1, qv1)
+    _kf_predict_kernel(x2, p2, qp2, qv2)
 
 
 @numba.njit(cache=True)
