@@ -689,15 +689,12 @@ class PBMTracker:
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes, rects = tg.dof[rows[:, None], _BOX_COLUMNS], tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
-        score = tg.score[rows].clip(0.0, 1.0).tolist()
-        confirmed, has_gate = tg.confirmed[rows].tolist(), np.isfinite(gates[:, 0]).tolist()
-        out = []
-        for i, (track_id, is_found) in enumerate(zip(tg.id[rows].tolist(), found[rows].tolist())):
-            extra = {"parts": rects[i], "occluded_parts": occluded_parts[i],
-                     "part_scores": part_scores[i], "gate": gates[i] if has_gate[i] else None}
-            if is_found:
-                state = TrackState.CONFIRMED if confirmed[i] else TrackState.TENTATIVE
-                out.append(Track(track_id, boxes[i], state, score[i], extra))
-            else:
-                out.append(Track(track_id, boxes[i], TrackState.OCCLUDED, 0.0, extra))
-        return out
+        found = found[rows]
+        score = np.where(found, tg.score[rows].clip(0.0, 1.0), 0.0).tolist()
+        states = [(TrackState.CONFIRMED if c else TrackState.TENTATIVE) if f else TrackState.OCCLUDED
+                  for f, c in zip(found.tolist(), tg.confirmed[rows].tolist())]
+        return [Track(i, box, state, s, {"parts": r, "occluded_parts": o, "part_scores": p,
+                                         "gate": g if has_g else None})
+                for i, box, state, s, r, o, p, g, has_g in zip(
+                    tg.id[rows].tolist(), boxes, states, score, rects, occluded_parts, part_scores,
+                    gates, np.isfinite(gates[:, 0]).tolist())]
