@@ -229,6 +229,11 @@ def test_pair_scores_fuse_the_three_layers(rng):
     pj_ref, p_ref = layered_scores(models, d_ref, omega, gamma, 2.5)
     np.testing.assert_array_equal(pj, pj_ref)
     np.testing.assert_array_equal(p, p_ref)
+    # no pairs; a pair index out of range
+    pj, p = pair_scores(models, model, cand, np.zeros(0, int), np.zeros(0, int), misses, omega, gamma)
+    assert pj.shape == (0, N_PARTS) and p.shape == (0,)
+    with pytest.raises(IndexError):
+        pair_scores(models, model, cand, np.array([6]), np.array([0]), misses, omega, gamma)
 
 
 def test_ambiguous_equals_the_sort_based_rule(rng):
