@@ -339,7 +339,8 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     Args:
         image: (H, W) uint8 grey or (H, W, 3) BGR frame (only the window is converted).
             template: (th, tw) grey or (th, tw, 3) BGR uint8 head patch (``head_patch``).
-        centre: (2,) expected top-left corner (x, y) of the head patch. radius: search
+        centre: (2,) expected top-left corner (x, y) of the head patch (array or
+            sequence). radius: search
             radius (pixels).
     Returns:
         best top-left corner (2,) float64 (x, y) and its normalised correlation (-1..1;
@@ -349,7 +350,7 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     th, tw = template.shape
     H, W = image.shape[:2]
     r = math.ceil(radius)
-    x0, y0 = round(centre[0]) - r, round(centre[1]) - r
+    x0, y0 = round(float(centre[0])) - r, round(float(centre[1])) - r
     c0, r0 = max(x0, 0), max(y0, 0)
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
     if c1 - c0 < tw or r1 - r0 < th:
@@ -359,10 +360,10 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW:
         bx, by, best = ncc_all(win, template)
         return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
-    xs = ys = np.zeros(0, np.int64)
+    xs = ys = None
     if th >= 2 * fy and tw >= 2 * fx:
         xs, ys = coarse_peaks(win, template, fy, fx, COARSE_PEAKS)
-    if len(xs):
+    if xs is not None and len(xs):
         bx, by, best = ncc_climb(win, template, xs, ys, REFINE_PAD)
     else:  # a template too small for blocks, or flat over blocks: OpenCV, exhaustively
         res = cv2.matchTemplate(win, template, cv2.TM_CCOEFF_NORMED)

@@ -498,8 +498,7 @@ class PBMTracker:
         else:
             cx, cy = heads.mean(axis=0).tolist()
             radius = float(np.max(np.linalg.norm(heads - [cx, cy], axis=1)))
-        tl, corr = match_head_template(frame, template, np.array([cx - 0.5 * tw, cy]),
-                                       radius + 0.5 * tw + 2)
+        tl, corr = match_head_template(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
         if corr < self.template_threshold:
             return -1, None
         rx, ry = tl[0] + 0.5 * tw, float(tl[1])
