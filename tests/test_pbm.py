@@ -682,3 +682,28 @@ def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
     want = (misses == 0) | (confirmed & (misses <= 3) & ~(near & (misses >= 2)))
     np.testing.assert_array_equal(alive_rows(dof, misses, confirmed, 640, 480, 8.0, 3, 2), want)
     assert 0 < want.sum() < 40
+
+
+def test_carved_rows_equal_the_numpy_selection_of_searched_and_aligned_boxes():
+    from trackers.layered._glue_kernels import carved_rows
+    from trackers.layered.model import dofs_from_heads
+
+    rng = np.random.default_rng(12)
+    m, P, T = 25, 7, 4
+    search_q, align_q = np.array([0, 2, 3, 6]), np.array([1, 5])  # pair 4 dismissed
+    K = len(search_q) * m + len(align_q)
+    p = np.round(rng.random(K) * 8) / 8  # ties: the first maximum wins
+    pj, boxes = rng.random((K, N_PARTS)), rng.uniform(5, 200, (K, 4))
+    heads, ti = rng.uniform(0, 300, (P, 3)), rng.integers(0, T, P)
+    alpha, beta = rng.random(T), rng.random(T)
+    kept, p_h, pj_h, k, dof = carved_rows(p, pj, boxes, heads, ti, alpha, beta, search_q, align_q, m)
+    ns = len(search_q)
+    best = np.concatenate([np.argmax(p[:ns * m].reshape(ns, m), axis=1) + m * np.arange(ns),
+                           ns * m + np.arange(len(align_q))])
+    qs = np.concatenate([search_q, align_q])
+    np.testing.assert_array_equal(kept, np.isin(np.arange(P), qs))
+    np.testing.assert_array_equal(k[qs], best)
+    np.testing.assert_array_equal(p_h[qs], p[best])
+    np.testing.assert_array_equal(pj_h[qs], pj[best])
+    np.testing.assert_array_equal(dof[qs], dofs_from_heads(heads[qs], boxes[best, 2], boxes[best, 3],
+                                                           alpha[ti[qs]], beta[ti[qs]]))

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from trackers.frontend.parts import HEAD_FRACTION
+
 
 @numba.njit(cache=True)
 def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
@@ -158,3 +160,52 @@ def alive_rows(dof: np.ndarray, misses: np.ndarray, confirmed: np.ndarray, width
         alive[t] = misses[t] == 0 or (confirmed[t] and misses[t] <= max_misses
                                       and not (near_border and misses[t] >= exit_misses))
     return alive
+
+
+@numba.njit(cache=True)
+def carved_rows(p: np.ndarray, pj: np.ndarray, boxes: np.ndarray, heads: np.ndarray,
+                ti: np.ndarray, alpha: np.ndarray, beta: np.ndarray, search_q: np.ndarray,
+                align_q: np.ndarray, m: int) -> tuple:  # pragma: no cover (compiled)
+    """The occluded candidates of P (target ti, head) pairs (PBM 3.1) from the scores of
+    the carved boxes: searched pair ``search_q[s]`` owns boxes s m .. s m + m - 1 (eqs.
+    9-10) and keeps the best (``np.argmax``: the first maximum); aligned pair
+    ``align_q[a]`` owns box len(search_q) m + a. Pairs in neither are dismissed.
+
+    Returns:
+        kept (P,) bool, p (P,), p_j (P, 5), box index k (P,) and the DOF under occlusion
+        (P, 6) (``model.dofs_from_heads`` of the head with the box's w, h and the target's
+        alpha, beta).
+    """
+    P = ti.shape[0]
+    kept = np.zeros(P, np.bool_)
+    k = np.zeros(P, np.int64)
+    for s in range(search_q.shape[0]):
+        b = s * m
+        if not np.isnan(p[b]):
+            for j in range(s * m + 1, s * m + m):
+                if np.isnan(p[j]):
+                    b = j
+                    break
+                if p[j] > p[b]:
+                    b = j
+        kept[search_q[s]] = True
+        k[search_q[s]] = b
+    for a in range(align_q.shape[0]):
+        kept[align_q[a]] = True
+        k[align_q[a]] = search_q.shape[0] * m + a
+    p_out = np.zeros(P)
+    pj_out = np.zeros((P, pj.shape[1]))
+    dof = np.zeros((P, 6))
+    for q in range(P):
+        if not kept[q]:
+            continue
+        b, t = k[q], ti[q]
+        p_out[q] = p[b]
+        pj_out[q] = pj[b]
+        w, h = boxes[b, 2], boxes[b, 3]
+        xc, ytl = heads[q, 0], heads[q, 1]
+        dof[q, 0] = xc - alpha[t] * w
+        dof[q, 1], dof[q, 2] = ytl, xc
+        dof[q, 3] = ytl + HEAD_FRACTION * h + beta[t] * (h - HEAD_FRACTION * h)
+        dof[q, 4], dof[q, 5] = w, h
+    return kept, p_out, pj_out, k, dof

@@ -72,14 +72,19 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import iou_matrix
-from trackers.layered._glue_kernels import alive_rows, gated_pairs, matched_rows, nonzero_mask
+from trackers.layered._glue_kernels import (
+    alive_rows,
+    carved_rows,
+    gated_pairs,
+    matched_rows,
+    nonzero_mask,
+)
 from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
     Targets,
     dof_from_box,
     dof_from_head,
-    dofs_from_heads,
     update_parts,
 )
 from trackers.layered.models import FEATURES, FeatureModels
@@ -458,19 +463,8 @@ class PBMTracker:
         # eqs. 11-13 of every carved box k against the model of its target tis[k]
         pj, p = pair_scores(self.models, model, feats, tis, np.arange(len(tis)), targets.misses,
                             self.omega, self.gamma, self.model_spread)
-        ns = len(search_q)
-        qs = np.concatenate([search_q, align_q])
-        best = np.concatenate([np.argmax(p[:ns * m].reshape(ns, m), axis=1) + m * np.arange(ns),
-                               ns * m + np.arange(len(align_q))])
-        P = len(ti)
-        kept = np.zeros(P, dtype=bool)
-        kept[qs] = True
-        k = np.zeros(P, dtype=np.intp)
-        k[qs] = best
-        tq = ti[qs]
-        dof = np.zeros((P, 6))
-        dof[qs] = dofs_from_heads(heads[qs], B[best, 2], B[best, 3], alpha_t[tq], beta_t[tq])
-        return kept, p[k], pj[k], feats, k, dof
+        kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q, align_q, m)
+        return kept, p_h, pj_h, feats, k, dof
 
     # ------------------------------------------------------------------ pruning
     def _prune(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
