@@ -458,7 +458,7 @@ class PBMTracker:
         B = np.concatenate([search_boxes_many(heads[search_q], pred_wh[sti], alpha_t[sti],
                                               self.search_step, self.search_range).reshape(-1, 4),
                             align_boxes if len(align_q) else np.zeros((0, 4))])
-        tis = np.concatenate([np.repeat(sti, m), ti[align_q]])
+        tis = np.concatenate([sti.repeat(m), ti[align_q]])
         feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
         # eqs. 11-13 of every carved box k against the model of its target tis[k]
         pj, p = pair_scores(self.models, model, feats, tis, np.arange(len(tis)), targets.misses,
