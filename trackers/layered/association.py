@@ -15,7 +15,7 @@ docstring (the tests compare them value for value):
 
 - rho: ``np.sqrt(p * q).sum(-1)`` (numpy's pairwise sum, ``_rho``); no BLAS product,
   whose rounding depends on the CPU's kernel;
-- p(d | theta): ``scipy.special.ndtr`` itself (``_survival``);
+- p(d | theta): ``scipy.special.ndtr`` itself (``_survival_many``);
 - eq. 12: ``np.einsum("...ij,i->...j", prob, omega)`` (i = 0..5 left to right from 0);
 - eq. 13: sum_j p_j gamma_j, j = 0..4 left to right from 0.
 """
@@ -69,42 +69,53 @@ def _bind_scipy_ndtr() -> types.ExternalFunction:
 _scipy_ndtr = _bind_scipy_ndtr()
 
 
-@numba.njit(cache=True, inline="always")
-def _survival(x: float, w: np.ndarray, mu: np.ndarray, s: np.ndarray, i: int, j: int) -> float:
-    """P(D >= x) of model (i, j) of padded (6, 5, K) mixture arrays (``FeatureModels``):
-    ``FeatureModels.match_probability`` of one difference, the same operations in the same
-    order: clip x at 0; per component w (ndtr((mu - x) / s) + ndtr((-mu - x) / s)), summed
-    left to right from 0 (numpy's sum below 8 components); clip to [0, 1]. Zero-weight
-    padding adds exact zeros and is skipped; a zero mean needs one ndtr (both terms equal).
+@numba.njit(cache=True)
+def _survival_many(xs: np.ndarray, m: int, w: np.ndarray, mu: np.ndarray, s: np.ndarray,
+                   i: int, j: int, out: np.ndarray) -> None:
+    """P(D >= x) of model (i, j) of padded (6, 5, K) mixture arrays (``FeatureModels``) for
+    the m differences xs[:m], already clipped at 0, into out[:m]:
+    ``FeatureModels.match_probability``, the same operations in the same order: per
+    component w (ndtr((mu - x) / s) + ndtr((-mu - x) / s)), summed left to right from 0
+    (numpy's sum below 8 components); clip to [0, 1]. Zero-weight padding adds exact zeros
+    and is skipped; a zero mean needs one ndtr (both terms equal). The ndtr calls run in
+    tight loops over the differences, component by component.
     """
-    if x < 0.0:  # np.maximum(x, 0): NaN stays NaN  # noqa: PLR1730
-        x = 0.0
-    total = 0.0
+    out[:m] = 0.0
     for c in range(w.shape[2]):
-        wc = w[i, j, c]
+        wc, mc, sc = w[i, j, c], mu[i, j, c], s[i, j, c]
         if wc == 0.0:
             continue
-        m, sc = mu[i, j, c], s[i, j, c]
-        if m == 0.0:
-            a = _scipy_ndtr((m - x) / sc, 0)
-            total += wc * (a + a)
+        if mc == 0.0:
+            for q in range(m):
+                a = _scipy_ndtr((mc - xs[q]) / sc, 0)
+                out[q] += wc * (a + a)
         else:
-            total += wc * (_scipy_ndtr((m - x) / sc, 0) + _scipy_ndtr((-m - x) / sc, 0))
-    if total < 0.0:
-        return 0.0
-    if total > 1.0:
-        return 1.0
-    return total
+            for q in range(m):
+                out[q] += wc * (_scipy_ndtr((mc - xs[q]) / sc, 0)
+                                + _scipy_ndtr((-mc - xs[q]) / sc, 0))
+    for q in range(m):  # NaN stays NaN
+        if out[q] < 0.0:
+            out[q] = 0.0
+        elif out[q] > 1.0:
+            out[q] = 1.0
 
 
 @numba.njit(cache=True)
 def survival_kernel(d: np.ndarray, w: np.ndarray, mu: np.ndarray, s: np.ndarray, out: np.ndarray
                     ) -> None:
-    """``_survival`` of (n, 6, 5) differences into out (n, 6, 5)."""
-    for k in range(d.shape[0]):
-        for i in range(d.shape[1]):
-            for j in range(d.shape[2]):
-                out[k, i, j] = _survival(d[k, i, j], w, mu, s, i, j)
+    """``_survival_many`` of (n, 6, 5) differences into out (n, 6, 5)."""
+    n = d.shape[0]
+    xs, p = np.empty(n), np.empty(n)
+    for i in range(d.shape[1]):
+        for j in range(d.shape[2]):
+            for k in range(n):
+                x = d[k, i, j]
+                if x < 0.0:  # np.maximum(x, 0): NaN stays NaN  # noqa: PLR1730
+                    x = 0.0
+                xs[k] = x
+            _survival_many(xs, n, w, mu, s, i, j, p)
+            for k in range(n):
+                out[k, i, j] = p[k]
 
 
 @numba.njit(cache=True, inline="always")
@@ -249,40 +260,47 @@ def _normalised(weights: np.ndarray) -> np.ndarray:
     return weights / total
 
 
-@numba.njit(cache=True, inline="always")
-def _scores_one(d: np.ndarray, kd: int, spread: float, omega: np.ndarray, gamma: np.ndarray,
-                w: np.ndarray, mu: np.ndarray, s: np.ndarray, last_x: np.ndarray,
-                last_p: np.ndarray, pj: np.ndarray, p: np.ndarray, k: int) -> None:
-    """Eq. 12 for the (6, 5) differences d[kd] into pj[k]: p_j = sum_i omega_i
-    P(D_ij >= d_ij / spread), i left to right from 0 (as ``np.einsum("...ij,i->...j")``);
-    and eq. 13 into p[k]: sum_j p_j gamma_j, j left to right from 0.
-    omega and gamma already normalised. last_x, last_p (6, 5): the previous argument and
-    probability of each model, reused when the argument repeats (exact zeros and ones are
-    frequent; NaN-initialised, never equal)."""
-    total = 0.0
-    for j in range(pj.shape[1]):
-        acc = 0.0
-        for i in range(d.shape[1]):
-            x = d[kd, i, j] / spread
-            if x != last_x[i, j]:
-                last_x[i, j] = x
-                last_p[i, j] = _survival(x, w, mu, s, i, j)
-            acc += last_p[i, j] * omega[i]
-        pj[k, j] = acc
-        total += acc * gamma[j]
-    p[k] = total
-
-
 @numba.njit(cache=True)
 def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.ndarray,
                    w: np.ndarray, mu: np.ndarray, s: np.ndarray, pj: np.ndarray, p: np.ndarray
                    ) -> None:
     """Eqs. 12 and 13 for (K, 6, 5) differences into pj (K, 5), p (K,);
-    omega and gamma are normalised here."""
+    omega and gamma are normalised here.
+
+    The probabilities P(D_ij >= d_ij / spread) are computed model by model over all pairs
+    first (``_survival_many``; an argument repeated by consecutive pairs is computed
+    once), then eqs. 12-13 pair by pair.
+    """
     omega, gamma = _normalised(omega), _normalised(gamma)
-    last_x, last_p = np.full(w.shape[:2], np.nan), np.empty(w.shape[:2])
-    for k in range(d.shape[0]):
-        _scores_one(d, k, spread, omega, gamma, w, mu, s, last_x, last_p, pj, p, k)
+    K, NF, NP = d.shape
+    prob = np.empty((NF, NP, K))
+    xs, tot = np.empty(K), np.empty(K)  # the distinct arguments (clipped at 0), their sums
+    slot = np.empty(K, np.intp)  # pair -> its argument in xs
+    for i in range(NF):
+        for j in range(NP):
+            m, last = 0, np.nan
+            for k in range(K):
+                x = d[k, i, j] / spread
+                if x != last:  # a new argument (NaN never repeats)
+                    last = x
+                    if x < 0.0:  # np.maximum(x, 0): NaN stays NaN  # noqa: PLR1730
+                        x = 0.0
+                    xs[m] = x
+                    m += 1
+                slot[k] = m - 1
+            _survival_many(xs, m, w, mu, s, i, j, tot)
+            row = prob[i, j]
+            for k in range(K):
+                row[k] = tot[slot[k]]
+    for k in range(K):
+        total = 0.0
+        for j in range(NP):
+            acc = 0.0
+            for i in range(NF):
+                acc += prob[i, j, k] * omega[i]
+            pj[k, j] = acc
+            total += acc * gamma[j]
+        p[k] = total
 
 
 @numba.njit(cache=True)
