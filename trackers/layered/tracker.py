@@ -615,7 +615,6 @@ class PBMTracker:
                 S[ti, chosen] = max(keep, self.match_threshold)
         cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.match_threshold)
-        taken = np.zeros(n_a, dtype=bool)
         if len(matches):
             # model update (PBM 4.2): global models and filters of all matched targets at once
             mt, mn = matches[:, 0], matches[:, 1]
@@ -635,7 +634,6 @@ class PBMTracker:
                              self.update_rate, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
                              targets.alpha[r], targets.beta[r])
             targets.score[mt] = S[mt, mn]
-            taken[mn] = True
             # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
             fresh = mt[~occl & (pj[:, 0] >= self.part_match_threshold)]
             for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
@@ -650,10 +648,10 @@ class PBMTracker:
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
         # new targets from free candidates (new blobs, split heads)
-        live_boxes = targets.boxes
-        for n in free.tolist():
+        live_boxes = targets.boxes if len(free) else None
+        for n in free.tolist():  # (``assign`` leaves exactly the untaken candidates free)
             box = boxes[n]
-            if taken[n] or box[3] < self.min_height:
+            if box[3] < self.min_height:
                 continue
             if cand.blob[n] and not self.blob_births:
                 continue
