@@ -7,8 +7,8 @@ Part layer (eq. 12): p_j = sum_i omega_i p(d_ij | theta_ij), p(. | theta) the ma
 probability of ``FeatureModels``.
 Global layer (eq. 13): p = sum_j gamma_j p_j.
 
-The layers run in small numba kernels, one loop over the scored (target, candidate) pairs
-with no (pairs, 6, 5, components) temporaries; ``pair_scores`` chains eqs. 11-13 for the
+The layers run in small numba kernels over the scored (target, candidate) pairs with no
+(pairs, 6, 5, components) temporaries; ``pair_scores`` chains eqs. 11-13 for the
 selected pairs in one call (the models indexed, not copied per pair). Every
 kernel fixes its floating-point order, the same as the numpy expression quoted in its
 docstring (the tests compare them value for value):
