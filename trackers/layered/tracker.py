@@ -326,23 +326,18 @@ class PBMTracker:
         heads = detections.heads
         if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
             heads = np.asarray(self.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
-        finite = np.isfinite(det_boxes).all(axis=1)
-        valid = (finite & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)).nonzero()[0]
+        valid = (np.logical_and.reduce(np.isfinite(det_boxes), axis=1)
+                 & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)).nonzero()[0]
         box = det_boxes[valid]
-        has_head = (np.zeros(len(valid), dtype=bool) if heads is None
-                    else np.isfinite(heads[valid]).all(axis=1))
-        head = np.empty((len(valid), 3))
-        n_head = np.count_nonzero(has_head)
-        if n_head:
+        if fg is not None:  # the top 1/7 band's foreground (PBM 3.1)
+            head = heads_from_bands(fg, box)
+        else:  # the band's centre
+            x, y, w = box[:, 0], box[:, 1], box[:, 2]
+            head = np.column_stack([x + 0.5 * w, y, 0.5 * w])
+        if heads is not None:  # the source's heads where it gives them
+            has_head = np.logical_and.reduce(np.isfinite(heads[valid]), axis=1)
             hx, hy, hw = heads[valid[has_head], :3].T
             head[has_head] = np.column_stack([hx + 0.5 * hw, hy, hw])
-        if n_head < len(valid):
-            need = ~has_head
-            if fg is not None:  # the top 1/7 band's foreground (PBM 3.1)
-                head[need] = heads_from_bands(fg, box[need])
-            else:  # the band's centre
-                x, y, w = box[need, 0], box[need, 1], box[need, 2]
-                head[need] = np.column_stack([x + 0.5 * w, y, 0.5 * w])
         rows = (box, box.copy(), head, np.zeros(len(valid), dtype=bool),
                 np.ones(len(valid), dtype=np.int64))
         if fg is None:
