@@ -153,9 +153,13 @@ class Gate:
 
     def boxes(self, centres: np.ndarray, rates: np.ndarray, size_wh: np.ndarray,
               misses: np.ndarray) -> np.ndarray:
-        """(T, 4) xywh gates centred on ``centres`` (T, 2)."""
-        half = self.half_sizes(rates, size_wh, misses)
-        return np.concatenate([centres - half, 2 * half], axis=1)
+        """(T, 4) xywh gates centred on ``centres`` (T, 2): (centre - half, 2 half)."""
+        out = np.empty((len(size_wh), 4))
+        _boxes_kernel(np.asarray(centres, dtype=np.float64), np.asarray(rates, dtype=np.float64),
+                      np.asarray(size_wh, dtype=np.float64), np.asarray(misses, dtype=np.int64),
+                      self.speed_factor, self.min_fraction, self.miss_factor, self.growth,
+                      self.max_fraction, out)
+        return out
 
 
 @numba.njit(cache=True)
@@ -170,3 +174,17 @@ def _half_kernel(rates, size_wh, misses, speed_factor, min_fraction, miss_factor
             if misses[n] > 0:
                 h = h * miss_factor * growth ** (misses[n] - 1.0)
             half[n, i] = min(h, max_fraction * max(size_wh[n, i], 1.0))
+
+
+@numba.njit(cache=True)
+def _boxes_kernel(centres, rates, size_wh, misses, speed_factor, min_fraction, miss_factor, growth,
+                  max_fraction, out):  # pragma: no cover (compiled)
+    """``Gate.boxes``: the half-sizes of ``_half_kernel``, then per row and axis
+    out = (centre - half, 2 half)."""
+    half = np.empty((size_wh.shape[0], 2))
+    _half_kernel(rates, size_wh, misses, speed_factor, min_fraction, miss_factor, growth,
+                 max_fraction, half)
+    for n in range(size_wh.shape[0]):
+        for i in range(2):
+            out[n, i] = centres[n, i] - half[n, i]
+            out[n, 2 + i] = 2 * half[n, i]
