@@ -139,6 +139,15 @@ class PartFeatures:
             self.centroid[i], self.height[i],
         )
 
+    def shifted(self, shift: np.ndarray) -> PartFeatures:
+        """The features with part rectangles and centroids moved by ``shift`` (N, 2) (x, y);
+        appearance (area, perimeter, histograms) shared, not copied."""
+        d = np.asarray(shift, dtype=np.float64).reshape(-1, 1, 2)
+        parts = self.parts.copy()
+        parts[..., :2] += d
+        return PartFeatures(parts, self.area, self.perimeter, self.hsv, self.xyz,
+                            self.centroid + d, self.height)
+
     def copy(self) -> PartFeatures:
         return PartFeatures(
             self.parts.copy(), self.area.copy(), self.perimeter.copy(), self.hsv.copy(),

@@ -168,6 +168,11 @@ class Targets:
         return self.gate.boxes(self.dof[:, 2:4], self.kf1.x[:, 2:], self.predicted_size(),
                                self.misses)
 
+    def predicted_shift(self) -> np.ndarray:
+        """(T, 2) KF1's predicted centroid (after ``predict``) minus the last validated one:
+        the constant-velocity motion since each target was last found."""
+        return self.kf1.x[:, :2] - self.dof[:, 2:4]
+
     def mark_missed(self, rows: np.ndarray) -> None:
         """The targets at ``rows`` were not found: every part counts as occluded."""
         self.misses[rows] += 1
