@@ -74,3 +74,26 @@ def test_motion_compensation_helps_in_a_crowd():
         out[mc] = score_sequence(seq.gt.table, res["pbm"].table).row()
     assert out[True]["IDF1"] > out[False]["IDF1"] + 0.05
     assert out[True]["HOTA"] > out[False]["HOTA"] + 0.03
+
+
+def test_size_is_held_while_unfound():
+    """KF2 stops extrapolating the size of a target that is not found: a shrinking person
+    who disappears keeps the last predicted size instead of shrinking for ever."""
+    tg = _targets()
+    ex = PartFeatureExtractor(4, 14, 6)
+    ex.start(np.full((240, 320, 3), 90, np.uint8), None)
+    parts = ex.extract(np.array([[100.0, 50.0, 30.0, 90.0]]), np.array([0.5]), np.array([0.5]))
+    tg.add(1, np.array([100.0, 50.0, 115.0, 95.0, 30.0, 90.0]), 0.5, 0.5, parts, None)
+    for k in range(1, 11):  # walking away: 1 px shorter per frame
+        tg.predict()
+        h = 90.0 - k
+        tg.update(np.array([0]), np.array([[100.0, 50.0, 115.0, 50.0 + h / 2, h / 3, h]]),
+                  np.ones(1, bool), np.zeros(1, bool), np.ones((1, 5)), 0.4)
+    assert tg.kf2.x[0, 2] < -0.3  # KF2 has learnt the shrinking
+    sizes = []
+    for _ in range(20):
+        sizes.append(tg.predict()[0].copy())
+        tg.mark_missed(np.array([0]))
+    assert np.array_equal(tg.kf2.x[0, 2:], [0.0, 0.0])
+    assert np.array_equal(sizes[1], sizes[-1])  # held from the first miss on
+    assert sizes[-1][1] > 75.0

@@ -60,6 +60,9 @@ Adaptations (where the paper is vague or relies on what we do not have):
   stays zero-order (PBM 3), so a person who turns back while hidden is still searched for
   where they were last seen, and after a gap of m frames the differences are divided by
   1 + m as above.
+- KF2 holds the size of an unfound target (its size rates are zeroed at a miss): a hidden
+  person's size is not extrapolated, so the occlusion test and the search boxes of a long
+  lost target keep a person's size.
 - Targets are born from detections (and from free blobs when ``blob_births``).
 """
 
