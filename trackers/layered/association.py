@@ -304,6 +304,27 @@ def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.nd
 
 
 @numba.njit(cache=True)
+def _pair_scores_kernel(m_parts: np.ndarray, m_area: np.ndarray, m_perimeter: np.ndarray,
+                        m_hsv: np.ndarray, m_xyz: np.ndarray, m_centroid: np.ndarray,
+                        m_height: np.ndarray, c_parts: np.ndarray, c_area: np.ndarray,
+                        c_perimeter: np.ndarray, c_hsv: np.ndarray, c_xyz: np.ndarray,
+                        c_centroid: np.ndarray, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
+                        leaves: np.ndarray, program: np.ndarray, spread: float,
+                        omega: np.ndarray, gamma: np.ndarray, w: np.ndarray, mu: np.ndarray,
+                        s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 11-13 of the pairs (ti[k], n[k]) in one call: ``_differences_kernel`` then
+    ``_scores_kernel``; returns p_j (K, 5) and p (K,)."""
+    K = ti.shape[0]
+    d = np.empty((K, w.shape[0], m_area.shape[1]))
+    _differences_kernel(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height,
+                        c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid, ti, n, misses,
+                        leaves, program, d)
+    pj, p = np.empty((K, m_area.shape[1])), np.empty(K)
+    _scores_kernel(d, spread, omega, gamma, w, mu, s, pj, p)
+    return pj, p
+
+
+@numba.njit(cache=True)
 def _ambiguous_kernel(scores: np.ndarray, threshold: float, margin: float
                       ) -> tuple[int, int, bool]:
     """``ambiguous`` in one pass: the best and runner-up are the first and second entries
@@ -348,9 +369,10 @@ def _misses(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
     return np.asarray(misses, dtype=np.float64)
 
 
-def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                 misses: np.ndarray | None) -> np.ndarray:
-    """Eq. 11 of pairs (ti[k], n[k]), indices in [0, T) and [0, N) (IndexError else)."""
+def _pairs(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """The pair indices ti, n as (K,) intp arrays, after checking their shapes and that
+    model and candidates have histograms of the same bins (ValueError else)."""
     ti = np.asarray(ti, dtype=np.intp)
     n = np.asarray(n, dtype=np.intp)
     if ti.shape != n.shape or ti.ndim != 1:
@@ -358,6 +380,13 @@ def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.
     if model.hsv.shape[2] != cand.hsv.shape[2] or model.xyz.shape[2] != cand.xyz.shape[2]:
         raise ValueError(f"histogram bins differ: model {model.hsv.shape[2]}, "
                          f"candidates {cand.hsv.shape[2]}")
+    return ti, n
+
+
+def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
+                 misses: np.ndarray | None) -> np.ndarray:
+    """Eq. 11 of pairs (ti[k], n[k]), indices in [0, T) and [0, N) (IndexError else)."""
+    ti, n = _pairs(model, cand, ti, n)
     out = np.empty((len(ti), N_FEATURES, N_PARTS))
     _differences_kernel(*_arrays(model), *_arrays(cand)[:6], ti, n, _misses(misses, len(model)),
                         *_pairwise_plan(model.hsv.shape[2]), out)
@@ -438,7 +467,11 @@ def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
     """
-    return _scores(models, _differences(model, cand, ti, n, misses), omega, gamma, spread)
+    ti, n = _pairs(model, cand, ti, n)
+    return _pair_scores_kernel(*_arrays(model), *_arrays(cand)[:6], ti, n,
+                               _misses(misses, len(model)), *_pairwise_plan(model.hsv.shape[2]),
+                               float(spread), _weights(omega, N_FEATURES, "omega"),
+                               _weights(gamma, N_PARTS, "gamma"), models._w, models._mu, models._s)
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:
