@@ -570,14 +570,13 @@ def band_heads(fg: np.ndarray, boxes: np.ndarray, fraction: float) -> np.ndarray
     return out
 
 
-@numba.njit(cache=True)
-def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
-    """Number of nonzero pixels of a uint8 mask inside the union of N xywh boxes, each
-    covering the pixels of ``geometry.box_slices`` (floor of the top-left, ceil of the
-    bottom-right, clipped to the image); a non-finite box covers nothing."""
-    H, W = fg.shape
+@numba.njit(cache=True, inline="always")
+def _box_spans(boxes: np.ndarray, H: int, W: int) -> np.ndarray:
+    """(N, 4) int64 (r0, r1, c0, c1) half-open pixel spans of N xywh boxes in an H x W
+    image (``geometry.box_slices``: floor of the top-left, ceil of the bottom-right,
+    clipped); a non-finite box gets an empty span."""
     n = boxes.shape[0]
-    spans = np.zeros((n, 4), np.int64)  # r0, r1, c0, c1 (half-open, inside the image)
+    spans = np.zeros((n, 4), np.int64)
     for k in range(n):
         x, y, w, h = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
         if not (np.isfinite(x) and np.isfinite(y) and np.isfinite(x + w) and np.isfinite(y + h)):
@@ -586,33 +585,81 @@ def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
         r0, r1 = min(max(np.floor(y), 0.0), H), min(np.ceil(y + h), H)
         spans[k, 0], spans[k, 1] = int(r0), int(max(r1, r0))
         spans[k, 2], spans[k, 3] = int(c0), int(max(c1, c0))
-    starts = np.empty(n, np.int64)
-    ends = np.empty(n, np.int64)
+    return spans
+
+
+@numba.njit(cache=True, inline="always")
+def _covered_in_row(row: np.ndarray, r: int, spans: np.ndarray, starts: np.ndarray,
+                    ends: np.ndarray) -> int:
+    """Nonzero entries of image row ``row`` (row r) inside the union of the ``spans``
+    (``_box_spans``); scratch starts, ends (N,)."""
+    # column intervals of the spans covering row r, sorted by start, then merged
+    m = 0
+    for k in range(spans.shape[0]):
+        if spans[k, 0] <= r < spans[k, 1] and spans[k, 3] > spans[k, 2]:
+            j = m
+            while j > 0 and starts[j - 1] > spans[k, 2]:
+                starts[j], ends[j] = starts[j - 1], ends[j - 1]
+                j -= 1
+            starts[j], ends[j] = spans[k, 2], spans[k, 3]
+            m += 1
     total = 0
+    k = 0
+    while k < m:
+        a, b = starts[k], ends[k]
+        k += 1
+        while k < m and starts[k] <= b:
+            b = max(b, ends[k])
+            k += 1
+        seg = row[a:b]
+        for c in range(b - a):
+            total += np.int64(seg[c] != 0)
+    return total
+
+
+@numba.njit(cache=True, inline="always")
+def _span_rows(spans: np.ndarray, H: int) -> tuple[int, int]:
+    """The rows [rmin, rmax) that the non-empty spans cover (rmin >= rmax: none)."""
     rmin, rmax = H, 0
-    for k in range(n):
+    for k in range(spans.shape[0]):
         if spans[k, 3] > spans[k, 2]:
             rmin, rmax = min(rmin, spans[k, 0]), max(rmax, spans[k, 1])
+    return rmin, rmax
+
+
+@numba.njit(cache=True)
+def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
+    """Number of nonzero pixels of a uint8 mask inside the union of N xywh boxes, each
+    covering the pixels of ``geometry.box_slices`` (floor of the top-left, ceil of the
+    bottom-right, clipped to the image); a non-finite box covers nothing."""
+    H, W = fg.shape
+    spans = _box_spans(boxes, H, W)
+    starts, ends = np.empty(boxes.shape[0], np.int64), np.empty(boxes.shape[0], np.int64)
+    rmin, rmax = _span_rows(spans, H)
+    total = 0
     for r in range(rmin, rmax):
-        row = fg[r]
-        # column intervals of the spans covering row r, sorted by start, then merged
-        m = 0
-        for k in range(n):
-            if spans[k, 0] <= r < spans[k, 1] and spans[k, 3] > spans[k, 2]:
-                j = m
-                while j > 0 and starts[j - 1] > spans[k, 2]:
-                    starts[j], ends[j] = starts[j - 1], ends[j - 1]
-                    j -= 1
-                starts[j], ends[j] = spans[k, 2], spans[k, 3]
-                m += 1
-        k = 0
-        while k < m:
-            a, b = starts[k], ends[k]
-            k += 1
-            while k < m and starts[k] <= b:
-                b = max(b, ends[k])
-                k += 1
-            seg = row[a:b]
-            for c in range(b - a):
-                total += np.int64(seg[c] != 0)
+        total += _covered_in_row(fg[r], r, spans, starts, ends)
     return total
+
+
+@numba.njit(cache=True)
+def foreground_counts(values: np.ndarray, boxes: np.ndarray) -> tuple:  # pragma: no cover (compiled)
+    """The foreground (PBM 2) of an (H, W) label image or mask in one pass: (H, W) bool
+    ``values != 0``, its number of True pixels (``np.count_nonzero``) and the number of
+    them inside the union of the xywh boxes (``covered_count``), each row counted while
+    it is still in cache."""
+    H, W = values.shape
+    mask = np.empty((H, W), np.bool_)
+    spans = _box_spans(boxes, H, W)
+    starts, ends = np.empty(boxes.shape[0], np.int64), np.empty(boxes.shape[0], np.int64)
+    rmin, rmax = _span_rows(spans, H)
+    count, covered = 0, 0
+    for r in range(H):
+        src, dst = values[r], mask[r]
+        for c in range(W):
+            v = src[c] != 0
+            dst[c] = v
+            count += v
+        if rmin <= r < rmax:
+            covered += _covered_in_row(dst, r, spans, starts, ends)
+    return mask, count, covered

@@ -87,8 +87,8 @@ from trackers.layered._glue_kernels import (
     carved_rows,
     gated_pairs,
     matched_rows,
-    nonzero_mask,
 )
+from trackers.layered._search_kernels import foreground_counts
 from trackers.layered.association import ambiguous_rows, pair_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
@@ -332,10 +332,11 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ candidates
     def _anchors(self, fg: np.ndarray | None, detections: Detections,
-                 frame: np.ndarray | None = None, fg_count: int | None = None) -> Candidates:
+                 frame: np.ndarray | None = None, fg_residual: int | None = None) -> Candidates:
         """The frame's candidates (PBM 2, 3.1): the valid detection boxes with their heads,
-        then the heads of foreground blobs that no detection explains (``fg_count``: the
-        number of foreground pixels, when known)."""
+        then the heads of foreground blobs that no detection explains (``fg_residual``: the
+        number of foreground pixels that no detection box covers, ``residual_foreground``,
+        when known)."""
         det_boxes = detections.boxes
         heads = detections.heads
         if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
@@ -357,7 +358,9 @@ class PBMTracker:
         if fg is None:
             return Candidates(*rows)
         # blobs matter only where foreground is left unexplained by the detections
-        if len(det_boxes) and residual_foreground(fg, det_boxes, fg_count) < self.min_blob_area:
+        if fg_residual is None and len(det_boxes):
+            fg_residual = residual_foreground(fg, det_boxes)
+        if len(det_boxes) and fg_residual < self.min_blob_area:
             return Candidates(*rows)
         s = self.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
@@ -530,7 +533,9 @@ class PBMTracker:
         frame = np.asarray(frame)
         if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
             raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
-        fg, fg_count = None, None
+        if detections is None:
+            detections = Detections.empty()
+        fg, fg_residual = None, None
         if foreground is not None:
             foreground = np.asarray(foreground)
             if foreground.shape != frame.shape[:2]:
@@ -539,16 +544,17 @@ class PBMTracker:
             if foreground.dtype == bool:
                 fg = np.ascontiguousarray(foreground)
             elif foreground.dtype.kind in "iu" and foreground.dtype.isnative:
-                fg, fg_count = nonzero_mask(foreground)  # a label image, counted on the way
+                # a label image: the mask, its pixels and those the detections cover, in one pass
+                fg, count, covered = foreground_counts(
+                    foreground, np.asarray(detections.boxes, dtype=np.float64).reshape(-1, 4))
+                fg_residual = count - covered
             else:
                 fg = foreground != 0
-        if detections is None:
-            detections = Detections.empty()
         self._frame += 1
         H, W = frame.shape[:2]
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
-        cand = self._anchors(fg, detections, frame, fg_count)
+        cand = self._anchors(fg, detections, frame, fg_residual)
         n_a = len(cand)
         boxes = cand.box
         # foreground centroids (PBM 2.1) and the parts split at them, on one grid
