@@ -1,5 +1,6 @@
-"""PBM motion compensation: overlap and displacement (eq. 11) against the parts models
-moved by KF1's predicted motion (an adaptation for crowds; the gate stays zero-order)."""
+"""PBM dynamics adaptations: overlap and displacement (eq. 11) against the parts models
+moved by KF1's predicted motion (for crowds; the gate stays zero-order), KF2 holding a
+hidden person's size, and a gate large enough to find a person who walked on while hidden."""
 
 from __future__ import annotations
 
@@ -97,3 +98,13 @@ def test_size_is_held_while_unfound():
     assert np.array_equal(tg.kf2.x[0, 2:], [0.0, 0.0])
     assert np.array_equal(sizes[1], sizes[-1])  # held from the first miss on
     assert sizes[-1][1] > 75.0
+
+
+def test_a_person_who_walks_on_behind_an_occluder_keeps_the_id():
+    """follow_occluder: the person walks about 60 frames behind a moving occluder and
+    comes out about four widths away; the grown gate (PBM 3) must still reach them, so
+    that the person's first id is the one kept (a new id for the rest: IDF1 ~0.76)."""
+    seq = load_scenario("follow_occluder", seed=0, length=150)
+    res = run_sequence({"pbm": instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))},
+                       seq, NoisyGroundTruth(seed=0), foreground="exact")
+    assert score_sequence(seq.gt.table, res["pbm"].table).row()["IDF1"] > 0.85

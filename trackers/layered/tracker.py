@@ -205,7 +205,7 @@ class PBMTracker:
         gate_min_fraction: float = 0.5,
         gate_miss_factor: float = 2.0,
         gate_growth: float = 1.15,
-        gate_max_fraction: float = 4.0,
+        gate_max_fraction: float = 6.0,
         kf1_position_noise: float = 0.5,
         kf1_velocity_noise: float = 0.2,
         kf1_measurement_noise: float = 0.5,
