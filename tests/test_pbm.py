@@ -632,13 +632,13 @@ def test_prune_equals_the_numpy_centre_radius_and_nearest_head():
     assert t._prune(None, cands, heads, frame) == (-1, None)
 
 
-def test_nonzero_mask_and_the_tracker_accept_every_foreground_dtype():
-    from trackers.layered._glue_kernels import nonzero_mask
+def test_foreground_counts_and_the_tracker_accept_every_foreground_dtype():
+    from trackers.layered._search_kernels import foreground_counts
 
     rng = np.random.default_rng(6)
     labels = rng.integers(0, 4, (30, 40)) * (rng.random((30, 40)) < 0.5)
     for dtype in (np.int32, np.uint8, np.int64, np.uint16):
-        mask, count = nonzero_mask(labels.astype(dtype)[:, ::-1])  # strided too
+        mask, count, _ = foreground_counts(labels.astype(dtype)[:, ::-1], np.zeros((0, 4)))  # strided too
         np.testing.assert_array_equal(mask, labels[:, ::-1] != 0)
         assert count == np.count_nonzero(labels) and mask.flags.c_contiguous
     frame = rng.integers(0, 256, (30, 40, 3), dtype=np.uint8)

@@ -91,21 +91,6 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
 
 
 @numba.njit(cache=True)
-def nonzero_mask(values: np.ndarray) -> tuple:  # pragma: no cover (compiled)
-    """The foreground (PBM 2) of an (H, W) label image or mask in one pass: (H, W) bool
-    ``values != 0`` and its number of True pixels (``np.count_nonzero``)."""
-    H, W = values.shape
-    mask = np.empty((H, W), np.bool_)
-    count = 0
-    for r in range(H):
-        for c in range(W):
-            v = values[r, c] != 0
-            mask[r, c] = v
-            count += v
-    return mask, count
-
-
-@numba.njit(cache=True)
 def matched_rows(mt: np.ndarray, mn: np.ndarray, hyp: np.ndarray, boxes: np.ndarray,
                  centroid: np.ndarray, blob: np.ndarray, pred_wh: np.ndarray, alpha: np.ndarray,
                  pj_all: np.ndarray, dof_h: np.ndarray, pj_h: np.ndarray, k_h: np.ndarray
