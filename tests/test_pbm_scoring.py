@@ -4,17 +4,20 @@
 The references are the numpy implementations the kernels replaced. Where the kernels fix a
 floating-point order that numpy left to BLAS (the Bhattacharyya products of
 ``selected_differences`` and the eq. 13 sum), the reference is written with that order and
-the original BLAS expression is compared within 1e-15.
+the original BLAS expression is compared within 1e-15. The kernels' normal CDF is a
+table of scipy's ``ndtr`` (``association._ndtr``): probabilities match scipy's within 1e-9.
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 from scipy.special import ndtr
 
 from trackers.frontend.parts import N_PARTS, PartFeatures
 from trackers.layered.association import (
+    _ndtr,
     ambiguous,
     ambiguous_rows,
     feature_differences,
@@ -25,6 +28,7 @@ from trackers.layered.association import (
 from trackers.layered.models import FEATURES, FeatureModels, FoldedMixture
 
 NF = len(FEATURES)
+NDTR_ATOL = 1e-9  # the kernels' normal CDF table against scipy's ndtr, summed over components
 
 
 # ----------------------------------------------------------------------------- references
@@ -162,10 +166,29 @@ def test_match_probability_equals_numpy_for_1_2_and_3_components(rng):
                                                                    (400, NF, N_PARTS))
     d[::7] = 0.0
     d[1::11] *= -1.0  # negative differences count as 0
-    np.testing.assert_array_equal(models.match_probability(d), ref_match_probability(models, d))
+    # the kernels' normal CDF is a table (``association._ndtr``): scipy's values to 3e-10
+    np.testing.assert_allclose(models.match_probability(d), ref_match_probability(models, d),
+                               rtol=0, atol=NDTR_ATOL)
     assert models.match_probability(d[0]).shape == (NF, N_PARTS)
     default = FeatureModels.default()
-    np.testing.assert_array_equal(default.match_probability(d), ref_match_probability(default, d))
+    np.testing.assert_allclose(default.match_probability(d), ref_match_probability(default, d),
+                               rtol=0, atol=NDTR_ATOL)
+
+
+def test_normal_cdf_table_is_scipys_ndtr_within_3e_10():
+    @numba.njit
+    def cdf(z, out):
+        for q in range(z.shape[0]):
+            out[q] = _ndtr(z[q])
+
+    z = np.concatenate([np.linspace(-12.0, 12.0, 480_001), [-np.inf, np.inf, -9.0, 9.0, 0.0]])
+    got = np.empty_like(z)
+    cdf(z, got)
+    assert np.abs(got - ndtr(z)).max() < 3e-10
+    assert ((got >= 0.0) & (got <= 1.0)).all()
+    assert (np.diff(got[:480_001]) >= -1e-15).all()  # non-decreasing, to rounding
+    cdf(np.array([np.nan]), got[:1])
+    assert np.isnan(got[0])
 
 
 @pytest.mark.parametrize("with_misses", [False, True])
@@ -199,7 +222,7 @@ def test_layered_scores_equal_numpy(rng):
     omega = rng.uniform(0.1, 1, NF)
     gamma = rng.uniform(0.1, 1, N_PARTS)
     pj, p = layered_scores(models, d, omega, gamma, 3.0)
-    np.testing.assert_array_equal(pj, ref_part_scores(models, d, omega, 3.0))
+    np.testing.assert_allclose(pj, ref_part_scores(models, d, omega, 3.0), rtol=0, atol=NDTR_ATOL)
     np.testing.assert_array_equal(p, ref_global_scores(pj, gamma))
     # the former BLAS matrix-vector product: the same up to rounding
     np.testing.assert_allclose(p, pj @ (gamma / gamma.sum()), atol=1e-15)
