@@ -4,7 +4,9 @@ and learn the feature weights omega of eq. 12 (PBM 4.1).
 Models. For every annotated person visible in two consecutive frames, the five parts of
 its ground-truth box are measured in both frames (``trackers.frontend.parts``) and the
 absolute differences of the six features (eq. 11) are collected per feature and part.
-Each of the 30 sets is fitted by a half-normal, or by a two-component folded Gaussian
+With the tracker config's ``motion_compensation`` (the default), overlap and displacement
+compare the person with its previous parts moved by its previous step, as the tracker
+compares a candidate with the parts model moved by KF1's prediction. Each of the 30 sets is fitted by a half-normal, or by a two-component folded Gaussian
 mixture where that wins by BIC (the differences are not unimodal).
 
 Weights (PBM 4.1: "The weights in (12), omega_i, have been trained with maximum
@@ -99,7 +101,7 @@ class PairSamples:
 
 def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibility: float = 0.7,
                   bins: int = 4, neighbours: int = 3, radius: float = 1.0,
-                  block_frames: int = 25) -> PairSamples:
+                  block_frames: int = 25, motion_compensation: bool = True) -> PairSamples:
     """Positive and negative frame-to-frame pairs of annotated people (PBM 4.1 samples).
 
     Args:
@@ -112,6 +114,11 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
         radius: a negative's box centre lies within ``radius`` x (w, h) of the person's
             previous centre (w, h its previous box size), like the tracker's gate (PBM 3).
         block_frames: frames per cross-validation block.
+        motion_compensation: as the tracker's ``motion_compensation``: the previous frame's
+            parts are moved by the person's previous step (its centroid in frame k-1 minus
+            in frame k-2; none when it was not kept in frame k-2) before the overlap and
+            displacement differences are taken, as the tracker moves a target's parts model
+            by KF1's constant-velocity prediction.
     Returns:
         ``PairSamples``; positives are exactly the pairs ``collect_differences`` returns.
     """
@@ -129,7 +136,8 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
             continue
         table = seq.gt.table
         occluded = seq.gt.occluded
-        prev = None  # (ids, boxes, features) of the previous frame
+        prev = None  # (ids, boxes, features, centroids) of the previous frame
+        before: dict[int, np.ndarray] = {}  # id -> centroid, the frame before that
         warned = False
         n = seq.info.length if max_frames is None else min(seq.info.length, max_frames)
         for k in range(1, n + 1):
@@ -155,7 +163,7 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
             boxes = np.asarray(table.boxes[rows], dtype=np.float64)
             ex.start(frame, fg)
             if len(rows) == 0:
-                prev = None
+                prev, before = None, {}
                 continue
             cents = np.array([_centroid(fg, b) for b in boxes])
             al, be = centroid_ratios(boxes, cents)
@@ -163,11 +171,17 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
             if prev is not None:
                 ti, ci, is_pos = _pairs(prev[0], prev[1], ids, boxes, neighbours, radius)
                 if len(ti):
-                    d = feature_differences(prev[2], feats)[ti, ci]  # (K, 6, 5)
+                    model = prev[2]
+                    if motion_compensation:
+                        model = model.shifted(np.array([
+                            c - before[i] if i in before else np.zeros(2)
+                            for i, c in zip(prev[0].tolist(), prev[3])]).reshape(-1, 2))
+                    d = feature_differences(model, feats)[ti, ci]  # (K, 6, 5)
                     ds.append(d)
                     pos.append(is_pos)
                     blocks.append(np.full(len(ti), block_base + (k - 1) // block_frames, np.int64))
-            prev = (ids, boxes, feats)
+                before = dict(zip(prev[0].tolist(), prev[3]))
+            prev = (ids, boxes, feats, cents)
         block_base += (n - 1) // block_frames + 1
     if not ds:
         return PairSamples(np.zeros((0, len(FEATURES), N_PARTS)), np.zeros(0, bool),
@@ -204,7 +218,8 @@ def _pairs(prev_ids: np.ndarray, prev_boxes: np.ndarray, ids: np.ndarray, boxes:
 
 
 def collect_differences(sequences: Iterable, max_frames: int | None = None,
-                        min_visibility: float = 0.7, bins: int = 4) -> dict[str, np.ndarray]:
+                        min_visibility: float = 0.7, bins: int = 4,
+                        motion_compensation: bool = True) -> dict[str, np.ndarray]:
     """Frame-to-frame part feature differences of annotated people (eq. 11).
 
     Args:
@@ -213,11 +228,13 @@ def collect_differences(sequences: Iterable, max_frames: int | None = None,
         min_visibility: people below this visibility (when known) or flagged occluded are
             skipped: the models describe unoccluded matches.
         bins: histogram bins per channel (must match the tracker's ``histogram_bins``).
+        motion_compensation: see ``collect_pairs``.
     Returns:
         {feature: (K, 5) differences}.
     """
     return positive_differences(collect_pairs(sequences, max_frames, min_visibility, bins,
-                                              neighbours=0))
+                                              neighbours=0,
+                                              motion_compensation=motion_compensation))
 
 
 def positive_differences(samples: PairSamples) -> dict[str, np.ndarray]:
@@ -487,7 +504,8 @@ def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str |
 
 
 def _tracker_settings(path: str | Path) -> dict:
-    """part_weights, match_threshold, model_spread and feature_weights of a tracker config."""
+    """part_weights, match_threshold, model_spread and feature_weights of a tracker config,
+    and its motion_compensation (the tracker's default, true, when the key is absent)."""
     p = Path(path)
     try:
         cfg = yaml.safe_load(p.read_text())
@@ -498,6 +516,7 @@ def _tracker_settings(path: str | Path) -> dict:
         if not isinstance(cfg, dict) or key not in cfg:
             raise ValueError(f"{p}: key {key!r} missing")
         out[key] = cfg[key]
+    out["motion_compensation"] = bool(cfg.get("motion_compensation", True))
     return out
 
 
@@ -521,7 +540,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--radius", type=float, default=1.0,
                     help="negatives' centres within radius x (w, h) of the person's centre")
     ap.add_argument("--tracker-config", default=str(TRACKER_CONFIG),
-                    help="tracker YAML giving part_weights, match_threshold, model_spread")
+                    help="tracker YAML giving part_weights, match_threshold, model_spread and "
+                         "motion_compensation")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     sequences = []
@@ -542,9 +562,12 @@ def main(argv: list[str] | None = None) -> int:
     tracker = _tracker_settings(args.tracker_config)
     samples = collect_pairs(sequences, args.max_frames, args.min_visibility, args.bins,
                             neighbours=0 if args.no_weights else args.neighbours,
-                            radius=args.radius, block_frames=args.block_frames)
+                            radius=args.radius, block_frames=args.block_frames,
+                            motion_compensation=tracker["motion_compensation"])
     diffs = positive_differences(samples)
     description = "fitted on " + "; ".join(sources)
+    if tracker["motion_compensation"]:
+        description += "; overlap and displacement motion-compensated"
     models = fit_models(diffs, description)
     fit = None
     if not args.no_weights:
