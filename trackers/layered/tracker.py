@@ -216,7 +216,7 @@ class PBMTracker:
         min_height: float = 12.0,
         head_separation: float = 0.12,
         head_min_fill: float = 0.2,
-        model_spread: float = 3.0,
+        model_spread: float = 4.5,
         histogram_bins: int = 4,
         grid_rows: int = 35,
         grid_cols: int = 15,
