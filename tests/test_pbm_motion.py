@@ -64,17 +64,22 @@ def test_moved_parts_keep_appearance_and_move_geometry():
 
 
 def test_motion_compensation_helps_in_a_crowd():
-    """10 people crossing in a 640x480 room, exact detections: comparing the moved models
-    keeps more identities than comparing the last positions (IDF1 and HOTA)."""
-    seq = load_scenario("crowd", seed=0, length=100, people=10)
-    out = {}
-    for mc in (False, True):
-        cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-        cfg.motion_compensation = mc
-        res = run_sequence({"pbm": instantiate(cfg)}, seq, NoisyGroundTruth(seed=0), foreground="exact")
-        out[mc] = score_sequence(seq.gt.table, res["pbm"].table).row()
-    assert out[True]["IDF1"] > out[False]["IDF1"] + 0.05
-    assert out[True]["HOTA"] > out[False]["HOTA"] + 0.03
+    """10 people crossing in a 640x480 room, exact detections, 4 seeds: comparing the moved
+    models keeps more identities than comparing the last positions (mean IDF1 and HOTA;
+    measured +0.06 and +0.05; one crowd alone can go either way)."""
+    out: dict[bool, list] = {False: [], True: []}
+    for seed in range(4):
+        seq = load_scenario("crowd", seed=seed, length=100, people=10)
+        for mc in (False, True):
+            cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+            cfg.motion_compensation = mc
+            res = run_sequence({"pbm": instantiate(cfg)}, seq, NoisyGroundTruth(seed=seed),
+                               foreground="exact")
+            row = score_sequence(seq.gt.table, res["pbm"].table).row()
+            out[mc].append((row["IDF1"], row["HOTA"]))
+    on, off = np.mean(out[True], axis=0), np.mean(out[False], axis=0)
+    assert on[0] > off[0] + 0.03
+    assert on[1] > off[1] + 0.02
 
 
 def test_size_is_held_while_unfound():

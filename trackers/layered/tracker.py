@@ -63,6 +63,9 @@ Adaptations (where the paper is vague or relies on what we do not have):
 - KF2 holds the size of an unfound target (its size rates are zeroed at a miss): a hidden
   person's size is not extrapolated, so the occlusion test and the search boxes of a long
   lost target keep a person's size.
+- Multiple responses (PBM 4.1) whose heads coincide (within ``duplicate_radius`` head
+  widths of the best one's) are one response: the best is kept, no head template is
+  matched (it could not tell them apart; measured, it chose worse and cost time).
 - Targets are born from detections (and from free blobs when ``blob_births``).
 """
 
@@ -166,6 +169,9 @@ class PBMTracker:
         blob_downsample: connected components run on the mask subsampled by this factor.
         template_threshold: normalised correlation needed by head-template pruning.
         prune_radius: ambiguous candidates closer than this many head widths are "nearby".
+        duplicate_radius: ambiguous candidates whose heads all lie within this many head
+            widths of the best one's are one response: the best is kept without template
+            matching (negative: always match the template).
         min_hits: matches in a row that confirm a new target.
         max_misses: frames a confirmed target survives unfound.
         exit_margin: pixels from the border within which a lost target counts as leaving.
@@ -224,6 +230,7 @@ class PBMTracker:
         blob_downsample: int = 2,
         template_threshold: float = 0.6,
         prune_radius: float = 3.0,
+        duplicate_radius: float = 0.25,
         min_hits: int = 3,
         max_misses: int = 90,
         exit_margin: float = 8.0,
@@ -298,6 +305,7 @@ class PBMTracker:
         self.head_min_fill = head_min_fill
         self.template_threshold = template_threshold
         self.prune_radius = prune_radius
+        self.duplicate_radius = float(duplicate_radius)
         self.min_hits = int(min_hits)
         self.max_misses = int(max_misses)
         self.exit_margin = float(exit_margin)
@@ -613,15 +621,20 @@ class PBMTracker:
                 # distant rivals are left to the one-to-one assignment
                 r = best if best >= 0 else int(np.argmax(row))
                 hw = max(cand.head[r, 2], 1.0)
-                cands = cands[_norms(heads_xy[cands] - heads_xy[r]) <= self.prune_radius * hw]
+                dist = _norms(heads_xy[cands] - heads_xy[r])
+                near = dist <= self.prune_radius * hw
+                cands = cands[near]
                 if amb and len(cands) < 2:
                     continue
-                chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
+                if amb and dist[near].max() <= self.duplicate_radius * hw:
+                    chosen, refined = best, None  # one response: the heads coincide
+                else:
+                    chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
                 if chosen < 0:
                     if weak:
                         continue
                     chosen = best
-                elif hyp[ti, chosen] >= 0:
+                elif refined is not None and hyp[ti, chosen] >= 0:
                     # "the matching candidate is then updated accordingly": a carved
                     # (occluded) candidate is re-anchored on the refined head
                     q = hyp[ti, chosen]

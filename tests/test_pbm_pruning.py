@@ -1,0 +1,50 @@
+"""PBM multiple-response pruning (PBM 4.1): ambiguous candidates whose heads coincide are
+one response, kept without a head-template match (``duplicate_radius``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from hydra.utils import instantiate
+from omegaconf import OmegaConf
+
+from harness.datasets.synthetic import load_scenario
+from harness.detection_sources import NoisyGroundTruth
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _template_matches(duplicate_radius: float) -> list[np.ndarray]:
+    """The candidate heads (K, 2) of every head-template match of pbm on a crowd."""
+    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg.duplicate_radius = duplicate_radius
+    tracker = instantiate(cfg)
+    calls: list[np.ndarray] = []
+    prune = tracker._prune
+
+    def recorded(template, cands, heads, frame):
+        calls.append(np.array(heads, dtype=np.float64))
+        return prune(template, cands, heads, frame)
+
+    tracker._prune = recorded
+    seq = load_scenario("crowd", seed=0, length=60, people=10)
+    src = NoisyGroundTruth(seed=0)
+    src.start(seq)
+    for k in range(1, 61):
+        frame = seq.frame(k)
+        tracker.update(frame, src.detect(k, frame)[0], seq.foreground(k))
+    return calls
+
+
+def _coinciding(calls: list[np.ndarray]) -> int:
+    """Matches among at least two candidates whose heads all lie within 1 pixel."""
+    return sum(len(h) > 1 and np.ptp(h, axis=0).max() <= 1.0 for h in calls)
+
+
+def test_coinciding_heads_are_one_response():
+    always = _template_matches(-1.0)
+    default = _template_matches(0.25)
+    assert _coinciding(always) > 0  # the crowd has such responses
+    assert _coinciding(default) == 0
+    assert len(default) < len(always)
