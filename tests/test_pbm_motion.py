@@ -113,3 +113,38 @@ def test_a_person_who_walks_on_behind_an_occluder_keeps_the_id():
     res = run_sequence({"pbm": instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))},
                        seq, NoisyGroundTruth(seed=0), foreground="exact")
     assert score_sequence(seq.gt.table, res["pbm"].table).row()["IDF1"] > 0.85
+
+
+def _walk_then_vanish(report_predicted: bool) -> list[np.ndarray]:
+    """A person walking right 3 px per frame, detected for 12 frames, then not detected:
+    the boxes pbm reports for it in the 4 frames after."""
+    from trackers.records import Detections, TrackState
+
+    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg.report_predicted = report_predicted
+    tracker = instantiate(cfg)
+    rng = np.random.default_rng(0)
+    background = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)
+    out = []
+    for k in range(16):
+        box = np.array([40.0 + 3 * k, 60.0, 30.0, 90.0])
+        frame = background.copy()
+        x, y, w, h = box.astype(int)
+        frame[y:y + h // 7, x:x + w] = (40, 80, 200)
+        frame[y + h // 7:y + h, x:x + w] = (200, 60, 40)
+        dets = Detections(box[None], np.ones(1)) if k < 12 else Detections.empty()
+        tracks = tracker.update(frame, dets)
+        if k >= 12:
+            (t,) = tracks
+            assert t.state == TrackState.OCCLUDED
+            out.append(t.box.copy())
+    return out
+
+
+def test_an_unfound_target_is_reported_where_kf1_predicts_it():
+    moved, still = _walk_then_vanish(True), _walk_then_vanish(False)
+    assert all(np.array_equal(b, still[0]) for b in still)  # the last validated box
+    steps = np.diff([b[0] for b in moved])
+    assert np.all(np.abs(steps - 3.0) < 1.0)  # KF1's velocity, about 3 px per frame
+    assert moved[0][0] > still[0][0] + 2.0
+    np.testing.assert_array_equal([b[2:] for b in moved], [b[2:] for b in still])

@@ -27,9 +27,10 @@ frame (PBM Fig. 1):
 Multi-target life cycle (an adaptation: the paper initialises by hand, PBM 3): a candidate
 that no target takes starts a TENTATIVE target (new blobs, and heads of a blob that split
 from another); it is CONFIRMED after ``min_hits`` matches in a row and dropped if it
-misses before. A confirmed target that is not found is reported OCCLUDED at its last
-validated box (zero-order, as the gate) for up to ``max_report_misses`` frames when
-``report_occluded``; it is dropped after ``max_misses`` frames, or after ``exit_misses``
+misses before. A confirmed target that is not found is reported OCCLUDED for up to
+``max_report_misses`` frames when ``report_occluded``: at its last validated box
+(zero-order, as the gate), or moved by KF1's constant-velocity prediction when
+``report_predicted``; it is dropped after ``max_misses`` frames, or after ``exit_misses``
 frames when its box touches the image border (it left).
 
 Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
@@ -187,6 +188,8 @@ class PBMTracker:
             turn it on.
         report_occluded: report unfound confirmed targets as OCCLUDED.
         max_report_misses: frames an unfound target is reported.
+        report_predicted: an unfound target's reported box is its last validated box
+            moved by KF1's predicted motion since (the gate stays zero-order).
         motion_compensation: displacement and overlap against the parts model moved by
             KF1's predicted motion (an adaptation, see above).
     """
@@ -240,6 +243,7 @@ class PBMTracker:
         blob_births: bool = False,
         report_occluded: bool = True,
         max_report_misses: int = 5,
+        report_predicted: bool = True,
         motion_compensation: bool = True,
     ) -> None:
         if models is None:
@@ -317,6 +321,7 @@ class PBMTracker:
         self.blob_births = bool(blob_births)
         self.report_occluded = bool(report_occluded)
         self.max_report_misses = int(max_report_misses)
+        self.report_predicted = bool(report_predicted)
         self.motion_compensation = bool(motion_compensation)
         if int(blob_downsample) < 1:
             raise ValueError(f"blob_downsample must be >= 1, got {blob_downsample}")
@@ -709,6 +714,8 @@ class PBMTracker:
         rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes, rects = tg.dof[rows[:, None], _BOX_COLUMNS], tg.parts.parts[rows]
+        if self.report_predicted:
+            boxes[:, :2] += np.where(found[rows, None], 0.0, tg.predicted_shift()[rows])
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
         found = found[rows]
         score = np.where(found, tg.score[rows].clip(0.0, 1.0), 0.0).tolist()
