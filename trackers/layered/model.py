@@ -11,6 +11,12 @@ Update (PBM 4.2):
   perimeter and colour histograms towards the candidate's by a running average with weight
   ``update_rate * p_j`` (the better the match, the larger the step); a part below the
   threshold does not match and keeps its model frozen (its rectangle follows the GM).
+
+Stale parts (``stale_parts``, an adaptation beyond the paper): a frozen part keeps p_j low
+once the person's appearance has moved on, and then never matches again. A part that is
+visible (its target matched unoccluded, no other target's box over it, inside the image,
+its foreground present) yet fails to match is counted; after ``stale_frames`` such frames
+it is re-learned (step ``relearn_rate``). A hidden part is never re-learned.
 """
 
 from __future__ import annotations
@@ -65,6 +71,7 @@ class Targets:
         hits, misses: (T,) life-cycle counters. confirmed: (T,) passed ``min_hits``.
         occluded: (T,) the last match was an occluded candidate.
         occluded_parts: (T, 5) parts frozen at the last update. part_scores: (T, 5) p_j.
+        stale: (T, 5) frames each part failed to match while visible (``stale_parts``).
         score: (T,) global score of the last match. last_gate: (T, 4) the gate the last
             frame's candidates were validated in (NaN before the first).
         head_template: per target, the head patch (``search.head_patch``, a BGR crop) that
@@ -99,6 +106,7 @@ class Targets:
         self.occluded = np.zeros(0, dtype=bool)
         self.occluded_parts = np.zeros((0, N_PARTS), dtype=bool)
         self.part_scores = np.zeros((0, N_PARTS))
+        self.stale = np.zeros((0, N_PARTS), dtype=np.int64)
         self.score = np.zeros(0)
         self.last_gate = np.zeros((0, 4))
         self.head_template: list[np.ndarray | None] = []
@@ -136,6 +144,7 @@ class Targets:
         self.occluded = np.append(self.occluded, False)
         self.occluded_parts = np.vstack([self.occluded_parts, np.zeros(N_PARTS, dtype=bool)])
         self.part_scores = np.vstack([self.part_scores, np.ones(N_PARTS)])
+        self.stale = np.vstack([self.stale, np.zeros(N_PARTS, dtype=np.int64)])
         self.score = np.append(self.score, 0.0)
         self.last_gate = np.vstack([self.last_gate, np.full(4, np.nan)])
         self.head_template.append(head_template)
@@ -147,7 +156,7 @@ class Targets:
         self.kf2.take(rows)
         for name in ("id", "dof", "_ratios", "_n_ratios", "alpha", "beta", "_history",
                      "_n_history", "hits", "misses", "confirmed", "occluded",
-                     "occluded_parts", "part_scores", "score", "last_gate"):
+                     "occluded_parts", "part_scores", "stale", "score", "last_gate"):
             setattr(self, name, getattr(self, name)[rows])
         self.parts = self.parts.take(rows)
         self.head_template = [self.head_template[i] for i in rows]
@@ -300,9 +309,71 @@ def _global_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, 
         shift[q, 1] = dof_all[n, 3] - y0
 
 
+def stale_parts(targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
+                part_scores: np.ndarray, part_match_threshold: float, occluder_misses: int,
+                image_size: tuple[int, int], max_cover: float, min_fill: float,
+                stale_frames: int) -> np.ndarray:
+    """Stale parts (an adaptation beyond PBM 4.2) of the targets at ``rows`` (unique),
+    matched unoccluded to the candidates at ``ks`` of ``cand``, after ``Targets.update``
+    and before ``update_parts``: returns the (M, 5) parts to re-learn, and counts
+    ``targets.stale``.
+
+    A part is visible when at most ``max_cover`` of its rectangle (the candidate's) lies
+    under the box of another target unfound for at most ``occluder_misses`` frames (at its
+    global model), or outside the image (W, H), and its foreground area is at least
+    ``min_fill`` x its model's (a part hidden behind a wall loses its foreground). A visible
+    part below ``part_match_threshold`` adds one to its count, a matching part resets it;
+    a count reaching ``stale_frames`` is re-learned (no longer flagged frozen) and reset.
+    A hidden part keeps its count and its model stays frozen.
+    """
+    relearn = np.zeros((len(rows), N_PARTS), dtype=np.bool_)
+    W, H = image_size
+    _stale_parts_kernel(targets.stale, targets.occluded_parts, targets.parts.area, targets.dof,
+                        targets.misses, np.asarray(rows, dtype=np.int64), cand.parts, cand.area,
+                        np.asarray(ks, dtype=np.int64),
+                        np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
+                        float(part_match_threshold), int(occluder_misses), float(W), float(H),
+                        float(max_cover), float(min_fill), int(stale_frames), relearn)
+    return relearn
+
+
+@numba.njit(cache=True)
+def _stale_parts_kernel(stale, occluded_parts, m_area, dof, misses, rows, c_parts, c_area, ks,
+                        part_scores, threshold, occluder_misses, W, H, max_cover, min_fill,
+                        stale_frames, relearn):  # pragma: no cover (compiled)
+    """``stale_parts`` in one loop over rows x parts x targets; cover is the largest of
+    the fraction outside the image and the fractions under each other target's box."""
+    T = dof.shape[0]
+    for q in range(rows.shape[0]):
+        r, k = rows[q], ks[q]
+        for j in range(c_parts.shape[1]):
+            x0, y0 = c_parts[k, j, 0], c_parts[k, j, 1]
+            x1, y1 = x0 + c_parts[k, j, 2], y0 + c_parts[k, j, 3]
+            size = max(c_parts[k, j, 2] * c_parts[k, j, 3], 1e-9)
+            inside = ((min(max(x1, 0.0), W) - min(max(x0, 0.0), W))
+                      * (min(max(y1, 0.0), H) - min(max(y0, 0.0), H)))
+            cover = 1.0 - inside / size
+            for t in range(T):
+                if t == r or misses[t] > occluder_misses:
+                    continue
+                iw = min(x1, dof[t, 0] + dof[t, 4]) - max(x0, dof[t, 0])
+                ih = min(y1, dof[t, 1] + dof[t, 5]) - max(y0, dof[t, 1])
+                if iw > 0.0 and ih > 0.0:
+                    cover = max(cover, iw * ih / size)
+            if part_scores[q, j] >= threshold:
+                stale[r, j] = 0
+            elif cover <= max_cover and c_area[k, j] >= min_fill * m_area[r, j]:
+                stale[r, j] += 1
+                if stale[r, j] >= stale_frames:
+                    relearn[q, j] = True
+                    stale[r, j] = 0
+                    occluded_parts[r, j] = False
+
+
 def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
                  part_scores: np.ndarray, part_match_threshold: float, update_rate: float,
-                 shift: np.ndarray, boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray) -> None:
+                 shift: np.ndarray, boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray,
+                 relearn: np.ndarray | None = None, relearn_rate: float = 1.0) -> None:
     """PBM 4.2 parts-model update of several targets at once, in place.
 
     Each part whose score p_j reaches ``part_match_threshold`` moves its area, perimeter
@@ -316,34 +387,42 @@ def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: 
         cand: features holding the chosen candidates at ``ks`` (M,) (no copy).
         part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Targets.update``).
         boxes: (M, 4) xywh, alpha, beta: (M,) the updated global models.
+        relearn: (M, 5) stale parts (``stale_parts``): moved towards the candidate by
+            ``relearn_rate`` whatever p_j, and given its centroid. None: none.
     """
+    if relearn is None:
+        relearn = np.zeros((len(rows), N_PARTS), dtype=bool)
     _update_parts_kernel(model.parts, model.area, model.perimeter, model.hsv, model.xyz,
                          model.centroid, model.height, np.asarray(rows, dtype=np.int64),
                          cand.area, cand.perimeter, cand.hsv, cand.xyz, cand.centroid,
                          np.asarray(ks, dtype=np.int64), np.asarray(part_scores, dtype=np.float64),
                          float(part_match_threshold), float(update_rate),
                          np.asarray(shift, dtype=np.float64), np.asarray(boxes, dtype=np.float64),
-                         np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64))
+                         np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64),
+                         np.asarray(relearn, dtype=np.bool_), float(relearn_rate))
 
 
 @numba.njit(cache=True)
 def _update_parts_kernel(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height, rows,
                          c_area, c_perimeter, c_hsv, c_xyz, c_centroid, ks, part_scores,
-                         threshold, rate, shift, boxes, alpha, beta):  # pragma: no cover (compiled)
+                         threshold, rate, shift, boxes, alpha, beta, relearn,
+                         relearn_rate):  # pragma: no cover (compiled)
     """``update_parts`` in one loop; each value is computed by the same operations, in the
     same order, as the numpy expressions
 
         eta = where(p >= threshold, rate * p, 0); m += eta * (c - m)   (area, perimeter, hsv, xyz)
         centroid = where(p >= threshold, c_centroid, m_centroid + shift)
         parts = part_boxes(boxes, alpha, beta); height = boxes[:, 3]
+
+    except that a ``relearn`` part takes eta = relearn_rate and the candidate's centroid.
     """
     nb = m_hsv.shape[2]
     for q in range(rows.shape[0]):
         r, k = rows[q], ks[q]
         for j in range(m_area.shape[1]):
             p = part_scores[q, j]
-            matched = p >= threshold
-            eta = rate * p if matched else 0.0
+            matched = p >= threshold or relearn[q, j]
+            eta = relearn_rate if relearn[q, j] else (rate * p if p >= threshold else 0.0)
             m_area[r, j] += eta * (c_area[k, j] - m_area[r, j])
             m_perimeter[r, j] += eta * (c_perimeter[k, j] - m_perimeter[r, j])
             for u in range(nb):
