@@ -9,18 +9,18 @@ at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (``../shared/data``)
 with foreground none, detection noise seeded by each of ``--seeds``. Prints the COMBINED
 HOTA, IDF1, MOTA, IDs, Frag per data set and variant (per sequence with ``--per-sequence``).
 
-Measured 2026-11-22, models + omega fitted on synthetic seed 1 (learned omega: area 0.25,
-overlap 0.75, the rest 0; CV accuracy 0.984 vs 0.947 for the hand-set omega; the same omega
-with grid step 0.1). COMBINED HOTA / IDF1 / IDs, hand -> learned:
-    synthetic seed 2 miss 0    0.766/0.798/35 -> 0.748/0.775/46
-    synthetic seed 2 miss 0.3  0.749/0.797/57 -> 0.711/0.753/53
-    synthetic seed 3 miss 0    0.772/0.803/39 -> 0.711/0.738/46
-    synthetic seed 3 miss 0.3  0.782/0.836/32 -> 0.714/0.751/38
-    CAVIAR miss 0.3 seed 2     0.788/0.839/6  -> 0.860/0.888/4
-    CAVIAR miss 0.3 seed 3     0.843/0.844/7  -> 0.656/0.616/11
-    CAVIAR miss 0.3 seeds 0-9  mean HOTA 0.838 -> 0.794 (learned better on 4 of 10), IDs 55 -> 63
-The learned omega classifies held-out pairs better (balanced accuracy 0.984 vs 0.933/0.945
-on seeds 2/3) but tracks worse: the hand-set omega stays the default.
+Measured 2026-11-22 (4th session: motion-compensated fit, model_spread 4.5), models + omega
+fitted on synthetic seed 1 (learned omega: area 0.2, overlap 0.8, the rest 0; CV accuracy
+0.997 vs 0.913 for the hand-set omega). COMBINED HOTA / IDF1 / IDs, hand -> learned:
+    synthetic seed 2 miss 0    0.890/0.924/18 -> 0.845/0.877/15
+    synthetic seed 2 miss 0.3  0.839/0.905/34 -> 0.788/0.842/29
+    synthetic seed 3 miss 0    0.832/0.861/27 -> 0.814/0.842/25
+    synthetic seed 3 miss 0.3  0.809/0.853/38 -> 0.760/0.802/33
+    CAVIAR miss 0.3 seed 2     0.864/0.895/3  -> 0.758/0.817/6
+    CAVIAR miss 0.3 seed 3     0.832/0.839/7  -> 0.766/0.751/7
+    CAVIAR miss 0.3 seeds 0-9  mean HOTA 0.852 -> 0.821 (learned better on 1 of 10), IDs 46 -> 57
+The learned omega classifies held-out pairs better but tracks worse: the hand-set omega
+stays the default.
 
     .venv/bin/python benchmarks/bench_pbm_weights.py [--seeds 2 3] [--miss 0.3] [--length 150]
         [--fit-seed 1] [--models results/pbm_weights/models_seed1.yaml] [--refit] [--weight-step 0.2]
