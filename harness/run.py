@@ -87,8 +87,11 @@ class ForegroundProvider:
 
     Modes:
         auto: the detection source's mask when it computes one, else the dataset's exact
-            label image (synthetic scenes) when it has one, else None.
-        exact: the dataset's exact label image; an error when the dataset has none.
+            person mask (synthetic scenes) when it has one, else None.
+        exact: the dataset's exact person mask; an error when the dataset has none.
+
+    The dataset's exact foreground is a label image of ground-truth ids; trackers get its
+    nonzero pixels as a bool mask, never the ids (which would leak the ground truth).
         none: always None.
         mog2: a background-subtraction mask (``trackers.frontend.BackgroundModel``, one
             model per sequence, built with ``background`` as keyword arguments), unless
@@ -123,14 +126,15 @@ class ForegroundProvider:
                     f"foreground=exact but {self.sequence.info.name!r} has no exact foreground "
                     f"(frame {index}); use foreground=auto, none or mog2"
                 )
-            return fg
+            return fg != 0
         if self.mode == "mog2":
             mask = self._model.apply(frame) if frame is not None else None
             return source_mask if source_mask is not None else mask
         # auto
         if source_mask is not None:
             return source_mask
-        return self.sequence.foreground(index)
+        fg = self.sequence.foreground(index)
+        return None if fg is None else fg != 0
 
 
 # --------------------------------------------------------------------------- one sequence
