@@ -1,5 +1,6 @@
 """PBM multiple-response pruning (PBM 4.1): ambiguous candidates whose heads coincide are
-one response, kept without a head-template match (``duplicate_radius``)."""
+one response, kept without a head-template match (``duplicate_radius``); a long-lost
+target's stale template prunes nothing (``prune_max_misses``)."""
 
 from __future__ import annotations
 
@@ -15,16 +16,23 @@ from harness.detection_sources import NoisyGroundTruth
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _template_matches(duplicate_radius: float) -> list[np.ndarray]:
-    """The candidate heads (K, 2) of every head-template match of pbm on a crowd."""
+def _template_matches(duplicate_radius: float, prune_max_misses: int = 5,
+                      misses: list | None = None) -> list[np.ndarray]:
+    """The candidate heads (K, 2) of every head-template match of pbm on a crowd (and, in
+    ``misses``, the frames the matched target had been unfound)."""
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
     cfg.duplicate_radius = duplicate_radius
+    cfg.prune_max_misses = prune_max_misses
     tracker = instantiate(cfg)
     calls: list[np.ndarray] = []
     prune = tracker._prune
 
     def recorded(template, cands, heads, frame):
         calls.append(np.array(heads, dtype=np.float64))
+        if misses is not None:
+            tg = tracker.targets
+            (ti,) = [i for i, t in enumerate(tg.head_template) if t is template]
+            misses.append(int(tg.misses[ti]))
         return prune(template, cands, heads, frame)
 
     tracker._prune = recorded
@@ -48,3 +56,11 @@ def test_coinciding_heads_are_one_response():
     assert _coinciding(always) > 0  # the crowd has such responses
     assert _coinciding(default) == 0
     assert len(default) < len(always)
+
+
+def test_a_long_lost_target_is_not_pruned_by_its_stale_template():
+    always, default = [], []
+    _template_matches(0.25, 10_000, always)
+    _template_matches(0.25, 5, default)
+    assert max(always) > 5  # the crowd has such targets
+    assert default and max(default) <= 5

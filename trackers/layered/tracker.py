@@ -67,6 +67,9 @@ Adaptations (where the paper is vague or relies on what we do not have):
 - Multiple responses (PBM 4.1) whose heads coincide (within ``duplicate_radius`` head
   widths of the best one's) are one response: the best is kept, no head template is
   matched (it could not tell them apart; measured, it chose worse and cost time).
+- A target unfound for more than ``prune_max_misses`` frames is not pruned by its head
+  template (taken when it was last seen; it failed to match 57% of the time in a crowd):
+  an ambiguous choice keeps the best candidate, a weak candidate is left.
 - Stale parts (``stale_frames``, ``stale_cover``, ``stale_fill``, ``relearn_rate``): a
   frozen part (PBM 4.2) whose person's appearance has moved on keeps failing to match and
   is never updated again (in a 10-person crowd, parts were frozen 41-68% of the time). A
@@ -181,6 +184,9 @@ class PBMTracker:
         duplicate_radius: ambiguous candidates whose heads all lie within this many head
             widths of the best one's are one response: the best is kept without template
             matching (negative: always match the template).
+        prune_max_misses: a target unfound for more than this many frames is not pruned by
+            its (stale) head template: an ambiguous choice keeps the best candidate, a weak
+            candidate is not taken.
         min_hits: matches in a row that confirm a new target.
         max_misses: frames a confirmed target survives unfound.
         exit_margin: pixels from the border within which a lost target counts as leaving.
@@ -250,6 +256,7 @@ class PBMTracker:
         template_threshold: float = 0.6,
         prune_radius: float = 3.0,
         duplicate_radius: float = 0.25,
+        prune_max_misses: int = 5,
         min_hits: int = 3,
         max_misses: int = 90,
         exit_margin: float = 8.0,
@@ -330,6 +337,7 @@ class PBMTracker:
         self.template_threshold = template_threshold
         self.prune_radius = prune_radius
         self.duplicate_radius = float(duplicate_radius)
+        self.prune_max_misses = int(prune_max_misses)
         self.min_hits = int(min_hits)
         self.max_misses = int(max_misses)
         self.exit_margin = float(exit_margin)
@@ -661,7 +669,12 @@ class PBMTracker:
                 cands = cands[near]
                 if amb and len(cands) < 2:
                     continue
-                if amb and dist[near].max() <= self.duplicate_radius * hw:
+                if targets.misses[ti] > self.prune_max_misses:
+                    # a long-lost target's head template is stale: no pruning by it
+                    if weak:
+                        continue
+                    chosen, refined = best, None
+                elif amb and dist[near].max() <= self.duplicate_radius * hw:
                     chosen, refined = best, None  # one response: the heads coincide
                 else:
                     chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
