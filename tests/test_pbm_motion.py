@@ -148,3 +148,34 @@ def test_an_unfound_target_is_reported_where_kf1_predicts_it():
     assert np.all(np.abs(steps - 3.0) < 1.0)  # KF1's velocity, about 3 px per frame
     assert moved[0][0] > still[0][0] + 2.0
     np.testing.assert_array_equal([b[2:] for b in moved], [b[2:] for b in still])
+
+
+def test_someone_missed_at_the_border_is_kept_and_someone_who_walked_out_is_dropped():
+    """Life cycle: A stands at the top-left border and is missed for 6 frames (more than
+    ``exit_misses``): A keeps the id. B walks out through the left border at 4 px per
+    frame: KF1 carries B's box beyond the border and B is dropped after ``exit_misses``."""
+    from trackers.records import Detections
+
+    tracker = instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
+    rng = np.random.default_rng(1)
+    background = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)
+    colours = ((40, 80, 200), (30, 160, 60))
+    a_ids, b_alive = [], []
+    for k in range(26):
+        boxes = [np.array([2.0, 2.0, 30.0, 90.0]), np.array([50.0 - 4 * k, 120.0, 30.0, 90.0])]
+        frame = background.copy()
+        for box, colour in zip(boxes, colours):
+            x, y, w, h = box.astype(int)
+            frame[y:y + h, max(x, 0):max(x + w, 0)] = colour
+        seen = [not 12 <= k < 18, boxes[1][0] >= 0]
+        shown = [b for b, s in zip(boxes, seen) if s]
+        dets = Detections(np.array(shown), np.ones(len(shown))) if shown else Detections.empty()
+        tracks = tracker.update(frame, dets)
+        if k == 0:
+            a_id, b_id = (t.id for t in tracks)
+        if seen[0]:
+            a_ids.append(next(t.id for t in tracks if t.box[1] < 10))
+        b_alive.append(b_id in tracker.targets.id)
+    assert a_ids == [a_id] * len(a_ids)
+    last_seen = int(np.floor(50 / 4))  # B's last detection: k = 12, box at x = 2
+    assert all(b_alive[:last_seen + 3]) and not any(b_alive[last_seen + 4:])

@@ -130,20 +130,22 @@ def matched_rows(mt: np.ndarray, mn: np.ndarray, hyp: np.ndarray, boxes: np.ndar
 
 
 @numba.njit(cache=True)
-def alive_rows(dof: np.ndarray, misses: np.ndarray, confirmed: np.ndarray, width: int,
-               height: int, margin: float, max_misses: int, exit_misses: int
+def alive_rows(dof: np.ndarray, shift: np.ndarray, misses: np.ndarray, confirmed: np.ndarray,
+               width: int, height: int, margin: float, max_misses: int, exit_misses: int
                ) -> np.ndarray:  # pragma: no cover (compiled)
     """(T,) bool: the targets kept after this frame (the tracker's life cycle): found, or
     confirmed and unfound for at most ``max_misses`` frames, unless unfound for
-    ``exit_misses`` frames with the box (dof columns 0, 1, 4, 5) within ``margin`` of the
-    border (it left)."""
+    ``exit_misses`` frames with the box (dof columns 0, 1, 4, 5) moved by ``shift`` (T, 2)
+    (KF1's prediction since it was last found) more than ``margin`` beyond an image border
+    (it left; a person standing at the border is not leaving)."""
     T = misses.shape[0]
     alive = np.empty(T, np.bool_)
     for t in range(T):
-        x, y, w, h = dof[t, 0], dof[t, 1], dof[t, 4], dof[t, 5]
-        near_border = x <= margin or y <= margin or x + w >= width - margin or y + h >= height - margin
+        x, y = dof[t, 0] + shift[t, 0], dof[t, 1] + shift[t, 1]
+        x1, y1 = x + dof[t, 4], y + dof[t, 5]
+        gone = x < -margin or y < -margin or x1 > width + margin or y1 > height + margin
         alive[t] = misses[t] == 0 or (confirmed[t] and misses[t] <= max_misses
-                                      and not (near_border and misses[t] >= exit_misses))
+                                      and not (gone and misses[t] >= exit_misses))
     return alive
 
 

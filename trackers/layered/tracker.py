@@ -31,7 +31,8 @@ misses before. A confirmed target that is not found is reported OCCLUDED for up 
 ``max_report_misses`` frames when ``report_occluded``: at its last validated box
 (zero-order, as the gate), or moved by KF1's constant-velocity prediction when
 ``report_predicted``; it is dropped after ``max_misses`` frames, or after ``exit_misses``
-frames when its box touches the image border (it left).
+frames when its box moved by KF1's prediction has crossed the image border by more than
+``exit_margin`` (it left; someone standing at the border and missed is not leaving).
 
 Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
 parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates were
@@ -189,8 +190,9 @@ class PBMTracker:
             candidate is not taken.
         min_hits: matches in a row that confirm a new target.
         max_misses: frames a confirmed target survives unfound.
-        exit_margin: pixels from the border within which a lost target counts as leaving.
-        exit_misses: frames unfound after which a leaving target is dropped.
+        exit_margin: pixels beyond the image border that an unfound target's box, moved by
+            KF1's prediction, must reach to count as gone.
+        exit_misses: frames unfound after which a gone target is dropped.
         new_track_iou: a free candidate overlapping a live target by more IoU than this
             does not start a new target.
         head_detector: optional PBM 2.3 head detector (``trackers.frontend.heads.HeadDetector``)
@@ -730,8 +732,9 @@ class PBMTracker:
         if len(lost):
             targets.mark_missed(lost)
         # drop tentative misses, long-lost and leaving targets
-        alive = alive_rows(targets.dof, targets.misses, targets.confirmed, W, H, self.exit_margin,
-                           self.max_misses, self.exit_misses)
+        alive = alive_rows(targets.dof, targets.predicted_shift(), targets.misses,
+                           targets.confirmed, W, H, self.exit_margin, self.max_misses,
+                           self.exit_misses)
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
         # new targets from free candidates (new blobs, split heads)
