@@ -534,13 +534,14 @@ def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
 
 
 def test_gated_pairs_equal_the_numpy_gating():
-    """The compiled gating (PBM 3) and occlusion-test pairs (PBM 3.1) against the numpy
-    expressions they replace, on random scenes with many boundary cases."""
+    """The compiled gating (PBM 3), occlusion-test pairs (PBM 3.1) and lone growth against
+    numpy expressions, on random scenes with many boundary cases."""
     from trackers.geometry import overlap_ratio_matrix
     from trackers.layered._glue_kernels import gated_pairs
     from trackers.layered.search import occlusion_kinds
 
     rng = np.random.default_rng(11)
+    n_lone = 0
     for trial in range(40):
         T, N = int(rng.integers(0, 7)), int(rng.integers(0, 9))
         boxes = np.round(rng.uniform(0, 60, (N, 4)) * 2) / 2 + [0, 0, 5, 10]
@@ -555,8 +556,15 @@ def test_gated_pairs_equal_the_numpy_gating():
         so = 0.0 if trial % 5 == 0 else 0.5
         kinds = occlusion_kinds(regions[:, 2:], pred, 0.5)
         dof = np.column_stack([tboxes[:, :2], tboxes[:, :2] + 0.5 * tboxes[:, 2:], tboxes[:, 2:]])
-        got = gated_pairs(boxes, regions, heads, nh, gates, pred, kinds.copy(), dof, misses, so)
+        present = rng.random(T) < (0.0 if trial % 4 == 0 else 0.8)
+        got = gated_pairs(boxes, regions, heads, nh, gates, pred, kinds.copy(), dof, misses, so,
+                          present)
         # the numpy reference
+        if so > 0:  # lone growth: the one present target holding a one-head larger region
+            holds = (overlap_ratio_matrix(tboxes, regions) >= so) & present[:, None]
+            lone = holds & (holds.sum(0) == 1) & (nh == 1) & (kinds > 0)
+            n_lone += lone.sum()
+            kinds[lone] = 0
         c = boxes[:, :2] + 0.5 * boxes[:, 2:]
         g = gates[:, None]
         inside = ((c[:, 0] >= g[..., 0]) & (c[:, 0] <= g[..., 0] + g[..., 2])
@@ -574,6 +582,7 @@ def test_gated_pairs_equal_the_numpy_gating():
             ti_s, n_s = ti_s[held], n_s[held]
         for a, b in zip(got, (ti_in, n_in, ti_s, n_s, kinds[ti_s, n_s])):
             np.testing.assert_array_equal(a, b)
+    assert n_lone > 0
 
 
 def test_assign_equals_the_numpy_gated_hungarian():

@@ -179,3 +179,33 @@ def test_someone_missed_at_the_border_is_kept_and_someone_who_walked_out_is_drop
     assert a_ids == [a_id] * len(a_ids)
     last_seen = int(np.floor(50 / 4))  # B's last detection: k = 12, box at x = 2
     assert all(b_alive[:last_seen + 3]) and not any(b_alive[last_seen + 4:])
+
+
+def _doorway(lone_growth: bool) -> list[float]:
+    """A person stepping out of a doorway: the detection widens from 10 to 44 px over 6
+    frames (height 90), then stays; the widths pbm reports for the person."""
+    from trackers.records import Detections
+
+    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg.lone_growth = lone_growth
+    tracker = instantiate(cfg)
+    background = np.random.default_rng(2).integers(60, 120, (240, 320, 3), dtype=np.uint8)
+    widths = []
+    for k in range(20):
+        box = np.array([100.0, 60.0, (10.0, 14.0, 20.0, 28.0, 38.0, 44.0)[min(k, 5)], 90.0])
+        frame = background.copy()
+        x, y, w, h = box.astype(int)
+        frame[y:y + h // 7, x:x + w] = (40, 80, 200)
+        frame[y + h // 7:y + h, x:x + w] = (200, 60, 40)
+        (t,) = tracker.update(frame, Detections(box[None], np.ones(1)))
+        widths.append(float(t.box[2]))
+    return widths
+
+
+def test_a_person_walking_in_through_a_doorway_is_boxed_whole():
+    """Lone growth: a region over 50% wider than the target that holds no other target is the
+    target grown, so the box follows the detection; the paper's occlusion search
+    (w within +-10%) keeps the narrow box it was first seen with."""
+    grown, searched = _doorway(True), _doorway(False)
+    assert min(grown[8:]) > 40.0
+    assert max(searched[8:]) < 30.0

@@ -15,10 +15,37 @@ from trackers.frontend.parts import HEAD_FRACTION
 
 
 @numba.njit(cache=True)
+def _held(dof: np.ndarray, t: int, region: np.ndarray, ratio: float) -> bool:  # pragma: no cover
+    """At least ``ratio`` of target t's box (dof columns 0, 1, 4, 5) lies inside ``region``
+    (``geometry.overlap_ratio_matrix``)."""
+    area = dof[t, 4] * dof[t, 5]
+    w = min(dof[t, 0] + dof[t, 4], region[0] + region[2]) - max(dof[t, 0], region[0])
+    h = min(dof[t, 1] + dof[t, 5], region[1] + region[3]) - max(dof[t, 1], region[1])
+    inter = max(w, 0.0) * max(h, 0.0)
+    return (inter / area if area > 0 else 0.0) >= ratio
+
+
+@numba.njit(cache=True)
+def _lone_growth(kinds: np.ndarray, regions: np.ndarray, heads_in_region: np.ndarray,
+                 dof: np.ndarray, present: np.ndarray, ratio: float) -> None:  # pragma: no cover
+    """``gated_pairs``' lone growth, in place on ``kinds``."""
+    T, N = kinds.shape
+    for n in range(N):
+        if heads_in_region[n] > 1:
+            continue
+        owner, holders = -1, 0
+        for t in range(T):
+            if present[t] and _held(dof, t, regions[n], ratio):
+                owner, holders = t, holders + 1
+        if holders == 1 and kinds[owner, n] > 0:
+            kinds[owner, n] = 0
+
+
+@numba.njit(cache=True)
 def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
                 heads_in_region: np.ndarray, gates: np.ndarray, pred_wh: np.ndarray,
                 kinds: np.ndarray, dof: np.ndarray, misses: np.ndarray,
-                search_overlap: float) -> tuple:  # pragma: no cover (compiled)
+                search_overlap: float, present: np.ndarray) -> tuple:  # pragma: no cover (compiled)
     """Gating (PBM 3) and the occlusion test's pairs (PBM 3.1) of T targets and N candidates.
 
     A candidate is in target t's gate (xywh ``gates[t]``) when its box centre
@@ -30,15 +57,24 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     region, a target missed last frame, or ``geometry.overlap_ratio_matrix(boxes of dof,
     regions)[t, n] >= search_overlap``.
 
+    Lone growth (adaptation): a region larger only by size (one head) that holds target t
+    and no other ``present`` target (both by ``search_overlap`` of their boxes) is t
+    itself, grown (entering through a border or a doorway, coming closer), not a merge:
+    the pair is unoccluded (kind 0). ``present`` all False: never.
+
     Args:
         boxes, regions: (N, 4) xywh candidate boxes and regions. heads: (N, 3) heads.
         heads_in_region: (N,) int. gates: (T, 4) xywh. pred_wh: (T, 2) KF2 (w, h).
         dof: (T, 6) the targets' global models (xtl, ytl, xc, yc, w, h). misses: (T,) int.
+        present: (T,) bool, the targets whose boxes can hold a region (found or recently
+            missed).
     Returns:
         (ti, n) of the unoccluded pairs in the gates, then (ti, n, kind) of the occluded
         pairs to search or align, each in row-major order (as ``np.nonzero``).
     """
     T, N = kinds.shape
+    if search_overlap > 0:
+        _lone_growth(kinds, regions, heads_in_region, dof, present, search_overlap)
     inside = np.zeros((T, N), np.bool_)
     n_in, n_occ = 0, 0
     for t in range(T):
@@ -61,10 +97,6 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     for t in range(T):
         gx0, gy0 = gates[t, 0], gates[t, 1]
         gx1, gy1 = gx0 + gates[t, 2], gates[t, 1] + gates[t, 3]
-        # target t's box as x1 y1 x2 y2 and area (``overlap_ratio_matrix``)
-        ax0, ay0 = dof[t, 0], dof[t, 1]
-        ax1, ay1 = ax0 + dof[t, 4], ay0 + dof[t, 5]
-        area = dof[t, 4] * dof[t, 5]
         for n in range(N):
             if not inside[t, n]:
                 continue
@@ -76,15 +108,9 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
             hx, hy = heads[n, 0], heads[n, 1] + 0.5 * pred_wh[t, 1]
             if not (gx0 <= hx <= gx1 and gy0 <= hy <= gy1):
                 continue
-            if search_overlap > 0 and kind > 0 and misses[t] <= 0:
-                bx0, by0 = regions[n, 0], regions[n, 1]
-                bx1, by1 = bx0 + regions[n, 2], by0 + regions[n, 3]
-                w = min(ax1, bx1) - max(ax0, bx0)
-                h = min(ay1, by1) - max(ay0, by0)
-                inter = max(w, 0.0) * max(h, 0.0)
-                ratio = inter / area if area > 0 else 0.0
-                if not ratio >= search_overlap:
-                    continue
+            if (search_overlap > 0 and kind > 0 and misses[t] <= 0
+                    and not _held(dof, t, regions[n], search_overlap)):
+                continue
             ti_s[b], n_s[b], kind_s[b] = t, n, kind
             b += 1
     return ti_in, n_in_, ti_s[:b], n_s[:b], kind_s[:b]

@@ -54,6 +54,10 @@ Adaptations (where the paper is vague or relies on what we do not have):
   pairs, and a blob candidate keeps KF2's width.
 - The occlusion test applies to every candidate as in the paper; a blob with several
   heads counts as merged (searched) whatever its size.
+- Lone growth (``lone_growth``): a region larger by size alone (one head) that holds the
+  target and no other found or reported target is the target grown, not a merge: a person
+  walking in through a border or a doorway, whose box widens over ten frames or so. The
+  paper's search (w, h within +-10%) would keep the box it was first seen with.
 - After a gap of m frames the displacement and overlap differences are divided by 1 + m.
 - Motion compensation (``motion_compensation``): displacement and overlap (eq. 11) compare
   a candidate with the parts model moved by KF1's constant-velocity prediction since the
@@ -163,6 +167,9 @@ class PBMTracker:
         search_range: i runs over -range..range in eqs. 9-10.
         search_overlap: a larger region is searched for a found target only when at least
             this fraction of the target's last box lies inside it (0 = always).
+        lone_growth: a larger region with one head that holds (``search_overlap``) the
+            target and no other found or reported target is the target itself, grown:
+            unoccluded, not searched.
         ratio_window: frames of the running averages of alpha and beta (PBM 2.1, 3-5).
         occluded_window: DOF vectors averaged under occlusion (PBM 4.2).
         gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
@@ -232,6 +239,7 @@ class PBMTracker:
         search_step: float = 0.05,
         search_range: int = 2,
         search_overlap: float = 0.5,
+        lone_growth: bool = True,
         ratio_window: int = 4,
         occluded_window: int = 3,
         gate_speed_factor: float = 3.0,
@@ -326,6 +334,7 @@ class PBMTracker:
         if not 0.0 <= search_overlap <= 1.0:
             raise ValueError(f"search_overlap must lie in [0, 1], got {search_overlap}")
         self.search_overlap = float(search_overlap)
+        self.lone_growth = bool(lone_growth)
         self.ratio_window = int(ratio_window)
         self.occluded_window = int(occluded_window)
         self._gate = Gate(gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
@@ -637,10 +646,11 @@ class PBMTracker:
             # located within the blob"): a found target's last box lies at least
             # ``search_overlap`` inside it. A blob holding several heads is a merge: searched.
             kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.occlusion_threshold)
+            present = (targets.misses <= self.max_report_misses) & self.lone_growth
             ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
                 boxes, cand.region, cand.head, cand.heads_in_region, gates,
                 pred_wh, kinds, targets.dof, targets.misses,
-                self.search_overlap)
+                self.search_overlap, present)
             # eqs. 11-13 for the unoccluded candidates
             pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
                                       self.omega, self.gamma, self.model_spread)
