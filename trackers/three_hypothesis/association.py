@@ -97,6 +97,7 @@ def associate(
     sqrt_q: np.ndarray | None = None,
     sqrt_p: np.ndarray | None = None,
     gated: np.ndarray | None = None,
+    gate: np.ndarray | None = None,
 ) -> Association:
     """Match measurements to persons in two stages.
 
@@ -126,6 +127,8 @@ def associate(
         sqrt_q, sqrt_p: optional element-wise square roots of q and p (rho = sqrt_q sqrt_p'),
             possibly restricted to the same columns, e.g. the bins where some p is nonzero.
         gated: optional (P,) bool: persons that may take part in stage 2 (default all).
+        gate: optional (B,) gate radius of each node in pixels; the node's validation
+            region is the circle of radius min(mu_g, gate) (default mu_g for every node).
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
@@ -165,7 +168,8 @@ def associate(
     if eligible.any() and not matched_d.all():
         d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
         free = eligible[owners][:, None] & ~matched_d[None, :]
-        c2 = np.where(free & (d <= mu_g) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
+        radius = mu_g if gate is None else np.minimum(mu_g, np.asarray(gate, dtype=float))[:, None]
+        c2 = np.where(free & (d <= radius) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
         cost2, best2 = _person_costs(c2, starts, owners)
         m2 = _hungarian(cost2, 2.0)
         matched_p[m2[:, 0]] = True

@@ -36,6 +36,13 @@ Adaptations of what the paper leaves open (also listed in the README):
 * "contradictory" hypotheses are read as hypotheses in plain view without a detection
   (``cover``), and their pruning as m such frames in a row;
 * ``max_hidden`` bounds how long a hidden person is kept (the paper sets no limit);
+* the stage-2 validation gate is the circle approximating each node's Kalman validation
+  region: radius ``gate_sigmas`` x the larger standard deviation of its predicted centre
+  (innovation covariance H P H' + R), capped at mu_g. A fixed radius in pixels is too wide
+  for small, far people (CAVIAR: a 120 px gate let a standing person's track jump 25 px onto
+  a neighbour whose own track was not yet confirmed), while the Kalman region grows with
+  speed uncertainty and with every frame a person stays hidden (``gate_sigmas: 0`` gives
+  the paper's fixed radius mu_g);
 * eq. 3 on a tie or an unknown order puts the region with the lower bottom edge in front.
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a
@@ -136,6 +143,9 @@ class RetaTracker:
         region_samples: grid points per side integrating ellipse overlaps (eqs. 2, 5).
         pixel_stride: histogram every pixel_stride-th row and column of an ellipse (1 =
             every pixel, as in the paper; 2 is four times cheaper for large people).
+        gate_sigmas: stage-2 gate radius in standard deviations of a node's predicted centre
+            (Kalman innovation H P H' + R), capped at mu_g; 0 = mu_g for every node
+            (adaptation, see the module notes).
         tentative_misses: frames a tentative track may go unmatched before it is dropped as
             a false positive (0: its tracking ends at the first miss, as in Fig. 3; 2 tolerates missed detections).
         report_exposed: frames a hidden person's best hypothesis may stand in plain view (not
@@ -165,6 +175,7 @@ class RetaTracker:
         pixel_stride: int = 1,
         tentative_misses: int = 2,
         report_exposed: int = 4,
+        gate_sigmas: float = 3.0,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -184,6 +195,8 @@ class RetaTracker:
             raise ValueError(f"tentative_misses must be >= 0, got {tentative_misses}")
         if report_exposed < 0:
             raise ValueError(f"report_exposed must be >= 0, got {report_exposed}")
+        if not gate_sigmas >= 0:
+            raise ValueError(f"gate_sigmas must be >= 0, got {gate_sigmas}")
         if confirm_frames < 1:
             raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
         if max_hidden < 1:
@@ -195,6 +208,7 @@ class RetaTracker:
                 raise ValueError(f"{name} must be > 0, got {value}")
         self.mu_rho = mu_rho
         self.mu_g = mu_g
+        self.gate_sigmas = gate_sigmas
         self.m = m
         self.lam = lam
         self.confirm_frames = confirm_frames
@@ -297,7 +311,8 @@ class RetaTracker:
         sqrt_p = np.sqrt(np.array([h[support] for h in p]).reshape(len(dets), len(support)))
         assoc = associate(pred, owners, sqrt_q, dets, sqrt_p, self.mu_rho, self.mu_g,
                           delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p,
-                          gated=np.array([person.confirmed for person in persons], dtype=bool))
+                          gated=np.array([person.confirmed for person in persons], dtype=bool),
+                          gate=self._gate_radii(Pp, owners, persons))
         matched_det = {pi: (d, n, s, r) for (pi, d, n), s, r
                        in zip(assoc.matches.tolist(), assoc.stages.tolist(), assoc.rho.tolist())}
 
@@ -475,6 +490,17 @@ class RetaTracker:
         return self._outputs()
 
     # ------------------------------------------------------------------ helpers
+    def _gate_radii(self, Pp: np.ndarray, owners: np.ndarray,
+                    persons: list[_Person]) -> np.ndarray | None:
+        """(B,) stage-2 gate radius of each predicted node: ``gate_sigmas`` times the larger
+        standard deviation of its centre's innovation (P + R over xc, yc); None (every
+        node gets mu_g) when ``gate_sigmas`` is 0."""
+        if self.gate_sigmas <= 0 or len(Pp) == 0:
+            return None
+        r = np.array([person.R[0, 0] for person in persons])[owners]  # R = (sigma_z h)^2 I
+        var = np.maximum(Pp[:, 0, 0], Pp[:, 1, 1]) + r
+        return self.gate_sigmas * np.sqrt(var)
+
     def _hypothesis_under(self, shape: np.ndarray, persons: list[_Person], owners: np.ndarray,
                           pred: np.ndarray, matched: dict, taken: set[int]) -> int | None:
         """Index of the hidden confirmed person (unmatched this frame) one of whose
