@@ -101,6 +101,7 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import iou_matrix
+from trackers.layered import warmup
 from trackers.layered._glue_kernels import (
     alive_rows,
     carved_rows,
@@ -223,6 +224,9 @@ class PBMTracker:
             ``max_report_misses`` frames, at its last box) or outside the image.
         stale_fill: ... and its foreground area is at least this fraction of its model's.
         relearn_rate: running-average step of a re-learned stale part (1 = replaced).
+        warm_up: the first tracker built in a process runs ``warmup.scene`` and resets,
+            so that numba's kernels are compiled or loaded (0.3-0.5 s) before the first
+            real frame, not inside a timed ``update``.
     """
 
     def __init__(
@@ -282,6 +286,7 @@ class PBMTracker:
         stale_cover: float = 0.1,
         stale_fill: float = 0.75,
         relearn_rate: float = 1.0,
+        warm_up: bool = True,
     ) -> None:
         if models is None:
             models = FeatureModels.default()
@@ -382,6 +387,8 @@ class PBMTracker:
         sr, sc = (int(v) for v in search_grid)
         self._search_extractor = PartFeatureExtractor(int(histogram_bins), sr, sc)
         self.reset()
+        if warm_up:
+            warmup.once(self)
 
     def reset(self) -> None:
         """Forget every target and restart ids at 1."""
