@@ -294,8 +294,8 @@ def test_tud_campus_without_seqinfo():
     with pytest.raises(SeqInfoError, match="TUD-Campus"):
         load_mot(DATA / "trajectories")
     seqs = load_mot(DATA / "trajectories", image_size=[640, 480])
-    assert [s.info.name for s in seqs] == ["PETS09-S2L1", "TUD-Campus"]
-    assert seqs[1].info.length == 71  # the last gt/det frame
+    assert [s.info.name for s in seqs] == ["CAVIAR-OneLeaveShop2cor", "PETS09-S2L1", "TUD-Campus"]
+    assert seqs[2].info.length == 71  # the last gt/det frame
 
 
 # ---------------------------------------------------------------- CAVIAR
