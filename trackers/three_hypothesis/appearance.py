@@ -70,6 +70,32 @@ class EllipseHistogrammer:
             cached = self._masks[key] = (m, int(np.count_nonzero(m)))
         return cached
 
+    def foreground_share(self, foreground: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+        """(N,) share of the pixels of each box's ellipse (snapped as ``snap_boxes``, cut by
+        the image border) that are foreground; 0 for an ellipse entirely outside the image.
+
+        Args:
+            foreground: (H, W) bool mask or label image (nonzero = foreground).
+            boxes: (N, 4) xywh.
+        """
+        height, width = foreground.shape[:2]
+        out = np.zeros(len(boxes))
+        for k, (bx, by, bw, bh) in enumerate(np.asarray(boxes, dtype=np.float64)
+                                              .reshape(-1, 4).tolist()):
+            x, y = round(bx), round(by)
+            w, h = max(round(bx + bw) - x, 1), max(round(by + bh) - y, 1)
+            r0, r1 = max(y, 0), min(y + h, height)
+            c0, c1 = max(x, 0), min(x + w, width)
+            if r1 <= r0 or c1 <= c0:
+                continue
+            m, total = self._mask(h, w)
+            if r1 - r0 < h or c1 - c0 < w:
+                m = m[r0 - y : r1 - y, c0 - x : c1 - x]
+                total = np.count_nonzero(m)
+            if total:
+                out[k] = np.count_nonzero(m & (foreground[r0:r1, c0:c1] != 0)) / total
+        return out
+
     def __call__(
         self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
     ) -> np.ndarray:

@@ -54,6 +54,18 @@ Adaptations of what the paper leaves open (also listed in the README):
   detections) while the one in front, model refreshed every frame, matched the hidden
   one's detection better (rho 0.92) whenever its own was missed, and took it;
 * eq. 3 on a tie or an unknown order puts the region with the lower bottom edge in front.
+* ``foreground_support``: a hypothesis whose ellipse holds (almost) no foreground is seen
+  to be empty (nobody is there to be occluded): it counts as in plain view, is pruned after
+  m such frames and is never reported. A false alarm's track, or a person who left,
+  otherwise left hypotheses reported on the bare floor (the paper's "hypotheses generated
+  by FPs are eliminated", decided from the image rather than from time alone). For the
+  same reason a detection on an (almost) empty region does not count towards confirming a
+  tentative track: a false alarm that flickers on the bare floor never becomes a person;
+* ``report_spread``: a hidden person's best hypothesis is reported only while its centre
+  is known to within ``report_spread`` person widths (one standard deviation of the Kalman
+  prediction); past that it stays in the graph (and can be re-identified) but is not
+  reported: a box placed by a guess that uncertain is more often wrong than right;
+* ``shape_estimate`` and ``foreground_histograms`` (see the arguments).
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a
 hidden confirmed person: covered by a visible person first, then fewest frames in plain
@@ -86,7 +98,6 @@ from trackers.three_hypothesis.motion import (
 from trackers.three_hypothesis.occlusion import (
     boxes_meet,
     depth_order,
-    overlap_ratio,
     region_overlaps,
 )
 
@@ -104,6 +115,7 @@ class _Branch:
     occluder: int | None = None  # person key followed / hidden behind
     exposed: int = 0  # consecutive frames in plain view without a detection
     covered: bool = False  # hidden behind a visible person this frame
+    unseen: bool = False  # its region holds (almost) no foreground this frame
     depth: int = 0  # people in front of this node (eq. 3)
     graph_node: Node | None = None  # this frame's graph node
 
@@ -166,6 +178,19 @@ class RetaTracker:
             detection is bridged, but a person who left behind the scenery (a door, a
             pillar, the frame edge) is no longer reported; it stays in the graph as a
             HYPOTHESIS (and is re-identified if detected again) until pruned after m frames.
+        foreground_support: with a foreground mask, a hypothesis whose ellipse holds less
+            than ``min_foreground`` foreground is seen to be empty: never covered (pruned
+            after m such frames) and never reported; a detection that empty does not count
+            towards confirming a tentative track (adaptation, see the module notes).
+        report_spread: a hidden person's best hypothesis is reported only while the
+            standard deviation of its centre (Kalman P) is at most this many person widths;
+            0 reports it however uncertain (the paper; adaptation, see the module notes).
+        shape_estimate: the region of a matched person behind others is the Kalman
+            estimate (prediction corrected by the measurement); False: the bare prediction
+            (the paper, 3.3.3).
+        foreground_histograms: histograms (eq. 1) count only foreground pixels when a mask
+            is given and covers at least ``min_foreground`` of the ellipse; False: every
+            pixel of the ellipse (the paper).
     """
 
     def __init__(
@@ -190,6 +215,10 @@ class RetaTracker:
         report_exposed: int = 4,
         gate_sigmas: float = 3.0,
         blend_visible: bool = True,
+        foreground_support: bool = True,
+        report_spread: float = 3.0,
+        shape_estimate: bool = True,
+        foreground_histograms: bool = True,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -209,6 +238,8 @@ class RetaTracker:
             raise ValueError(f"tentative_misses must be >= 0, got {tentative_misses}")
         if report_exposed < 0:
             raise ValueError(f"report_exposed must be >= 0, got {report_exposed}")
+        if not report_spread >= 0:
+            raise ValueError(f"report_spread must be >= 0, got {report_spread}")
         if not gate_sigmas >= 0:
             raise ValueError(f"gate_sigmas must be >= 0, got {gate_sigmas}")
         if confirm_frames < 1:
@@ -224,6 +255,10 @@ class RetaTracker:
         self.mu_g = mu_g
         self.gate_sigmas = gate_sigmas
         self.blend_visible = bool(blend_visible)
+        self.foreground_support = bool(foreground_support)
+        self.report_spread = float(report_spread)
+        self.shape_estimate = bool(shape_estimate)
+        self.foreground_histograms = bool(foreground_histograms)
         self.m = m
         self.lam = lam
         self.confirm_frames = confirm_frames
@@ -279,7 +314,8 @@ class RetaTracker:
         dets = detections.boxes[keep]
         # eq. 1 per measurement (one array each); ``support``: the bins where some
         # measurement has pixels
-        p, support = self.histograms.measure(frame, dets, foreground)
+        p, support = self.histograms.measure(
+            frame, dets, foreground if self.foreground_histograms else None)
         persons = self._persons
         self._public = {person.key: person.public_id for person in persons}
 
@@ -371,21 +407,28 @@ class RetaTracker:
             # measurement. The prediction alone drifts: its size rate could never be
             # corrected while hidden, so a person half behind another shrank or swelled.
             estimate = state_boxes(Xc).tolist()
+            empty_dets: set[int] = set()
+            if foreground is not None and self.foreground_support:
+                tent = [d for i, (d, _, _, _) in rows if not persons[i].confirmed]
+                if tent:
+                    share = self.histograms.foreground_share(foreground, dets[tent])
+                    empty_dets = {d for d, f in zip(tent, share.tolist())
+                                  if f < self.histograms.min_foreground}
+            visible_share = self._visible_share(rows, behind, dbox, dets, in_front, matched_det)
             for r, (i, (d, n, stage, rho)) in enumerate(rows):
                 person = persons[i]
                 if not behind[r]:
                     person.q = p[d]  # appearance updated only when not occluded
                     shape = dbox[r]
                 else:
-                    shape = np.array(estimate[r])
+                    # the Kalman estimate (adaptation) or the bare prediction (the paper)
+                    shape = np.array(estimate[r]) if self.shape_estimate else pred[n].copy()
                     if self.blend_visible:
-                        # visible share of the measurement left by the (visible) people in front
-                        fronts = [matched_det[j][0] for j in in_front[n] if j in matched_det]
-                        v = 1.0 - covered_fraction(dbox[r][None], dets[fronts],
-                                                   self.region_samples)[0]
+                        v = visible_share[r]
                         if v > 0:
                             person.q = (1.0 - v) * person.q + v * p[d]
-                person.hits += 1
+                if person.confirmed or d not in empty_dets:
+                    person.hits += 1  # a detection on no foreground does not confirm
                 person.misses = 0
                 person.spawned = False
                 if not person.confirmed and person.hits >= self.confirm_frames:
@@ -458,7 +501,16 @@ class RetaTracker:
             if (~cont).any():
                 fraction[~cont] = covered_fraction(hyp_boxes[~cont], visible_boxes,
                                                    self.region_samples)
-            cover = (fraction >= self.cover).tolist()
+            cover = fraction >= self.cover
+            unseen = np.zeros(len(cover), dtype=bool)
+            if foreground is not None and self.foreground_support:
+                # nobody can be seen where the region holds no foreground: the missing
+                # detection is not explained by an occluder (adaptation)
+                unseen = (self.histograms.foreground_share(foreground, hyp_boxes)
+                          < self.histograms.min_foreground)
+                cover &= ~unseen
+            cover = cover.tolist()
+            unseen = unseen.tolist()
             gone = gone.tolist()
             corners = hyp_boxes.tolist()
             k = 0
@@ -468,6 +520,7 @@ class RetaTracker:
                 kept_corners: list[list[float]] = []
                 for b in new:
                     box, corner, g, c = hyp_boxes[k], corners[k], gone[k], cover[k]
+                    b.unseen = unseen[k]
                     k += 1
                     b.covered = c
                     b.exposed = 0 if c else b.exposed + 1
@@ -523,6 +576,24 @@ class RetaTracker:
         var = np.maximum(Pp[:, 0, 0], Pp[:, 1, 1]) + r
         return self.gate_sigmas * np.sqrt(var)
 
+    def _visible_share(self, rows: list, behind: np.ndarray, dbox: np.ndarray,
+                       dets: np.ndarray, in_front: dict, matched_det: dict) -> list[float]:
+        """Per matched row, the share v of its measured region left visible by the matched
+        people in front of it (1 - the largest share one of them covers; 1 for rows not
+        behind anyone), all pairs integrated in one ``region_overlaps`` call."""
+        share = [1.0] * len(rows)
+        if not self.blend_visible or not behind.any():
+            return share
+        k = behind.nonzero()[0]
+        near = np.zeros((len(k), len(dets)), dtype=bool)
+        for a, r in enumerate(k.tolist()):
+            n = rows[r][1][1]
+            near[a, [matched_det[j][0] for j in in_front[n] if j in matched_det]] = True
+        covered = covered_fraction(dbox[k], dets, self.region_samples, near)
+        for a, r in enumerate(k.tolist()):
+            share[r] = 1.0 - float(covered[a])
+        return share
+
     def _hypothesis_under(self, shape: np.ndarray, persons: list[_Person], owners: np.ndarray,
                           pred: np.ndarray, matched: dict, taken: set[int]) -> int | None:
         """Index of the hidden confirmed person (unmatched this frame) one of whose
@@ -570,8 +641,11 @@ class RetaTracker:
             best = hyp.best_hypothesis([b.kind for b in branches], [b.exposed for b in branches],
                                        [b.covered for b in branches])
             top = branches[best]
-            if not top.covered and top.exposed > self.report_exposed:
-                best = -1  # in plain view without a detection: drawn, not reported
+            if top.unseen or (not top.covered and top.exposed > self.report_exposed):
+                best = -1
+            elif self.report_spread > 0 and (max(top.P[0, 0], top.P[1, 1])
+                                             > (self.report_spread * top.x[2]) ** 2):
+                best = -1  # centre no longer known to within report_spread widths  # in plain view without a detection: drawn, not reported
             for k, b in enumerate(branches):
                 state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS
                 out.append(self._track(person, b, None, state))
@@ -591,14 +665,19 @@ class RetaTracker:
         return Track(person.public_id, box, state, 1.0, extra)
 
 
-def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24) -> np.ndarray:
+def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24,
+                     near: np.ndarray | None = None) -> np.ndarray:
     """(N,) largest fraction |S_i & S_v| / |S_i| of each hypothesis region S_i hidden by one
-    visible region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2)."""
+    visible region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2); ``near``
+    (N, M) bool restricts the visible regions each S_i is compared with (default: all)."""
     if len(boxes) == 0 or len(visible) == 0:
         return np.zeros(len(boxes))
+    if near is not None:
+        near = near & boxes_meet(boxes, visible)
     area_i = np.pi / 4 * boxes[:, 2] * boxes[:, 3]
     area_v = np.pi / 4 * visible[:, 2] * visible[:, 3]
-    inter = overlap_ratio(boxes, visible, samples) * (area_i[:, None] + area_v[None, :])
+    ratio = 0.5 * region_overlaps(boxes, visible, samples, near)  # eq. 2's ratio
+    inter = ratio * (area_i[:, None] + area_v[None, :])
     return (inter / np.maximum(area_i, 1e-9)[:, None]).max(axis=1)
 
 
