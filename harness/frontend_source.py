@@ -45,7 +45,7 @@ class FrontendSource:
         self.detector.reset()
         warm = getattr(self.detector, "warm_up_sequence", None)
         if warm is not None:
-            warm(sequence.info.length, sequence.frame)
+            warm(sequence.info.length, sequence.nth_frame)
 
     def detect(self, index: int, frame: np.ndarray | None) -> tuple[Detections, np.ndarray | None]:
         if self._sequence is None:

@@ -113,7 +113,7 @@ class ForegroundProvider:
             self._model = BackgroundModel(**dict(background or {}))
             warm = getattr(self._model, "warm_up_sequence", None)
             if warm is not None:
-                warm(sequence.info.length, sequence.frame)
+                warm(sequence.info.length, sequence.nth_frame)
 
     def __call__(self, index: int, frame: np.ndarray | None,
                  source_mask: np.ndarray | None) -> np.ndarray | None:
@@ -239,7 +239,8 @@ def run_sequence(
 
     Args:
         trackers: name -> freshly built tracker.
-        sequence: the sequence; frames 1..length are visited in order.
+        sequence: the sequence; its ``frame_numbers()`` (1..length, or a window's
+            first..last) are visited in order, and tracks carry those numbers.
         source: detection source; ``start(sequence)`` is called here.
         foreground: foreground mode (see ``ForegroundProvider``).
         background: keyword arguments of the background model for ``foreground="mog2"``.
@@ -262,7 +263,7 @@ def run_sequence(
     dropped_dets = 0
     bar = (progress or _no_progress)(total=sequence.info.length, desc=name)
     try:
-        for k in range(1, sequence.info.length + 1):
+        for k in sequence.frame_numbers():
             if not active:
                 break
             frame = sequence.frame(k)

@@ -3,13 +3,16 @@
 A ``Sequence`` has ``info`` (``trackers.records.SequenceInfo``), optional ground truth
 (``GroundTruth``), optional public detections (``harness.io.mot.MotTable``) and frames:
 ``frame(k)`` returns frame k (1-based) as an (H, W, 3) uint8 BGR array, or None when the
-dataset carries no pixels. Iterating ``frames()`` yields ``(k, image)`` for k = 1..length.
+dataset carries no pixels. Iterating ``frames()`` yields ``(k, image)`` for k in
+``frame_numbers()``: 1..length, or first..last for a ``FrameWindow`` (a part of a longer
+sequence that keeps the original frame numbers, so its tracks align with the original gt).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from collections.abc import Sequence as Seq
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -47,6 +50,8 @@ class Sequence:
     info: SequenceInfo
     gt: GroundTruth | None = None
     public_detections: MotTable | None = None
+    #: number of the first frame: 1, or where a ``FrameWindow`` starts in the original
+    first_frame: int = 1
 
     @property
     def has_pixels(self) -> bool:
@@ -61,8 +66,18 @@ class Sequence:
         0 = background) when the dataset knows it (synthetic scenes), else None."""
         return None
 
+    def frame_numbers(self) -> range:
+        """The frame numbers of this sequence, in order: ``first_frame`` .. ``first_frame +
+        length - 1`` (1..length unless it is a window of a longer sequence)."""
+        return range(self.first_frame, self.first_frame + self.info.length)
+
+    def nth_frame(self, j: int) -> np.ndarray | None:
+        """The ``j``-th frame of this sequence (1-based position, whatever its number); the
+        form background models' ``warm_up_sequence(length, frame_fn)`` take."""
+        return self.frame(self.first_frame + int(j) - 1)
+
     def frames(self) -> Iterator[tuple[int, np.ndarray | None]]:
-        for k in range(1, self.info.length + 1):
+        for k in self.frame_numbers():
             yield k, self.frame(k)
 
     def __len__(self) -> int:
@@ -71,3 +86,86 @@ class Sequence:
     def __repr__(self) -> str:
         i = self.info
         return f"{type(self).__name__}({i.name!r}, {i.width}x{i.height}, {i.length} frames)"
+
+
+class FrameWindow(Sequence):
+    """Frames ``first``..``last`` (1-based, inclusive) of another sequence, keeping their
+    original numbers: ``frame(k)``, the ground truth, the public detections and the
+    foreground are the original's for k in the window, nothing outside it exists, and the
+    tracks a run writes align frame by frame with the original ground truth.
+
+    Use: choose parameters on one part of a sequence and report on another (e.g. CAVIAR
+    OneLeaveShop1cor frames 1-150 and 151-295). Any other attribute is the original's.
+
+    Raises:
+        ValueError: the window is empty or not inside the original's frame numbers.
+    """
+
+    def __init__(self, inner: Sequence, first: int, last: int) -> None:
+        frames = inner.frame_numbers()
+        if int(first) != first or int(last) != last:
+            raise ValueError(f"{inner.info.name}: frames must be integers, got [{first}, {last}]")
+        first, last = int(first), int(last)
+        if not (frames.start <= first <= last <= frames.stop - 1):
+            raise ValueError(
+                f"{inner.info.name}: frames [{first}, {last}] must satisfy "
+                f"{frames.start} <= first <= last <= {frames.stop - 1} (its frame numbers)"
+            )
+        self.inner = inner
+        self.first_frame = first
+        self.last_frame = last
+        self.info = replace(inner.info, length=last - first + 1)
+        self.gt = None
+        if inner.gt is not None:
+            keep = np.flatnonzero((inner.gt.table.frames >= first)
+                                  & (inner.gt.table.frames <= last))
+            g = inner.gt
+            self.gt = GroundTruth(g.table.rows(keep),
+                                  None if g.occluded is None else g.occluded[keep],
+                                  None if g.labels is None else g.labels[keep])
+        self.public_detections = None
+        if inner.public_detections is not None:
+            d = inner.public_detections
+            self.public_detections = d.rows((d.frames >= first) & (d.frames <= last))
+
+    def __getattr__(self, name: str):
+        if name == "inner":  # not yet set (e.g. while unpickling)
+            raise AttributeError(name)
+        return getattr(self.inner, name)
+
+    @property
+    def has_pixels(self) -> bool:
+        return self.inner.has_pixels
+
+    def _check(self, index: int) -> int:
+        k = int(index)
+        if not self.first_frame <= k <= self.last_frame:
+            raise IndexError(f"{self.info.name}: frame {index} outside the window "
+                             f"{self.first_frame}..{self.last_frame}")
+        return k
+
+    def frame(self, index: int) -> np.ndarray | None:
+        return self.inner.frame(self._check(index))
+
+    def foreground(self, index: int) -> np.ndarray | None:
+        return self.inner.foreground(self._check(index))
+
+    def __repr__(self) -> str:
+        return f"FrameWindow({self.inner!r}, frames {self.first_frame}..{self.last_frame})"
+
+
+def window(sequences: Seq[Sequence], frames: Seq[int] | None) -> list[Sequence]:
+    """``sequences`` restricted to ``frames = [first, last]`` (1-based, inclusive; original
+    numbers kept, see ``FrameWindow``), or unchanged when ``frames`` is None. The datasets'
+    ``frames`` config key (``dataset.frames=[151,295]``).
+
+    Raises:
+        ValueError: ``frames`` is not two integers, or not inside a sequence's frames.
+    """
+    seqs = list(sequences)
+    if frames is None:
+        return seqs
+    if isinstance(frames, str | bytes) or len(frames) != 2:
+        raise ValueError(f"frames must be [first, last] (1-based, inclusive), got {frames!r}")
+    first, last = frames
+    return [FrameWindow(s, first, last) for s in seqs]

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence
+from harness.datasets.base import GroundTruth, Sequence, window
 from harness.datasets.images import ImageSequence, numbered_images, read_image
 from harness.datasets.mot import APPEARANCE_LABELS, read_seqinfo, seqinfo_number
 from harness.datasets.video import VIDEO_EXTENSIONS, VideoSequence
@@ -132,7 +132,7 @@ def _find_xml(root: Path) -> Path:
 
 def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Path | None = None,
                 name: str | None = None, fps: float | None = None,
-                prefetch: int = 2) -> list[Sequence]:
+                prefetch: int = 2, frames: list[int] | None = None) -> list[Sequence]:
     """Read one CAVIAR sequence: frames (JPEG folder or video) plus CVML ground truth.
 
     Args:
@@ -145,6 +145,8 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
         name: sequence name; None = seqinfo.ini's name, else the folder name.
         fps: frame rate; None = seqinfo.ini's, else the video's, else CAVIAR's 25.
         prefetch: frames decoded ahead while iterating a JPEG sequence.
+        frames: [first, last] (1-based, inclusive) to keep only those frames, numbered as in
+            the whole sequence (``harness.datasets.base.window``); None = all.
     Returns:
         a one-element list (the dataset-config contract) holding the sequence, whose
         ``gt.labels`` are the appearance labels and ``gt.occluded`` flags ``occluded``.
@@ -181,7 +183,7 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
         if last_gt > seq.info.length:
             log.warning("%s: ground truth reaches frame %d but the video has %d frames",
                         xml_path, last_gt, seq.info.length)
-        return [seq]
+        return window([seq], frames)
 
     folder = root / "img1" if (root / "img1").is_dir() else root
     images = numbered_images(folder)
@@ -209,4 +211,5 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
         log.warning("%s: ground truth reaches frame %d but the sequence has %d frames",
                     xml_path, last_gt, length)
     info = SequenceInfo(name=seq_name, width=int(w), height=int(h), fps=rate, length=length)
-    return [ImageSequence(info, paths, gt=gt, public_detections=det, prefetch=prefetch)]
+    return window([ImageSequence(info, paths, gt=gt, public_detections=det, prefetch=prefetch)],
+                  frames)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import GroundTruth
+from harness.datasets.base import GroundTruth, Sequence, window
 from harness.datasets.images import ImageSequence, numbered_images
 from harness.datasets.images import image_size as read_image_size
 from harness.io.mot import MotFormatError, MotTable, read_mot
@@ -36,7 +36,8 @@ class SeqInfoError(ValueError):
 
 def load_mot(root: str | Path, sequences: list[str] | None = None,
              image_size: list[int] | tuple[int, int] | None = None, fps: float | None = None,
-             occlusion_threshold: float = 0.5, prefetch: int = 2) -> list[ImageSequence]:
+             occlusion_threshold: float = 0.5, prefetch: int = 2,
+             frames: list[int] | None = None) -> list[Sequence]:
     """Read MOTChallenge sequence folders.
 
     Args:
@@ -51,6 +52,8 @@ def load_mot(root: str | Path, sequences: list[str] | None = None,
         occlusion_threshold: gt rows whose visibility is below it are flagged
             ``GroundTruth.occluded``; CAVIAR ``occluded`` labels are flagged too.
         prefetch: frames decoded ahead while iterating ``frames()``.
+        frames: [first, last] (1-based, inclusive) to keep only those frames of every
+            sequence, numbered as in the whole sequence (``harness.datasets.base.window``).
     Returns:
         one ``ImageSequence`` per folder; without ``img1/`` the sequence is box-only
         (``has_pixels`` False, ``frame`` returns None): only box-only trackers can run on it.
@@ -85,9 +88,9 @@ def load_mot(root: str | Path, sequences: list[str] | None = None,
             if not folder.is_dir():
                 raise FileNotFoundError(f"MOT sequence folder not found: {folder}")
             folders.append(folder)
-    return [load_mot_sequence(f, image_size=image_size, fps=fps,
-                              occlusion_threshold=occlusion_threshold, prefetch=prefetch)
-            for f in folders]
+    return window([load_mot_sequence(f, image_size=image_size, fps=fps,
+                                     occlusion_threshold=occlusion_threshold, prefetch=prefetch)
+                   for f in folders], frames)
 
 
 def _is_sequence_folder(folder: Path) -> bool:

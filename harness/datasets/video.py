@@ -14,7 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence
+from harness.datasets.base import GroundTruth, Sequence, window
 from harness.datasets.images import FrameError
 from harness.datasets.mot import ground_truth_from_table
 from harness.io.mot import MotTable, read_mot
@@ -164,7 +164,7 @@ class VideoSequence(Sequence):
 
 def load_video(path: str | Path, gt: str | Path | None = None, name: str | None = None,
                fps: float | None = None, det: str | Path | None = None,
-               exact: bool | None = None) -> list[Sequence]:
+               exact: bool | None = None, frames: list[int] | None = None) -> list[Sequence]:
     """One video file as a one-sequence dataset.
 
     Args:
@@ -174,6 +174,8 @@ def load_video(path: str | Path, gt: str | Path | None = None, name: str | None 
         fps: frame rate overriding the container's.
         det: optional MOT detection file (public detections).
         exact: never seek by frame number (see ``VideoSequence``); None = only for MPEG.
+        frames: [first, last] (1-based, inclusive) to keep only those frames, numbered as in
+            the whole video (``harness.datasets.base.window``); None = all.
     """
     path = Path(path).expanduser()
     if not path.exists():
@@ -182,4 +184,4 @@ def load_video(path: str | Path, gt: str | Path | None = None, name: str | None 
     if seq.gt is not None and len(seq.gt.table) and seq.gt.table.frames.max() > seq.info.length:
         log.warning("%s: gt reaches frame %d but the video has %d frames", gt,
                     int(seq.gt.table.frames.max()), seq.info.length)
-    return [seq]
+    return window([seq], frames)

@@ -46,7 +46,7 @@ def head_pixels_of(sequences, step: int = 5, head_fraction: float = 1 / 7) -> np
             log.warning("%s: no ground truth or no pixels, skipped", seq.info.name)
             continue
         table = seq.gt.table
-        for k in range(1, seq.info.length + 1, step):
+        for k in seq.frame_numbers()[::step]:
             rows = seq.gt.rows_of(k)
             if len(rows) == 0:
                 continue

@@ -46,8 +46,8 @@ def person_masks(sequences, step: int = 5, min_visibility: float = 0.95, min_hei
                 continue
             bg = background
             bg.reset()
-            bg.warm_up_sequence(seq.info.length, seq.frame)
-        for k in range(1, seq.info.length + 1):
+            bg.warm_up_sequence(seq.info.length, seq.nth_frame)
+        for k in seq.frame_numbers():
             fg = None
             if bg is not None:
                 fg = bg.apply(seq.frame(k))  # every frame updates the model

@@ -252,7 +252,7 @@ def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str
         frames_dir = Path(frames_dir)
         frames_dir.mkdir(parents=True, exist_ok=True)
     previous: dict | None = None
-    for k in range(1, sequence.info.length + 1):
+    for k in sequence.frame_numbers():
         frame = sequence.frame(k)
         dets, mask = source.detect(k, frame)
         fg = (mask if mask is not None else sequence.foreground(k)) if foreground else None

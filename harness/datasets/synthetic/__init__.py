@@ -23,6 +23,7 @@ from collections.abc import Sequence as Seq
 
 import numpy as np
 
+from harness.datasets.base import window
 from harness.datasets.synthetic.people import Appearance, draw_person, head_box, random_appearance
 from harness.datasets.synthetic.replay import load_replay
 from harness.datasets.synthetic.scenarios import SCENARIOS, illumination_gains, world_cast
@@ -122,6 +123,7 @@ def load_suite(
     illumination: float = 0.0,
     shadows: bool = True,
     occluded_below: float = 0.3,
+    frames: list[int] | None = None,
 ) -> list[SyntheticSequence]:
     """One sequence per scenario preset, named after it.
 
@@ -138,6 +140,8 @@ def load_suite(
             (0 = constant light); ``illumination`` uses at least 0.3 plus a dimming step.
         shadows: draw soft cast shadows.
         occluded_below: gt rows with visibility below this are flagged occluded.
+        frames: [first, last] (1-based, inclusive) to run only those frames of each scene,
+            numbered as in the whole scene (``harness.datasets.base.window``); None = all.
     Raises:
         ValueError: an unknown scenario (the message lists the valid ones) or bad value.
     """
@@ -149,7 +153,7 @@ def load_suite(
         raise ValueError(f"unknown synthetic scenario(s) {bad}; valid: {', '.join(SCENARIOS)}")
     if len(set(names)) != len(names):
         raise ValueError(f"scenarios must be distinct, got {names}")
-    return [
+    return window([
         load_scenario(
             s,
             seed,
@@ -165,4 +169,4 @@ def load_suite(
             occluded_below,
         )
         for s in names
-    ]
+    ], frames)

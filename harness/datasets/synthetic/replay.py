@@ -22,6 +22,7 @@ from harness.datasets.synthetic.people import random_appearance
 from harness.datasets.synthetic.scenarios import walking_poses
 from harness.datasets.synthetic.scene import Camera, render_background
 from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
+from harness.datasets.base import Sequence, window
 from harness.io.mot import read_mot
 
 log = logging.getLogger(__name__)
@@ -66,7 +67,8 @@ def load_replay(
     shadows: bool = True,
     occluded_below: float = 0.3,
     name: str | None = None,
-) -> list[SyntheticSequence]:
+    frames: list[int] | None = None,
+) -> list[Sequence]:
     """Replay a MOT gt file as a synthetic sequence.
 
     Args:
@@ -79,6 +81,9 @@ def load_replay(
         noise: sensor noise standard deviation, grey levels.
         shadows, occluded_below: as in ``SyntheticSequence``.
         name: sequence name (default seqinfo's name, else the folder name).
+        frames: [first, last] (1-based, inclusive) to run only those frames, numbered as in
+            the file (``harness.datasets.base.window``; the people are drawn as in the
+            whole replay); None = all.
     Returns:
         A one-element list (the dataset interface returns lists of sequences).
     Raises:
@@ -145,4 +150,4 @@ def load_replay(
             "%s: attached %d public detections from %s", seq_name, len(seq.public_detections), det
         )
     log.info("%s: replaying %d people over %d frames from %s", seq_name, P, length, gt_file)
-    return [seq]
+    return window([seq], frames)
