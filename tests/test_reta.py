@@ -536,3 +536,23 @@ def test_record_sequence_writes_graph_beside_tracks_and_draws_frames(tmp_path):
     assert {n["frame"] for n in doc["nodes"]} == set(range(1, 41))
     with pytest.raises(TypeError, match="graph"):
         record_sequence(BaselineTracker(), Tiny(), Exact(), tmp_path / "x.json")
+
+
+GREEN = ((40, 180, 40), (30, 110, 30))
+YELLOW = ((40, 200, 220), (30, 120, 140))
+
+
+def test_crowd_crossing_keeps_every_id_where_the_baseline_switches():
+    """Two pairs walking in opposite directions cross in the middle of the scene, each
+    person hidden or half hidden for several frames by the ones in front: reta keeps one id
+    per person (its hypotheses carry the hidden ones through), the baseline does not."""
+    n = 120
+    paths = [_line((30, 140), (2.0, 0), n), _line((10, 165), (2.0, 0), n),
+             _line((290, 150), (-2.0, 0), n), _line((310, 175), (-2.0, 0), n)]
+    frames = _scene(paths, [RED, BLUE, GREEN, YELLOW])
+    assert min(len(f[2]) for f in frames) < 4  # people really disappear in the crossing
+    ids, unmatched = _identities(frames, RetaTracker())
+    assert {k: len(set(v)) for k, v in ids.items()} == {0: 1, 1: 1, 2: 1, 3: 1}
+    assert len({v[0] for v in ids.values()}) == 4
+    base, _ = _identities(frames, BaselineTracker())
+    assert max(len(set(v)) for v in base.values()) > 1
