@@ -1,7 +1,8 @@
 """Background subtraction and mask clean-up (Reta 3.1, PBM 2).
 
-OpenCV's MOG2 (default) or KNN model gives a foreground mask; MOG2/KNN mark shadow pixels
-127 and these are dropped (PBM 2: shadow removal). ``clean_mask`` applies the morphological
+OpenCV's MOG2 (default) or KNN model, or the texture and invariant-colour mixture of Reta 3.1
+(``texture_colour.TextureColourMixture``), gives a foreground mask; shadow pixels are
+labelled 127 and dropped (PBM 2: shadow removal). ``clean_mask`` applies the morphological
 opening and closing. A warm-up learns the background before the first frame from frames
 sampled across the sequence, for sequences that start with people in view.
 """
@@ -13,6 +14,8 @@ from collections.abc import Callable, Sequence
 
 import cv2
 import numpy as np
+
+from trackers.frontend.texture_colour import TextureColourMixture
 
 log = logging.getLogger(__name__)
 
@@ -59,6 +62,7 @@ def clean_mask(
 
 
 WARMUPS = ("samples", "median", "inpaint")
+METHODS = ("mog2", "knn", "texture_colour")
 
 
 def background_estimate(
@@ -103,7 +107,8 @@ class BackgroundModel:
     The defaults are the values tuned on CAVIAR OneLeaveShop1cor (``conf/detector/*.yaml``).
 
     Args:
-        method: "mog2" (Zivkovic's GMM, default) or "knn".
+        method: "mog2" (Zivkovic's GMM, default), "knn", or "texture_colour" (Reta 3.1's
+            mixture over texture and illumination-invariant colour, ``mixture``).
         history: frames of history of the model.
         var_threshold: MOG2 squared Mahalanobis threshold (KNN: squared distance threshold).
         learning_rate: per-frame update rate in [0, 1]; -1 lets OpenCV choose 1/history.
@@ -134,6 +139,8 @@ class BackgroundModel:
         shadow_threshold: MOG2/KNN shadow threshold tau: a pixel darker than the background
             by a factor in [tau, 1] with the same chromaticity is shadow (OpenCV 0.5); lower
             values also catch stronger shadows and floor reflections.
+        mixture: the ``TextureColourMixture`` of method "texture_colour" (None: its defaults
+            with ``history``); ignored by mog2/knn, whose parameters are the ones above.
     """
 
     def __init__(
@@ -154,9 +161,10 @@ class BackgroundModel:
         shadow_threshold: float = 0.5,
         work_scale: float = 1.0,
         gain_compensation: bool = True,
+        mixture: TextureColourMixture | None = None,
     ) -> None:
-        if method not in ("mog2", "knn"):
-            raise ValueError(f"method must be 'mog2' or 'knn', got {method!r}")
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         if history < 1:
             raise ValueError(f"history must be >= 1, got {history}")
         if var_threshold <= 0:
@@ -192,10 +200,19 @@ class BackgroundModel:
             raise ValueError(f"work_scale must be in (0, 1], got {work_scale}")
         self.work_scale = float(work_scale)
         self.gain_compensation = bool(gain_compensation)
+        if method == "texture_colour" and mixture is None:
+            mixture = TextureColourMixture(history=self.history)
+        self.mixture = mixture
         self.reset()
 
     def reset(self) -> None:
         """Forget the learnt background."""
+        self._reference: np.ndarray | None = None  # grid samples of the reference background
+        self.last_gain = np.ones(3)
+        if self.method == "texture_colour":
+            self.mixture.reset()
+            self._model = self.mixture
+            return
         if self.method == "mog2":
             self._model = cv2.createBackgroundSubtractorMOG2(
                 history=self.history, varThreshold=self.var_threshold,
@@ -209,8 +226,6 @@ class BackgroundModel:
         if self.background_ratio is not None:
             self._model.setBackgroundRatio(float(self.background_ratio))
         self._model.setShadowThreshold(self.shadow_threshold)
-        self._reference: np.ndarray | None = None  # grid samples of the reference background
-        self.last_gain = np.ones(3)
 
     def warm_up(self, frames: Sequence[np.ndarray]) -> None:
         """Learn the background from ``frames`` ((H, W, 3) uint8 each) before tracking
@@ -304,7 +319,7 @@ class BackgroundModel:
     def clean(self, raw: np.ndarray) -> np.ndarray:
         """Drop shadows (127) then open/close: (H, W) uint8 0/255."""
         # shadows are 127: keep only values above it (without shadow detection: any nonzero)
-        level = SHADOW_VALUE if self.detect_shadows else 0
+        level = SHADOW_VALUE if self.detect_shadows or self.method == "texture_colour" else 0
         fg = cv2.threshold(raw, level, 255, cv2.THRESH_BINARY)[1]
         return clean_mask(fg, self.open_kernel, self.close_kernel, self.fill_holes)
 

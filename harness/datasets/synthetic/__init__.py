@@ -76,6 +76,7 @@ def load_scenario(
     occluded_below: float = 0.3,
     mirror: bool | None = None,
     name: str | None = None,
+    reflection: float = 0.0,
 ) -> SyntheticSequence:
     """One synthetic sequence of preset ``scenario`` (arguments as in ``load_suite``;
     ``mirror`` forces the left-right orientation, None lets the seed choose)."""
@@ -104,7 +105,8 @@ def load_scenario(
         step=scenario == "illumination",
     )
     seq = SyntheticSequence(
-        name or scenario, cast, background, fps, int(seed), noise, gains, shadows, occluded_below
+        name or scenario, cast, background, fps, int(seed), noise, gains, shadows, occluded_below,
+        reflection=reflection,
     )
     log.debug("built %r", seq)
     return seq
@@ -124,6 +126,7 @@ def load_suite(
     shadows: bool = True,
     occluded_below: float = 0.3,
     frames: list[int] | None = None,
+    reflection: float = 0.0,
 ) -> list[SyntheticSequence]:
     """One sequence per scenario preset, named after it.
 
@@ -142,6 +145,8 @@ def load_suite(
         occluded_below: gt rows with visibility below this are flagged occluded.
         frames: [first, last] (1-based, inclusive) to run only those frames of each scene,
             numbered as in the whole scene (``harness.datasets.base.window``); None = all.
+        reflection: opacity of a mirrored floor reflection under each person (0 = none;
+            ``SyntheticSequence``).
     Raises:
         ValueError: an unknown scenario (the message lists the valid ones) or bad value.
     """
@@ -167,6 +172,7 @@ def load_suite(
             illumination,
             shadows,
             occluded_below,
+            reflection=reflection,
         )
         for s in names
     ], frames)

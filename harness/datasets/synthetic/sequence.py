@@ -14,7 +14,10 @@ Head boxes (``head_boxes(k)``, aligned with ``gt.rows_of(k)``; ``head_table``, a
 ``gt.table``) are the amodal head boxes clipped to the image; whether the head is visible
 follows from ``foreground(k)`` (pixels equal to the id).
 
-Shadows darken the floor only: they are not part of a person's label.
+Shadows darken the floor only: they are not part of a person's label. Floor reflections
+(``reflection`` > 0: each person mirrored about its foot row and blended into the floor below
+it, strength fading to 0 over half its height, as on CAVIAR's shiny floor) are not either;
+``reflection_mask(k)`` gives their exact pixels for measuring a background model.
 """
 
 from __future__ import annotations
@@ -92,6 +95,9 @@ class SyntheticSequence(Sequence):
             steps of 1/128 (None = constant light).
         shadows: draw soft cast shadows.
         occluded_below: visibility under which a gt row is flagged occluded.
+        reflection: opacity r in [0, 1) of a floor reflection under each person's feet (0 = none):
+            the person mirrored about the foot row, blended with weight r (1 - d / (h / 2)) at
+            d rows below the feet (h: the person's height).
         cache_frames: how many rendered frames (with their label images) are kept.
     Frames are rendered on demand: ``frame(k)`` works in any order, and ``frame(k)`` followed
     by ``foreground(k)`` renders once.
@@ -109,6 +115,7 @@ class SyntheticSequence(Sequence):
         shadows: bool = True,
         occluded_below: float = 0.3,
         cache_frames: int = 4,
+        reflection: float = 0.0,
     ) -> None:
         if background.ndim != 3 or background.shape[2] != 3 or background.dtype != np.uint8:
             raise ValueError(
@@ -119,6 +126,8 @@ class SyntheticSequence(Sequence):
             raise ValueError(f"SyntheticSequence: noise must be >= 0, got {noise}")
         if fps <= 0:
             raise ValueError(f"SyntheticSequence: fps must be > 0, got {fps}")
+        if not 0.0 <= reflection < 1.0:
+            raise ValueError(f"SyntheticSequence: reflection must be in [0, 1), got {reflection}")
         if cache_frames < 1:
             raise ValueError(f"SyntheticSequence: cache_frames must be >= 1, got {cache_frames}")
         H, W = background.shape[:2]
@@ -135,6 +144,7 @@ class SyntheticSequence(Sequence):
         self.gains = gains
         self.shadows = ShadowPainter() if shadows else None
         self.occluded_below = float(occluded_below)
+        self.reflection = float(reflection)
         self.public_detections: MotTable | None = None
         self._cache: OrderedDict[int, list] = OrderedDict()
         self._cache_frames = int(cache_frames)
@@ -171,7 +181,43 @@ class SyntheticSequence(Sequence):
         pixel, 0 elsewhere (shadows are background)."""
         return self._entry(index, colour=False)[1].copy()
 
+    def reflection_mask(self, index: int) -> np.ndarray:
+        """(H, W) bool: pixels of frame ``index`` changed by a floor reflection (weight > 0)
+        and not covered by a person; all False without reflections."""
+        k = self._check(index)
+        H, W = self.info.height, self.info.width
+        weight = np.zeros((H, W), np.float32)
+        for p in self._present(k - 1):
+            self._reflect(p, k - 1, None, weight)
+        return (weight > 0) & (self.foreground(k) == 0)
+
     # ------------------------------------------------------------------ rendering
+    def _reflect(self, p: int, i: int, img: np.ndarray | None, weight: np.ndarray | None) -> None:
+        """Blend person ``p``'s mirror image into ``img`` below its feet (see ``reflection``);
+        ``weight`` (H, W) float32 gets the largest blending weight of each pixel."""
+        H, W = self.info.height, self.info.width
+        x, y, w, h = (float(v) for v in self.cast.boxes[p, i])
+        x0, x1 = max(math.floor(x), 0), min(math.ceil(x + w), W)
+        y0, foot = max(math.floor(y), 0), math.ceil(y + h)
+        n = min(foot - y0, H - foot, math.ceil(h / 2))  # rows of reflection inside the image
+        if self.reflection <= 0 or n <= 0 or x1 <= x0:
+            return
+        crop = np.zeros((foot - y0, x1 - x0, 3), np.uint8) if img is not None else None
+        lab = np.zeros((foot - y0, x1 - x0), np.int32)
+        c = self.cast
+        draw_person(crop, lab, 1, c.boxes[p, i], c.appearances[p], float(c.phase[p, i]),
+                    float(c.facing[p, i]), bool(c.away[p, i]), float(c.swing[p, i]), (x0, y0))
+        d = np.arange(n, dtype=np.float32)
+        fade = self.reflection * np.maximum(1.0 - d / (h / 2), 0.0)  # weight at d rows down
+        a = (lab[::-1][:n] > 0) * fade[:, None]  # mirrored: row foot + d shows row foot - 1 - d
+        if weight is not None:
+            np.maximum(weight[foot : foot + n, x0:x1], a, out=weight[foot : foot + n, x0:x1])
+        if img is not None:
+            roi = img[foot : foot + n, x0:x1].astype(np.float32)
+            mir = crop[::-1][:n].astype(np.float32)
+            img[foot : foot + n, x0:x1] = np.clip(
+                roi + a[..., None] * (mir - roi) + 0.5, 0, 255).astype(np.uint8)
+
     def _check(self, index: int) -> int:
         k = int(index)
         if k != index or not 1 <= k <= self.info.length:
@@ -237,6 +283,9 @@ class SyntheticSequence(Sequence):
         if self.shadows is not None:
             for p in people:
                 self.shadows.paint(img, self.cast.boxes[p, i], 0.15)
+        if self.reflection > 0:
+            for p in people:
+                self._reflect(p, i, img, None)
         for p in people:
             self._draw(p, i, img, None)
         if self.gains is not None:

@@ -1,0 +1,86 @@
+"""The texture and invariant-colour background mixture (Reta 3.1) and the renderer's floor
+reflections it is measured on."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.datasets.synthetic import load_scenario
+from trackers.frontend.background import BackgroundModel
+from trackers.frontend.texture_colour import TextureColourMixture, siltp
+
+
+def test_siltp_is_scale_invariant_and_ignores_faint_patterns():
+    rng = np.random.default_rng(0)
+    g = rng.uniform(60, 200, (12, 14)).astype(np.float32)
+    s = siltp(g, 0.08)
+    assert set(np.unique(s)) <= {-1.0, 0.0, 1.0}
+    np.testing.assert_array_equal(siltp(0.6 * g, 0.08), s)  # a cast shadow: same pattern
+    flat = np.full((8, 8), 150.0, np.float32)
+    flat[::2] += 5.0  # a 3% pattern, under tau
+    assert not siltp(flat, 0.08).any()
+
+
+def test_mixture_labels_a_shadow_127_and_an_object_255():
+    rng = np.random.default_rng(1)
+    bg = rng.integers(90, 160, (40, 50, 3)).astype(np.uint8)
+    mix = TextureColourMixture(history=50)
+    for _ in range(20):
+        mix.apply(bg, 0.2)
+    frame = bg.copy()
+    frame[5:15, 5:15] = (bg[5:15, 5:15] * 0.6).astype(np.uint8)  # shadow: darker, same chroma
+    frame[25:35, 30:45] = (20, 200, 40)  # a green object
+    out = mix.apply(frame, 0.0)
+    assert (out[6:14, 6:14] == 127).mean() > 0.9
+    assert (out[26:34, 31:44] == 255).mean() > 0.9
+    assert (out[20:24] == 0).all()
+    assert mix.getBackgroundImage().shape == bg.shape
+
+
+def test_mixture_arguments_validated():
+    for kw in ({"modes": 0}, {"threshold": 0.0}, {"background_weight": 1.0},
+               {"shadow_ratio": 1.2}, {"texture_tau": 0.0}, {"noise": -1.0}):
+        with pytest.raises(ValueError):
+            TextureColourMixture(**kw)
+    with pytest.raises(ValueError, match="method"):
+        BackgroundModel(method="vibe")
+
+
+def test_renderer_draws_a_mirrored_reflection_below_the_feet():
+    plain = load_scenario("crossing", seed=3, width=192, height=144, length=30, noise=0.0)
+    shiny = load_scenario("crossing", seed=3, width=192, height=144, length=30, noise=0.0,
+                          reflection=0.4)
+    k = 15
+    refl = shiny.reflection_mask(k)
+    assert refl.sum() > 50 and not plain.reflection_mask(k).any()
+    assert not (refl & (shiny.foreground(k) > 0)).any()
+    changed = np.abs(shiny.frame(k).astype(int) - plain.frame(k).astype(int)).sum(axis=2) > 0
+    assert changed[refl].mean() > 0.5 and not changed[~refl].any()
+    np.testing.assert_array_equal(shiny.foreground(k), plain.foreground(k))
+    # below the feet: every reflection pixel lies under some person's box bottom
+    rows = np.flatnonzero(refl.any(axis=1))
+    boxes = shiny.gt.table.boxes[shiny.gt.rows_of(k)]
+    assert rows.min() >= np.floor((boxes[:, 1] + boxes[:, 3]).min()) - 1
+
+
+def test_texture_colour_removes_a_floor_reflection_and_keeps_the_person():
+    """Opacity 0.6 reflections under every person: under 3% of the reflection's pixels are
+    foreground (a third of MOG2's at most), and at least 95% of the people's pixels are kept."""
+    seq = load_scenario("crossing", seed=11, width=192, height=144, length=40, reflection=0.6)
+    res = {}
+    for name, model in (("mog2", BackgroundModel()),
+                        ("tc", BackgroundModel(method="texture_colour"))):
+        model.warm_up_sequence(seq.info.length, seq.frame)
+        fg_refl = n_refl = kept = n_person = 0
+        for k in range(1, seq.info.length + 1):
+            mask = model.apply(seq.frame(k))
+            person, refl = seq.foreground(k) > 0, seq.reflection_mask(k)
+            fg_refl += (mask & refl).sum()
+            n_refl += refl.sum()
+            kept += (mask & person).sum()
+            n_person += person.sum()
+        res[name] = (fg_refl / n_refl, kept / n_person)
+    assert n_refl > 1000
+    assert res["tc"][0] < 0.03 and res["tc"][0] < res["mog2"][0] / 3
+    assert res["tc"][1] >= 0.95
