@@ -26,6 +26,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -640,6 +641,12 @@ def run_experiment(
     except ValueError as err:
         raise RunError(str(err)) from None
 
+    protocol_node = _cfg_get(cfg, "protocol", {})
+    protocol = str(_cfg_get(protocol_node, "name", "multi"))
+    if protocol not in ("multi", "single_target"):
+        raise RunError(f"protocol.name must be multi or single_target, got {protocol!r}")
+    targets = _container(_cfg_get(protocol_node, "targets", None))
+
     # check everything that can be checked before the first frame
     configs = tracker_configs(_cfg_get(cfg, "tracker"), tracker_name)
     for name, node in configs.items():
@@ -673,10 +680,17 @@ def run_experiment(
     for seq in sequences:
         sname = seq.info.name
         try:
-            trackers = {n: build_tracker(n, node) for n, node in configs.items()}
             source = build_source(_cfg_get(cfg, "detector"))
-            outputs = run_sequence(trackers, seq, source, foreground, background, progress,
-                                   on_update=graphs.hook())
+            if protocol == "single_target":
+                from harness.protocols import run_single_target
+
+                builders = {n: partial(build_tracker, n, node) for n, node in configs.items()}
+                outputs = run_single_target(builders, seq, source, foreground, background,
+                                            progress, targets)
+            else:
+                trackers = {n: build_tracker(n, node) for n, node in configs.items()}
+                outputs = run_sequence(trackers, seq, source, foreground, background, progress,
+                                       on_update=graphs.hook())
             graphs.write(sname)
         except Exception as err:  # noqa: BLE001 - the sequence fails, the next goes on
             fail("*", sname, "sequence", err, traceback.format_exc())

@@ -1,0 +1,91 @@
+"""Colour particle filter (Perez, Hue, Vermaak and Gangnet 2002), PBM's CCMSPF-like comparator.
+
+Each target carries N particles over its box centre, velocity and scale. Per frame (the
+bootstrap filter): every particle moves by second-order (constant-velocity) dynamics with
+random-walk noise, is weighted by the colour likelihood
+exp(-lambda d^2) with d^2 = 1 - rho(q, p) (rho the Bhattacharyya coefficient of the
+target's hue-saturation model q and the particle box's histogram p), the estimate is the
+weighted mean, and the particles are resampled (systematic resampling). Seeded: the same
+seed gives the same tracks. Life cycle and colour model: ``trackers.comparators.appearance``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackers.comparators.appearance import ColourTarget, ColourTrackerBase, hs_histogram
+from trackers.records import Detections, Track
+
+
+class ColourParticleFilter(ColourTrackerBase):
+    """Bootstrap particle filter with a colour likelihood, one particle set per target.
+
+    Args:
+        particles: N, particles per target.
+        position_noise: random-walk standard deviation of the centre and of the velocity,
+            in box sizes (per frame).
+        scale_noise: random-walk standard deviation of the log scale (0 = a fixed size, as
+            mean shift keeps: colour alone favours boxes shrunk inside the person).
+        likelihood_lambda: lambda of exp(-lambda (1 - rho)).
+        seed: seed of the random walk and the resampling (restarted by ``reset``).
+        birth_iou, min_similarity, max_misses: life cycle (``ColourTrackerBase``).
+    """
+
+    def __init__(self, particles: int = 100, position_noise: float = 0.1,
+                 scale_noise: float = 0.0, likelihood_lambda: float = 20.0, seed: int = 0,
+                 birth_iou: float = 0.3, min_similarity: float = 0.5,
+                 max_misses: int = 10) -> None:
+        if particles < 1:
+            raise ValueError(f"particles must be >= 1, got {particles}")
+        for name, v in (("position_noise", position_noise), ("scale_noise", scale_noise),
+                        ("likelihood_lambda", likelihood_lambda)):
+            if v < 0:
+                raise ValueError(f"{name} must be >= 0, got {v}")
+        self.particles = particles
+        self.position_noise = position_noise
+        self.scale_noise = scale_noise
+        self.likelihood_lambda = likelihood_lambda
+        self.seed = seed
+        self._sets: dict[int, np.ndarray] = {}
+        super().__init__(birth_iou, min_similarity, max_misses)
+
+    def reset(self) -> None:
+        super().reset()
+        self._rng = np.random.default_rng(self.seed)
+        self._sets = {}
+
+    def _follow(self, target: ColourTarget, hsv: np.ndarray, mask: np.ndarray) -> float:
+        x, y, w, h = target.box
+        s = self._sets.get(target.id)
+        if s is None:  # (N, 5): centre x, y, velocity x, y, log scale against the current box
+            s = np.tile([x + w / 2, y + h / 2, 0.0, 0.0, 0.0], (self.particles, 1))
+        e = self._rng.normal(0.0, 1.0, s.shape) * [self.position_noise * w,
+                                                   self.position_noise * h,
+                                                   self.position_noise * w,
+                                                   self.position_noise * h, self.scale_noise]
+        s = s + e
+        s[:, :2] += s[:, 2:4]  # second-order dynamics: x_t = x_{t-1} + v_t + e, v_t = v_{t-1} + e
+        scale = np.exp(s[:, 4])
+        boxes = np.column_stack([s[:, 0] - w * scale / 2, s[:, 1] - h * scale / 2,
+                                 w * scale, h * scale])
+        rho = np.array([np.sqrt(target.q * hs_histogram(hsv, mask, b)).sum() for b in boxes])
+        weight = np.exp(-self.likelihood_lambda * (1.0 - rho))  # p(z|x) = exp(-lambda d^2)
+        weight /= weight.sum()
+        mean = weight @ s  # the posterior mean
+        sc = np.exp(mean[4])
+        target.box = np.array([mean[0] - w * sc / 2, mean[1] - h * sc / 2, w * sc, h * sc])
+        u = (self._rng.random() + np.arange(self.particles)) / self.particles  # systematic
+        idx = np.minimum(np.searchsorted(np.cumsum(weight), u), self.particles - 1)
+        s = s[idx]
+        s[:, 4] -= mean[4]  # scales relative to the new box
+        self._sets[target.id] = s
+        return float(np.sqrt(target.q * hs_histogram(hsv, mask, target.box)).sum())
+
+    def update(self, frame: np.ndarray | None, detections: Detections,
+               foreground: np.ndarray | None = None) -> list[Track]:
+        tracks = super().update(frame, detections, foreground)
+        live = {t.id for t in self._targets}
+        self._sets = {k: v for k, v in self._sets.items() if k in live}
+        return tracks
+
+    update.__doc__ = ColourTrackerBase.update.__doc__
