@@ -55,6 +55,18 @@ def test_a_detection_where_a_target_stands_starts_nothing(make):
     assert ids == [{1}] * 5
 
 
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+def test_a_single_target_tracker_starts_nothing_more(make):
+    frames, boxes = _scene(3)
+    far = np.array([[150, 10, 16, 32]])
+    tracker = make(max_targets=1)
+    out = [tracker.update(f, Detections(np.vstack([b[None], far]), np.ones(2)))
+           for f, b in zip(frames, boxes)]
+    assert [[t.id for t in o] for o in out] == [[1]] * 3
+    assert len(make().update(frames[0], Detections(np.vstack([boxes[0][None], far]),
+                                                   np.ones(2)))) == 2
+
+
 def test_particle_filter_is_seeded():
     frames, boxes = _scene(15)
     a = _follow(ColourParticleFilter(seed=3), frames, boxes)

@@ -26,15 +26,19 @@ from trackers.records import Detections, Track, TrackState
 HUE_BINS = 16
 SAT_BINS = 16
 VAL_BINS = 16
-_RANGES = [0, 180, 0, 256]
+MODEL_BINS = HUE_BINS * SAT_BINS + VAL_BINS
 
 
-def hsv_of(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(H, W, 3) uint8 BGR -> its HSV image and the (H, W) uint8 mask of pixels with a hue
-    (saturation >= 30 and value >= 32: dark and grey pixels carry no usable hue)."""
+def colour_bins(frame: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8 BGR -> (H, W) int64 bin of every pixel in Perez et al.'s colour model:
+    hue and saturation bins for a pixel with a hue (saturation >= 30 and value >= 32), else
+    HUE_BINS * SAT_BINS plus its value bin (dark and grey pixels carry no usable hue)."""
     hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
-    mask = cv2.inRange(hsv, (0, 30, 32), (180, 255, 255))
-    return hsv, mask
+    hue = hsv[..., 0].astype(np.int64) * HUE_BINS // 180
+    sat = hsv[..., 1].astype(np.int64) * SAT_BINS // 256
+    val = hsv[..., 2].astype(np.int64) * VAL_BINS // 256
+    has_hue = (hsv[..., 1] >= 30) & (hsv[..., 2] >= 32)
+    return np.where(has_hue, hue * SAT_BINS + sat, HUE_BINS * SAT_BINS + val)
 
 
 def clip_box(box: np.ndarray, width: int, height: int) -> tuple[int, int, int, int] | None:
@@ -48,22 +52,17 @@ def clip_box(box: np.ndarray, width: int, height: int) -> tuple[int, int, int, i
     return x0, y0, x1, y1
 
 
-def hs_histogram(hsv: np.ndarray, mask: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """Colour model of ``box`` after Perez et al. (2002): a hue-saturation histogram of the
-    pixels with a hue (``mask``) followed by a value histogram of the others, (HUE_BINS *
-    SAT_BINS + VAL_BINS,) float64 summing to 1 (all zero for an empty box). Grey pixels
-    count too, so a box half on the person and half on a grey floor differs from one on
-    the person."""
-    r = clip_box(box, hsv.shape[1], hsv.shape[0])
+def colour_model(bins: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Perez et al.'s colour model of ``box``: the histogram of its pixels' ``colour_bins``
+    (hue-saturation bins, then value bins of the pixels without a hue), (MODEL_BINS,)
+    float64 summing to 1 (all zero for an empty box). Grey pixels count too, so a box half
+    on the person and half on a grey floor differs from one on the person."""
+    r = clip_box(box, bins.shape[1], bins.shape[0])
     if r is None:
-        return np.zeros(HUE_BINS * SAT_BINS + VAL_BINS)
+        return np.zeros(MODEL_BINS)
     x0, y0, x1, y1 = r
-    roi, m = hsv[y0:y1, x0:x1], mask[y0:y1, x0:x1]
-    hs = cv2.calcHist([roi], [0, 1], m, [HUE_BINS, SAT_BINS], _RANGES).ravel()
-    v = cv2.calcHist([roi], [2], cv2.bitwise_not(m), [VAL_BINS], [0, 256]).ravel()
-    h = np.concatenate([hs, v]).astype(np.float64)
-    s = h.sum()
-    return h / s if s > 0 else h
+    h = np.bincount(bins[y0:y1, x0:x1].ravel(), minlength=MODEL_BINS).astype(np.float64)
+    return h / h.sum()
 
 
 @dataclass
@@ -85,16 +84,21 @@ class ColourTrackerBase:
         min_similarity: Bhattacharyya coefficient of the followed box's colour with the
             model below which the frame counts as a miss.
         max_misses: misses in a row after which a target ends.
+        max_targets: targets followed at once (None = no bound); 1 makes it the
+            single-target tracker the papers compare with (later detections start nothing).
     """
 
     def __init__(self, birth_iou: float = 0.3, min_similarity: float = 0.5,
-                 max_misses: int = 10) -> None:
+                 max_misses: int = 10, max_targets: int | None = None) -> None:
         if not 0.0 <= birth_iou <= 1.0:
             raise ValueError(f"birth_iou must lie in [0, 1], got {birth_iou}")
         if not 0.0 <= min_similarity <= 1.0:
             raise ValueError(f"min_similarity must lie in [0, 1], got {min_similarity}")
         if max_misses < 0:
             raise ValueError(f"max_misses must be >= 0, got {max_misses}")
+        if max_targets is not None and max_targets < 1:
+            raise ValueError(f"max_targets must be >= 1 or None, got {max_targets}")
+        self.max_targets = max_targets
         self.birth_iou = birth_iou
         self.min_similarity = min_similarity
         self.max_misses = max_misses
@@ -105,7 +109,7 @@ class ColourTrackerBase:
         self._targets: list[ColourTarget] = []
         self._next_id = 1
 
-    def _follow(self, target: ColourTarget, hsv: np.ndarray, mask: np.ndarray) -> float:
+    def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         """Move ``target.box`` to where its colour is; return the similarity there."""
         raise NotImplementedError
 
@@ -122,28 +126,30 @@ class ColourTrackerBase:
         """
         if frame is None:
             raise ValueError(f"{type(self).__name__} needs frames (colour is all it sees)")
-        hsv, mask = hsv_of(frame)
+        bins = colour_bins(frame)
         height, width = frame.shape[:2]
         kept = []
         for t in self._targets:  # 1. follow each target by its colour
-            rho = self._follow(t, hsv, mask)
+            rho = self._follow(t, bins)
             t.misses = t.misses + 1 if rho < self.min_similarity else 0
             cx, cy = t.box[0] + t.box[2] / 2, t.box[1] + t.box[3] / 2
             inside = 0 <= cx < width and 0 <= cy < height
             if inside and t.misses <= self.max_misses:  # 2. end the lost
                 kept.append(t)
         self._targets = kept
-        self._births(detections, hsv, mask)  # 3. start targets where none stands
+        self._births(detections, bins)  # 3. start targets where none stands
         return [Track(t.id, t.box.copy(), TrackState.CONFIRMED) for t in self._targets]
 
-    def _births(self, detections: Detections, hsv: np.ndarray, mask: np.ndarray) -> None:
+    def _births(self, detections: Detections, bins: np.ndarray) -> None:
         taken = np.array([t.box for t in self._targets]).reshape(-1, 4)
         for box in detections.boxes:
+            if self.max_targets is not None and len(self._targets) >= self.max_targets:
+                return
             if len(taken) and iou_matrix(box[None], taken).max() >= self.birth_iou:
                 continue  # a target stands there already
-            q = hs_histogram(hsv, mask, box)
+            q = colour_model(bins, box)
             if q.sum() == 0:
-                continue  # nothing with a hue in the box: nothing to follow
+                continue  # the box lies outside the image
             self._targets.append(ColourTarget(self._next_id, box.astype(np.float64), q))
             self._next_id += 1
             taken = np.vstack([taken, box])

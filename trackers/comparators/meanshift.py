@@ -1,8 +1,10 @@
 """Mean shift (Comaniciu, Ramesh and Meer 2003), PBM's "MS" comparator, with OpenCV.
 
-The hue-saturation part of each target's colour model q is back-projected on the frame (every pixel gets
-q of its colour bin) around the target's last box, and ``cv2.meanShift`` moves the box, at
-fixed size, to the mode of that likelihood. Life cycle and colour model:
+Comaniciu et al.'s iteration around each target's last box: every pixel i of colour bin u
+is weighted by w_i = sqrt(q_u / p_u(y)), q the target's colour model and p(y) the
+candidate box's (eq. 10), and ``cv2.meanShift`` moves the box, at fixed size, to the
+weighted mean of its pixels (eq. 13, with the Epanechnikov profile's flat derivative);
+repeated until the box moves less than a pixel. Life cycle and colour model:
 ``trackers.comparators.appearance``.
 """
 
@@ -12,33 +14,32 @@ import cv2
 import numpy as np
 
 from trackers.comparators.appearance import (
-    HUE_BINS, SAT_BINS, ColourTarget, ColourTrackerBase, clip_box, hs_histogram,
+    ColourTarget, ColourTrackerBase, clip_box, colour_model,
 )
-
-_RANGES = [0, 180, 0, 256]
 
 
 class MeanShiftTracker(ColourTrackerBase):
-    """Mean shift over the back-projected colour model, one box of fixed size per target.
+    """Mean shift on the colour model (Comaniciu et al. 2003), one box of fixed size per target.
 
     Args:
         max_iterations: mean-shift iterations per frame (OpenCV's term criteria).
         search: half-width of the region searched around the last box, in box sizes.
-        birth_iou, min_similarity, max_misses: life cycle (``ColourTrackerBase``).
+        birth_iou, min_similarity, max_misses, max_targets: life cycle (``ColourTrackerBase``).
     """
 
     def __init__(self, max_iterations: int = 10, search: float = 1.0, birth_iou: float = 0.3,
-                 min_similarity: float = 0.5, max_misses: int = 10) -> None:
+                 min_similarity: float = 0.5, max_misses: int = 10,
+                 max_targets: int | None = None) -> None:
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
         if search <= 0:
             raise ValueError(f"search must be > 0, got {search}")
         self.max_iterations = max_iterations
         self.search = search
-        super().__init__(birth_iou, min_similarity, max_misses)
+        super().__init__(birth_iou, min_similarity, max_misses, max_targets)
 
-    def _follow(self, target: ColourTarget, hsv: np.ndarray, mask: np.ndarray) -> float:
-        height, width = hsv.shape[:2]
+    def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
+        height, width = bins.shape
         x, y, w, h = target.box
         roi = clip_box(np.array([x - self.search * w, y - self.search * h,
                                  w * (1 + 2 * self.search), h * (1 + 2 * self.search)]),
@@ -46,14 +47,23 @@ class MeanShiftTracker(ColourTrackerBase):
         if roi is None:
             return 0.0
         x0, y0, x1, y1 = roi
-        hs = target.q[:HUE_BINS * SAT_BINS].reshape(HUE_BINS, SAT_BINS)
-        model = hs * 255.0 / max(hs.max(), 1e-12)
-        back = cv2.calcBackProject([hsv[y0:y1, x0:x1]], [0, 1], model.astype(np.float32),
-                                   _RANGES, 1)
-        back &= mask[y0:y1, x0:x1]
-        window = (int(round(x)) - x0, int(round(y)) - y0, max(int(round(w)), 1),
-                  max(int(round(h)), 1))
-        criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, self.max_iterations, 1)
-        _, (wx, wy, _, _) = cv2.meanShift(back, window, criteria)
-        target.box = np.array([wx + x0 + (x - round(x)), wy + y0 + (y - round(y)), w, h])
-        return float(np.sqrt(target.q * hs_histogram(hsv, mask, target.box)).sum())
+        u = bins[y0:y1, x0:x1]  # bin u of every pixel
+        wx, wy = x - x0, y - y0
+        ww, wh = max(int(round(w)), 1), max(int(round(h)), 1)
+        criteria = (cv2.TERM_CRITERIA_COUNT, 1, 0)
+        for _ in range(self.max_iterations):
+            r = clip_box(np.array([wx, wy, w, h]), x1 - x0, y1 - y0)
+            if r is None:
+                break
+            p = np.bincount(u[r[1]:r[3], r[0]:r[2]].ravel(), minlength=len(target.q))
+            p = p / p.sum()  # the candidate's colour model p(y)
+            ratio = np.sqrt(np.divide(target.q, p, out=np.zeros_like(p), where=p > 0))
+            weight = ratio[u].astype(np.float32)  # w_i = sqrt(q_u / p_u(y)) (eq. 10)
+            _, (nx, ny, _, _) = cv2.meanShift(weight, (int(round(wx)), int(round(wy)), ww, wh),
+                                              criteria)  # y1 = sum x_i w_i / sum w_i (eq. 13)
+            step = np.hypot(nx - round(wx), ny - round(wy))
+            wx, wy = wx + nx - round(wx), wy + ny - round(wy)
+            if step < 1:
+                break
+        target.box = np.array([wx + x0, wy + y0, w, h])
+        return float(np.sqrt(target.q * colour_model(bins, target.box)).sum())

@@ -4,7 +4,7 @@ Each target carries N particles over its box centre, velocity and scale. Per fra
 bootstrap filter): every particle moves by second-order (constant-velocity) dynamics with
 random-walk noise, is weighted by the colour likelihood
 exp(-lambda d^2) with d^2 = 1 - rho(q, p) (rho the Bhattacharyya coefficient of the
-target's hue-saturation model q and the particle box's histogram p), the estimate is the
+target's colour model q and the particle box's p), the estimate is the
 weighted mean, and the particles are resampled (systematic resampling). Seeded: the same
 seed gives the same tracks. Life cycle and colour model: ``trackers.comparators.appearance``.
 """
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.comparators.appearance import ColourTarget, ColourTrackerBase, hs_histogram
+from trackers.comparators.appearance import ColourTarget, ColourTrackerBase, colour_model
 from trackers.records import Detections, Track
 
 
@@ -28,13 +28,13 @@ class ColourParticleFilter(ColourTrackerBase):
             mean shift keeps: colour alone favours boxes shrunk inside the person).
         likelihood_lambda: lambda of exp(-lambda (1 - rho)).
         seed: seed of the random walk and the resampling (restarted by ``reset``).
-        birth_iou, min_similarity, max_misses: life cycle (``ColourTrackerBase``).
+        birth_iou, min_similarity, max_misses, max_targets: life cycle (``ColourTrackerBase``).
     """
 
     def __init__(self, particles: int = 100, position_noise: float = 0.1,
                  scale_noise: float = 0.0, likelihood_lambda: float = 20.0, seed: int = 0,
                  birth_iou: float = 0.3, min_similarity: float = 0.5,
-                 max_misses: int = 10) -> None:
+                 max_misses: int = 10, max_targets: int | None = None) -> None:
         if particles < 1:
             raise ValueError(f"particles must be >= 1, got {particles}")
         for name, v in (("position_noise", position_noise), ("scale_noise", scale_noise),
@@ -47,14 +47,14 @@ class ColourParticleFilter(ColourTrackerBase):
         self.likelihood_lambda = likelihood_lambda
         self.seed = seed
         self._sets: dict[int, np.ndarray] = {}
-        super().__init__(birth_iou, min_similarity, max_misses)
+        super().__init__(birth_iou, min_similarity, max_misses, max_targets)
 
     def reset(self) -> None:
         super().reset()
         self._rng = np.random.default_rng(self.seed)
         self._sets = {}
 
-    def _follow(self, target: ColourTarget, hsv: np.ndarray, mask: np.ndarray) -> float:
+    def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         x, y, w, h = target.box
         s = self._sets.get(target.id)
         if s is None:  # (N, 5): centre x, y, velocity x, y, log scale against the current box
@@ -68,7 +68,7 @@ class ColourParticleFilter(ColourTrackerBase):
         scale = np.exp(s[:, 4])
         boxes = np.column_stack([s[:, 0] - w * scale / 2, s[:, 1] - h * scale / 2,
                                  w * scale, h * scale])
-        rho = np.array([np.sqrt(target.q * hs_histogram(hsv, mask, b)).sum() for b in boxes])
+        rho = np.array([np.sqrt(target.q * colour_model(bins, b)).sum() for b in boxes])
         weight = np.exp(-self.likelihood_lambda * (1.0 - rho))  # p(z|x) = exp(-lambda d^2)
         weight /= weight.sum()
         mean = weight @ s  # the posterior mean
@@ -79,7 +79,7 @@ class ColourParticleFilter(ColourTrackerBase):
         s = s[idx]
         s[:, 4] -= mean[4]  # scales relative to the new box
         self._sets[target.id] = s
-        return float(np.sqrt(target.q * hs_histogram(hsv, mask, target.box)).sum())
+        return float(np.sqrt(target.q * colour_model(bins, target.box)).sum())
 
     def update(self, frame: np.ndarray | None, detections: Detections,
                foreground: np.ndarray | None = None) -> list[Track]:
