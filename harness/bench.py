@@ -5,10 +5,20 @@ Stages, timed separately on the same frames:
 * decode: ``Sequence.frame(k)`` (JPEG/video decoding; rendering for synthetic scenes);
 * front end: the detection source's ``detect(k, frame)`` plus the foreground handed to the
   trackers (background subtraction, blobs, silhouette/HOG/head detection, or noisy gt);
+  the per-sequence warm-up (``source.start``: the background learnt from frames sampled over
+  the sequence) is not in it and is printed on its own line;
+* for a front-end detector (``FrontendSource`` around a detector with a ``background`` and
+  ``detect_on``), the same work stage by stage: ``background`` (the model's raw label image),
+  ``cleaning`` (shadow removal and morphology), ``detector`` (blobs and the person search,
+  ``detect_on``), ``hand-off`` (detection clean-up and the foreground handed to the trackers);
+  and ``foreground only``: background, cleaning and connected-component blobs alone, the
+  front end without a person detector, timed in the same run for comparison;
 * tracker: each tracker's ``update`` on the cached detections and foreground.
 
 Each stage is run ``--repeats`` times over the first ``--frames`` frames of the chosen
-sequence and the median frames/s is reported (with the range). Everything runs on one core:
+sequence and the median frames/s is reported (with the range). Times are the CPU time of the
+benchmarking thread (``time.thread_time``; ``--clock wall`` for elapsed time), so that other
+processes on a shared machine do not slow the figures down. Everything runs on one core:
 OpenCV with ``cv2.setNumThreads(1)`` and the BLAS/OpenMP pools limited to one thread (set
 before numpy is imported). Frames are held in memory between stages, so the tracker stage
 measures the tracker alone. Speed targets belong in ``benchmarks/``; this tool only measures.
@@ -61,10 +71,71 @@ class StageTiming:
                 "ms_per_frame": round(1000.0 / med, 3) if med > 0 else float("nan")}
 
 
+CLOCKS: dict[str, Callable[[], float]] = {"cpu": time.thread_time, "wall": time.perf_counter}
+_clock: Callable[[], float] = time.thread_time
+
+
 def _time(fn: Callable[[], None]) -> float:
-    t0 = time.perf_counter()
+    t0 = _clock()
     fn()
-    return time.perf_counter() - t0
+    return _clock() - t0
+
+
+def _staged_detector(source: Any) -> Any | None:
+    """The detector inside a front-end source when its stages can be timed one by one."""
+    det = getattr(source, "detector", None)
+    bg = getattr(det, "background", None)
+    if det is None or not hasattr(det, "detect_on") or not all(
+            hasattr(bg, a) for a in ("raw", "clean")):
+        return None
+    return det
+
+
+def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images: Sequence[Any],
+                          repeats: int = 3, foreground: str = "auto",
+                          background: Mapping[str, Any] | None = None,
+                          ) -> tuple[list[StageTiming], list[float]]:
+    """Stage-by-stage timings of a front-end detector on ``images`` (frames 1..n), and the
+    warm-up seconds of each run (empty lists when the source has no timed stages)."""
+    from harness.run import ForegroundProvider, clean_detections
+    from trackers.frontend.blobs import blobs_from_mask
+
+    if _staged_detector(make_source()) is None:
+        return [], []
+    names = ("background", "cleaning", "detector", "hand-off", "blobs")
+    runs: dict[str, list[float]] = {k: [] for k in names}
+    warm: list[float] = []
+    for _ in range(repeats):
+        source = make_source()
+        det = _staged_detector(source)
+        warm.append(_time(lambda source=source: source.start(sequence)))
+        fg_of = ForegroundProvider(foreground, sequence, background)
+        acc = dict.fromkeys(names, 0.0)
+        for k, img in enumerate(images, 1):
+            t0 = _clock()
+            raw = det.background.raw(img)
+            t1 = _clock()
+            fg = det.background.clean(raw) > 0
+            t2 = _clock()
+            dets = det.detect_on(img, fg)
+            t3 = _clock()
+            dets, _ = clean_detections(dets)
+            fg_of(k, img, fg)
+            t4 = _clock()
+            blobs_from_mask(fg, perimeter=False)
+            t5 = _clock()
+            for name, dt in zip(names, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)):
+                acc[name] += dt
+        for name in names:
+            runs[name].append(acc[name])
+    n = len(images)
+    total = [sum(runs[k][r] for k in names[:4]) for r in range(repeats)]
+    fg_only = [runs["background"][r] + runs["cleaning"][r] + runs["blobs"][r]
+               for r in range(repeats)]
+    out = [StageTiming(f"  {k}", n, runs[k]) for k in names[:4]]
+    out += [StageTiming("front end (staged sum)", n, total),
+            StageTiming("foreground only", n, fg_only)]
+    return out, warm
 
 
 def bench_sequence(sequence: Any, make_source: Callable[[], Any],
@@ -86,21 +157,33 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
         images.clear()
         images.extend(sequence.frame(k) for k in range(1, n + 1))
 
-    decode_s = [_time(decode) for _ in range(repeats)]
+    global _clock
+    clock, _clock = _clock, (time.process_time if _clock is time.thread_time else _clock)
+    try:  # decoding may run in a prefetch thread: its CPU time is the process's
+        decode_s = [_time(decode) for _ in range(repeats)]
+    finally:
+        _clock = clock
     inputs: list[tuple[Any, Any]] = []
 
-    def front() -> None:
+    def front(source: Any) -> None:
         inputs.clear()
-        source = make_source()
-        source.start(sequence)
         fg_of = ForegroundProvider(foreground, sequence, background)
         for k, img in enumerate(images, 1):
             dets, mask = source.detect(k, img)
             dets, _ = clean_detections(dets)
             inputs.append((dets, fg_of(k, img, mask)))
 
-    front_s = [_time(front) for _ in range(repeats)]
+    front_s = []
+    for _ in range(repeats):
+        source = make_source()
+        source.start(sequence)  # the per-sequence warm-up: timed by bench_frontend_stages
+        front_s.append(_time(lambda source=source: front(source)))
     out = [StageTiming("decode", n, decode_s), StageTiming("front end", n, front_s)]
+    staged, warm = bench_frontend_stages(sequence, make_source, images, repeats, foreground,
+                                         background)
+    out += staged
+    if warm:  # once per sequence: one "frame" of this row is the whole warm-up
+        out.append(StageTiming("warm-up (per sequence)", 1, warm))
     names = list(make_trackers())
     for name in names:
         runs = []
@@ -125,7 +208,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--frames", type=int, default=100, help="frames timed (default 100)")
     p.add_argument("--repeats", type=int, default=3, help="runs per stage (default 3)")
     p.add_argument("--csv", type=Path, help="also write the table here")
+    p.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
+                   help="cpu: CPU time of this thread (default); wall: elapsed time")
     args = p.parse_args(argv)
+    global _clock
+    _clock = CLOCKS[args.clock]
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
 
     import cv2
@@ -155,8 +242,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     node = cfg.detector.get("detector") or cfg.detector  # a FrontendSource wraps a detector
     detector = str(node.get("_target_", "?")).rsplit(".", 1)[-1]
     print(f"{seq.info.name} ({seq.info.width}x{seq.info.height}), detector {detector}, "
-          f"one core, median of {args.repeats} runs")
+          f"one core, {args.clock} clock, median of {args.repeats} runs")
     print(table.to_string(index=False))
+    rows = {r["stage"]: r["fps_median"] for r in table.to_dict("records")}
+    if "foreground only" in rows:
+        print("warm-up: once per sequence, not in the front end's frames/s; front end / "
+              f"foreground only: {rows['front end'] / rows['foreground only']:.2f} of the frames/s")
     if args.csv:
         args.csv.parent.mkdir(parents=True, exist_ok=True)
         table.to_csv(args.csv, index=False, lineterminator="\n")
