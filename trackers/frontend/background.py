@@ -294,9 +294,8 @@ class BackgroundModel:
         if np.all(np.abs(gain - 1.0) < 0.01):
             return frame
         lut = np.clip(np.arange(256, dtype=np.float32)[:, None] / gain[None, :] + 0.5, 0, 255)
-        lut = lut.astype(np.uint8)
-        return cv2.merge([cv2.LUT(frame[..., c], np.ascontiguousarray(lut[:, c]))
-                          for c in range(3)])
+        # one 3-channel table: each channel through its own column, in one pass
+        return cv2.LUT(frame, lut.astype(np.uint8).reshape(256, 1, 3))
 
     def _apply(self, frame: np.ndarray, rate: float) -> np.ndarray:
         out = self._model.apply(self._compensate(self._small(frame)), learningRate=rate)
