@@ -14,7 +14,7 @@
     384x288 and 80 frames/s at 768x576.
 
 Run: ``python benchmarks/bench_frontend.py [--frames N] [--skip-quality] [--skip-speed]``.
-Needs ``../shared/data/CAVIAR-OneLeaveShop1cor`` (or $OCCBENCH_DATA); exits with a message
+Reads the shipped CAVIAR-OneLeaveShop1cor (``harness.paths``, $OCCBENCH_DATA moves it); exits with a message
 when it is absent.
 """
 
@@ -42,11 +42,11 @@ from hydra.utils import instantiate
 from harness.detect import match_count, run_detection
 from harness.frontend_source import compose_config
 from harness.io.mot import read_mot
+from harness.paths import data_path
 from trackers.frontend.blobs import blobs_from_mask
 from trackers.frontend.features import ellipse_histograms
 
-DATA = Path(os.environ.get("OCCBENCH_DATA", ROOT.parent / "shared" / "data"))
-CAVIAR = DATA / "CAVIAR-OneLeaveShop1cor"
+CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
 
 #: (label, detector config, overrides) compared in (a)
 QUALITY = [
@@ -108,16 +108,18 @@ def _timed(fn, *args):
 
 def speed(n_frames: int) -> None:
     cv2.setNumThreads(1)
-    paths = sorted((CAVIAR / "img1").glob("*.jpg"))[:n_frames]
-    print(f"\n(b) speed, one core (cv2.setNumThreads(1)), {len(paths)} CAVIAR frames, "
+    from harness.datasets.caviar import load_caviar
+
+    (seq,) = load_caviar(CAVIAR)
+    originals = [img for k, img in seq.frames() if k <= n_frames]
+    print(f"\n(b) speed, one core (cv2.setNumThreads(1)), {len(originals)} CAVIAR frames, "
           "frames/s per stage (mean time per frame in ms)")
     stages = ("decode", "background", "background x0.5", "morphology", "blobs", "foreground det",
               "silhouette det", "hog det", "features")
     rows = {}
     for scale in (1, 2):
         jpegs = []
-        for p in paths:
-            img = cv2.imread(str(p))
+        for img in originals:
             if scale != 1:
                 img = cv2.resize(img, None, fx=scale, fy=scale, interpolation=cv2.INTER_LINEAR)
             jpegs.append(cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 90])[1])
@@ -183,7 +185,7 @@ def main() -> int:
     ap.add_argument("--skip-quality", action="store_true")
     ap.add_argument("--skip-speed", action="store_true")
     args = ap.parse_args()
-    if not (CAVIAR / "img1").is_dir():
+    if not CAVIAR.is_dir():
         print(f"bench_frontend: CAVIAR data not found at {CAVIAR} (set OCCBENCH_DATA); skipped")
         return 0
     if not args.skip_quality:

@@ -8,8 +8,7 @@ as candidates), as CPU time (``time.process_time``, best of ``--repeats`` runs: 
 machine may be shared). Target: >= 1,000 frames/s.
 
 Accuracy: IDF1, HOTA, MOTA, IDs and Frag of ``pbm`` and ``baseline`` (both with their
-``conf/tracker`` defaults) on the synthetic suite and, when ``../shared/data`` is present,
-on CAVIAR OneLeaveShop1cor, with ``NoisyGroundTruth(miss_rate, seed)`` detections.
+``conf/tracker`` defaults) on the synthetic suite and on the shipped CAVIAR OneLeaveShop1cor, with ``NoisyGroundTruth(miss_rate, seed)`` detections.
 
     .venv/bin/python benchmarks/bench_pbm.py [--speed-frames 300] [--repeats 3] [--miss 0.3]
         [--seed 0] [--skip-speed] [--skip-accuracy] [--length 150]
@@ -30,10 +29,11 @@ from omegaconf import OmegaConf
 
 from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
 from harness.detection_sources import NoisyGroundTruth
+from harness.paths import data_path
 from harness.run import run_sequence, score, summary_rows
 
 ROOT = Path(__file__).resolve().parents[1]
-CAVIAR = ROOT.parent / "shared" / "data" / "CAVIAR-OneLeaveShop1cor"
+CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
 SHOWN = ["IDF1", "HOTA", "MOTA", "IDs", "Frag", "Recall", "Precision"]
 
 
@@ -107,9 +107,9 @@ def main() -> None:
         accuracy(suite, miss, args.seed, "auto",
                  f"synthetic suite, noisy_gt miss {miss} seed {args.seed}, exact foreground")
     if CAVIAR.is_dir():
-        from harness.datasets.mot import load_mot
+        from harness.datasets.caviar import load_caviar
 
-        cav = load_mot(CAVIAR)
+        cav = load_caviar(CAVIAR)
         for fg in ("none", "mog2"):
             accuracy(cav, args.miss, args.seed, fg,
                      f"CAVIAR OneLeaveShop1cor, noisy_gt miss {args.miss} seed {args.seed}, foreground {fg}")

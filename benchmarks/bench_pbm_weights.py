@@ -5,7 +5,7 @@ models were) writes the models and the learned omega (``--models``). Evaluation 
 data, each variant with those same models (only omega differs): ``hand`` = omega of
 ``conf/tracker/pbm.yaml``, ``learned`` = omega of the fit. Data: the synthetic suite at
 ``--seeds`` (not 0, which the defaults were tuned on, not the fit seed) with ``NoisyGroundTruth``
-at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (``../shared/data``) at ``--miss``
+at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (shipped, ``harness.paths``) at ``--miss``
 with foreground none, detection noise seeded by each of ``--seeds``. Prints the COMBINED
 HOTA, IDF1, MOTA, IDs, Frag per data set and variant (per sequence with ``--per-sequence``).
 
@@ -42,10 +42,11 @@ from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
 from harness.detection_sources import NoisyGroundTruth
 from harness.fit.pbm import load_feature_weights
 from harness.fit.pbm import main as fit_main
+from harness.paths import data_path
 from harness.run import run_sequence, score, summary_rows
 
 ROOT = Path(__file__).resolve().parents[1]
-CAVIAR = ROOT.parent / "shared" / "data" / "CAVIAR-OneLeaveShop1cor"
+CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
 SHOWN = ["HOTA", "IDF1", "MOTA", "IDs", "Frag", "Recall", "Precision"]
 
 
@@ -114,9 +115,9 @@ def main() -> None:
     if args.skip_caviar:
         return
     if CAVIAR.is_dir():
-        from harness.datasets.mot import load_mot
+        from harness.datasets.caviar import load_caviar
 
-        caviar = load_mot(CAVIAR)
+        caviar = load_caviar(CAVIAR)
         for seed in args.seeds:
             accuracy(caviar, variants, models, args.miss, seed, "none",
                      f"CAVIAR OneLeaveShop1cor, noisy_gt miss {args.miss} seed {seed}, foreground none",

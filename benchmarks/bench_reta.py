@@ -10,7 +10,7 @@ are the boxes of people at least 30 % visible.
 Accuracy: IDF1 and HOTA (``harness.metrics``) of reta and the baseline on the synthetic
 suite (``harness.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
 (miss rate 0 and 0.3), and on CAVIAR OneLeaveShop1cor (noisy gt, miss 0.3, seed 0) when
-``../shared/data`` (or $OCCBENCH_DATA) holds it.
+the data root (``harness.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
 Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]``.
 """
@@ -35,6 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from harness.paths import data_path
 from trackers.baseline import BaselineTracker
 from trackers.records import Detections
 from trackers.three_hypothesis import RetaTracker
@@ -128,8 +129,7 @@ def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
     suite = load_suite()
     for miss in miss_rates:
         run("synthetic", suite, miss)
-    data = Path(os.environ.get("OCCBENCH_DATA", ROOT.parent / "shared" / "data"))
-    caviar = data / "CAVIAR-OneLeaveShop1cor"
+    caviar = data_path("CAVIAR-OneLeaveShop1cor")
     if caviar.is_dir():
         from harness.datasets.caviar import load_caviar
 

@@ -1,1 +1,5 @@
 """occbench harness: datasets, detection sources, runs, evaluation and reports."""
+
+from harness.paths import register_resolver as _register_resolver
+
+_register_resolver()  # configs name data files as ${occbench.data:...} (harness.paths)

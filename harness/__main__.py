@@ -8,7 +8,7 @@ config.yaml) and prints the COMBINED comparison table. Examples::
     python -m harness tracker=baseline
     python -m harness dataset=synthetic dataset.scenarios=[stop_behind] dataset.seed=3
     python -m harness detector=noisy_gt detector.miss_rate=0.3
-    python -m harness dataset=mot dataset.root=../shared/data/trajectories tracker=baseline
+    python -m harness dataset=mot dataset.root=datasets/trajectories/TUD-Campus dataset.image_size=[640,480] tracker=baseline
     python -m harness +external.sort=path/to/results   # score another tracker's files too
 
 The job returns the objective for sweepers: the COMBINED ``objective.metric`` of

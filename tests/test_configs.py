@@ -24,7 +24,6 @@ from harness.datasets.base import Sequence
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = ROOT / "conf"
-SHARED = ROOT.parent / "shared" / "data"
 GROUPS = ("dataset", "detector", "tracker", "evaluation", "experiment")
 
 
@@ -140,8 +139,6 @@ def test_default_app_config():
 def test_dataset_config_instantiates(name, fixtures):
     cfg = _compose("config", [f"dataset={name}", *_fill("dataset", name, fixtures)])
     _skip_unbuilt(cfg.dataset)
-    if name == "caviar" and not Path(str(cfg.dataset.root)).exists():
-        pytest.skip(f"CAVIAR data not found at {cfg.dataset.root} (shared data absent)")
     seqs = instantiate(cfg.dataset, _convert_="all")
     seqs = [seqs] if isinstance(seqs, Sequence) else list(seqs)
     assert seqs and all(isinstance(s, Sequence) and s.info.length > 0 for s in seqs)

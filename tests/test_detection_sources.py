@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import motmetrics
@@ -16,11 +15,12 @@ from harness.datasets.caviar import load_caviar
 from harness.datasets.mot import ground_truth_from_table, load_mot
 from harness.detection_sources import NoisyGroundTruth, PublicDetections
 from harness.io.mot import MotTable, read_mot
+from harness.paths import SHIPPED_DATA
 from trackers.geometry import clip_boxes, iou_matrix
 from trackers.records import Detections, SequenceInfo
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = Path(os.environ.get("OCCBENCH_DATA", ROOT.parent / "shared" / "data"))
+DATA = SHIPPED_DATA  # the sample shipped in datasets/
 CAVIAR = DATA / "CAVIAR-OneLeaveShop1cor"
 PETS = DATA / "trajectories" / "PETS09-S2L1"
 MM_DATA = Path(motmetrics.__file__).parent / "data"
@@ -196,7 +196,6 @@ def test_noisy_gt_needs_gt_and_start():
         NoisyGroundTruth().detect(1, None)
 
 
-@pytest.mark.skipif(not (CAVIAR / "gt" / "cols1gt.xml").is_file(), reason=f"no {CAVIAR}")
 def test_noiseless_on_caviar_skips_only_occluded_people():
     (seq,) = load_caviar(CAVIAR)
     out = run(NoisyGroundTruth(), seq)
@@ -265,7 +264,6 @@ def test_public_detections_from_an_empty_det_file(tmp_path):
     assert [len(d) for d in out.values()] == [0, 0, 0]
 
 
-@pytest.mark.skipif(not (PETS / "det" / "det.txt").is_file(), reason=f"no {PETS}")
 def test_public_detections_of_pets_match_the_file():
     (seq,) = load_mot(PETS)
     out = run(PublicDetections(min_score=0.9), seq)

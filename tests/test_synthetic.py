@@ -21,7 +21,6 @@ from harness.datasets.synthetic import (
 from harness.io.mot import read_mot
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "data" / "trajectories" / "PETS09-S2L1"
 OCCLUSION_PRESETS = ("crossing", "stop_behind", "follow_occluder", "uturn_behind")
 
 
@@ -330,12 +329,8 @@ def test_configs_compose_and_instantiate() -> None:
         seqs = instantiate(cfg.dataset)
         assert [s.info.name for s in seqs] == ["crossing", "crowd"]
         assert seqs[0].seed == 3 and seqs[0].info.length == 5
-        if SHARED.is_dir():
-            cfg = compose(
-                "config",
-                overrides=["dataset=replay", f"dataset.gt_path={SHARED}", "dataset.max_frames=10"],
-            )
-            (rep,) = instantiate(cfg.dataset)
-            assert rep.info.width == 768 and rep.info.length == 10
-            assert rep.public_detections is not None and rep.public_detections.frames.max() <= 10
-            assert len(rep.gt.table) > 0
+        cfg = compose("config", overrides=["dataset=replay", "dataset.max_frames=10"])
+        (rep,) = instantiate(cfg.dataset)  # the shipped PETS09-S2L1 trajectories
+        assert rep.info.width == 768 and rep.info.length == 10
+        assert rep.public_detections is not None and rep.public_detections.frames.max() <= 10
+        assert len(rep.gt.table) > 0

@@ -1,6 +1,6 @@
 """MOTChallenge sequence folders: ``<root>/<sequence>/{seqinfo.ini, img1/, gt/gt.txt, det/det.txt}``.
 
-Layout of one sequence folder (MOT15/16/17/20 and the folders under ``../shared/data``)::
+Layout of one sequence folder (MOT15/16/17/20 and the shipped ``datasets/trajectories/``)::
 
     seqinfo.ini          [Sequence] name, imDir, frameRate, seqLength, imWidth, imHeight, imExt
     img1/000001.jpg ...  frame k is ``<imDir>/<k:06d><imExt>`` (optional: box-only without it)
