@@ -717,3 +717,34 @@ def test_carved_rows_equal_the_numpy_selection_of_searched_and_aligned_boxes():
     np.testing.assert_array_equal(pj_h[qs], pj[best])
     np.testing.assert_array_equal(dof[qs], dofs_from_heads(heads[qs], boxes[best, 2], boxes[best, 3],
                                                            alpha[ti[qs]], beta[ti[qs]]))
+
+
+def test_a_flickering_false_alarm_over_background_is_never_reported():
+    """A detection box over empty background, present two frames of every three from the
+    first frame on, beside one walking person: with foreground, pbm never reports it
+    (it holds no foreground, PBM 2), and keeps the person; without the support rule
+    (``min_support=0``) the same input starts and reports a false track."""
+    scene = S.Scene(320, 240, [S.Person(1, S.walk(40, (40, 60), (2.0, 0.0), (30, 105)),
+                                        shirt=(40, 40, 200), pants=(90, 60, 30))], seed=4)
+    alarm = np.array([220.0, 40.0, 30.0, 100.0])
+
+    def reported_alarm(tracker) -> tuple[int, set[int]]:
+        hits, person_ids = 0, set()
+        for k in range(scene.length):
+            img, lab = scene.render(k)
+            det = scene.detections(k, lab)
+            if k % 3 != 2:
+                det = Detections(np.vstack([det.boxes, alarm]), np.ones(len(det) + 1))
+            for t in tracker.update(img, det, lab):
+                if not t.state.reported:
+                    continue
+                if iou_matrix(t.box[None], alarm[None])[0, 0] > 0.3:
+                    hits += 1
+                if iou_matrix(t.box[None], scene.gt(k)[1][None])[0, 0] >= 0.5:
+                    person_ids.add(t.id)
+        return hits, person_ids
+
+    hits, ids = reported_alarm(PBMTracker())
+    assert hits == 0
+    assert len(ids) == 1
+    assert reported_alarm(PBMTracker(min_support=0.0))[0] > 0

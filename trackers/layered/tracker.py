@@ -82,7 +82,11 @@ Adaptations (where the paper is vague or relies on what we do not have):
   image border, or its foreground area fallen below ``stale_fill`` of its model's (a wall).
   A part that is visible by all three yet fails to match ``stale_frames`` times is
   re-learned; a hidden part stays frozen, as in the paper.
-- Targets are born from detections (and from free blobs when ``blob_births``).
+- Targets are born from detections (and from free blobs when ``blob_births``), and with
+  foreground only from candidates whose parts hold foreground (``min_support``): a
+  detection over background is a false alarm, never a person.
+- ``occluded_cover`` (off by default): an unfound target is reported only while found
+  targets' boxes cover it.
 """
 
 from __future__ import annotations
@@ -100,7 +104,7 @@ from trackers.frontend.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.geometry import iou_matrix
+from trackers.geometry import iou_matrix, overlap_ratio_matrix
 from trackers.layered import warmup
 from trackers.layered._glue_kernels import (
     alive_rows,
@@ -224,6 +228,13 @@ class PBMTracker:
             ``max_report_misses`` frames, at its last box) or outside the image.
         stale_fill: ... and its foreground area is at least this fraction of its model's.
         relearn_rate: running-average step of a re-learned stale part (1 = replaced).
+        min_support: with foreground, a candidate starts a target only when the mean
+            foreground fraction of its five parts (``PartFeatures.area``) is at least this
+            (PBM 2: a person is a foreground region; a detection over background is a
+            false alarm); 0 = any detection starts one.
+        occluded_cover: with foreground, an unfound target is reported (OCCLUDED) only while
+            the boxes of found confirmed targets cover at least this fraction of its box
+            (evidence that it is hidden, not gone); 0 = off.
         warm_up: the first tracker built in a process runs ``warmup.scene`` and resets,
             so that numba's kernels are compiled or loaded (0.3-0.5 s) before the first
             real frame, not inside a timed ``update``.
@@ -287,7 +298,14 @@ class PBMTracker:
         stale_fill: float = 0.75,
         relearn_rate: float = 1.0,
         warm_up: bool = True,
+        min_support: float = 0.3,
+        occluded_cover: float = 0.0,
     ) -> None:
+        for name, v in (("min_support", min_support), ("occluded_cover", occluded_cover)):
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must lie in [0, 1], got {v}")
+        self.min_support = float(min_support)
+        self.occluded_cover = float(occluded_cover)
         if models is None:
             models = FeatureModels.default()
         elif isinstance(models, Mapping):
@@ -398,6 +416,7 @@ class PBMTracker:
         self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
         self._blob_pairs = 0
         self._frame = 0
+        self._had_fg = False
 
     # ------------------------------------------------------------------ candidates
     def _anchors(self, fg: np.ndarray | None, detections: Detections,
@@ -542,10 +561,15 @@ class PBMTracker:
         tis = np.concatenate([sti.repeat(m), ti[align_q]])
         feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
         # eqs. 11-13 of every carved box k against the model of its target tis[k]
-        pj, p = pair_scores(self.models, model, feats, tis, np.arange(len(tis)), targets.misses,
-                            self.omega, self.gamma, self.model_spread)
+        pj, p = self._scores(model, feats, tis, np.arange(len(tis)))
         kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q, align_q, m)
         return kept, p_h, pj_h, feats, k, dof
+
+    def _scores(self, model: PartFeatures, feats: PartFeatures, ti: np.ndarray,
+                n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Eqs. 11-13 of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
+        return pair_scores(self.models, model, feats, ti, n, self.targets.misses,
+                           self.omega, self.gamma, self.model_spread)
 
     # ------------------------------------------------------------------ pruning
     def _prune(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
@@ -620,6 +644,7 @@ class PBMTracker:
             else:
                 fg = foreground != 0
         self._frame += 1
+        self._had_fg = fg is not None
         H, W = frame.shape[:2]
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
@@ -659,8 +684,7 @@ class PBMTracker:
                 pred_wh, kinds, targets.dof, targets.misses,
                 self.search_overlap, present)
             # eqs. 11-13 for the unoccluded candidates
-            pj_in, p_in = pair_scores(self.models, model, feats, ti_in, n_in, targets.misses,
-                                      self.omega, self.gamma, self.model_spread)
+            pj_in, p_in = self._scores(model, feats, ti_in, n_in)
             pj_all[ti_in, n_in] = pj_in
             S[ti_in, n_in] = p_in
             found = (self._occluded_hypotheses(ti_s, n_s, kind_s, cand, fg, pred_wh, model)
@@ -762,6 +786,8 @@ class PBMTracker:
                 continue
             if cand.blob[n] and not self.blob_births:
                 continue
+            if fg is not None and feats.area[n].mean() < self.min_support:
+                continue  # too little foreground under its parts to be a person (PBM 2)
             if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > self.new_track_iou:
                 continue
             centroid = cand.centroid[n]
@@ -785,9 +811,17 @@ class PBMTracker:
             shown = found | (tg.confirmed & (tg.misses <= self.max_report_misses))
         rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
-        boxes, rects = tg.dof[rows[:, None], _BOX_COLUMNS], tg.parts.parts[rows]
+        boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         if self.report_predicted:
             boxes[:, :2] += np.where(found[rows, None], 0.0, tg.predicted_shift()[rows])
+        if self.occluded_cover > 0 and self._had_fg and not found[rows].all():
+            # evidence of occlusion: an unfound target is reported only while found
+            # confirmed targets' boxes cover at least ``occluded_cover`` of its box
+            fb = tg.dof[(found & tg.confirmed).nonzero()[0][:, None], _BOX_COLUMNS]
+            cover = overlap_ratio_matrix(boxes, fb).sum(axis=1) if len(fb) else np.zeros(len(rows))
+            keep = found[rows] | (cover >= self.occluded_cover)
+            rows, boxes = rows[keep], boxes[keep]
+        rects = tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
         found = found[rows]
         score = np.where(found, tg.score[rows].clip(0.0, 1.0), 0.0).tolist()
