@@ -84,3 +84,18 @@ def test_texture_colour_removes_a_floor_reflection_and_keeps_the_person():
     assert n_refl > 1000
     assert res["tc"][0] < 0.03 and res["tc"][0] < res["mog2"][0] / 3
     assert res["tc"][1] >= 0.95
+
+
+def test_compiled_mixture_matches_the_numpy_equations():
+    seq = load_scenario("crossing", seed=4, width=128, height=96, length=20, reflection=0.4)
+    ref = TextureColourMixture(history=30, compiled=False)
+    fast = TextureColourMixture(history=30, compiled=True)
+    agree = total = 0
+    for k in range(1, seq.info.length + 1):
+        f = seq.frame(k)
+        a, b = ref.apply(f, -1 if k > 3 else 0.3), fast.apply(f, -1 if k > 3 else 0.3)
+        agree += (a == b).sum()
+        total += a.size
+    assert agree / total >= 0.999
+    np.testing.assert_allclose(fast._w, ref._w, atol=1e-3)
+    np.testing.assert_allclose(fast.getBackgroundImage(), ref.getBackgroundImage(), atol=2)

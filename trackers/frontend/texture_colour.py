@@ -31,8 +31,8 @@ form the reference gives it, vectorised over the image:
 
 ``apply`` returns OpenCV's convention: 255 foreground, 127 background explained only by the
 invariance (matched although the plain colour differs by more than ``noise``: shadows and
-faint reflections, drawn for inspection), 0 background. Plain numpy; about 27k pixels per
-frame at the usual half working resolution.
+faint reflections, drawn for inspection), 0 background. The numpy code below is the
+reference; ``compiled`` runs the same equations as one numba pass.
 """
 
 from __future__ import annotations
@@ -81,6 +81,8 @@ class TextureColourMixture:
         shadow_ratio: darkest brightness ratio a still matched (cast shadows).
         highlight_ratio: brightest ratio a still matched.
         noise: grey levels of |I - mu| under which the colour always matches.
+        compiled: run ``apply`` as one compiled pass (``_texture_colour_kernel``, tested
+            against this numpy code); False runs the numpy equations below.
     """
 
     def __init__(
@@ -96,6 +98,7 @@ class TextureColourMixture:
         shadow_ratio: float = 0.5,
         highlight_ratio: float = 1.15,
         noise: float = 12.0,
+        compiled: bool = True,
     ) -> None:
         if modes < 1:
             raise ValueError(f"modes must be >= 1, got {modes}")
@@ -124,8 +127,9 @@ class TextureColourMixture:
         self.chroma_tolerance = float(chroma_tolerance)
         self.shadow_ratio, self.highlight_ratio = float(shadow_ratio), float(highlight_ratio)
         self.noise = float(noise)
+        self.compiled = bool(compiled)
         self._mu: np.ndarray | None = None  # (K, N, 3) colour means
-        self._t: np.ndarray | None = None  # (K, 8, N) texture means
+        self._t: np.ndarray | None = None  # (K, N, 8) texture means
         self._w: np.ndarray | None = None  # (K, N) weights
         self._shape: tuple[int, int] | None = None
 
@@ -138,7 +142,7 @@ class TextureColourMixture:
         K, N = self.modes, colour.shape[0]
         self._shape = shape
         self._mu = np.repeat(colour[None], K, axis=0)
-        self._t = np.repeat(tex[None], K, axis=0)
+        self._t = np.repeat(tex.T[None], K, axis=0)
         self._w = np.zeros((K, N), dtype=np.float32)
         self._w[0] = 1.0
 
@@ -147,7 +151,7 @@ class TextureColourMixture:
         invariance (K, N) bool (plain colour difference above ``noise``)."""
         mu, t = self._mu, self._t
         # D_tex = mean_n |s_n - t_kn| / 2
-        d_tex = np.abs(tex[None] - t).mean(axis=1) * 0.5
+        d_tex = np.abs(tex.T[None] - t).mean(axis=2) * 0.5
         # brightness ratio a = I.mu / |mu|^2, chromatic distortion c = |I - a mu| / (a |mu|)
         mu2 = np.einsum("knc,knc->kn", mu, mu) + 1.0
         a = np.einsum("nc,knc->kn", colour, mu) / mu2
@@ -165,13 +169,23 @@ class TextureColourMixture:
         """Label a (H, W, 3) uint8 frame (255 fg, 127 explained by invariance, 0 bg) and
         update the model with rate ``learningRate`` (-1: 1 / history; 0: no update)."""
         H, W = frame.shape[:2]
+        alpha = 1.0 / self.history if learningRate < 0 else float(learningRate)
+        if self.compiled and self._mu is not None and self._shape == (H, W):
+            from trackers.frontend._texture_colour_kernel import apply_kernel
+
+            label = np.empty((H, W), dtype=np.uint8)
+            apply_kernel(np.ascontiguousarray(frame), self._mu, self._t, self._w, alpha,
+                         self.texture_tau, self.texture_radius, 0.5 * self.noise,
+                         self.texture_weight, self.threshold, self.background_weight,
+                         self.chroma_tolerance, self.shadow_ratio, self.highlight_ratio,
+                         self.noise, label)
+            return label
         colour = frame.reshape(-1, 3).astype(np.float32)
         grey = colour.mean(axis=1).reshape(H, W) + 1.0
         tex = siltp(grey, self.texture_tau, self.texture_radius, 0.5 * self.noise).reshape(8, -1)
         if self._mu is None or self._shape != (H, W):
             self._init(colour, tex, (H, W))
             return np.zeros((H, W), dtype=np.uint8)
-        alpha = 1.0 / self.history if learningRate < 0 else float(learningRate)
         d, far = self.distances(colour, tex)
         N = colour.shape[0]
         cols = np.arange(N)
@@ -186,13 +200,13 @@ class TextureColourMixture:
             mk, mc = k[matched], cols[matched]
             w[mk, mc] += alpha
             self._mu[mk, mc] += alpha * (colour[mc] - self._mu[mk, mc])
-            self._t[mk, :, mc] += alpha * (tex[:, mc].T - self._t[mk, :, mc])
+            self._t[mk, mc] += alpha * (tex[:, mc].T - self._t[mk, mc])
             new = np.flatnonzero(~matched)
             if len(new):  # replace the weakest mode
                 kn = np.argmin(w[:, new], axis=0)
                 w[kn, new] = alpha
                 self._mu[kn, new] = colour[new]
-                self._t[kn, :, new] = tex[:, new].T
+                self._t[kn, new] = tex[:, new].T
         return label.reshape(H, W)
 
     def getBackgroundImage(self) -> np.ndarray | None:  # noqa: N802
