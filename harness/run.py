@@ -224,6 +224,17 @@ def _copy(a: np.ndarray | None) -> np.ndarray | None:
     return None if a is None else a.copy()
 
 
+def start_trackers(trackers: Mapping[str, Tracker], sequence: Sequence) -> None:
+    """Tell each tracker that has a ``start_sequence(info)`` method the sequence's
+    ``SequenceInfo`` (frame rate, size) before its first frame: trackers whose parameters
+    are in frames per second (e.g. BoxMOT's, ``trackers.outside.boxmot``) take the rate
+    from there rather than from a config value that would be wrong on another dataset."""
+    for tracker in trackers.values():
+        start = getattr(tracker, "start_sequence", None)
+        if callable(start):
+            start(sequence.info)
+
+
 def run_sequence(
     trackers: Mapping[str, Tracker],
     sequence: Sequence,
@@ -258,6 +269,7 @@ def run_sequence(
     name = sequence.info.name
     source.start(sequence)
     fg_of = ForegroundProvider(foreground, sequence, background)
+    start_trackers(trackers, sequence)
     rows = {t: _Rows() for t in trackers}
     out = {t: TrackerOutput(MotTable.empty()) for t in trackers}
     active = dict(trackers)
@@ -513,6 +525,20 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
     return out
 
 
+def _missing_library(err: BaseException) -> bool:
+    """Whether ``err`` (or an exception it was raised from) is an outside tracker's missing
+    optional library (``trackers.outside._common.MissingLibrary``)."""
+    from trackers.outside._common import MissingLibrary
+
+    seen = set()
+    while err is not None and id(err) not in seen:
+        if isinstance(err, MissingLibrary):
+            return True
+        seen.add(id(err))
+        err = err.__cause__ or err.__context__
+    return False
+
+
 def build_tracker(name: str, node: Any) -> Tracker:
     """Instantiate one tracker config; RunError with a clear message when it cannot be."""
     from hydra.utils import instantiate
@@ -649,8 +675,19 @@ def run_experiment(
 
     # check everything that can be checked before the first frame
     configs = tracker_configs(_cfg_get(cfg, "tracker"), tracker_name)
-    for name, node in configs.items():
-        build_tracker(name, node)
+    group = "_target_" not in _cfg_get(cfg, "tracker")
+    for name, node in list(configs.items()):
+        try:
+            build_tracker(name, node)
+        except RunError as err:
+            # in a group (tracker=everyone) an outside tracker whose optional library is
+            # not installed is left out; selected alone, it stops the run
+            if not (group and _missing_library(err)):
+                raise
+            log.warning("tracker %s left out: %s", name, err.__cause__)
+            del configs[name]
+    if not configs:
+        raise RunError("no tracker of the selected group can be built (see the warnings)")
     externals = external_folders(_cfg_get(cfg, "external", {}), configs)
     build_source(_cfg_get(cfg, "detector"))
     sequences = load_sequences(_cfg_get(cfg, "dataset"))

@@ -49,12 +49,13 @@ def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: De
                                                            dict[str, list[Track]]]]:
     """Yield ``(k, frame, {tracker: tracks})`` for frames 1..``last`` (default: all), running
     every tracker on the same detections as ``harness.run.run_sequence`` does."""
-    from harness.run import ForegroundProvider, clean_detections
+    from harness.run import ForegroundProvider, clean_detections, start_trackers
 
     source.start(sequence)
     fg_of = ForegroundProvider(foreground, sequence, background)
     for t in trackers.values():
         t.reset()
+    start_trackers(trackers, sequence)
     last = sequence.info.length if last is None else min(last, sequence.info.length)
     for k in range(1, last + 1):
         frame = sequence.frame(k)

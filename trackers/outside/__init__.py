@@ -26,6 +26,9 @@ Modules:
     norfair: ``NorfairTracker`` (tryolabs norfair, IoU distance on the two box corners).
     motpy: ``MotpyTracker`` (wmuron motpy, Kalman box tracker with IoU matching).
     ocsort: ``OCSortTracker`` (Cao et al. 2023, official code as packaged by ``ocsort``).
+    boxmot: ``BoxmotTracker`` (BoxMOT's motion-only trackers: BoT-SORT, ByteTrack, OC-SORT,
+        DeepOCSORT, HybridSORT, BoostTrack, OccluBoost, SFSORT; no ReID, no camera-motion
+        compensation; extra ``boxmot``).
     bytetrack: ``ByteTrackTracker`` (Zhang et al. 2022, OUR re-implementation of BYTE on
         the project's Kalman filter and Hungarian assignment: no installable package
         implements it without torch or a second OpenCV).
@@ -33,9 +36,10 @@ Modules:
 
 from __future__ import annotations
 
+from trackers.outside.boxmot import BoxmotTracker
 from trackers.outside.bytetrack import ByteTrackTracker
 from trackers.outside.motpy import MotpyTracker
 from trackers.outside.norfair import NorfairTracker
 from trackers.outside.ocsort import OCSortTracker
 
-__all__ = ["ByteTrackTracker", "MotpyTracker", "NorfairTracker", "OCSortTracker"]
+__all__ = ["BoxmotTracker", "ByteTrackTracker", "MotpyTracker", "NorfairTracker", "OCSortTracker"]

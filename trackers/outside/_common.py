@@ -14,6 +14,11 @@ EXTRA = "outside"
 NO_DEPS = "norfair==2.3.0 ocsort==0.0.2"
 
 
+class MissingLibrary(ImportError):
+    """An outside tracker's optional library is not installed (the message says how to
+    install it). A run of a tracker group (``tracker=everyone``) skips such a tracker."""
+
+
 def require(module: str, install: str, tracker: str) -> ModuleType:
     """Import ``module`` or raise an ImportError saying how to install it.
 
@@ -25,7 +30,7 @@ def require(module: str, install: str, tracker: str) -> ModuleType:
     try:
         return importlib.import_module(module)
     except ImportError as err:
-        raise ImportError(
+        raise MissingLibrary(
             f"{tracker} needs the outside library '{module}', which is not installed. "
             f'Install the outside trackers: pip install -e ".[{EXTRA}]" && pip install '
             f"--no-deps {NO_DEPS}; or this one alone: pip install {install} "
