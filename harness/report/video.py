@@ -9,8 +9,9 @@ its tracking graph, Reta et al.'s, is drawn by ``harness.report.graph.draw_graph
 dashed and grey ellipses with the edges from the previous frame), ground truth thin white
 underneath when asked.
 
-Outputs: an MP4 (``cv2.VideoWriter``, fourcc mp4v) of the panels, and a contact sheet: a PNG
-grid with one row per chosen frame and one column per tracker.
+Outputs: an H.264 MP4 (``H264Writer``: the ffmpeg that imageio-ffmpeg ships, libx264,
+yuv420p, avc1 in the container, so browsers play it) of the panels, and a contact sheet: a
+PNG grid with one row per chosen frame and one column per tracker.
 
 Command line (config overrides as for ``python -m harness``, or the config of a finished run)::
 
@@ -37,6 +38,51 @@ from harness.sources import DetectionSource
 from trackers.records import Track
 
 log = logging.getLogger(__name__)
+
+
+class H264Writer:
+    """Writes BGR frames into an H.264 MP4 (libx264, yuv420p, ``+faststart``) through the
+    ffmpeg binary that imageio-ffmpeg ships; odd frame sizes are padded with one black row
+    or column (yuv420p needs even sizes).
+
+    Args:
+        path: the MP4 to write.
+        fps: frames per second.
+        size: (width, height) of every frame.
+        crf: x264 constant rate factor (lower = better; 18 is visually lossless).
+    """
+
+    def __init__(self, path: str | Path, fps: float, size: tuple[int, int], crf: int = 18) -> None:
+        import imageio_ffmpeg
+
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        w, h = int(size[0]), int(size[1])
+        if w <= 0 or h <= 0:
+            raise ValueError(f"size must be positive, got {size}")
+        self.size = (w, h)
+        self._pad = (h % 2, w % 2)
+        self._gen = imageio_ffmpeg.write_frames(
+            str(self.path), (w + self._pad[1], h + self._pad[0]), fps=float(fps),
+            codec="libx264", pix_fmt_in="bgr24", pix_fmt_out="yuv420p", macro_block_size=1,
+            ffmpeg_log_level="error",
+            output_params=["-crf", str(int(crf)), "-preset", "medium", "-threads", "1",
+                           "-movflags", "+faststart"])
+        self._gen.send(None)  # start ffmpeg
+
+    def write(self, image: np.ndarray) -> None:
+        """Append one (H, W, 3) uint8 BGR frame of the writer's size."""
+        if image.shape[:2] != (self.size[1], self.size[0]):
+            raise ValueError(f"{self.path}: frame of shape {image.shape}, the video is "
+                             f"{self.size[0]}x{self.size[1]}")
+        if any(self._pad):
+            image = cv2.copyMakeBorder(image, 0, self._pad[0], 0, self._pad[1],
+                                       cv2.BORDER_CONSTANT, value=0)
+        self._gen.send(np.ascontiguousarray(image))
+
+    def release(self) -> None:
+        """Finish the file (ffmpeg writes the index)."""
+        self._gen.close()
 
 
 def _copy(a: np.ndarray | None) -> np.ndarray | None:
@@ -177,10 +223,7 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
                 if writer is None:
                     Path(video).parent.mkdir(parents=True, exist_ok=True)
                     fps = sequence.info.fps or 25.0
-                    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), fps,
-                                             (image.shape[1], image.shape[0]))
-                    if not writer.isOpened():
-                        raise OSError(f"cannot open a video writer for {video}")
+                    writer = H264Writer(video, fps, (image.shape[1], image.shape[0]))
                 writer.write(image)
     finally:
         if writer is not None:
