@@ -3,8 +3,8 @@
 GT is a gt file or a folder, either in MOTChallenge layout (``<seq>/gt/gt.txt``) or flat
 (``<seq>.txt``). RESULTS is a result file or a folder of ``<seq>.txt`` files. A sequence
 without a result file is scored as an empty result (a warning is logged). The table (one
-row per sequence and a ``COMBINED`` row; ratios shown in percent) is printed, and written
-as CSV with ``--csv`` (ratios as fractions). Exit status 0 on success, 2 on bad paths.
+row per sequence and a ``COMBINED`` row; ratios as fractions with 3 decimals, as the app
+prints them) is printed, and written as CSV with ``--csv`` (6 decimals). Exit status 0 on success, 2 on bad paths.
 """
 
 from __future__ import annotations
@@ -107,12 +107,10 @@ def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) ->
 
 
 def format_table(table: pd.DataFrame) -> str:
-    """The table as text: ratios in percent with 1 decimal, counts as integers."""
-    shown = table.copy()
+    """The table as text: ratios as fractions with 3 decimals, counts as integers."""
     ratios = [c for c in COLUMNS if c not in COUNT_COLUMNS]
-    shown[ratios] = shown[ratios] * 100.0
-    formatters = {c: "{:.1f}".format for c in ratios}
-    return shown.to_string(index=False, formatters=formatters, na_rep="-")
+    formatters = {c: "{:.3f}".format for c in ratios}
+    return table.to_string(index=False, formatters=formatters, na_rep="-")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -122,7 +120,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("gt", type=Path, help="gt file, or folder of <seq>/gt/gt.txt or <seq>.txt")
     p.add_argument("results", type=Path, help="result file, or folder of <seq>.txt")
-    p.add_argument("--csv", type=Path, default=None, help="write the table here (fractions)")
+    p.add_argument("--csv", type=Path, default=None, help="write the table here")
     p.add_argument(
         "--iou",
         type=float,
@@ -140,7 +138,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (FileNotFoundError, ValueError) as err:  # MotFormatError is a ValueError
         print(f"error: {err}", file=sys.stderr)
         return 2
-    print(f"IoU threshold {args.iou:g}; ratios in %")
+    print(f"IoU threshold {args.iou:g}; ratios as fractions")
     print(format_table(table))
     if args.csv is not None:
         args.csv.parent.mkdir(parents=True, exist_ok=True)

@@ -34,10 +34,11 @@ import numpy as np
 import pandas as pd
 
 from harness.datasets.base import Sequence
-from harness.io.mot import MotTable, read_mot, write_mot
-from harness.metrics import COLUMNS, SequenceScore, score_sequence, summarize
+from harness.io.mot import MotTable, read_mot, write_mot, write_mot_gt, write_seqinfo, write_seqmap
+from harness.metrics import COLUMNS, SequenceScore, hota_alpha_table, score_sequence, summarize
 from harness.report.bars import DEFAULT_METRICS, metric_bars
 from harness.report.graph import GraphExport
+from harness.report.hota_alpha import hota_alpha_plot
 from harness.report.tables import comparison, direction, per_sequence, to_latex, to_markdown
 from harness.sources import DetectionSource
 from trackers.records import Detections, Track
@@ -403,15 +404,19 @@ class RunWriter:
     """Writes a run directory as results arrive, so that a later failure loses nothing.
 
     Layout: ``config.yaml`` (resolved config), ``tracks/<tracker>/<sequence>.txt`` (MOT
-    results, written as each tracker finishes a sequence), ``metrics.csv`` and ``summary.md``
-    (rewritten after each sequence), ``timings.csv``, ``errors.txt`` (only when something
-    failed), ``summary.tex`` (COMBINED LaTeX table) and ``plots/metrics.png`` (at the end).
+    results, written as each tracker finishes a sequence), ``gt/<sequence>/gt/gt.txt`` and
+    ``gt/<sequence>/seqinfo.ini`` (the ground truth scored against, before the trackers run)
+    with ``gt/seqmap.txt`` (the sequences tracked so far): a MOTChallenge benchmark folder
+    that TrackEval re-scores as it is; ``metrics.csv`` and ``summary.md`` (rewritten after
+    each sequence), ``timings.csv``, ``errors.txt`` (only when something failed),
+    ``summary.tex`` (COMBINED LaTeX table), ``hota_alpha.csv`` (HOTA and its sub-metrics at
+    each alpha) and ``plots/`` (``metrics.png``, ``hota_alpha.png``) at the end.
     """
 
     def __init__(self, out_dir: str | Path) -> None:
         self.out_dir = Path(out_dir)
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        for stale in ("errors.txt",):
+        for stale in ("errors.txt", "gt/seqmap.txt"):
             (self.out_dir / stale).unlink(missing_ok=True)
 
     def track_path(self, tracker: str, sequence: str) -> Path:
@@ -420,6 +425,24 @@ class RunWriter:
     def tracks(self, tracker: str, sequence: str, table: MotTable) -> Path:
         path = self.track_path(tracker, sequence)
         write_mot(path, table.frames, table.ids, table.boxes, table.conf)
+        return path
+
+    def ground_truth(self, seq: Sequence) -> Path | None:
+        """Write ``gt/<sequence>/gt/gt.txt`` (``write_mot_gt``) and its ``seqinfo.ini``; None
+        when the sequence has no ground truth."""
+        if seq.gt is None:
+            return None
+        folder = self.out_dir / "gt" / seq.info.name
+        write_mot_gt(folder / "gt" / "gt.txt", seq.gt.table)
+        info = seq.info
+        write_seqinfo(folder / "seqinfo.ini", info.name, info.length, info.fps, info.width,
+                      info.height)
+        return folder / "gt" / "gt.txt"
+
+    def seqmap(self, names: list[str]) -> Path:
+        """Write ``gt/seqmap.txt`` naming ``names``."""
+        path = self.out_dir / "gt" / "seqmap.txt"
+        write_seqmap(path, names)
         return path
 
     def metrics(self, frame: pd.DataFrame) -> None:
@@ -714,9 +737,11 @@ def run_experiment(
         log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
 
     overall = (progress or _no_progress)(total=len(sequences), desc="sequences", unit="seq")
+    tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
     for seq in sequences:
         sname = seq.info.name
         try:
+            writer.ground_truth(seq)
             source = build_source(_cfg_get(cfg, "detector"))
             if protocol == "single_target":
                 from harness.protocols import run_single_target
@@ -733,6 +758,9 @@ def run_experiment(
             fail("*", sname, "sequence", err, traceback.format_exc())
             overall.update(1)
             continue
+        if seq.gt is not None and outputs:
+            tracked.append(sname)
+            writer.seqmap(tracked)
         for n, out in outputs.items():
             path = writer.tracks(n, sname, out.table)
             timings.append({"tracker": n, "sequence": sname, "frames": out.frames,
@@ -781,6 +809,14 @@ def run_experiment(
         metric_bars(metrics, writer.out_dir / "plots" / "metrics.png", plot_metrics, title)
     except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
         fail("*", "*", "plot", err, traceback.format_exc())
+    try:  # HOTA and its sub-metrics at each alpha, and plots/hota_alpha.png
+        alpha = _hota_alpha_frame(scores)
+        if not alpha.empty:
+            writer.text("hota_alpha.csv", alpha.to_csv(index=False, float_format="%.6f",
+                                                       lineterminator="\n"))
+            hota_alpha_plot(alpha, writer.out_dir / "plots" / "hota_alpha.png", title)
+    except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
+        fail("*", "*", "hota_alpha", err, traceback.format_exc())
     return ExperimentResult(metrics, failures, pd.DataFrame(timings), writer.out_dir, names)
 
 
@@ -836,6 +872,17 @@ def _with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]])
         return metrics
     return metrics.merge(extra_rows(extras), on=["tracker", "sequence"], how="left",
                          validate="one_to_one")
+
+
+def _hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+    """``hota_alpha.csv``: ``tracker`` + ``harness.metrics.hota_alpha_table`` per tracker."""
+    parts = []
+    for name, s in scores.items():
+        if s:
+            frame = hota_alpha_table(dict(s))
+            frame.insert(0, "tracker", name)
+            parts.append(frame)
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
 
 
 def _metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:

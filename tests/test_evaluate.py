@@ -53,7 +53,8 @@ def tud_scores():
 
 def test_columns_contract():
     assert COLUMNS == ["MOTA", "MOTP", "IDF1", "IDP", "IDR", "Recall", "Precision", "GT", "MT",
-                       "PT", "ML", "FP", "FN", "IDs", "Frag", "HOTA", "DetA", "AssA", "LocA"]  # fmt: skip
+                       "PT", "ML", "FP", "FN", "IDs", "Frag", "HOTA", "DetA", "AssA", "LocA",
+                       "DetRe", "DetPr", "AssRe", "AssPr"]  # fmt: skip
 
 
 def test_devkit_figures_for_tud(tud_scores):
@@ -116,8 +117,14 @@ def test_identity_switch_and_fragmentation_hand_case():
     gt = table([(f, 1, 10 * f, 0, 10, 20) for f in range(1, 7)])
     res = table([(f, 1 if f < 3 else 2, 10 * f, 0, 10, 20) for f in (1, 2, 4, 5, 6)])
     row = summarize({"s": score_sequence(gt, res)}).iloc[0]
-    assert (row["FN"], row["FP"], row["IDs"], row["Frag"]) == (1, 0, 1, 1)
+    # a frame without any tracker box does not end a tracked stretch (TrackEval, devkit)
+    assert (row["FN"], row["FP"], row["IDs"], row["Frag"]) == (1, 0, 1, 0)
     assert row["MOTA"] == pytest.approx(1 - 2 / 6)
+    # with another box in frame 3 the person goes untracked there: one fragmentation
+    other = table([(f, 1 if f < 3 else 2, 10 * f, 0, 10, 20) for f in (1, 2, 4, 5, 6)]
+                  + [(3, 9, 200, 100, 10, 20)])
+    row2 = summarize({"s": score_sequence(gt, other)}).iloc[0]
+    assert (row2["FN"], row2["FP"], row2["IDs"], row2["Frag"]) == (1, 1, 1, 1)
     # best identity mapping: gt 1 <-> id 2 (3 frames): IDP = 3/5, IDR = 3/6
     assert row["IDP"] == pytest.approx(3 / 5)
     assert row["IDR"] == pytest.approx(3 / 6)
@@ -226,7 +233,8 @@ def test_cli_folders_print_and_write_csv(tud_dirs, layout, tmp_path, capsys):
     gt = nested if layout == "nested" else flat
     assert main([str(gt), str(res), "--csv", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "TUD-Campus" in printed and COMBINED in printed and "55.5" in printed
+    assert "TUD-Campus" in printed and COMBINED in printed and "0.555" in printed  # fractions
+    assert "55.5" not in printed
     csv = pd.read_csv(out)
     assert csv.columns.tolist() == ["sequence", *COLUMNS]
     assert csv["sequence"].tolist() == [*TUD, COMBINED]

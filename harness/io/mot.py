@@ -150,3 +150,46 @@ def write_mot(path: str | Path, frames: np.ndarray, ids: np.ndarray, boxes: np.n
     tmp = path.with_suffix(path.suffix + ".part")
     tmp.write_text("".join(lines))
     tmp.replace(path)
+
+
+def write_mot_gt(path: str | Path, table: MotTable) -> None:
+    """Write ground truth as MOT16+ gt rows ``frame,id,left,top,width,height,conf,class,visibility``.
+
+    Boxes 1-based with 6 decimals (reading the file back gives the boxes in memory to within
+    5e-7 px); ``conf`` as it is (1 = scored, 0 = ignored); class as it is, except MOT15-style
+    rows without a class (-1), which are written as 1 (pedestrian): they are scored as
+    pedestrians here and by TrackEval's MOT16/17 rules alike; visibility as it is, -1 where
+    unknown (``read_mot(path, gt=True)`` reads -1 back as NaN). Sorted by (frame, id).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    order = np.lexsort((table.ids, table.frames))
+    classes = np.where(table.classes < 0, 1, table.classes)
+    vis = np.where(np.isfinite(table.visibility), table.visibility, -1.0)
+    lines = [
+        f"{f},{i},{b[0] + 1:.6f},{b[1] + 1:.6f},{b[2]:.6f},{b[3]:.6f},{c:g},{k},{v:.6g}\n"
+        for f, i, b, c, k, v in zip(table.frames[order], table.ids[order], table.boxes[order],
+                                    table.conf[order], classes[order], vis[order])
+    ]
+    tmp = path.with_suffix(path.suffix + ".part")
+    tmp.write_text("".join(lines))
+    tmp.replace(path)
+
+
+def write_seqinfo(path: str | Path, name: str, length: int, fps: float, width: int, height: int,
+                  im_dir: str = "img1", im_ext: str = ".jpg") -> None:
+    """Write a MOTChallenge ``seqinfo.ini`` (``[Sequence]`` name, imDir, frameRate, seqLength,
+    imWidth, imHeight, imExt); the frame rate as an integer when it is one."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rate = int(fps) if float(fps).is_integer() else fps
+    path.write_text(f"[Sequence]\nname={name}\nimDir={im_dir}\nframeRate={rate}\n"
+                    f"seqLength={int(length)}\nimWidth={int(width)}\nimHeight={int(height)}\n"
+                    f"imExt={im_ext}\n")
+
+
+def write_seqmap(path: str | Path, names: list[str]) -> None:
+    """Write a MOTChallenge seqmap: the header ``name`` and one sequence name a line."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("".join(f"{n}\n" for n in ["name", *names]))

@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import motmetrics as mm
+import numpy as np
 import pandas as pd
 
 from harness.io.mot import MotTable
@@ -30,8 +31,10 @@ __all__ = [
     "COLUMNS",
     "COMBINED",
     "COUNT_COLUMNS",
+    "HOTA_ALPHA_COLUMNS",
     "SequenceScore",
     "combine",
+    "hota_alpha_table",
     "score_sequence",
     "summarize",
 ]
@@ -39,8 +42,11 @@ __all__ = [
 COLUMNS: list[str] = [
     "MOTA", "MOTP", "IDF1", "IDP", "IDR", "Recall", "Precision",
     "GT", "MT", "PT", "ML", "FP", "FN", "IDs", "Frag",
-    "HOTA", "DetA", "AssA", "LocA",
+    "HOTA", "DetA", "AssA", "LocA", "DetRe", "DetPr", "AssRe", "AssPr",
 ]  # fmt: skip
+#: per-alpha columns of ``hota_alpha_table`` (each also averaged over alpha in ``COLUMNS``)
+HOTA_ALPHA_COLUMNS: list[str] = ["HOTA", "DetA", "AssA", "DetRe", "DetPr", "AssRe", "AssPr",
+                                 "LocA"]
 COUNT_COLUMNS: list[str] = ["GT", "MT", "PT", "ML", "FP", "FN", "IDs", "Frag"]
 COMBINED = "COMBINED"
 
@@ -75,7 +81,7 @@ class SequenceScore:
             FP=c.false_positives, FN=c.misses, IDs=c.switches, Frag=c.fragmentations,
         )  # fmt: skip
         h = self.hota.summary()
-        out.update(HOTA=h["HOTA"], DetA=h["DetA"], AssA=h["AssA"], LocA=h["LocA"])
+        out.update(h)  # HOTA, DetA, AssA, LocA, DetRe, DetPr, AssRe, AssPr (means over alpha)
         return {k: out[k] for k in COLUMNS}
 
 
@@ -95,7 +101,7 @@ def score_sequence(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> S
     pairs = pair_frames(gt, res)
     acc = accumulate(pairs, iou_threshold)
     return SequenceScore(
-        clear=clear_counts(acc),
+        clear=clear_counts(acc, pairs, iou_threshold),
         hota=hota_counts(pairs.gt_ids, pairs.tracker_ids, pairs.iou),
         iou_threshold=iou_threshold,
         ignored_gt=pairs.ignored_gt,
@@ -140,3 +146,24 @@ def summarize(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
     table = pd.DataFrame(rows, columns=["sequence", *COLUMNS])
     table[COUNT_COLUMNS] = table[COUNT_COLUMNS].astype("int64")
     return table
+
+
+def hota_alpha_table(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
+    """HOTA and its sub-metrics at each of the 19 alphas (``harness.metrics.hota.ALPHAS``).
+
+    Returns:
+        DataFrame with columns ``sequence``, ``alpha`` + ``HOTA_ALPHA_COLUMNS``: 19 rows per
+        sequence (in the mapping's order) and 19 for ``COMBINED`` (combined as TrackEval);
+        fractions. Their means over alpha are the same columns of ``summarize``.
+    """
+    from harness.metrics.hota import ALPHAS
+
+    parts = [*scores.items(), (COMBINED, combine(scores))]
+    frames = []
+    for name, s in parts:
+        h = s.hota
+        values = {"HOTA": h.hota, "DetA": h.det_a, "AssA": h.ass_a, "DetRe": h.det_re,
+                  "DetPr": h.det_pr, "AssRe": h.ass_re, "AssPr": h.ass_pr, "LocA": h.loc_a}
+        frames.append(pd.DataFrame({"sequence": name, "alpha": np.round(ALPHAS, 2),
+                                    **{k: values[k] for k in HOTA_ALPHA_COLUMNS}}))
+    return pd.concat(frames, ignore_index=True)
