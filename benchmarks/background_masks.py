@@ -8,13 +8,13 @@ then each model's clean foreground (white) and the pixels it labelled shadow / e
 invariance and removed (red). Both models warm up on 50 frames sampled over the first 150.
 
 Run: ``python benchmarks/background_masks.py [--out docs/img/background_before_after.png]``.
-Needs ``../shared/data`` (or $OCCBENCH_DATA) for the real rows; they are left out without it.
+CAVIAR comes from the shipped sample (``harness.paths``); the unlabelled videos from
+``../shared/data/videos`` (optional material: their rows are left out without it).
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -27,9 +27,10 @@ sys.path.insert(0, str(ROOT))
 from harness.datasets.caviar import load_caviar  # noqa: E402
 from harness.datasets.synthetic import load_scenario  # noqa: E402
 from harness.datasets.video import load_video  # noqa: E402
+from harness.paths import data_path  # noqa: E402
 from trackers.frontend.background import BackgroundModel  # noqa: E402
 
-DATA = Path(os.environ.get("OCCBENCH_DATA", ROOT.parent / "shared" / "data"))
+VIDEOS = ROOT.parent / "shared" / "data" / "videos"  # optional, not shipped
 MODELS = {"MOG2 (default)": {}, "texture_colour (Reta 3.1)": {"method": "texture_colour",
                                                                 "work_scale": 0.5}}
 
@@ -73,12 +74,12 @@ def main() -> int:
     syn = load_scenario("crossing", seed=11, width=384, height=288, length=40, reflection=0.6)
     rows.append(row(syn, 20, syn.reflection_mask(20)))
     titles.append("synthetic, reflection opacity 0.6 (blue outline: exact reflection)")
-    caviar = DATA / "CAVIAR-OneLeaveShop1cor"
+    caviar = data_path("CAVIAR-OneLeaveShop1cor")
     if caviar.is_dir():
         rows.append(row(load_caviar(caviar, prefetch=0)[0], 130))
         titles.append("CAVIAR OneLeaveShop1cor frame 130 (dev half)")
     for name, k in (("CAVIAR-ShopAssistant1cor", 300), ("CAVIAR-OneStopEnter1front", 300)):
-        path = DATA / "videos" / f"{name}.mp4"
+        path = VIDEOS / f"{name}.mp4"
         if path.is_file():
             rows.append(row(load_video(path)[0], k))
             titles.append(f"{name} frame {k} (unlabelled)")
