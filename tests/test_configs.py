@@ -152,6 +152,19 @@ def test_detector_config_instantiates(name):
     assert callable(getattr(source, "start", None)) and callable(getattr(source, "detect", None))
 
 
+def _instantiate_or_skip_extra(node, key: str):
+    """``instantiate(node)``; an outside tracker whose library (an extra) is not installed
+    skips the test with the install hint."""
+    if not str(node.get("_target_", "")).startswith("trackers.outside."):
+        return instantiate(node, _convert_="all")
+    try:
+        return instantiate(node, _convert_="all")
+    except Exception as err:
+        if isinstance(err.__cause__ or err, ImportError):
+            pytest.skip(f"{key}: {err.__cause__ or err}")
+        raise
+
+
 @pytest.mark.parametrize("name", _configs("tracker"))
 def test_tracker_config_instantiates(name):
     cfg = _compose("config", [f"tracker={name}", "dataset=mot", "dataset.root=unused"])
@@ -159,15 +172,7 @@ def test_tracker_config_instantiates(name):
     assert nodes
     for key, node in nodes.items():
         _skip_unbuilt(node)
-        if str(node._target_).startswith("trackers.outside."):
-            try:  # an outside tracker's library is an extra: skip when it is not installed
-                tracker = instantiate(node, _convert_="all")
-            except Exception as err:
-                if isinstance(err.__cause__ or err, ImportError):
-                    pytest.skip(f"{key}: {err.__cause__ or err}")
-                raise
-        else:
-            tracker = instantiate(node, _convert_="all")
+        tracker = _instantiate_or_skip_extra(node, key)
         assert callable(tracker.update) and callable(tracker.reset), key
         tracker.reset()
 
@@ -196,7 +201,7 @@ def test_experiment_config_instantiates(name, fixtures):
         nodes = [node] if "_target_" in node else list(node.values())
         for sub in nodes:
             _skip_unbuilt(sub)
-            instantiate(sub, _convert_="all")
+            _instantiate_or_skip_extra(sub, f"{name}: {group}")
 
 
 @pytest.mark.parametrize("group,name", [
