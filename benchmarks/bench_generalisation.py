@@ -68,6 +68,10 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, help="output folder")
     ap.add_argument("--docs", action="store_true", help="write docs/generalisation.md too")
     ap.add_argument("--list", action="store_true", help="list sets and trackers, run nothing")
+    ap.add_argument("--combine", nargs="+", type=Path, metavar="CSV",
+                    help="run nothing: join generalisation.csv files of earlier runs (e.g. the "
+                    "tuned rows run later; noisy-gt and front-end detections are deterministic, "
+                    "so separate runs give the same detections) into one table")
     args = ap.parse_args(argv)
     os.chdir(ROOT)  # the configs' data paths are relative to the repository root
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
@@ -81,6 +85,19 @@ def main(argv=None) -> int:
         sets = [known[n] for n in args.sets]
     elif args.quick:
         sets = [s for s in sets if s.quick]
+    if args.combine:
+        import pandas as pd
+
+        table = pd.concat([pd.read_csv(c) for c in args.combine], ignore_index=True)
+        table = table.drop_duplicates(["set", "tracker"], keep="last")
+        order = {n: i for i, n in enumerate(G.ordered_trackers())}
+        table = table.sort_values("tracker", key=lambda c: c.map(lambda n: order.get(n, 999)),
+                                  kind="stable")
+        out = args.out or ROOT / "results" / "generalisation" / dt.datetime.now().strftime(
+            "%Y-%m-%d_%H-%M-%S")
+        out.mkdir(parents=True, exist_ok=True)
+        G.write(table, sets, out)
+        return _report(table, sets, out, args, argv)
     trackers, skipped = G.available_trackers(args.trackers)
     if args.list:
         for s in G.SETS:
@@ -99,12 +116,17 @@ def main(argv=None) -> int:
     if table.empty:
         print("no set was run")
         return 1
+    return _report(table, sets, out, args, argv)
+
+
+def _report(table, sets, out: Path, args, argv) -> int:
     text = G.markdown(table, sets)
     print(text)
     print(f"results: {out}")
     if args.docs:
         note = "" if args.length is None else f" (sequences cut to {args.length} frames)"
-        scope = "all sets" if not (args.quick or args.sets) else "a subset of the sets"
+        missing = [s.name for s in G.SETS if s.name not in set(table["set"])]
+        scope = "all sets" if not missing else f"not run: {', '.join(missing)}"
         (ROOT / "docs").mkdir(exist_ok=True)
         (ROOT / "docs" / "generalisation.md").write_text(
             DOCS_HEAD + f"## Latest table ({G.provenance()}; {scope}{note})\n\n"

@@ -144,6 +144,16 @@ def _resolve(overrides: Iterable[str], trajectories: Path) -> list[str]:
     return out
 
 
+def ordered_trackers() -> list[str]:
+    """``TRACKERS`` with every ``conf/tracker/*_tuned.yaml`` after the tracker it tunes."""
+    tuned = sorted(p.stem for p in (CONF / "tracker").glob("*_tuned.yaml"))
+    names = []
+    for n in TRACKERS:
+        names.append(n)
+        names += [t for t in tuned if t == f"{n}_tuned"]
+    return names + [t for t in tuned if t not in names]
+
+
 def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[str, str]]:
     """Tracker configs by name whose code imports, and the skipped ones with the reason.
 
@@ -153,12 +163,7 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
     from harness.run import RunError, build_tracker
 
     if names is None:
-        tuned = sorted(p.stem for p in (CONF / "tracker").glob("*_tuned.yaml"))
-        names = []
-        for n in TRACKERS:
-            names.append(n)
-            names += [t for t in tuned if t == f"{n}_tuned"]
-        names += [t for t in tuned if t not in names]
+        names = ordered_trackers()
     configs, skipped = {}, {}
     for n in names:
         if not (CONF / "tracker" / f"{n}.yaml").is_file():

@@ -48,3 +48,27 @@ def test_tiny_table_same_detections_for_every_tracker(tmp_path):
 def test_unknown_tracker_is_skipped_with_its_reason():
     trackers, skipped = G.available_trackers(["baseline", "no_such_tracker"])
     assert list(trackers) == ["baseline"] and "no_such_tracker" in skipped
+
+
+def test_combine_joins_earlier_tables(tmp_path):
+    """``--combine``: rows of separate runs (e.g. tuned trackers run later) in one table,
+    a later run's row replacing an earlier one of the same set and tracker."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_generalisation", G.ROOT / "benchmarks" / "bench_generalisation.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    a = pd.DataFrame({"set": ["synth", "synth"], "role": "untouched", "tracker": ["pbm", "reta"],
+                      "IDF1": [0.5, 0.6], "HOTA": 0.5, "MOTA": 0.5, "n_seeds": 2, "failures": 0})
+    b = pd.DataFrame({"set": ["synth"], "role": "untouched", "tracker": ["norfair_tuned"],
+                      "IDF1": [0.7], "HOTA": 0.6, "MOTA": 0.4, "n_seeds": 2, "failures": 0})
+    c = a.iloc[[0]].assign(IDF1=0.55)
+    for name, t in (("a", a), ("b", b), ("c", c)):
+        t.to_csv(tmp_path / f"{name}.csv", index=False)
+    assert bench.main(["--combine", *(str(tmp_path / f"{n}.csv") for n in "abc"),
+                       "--out", str(tmp_path / "out")]) == 0
+    out = pd.read_csv(tmp_path / "out" / "generalisation.csv")
+    assert list(out["tracker"]) == ["reta", "pbm", "norfair_tuned"]  # table order
+    assert out.set_index("tracker").loc["pbm", "IDF1"] == 0.55
+    assert "0.700 / 0.600 / 0.400" in (tmp_path / "out" / "generalisation.md").read_text()
