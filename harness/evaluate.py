@@ -85,6 +85,21 @@ def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
     return pairs
 
 
+def _sequence_length(gt_file: Path) -> int | None:
+    """``seqLength`` of the ``seqinfo.ini`` beside a ``<seq>/gt/gt.txt``, else None."""
+    import configparser
+
+    ini = gt_file.parent.parent / "seqinfo.ini"
+    if gt_file.name != "gt.txt" or not ini.is_file():
+        return None
+    parser = configparser.ConfigParser()
+    try:
+        parser.read(ini)
+        return int(parser["Sequence"]["seqLength"])
+    except (KeyError, ValueError, configparser.Error):
+        return None
+
+
 def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) -> pd.DataFrame:
     """Score all sequences; returns ``summarize`` of the scores (fractions, COMBINED row)."""
     scores: dict[str, SequenceScore] = {}
@@ -98,7 +113,7 @@ def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) ->
             )
             res_table = MotTable.empty(str(Path(results) / f"{name}.txt"))
         else:
-            res_table = read_mot(r)
+            res_table = read_mot(r, kind="result", last_frame=_sequence_length(g))
         scores[name] = score_sequence(gt_table, res_table, iou_threshold)
         log.debug(
             "%s: scored %d gt rows against %d result rows", name, len(gt_table), len(res_table)

@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import csv
 import importlib
+import io
 import logging
 import math
+import shutil
 import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
@@ -34,7 +36,17 @@ import numpy as np
 import pandas as pd
 
 from harness.datasets.base import Sequence
-from harness.io.mot import MotTable, read_mot, write_mot, write_mot_gt, write_seqinfo, write_seqmap
+from harness.io.mot import (
+    MotTable,
+    format_mot,
+    read_mot,
+    read_mot_text,
+    write_atomic,
+    write_mot,
+    write_mot_gt,
+    write_seqinfo,
+    write_seqmap,
+)
 from harness.metrics import COLUMNS, SequenceScore, hota_alpha_table, score_sequence, summarize
 from harness.report.bars import DEFAULT_METRICS, metric_bars
 from harness.report.graph import GraphExport
@@ -413,16 +425,33 @@ class RunWriter:
     each alpha) and ``plots/`` (``metrics.png``, ``hota_alpha.png``) at the end.
     """
 
+    #: outputs of an earlier run in the same folder, removed when a run starts there so that
+    #: nothing stale (a track file of a tracker or sequence not run again) is mistaken for
+    #: this run's; files of sweeps (status.json) and Hydra (.hydra/, the log) are kept
+    STALE = ("tracks", "metrics.csv", "summary.md", "summary.tex", "timings.csv", "errors.txt",
+             "plots/metrics.png", "config.yaml")
+
     def __init__(self, out_dir: str | Path) -> None:
         self.out_dir = Path(out_dir)
-        self.out_dir.mkdir(parents=True, exist_ok=True)
-        for stale in ("errors.txt", "gt/seqmap.txt"):
-            (self.out_dir / stale).unlink(missing_ok=True)
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+            for stale in self.STALE:
+                path = self.out_dir / stale
+                if path.is_dir() and not path.is_symlink():
+                    shutil.rmtree(path)
+                else:
+                    path.unlink(missing_ok=True)
+            for part in self.out_dir.rglob("*.part"):
+                part.unlink(missing_ok=True)
+        except OSError as err:
+            raise RunError(f"cannot prepare the run folder {self.out_dir}: "
+                           f"{err.strerror or err} ({err.filename or self.out_dir})") from None
 
     def track_path(self, tracker: str, sequence: str) -> Path:
         return self.out_dir / "tracks" / tracker / f"{sequence}.txt"
 
     def tracks(self, tracker: str, sequence: str, table: MotTable) -> Path:
+        """Write a tracker's result file (raises ``WriteError`` naming it)."""
         path = self.track_path(tracker, sequence)
         write_mot(path, table.frames, table.ids, table.boxes, table.conf)
         return path
@@ -446,34 +475,31 @@ class RunWriter:
         return path
 
     def metrics(self, frame: pd.DataFrame) -> None:
-        _atomic_write(self.out_dir / "metrics.csv", frame.to_csv(index=False, float_format="%.6f",
-                                                                 lineterminator="\n"))
+        write_atomic(self.out_dir / "metrics.csv", frame.to_csv(
+            index=False, float_format="%.6f", lineterminator="\n"))
 
     def timings(self, rows: list[dict[str, Any]]) -> None:
-        path = self.out_dir / "timings.csv"
-        with path.open("w", newline="") as fh:
-            w = csv.DictWriter(fh, ["tracker", "sequence", "frames", "seconds", "fps"],
-                               lineterminator="\n")
-            w.writeheader()
-            w.writerows(rows)
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, ["tracker", "sequence", "frames", "seconds", "fps"],
+                           lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+        write_atomic(self.out_dir / "timings.csv", buf.getvalue())
 
     def failure(self, f: Failure) -> None:
-        with (self.out_dir / "errors.txt").open("a") as fh:
-            fh.write(f"[{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}\n")
-            if f.trace:
-                fh.write("    " + f.trace.rstrip().replace("\n", "\n    ") + "\n")
+        """Append ``f`` to errors.txt; a failure to write it is logged, never raised (the
+        failure is in the run's result and its log all the same)."""
+        text = f"[{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}\n"
+        if f.trace:
+            text += "    " + f.trace.rstrip().replace("\n", "\n    ") + "\n"
+        try:
+            with (self.out_dir / "errors.txt").open("a") as fh:
+                fh.write(text)
+        except OSError as err:
+            log.error("cannot write %s: %s", self.out_dir / "errors.txt", err.strerror or err)
 
     def text(self, name: str, text: str) -> Path:
-        path = self.out_dir / name
-        _atomic_write(path, text)
-        return path
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".part")
-    tmp.write_text(text)
-    tmp.replace(path)
+        return write_atomic(self.out_dir / name, text)
 
 
 def _cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
@@ -562,23 +588,46 @@ def _missing_library(err: BaseException) -> bool:
     return False
 
 
-def build_tracker(name: str, node: Any) -> Tracker:
-    """Instantiate one tracker config; RunError with a clear message when it cannot be."""
+def check_node(node: Any, key: str, target: Any) -> None:
+    """Type-check a ``_target_`` config against ``target``'s signature
+    (``harness.config_check.check_target``); RunError naming ``key.<argument>``."""
+    from harness.config_check import ConfigError, check_target
+
+    try:
+        check_target(dict(_container(node)), key, target)
+    except ConfigError as err:
+        raise RunError(str(err)) from None
+
+
+def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
+    """Instantiate one tracker config; RunError with a clear message when it cannot be.
+
+    ``key`` is the config path of ``node`` for messages (default ``tracker.<name>``)."""
     from hydra.utils import instantiate
 
     target = str(node["_target_"])
     try:
-        _locate_target(target)
+        cls = _locate_target(target)
     except Exception as err:
         raise RunError(
             f"tracker {name!r}: its code {target} is not built or cannot be imported "
             f"({type(err).__name__}: {err}). conf/tracker/all.yaml lists the built trackers."
         ) from err
+    check_node(node, key or f"tracker.{name}", cls)
     try:
         return instantiate(node, _convert_="all")
     except Exception as err:
         cause = err.__cause__ or err
         raise RunError(f"tracker {name!r} ({target}): {type(cause).__name__}: {cause}") from err
+
+
+def _check_located(node: Any, key: str) -> None:
+    """``check_node`` when ``node``'s target imports (else instantiate reports it)."""
+    try:
+        target = _locate_target(str(node["_target_"]))
+    except Exception:  # noqa: BLE001 - instantiate gives the full message
+        return
+    check_node(node, key, target)
 
 
 def load_sequences(node: Any) -> list[Sequence]:
@@ -587,6 +636,7 @@ def load_sequences(node: Any) -> list[Sequence]:
 
     if node is None or "_target_" not in node:
         raise RunError("dataset: no dataset selected (dataset=<name> with a _target_)")
+    _check_located(node, "dataset")
     try:
         seqs = instantiate(node, _convert_="all")
     except Exception as err:
@@ -613,6 +663,7 @@ def build_source(node: Any) -> DetectionSource:
 
     if node is None or "_target_" not in node:
         raise RunError("detector: no detection source selected (detector=<name>)")
+    _check_located(node, "detector")
     try:
         return instantiate(node, _convert_="all")
     except Exception as err:
@@ -636,13 +687,30 @@ def external_folders(node: Any, taken: Iterable[str]) -> dict[str, Path]:
     return out
 
 
-def read_external(name: str, folder: Path, sequence: str) -> MotTable:
-    """The external tracker's result for ``sequence``; empty (with a warning) when missing."""
+def read_external(name: str, folder: Path, sequence: str,
+                  last_frame: int | None = None) -> MotTable:
+    """The external tracker's result for ``sequence``; empty (with a warning) when missing.
+
+    Raises:
+        MotFormatError: a malformed row, or a row beyond ``last_frame`` (file and line named).
+    """
     path = folder / f"{sequence}.txt"
     if not path.is_file():
         log.warning("external %s: no result file %s: scored as an empty result", name, path)
         return MotTable.empty(str(path))
-    return read_mot(path)
+    return read_mot(path, kind="result", last_frame=last_frame)
+
+
+def _last_frame(seq: Sequence) -> int:
+    """The last frame number of the whole sequence (a ``FrameWindow``'s original's)."""
+    return getattr(seq, "inner", seq).frame_numbers()[-1]
+
+
+def _in_window(table: MotTable, seq: Sequence) -> MotTable:
+    """``table``'s rows on the frames of ``seq`` (a window scores only its own frames)."""
+    frames = seq.frame_numbers()
+    keep = (table.frames >= frames.start) & (table.frames < frames.stop)
+    return table if keep.all() else table.rows(keep)
 
 
 def run_experiment(
@@ -673,9 +741,13 @@ def run_experiment(
         if not HydraConfig.initialized():
             raise RunError("run_experiment needs out_dir outside a Hydra app")
         out_dir = HydraConfig.get().runtime.output_dir
+    check_config(cfg)
     writer = RunWriter(out_dir)
     if OmegaConf.is_config(cfg):
-        writer.text("config.yaml", OmegaConf.to_yaml(cfg, resolve=True))
+        try:
+            writer.text("config.yaml", OmegaConf.to_yaml(cfg, resolve=True))
+        except OSError as err:
+            raise RunError(str(err)) from None
     foreground = str(_cfg_get(cfg, "foreground", "auto"))
     if foreground not in FOREGROUND_MODES:
         raise RunError(f"foreground must be one of {FOREGROUND_MODES}, got {foreground!r}")
@@ -697,11 +769,13 @@ def run_experiment(
     targets = _container(_cfg_get(protocol_node, "targets", None))
 
     # check everything that can be checked before the first frame
-    configs = tracker_configs(_cfg_get(cfg, "tracker"), tracker_name)
-    group = "_target_" not in _cfg_get(cfg, "tracker")
+    tracker_node = _cfg_get(cfg, "tracker")
+    configs = tracker_configs(tracker_node, tracker_name)
+    group = "_target_" not in tracker_node
+    keys = {n: f"tracker.{n}" if group else "tracker" for n in configs}
     for name, node in list(configs.items()):
         try:
-            build_tracker(name, node)
+            build_tracker(name, node, keys[name])
         except RunError as err:
             # in a group (tracker=everyone) an outside tracker whose optional library is
             # not installed is left out; selected alone, it stops the run
@@ -715,6 +789,9 @@ def run_experiment(
     build_source(_cfg_get(cfg, "detector"))
     sequences = load_sequences(_cfg_get(cfg, "dataset"))
     names = [*configs, *externals]
+    wanted = _cfg_get(_cfg_get(cfg, "objective", {}), "tracker")
+    if wanted is not None and str(wanted) not in names:
+        raise RunError(f"objective.tracker={wanted}: not a tracker of this run ({names})")
     title = _title(cfg, sequences)
     log.info("%d sequence(s) x %d tracker(s) %s, foreground=%s", len(sequences), len(names),
              names, foreground)
@@ -736,75 +813,120 @@ def run_experiment(
         writer.failure(f)
         log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
 
+    expected = sum(1 for s in sequences if s.gt is not None)  # sequences that can be scored
+
+    def publish(state: str) -> pd.DataFrame:
+        """Write metrics.csv (with its ``complete`` column) and summary.md for ``state``:
+        ``running``, ``finished`` or ``interrupted``."""
+        frame = _with_extras(_metrics_frame(scores), extras)
+        frame = mark_complete(frame, expected, state == "finished")
+        done = len({s for p in scores.values() for s in p})
+        status = run_status(state, done, len(sequences), failures)
+        if frame.empty:
+            frame = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
+        writer.metrics(frame)
+        writer.text("summary.md", summary_markdown(frame, failures, table_columns, title, status))
+        return frame
+
     overall = (progress or _no_progress)(total=len(sequences), desc="sequences", unit="seq")
     tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
-    for seq in sequences:
-        sname = seq.info.name
-        try:
-            writer.ground_truth(seq)
-            source = build_source(_cfg_get(cfg, "detector"))
-            if protocol == "single_target":
-                from harness.protocols import run_single_target
+    sname = ""
+    try:
+        for seq in sequences:
+            sname = seq.info.name
+            try:
+                writer.ground_truth(seq)
+                source = build_source(_cfg_get(cfg, "detector"))
+                if protocol == "single_target":
+                    from harness.protocols import run_single_target
 
-                builders = {n: partial(build_tracker, n, node) for n, node in configs.items()}
-                outputs = run_single_target(builders, seq, source, foreground, background,
-                                            progress, targets)
-            else:
-                trackers = {n: build_tracker(n, node) for n, node in configs.items()}
-                outputs = run_sequence(trackers, seq, source, foreground, background, progress,
-                                       on_update=graphs.hook())
-            graphs.write(sname)
-        except Exception as err:  # noqa: BLE001 - the sequence fails, the next goes on
-            fail("*", sname, "sequence", err, traceback.format_exc())
+                    builders = {n: partial(build_tracker, n, node, keys[n])
+                                for n, node in configs.items()}
+                    outputs = run_single_target(builders, seq, source, foreground, background,
+                                                progress, targets)
+                else:
+                    trackers = {n: build_tracker(n, node, keys[n]) for n, node in configs.items()}
+                    outputs = run_sequence(trackers, seq, source, foreground, background,
+                                           progress, on_update=graphs.hook())
+                graphs.write(sname)
+            except Exception as err:  # noqa: BLE001 - the sequence fails, the next goes on
+                fail("*", sname, "sequence", err, traceback.format_exc())
+                overall.update(1)
+                continue
+            if seq.gt is not None and outputs:
+                tracked.append(sname)
+                try:
+                    writer.seqmap(tracked)
+                except OSError as err:
+                    fail("*", sname, "write", err)
+            for n, out in outputs.items():
+                path = writer.track_path(n, sname)
+                text = format_mot(out.table.frames, out.table.ids, out.table.boxes,
+                                  out.table.conf)
+                try:
+                    write_atomic(path, text)
+                except OSError as err:  # scored all the same, from the bytes meant for it
+                    fail(n, sname, "write", err)
+                timings.append({"tracker": n, "sequence": sname, "frames": out.frames,
+                                "seconds": round(out.seconds, 4),
+                                "fps": round(out.fps, 2) if math.isfinite(out.fps) else ""})
+                if out.error is not None:
+                    fail(n, sname, "tracker", out.error, out.trace or "")
+                    continue
+                log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
+                if seq.gt is None:
+                    log.warning("%s has no ground truth: %s not scored", sname, n)
+                    continue
+                try:
+                    result_table = read_mot_text(text, path, kind="result",
+                                                 last_frame=_last_frame(seq))
+                    scores[n][sname] = score(seq.gt, result_table, iou_threshold)
+                    extras[n][sname] = extra_score(seq.gt, result_table, iou_threshold,
+                                                   hidden_below)
+                except Exception as err:  # noqa: BLE001 - recorded, the run goes on
+                    fail(n, sname, "score", err, traceback.format_exc())
+            for n, folder in externals.items():
+                if seq.gt is None:
+                    continue
+                try:
+                    result_table = _in_window(read_external(n, folder, sname, _last_frame(seq)),
+                                              seq)
+                    scores[n][sname] = score(seq.gt, result_table, iou_threshold)
+                    extras[n][sname] = extra_score(seq.gt, result_table, iou_threshold,
+                                                   hidden_below)
+                except Exception as err:  # noqa: BLE001 - recorded, the run goes on
+                    fail(n, sname, "external", err, traceback.format_exc())
             overall.update(1)
-            continue
-        if seq.gt is not None and outputs:
-            tracked.append(sname)
-            writer.seqmap(tracked)
-        for n, out in outputs.items():
-            path = writer.tracks(n, sname, out.table)
-            timings.append({"tracker": n, "sequence": sname, "frames": out.frames,
-                            "seconds": round(out.seconds, 4),
-                            "fps": round(out.fps, 2) if math.isfinite(out.fps) else ""})
-            if out.error is not None:
-                fail(n, sname, "tracker", out.error, out.trace or "")
-                continue
-            log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
-            if seq.gt is None:
-                log.warning("%s has no ground truth: %s not scored", sname, n)
-                continue
             try:
-                result_table = read_mot(path)
-                scores[n][sname] = score(seq.gt, result_table, iou_threshold)
-                extras[n][sname] = extra_score(seq.gt, result_table, iou_threshold, hidden_below)
+                writer.timings(timings)
+                metrics = publish("running")
             except Exception as err:  # noqa: BLE001 - recorded, the run goes on
-                fail(n, sname, "score", err, traceback.format_exc())
-        for n, folder in externals.items():
-            if seq.gt is None:
-                continue
-            try:
-                result_table = read_external(n, folder, sname)
-                scores[n][sname] = score(seq.gt, result_table, iou_threshold)
-                extras[n][sname] = extra_score(seq.gt, result_table, iou_threshold, hidden_below)
-            except Exception as err:  # noqa: BLE001 - recorded, the run goes on
-                fail(n, sname, "external", err, traceback.format_exc())
-        writer.timings(timings)
-        overall.update(1)
+                fail("*", sname, "metrics", err, traceback.format_exc())
+    except BaseException as err:  # Ctrl-C, SIGTERM: say so in errors.txt, metrics, summary
+        if isinstance(err, Exception):
+            raise
+        fail("*", sname or "*", "interrupted",
+             f"{type(err).__name__}: the run was stopped during sequence {sname!r}; "
+             "metrics.csv and summary.md cover only the sequences before it")
         try:
-            metrics = _with_extras(_metrics_frame(scores), extras)
-            writer.metrics(metrics)
-            writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
-        except Exception as err:  # noqa: BLE001 - recorded, the run goes on
-            fail("*", sname, "metrics", err, traceback.format_exc())
-    overall.close()
+            publish("interrupted")
+        except Exception:  # noqa: BLE001 - already stopping; errors.txt says why
+            log.exception("could not mark %s as interrupted", writer.out_dir)
+        raise
+    finally:
+        overall.close()
+    try:
+        metrics = publish("finished")
+    except Exception as err:  # noqa: BLE001 - recorded (disk full...), the run ends failed
+        fail("*", "*", "metrics", err, traceback.format_exc())
     if metrics.empty:
         log.warning("no sequence was scored: metrics.csv has no rows")
-        metrics = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS])
-        writer.metrics(metrics)
-    writer.text("summary.md", summary_markdown(metrics, failures, table_columns, title))
-    if not metrics.empty:
-        writer.text("summary.tex", to_latex(comparison(metrics, table_columns),
-                                            caption=f"occbench: {title} (COMBINED)"))
+    try:
+        if not metrics.empty:
+            writer.text("summary.tex", to_latex(comparison(metrics, table_columns),
+                                                caption=f"occbench: {title} (COMBINED)"))
+    except Exception as err:  # noqa: BLE001 - recorded
+        fail("*", "*", "summary", err, traceback.format_exc())
     try:
         metric_bars(metrics, writer.out_dir / "plots" / "metrics.png", plot_metrics, title)
     except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
@@ -820,6 +942,25 @@ def run_experiment(
     return ExperimentResult(metrics, failures, pd.DataFrame(timings), writer.out_dir, names)
 
 
+def check_config(cfg: Any) -> None:
+    """Type- and range-check the app's own keys (``harness.config_check.check_app``) before
+    anything is built or written; RunError naming the key."""
+    from harness.config_check import APP_SCHEMA, ConfigError, check_app
+
+    plain: dict[str, Any] = {}
+    for top in dict.fromkeys(k.split(".")[0] for k in APP_SCHEMA):
+        try:
+            present = top in cfg
+        except TypeError:
+            present = hasattr(cfg, top)
+        if present:
+            plain[top] = _container(cfg[top] if hasattr(cfg, "__getitem__") else getattr(cfg, top))
+    try:
+        check_app(plain)
+    except ConfigError as err:
+        raise RunError(str(err)) from None
+
+
 def _title(cfg: Any, sequences: list[Sequence]) -> str:
     def target(key: str) -> str:
         choice = _hydra_choice(key)
@@ -832,12 +973,45 @@ def _title(cfg: Any, sequences: list[Sequence]) -> str:
             f"detector {target('detector')}")
 
 
+def mark_complete(metrics: pd.DataFrame, expected: int, finished: bool) -> pd.DataFrame:
+    """``metrics`` with a last column ``complete``: True on a sequence row (scored in full);
+    on a COMBINED row, True only when the run has finished and the tracker was scored on
+    all ``expected`` sequences (else its COMBINED covers only some of them)."""
+    if metrics.empty:
+        return metrics
+    out = metrics.drop(columns=["complete"], errors="ignore").copy()
+    per = out[out["sequence"] != COMBINED].groupby("tracker")["sequence"].nunique()
+    combined = out["sequence"] == COMBINED
+    whole = out["tracker"].map(per).fillna(0).astype(int) >= expected
+    out["complete"] = ~combined | (whole & finished)
+    return out
+
+
+def run_status(state: str, done: int, total: int, failures: list[Failure]) -> str | None:
+    """The line summary.md opens with when the run is not (yet) complete, else None."""
+    if state == "running":
+        return (f"**Incomplete run**: still running ({done} of {total} sequences scored so "
+                "far); COMBINED rows cover only those.")
+    if state == "interrupted":
+        return (f"**Incomplete run**: interrupted after {done} of {total} sequences; COMBINED "
+                "rows cover only those (metrics.csv: `complete` false). See errors.txt.")
+    if failures:
+        return (f"**Partly failed run**: {len(failures)} part(s) failed (see Failures below "
+                "and errors.txt); a COMBINED row whose `complete` is false in metrics.csv "
+                "misses some sequences.")
+    return None
+
+
 def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
-                     columns: list[str] | None = None, title: str = "") -> str:
-    """``summary.md``: the COMBINED comparison, per-sequence tables, and failures."""
+                     columns: list[str] | None = None, title: str = "",
+                     status: str | None = None) -> str:
+    """``summary.md``: the COMBINED comparison, per-sequence tables, and failures; opened by
+    ``status`` (``run_status``) when the run is incomplete or partly failed."""
     lines = ["# occbench results", ""]
     if title:
         lines += [title, ""]
+    if status:
+        lines += [status, ""]
     if metrics.empty:
         lines += ["No sequence was scored.", ""]
     else:

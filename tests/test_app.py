@@ -308,7 +308,7 @@ def test_experiment_writes_run_directory(tmp_path, mot_root):
         assert (out / name).is_file(), name
     assert not (out / "errors.txt").exists()
     m = pd.read_csv(out / "metrics.csv")
-    assert list(m.columns) == ["tracker", "sequence", *COLUMNS, *EXTRA_COLUMNS]
+    assert list(m.columns) == ["tracker", "sequence", *COLUMNS, *EXTRA_COLUMNS, "complete"]
     assert list(m["sequence"]) == ["cross-a", "cross-b", "COMBINED"]
     assert set(m["tracker"]) == {"baseline"}
     combined = m[m["sequence"] == "COMBINED"].iloc[0]
@@ -534,7 +534,7 @@ def test_cli_end_to_end_on_synthetic(tmp_path):
                  "plots/metrics.png"):
         assert (run / name).is_file(), name
     m = pd.read_csv(run / "metrics.csv")
-    assert list(m.columns) == ["tracker", "sequence", *COLUMNS, *EXTRA_COLUMNS]
+    assert list(m.columns) == ["tracker", "sequence", *COLUMNS, *EXTRA_COLUMNS, "complete"]
     seqs = [s for s in m["sequence"] if s != "COMBINED"]
     assert seqs == ["crossing", "crowd"]
     assert all((run / "tracks" / "baseline" / f"{s}.txt").is_file() for s in seqs)

@@ -177,7 +177,7 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
                              "pass video=<path>")
         video = videos[0] if videos else None
     det_path = root / "det" / "det.txt"
-    det = read_mot(det_path) if det_path.is_file() else None
+    det = read_mot(det_path, kind="det") if det_path.is_file() else None
     if video is not None:
         seq = VideoSequence(video, gt=gt, public_detections=det, name=seq_name, fps=fps)
         if last_gt > seq.info.length:

@@ -28,19 +28,64 @@ class FrameError(RuntimeError):
     """A frame that is missing or cannot be decoded; the message names the file."""
 
 
+JPEG_EXTENSIONS = (".jpg", ".jpeg", ".jpe", ".jfif")
+
+
 def read_image(path: str | Path) -> np.ndarray:
     """Decode one image file as (H, W, 3) uint8 BGR (grey and 16-bit images are converted).
 
+    JPEG files are decoded by libjpeg-turbo through ``simplejpeg`` in strict mode, so that a
+    file libjpeg decodes only with a warning (a truncated file, "premature end of data
+    segment", "N extraneous bytes before marker": the frame would be grey or smeared from
+    the damage down) is an error like an undecodable one; the pixels equal ``cv2.imread``'s
+    (same library, same settings). OpenCV's own decoder only prints such warnings, naming
+    no file, and returns the damaged picture.
+
     Raises:
-        FrameError: the file does not exist, or OpenCV cannot decode it (corrupt/unsupported).
+        FrameError: the file does not exist, cannot be read, or does not decode cleanly
+            (corrupt, truncated or unsupported); the message names the file.
     """
     path = Path(path)
     if not path.is_file():
         raise FrameError(f"missing frame file: {path}")
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise FrameError(f"cannot read frame file {path}: {err.strerror or err}") from None
+    if path.suffix.lower() in JPEG_EXTENSIONS or data[:2] == b"\xff\xd8":
+        image = _decode_jpeg(data, path)
+        if image is not None:
+            return image
+    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_COLOR)
     if image is None:
         raise FrameError(f"cannot decode image (corrupt or unsupported format): {path}")
     return image
+
+
+def _decode_jpeg(data: bytes, path: Path) -> np.ndarray | None:
+    """Strict JPEG decoding (BGR); None when libjpeg-turbo's TurboJPEG API cannot handle the
+    file at all (e.g. CMYK) but it is not damaged, so that OpenCV decodes it instead.
+
+    Raises:
+        FrameError: the file is damaged (libjpeg reports an error or a warning).
+    """
+    import simplejpeg
+
+    if not data.startswith(b"\xff\xd8"):
+        raise FrameError(f"not a JPEG file (no start-of-image marker): {path}")
+    try:
+        return simplejpeg.decode_jpeg(data, colorspace="BGR", strict=True)
+    except ValueError as err:
+        strict_msg = str(err)
+    try:  # decodes without strictness: the strict failure was a warning, i.e. damage
+        simplejpeg.decode_jpeg(data, colorspace="BGR", strict=False)
+    except ValueError as err:
+        if "color" in str(err).lower():  # e.g. CMYK: not damage, OpenCV converts it
+            return None
+        truncated = "" if data.rstrip(b"\x00").endswith(b"\xff\xd9") else (
+            "; no end-of-image marker: truncated?")
+        raise FrameError(f"corrupt JPEG (libjpeg: {err}{truncated}): {path}") from None
+    raise FrameError(f"corrupt JPEG (libjpeg: {strict_msg}): {path}")
 
 
 def image_size(path: str | Path) -> tuple[int, int]:

@@ -147,7 +147,7 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
     det = None
     det_path = folder / "det" / "det.txt"
     if det_path.is_file():
-        det = read_mot(det_path)
+        det = read_mot(det_path, kind="det")
         if len(det) == 0:
             log.warning("%s: empty detection file: no public detections in any frame", det_path)
 

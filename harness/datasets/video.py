@@ -87,7 +87,7 @@ class VideoSequence(Sequence):
             gt = ground_truth_from_table(read_mot(gt, gt=True))
         self.gt = gt
         if isinstance(public_detections, (str, Path)):
-            public_detections = read_mot(public_detections)
+            public_detections = read_mot(public_detections, kind="det")
         self.public_detections = public_detections
 
     def _capture(self) -> cv2.VideoCapture:

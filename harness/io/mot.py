@@ -9,6 +9,9 @@ from left and top, writing adds it back.
 from __future__ import annotations
 
 import logging
+import math
+import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,47 +70,77 @@ class MotTable:
                    z.copy(), path)
 
 
-def read_mot(path: str | Path, gt: bool = False) -> MotTable:
-    """Read a MOT gt, det or result file.
+READ_KINDS = ("any", "gt", "det", "result")
+
+
+def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
+             last_frame: int | None = None) -> MotTable:
+    """Read a MOT gt, det or result file, validating every numeric column.
 
     Args:
         path: text file with comma (or whitespace) separated rows of at least 6 fields.
-        gt: interpret columns 8 and 9 as class and visibility (MOT16+ gt with 9 columns).
+        gt: interpret columns 8 and 9 as class and visibility (MOT16+ gt with 9 columns);
+            implies ``kind="gt"``.
+        kind: what the file holds, for the identity column: ``gt`` and ``result`` need a
+            positive integer id; ``det`` any integer (-1 by convention); ``any`` a positive
+            integer or -1.
+        last_frame: the sequence's last frame number; a row beyond it is an error (a result
+            row there would silently count as a false positive).
     Raises:
         FileNotFoundError: no such file.
-        MotFormatError: a malformed row; the message gives file and line number.
-    Rows with NaN, infinite or non-positive width/height are skipped with a warning
-    naming file and line; an empty file gives an empty table.
+        MotFormatError: a malformed row, naming file and line: fewer than 6 fields, a field
+            that is not a number, a frame that is not a positive integer (or is beyond
+            ``last_frame``), an id that is not an integer as ``kind`` needs, a NaN or
+            infinite confidence/score, class, visibility or world coordinate.
+    Rows whose box has a NaN, infinite or non-positive width/height are skipped with a
+    warning naming file and line; an empty file gives an empty table.
     """
     path = Path(path)
+    if gt:
+        kind = "gt"
+    if kind not in READ_KINDS:
+        raise ValueError(f"kind must be one of {READ_KINDS}, got {kind!r}")
     if not path.is_file():
         raise FileNotFoundError(f"MOT file not found: {path}")
+    with path.open() as fh:
+        return _parse(fh, path, kind, last_frame)
+
+
+def read_mot_text(text: str, path: str | Path, kind: str = "any",
+                  last_frame: int | None = None) -> MotTable:
+    """``read_mot`` of the text of a MOT file (``path`` names it in messages): the run
+    scores exactly the bytes it writes, even when writing them failed."""
+    if kind not in READ_KINDS:
+        raise ValueError(f"kind must be one of {READ_KINDS}, got {kind!r}")
+    return _parse(text.splitlines(), Path(path), kind, last_frame)
+
+
+def _parse(lines: Iterable[str], path: Path, kind: str, last_frame: int | None) -> MotTable:
+    gt = kind == "gt"
     values: list[list[float]] = []
     skipped = 0
     ncols = 0  # most fields on any row, before padding
-    with path.open() as fh:
-        for lineno, line in enumerate(fh, 1):
-            text = line.strip()
-            if not text or text.startswith("#"):
-                continue
-            fields = text.replace(",", " ").split()
-            if len(fields) < 6:
-                raise MotFormatError(
-                    f"{path}:{lineno}: expected at least 6 fields, got {len(fields)}: {text!r}"
-                )
-            try:
-                row = [float(v) for v in fields[:10]]
-            except ValueError as err:
-                raise MotFormatError(f"{path}:{lineno}: not a number ({err}): {text!r}") from None
-            ncols = max(ncols, len(row))
-            row += [-1.0] * (10 - len(row))
-            if row[0] != int(row[0]) or row[0] < 1:
-                raise MotFormatError(f"{path}:{lineno}: frame must be a positive integer: {text!r}")
-            if not (np.isfinite(row[2:6]).all() and row[4] > 0 and row[5] > 0):
-                log.warning("%s:%d: skipped box with NaN or non-positive size: %r", path, lineno, text)
-                skipped += 1
-                continue
-            values.append(row)
+    for lineno, line in enumerate(lines, 1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        fields = text.replace(",", " ").split()
+        if len(fields) < 6:
+            raise MotFormatError(
+                f"{path}:{lineno}: expected at least 6 fields, got {len(fields)}: {text!r}"
+            )
+        try:
+            row = [float(v) for v in fields[:10]]
+        except ValueError as err:
+            raise MotFormatError(f"{path}:{lineno}: not a number ({err}): {text!r}") from None
+        ncols = max(ncols, len(row))
+        row += [-1.0] * (10 - len(row))
+        _check_row(row, kind, last_frame, f"{path}:{lineno}", text)
+        if not (np.isfinite(row[2:6]).all() and row[4] > 0 and row[5] > 0):
+            log.warning("%s:%d: skipped box with NaN or non-positive size: %r", path, lineno, text)
+            skipped += 1
+            continue
+        values.append(row)
     if skipped:
         log.warning("%s: %d rows skipped", path, skipped)
     if not values:
@@ -129,27 +162,95 @@ def read_mot(path: str | Path, gt: bool = False) -> MotTable:
                     classes, visibility, str(path))
 
 
-def write_mot(path: str | Path, frames: np.ndarray, ids: np.ndarray, boxes: np.ndarray,
-              scores: np.ndarray | None = None) -> None:
-    """Write MOT result rows ``frame,id,left,top,width,height,conf,-1,-1,-1`` (1-based boxes).
+def _check_row(row: list[float], kind: str, last_frame: int | None, where: str,
+               text: str) -> None:
+    """Raise ``MotFormatError`` (naming ``where``, i.e. file:line) for a row whose frame, id
+    or other non-box column is not what a MOT file allows."""
+    frame, ident = row[0], row[1]
+    if not (math.isfinite(frame) and frame == int(frame) and frame >= 1):
+        raise MotFormatError(f"{where}: frame must be a positive integer, got "
+                             f"{_shown(frame)}: {text!r}")
+    if last_frame is not None and frame > last_frame:
+        raise MotFormatError(f"{where}: frame {int(frame)} is beyond the sequence's last frame "
+                             f"{last_frame}: {text!r}")
+    if not (math.isfinite(ident) and ident == int(ident)):
+        raise MotFormatError(f"{where}: id must be an integer, got {_shown(ident)}: {text!r}")
+    if kind in ("gt", "result") and ident < 1:
+        raise MotFormatError(f"{where}: id must be a positive integer in a {kind} file, got "
+                             f"{int(ident)}: {text!r}")
+    if kind == "any" and ident < 1 and ident != -1:
+        raise MotFormatError(f"{where}: id must be a positive integer (or -1 for a detection), "
+                             f"got {int(ident)}: {text!r}")
+    for col in range(6, 10):
+        if not math.isfinite(row[col]):
+            name = "confidence/score" if col == 6 else f"column {col + 1}"
+            raise MotFormatError(f"{where}: {name} must be a finite number, got "
+                                 f"{_shown(row[col])}: {text!r}")
 
-    Rows are sorted by (frame, id); numbers are written with 2 decimals so that the same
-    input gives the same bytes.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+
+def _shown(v: float) -> str:
+    return str(int(v)) if math.isfinite(v) and v == int(v) else repr(v)
+
+
+def format_mot(frames: np.ndarray, ids: np.ndarray, boxes: np.ndarray,
+               scores: np.ndarray | None = None) -> str:
+    """MOT result rows ``frame,id,left,top,width,height,conf,-1,-1,-1`` (1-based boxes) as
+    text, sorted by (frame, id), numbers with 2 decimals (the same input, the same bytes)."""
     frames = np.asarray(frames, dtype=np.int64).reshape(-1)
     ids = np.asarray(ids, dtype=np.int64).reshape(-1)
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     scores = np.ones(len(frames)) if scores is None else np.asarray(scores, dtype=np.float64)
     order = np.lexsort((ids, frames))
-    lines = [
+    return "".join(
         f"{f},{i},{b[0] + 1:.2f},{b[1] + 1:.2f},{b[2]:.2f},{b[3]:.2f},{s:.3f},-1,-1,-1\n"
         for f, i, b, s in zip(frames[order], ids[order], boxes[order], scores[order])
-    ]
+    )
+
+
+def write_mot(path: str | Path, frames: np.ndarray, ids: np.ndarray, boxes: np.ndarray,
+              scores: np.ndarray | None = None) -> None:
+    """Write MOT result rows (``format_mot``) atomically (``write_atomic``).
+
+    Raises:
+        WriteError: the file cannot be written (disk full, no permission); nothing is left
+            half-written.
+    """
+    write_atomic(path, format_mot(frames, ids, boxes, scores))
+
+
+class WriteError(OSError):
+    """A file that cannot be written; one line naming the file and the reason
+    (``strerror``, also its ``str``); ``errno`` is the underlying error's."""
+
+    def __str__(self) -> str:
+        return str(self.strerror)
+
+
+def write_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` through ``<path>.part`` and a rename, so that a reader
+    sees the old file or the whole new one; on failure the ``.part`` file is removed.
+
+    Raises:
+        WriteError: disk full, no permission, a folder in the way...: ``cannot write
+            <path>: <reason>``.
+    """
+    path = Path(path)
     tmp = path.with_suffix(path.suffix + ".part")
-    tmp.write_text("".join(lines))
-    tmp.replace(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError as err:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        reason = err.strerror or str(err)
+        where = f" ({err.filename})" if err.filename and str(err.filename) not in (
+            str(path), str(tmp)) else ""
+        raise WriteError(err.errno, f"cannot write {path}: {reason}{where}") from err
+    return path
 
 
 def write_mot_gt(path: str | Path, table: MotTable) -> None:
@@ -171,9 +272,7 @@ def write_mot_gt(path: str | Path, table: MotTable) -> None:
         for f, i, b, c, k, v in zip(table.frames[order], table.ids[order], table.boxes[order],
                                     table.conf[order], classes[order], vis[order])
     ]
-    tmp = path.with_suffix(path.suffix + ".part")
-    tmp.write_text("".join(lines))
-    tmp.replace(path)
+    write_atomic(path, "".join(lines))
 
 
 def write_seqinfo(path: str | Path, name: str, length: int, fps: float, width: int, height: int,
@@ -183,7 +282,7 @@ def write_seqinfo(path: str | Path, name: str, length: int, fps: float, width: i
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     rate = int(fps) if float(fps).is_integer() else fps
-    path.write_text(f"[Sequence]\nname={name}\nimDir={im_dir}\nframeRate={rate}\n"
+    write_atomic(path, f"[Sequence]\nname={name}\nimDir={im_dir}\nframeRate={rate}\n"
                     f"seqLength={int(length)}\nimWidth={int(width)}\nimHeight={int(height)}\n"
                     f"imExt={im_ext}\n")
 
@@ -192,4 +291,4 @@ def write_seqmap(path: str | Path, names: list[str]) -> None:
     """Write a MOTChallenge seqmap: the header ``name`` and one sequence name a line."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("".join(f"{n}\n" for n in ["name", *names]))
+    write_atomic(path, "".join(f"{n}\n" for n in ["name", *names]))

@@ -65,7 +65,7 @@ def comparison(
             dropped. None keeps every metric column.
     """
     rows = metrics[metrics["sequence"] == sequence].set_index("tracker")
-    rows = rows.drop(columns=["sequence"])
+    rows = rows.drop(columns=["sequence", "complete"], errors="ignore")
     if columns is not None:
         rows = rows[[c for c in columns if c in rows.columns]]
     rows.index.name = "tracker"

@@ -144,7 +144,7 @@ def load_replay(
     )
     det = root / "det" / "det.txt"
     if det.is_file():
-        dets = read_mot(det)
+        dets = read_mot(det, kind="det")
         seq.public_detections = dets.rows(dets.frames <= length)
         log.info(
             "%s: attached %d public detections from %s", seq_name, len(seq.public_detections), det
