@@ -47,14 +47,17 @@ def app(cfg: DictConfig) -> float:
     """The Hydra task: run the experiment, print the table, return the objective.
 
     In a multirun each job goes through ``harness.sweep.guarded``: a job already done with
-    the same overrides is skipped, a failing job is recorded in its ``status.json`` (and
+    the same overrides and the same inputs (config, code, data: ``harness.fingerprint``) is
+    skipped, a failing job is recorded in its ``status.json`` (and
     gathered into sweep.csv) while the other jobs go on.
     """
     hc = HydraConfig.get()
     if hc.mode == RunMode.MULTIRUN:
+        from harness.fingerprint import inputs
         from harness.sweep import guarded
 
-        return guarded(hc.runtime.output_dir, list(hc.overrides.task), lambda: run_app(cfg))
+        return guarded(hc.runtime.output_dir, list(hc.overrides.task), lambda: run_app(cfg),
+                       inputs=lambda: inputs(cfg))
     return run_app(cfg)
 
 

@@ -9,6 +9,7 @@ the job directories must be on a file system it can read.
 from __future__ import annotations
 
 import logging
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
-from harness.sweep import DEFAULT_METRICS, write_sweep
+from harness.sweep import DEFAULT_METRICS, failed_summary, not_done, write_sweep
 
 log = logging.getLogger(__name__)
 
@@ -40,11 +41,23 @@ class GatherSweep(Callback):
             return
         try:
             frame = write_sweep(sweep_dir, self.metrics, self.plots)
-        except Exception:  # gathering must never turn a finished sweep into a failure
+        except Exception as err:  # noqa: BLE001 - the jobs' own results stay on disk
             log.exception("gathering the sweep in %s failed", sweep_dir)
+            _exit_failed(f"occbench: gathering the sweep in {sweep_dir} failed: "
+                         f"{type(err).__name__}: {err}")
             return
         log.info("sweep of %d jobs gathered: %s", frame["job"].nunique() if len(frame) else 0,
                  sweep_dir / "sweep.md")
+        if not_done(frame):
+            _exit_failed(f"occbench: {failed_summary(frame, sweep_dir)}")
+
+
+def _exit_failed(message: str) -> None:
+    """End the multirun with exit status 1 after ``message`` on stderr. Hydra turns an
+    exception in a callback into a warning (exit 0), so this exits instead: a sweep in
+    which any job failed must not look like a success."""
+    print(message, file=sys.stderr)
+    raise SystemExit(1)
 
 
 class PaperTable(Callback):

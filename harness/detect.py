@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import logging
 import time
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,7 +35,7 @@ import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from harness.io.mot import write_mot
+from harness.io.mot import write_atomic, write_mot
 from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix
 
@@ -125,11 +126,12 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
     """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
     from hydra.utils import instantiate
 
-    from trackers.frontend.blobs import blob_boxes, blobs_from_mask
-
     sequences = list(instantiate(cfg.dataset))
     source = instantiate(cfg.detector)
-    iou = float(cfg.get("iou_threshold", 0.5))
+    iou = cfg.get("iou_threshold", 0.5)
+    if isinstance(iou, bool) or not isinstance(iou, int | float) or not 0 < iou <= 1:
+        raise ValueError(f"iou_threshold={iou}: must be a number in (0, 1]")
+    iou = float(iou)
     ov = cfg.get("overlays") or {}
     ov_frames = ov.get("frames")
     if ov_frames is not None:
@@ -142,63 +144,106 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
 
         head_detector = HeadDetector()
     counts: dict[str, DetectionCounts] = {}
+    failures: list[str] = []
+    (out_dir / "errors.txt").unlink(missing_ok=True)
     for seq in sequences:
-        name = seq.info.name
-        source.start(seq)
-        c = DetectionCounts()
-        frames, boxes, scores = [], [], []
-        it = seq.frames()
-        if progress:
-            from tqdm import tqdm
-
-            it = tqdm(it, total=seq.info.length, desc=name, leave=False)
-        for k, frame in it:
-            t0 = time.perf_counter()
-            dets, fg = source.detect(k, frame)
-            c.seconds += time.perf_counter() - t0
-            c.frames += 1
-            frames.append(np.full(len(dets), k))
-            boxes.append(dets.boxes)
-            scores.append(dets.scores)
-            gt = None
-            if seq.gt is not None:
-                rows = seq.gt.rows_of(k)
-                rows = rows[seq.gt.table.conf[rows] > 0]
-                gt = seq.gt.table.boxes[rows]
-                c.gt += len(gt)
-                c.detections += len(dets)
-                c.tp += match_count(gt, dets.boxes, iou)
-            if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
-                bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
-                if dets.heads is None and head_detector is not None and len(dets):
-                    dets = type(dets)(dets.boxes, dets.scores, dets.labels,
-                                      head_detector.detect(frame, fg, dets.boxes))
-                path = out_dir / "overlays" / name / f"{k:06d}.png"
-                path.parent.mkdir(parents=True, exist_ok=True)
-                cv2.imwrite(str(path), draw_overlay(frame, fg, dets, gt, bb))
-        n = sum(len(f) for f in frames)
-        write_mot(out_dir / "det" / f"{name}.txt",
-                  np.concatenate(frames) if n else np.zeros(0),
-                  np.full(n, -1), np.concatenate(boxes) if n else np.zeros((0, 4)),
-                  np.concatenate(scores) if n else np.zeros(0))
-        if seq.gt is not None:
-            counts[name] = c
-        log.info("%s: %d frames, %d detections", name, c.frames, n)
+        try:
+            _detect_sequence(seq, source, out_dir, iou, ov_frames, head_detector, progress,
+                             counts)
+        except Exception as err:  # noqa: BLE001 - this sequence fails, the next goes on
+            msg = f"sequence {seq.info.name}: {type(err).__name__}: {err}"
+            log.error("%s", msg)
+            failures.append(msg)
+            with (out_dir / "errors.txt").open("a") as fh:
+                fh.write(msg + "\n    " + traceback.format_exc().rstrip().replace(
+                    "\n", "\n    ") + "\n")
     table = metrics_table(counts)
-    table.to_csv(out_dir / "detection_metrics.csv", index=False, float_format="%.4f")
+    write_atomic(out_dir / "detection_metrics.csv",
+                 table.to_csv(index=False, float_format="%.4f", lineterminator="\n"))
+    if failures:
+        raise DetectionFailed(failures, table)
     return table
+
+
+class DetectionFailed(RuntimeError):
+    """Some sequences failed (recorded in errors.txt); the others' outputs are written.
+
+    Attributes:
+        failures: one line per failed sequence.
+        table: detection_metrics.csv of the sequences that were scored.
+    """
+
+    def __init__(self, failures: list[str], table: pd.DataFrame) -> None:
+        super().__init__(f"{len(failures)} sequence(s) failed: " + "; ".join(failures))
+        self.failures = failures
+        self.table = table
+
+
+def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_detector,
+                     progress: bool, counts: dict[str, DetectionCounts]) -> None:
+    """Detect one sequence: its det file, overlays and counts (added to ``counts``)."""
+    from trackers.frontend.blobs import blob_boxes, blobs_from_mask
+
+    name = seq.info.name
+    source.start(seq)
+    c = DetectionCounts()
+    frames, boxes, scores = [], [], []
+    it = seq.frames()
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(it, total=seq.info.length, desc=name, leave=False)
+    for k, frame in it:
+        t0 = time.perf_counter()
+        dets, fg = source.detect(k, frame)
+        c.seconds += time.perf_counter() - t0
+        c.frames += 1
+        frames.append(np.full(len(dets), k))
+        boxes.append(dets.boxes)
+        scores.append(dets.scores)
+        gt = None
+        if seq.gt is not None:
+            rows = seq.gt.rows_of(k)
+            rows = rows[seq.gt.table.conf[rows] > 0]
+            gt = seq.gt.table.boxes[rows]
+            c.gt += len(gt)
+            c.detections += len(dets)
+            c.tp += match_count(gt, dets.boxes, iou)
+        if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
+            bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
+            if dets.heads is None and head_detector is not None and len(dets):
+                dets = type(dets)(dets.boxes, dets.scores, dets.labels,
+                                  head_detector.detect(frame, fg, dets.boxes))
+            path = out_dir / "overlays" / name / f"{k:06d}.png"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            cv2.imwrite(str(path), draw_overlay(frame, fg, dets, gt, bb))
+    n = sum(len(f) for f in frames)
+    write_mot(out_dir / "det" / f"{name}.txt",
+              np.concatenate(frames) if n else np.zeros(0),
+              np.full(n, -1), np.concatenate(boxes) if n else np.zeros((0, 4)),
+              np.concatenate(scores) if n else np.zeros(0))
+    if seq.gt is not None:
+        counts[name] = c
+    log.info("%s: %d frames, %d detections", name, c.frames, n)
 
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="detect")
 def app(cfg: DictConfig) -> None:
     out_dir = Path(HydraConfig.get().runtime.output_dir)
+    failed = None
     try:
         table = run_detection(cfg, out_dir, progress=bool(cfg.get("progress", True)))
-    except (ValueError, FileNotFoundError) as err:
+    except DetectionFailed as err:
+        table, failed = err.table, err
+    except (ValueError, OSError) as err:
         raise SystemExit(f"harness.detect: {err}") from None
     with pd.option_context("display.width", 160, "display.float_format", "{:.3f}".format):
         print(table.to_string(index=False))
     print(f"results: {out_dir}")
+    if failed is not None:
+        raise SystemExit(f"harness.detect: {len(failed.failures)} sequence(s) failed (the "
+                         f"others are written; see {out_dir / 'errors.txt'}):\n  "
+                         + "\n  ".join(failed.failures))
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ import json
 import logging
 import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +42,7 @@ import yaml
 log = logging.getLogger(__name__)
 
 STATUS_FILE = "status.json"
-DONE, FAILED = "done", "failed"
+DONE, FAILED, DAMAGED = "done", "failed", "damaged"
 COMBINED = "COMBINED"
 SEED = "seed"
 DEFAULT_METRICS = ("HOTA", "IDF1", "MOTA", "IDs", "ReID")
@@ -64,67 +64,133 @@ def read_overrides(job_dir: str | Path) -> list[str]:
 
 
 def read_status(job_dir: str | Path) -> dict[str, Any] | None:
-    """The job's ``status.json`` as a dict, None when absent or unreadable."""
+    """The job's ``status.json`` as a dict, None when absent; an unreadable or malformed one
+    gives ``{"status": "damaged", "error": <message naming the file>}`` (never done)."""
     path = Path(job_dir) / STATUS_FILE
     if not path.is_file():
         return None
     try:
-        return json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as err:
-        log.warning("%s: unreadable status (%s): the job counts as not run", path, err)
-        return None
+        body = json.loads(path.read_text())
+        if not isinstance(body, dict) or not isinstance(body.get("status"), str):
+            raise ValueError("not an object with a 'status' string")
+        return body
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        msg = f"{path}: unreadable status ({err}): the job counts as not done"
+        log.warning("%s", msg)
+        return {"status": DAMAGED, "error": msg}
 
 
 def write_status(job_dir: str | Path, status: str, overrides: Sequence[str],
-                 objective: float | None = None, error: str | None = None) -> Path:
-    """Write ``status.json`` (atomically): status, overrides, objective, error."""
+                 objective: float | None = None, error: str | None = None,
+                 inputs: Mapping[str, str] | None = None) -> Path:
+    """Write ``status.json`` (atomically): status, overrides, objective, error, and the
+    fingerprint of the job's inputs (``inputs``: config, code, data)."""
+    from harness.io.mot import write_atomic
+
     path = Path(job_dir) / STATUS_FILE
-    path.parent.mkdir(parents=True, exist_ok=True)
     obj = None if objective is None or not math.isfinite(objective) else float(objective)
-    body = {"status": status, "overrides": list(overrides), "objective": obj, "error": error}
-    tmp = path.with_suffix(".json.part")
-    tmp.write_text(json.dumps(body, indent=1) + "\n")
-    tmp.replace(path)
-    return path
+    body = {"status": status, "overrides": list(overrides), "objective": obj, "error": error,
+            "inputs": dict(inputs) if inputs else None}
+    return write_atomic(path, json.dumps(body, indent=1) + "\n")
 
 
-def finished(job_dir: str | Path, overrides: Sequence[str]) -> dict[str, Any] | None:
-    """The status of a job already done with exactly these overrides, else None."""
+def finished(job_dir: str | Path, overrides: Sequence[str],
+             inputs: Mapping[str, str] | None = None) -> dict[str, Any] | None:
+    """The status of a job already done with exactly these overrides and, when ``inputs``
+    is given, the same input fingerprint (``harness.fingerprint``), else None."""
     status = read_status(job_dir)
-    if status and status.get("status") == DONE and list(status.get("overrides") or []) == list(
-            overrides):
-        return status
-    return None
+    if not (status and status.get("status") == DONE
+            and list(status.get("overrides") or []) == list(overrides)):
+        return None
+    if inputs is not None:
+        changed = changed_inputs(status.get("inputs"), inputs)
+        if changed:
+            log.info("%s: inputs changed since it was done (%s): recomputed", job_dir,
+                     ", ".join(changed))
+            return None
+    return status
 
 
-def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], float]) -> float:
+def changed_inputs(old: Mapping[str, str] | None, new: Mapping[str, str]) -> list[str]:
+    """Names of the fingerprint parts that differ (all when none was recorded)."""
+    if not old:
+        return ["no fingerprint recorded"]
+    return [k for k in new if old.get(k) != new[k]]
+
+
+def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], float],
+            inputs: Callable[[], Mapping[str, str]] | None = None) -> float:
     """Run one sweep job: skip it when already done, record its failure instead of raising.
 
     Args:
         job_dir: the job's output directory.
         overrides: the job's task overrides (``HydraConfig.get().overrides.task``).
         run: the job; returns the objective.
+        inputs: gives the fingerprint of the job's inputs (config, code version, data
+            files: ``harness.fingerprint.inputs``); a job done with other inputs is run
+            again.
     Returns:
         The objective; the stored one for a skipped job; NaN for a failed job.
     """
-    done = finished(job_dir, overrides)
+    fingerprint = None
+    try:
+        fingerprint = dict(inputs()) if inputs is not None else None
+    except Exception as err:  # noqa: BLE001 - the job then always runs
+        log.warning("%s: cannot fingerprint the inputs (%s): the job is run", job_dir, err)
+        fingerprint = {"error": str(err)}
+    done = finished(job_dir, overrides, fingerprint)
     if done is not None:
         log.info("%s: already done with the same overrides: skipped", job_dir)
         value = done.get("objective")
         return float("nan") if value is None else float(value)
-    write_status(job_dir, "running", overrides)
+    write_status(job_dir, "running", overrides, inputs=fingerprint)
     try:
         value = float(run())
     except Exception as err:  # one job's failure must not stop the sweep
         msg = f"{type(err).__name__}: {err}".strip()
         log.exception("%s: job failed: %s", job_dir, msg)
-        write_status(job_dir, FAILED, overrides, error=msg)
+        write_status(job_dir, FAILED, overrides, error=msg, inputs=fingerprint)
         return float("nan")
-    write_status(job_dir, DONE, overrides, objective=value)
+    write_status(job_dir, DONE, overrides, objective=value, inputs=fingerprint)
     return value
 
 
 # --------------------------------------------------------------------------- gathering
+
+
+class SweepError(ValueError):
+    """A folder that is not a sweep, or a sweep that cannot be gathered; names the path."""
+
+
+def read_metrics(path: Path) -> tuple[pd.DataFrame, str]:
+    """A job's ``metrics.csv`` and "" when it is whole, else an empty frame and why not (the
+    message names the file): empty, truncated (a row with fewer fields than the header or
+    no final newline: the job was stopped while writing), or not a CSV table."""
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as err:
+        return pd.DataFrame(), f"{path}: unreadable ({err})"
+    if not text.strip():
+        return pd.DataFrame(), f"{path}: empty file (the job did not finish writing it)"
+    if not text.endswith("\n"):
+        return pd.DataFrame(), f"{path}: truncated (no final newline)"
+    import csv
+    import io
+
+    rows = list(csv.reader(io.StringIO(text)))
+    width = len(rows[0])
+    for i, row in enumerate(rows[1:], 2):
+        if row and len(row) != width:
+            return pd.DataFrame(), (f"{path}:{i}: truncated or malformed row ({len(row)} "
+                                    f"fields, the header has {width})")
+    try:
+        frame = pd.read_csv(io.StringIO(text))
+    except (ValueError, pd.errors.ParserError) as err:
+        return pd.DataFrame(), f"{path}: not a CSV table ({err})"
+    missing = [c for c in ("tracker", "sequence") if c not in frame.columns]
+    if missing:
+        return pd.DataFrame(), f"{path}: not a metrics table (no column {', '.join(missing)})"
+    return frame, ""
 
 
 def parse_override(text: str) -> tuple[str, str]:
@@ -153,6 +219,9 @@ def job_dirs(sweep_dir: str | Path) -> list[Path]:
         raise FileNotFoundError(f"sweep directory not found: {root}")
     dirs = [d for d in root.iterdir()
             if d.is_dir() and ((d / ".hydra").is_dir() or (d / STATUS_FILE).is_file())]
+    if not dirs:
+        raise SweepError(f"not a sweep folder: {root} holds no job folders (sub-folders with "
+                         f".hydra/ or {STATUS_FILE}, as a multirun writes them)")
 
     def key(d: Path) -> tuple[int, int | str]:
         return (0, int(d.name)) if d.name.isdigit() else (1, d.name)
@@ -183,13 +252,24 @@ def gather(sweep_dir: str | Path) -> pd.DataFrame:
             if state == "missing":
                 error = "no status.json and no metrics.csv: the job did not run or finish"
         # a failed job keeps whatever it scored before failing
-        frame = pd.read_csv(metrics_path) if metrics_path.is_file() else pd.DataFrame()
+        frame, damage = (read_metrics(metrics_path) if metrics_path.is_file()
+                         else (pd.DataFrame(), ""))
+        if damage:
+            log.warning("%s", damage)
+            if state == DONE:
+                state, error = DAMAGED, damage
+        if state == DONE and "complete" in frame.columns:
+            whole = frame["complete"].astype(str).str.lower().isin(["true", "1"])
+            if not whole.all():
+                state = "incomplete"
+                error = error or f"{metrics_path}: the run did not complete (complete=false)"
         if frame.empty:
             frame = pd.DataFrame([{}])
             if state == DONE:
-                error = error or "metrics.csv has no rows (nothing scored)"
+                error = error or f"{metrics_path}: no rows (nothing scored)"
         if (d / "errors.txt").is_file() and state == DONE and not error:
-            error = (d / "errors.txt").read_text().splitlines()[0]
+            lines = (d / "errors.txt").read_text(errors="replace").splitlines()
+            error = lines[0] if lines else ""
         head = {"job": d.name, **{_column(k): v for k, v in params.items()}, "status": state,
                 "error": error}
         for col, value in reversed(list(head.items())):
@@ -412,11 +492,12 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
                 plots: bool = True) -> pd.DataFrame:
     """Gather a sweep and write ``sweep.csv``, ``sweep.md`` and ``plots/`` into it."""
     sweep_dir = Path(sweep_dir)
+    from harness.io.mot import write_atomic
+
     frame = gather(sweep_dir)
-    tmp = sweep_dir / "sweep.csv.part"
-    frame.to_csv(tmp, index=False, float_format="%.6f", lineterminator="\n")
-    tmp.replace(sweep_dir / "sweep.csv")
-    (sweep_dir / "sweep.md").write_text(sweep_markdown(frame, metrics, sweep_dir.name))
+    write_atomic(sweep_dir / "sweep.csv",
+                 frame.to_csv(index=False, float_format="%.6f", lineterminator="\n"))
+    write_atomic(sweep_dir / "sweep.md", sweep_markdown(frame, metrics, sweep_dir.name))
     if plots:
         try:
             plot_sweep(frame, sweep_dir / "plots", metrics)
@@ -437,12 +518,35 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     try:
-        write_sweep(args.sweep_dir, args.metrics, not args.no_plots)
-    except (FileNotFoundError, ValueError, TypeError) as err:
+        frame = write_sweep(args.sweep_dir, args.metrics, not args.no_plots)
+    except (OSError, ValueError, TypeError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     print(args.sweep_dir / "sweep.md")
+    bad = not_done(frame)
+    if bad:
+        print(f"error: {failed_summary(frame, args.sweep_dir)}", file=sys.stderr)
+        return 1
     return 0
+
+
+def not_done(frame: pd.DataFrame) -> list[str]:
+    """Job numbers of a gathered sweep that are not done (failed, damaged, missing...)."""
+    if frame.empty:
+        return []
+    jobs = frame.drop_duplicates("job")
+    return [str(j) for j in jobs.loc[jobs["status"] != DONE, "job"]]
+
+
+def failed_summary(frame: pd.DataFrame, sweep_dir: str | Path) -> str:
+    """One paragraph: how many jobs are not done, and the first few with their error."""
+    jobs = frame.drop_duplicates("job")
+    bad = jobs[jobs["status"] != DONE]
+    lines = [f"{len(bad)} of {len(jobs)} sweep jobs not done (see {Path(sweep_dir) / 'sweep.md'}):"]
+    lines += [f"  job {r.job}: {r.status}: {r.error}" for r in bad.head(5).itertuples()]
+    if len(bad) > 5:
+        lines.append(f"  ... and {len(bad) - 5} more")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

@@ -177,7 +177,8 @@ def test_failing_job_is_recorded_and_a_rerun_skips_finished_jobs(tiny_mot, tmp_p
            "dataset=mot", f"dataset.root={tiny_mot}", "progress=false",
            f"hydra.sweep.dir={tmp_path}", "hydra/launcher=basic"]
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.returncode == 1, proc.stderr[-3000:]  # a sweep with a failed job fails
+    assert "1 of 2 sweep jobs not done" in proc.stderr
     table = (tmp_path / "sweep.csv").read_text()
     frame = pd.read_csv(tmp_path / "sweep.csv", keep_default_na=False)
     first = frame[frame["job"] == 0]
