@@ -25,7 +25,7 @@ def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_
             grey[y, x] = (np.float32(frame[y, x, 0]) + np.float32(frame[y, x, 1])
                           + np.float32(frame[y, x, 2])) / np.float32(3.0) + np.float32(1.0)
     s = np.empty(8, dtype=np.float32)
-    tried = np.empty(K, dtype=np.bool_)
+    order = np.empty(K, dtype=np.int64)
     far_best = False
     far_limit = np.float32(3.0 * noise * noise)
     for y in range(H):
@@ -34,25 +34,29 @@ def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_
             g = grey[y, x]
             step = max(g * np.float32(tau), np.float32(floor))
             hi, lo = g + step, g - step
+            inner = radius <= y < H - radius and radius <= x < W - radius
             for j in range(8):  # SILTP, edge-replicated
-                yy = min(max(y + _DY[j] * radius, 0), H - 1)
-                xx = min(max(x + _DX[j] * radius, 0), W - 1)
-                nb = grey[yy, xx]
-                s[j] = np.float32(1.0) if nb > hi else (np.float32(-1.0) if nb < lo else np.float32(0.0))
+                if inner:
+                    nb = grey[y + _DY[j] * radius, x + _DX[j] * radius]
+                else:
+                    nb = grey[min(max(y + _DY[j] * radius, 0), H - 1),
+                              min(max(x + _DX[j] * radius, 0), W - 1)]
+                s[j] = np.float32(nb > hi) - np.float32(nb < lo)  # branch-free
             c0 = np.float32(frame[y, x, 0])
             c1 = np.float32(frame[y, x, 1])
             c2 = np.float32(frame[y, x, 2])
             # the strongest matching mode: modes tried by decreasing weight (ties: lower k,
             # as numpy's argmax), stopping at the first match
             best = -1
-            for k in range(K):
-                tried[k] = False
-            for _ in range(K):
-                k = -1
-                for q in range(K):
-                    if not tried[q] and (k < 0 or w[q, n] > w[k, n]):
-                        k = q
-                tried[k] = True
+            for q in range(K):  # insertion sort by decreasing weight, stable (ties: lower k)
+                order[q] = q
+                i = q
+                while i > 0 and w[order[i - 1], n] < w[q, n]:
+                    order[i] = order[i - 1]
+                    i -= 1
+                order[i] = q
+            for oi in range(K):
+                k = order[oi]
                 dt = np.float32(0.0)
                 for j in range(8):
                     dt += abs(s[j] - t[k, n, j])
