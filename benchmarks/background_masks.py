@@ -31,8 +31,7 @@ from harness.paths import data_path  # noqa: E402
 from trackers.frontend.background import BackgroundModel  # noqa: E402
 
 VIDEOS = ROOT.parent / "shared" / "data" / "videos"  # optional, not shipped
-MODELS = {"MOG2 (default)": {}, "texture_colour (Reta 3.1)": {"method": "texture_colour",
-                                                                "work_scale": 0.5}}
+MODELS = {"MOG2": {}, "texture_colour (Reta 3.1, silhouette default)": {"method": "texture_colour"}}
 
 
 def _panel(model: BackgroundModel, frame: np.ndarray) -> np.ndarray:
@@ -73,11 +72,11 @@ def main() -> int:
     rows, titles = [], []
     syn = load_scenario("crossing", seed=11, width=384, height=288, length=40, reflection=0.6)
     rows.append(row(syn, 20, syn.reflection_mask(20)))
-    titles.append("synthetic, reflection opacity 0.6 (blue outline: exact reflection)")
+    titles.append("synthetic, reflection 0.6")
     caviar = data_path("CAVIAR-OneLeaveShop1cor")
     if caviar.is_dir():
         rows.append(row(load_caviar(caviar, prefetch=0)[0], 130))
-        titles.append("CAVIAR OneLeaveShop1cor frame 130 (dev half)")
+        titles.append("CAVIAR frame 130 (dev half)")
     for name, k in (("CAVIAR-ShopAssistant1cor", 300), ("CAVIAR-OneStopEnter1front", 300)):
         path = VIDEOS / f"{name}.mp4"
         if path.is_file():
