@@ -83,8 +83,12 @@ Adaptations (where the paper is vague or relies on what we do not have):
   A part that is visible by all three yet fails to match ``stale_frames`` times is
   re-learned; a hidden part stays frozen, as in the paper.
 - Targets are born from detections (and from free blobs when ``blob_births``), and with
-  foreground only from candidates whose parts hold foreground (``min_support``): a
+  foreground only from candidates with a part holding foreground (``min_support``): a
   detection over background is a false alarm, never a person.
+- Relative match (``relative_match``): a target found in the previous frame takes no
+  candidate scoring below ``relative_match`` times its last match's score: when its own
+  detection is missed, a neighbour's detection that merely passes ``match_threshold`` is
+  not taken (in crowds that first swap started the cascades of identity switches).
 - ``occluded_cover`` (off by default): an unfound target is reported only while found
   targets' boxes cover it.
 """
@@ -228,13 +232,15 @@ class PBMTracker:
             ``max_report_misses`` frames, at its last box) or outside the image.
         stale_fill: ... and its foreground area is at least this fraction of its model's.
         relearn_rate: running-average step of a re-learned stale part (1 = replaced).
-        min_support: with foreground, a candidate starts a target only when the mean
-            foreground fraction of its five parts (``PartFeatures.area``) is at least this
+        min_support: with foreground, a candidate starts a target only when the
+            foreground fraction of one of its five parts (``PartFeatures.area``) at least is this
             (PBM 2: a person is a foreground region; a detection over background is a
             false alarm); 0 = any detection starts one.
         occluded_cover: with foreground, an unfound target is reported (OCCLUDED) only while
             the boxes of found confirmed targets cover at least this fraction of its box
             (evidence that it is hidden, not gone); 0 = off.
+        relative_match: a target found in the previous frame takes no candidate whose
+            score p (eq. 13) is below this fraction of the score of that match; 0 = off.
         warm_up: the first tracker built in a process runs ``warmup.scene`` and resets,
             so that numba's kernels are compiled or loaded (0.3-0.5 s) before the first
             real frame, not inside a timed ``update``.
@@ -300,8 +306,11 @@ class PBMTracker:
         warm_up: bool = True,
         min_support: float = 0.3,
         occluded_cover: float = 0.0,
+        relative_match: float = 0.5,
     ) -> None:
-        for name, v in (("min_support", min_support), ("occluded_cover", occluded_cover)):
+        self.relative_match = float(relative_match)
+        for name, v in (("min_support", min_support), ("occluded_cover", occluded_cover),
+                        ("relative_match", relative_match)):
             if not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must lie in [0, 1], got {v}")
         self.min_support = float(min_support)
@@ -734,6 +743,14 @@ class PBMTracker:
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
                 S[ti, chosen] = max(keep, self.match_threshold)
+        withheld = None
+        if self.relative_match > 0 and T and n_a:
+            # a target found last frame takes no candidate scoring below relative_match x
+            # the score of that match (its own detection missed, a neighbour's is no match)
+            ref = np.where(targets.misses == 0, targets.score, 0.0)
+            weak = (S < self.relative_match * ref[:, None]) & (S >= self.match_threshold)
+            withheld = weak.any(axis=0)  # a poor match of a known target starts no new one
+            S[weak] = -np.inf
         cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.match_threshold)
         if len(matches):
@@ -786,7 +803,9 @@ class PBMTracker:
                 continue
             if cand.blob[n] and not self.blob_births:
                 continue
-            if fg is not None and feats.area[n].mean() < self.min_support:
+            if withheld is not None and withheld[n]:
+                continue
+            if fg is not None and feats.area[n].max() < self.min_support:
                 continue  # too little foreground under its parts to be a person (PBM 2)
             if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > self.new_track_iou:
                 continue
