@@ -30,8 +30,15 @@ import numpy as np
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable
 from harness.run import (
-    ForegroundProvider, ProgressFactory, RunError, Tracker, TrackerOutput, _copy,
-    _copy_detections, _no_progress, _Rows, clean_detections,
+    ForegroundProvider,
+    RunError,
+    Tracker,
+    TrackerOutput,
+    _copy,
+    _copy_detections,
+    _no_progress,
+    _Rows,
+    clean_detections,
 )
 from harness.sources import DetectionSource
 from trackers.geometry import iou_matrix

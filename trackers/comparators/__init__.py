@@ -3,4 +3,4 @@
 from trackers.comparators.meanshift import MeanShiftTracker
 from trackers.comparators.particle_filter import ColourParticleFilter
 
-__all__ = ["MeanShiftTracker", "ColourParticleFilter"]
+__all__ = ["ColourParticleFilter", "MeanShiftTracker"]

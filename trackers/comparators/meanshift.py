@@ -14,7 +14,10 @@ import cv2
 import numpy as np
 
 from trackers.comparators.appearance import (
-    ColourTarget, ColourTrackerBase, clip_box, colour_model,
+    ColourTarget,
+    ColourTrackerBase,
+    clip_box,
+    colour_model,
 )
 
 
