@@ -774,3 +774,19 @@ def test_identities_kept_through_a_crowd_crossing_where_the_baseline_switches():
         assert len(pbm[gid]) == L and len(set(pbm[gid])) == 1
     assert len(set(pbm[g][0] for g in (1, 2, 3))) == 3
     assert len(set(base[2])) > 1
+
+
+def test_paper_mode_turns_every_adaptation_off():
+    """``tracker=pbm_paper`` composes pbm.yaml with each adaptation at the paper's value."""
+    from harness.frontend_source import compose_config
+    from trackers.frontend.heads import HeadDetector
+
+    paper = instantiate(compose_config(["tracker=pbm_paper"]).tracker)
+    ours = instantiate(compose_config(["tracker=pbm"]).tracker)
+    assert isinstance(paper, PBMTracker) and isinstance(paper.head_detector, HeadDetector)
+    assert ours.head_detector is None
+    assert (paper.model_spread, paper.stale_frames, paper.min_support, paper.relative_match,
+            paper.occluded_cover) == (1.0, 0, 0.0, 0.0, 0.0)
+    assert not (paper.motion_compensation or paper.report_predicted or paper.lone_growth)
+    assert paper.prune_max_misses >= 10**6 and paper.duplicate_radius < 0
+    assert paper.match_threshold == ours.match_threshold  # what the paper leaves open: ours
