@@ -1,4 +1,4 @@
-"""``python -m harness`` (console script ``occbench``): the Hydra app.
+"""``occbench run`` (plain ``occbench``, ``python -m harness``): the Hydra app.
 
 Runs the selected trackers (default: every built tracker, ``conf/tracker/all.yaml``) on the
 selected dataset (default: the synthetic suite) with the selected detection source, writes
@@ -17,6 +17,7 @@ The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from pathlib import Path
 
@@ -73,10 +74,11 @@ def run_app(cfg: DictConfig) -> float:
     out_dir = Path(hc.runtime.output_dir)
     choice = hc.runtime.choices.get("tracker")
     objective = cfg.get("objective") or {}
+    multirun = hc.mode == RunMode.MULTIRUN
+    progress = progress_factory(bool(cfg.get("progress", True)), multirun)
     try:
-        with logging_redirect_tqdm():
-            result = run_experiment(cfg, out_dir, tracker_name=choice,
-                                    progress=progress_factory(bool(cfg.get("progress", True))))
+        with logging_redirect_tqdm() if progress is not None else contextlib.nullcontext():
+            result = run_experiment(cfg, out_dir, tracker_name=choice, progress=progress)
         value = result.objective(objective.get("tracker"), objective.get("metric") or "IDF1")
     except RunError as err:
         raise AppError(f"occbench: {err}") from None
@@ -84,18 +86,18 @@ def run_app(cfg: DictConfig) -> float:
         print(to_text(comparison(result.metrics, PRINTED)), end="")
     print(f"results: {out_dir}")
     if result.failures:
-        raise AppError(
-            f"occbench: {len(result.failures)} part(s) of the run failed (the rest is written): "
-            f"see {out_dir / 'errors.txt'}\n"
-            + "\n".join(f"  [{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}"
-                        for f in result.failures[:10])
-        )
+        raise AppError(  # each failure was logged once when it happened
+            f"occbench: {len(result.failures)} part(s) of the run failed (the rest is written; "
+            f"each is logged above, with its traceback in {out_dir / 'errors.txt'})")
     return value
 
 
 def main() -> None:
-    """Console-script entry point ``occbench`` (same as ``python -m harness``)."""
-    app()
+    """Console-script entry point ``occbench`` (same as ``python -m harness``): the
+    subcommands of ``harness.cli``; without one, this Hydra app."""
+    from harness.cli import main as cli
+
+    raise SystemExit(cli())
 
 
 if __name__ == "__main__":

@@ -33,9 +33,11 @@ import hydra
 import numpy as np
 import pandas as pd
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from harness.io.mot import write_atomic, write_mot
+from harness.progress import bars_wanted
 from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix
 
@@ -227,12 +229,15 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
     log.info("%s: %d frames, %d detections", name, c.frames, n)
 
 
-@hydra.main(version_base="1.3", config_path="../conf", config_name="detect")
+# absolute: a relative path resolves against the calling module (pkg://) under `occbench detect`
+@hydra.main(version_base="1.3", config_path=str(Path(__file__).resolve().parent.parent / "conf"),
+            config_name="detect")
 def app(cfg: DictConfig) -> None:
     out_dir = Path(HydraConfig.get().runtime.output_dir)
     failed = None
     try:
-        table = run_detection(cfg, out_dir, progress=bool(cfg.get("progress", True)))
+        table = run_detection(cfg, out_dir, progress=bars_wanted(
+            bool(cfg.get("progress", True)), HydraConfig.get().mode == RunMode.MULTIRUN))
     except DetectionFailed as err:
         table, failed = err.table, err
     except (ValueError, OSError) as err:

@@ -307,7 +307,8 @@ def run_sequence(
                 except Exception as err:  # noqa: BLE001 - one tracker's failure must not stop the others
                     out[t].error = f"frame {k}: {type(err).__name__}: {err}"
                     out[t].trace = traceback.format_exc()
-                    log.error("%s on %s failed at frame %d: %s: %s", t, name, k,
+                    # the caller reports it (run_experiment: errors.txt and one log line)
+                    log.debug("%s on %s failed at frame %d: %s: %s", t, name, k,
                               type(err).__name__, err)
                     del active[t]
                     continue
@@ -630,6 +631,26 @@ def _check_located(node: Any, key: str) -> None:
     check_node(node, key, target)
 
 
+def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence]) -> None:
+    """Before anything is timed (``harness.warmup``): reject a tracker that needs frames when
+    a sequence has none, then warm every tracker class up once per process."""
+    from harness.warmup import needs_pixels, warm_up_once
+
+    frameless = [s.info.name for s in sequences if not s.has_pixels]
+    if frameless:
+        for name, node in configs.items():
+            why = needs_pixels(build_tracker(name, node))
+            if why is not None:
+                raise RunError(
+                    f"tracker {name!r} needs frame pixels ({why}), but {len(frameless)} "
+                    f"sequence(s) have none (ground truth and detections only: "
+                    f"{', '.join(frameless[:5])}{', ...' if len(frameless) > 5 else ''}); "
+                    "run it on a dataset with frames, or choose a tracker that reads boxes "
+                    "only (tracker=baseline)")
+    warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
+                  for n, node in configs.items()}, log.info)
+
+
 def load_sequences(node: Any) -> list[Sequence]:
     """Instantiate the dataset config: a list of Sequence, RunError when it cannot be."""
     from hydra.utils import instantiate
@@ -788,6 +809,7 @@ def run_experiment(
     externals = external_folders(_cfg_get(cfg, "external", {}), configs)
     build_source(_cfg_get(cfg, "detector"))
     sequences = load_sequences(_cfg_get(cfg, "dataset"))
+    prepare_trackers(configs, sequences)
     names = [*configs, *externals]
     wanted = _cfg_get(_cfg_get(cfg, "objective", {}), "tracker")
     if wanted is not None and str(wanted) not in names:

@@ -413,6 +413,14 @@ def test_failing_tracker_in_experiment(tmp_path, mot_root):
     assert read_mot(tmp_path / "r" / "tracks" / "bad" / "cross-a.txt") is not None
 
 
+def test_pixel_tracker_on_frameless_data_is_refused_before_the_run(tmp_path, mot_root):
+    cfg = compose_cfg("dataset=mot", f"dataset.root={mot_root}", "tracker=reta")
+    with pytest.raises(RunError, match=r"tracker 'reta' needs frame pixels .* sequence\(s\) "
+                                       r"have none"):
+        run_experiment(cfg, tmp_path / "r", tracker_name="reta")
+    assert not (tmp_path / "r" / "tracks").exists()  # nothing started
+
+
 def test_unbuilt_tracker_fails_clearly(tmp_path, mot_root):
     cfg = compose_cfg("dataset=mot", f"dataset.root={mot_root}", "tracker=baseline",
                       "tracker._target_=trackers.not_built_yet.Tracker")

@@ -18,6 +18,9 @@ Command line (config overrides as for ``python -m harness``, or the config of a 
     python -m harness.report.video --sequence stop_behind --out stop_behind.mp4 \\
         --sheet stop_behind.png -- dataset=synthetic dataset.scenarios=[stop_behind]
     python -m harness.report.video --run results/2026-01-01/12-00-00 --sequence crossing
+
+With ``--run`` and neither ``--out`` nor ``--sheet``, both are written into the run directory:
+``report/<sequence>.mp4`` and ``report/<sequence>_sheet.png``.
 """
 
 from __future__ import annotations
@@ -258,6 +261,19 @@ def compose_config(overrides: Sequence[str], run_dir: Path | None = None) -> Any
         return compose("config", overrides=list(overrides))
 
 
+def run_choice(run_dir: Path, group: str) -> str | None:
+    """The config choice of ``group`` a finished run was started with (Hydra's
+    ``.hydra/hydra.yaml``), None when unknown."""
+    import yaml
+
+    path = Path(run_dir) / ".hydra" / "hydra.yaml"
+    if not path.is_file():
+        return None
+    body = yaml.safe_load(path.read_text()) or {}
+    choice = (((body.get("hydra") or {}).get("runtime") or {}).get("choices") or {}).get(group)
+    return None if choice is None else str(choice)
+
+
 def tracker_choice(overrides: Sequence[str]) -> str | None:
     """The ``tracker=<name>`` choice among command-line overrides (names a single tracker)."""
     for o in overrides:
@@ -282,8 +298,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--columns", type=int, default=None)
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    if args.out is None and args.sheet is None:
-        p.error("give --out and/or --sheet")
+    if args.out is None and args.sheet is None and args.run is None:
+        p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
     from harness.run import build_source, build_tracker, load_sequences, tracker_configs
 
     try:
@@ -296,9 +312,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             seq = by_name[args.sequence]
         else:
             seq = sequences[0]
-        configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
+        choice = tracker_choice(args.overrides)
+        if choice is None and args.run is not None:
+            choice = run_choice(args.run, "tracker")
+        configs = tracker_configs(cfg.tracker, choice)
         trackers = {n: build_tracker(n, node) for n, node in configs.items()}
-        written = render(trackers, seq, build_source(cfg.detector), args.out, args.sheet,
+        out, sheet = args.out, args.sheet
+        if out is None and sheet is None:  # --run alone: both, into the run directory
+            out = args.run / "report" / f"{seq.info.name}.mp4"
+            sheet = args.run / "report" / f"{seq.info.name}_sheet.png"
+        written = render(trackers, seq, build_source(cfg.detector), out, sheet,
                          args.sheet_frames, not args.no_gt, tuple(args.frames) if args.frames
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
                          cfg.get("background") or {})

@@ -109,7 +109,6 @@ from trackers.frontend.parts import (
     centroid_ratios,
 )
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
-from trackers.layered import warmup
 from trackers.layered._glue_kernels import (
     alive_rows,
     carved_rows,
@@ -241,9 +240,6 @@ class PBMTracker:
             (evidence that it is hidden, not gone); 0 = off.
         relative_match: a target found in the previous frame takes no candidate whose
             score p (eq. 13) is below this fraction of the score of that match; 0 = off.
-        warm_up: the first tracker built in a process runs ``warmup.scene`` and resets,
-            so that numba's kernels are compiled or loaded (0.3-0.5 s) before the first
-            real frame, not inside a timed ``update``.
     """
 
     def __init__(
@@ -303,7 +299,6 @@ class PBMTracker:
         stale_cover: float = 0.1,
         stale_fill: float = 0.75,
         relearn_rate: float = 1.0,
-        warm_up: bool = True,
         min_support: float = 0.3,
         occluded_cover: float = 0.0,
         relative_match: float = 0.5,
@@ -414,8 +409,6 @@ class PBMTracker:
         sr, sc = (int(v) for v in search_grid)
         self._search_extractor = PartFeatureExtractor(int(histogram_bins), sr, sc)
         self.reset()
-        if warm_up:
-            warmup.once(self)
 
     def reset(self) -> None:
         """Forget every target and restart ids at 1."""

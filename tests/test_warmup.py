@@ -1,5 +1,6 @@
-"""PBM warm-up (trackers/layered/warmup.py): it loads every kernel a run uses, and it leaves
-the tracker exactly as built."""
+"""The harness's warm-up before timing (harness/warmup.py): it loads every kernel a PBM run
+uses, it leaves a tracker exactly as built, it runs once per tracker class and process, and a
+tracker that needs frames is refused before a run on frameless data."""
 
 from __future__ import annotations
 
@@ -8,18 +9,19 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from harness.datasets.synthetic import load_scenario
 from harness.detection_sources import NoisyGroundTruth
 from harness.run import run_sequence
-from trackers.layered.warmup import warm_up
+from harness.warmup import WarmUp, needs_pixels, warm_up
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# in a fresh process: build a tracker (which warms up), then count the numba signatures a
-# crowd run adds, with and without a foreground mask
+# in a fresh process: warm a tracker up as the harness does, then count the numba
+# signatures a crowd run adds, with and without a foreground mask
 _FRESH = r"""
 import importlib, pkgutil, sys
 from hydra.utils import instantiate
@@ -29,8 +31,9 @@ import trackers
 from harness.datasets.synthetic import load_scenario
 from harness.detection_sources import NoisyGroundTruth
 from harness.run import run_sequence
+from harness.warmup import warm_up_once
 
-instantiate(OmegaConf.load(sys.argv[1]))
+warm_up_once({"pbm": lambda: instantiate(OmegaConf.load(sys.argv[1]))})
 kernels = {}
 for m in pkgutil.walk_packages(trackers.__path__, "trackers."):
     if m.name.startswith("trackers.outside"):
@@ -48,7 +51,7 @@ print(sum(before.values()))
 """
 
 
-def test_a_built_tracker_has_loaded_every_kernel_a_run_uses():
+def test_a_warmed_up_process_has_loaded_every_kernel_a_run_uses():
     out = subprocess.run([sys.executable, "-c", _FRESH, str(ROOT / "conf" / "tracker" / "pbm.yaml")],
                          capture_output=True, text=True, cwd=ROOT, check=True).stdout.splitlines()
     assert out[-2] == "[]"  # no kernel compiled or loaded during the run
@@ -57,7 +60,6 @@ def test_a_built_tracker_has_loaded_every_kernel_a_run_uses():
 
 def test_warm_up_leaves_the_tracker_as_built():
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-    cfg.warm_up = False
     seq = load_scenario("pair_walk", seed=1, length=60)
     plain, warmed = instantiate(cfg), instantiate(cfg)
     warm_up(warmed)
@@ -67,3 +69,47 @@ def test_warm_up_leaves_the_tracker_as_built():
     assert len(a) > 100
     np.testing.assert_array_equal(a.ids, b.ids)
     np.testing.assert_array_equal(a.boxes, b.boxes)
+
+
+class _Counting:
+    """A box-only tracker that counts its updates (class-level: the warm-up builds its own)."""
+
+    updates = 0
+
+    def reset(self) -> None:
+        pass
+
+    def update(self, frame, detections, foreground=None):
+        type(self).updates += 1
+        return []
+
+
+class _Pixels(_Counting):
+    def update(self, frame, detections, foreground=None):
+        if frame is None:
+            raise ValueError("needs pixels")
+        return super().update(frame, detections, foreground)
+
+
+def test_warm_up_runs_once_per_tracker_class_and_announces_it():
+    once, said = WarmUp(), []
+    _Counting.updates = 0
+    assert once({"a": _Counting, "b": _Counting}, said.append) == ["a"]
+    assert _Counting.updates > 0 and len(said) == 1 and "warming up a" in said[0]
+    n = _Counting.updates
+    assert once({"c": _Counting}, said.append) == []  # the class is warm: nothing run or said
+    assert _Counting.updates == n and len(said) == 1
+
+
+def test_needs_pixels_asks_the_tracker():
+    assert needs_pixels(_Counting()) is None
+    assert needs_pixels(_Pixels()) == "ValueError: needs pixels"
+
+
+
+def test_a_tracker_failing_in_the_warm_up_is_left_to_the_run():
+    class Failing(_Counting):
+        def update(self, frame, detections, foreground=None):
+            raise RuntimeError("not on this scene")
+
+    assert WarmUp()({"f": Failing}) == ["f"]  # no exception: the run reports real failures

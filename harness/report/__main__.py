@@ -1,0 +1,56 @@
+"""``occbench report RUN_DIR`` (``python -m harness.report RUN_DIR``): the pictures of a
+finished run, written into the run directory.
+
+* ``report/<sequence>.mp4`` and ``report/<sequence>_sheet.png``: every tracker of the run
+  drawn its own way, side by side (``harness.report.video``; the trackers are run again with
+  the run's saved config, so the drawings show the run's tracks);
+* ``plots/trajectory_<sequence>_<person>.png``: the most occluded ground-truth person's path
+  beside the ids that followed it (``harness.report.trajectories``).
+
+Each part can be skipped (``--no-video``, ``--no-trajectories``); ``--sequence`` picks the
+sequence (default: the run's first). For other outputs use the two modules directly.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(
+        prog="occbench report",
+        description="Video, contact sheet and trajectory plot of a finished run, written "
+                    "into the run directory (report/, plots/).")
+    p.add_argument("run_dir", type=Path, help="run directory of occbench run")
+    p.add_argument("--sequence", help="sequence name (default: the run's first)")
+    p.add_argument("--frames", type=int, nargs=2, metavar=("FIRST", "LAST"),
+                   help="frame range of the video (default: all)")
+    p.add_argument("--no-gt", action="store_true", help="do not draw the ground truth")
+    p.add_argument("--no-video", action="store_true", help="skip the video and contact sheet")
+    p.add_argument("--no-trajectories", action="store_true", help="skip the trajectory plot")
+    args = p.parse_args(argv)
+    if not (args.run_dir / "config.yaml").is_file():
+        print(f"error: {args.run_dir / 'config.yaml'} not found (a run directory of "
+              "occbench run)", file=sys.stderr)
+        return 2
+    common = ["--sequence", args.sequence] if args.sequence else []
+    status = 0
+    if not args.no_video:
+        from harness.report import video
+
+        extra = [*common, *(["--no-gt"] if args.no_gt else [])]
+        if args.frames:
+            extra += ["--frames", *map(str, args.frames)]
+        status = max(status, video.main(["--run", str(args.run_dir), *extra]))
+    if not args.no_trajectories:
+        from harness.report import trajectories
+
+        status = max(status, trajectories.main([str(args.run_dir), *common]))
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())

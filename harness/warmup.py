@@ -1,0 +1,131 @@
+"""Before anything is timed: every tracker of a run runs a short scripted scene once per
+process, so that compiled kernels (numba: compiled on the first use after an install,
+loaded from the ``__pycache__`` cache in every new process) and lazy imports are paid for
+here, not inside a timed ``update`` (``timings.csv`` measures tracking only). The wait is
+announced in one log line (stderr in the app).
+
+The scene takes a tracker through the paths a run uses: four painted people on a 240x320
+frame. Two walk towards each other and merge into one foreground blob (PBM's occlusion
+search), two look alike and walk side by side with touching heads (multiple responses and
+head-template pruning); detections are dropped in some frames (lost targets, grown gates),
+once with a bool foreground mask and once without. Each tracker is a fresh instance built
+for the purpose and thrown away: the trackers of the run are built afterwards, as they
+always were, and are not touched.
+
+``needs_pixels`` asks the same kind of question before a run on frameless data (ground
+truth and detections only): does the tracker's ``update`` accept ``frame=None``?
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import logging
+from typing import Protocol
+
+import numpy as np
+
+from trackers.records import Detections, Track
+
+log = logging.getLogger(__name__)
+
+FRAMES = 36
+SIZE = (240, 320)
+# (x at frame 0, x step per frame, y, w, h, head colour, body colour)
+PEOPLE = (
+    (40.0, 5.0, 60.0, 28.0, 84.0, (60, 90, 200), (200, 60, 40)),
+    (240.0, -5.0, 60.0, 28.0, 84.0, (60, 90, 200), (200, 60, 40)),
+    (120.0, 1.0, 140.0, 26.0, 84.0, (60, 95, 205), (150, 150, 40)),
+    (138.0, 1.0, 140.0, 26.0, 84.0, (60, 95, 205), (150, 150, 40)),
+)
+
+
+class _Tracker(Protocol):
+    def reset(self) -> None: ...
+
+    def update(self, frame: np.ndarray | None, detections: Detections,
+               foreground: np.ndarray | None = None) -> list[Track]: ...
+
+
+def scene(k: int) -> tuple[np.ndarray, np.ndarray, Detections]:
+    """Frame ``k`` of the scene: BGR frame, bool person mask and the detections (some
+    people missed in some frames)."""
+    rng = np.random.default_rng(k)
+    frame = rng.integers(90, 110, (*SIZE, 3), dtype=np.uint8)
+    mask = np.zeros(SIZE, dtype=bool)
+    boxes = []
+    for i, (x0, step, y, w, h, head, body) in enumerate(PEOPLE):
+        x = x0 + step * k
+        box = np.array([x, y, w, h])
+        c0, r0, c1, r1 = int(x), int(y), int(x + w), int(y + h)
+        frame[r0:r0 + int(h) // 7, c0:c1] = head
+        frame[r0:r0 + int(h) // 21, c0 + 4:c1 - 4] = (30, 30, 40)  # hair: a textured head template
+        frame[r0 + int(h) // 7:r1, c0:c1] = body
+        mask[r0:r1, c0:c1] = True
+        if (k + i) % 5 != 4:  # every person is missed one frame in five
+            boxes.append(box)
+    dets = Detections(np.array(boxes).reshape(-1, 4), np.ones(len(boxes)))
+    return frame, mask, dets
+
+
+def warm_up(tracker: _Tracker) -> None:
+    """Run ``tracker`` over the scene with and without a foreground mask, then ``reset``
+    it: its state afterwards is as built."""
+    for with_mask in (True, False):
+        tracker.reset()
+        for k in range(FRAMES):
+            frame, mask, dets = scene(k)
+            tracker.update(frame, dets, mask if with_mask else None)
+    tracker.reset()
+
+
+def needs_pixels(tracker: _Tracker) -> str | None:
+    """Why ``tracker`` cannot run without frames (the error its ``update(None, ...)`` raises
+    on the scene's first detections), or None when it can. Use a fresh tracker: it is
+    left in whatever state the attempt leaves it."""
+    _, _, dets = scene(0)
+    try:
+        tracker.update(None, dets, None)
+    except Exception as err:  # noqa: BLE001 - any refusal means the tracker needs pixels
+        return f"{type(err).__name__}: {err}"
+    return None
+
+
+class WarmUp:
+    """Warms each tracker class up once per process (numba's loaded kernels, like imports,
+    are process state: a second run in the same process has nothing to load).
+
+    ``__call__(builders)`` takes ``{name: () -> fresh tracker}`` and returns the names
+    warmed up now (the others' classes already were)."""
+
+    def __init__(self) -> None:
+        self.done: set[str] = set()
+
+    def __call__(self, builders: dict[str, Callable[[], _Tracker]],
+                 announce: Callable[[str], None] | None = None) -> list[str]:
+        todo: dict[str, _Tracker] = {}
+        for name, build in builders.items():
+            tracker = build()
+            kind = _kind(tracker)
+            if kind not in self.done and kind not in map(_kind, todo.values()):
+                todo[name] = tracker
+        if not todo:
+            return []
+        if announce is not None:
+            announce(f"warming up {', '.join(todo)} before timing ({2 * FRAMES} scripted "
+                     "frames each; compiled kernels: about half a minute on the first run "
+                     "after an install, a second or so after)")
+        for name, tracker in todo.items():
+            try:
+                warm_up(tracker)
+            except Exception as err:  # noqa: BLE001 - the run itself reports a failing tracker
+                log.debug("warm-up of %s stopped: %s: %s", name, type(err).__name__, err)
+            self.done.add(_kind(tracker))
+        return list(todo)
+
+
+def _kind(tracker: _Tracker) -> str:
+    return f"{type(tracker).__module__}.{type(tracker).__qualname__}"
+
+
+# one per process: see WarmUp
+warm_up_once = WarmUp()
