@@ -42,10 +42,11 @@ for m in pkgutil.walk_packages(trackers.__path__, "trackers."):
         if isinstance(v, CPUDispatcher):
             kernels[f"{v.__module__}.{v.__name__}"] = v
 before = {k: len(v.signatures) for k, v in kernels.items()}
-seq = load_scenario("crowd", seed=0, length=60, people=8)
-for fg in ("exact", "none"):
-    run_sequence({"pbm": instantiate(OmegaConf.load(sys.argv[1]))}, seq,
-                 NoisyGroundTruth(miss_rate=0.3, seed=0), foreground=fg)
+for seq in (load_scenario("crowd", seed=0, length=60, people=8),
+            load_scenario("crossing", seed=0, length=60)):  # often one match or none a frame
+    for fg in ("exact", "none"):
+        run_sequence({"pbm": instantiate(OmegaConf.load(sys.argv[1]))}, seq,
+                     NoisyGroundTruth(miss_rate=0.3, seed=0), foreground=fg)
 print(sorted(k for k, v in kernels.items() if len(v.signatures) != before[k]))
 print(sum(before.values()))
 """
