@@ -82,9 +82,14 @@ def run_app(cfg: DictConfig) -> float:
         value = result.objective(objective.get("tracker"), objective.get("metric") or "IDF1")
     except RunError as err:
         raise AppError(f"occbench: {err}") from None
-    if not result.metrics.empty:
-        print(to_text(comparison(result.metrics, PRINTED)), end="")
-    print(f"results: {out_dir}")
+    if multirun:  # one line per job; the sweep's summary is printed when the multirun ends
+        log.info("job %s [%s]: %s %s = %.4g", hc.job.num, " ".join(hc.overrides.task),
+                 objective.get("tracker") or result.trackers[0],
+                 objective.get("metric") or "IDF1", value)
+    else:
+        if not result.metrics.empty:
+            print(to_text(comparison(result.metrics, PRINTED)), end="")
+        print(f"results: {out_dir}")
     if result.failures:
         raise AppError(  # each failure was logged once when it happened
             f"occbench: {len(result.failures)} part(s) of the run failed (the rest is written; "

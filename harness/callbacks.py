@@ -1,7 +1,8 @@
 """Hydra callbacks of the app (registered under ``hydra.callbacks`` in ``conf/config.yaml``).
 
 ``GatherSweep``: at the end of a multirun, gather every job's ``metrics.csv`` into
-``sweep.csv``, ``sweep.md`` and ``plots/`` in the sweep directory (``harness.sweep``). It runs
+``sweep.csv``, ``sweep.md`` and ``plots/`` in the sweep directory (``harness.sweep``; an
+Optuna study's plots are Optuna's own, ``harness.tune``) and print the sweep's summary. It runs
 in the launching process, whatever the launcher (basic, joblib, Ray, SLURM via submitit), so
 the job directories must be on a file system it can read.
 """
@@ -15,9 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from hydra.experimental.callback import Callback
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
-from harness.sweep import DEFAULT_METRICS, failed_summary, not_done, write_sweep
+from harness.sweep import DEFAULT_METRICS, failed_summary, not_done, summary_text, write_sweep
 
 log = logging.getLogger(__name__)
 
@@ -39,15 +40,27 @@ class GatherSweep(Callback):
         if not sweep_dir.is_dir():
             log.warning("sweep directory %s does not exist: nothing gathered", sweep_dir)
             return
-        try:
-            frame = write_sweep(sweep_dir, self.metrics, self.plots)
+        from harness.tune import is_optuna
+
+        optuna = is_optuna(config)
+        try:  # an Optuna study is drawn with Optuna's own views, not as parameter lines
+            frame = write_sweep(sweep_dir, self.metrics, self.plots and not optuna)
         except Exception as err:  # noqa: BLE001 - the jobs' own results stay on disk
             log.exception("gathering the sweep in %s failed", sweep_dir)
             _exit_failed(f"occbench: gathering the sweep in {sweep_dir} failed: "
                          f"{type(err).__name__}: {err}")
             return
-        log.info("sweep of %d jobs gathered: %s", frame["job"].nunique() if len(frame) else 0,
-                 sweep_dir / "sweep.md")
+        if self.plots and optuna:
+            try:
+                from harness.tune import plot_study
+
+                metric = OmegaConf.select(config, "objective.metric", default=None) or "objective"
+                plot_study(sweep_dir, config, metric=str(metric))
+            except Exception:  # a plot is not worth losing the table for
+                log.exception("optuna plots of %s failed", sweep_dir)
+        if len(frame):  # the sweep's summary on stdout (jobs print no tables of their own)
+            print(summary_text(frame, self.metrics, str(sweep_dir)), end="")
+        print(f"sweep: {sweep_dir / 'sweep.md'}")
         if not_done(frame):
             _exit_failed(f"occbench: {failed_summary(frame, sweep_dir)}")
 

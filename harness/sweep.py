@@ -15,10 +15,14 @@ writes one job directory per parameter combination under ``hydra.sweep.dir``
   its error and no metrics). Rows are ordered by job number, tracker and sequence as the run
   wrote them, so the table does not depend on the launcher or on the number of workers.
 * ``write_sweep(sweep_dir)`` writes ``sweep.csv``, ``sweep.md`` and ``plots/``: for each
-  metric and each swept parameter (``seed`` excepted) the COMBINED value against the
-  parameter, one line per tracker, mean and 95% t-interval over the jobs sharing the value
-  (the seeds, and the other parameters' values when several are swept); and, when two or more
-  parameters besides the seed are swept, a heatmap of each pair (mean over the rest).
+  metric and each swept parameter the COMBINED value against the parameter, one line per
+  tracker, mean and 95% t-interval over the jobs sharing the value (the seeds, and the other
+  parameters' values when several are swept); and, when two or more parameters are swept,
+  a heatmap of each pair (mean over the rest). Keys named ``seed`` (``seed``,
+  ``dataset.seed``, any group) are replicates, never a parameter axis: they give the mean
+  and interval. The tracker choice is no axis either: each tracker is its own line.
+* ``summary_text(frame)`` is the sweep's summary printed at the end of a multirun: the
+  COMBINED mean and interval per parameter setting, then each job's overrides and status.
 
 The Hydra callback ``harness.callbacks.GatherSweep`` calls ``write_sweep`` at the end of a
 multirun; ``python -m harness.sweep <sweep_dir>`` does the same by hand.
@@ -212,6 +216,12 @@ def _column(key: str) -> str:
     return f"{key}_choice" if key in _RESERVED else key
 
 
+def _key(column: str) -> str:
+    """The override key of a gathered column (``tracker_choice`` -> ``tracker``)."""
+    base = column.removesuffix("_choice")
+    return base if column.endswith("_choice") and base in _RESERVED else column
+
+
 def job_dirs(sweep_dir: str | Path) -> list[Path]:
     """Job directories of a sweep (those with ``.hydra/`` or a status), by job number."""
     root = Path(sweep_dir)
@@ -284,6 +294,28 @@ def gather(sweep_dir: str | Path) -> pd.DataFrame:
             out[col] = out[col].astype("Int64")
     lead = ["job", *keys, "status", "error"]
     return out[lead + [c for c in out.columns if c not in lead]]
+
+
+def is_replicate(key: str) -> bool:
+    """A key named ``seed`` in any group (``seed``, ``dataset.seed``): a replicate."""
+    return key.rsplit(".", 1)[-1] == SEED
+
+
+def plot_axes(frame: pd.DataFrame) -> list[str]:
+    """Swept parameters that are plot axes: not replicates (seeds) and not the tracker
+    choice (every tracker is its own line already)."""
+    return [p for p in swept(frame) if not is_replicate(p) and p != _column("tracker")]
+
+
+def _tick(value: Any) -> str:
+    """A parameter value as a tick label: numbers to 4 significant digits."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    if not math.isfinite(v):
+        return str(value)
+    return f"{v:.4g}"
 
 
 def parameters(frame: pd.DataFrame) -> list[str]:
@@ -380,30 +412,76 @@ def sweep_markdown(frame: pd.DataFrame, metrics: Sequence[str], title: str = "")
     done = len(jobs) - n_failed
     lines += [f"{len(jobs)} jobs, {done} done, {n_failed} failed or missing; swept: "
               + (", ".join(params) or "nothing") + ".", ""]
-    non_seed = [p for p in params if p != SEED]
-    if "sequence" in frame.columns and shown:
-        agg = aggregate(frame, non_seed, shown)
-        if not agg.empty:
-            seeds = f" over {SEED}s" if SEED in params else ""
-            lines += [f"## COMBINED, mean ± 95% interval{seeds}", ""]
-            table = agg[[c for c in agg.columns if not c.endswith("_ci95")]].copy()
-            for m in shown:
-                if m in agg.columns:
-                    table[m] = [f"{a:.4g} ± {b:.2g}" if np.isfinite(a) and b > 0 else _fmt(a)
-                                for a, b in zip(agg[m], agg[f"{m}_ci95"])]
-            lines += [markdown_table(table), ""]
+    table = setting_table(frame, shown)
+    if not table.empty:
+        seeds = [p for p in params if is_replicate(p)]
+        over = f" over {', '.join(seeds)}" if seeds else ""
+        lines += [f"## COMBINED, mean ± 95% interval{over}", "", markdown_table(table), ""]
     per_job = frame
     if "sequence" in frame.columns:
         per_job = frame[(frame["sequence"] == COMBINED) | frame["sequence"].isna()]
     cols = ["job", *params, "status", *(["tracker"] if "tracker" in frame.columns else []),
             *shown]
-    lines += ["## Jobs (COMBINED rows)", "", markdown_table(per_job[cols])]
+    per_job = per_job[cols].copy()
+    for c in params:
+        per_job[c] = per_job[c].map(_tick)
+    lines += ["## Jobs (COMBINED rows)", "", markdown_table(per_job)]
     failed = jobs[jobs["status"] != DONE]
     if not failed.empty:
         lines += ["## Failed jobs", ""]
         lines += [f"- job {r.job}: {r.status}: {r.error}" for r in failed.itertuples()]
         lines.append("")
     return "\n".join(lines)
+
+
+def setting_table(frame: pd.DataFrame, metrics: Sequence[str]) -> pd.DataFrame:
+    """COMBINED ``metric`` as ``mean ± half-width`` per setting of the swept non-replicate
+    parameters and tracker (``n``: the jobs averaged, the seeds)."""
+    shown = [m for m in metrics if m in frame.columns]
+    if "sequence" not in frame.columns or not shown:
+        return pd.DataFrame()
+    by = [p for p in swept(frame) if not is_replicate(p)
+          and not (p == _column("tracker") and "tracker" in frame.columns)]
+    agg = aggregate(frame, by, shown)
+    if agg.empty:
+        return agg
+    table = agg[[c for c in agg.columns if not c.endswith("_ci95")]].copy()
+    for c in by:  # Optuna's values carry 17 digits
+        table[c] = table[c].map(_tick)
+    for m in shown:
+        if m in agg.columns:
+            table[m] = [f"{a:.4g} ± {b:.2g}" if np.isfinite(a) and b > 0 else _fmt(a)
+                        for a, b in zip(agg[m], agg[f"{m}_ci95"])]
+    return table
+
+
+def summary_text(frame: pd.DataFrame, metrics: Sequence[str] = DEFAULT_METRICS,
+                 title: str = "") -> str:
+    """The sweep's summary for the terminal: settings (mean ± 95% over seeds), then one line
+    per job with its overrides and its status."""
+    jobs = frame.drop_duplicates("job")
+    n_bad = int((jobs["status"] != DONE).sum())
+    params = swept(frame)
+    lines = [f"sweep {title}: {len(jobs)} jobs, {len(jobs) - n_bad} done, {n_bad} failed or "
+             f"missing; swept: {', '.join(params) or 'nothing'}".replace("sweep :", "sweep:")]
+    table = setting_table(frame, metrics)
+    if not table.empty:
+        seeds = [p for p in params if is_replicate(p)]
+        lines += ["", "COMBINED, mean ± 95% interval" + (f" over {', '.join(seeds)}" if seeds
+                                                           else "")]
+        with pd.option_context("display.width", 200, "display.max_columns", 50,
+                               "display.max_colwidth", 40):
+            lines.append(table.to_string(index=False))
+    common = [k for k in parameters(frame) if k not in params]
+    first = jobs.iloc[0] if len(jobs) else {}
+    shared = " ".join(f"{_key(k)}={first[k]}" for k in common if not pd.isna(first[k]))
+    lines += ["", "jobs" + (f" (all with {shared})" if shared else "") + ":"]
+    for row in jobs.to_dict("records"):
+        over = " ".join(f"{_key(k)}={_tick(row[k])}" for k in params
+                        if not pd.isna(row.get(k)) and str(row[k]) != "")
+        error = f": {row['error']}" if row["status"] != DONE and row.get("error") else ""
+        lines.append(f"  {row['job']:>3}  {over}  [{row['status']}{error}]")
+    return "\n".join(lines) + "\n"
 
 
 def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str]) -> list[Path]:
@@ -415,7 +493,7 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    params = [p for p in swept(frame) if p != SEED]
+    params = plot_axes(frame)
     shown = [m for m in metrics if m in frame.columns]
     written: list[Path] = []
     if "sequence" not in frame.columns:
@@ -433,7 +511,7 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
                      else np.array([labels.index(str(v)) for v in g[p]]))
                 ax.errorbar(x, g[m], yerr=g[f"{m}_ci95"], marker="o", capsize=3, label=tracker)
             if not numeric:
-                ax.set_xticks(range(len(labels)), labels, rotation=30)
+                ax.set_xticks(range(len(labels)), [_tick(v) for v in labels], rotation=30)
             ax.set_xlabel(p)
             ax.set_title(m)
             ax.grid(alpha=0.3)
@@ -447,7 +525,8 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
         plt.close(fig)
         written.append(path)
     jobs = frame.drop_duplicates("job")
-    grid_params = [p for p in params if jobs[p].nunique() <= MAX_HEATMAP_VALUES]
+    # a heatmap needs two parameter axes (never a tracker or seed) of 2..12 values each
+    grid_params = [p for p in params if 2 <= jobs[p].nunique() <= MAX_HEATMAP_VALUES]
     for i, a in enumerate(grid_params):  # continuous searches (Optuna) draw no heatmaps
         for b in grid_params[i + 1:]:
             agg = aggregate(frame, [a, b], shown)
@@ -466,8 +545,8 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
                     grid = g.pivot_table(index=a, columns=b, values=m, aggfunc="mean",
                                          sort=True)
                     im = ax.imshow(grid.to_numpy(dtype=float), cmap="viridis", aspect="auto")
-                    ax.set_xticks(range(grid.shape[1]), [str(v) for v in grid.columns])
-                    ax.set_yticks(range(grid.shape[0]), [str(v) for v in grid.index])
+                    ax.set_xticks(range(grid.shape[1]), [_tick(v) for v in grid.columns])
+                    ax.set_yticks(range(grid.shape[0]), [_tick(v) for v in grid.index])
                     ax.set_xlabel(b)
                     ax.set_ylabel(a)
                     ax.set_title(f"{t or ''} {m} (mean over the rest)".strip(), fontsize=9)

@@ -38,7 +38,6 @@ PEOPLE = (
     (138.0, 1.0, 140.0, 26.0, 84.0, (60, 95, 205), (150, 150, 40)),
 )
 
-
 class _Tracker(Protocol):
     def reset(self) -> None: ...
 
@@ -68,10 +67,12 @@ def scene(k: int, people: tuple = PEOPLE) -> tuple[np.ndarray, np.ndarray, Detec
 
 
 def warm_up(tracker: _Tracker) -> None:
-    """Run ``tracker`` over the scene with and without a foreground mask, then over the
-    first person alone (one match or none a frame: numba compiles a separate kernel for the
-    contiguous one-element index arrays that gives), then ``reset`` it: its state afterwards
-    is as built."""
+    """Run ``tracker`` over the scene with and without a foreground mask, then with the
+    first person alone (one match or none a frame: numba
+    compiles a separate kernel for the contiguous one-element index arrays that gives), then
+    ``reset`` it: its state afterwards is as built. (PBM's exhaustive small-window head
+    match, ``ncc_all``, is reached only near an image border and is not covered: on a fresh
+    install it compiles in the first sequence that needs it, a few seconds.)"""
     for people in (PEOPLE, PEOPLE[:1]):
         for with_mask in (True, False):
             tracker.reset()
@@ -114,9 +115,8 @@ class WarmUp:
         if not todo:
             return []
         if announce is not None:
-            announce(f"warming up {', '.join(todo)} before timing ({4 * FRAMES} scripted "
-                     "frames each; compiled kernels: about half a minute on the first run "
-                     "after an install, a second or so after)")
+            announce(f"warming up {', '.join(todo)} before timing (compiled kernels: about "
+                     "half a minute on the first run after an install, then a second)")
         for name, tracker in todo.items():
             try:
                 warm_up(tracker)

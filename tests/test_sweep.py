@@ -18,6 +18,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from harness.sweep import _tick  # noqa: I001 - private helper under test
 from harness.sweep import (
     DONE,
     FAILED,
@@ -26,7 +27,10 @@ from harness.sweep import (
     gather,
     guarded,
     interval95,
+    is_replicate,
     plot_sweep,
+    setting_table,
+    summary_text,
     swept,
     write_status,
     write_sweep,
@@ -127,6 +131,62 @@ def test_two_swept_parameters_give_a_heatmap(tmp_path):
     assert agg["tracker.max_age"].tolist() == ["1", "1", "3", "3"]
 
 
+def test_keys_named_seed_are_replicates():
+    assert all(map(is_replicate, ["seed", "dataset.seed", "detector.seed", "a.b.seed"]))
+    assert not any(map(is_replicate, ["seeds", "dataset.seed_offset", "tracker.max_age"]))
+
+
+def _seed_sweep(root: Path, seed_key: str = "dataset.seed") -> None:
+    num = 0
+    for age in (1, 3):
+        for seed in (0, 1, 2):
+            _fake_job(root, num, ["tracker=baseline", f"tracker.max_age={age}",
+                                  f"{seed_key}={seed}"],
+                      {"IDF1": 0.5 + 0.1 * age + 0.01 * seed, "HOTA": 0.4})
+            num += 1
+
+
+@pytest.mark.parametrize("seed_key", ["dataset.seed", "seed"])
+def test_a_seed_in_any_group_gives_mean_and_interval_never_an_axis(tmp_path, seed_key):
+    _seed_sweep(tmp_path, seed_key)
+    frame = gather(tmp_path)
+    table = setting_table(frame, ["IDF1"])
+    assert table["tracker.max_age"].tolist() == ["1", "3"] and table["n"].tolist() == [3, 3]
+    assert seed_key not in table.columns
+    # mean of 0.6, 0.61, 0.62 and the t-interval 4.303 * 0.01 / sqrt(3) = 0.0248
+    assert table.loc[0, "IDF1"] == "0.61 ± 0.025"
+    names = sorted(p.name for p in plot_sweep(frame, tmp_path / "plots", ["IDF1", "HOTA"]))
+    assert names == ["sweep_tracker_max_age.png"]  # no seed axis, no heatmap over seeds
+    md = write_sweep(tmp_path, ["IDF1"]) is not None and (tmp_path / "sweep.md").read_text()
+    assert f"mean ± 95% interval over {seed_key}" in md
+
+
+def test_no_heatmap_over_the_tracker_choice(tmp_path):
+    num = 0
+    for tracker in ("reta", "pbm"):
+        for age in (1, 3):
+            _fake_job(tmp_path, num, [f"tracker={tracker}", f"tracker.max_age={age}"],
+                      {"IDF1": 0.5, "HOTA": 0.4})
+            num += 1
+    frame = gather(tmp_path)
+    names = sorted(p.name for p in plot_sweep(frame, tmp_path / "plots", ["IDF1"]))
+    assert names == ["sweep_tracker_max_age.png"]
+
+
+def test_summary_shows_settings_and_every_jobs_overrides(tmp_path):
+    _seed_sweep(tmp_path)
+    text = summary_text(gather(tmp_path), ["IDF1"], "demo")
+    assert text.startswith("sweep demo: 6 jobs, 6 done, 0 failed or missing")
+    assert "mean ± 95% interval over dataset.seed" in text and "0.81 ± 0.025" in text
+    assert "\n    5  tracker.max_age=3 dataset.seed=2  [done]\n" in text
+    assert "jobs (all with tracker=baseline):" in text
+
+
+def test_ticks_are_rounded():
+    assert _tick("0.30000000000000004") == "0.3" and _tick(41.999999999) == "42"
+    assert _tick("reta") == "reta" and _tick(3) == "3"
+
+
 # --------------------------------------------------------------------------- end to end
 
 
@@ -158,9 +218,12 @@ def _multirun(data: Path, sweep_dir: Path, *extra: str) -> subprocess.CompletedP
 
 
 def test_joblib_sweep_equals_basic_launcher(tiny_mot, tmp_path):
-    _multirun(tiny_mot, tmp_path / "basic", "hydra/launcher=basic")
+    basic_run = _multirun(tiny_mot, tmp_path / "basic", "hydra/launcher=basic")
     _multirun(tiny_mot, tmp_path / "joblib", "hydra/launcher=parallel",
               "hydra.launcher.n_jobs=2")
+    # stdout: the sweep's summary once (seeds as replicates), no table per job
+    assert basic_run.stdout.count("COMBINED, mean ± 95% interval over seed\n") == 1
+    assert "results:" not in basic_run.stdout and "    5  tracker.max_age=3 seed=2" in basic_run.stdout
     basic = (tmp_path / "basic" / "sweep.csv").read_text()
     assert basic == (tmp_path / "joblib" / "sweep.csv").read_text()
     frame = pd.read_csv(tmp_path / "basic" / "sweep.csv")
@@ -200,3 +263,23 @@ def test_ray_launcher_sweep_equals_basic(tiny_mot, tmp_path):
               "hydra.launcher.ray.init.num_cpus=2")
     assert ((tmp_path / "basic" / "sweep.csv").read_text()
             == (tmp_path / "ray" / "sweep.csv").read_text())
+
+
+def test_optuna_study_starts_with_the_defaults_and_is_drawn_by_optuna(tmp_path):
+    pytest.importorskip("hydra_plugins.hydra_optuna_sweeper")
+    cmd = [sys.executable, "-m", "harness", "+experiment=tune_baseline",
+           "hydra.sweeper.n_trials=3", "hydra.sweeper.n_jobs=1", "hydra/launcher=basic",
+           "dataset.length=12", "dataset.scenarios=[crossing]", "dataset.width=160",
+           "dataset.height=120", f"hydra.sweep.dir={tmp_path}"]
+    proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    first = yaml.safe_load((tmp_path / "0" / ".hydra" / "overrides.yaml").read_text())
+    defaults = yaml.safe_load((ROOT / "conf" / "tracker" / "baseline.yaml").read_text())
+    for key in ("iou_threshold", "min_hits", "max_age"):  # the searched parameters
+        assert f"tracker.{key}={defaults[key]}" in first
+    names = sorted(p.name for p in (tmp_path / "plots").iterdir())
+    assert {"optuna_history.png", "optuna_slice.png", "optuna_contour.png"} <= set(names)
+    assert not [n for n in names if n.startswith(("sweep_", "heatmap_"))]
+    # the summary once, at the end, on stdout; no job prints a table of its own
+    assert proc.stdout.count("jobs (all with") == 1 and "results:" not in proc.stdout
