@@ -230,6 +230,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"no sequence {args.sequence!r}; have {sorted(by_name)}")
         seq = by_name[args.sequence] if args.sequence else sequences[0]
         configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
+        from harness.warmup import warm_up_once  # compile kernels before timing
+
+        warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
+                      for n, node in configs.items()}, lambda text: print(text, file=sys.stderr))
         timings = bench_sequence(
             seq, lambda: build_source(cfg.detector),
             lambda: {n: build_tracker(n, node) for n, node in configs.items()},
