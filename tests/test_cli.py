@@ -126,3 +126,30 @@ def test_report_writes_into_the_run_directory(tmp_path):
 def test_report_of_a_folder_that_is_no_run(tmp_path, capsys):
     assert cli.main(["report", str(tmp_path)]) == 2
     assert "config.yaml" in capsys.readouterr().err
+
+
+class _Stream:
+    def __init__(self, tty: bool) -> None:
+        self.tty = tty
+
+    def isatty(self) -> bool:
+        return self.tty
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
+def test_progress_bars_only_on_a_terminal_and_never_in_a_multirun():
+    from harness.progress import bars_wanted, progress_factory
+
+    assert bars_wanted(True, False, _Stream(True))
+    assert not bars_wanted(True, False, _Stream(False))  # a file or a pipe: no redraws
+    assert not bars_wanted(True, True, _Stream(True))  # a sweep job (joblib, Ray, SLURM)
+    assert not bars_wanted(False, False, _Stream(True))
+    assert progress_factory(True, False, _Stream(False)) is None
+    bar = progress_factory(True, False, _Stream(True))(total=3, desc="s")
+    bar.update(1)
+    bar.close()
