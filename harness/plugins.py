@@ -20,7 +20,8 @@ CONF = ROOT / "conf"
 
 # (group, choice) -> (modules that must import, pyproject extra, pip package)
 PLUGINS: dict[tuple[str, str], tuple[tuple[str, ...], str, str]] = {
-    ("launcher", "parallel"): (("hydra_plugins.hydra_joblib_launcher",), "", "hydra-joblib-launcher"),
+    ("launcher", "parallel"): (("hydra_plugins.occbench_launcher",), "", "occbench"),
+    ("launcher", "processes"): (("hydra_plugins.occbench_launcher",), "", "occbench"),
     ("launcher", "joblib"): (("hydra_plugins.hydra_joblib_launcher",), "", "hydra-joblib-launcher"),
     ("launcher", "ray_cluster"): (("hydra_plugins.hydra_ray_launcher", "ray"), "ray",
                                   "hydra-ray-launcher"),
@@ -84,6 +85,7 @@ def missing(overrides: Sequence[str]) -> list[str]:
         if not absent:
             continue
         how = (f'pip install -e "{ROOT}[{extra}]"' if extra
+               else f'pip install -e "{ROOT}"' if package == "occbench"
                else f"pip install {package}")
         what = f"hydra/{group}={choice}"
         head = what if where == what else f"{where} (which selects {what})"
