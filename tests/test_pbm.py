@@ -772,7 +772,7 @@ def test_identities_kept_through_a_crowd_crossing_where_the_baseline_switches():
     base, _ = run(BaselineTracker(), scene, hidden=hidden, min_visible=0.3)
     for gid in (1, 2, 3):
         assert len(pbm[gid]) == L and len(set(pbm[gid])) == 1
-    assert len(set(pbm[g][0] for g in (1, 2, 3))) == 3
+    assert len({pbm[g][0] for g in (1, 2, 3)}) == 3
     assert len(set(base[2])) > 1
 
 
