@@ -217,6 +217,28 @@ def test_association_keeps_one_good_pair_rather_than_two_poor_ones():
     assert (0, 0) in set(map(tuple, a.matches[:, :2]))
 
 
+def test_stage1_leaves_a_person_over_rather_than_exchange_a_good_pair_for_two_poor_ones():
+    # person 0 fits measurement 0 well (cost 0.2); person 1 (its own detection missed) and
+    # person 0 each fit the other measurement poorly (cost 1 - 0.707 + 1 - 0.6 = 0.69).
+    # Leaving a person over at cost 2 (the paper's reading, the default) makes the exchange
+    # cheaper (1.39 < 0.2 + 2): person 1 takes person 0's detection and pushes person 0
+    # onto the other one: the first swap of a cascade in crowds. At cost 1 the good pair stays (0.2 + 1 < 1.39) and person 1, outside its
+    # stage-2 gate, stays unmatched.
+    node_boxes = np.array([[100.0, 100, 40, 100], [130.0, 100, 40, 100]])
+    meas = np.array([[100.0, 100, 40, 100], [300.0, 100, 40, 100]])
+    q = np.array([_hist(1), 0.5 * _hist(1) + 0.5 * _hist(2)])
+    p = np.array([_hist(1), 0.5 * _hist(1) + 0.5 * _hist(3)])
+    delta = np.array([[0.8, 0.6], [0.6, 0.0]])
+    kw = dict(mu_rho=0.3, mu_g=50.0, delta=delta)
+    paper = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw, stage1_unmatched_cost=2.0)
+    assert sorted(map(tuple, paper.matches[:, :2])) == [(0, 1), (1, 0)]
+    ours = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw, stage1_unmatched_cost=1.0)
+    assert sorted(map(tuple, ours.matches[:, :2])) == [(0, 0)]
+    assert list(ours.unmatched_persons) == [1] and list(ours.unmatched_measurements) == [1]
+    with pytest.raises(ValueError, match="stage1_unmatched_cost"):
+        RetaTracker(stage1_unmatched_cost=0.0)
+
+
 def test_bad_input_raises_clear_errors():
     with pytest.raises(ValueError, match="frame"):
         RetaTracker().update(None, Detections.empty())

@@ -62,9 +62,9 @@ def _rows(*columns: np.ndarray) -> np.ndarray:
 
 
 def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
-    """Hungarian method where leaving a person unmatched costs ``leave`` (the largest
-    cost an accepted pair can have), so one good pair is never traded for two poor ones
-    just to match more. Returns (K, 2) rows (person, measurement), sorted by person.
+    """Hungarian method where leaving a person unmatched costs ``leave``, which is also the
+    largest cost an accepted pair can have. Returns (K, 2) rows (person, measurement),
+    sorted by person.
 
     Person i stays unmatched through its own dummy column D + i of cost ``leave``;
     forbidden pairs (inf, NaN or above ``leave``) get a cost larger than any complete
@@ -98,6 +98,7 @@ def associate(
     sqrt_p: np.ndarray | None = None,
     gated: np.ndarray | None = None,
     gate: np.ndarray | None = None,
+    stage1_unmatched_cost: float = 2.0,
 ) -> Association:
     """Match measurements to persons in two stages.
 
@@ -109,9 +110,14 @@ def associate(
     distance; Hungarian method; accept only rho >= mu_rho.
 
     Pairs with rho < mu_rho are excluded before the Hungarian step, so a rejected best
-    pair never blocks an acceptable alternative; leaving a person unmatched costs 2, the
-    largest cost of an acceptable pair, so every acceptable isolated pair is matched but
-    one good pair is not split into two poor ones merely to match more.
+    pair never blocks an acceptable alternative. Leaving a person unmatched in stage 2
+    costs 2, the largest cost of an acceptable pair, so every acceptable isolated pair is
+    matched; in stage 1 it costs ``stage1_unmatched_cost`` (2: the same), and a stage-1
+    pair costlier than that is left to stage 2, where a person who has one is still gated
+    by its own validation region. At 2, two poor pairs (each cost < 1) beat one good pair
+    plus a person left over, so a person whose detection is missed takes a neighbour's and
+    pushes the neighbour onto a third; at 1 a stage-1 pair is only worth matching when its
+    similarities rho and delta average at least 1/2.
 
     Args:
         node_boxes: (B, 4) xywh predicted regions of the nodes.
@@ -129,6 +135,7 @@ def associate(
         gated: optional (P,) bool: persons that may take part in stage 2 (default all).
         gate: optional (B,) gate radius of each node in pixels; the node's validation
             region is the circle of radius min(mu_g, gate) (default mu_g for every node).
+        stage1_unmatched_cost: cost of leaving a person unmatched in stage 1, in (0, 2].
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
@@ -155,7 +162,7 @@ def associate(
         delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
     cost1, best1 = _person_costs(c1, starts, owners)
-    m1 = _hungarian(cost1, 2.0)
+    m1 = _hungarian(cost1, stage1_unmatched_cost)
 
     matched_p = np.zeros(n_persons, dtype=bool)
     matched_d = np.zeros(n_meas, dtype=bool)

@@ -65,6 +65,15 @@ Adaptations of what the paper leaves open (also listed in the README):
   is known to within ``report_spread`` person widths (one standard deviation of the Kalman
   prediction); past that it stays in the graph (and can be re-identified) but is not
   reported: a box placed by a guess that uncertain is more often wrong than right;
+* ``stage1_unmatched_cost`` (an option, off by default: 2, the paper's reading, where the
+  Hungarian method matches every acceptable pair): leaving a person unmatched in stage 1
+  may cost less, e.g. 1, the cost of a pair whose similarities rho and delta average 1/2.
+  Stage 1 has no distance gate, and at 2 the Hungarian method trades one good pair and a
+  person left over for two poor pairs (cost < 1 each): in crowds a person whose detection
+  was missed takes a neighbour's and pushes the neighbour onto a third person's, and a
+  hidden person comes back on a found neighbour's detection. A person left over in stage
+  1 still competes in stage 2 inside its Kalman validation gate. At 1 crowds gain and
+  real detections with badly placed boxes lose (docs/adaptations.md), so it stays 2;
 * ``shape_estimate`` and ``foreground_histograms`` (see the arguments).
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a
@@ -191,6 +200,9 @@ class RetaTracker:
         foreground_histograms: histograms (eq. 1) count only foreground pixels when a mask
             is given and covers at least ``min_foreground`` of the ellipse; False: every
             pixel of the ellipse (the paper).
+        stage1_unmatched_cost: cost of leaving a person unmatched in association stage 1,
+            in (0, 2]; a stage-1 pair costlier than it is left to stage 2 (adaptation, see
+            the module notes); 2: every acceptable pair competes (the paper, default).
     """
 
     def __init__(
@@ -219,6 +231,7 @@ class RetaTracker:
         report_spread: float = 3.0,
         shape_estimate: bool = True,
         foreground_histograms: bool = True,
+        stage1_unmatched_cost: float = 2.0,
     ) -> None:
         if not 0.0 <= mu_rho <= 1.0:
             raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
@@ -242,6 +255,8 @@ class RetaTracker:
             raise ValueError(f"report_spread must be >= 0, got {report_spread}")
         if not gate_sigmas >= 0:
             raise ValueError(f"gate_sigmas must be >= 0, got {gate_sigmas}")
+        if not 0.0 < stage1_unmatched_cost <= 2.0:
+            raise ValueError(f"stage1_unmatched_cost must lie in (0, 2], got {stage1_unmatched_cost}")
         if confirm_frames < 1:
             raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
         if max_hidden < 1:
@@ -259,6 +274,7 @@ class RetaTracker:
         self.report_spread = float(report_spread)
         self.shape_estimate = bool(shape_estimate)
         self.foreground_histograms = bool(foreground_histograms)
+        self.stage1_unmatched_cost = float(stage1_unmatched_cost)
         self.m = m
         self.lam = lam
         self.confirm_frames = confirm_frames
@@ -363,7 +379,8 @@ class RetaTracker:
         assoc = associate(pred, owners, sqrt_q, dets, sqrt_p, self.mu_rho, self.mu_g,
                           delta=rs, sqrt_q=sqrt_q, sqrt_p=sqrt_p,
                           gated=np.array([person.confirmed for person in persons], dtype=bool),
-                          gate=self._gate_radii(Pp, owners, persons))
+                          gate=self._gate_radii(Pp, owners, persons),
+                          stage1_unmatched_cost=self.stage1_unmatched_cost)
         matched_det = {pi: (d, n, s, r) for (pi, d, n), s, r
                        in zip(assoc.matches.tolist(), assoc.stages.tolist(), assoc.rho.tolist())}
 
