@@ -57,9 +57,10 @@ class EvalSet:
         role: ``tuning`` (something was chosen on it) or ``untouched``.
         overrides: Hydra overrides selecting dataset, detector and their keys.
         seeds: values of the top-level ``seed`` (rendering and detector noise), one run each.
-        needs: paths (relative to the composed config's dataset root) that must exist;
-            a set whose data is absent is skipped with a message.
         quick: part of the quick subset (``--quick``).
+        description: one line for the legend of the table.
+        requires: folders under the trajectories folder (``trajectories_root()``) that must
+            exist; a set whose data is absent is skipped with a message.
     """
 
     name: str
