@@ -115,8 +115,9 @@ class WarmUp:
         if not todo:
             return []
         if announce is not None:
-            announce(f"warming up {', '.join(todo)} before timing (compiled kernels: about "
-                     "half a minute on the first run after an install, then a second)")
+            announce(f"warming up {', '.join(todo)} before timing (the first run after an "
+                     "install compiles their kernels: half a minute to a few minutes; later "
+                     "runs load them in about a second)")
         for name, tracker in todo.items():
             try:
                 warm_up(tracker)
