@@ -18,6 +18,7 @@ import numpy as np
 
 from trackers.frontend.background import BackgroundModel
 from trackers.frontend.blobs import Blob, blobs_from_mask
+from trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
 from trackers.frontend.heads import HeadDetector
 from trackers.frontend.silhouette import SilhouetteMatcher
 from trackers.geometry import iou_matrix
@@ -178,23 +179,33 @@ class ForegroundDetector(_ForegroundPipeline):
 
 
 class SilhouetteDetector(_ForegroundPipeline):
-    """Reta 3.1 adapted: greedy multi-scale silhouette-template fitting on the foreground.
+    """Reta 3.1 adapted: greedy multi-scale silhouette-template fitting on the foreground,
+    at the sizes a self-calibrated ground plane allows at each row.
 
-    With ``calibrate``, a ground-plane height prior (person height linear in the foot row,
-    ``silhouette.fit_height_model``) is learnt without annotations from isolated
-    single-person-like blobs (aspect within ``calibration_aspect``, filling at least
-    ``calibration_fill`` of their box): first in the warm-up sample, then from every frame,
-    refitted every ``recalibrate_every`` frames. Until enough samples exist, no prior is used.
+    Scene self-calibration (``calibration``, no annotations): in the warm-up, the template
+    is fitted without a size prior over ``calibration_frames`` frames sampled evenly over
+    the sequence (the foreground of each from the warmed-up background, without updating
+    it); the fits not cut by the picture's border, and the isolated person-like blobs, are
+    (foot row, height, width) samples of the perspective line ``calibration.Perspective``
+    (height = a * foot_row + b), fitted robustly (RANSAC, ``fit_perspective``). The detector
+    then searches only heights within ``matcher.height_tolerance`` of the line at each row.
+    With too little evidence it logs a warning and searches every height (the fallback).
+    A fixed ``matcher.height_model`` (a camera calibration) skips the learning.
+
+    The live picture (``calibration.active_area``: flat padding strips at the frame's edges
+    excluded) is found in the warm-up too; the matcher works on it, so that a person cut
+    by the picture's border is scored on its visible part.
 
     Args:
         background: the background model.
         matcher: the ``SilhouetteMatcher`` (template, scales, alpha, beta, threshold, ...).
         heads: optional head detector to report one head per detection.
-        calibrate: learn the height prior.
-        calibration_aspect: [min, max] width / height of blobs taken as single people.
-        calibration_fill: smallest blob area / box area of such blobs.
-        calibration_min_samples: samples needed before the prior is used.
-        recalibrate_every: frames between refits of the prior (0: warm-up only).
+        calibration: the ``PerspectiveCalibration`` (None: no learning, the matcher's fixed
+            ``height_model`` or none).
+        calibration_frames: frames sampled over the sequence for the calibration.
+        calibration_evidence: "fits" (template fits without a size prior; the line is then
+            in the template's own units, as the matcher uses it) or "blobs" (isolated
+            person-like blobs).
     """
 
     def __init__(
@@ -202,68 +213,90 @@ class SilhouetteDetector(_ForegroundPipeline):
         background: BackgroundModel | None = None,
         matcher: SilhouetteMatcher | None = None,
         heads: HeadDetector | None = None,
-        calibrate: bool = False,
-        calibration_aspect: Sequence[float] = (0.2, 0.6),
-        calibration_fill: float = 0.45,
-        calibration_min_samples: int = 30,
-        recalibrate_every: int = 25,
+        calibration: PerspectiveCalibration | None = None,
+        calibration_frames: int = 100,
+        calibration_evidence: str = "fits",
     ) -> None:
         super().__init__(background)
         self.matcher = matcher if matcher is not None else SilhouetteMatcher()
         self.heads = heads
-        self.calibrate = bool(calibrate)
-        lo, hi = (float(v) for v in calibration_aspect)
-        if not 0 < lo < hi:
-            raise ValueError(f"calibration_aspect must be [min, max] with 0 < min < max, got {calibration_aspect}")
-        self.calibration_aspect = (lo, hi)
-        self.calibration_fill = float(calibration_fill)
-        self.calibration_min_samples = int(calibration_min_samples)
-        self.recalibrate_every = int(recalibrate_every)
+        self.calibration = calibration
+        if calibration_frames < 0:
+            raise ValueError(f"calibration_frames must be >= 0, got {calibration_frames}")
+        self.calibration_frames = int(calibration_frames)
+        if calibration_evidence not in ("fits", "blobs"):
+            raise ValueError(f"calibration_evidence must be 'fits' or 'blobs', got {calibration_evidence!r}")
+        self.calibration_evidence = calibration_evidence
         self.reset()
 
     def reset(self) -> None:
         super().reset()
-        self._feet: list[float] = []
-        self._heights: list[float] = []
-        self._frames = 0
+        self.perspective: Perspective | None = None
+        self.area: tuple[int, int, int, int] | None = None  # live picture, see active_area
+        if self.calibration is not None:
+            self.calibration.reset()
         self.matcher.set_height_model(None)
-
-    def _collect(self, fg: np.ndarray) -> None:
-        lo, hi = self.calibration_aspect
-        min_height = self.matcher.pixel_heights(fg.shape[0])[0]
-        for b in blobs_from_mask(fg, min_area=20, perimeter=False):
-            _x, y, w, h = b.box
-            if (h >= min_height and lo <= w / h <= hi
-                    and b.area >= self.calibration_fill * w * h and y > 0
-                    and y + h < fg.shape[0]):
-                self._feet.append(y + h)
-                self._heights.append(h)
-
-    def _refit(self) -> None:
-        from trackers.frontend.silhouette import fit_height_model
-
-        model = fit_height_model(np.array(self._feet), np.array(self._heights),
-                                 min_samples=self.calibration_min_samples)
-        self.matcher.set_height_model(model)
-        log.debug("height model %s from %d samples", model, len(self._feet))
 
     def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
         frames = self.background.sample_frames(length, frame)
         self.background.warm_up(frames)
-        if self.calibrate and frames:
-            for f in frames:
+        if frames:
+            self.area = active_area(frames)
+        if self.calibration is None or self.matcher.fixed_height_model is not None:
+            return
+        n = min(self.calibration_frames, length)
+        ks = np.unique(np.linspace(1, length, n).round().astype(int)) if n > 0 else []
+        for k in ks:
+            f = frame(int(k))
+            if f is not None:
                 self._collect(self.background.peek(f))
-            self._refit()
+        self.perspective = self.calibration.fit()
+        if self.perspective is None:
+            log.warning("scene calibration: too little evidence (%d samples from %d frames); "
+                        "searching every person height", len(self.calibration.samples), len(ks))
+            return
+        log.info("scene calibration: %s, from %d frames", self.perspective.describe(), len(ks))
+        self.matcher.set_height_model((self.perspective.a, self.perspective.b))
+
+    def _live(self, fg: np.ndarray) -> tuple[np.ndarray, int, int]:
+        """The live picture's part of ``fg`` and its (row, column) offset."""
+        if self.area is None:
+            return fg, 0, 0
+        r0, r1, c0, c1 = self.area
+        return fg[r0:r1, c0:c1], r0, c0
+
+    def _collect(self, fg: np.ndarray) -> None:
+        """Calibration samples of one frame (``calibration_evidence``): "fits", the template
+        boxes of unconstrained fits (every component searched alone) inside the live
+        picture; "blobs", the isolated person-like blobs (``calibration.blob_sample``)."""
+        live, _, _ = self._live(fg)
+        if self.calibration_evidence == "blobs":
+            self.calibration.collect(blobs_from_mask(live, 1, perimeter=False), live.shape)
+            return
+        self.calibration.frame_height = live.shape[0]
+        boxes, _, _ = self.matcher.fit_all(live, group=False)
+        blobs = blobs_from_mask(live, 1, perimeter=False)
+        if not len(boxes) or not blobs:
+            return
+        # a component explained by exactly one fit is one well-segmented person
+        bb = np.stack([b.box for b in blobs])
+        c = boxes[:, :2] + boxes[:, 2:] / 2
+        inside = ((c[:, None, 0] >= bb[None, :, 0]) & (c[:, None, 0] < bb[None, :, 0] + bb[None, :, 2])
+                  & (c[:, None, 1] >= bb[None, :, 1]) & (c[:, None, 1] < bb[None, :, 1] + bb[None, :, 3]))
+        H, W = live.shape
+        edge = 2 * self.matcher.downscale
+        for j in np.flatnonzero(inside.sum(axis=0) == 1):
+            x, y, w, h = boxes[int(np.flatnonzero(inside[:, j])[0])]
+            if y >= edge and x >= edge and y + h <= H - edge and x + w <= W - edge:
+                self.calibration.samples.append((float(y + h), float(h), float(w)))
 
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
-        if self.calibrate:
-            self._frames += 1
-            self._collect(fg)
-            if self.recalibrate_every and self._frames % self.recalibrate_every == 0:
-                self._refit()
-        boxes, scores = self.matcher.fit(fg)
+        live, r0, c0 = self._live(fg)
+        boxes, scores = self.matcher.fit(live)
         if len(boxes) == 0:
             return Detections.empty()
+        boxes[:, 0] += c0
+        boxes[:, 1] += r0
         heads = None if self.heads is None else self.heads.detect(frame, fg, boxes)
         return Detections(boxes, np.clip(scores, 0.0, 1.0), _labels_from_boxes(boxes, fg), heads)
 

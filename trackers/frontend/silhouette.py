@@ -140,6 +140,11 @@ class SilhouetteMatcher:
         box_scale: [width, height] factors mapping a fitted template box to the reported
             box (the box convention of the annotations): the width about the box centre,
             the height from the top (the head stays put).
+        box: the reported box: "template" (the fitted template's box) or "foreground" (the
+            bounding box of the foreground pixels the fit explains: its silhouette's pixels
+            that are foreground, as an annotator boxes the visible person).
+        group_gap: foreground components less than this many rows (full resolution) apart
+            vertically are searched as one region (a person cut in two by the background).
     """
 
     def __init__(
@@ -164,6 +169,8 @@ class SilhouetteMatcher:
         height_model: Sequence[float] | None = None,
         frame_border: bool = False,
         box_scale: Sequence[float] = (1.0, 1.0),
+        box: str = "template",
+        group_gap: float = 0.0,
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
@@ -195,6 +202,12 @@ class SilhouetteMatcher:
         if bs.shape != (2,) or not ((bs > 0.2) & (bs <= 2.0)).all():
             raise ValueError(f"box_scale must be [w, h] factors in (0.2, 2], got {list(box_scale)}")
         self.box_scale = bs
+        if box not in ("template", "foreground"):
+            raise ValueError(f"box must be 'template' or 'foreground', got {box!r}")
+        self.box = box
+        if group_gap < 0:
+            raise ValueError(f"group_gap must be >= 0, got {group_gap}")
+        self.group_gap = float(group_gap)
         self.height_model: tuple[float, float] | None = None
         self.fixed_height_model: tuple[float, float] | None = None
         if height_model is not None:
@@ -237,12 +250,41 @@ class SilhouetteMatcher:
         else:
             self.height_model = (float(model[0]), float(model[1]))
 
-    def fit(self, foreground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def fit(self, foreground: np.ndarray, template_boxes: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Greedy fits over a (H, W) foreground mask (nonzero = foreground).
 
+        Foreground components closer than ``group_gap`` rows one above the other (a person
+        whose middle matches the background: torso and legs apart) are searched together.
+
+        Args:
+            foreground: (H, W) mask.
+            template_boxes: return the fitted templates' boxes (the sizes the height prior
+                speaks of) instead of the reported boxes (``box``, ``box_scale``).
         Returns:
             boxes (N, 4) float64 xywh in full-resolution pixels and scores (N,) float64.
         """
+        boxes, tight, scores = self.fit_all(foreground)
+        if not len(boxes):
+            return boxes, scores
+        H, W = np.asarray(foreground).shape
+        out = boxes if template_boxes or self.box == "template" else tight
+        if not template_boxes and (self.box_scale != 1.0).any():
+            sw, sh = self.box_scale
+            out[:, 0] += out[:, 2] * (1.0 - sw) / 2
+            out[:, 2] *= sw
+            out[:, 3] *= sh
+        if self.frame_border:  # clip to the frame
+            x0c, y0c = np.clip(out[:, 0], 0, W), np.clip(out[:, 1], 0, H)
+            x1c = np.clip(out[:, 0] + out[:, 2], 0, W)
+            y1c = np.clip(out[:, 1] + out[:, 3], 0, H)
+            out = np.column_stack([x0c, y0c, x1c - x0c, y1c - y0c])
+        return out, scores
+
+    def fit_all(self, foreground: np.ndarray, group: bool = True,
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Greedy fits: template boxes (N, 4), the boxes of the foreground each explains
+        (N, 4), both xywh full-resolution pixels unclipped, and scores (N,).
+        ``group=False`` searches every component alone (``group_gap`` ignored)."""
         d = self.downscale
         fg = (np.asarray(foreground) != 0).astype(np.uint8)
         H, W = fg.shape
@@ -251,8 +293,11 @@ class SilhouetteMatcher:
         if d > 1:  # INTER_AREA on 0/1 uint8 rounds: keep cells at least half foreground
             small = cv2.resize(fg * np.uint8(255), (W // d, H // d), interpolation=cv2.INTER_AREA)
             small = (small >= 128).astype(np.uint8)
-        n, lab, stats, _ = cv2.connectedComponentsWithStats(small, connectivity=8)
-        boxes, scores = [], []
+        gap = int(round(self.group_gap / d)) if group else 0
+        grouped = small if gap < 1 else cv2.dilate(small, np.ones((gap + 1, 1), np.uint8),
+                                                   anchor=(0, 0))
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(grouped, connectivity=8)
+        boxes, scores, tight = [], [], []
         m = max(self.margin // d, 1)
         hmax = max(k[0].shape[0] for k in self._kernels)
         wmax = max(k[0].shape[1] for k in self._kernels)
@@ -263,29 +308,20 @@ class SilhouetteMatcher:
                 continue
             x0, y0 = max(x - m - wmax // 2, 0), max(y - m - hmax // 2, 0)
             x1, y1 = min(x + w + m + wmax // 2, small.shape[1]), min(y + h + m + hmax // 2, small.shape[0])
-            # only this component's pixels in the crop (others are found from their own)
-            crop = (lab[y0:y1, x0:x1] == i).astype(np.float32)
+            # only this group's pixels in the crop (others are found from their own)
+            crop = ((lab[y0:y1, x0:x1] == i) & (small[y0:y1, x0:x1] > 0)).astype(np.float32)
             edges = None
             if self.frame_border:  # which crop sides are the frame's border
                 edges = (y0 == 0, y1 == small.shape[0], x0 == 0, x1 == small.shape[1])
-            b, s = self._greedy(crop, region_height=h, row0=y0, edges=edges)
-            for bx, sc in zip(b, s):
+            b, s, t = self._greedy(crop, region_height=h, row0=y0, edges=edges)
+            for bx, sc, tb in zip(b, s, t):
                 boxes.append([(bx[0] + x0) * d, (bx[1] + y0) * d, bx[2] * d, bx[3] * d])
+                tight.append([(tb[0] + x0) * d, (tb[1] + y0) * d, tb[2] * d, tb[3] * d])
                 scores.append(sc)
         if not boxes:
-            return np.zeros((0, 4)), np.zeros(0)
-        out = np.asarray(boxes, dtype=np.float64)
-        if (self.box_scale != 1.0).any():
-            sw, sh = self.box_scale
-            out[:, 0] += out[:, 2] * (1.0 - sw) / 2
-            out[:, 2] *= sw
-            out[:, 3] *= sh
-        if self.frame_border:  # clip to the frame
-            x0c, y0c = np.clip(out[:, 0], 0, W), np.clip(out[:, 1], 0, H)
-            x1c = np.clip(out[:, 0] + out[:, 2], 0, W)
-            y1c = np.clip(out[:, 1] + out[:, 3], 0, H)
-            out = np.column_stack([x0c, y0c, x1c - x0c, y1c - y0c])
-        return out, np.asarray(scores, dtype=np.float64)
+            return np.zeros((0, 4)), np.zeros((0, 4)), np.zeros(0)
+        return (np.asarray(boxes, dtype=np.float64), np.asarray(tight, dtype=np.float64),
+                np.asarray(scores, dtype=np.float64))
 
     def _is_part(self, box: list, boxes: list) -> bool:
         """Whether ``box`` lies more than ``max_overlap`` inside an earlier, taller fit
@@ -332,7 +368,7 @@ class SilhouetteMatcher:
             if (t.shape[0] <= 1.5 * region_height + 4 or cut) and (rows_ok is None or rows_ok.any()):
                 kernels.append((t, tsum, rows_ok))
         if not kernels:
-            return [], []
+            return [], [], []
         # zero-padded storage so that any window's kernel support is inside the array
         py = max(t.shape[0] for t, _, _ in kernels)
         px = max(t.shape[1] for t, _, _ in kernels)
@@ -368,7 +404,7 @@ class SilhouetteMatcher:
             return tv, bx, to
 
         maps = [list(sums(t, 0, H, 0, W)) for t, _, _ in kernels]
-        boxes, scores = [], []
+        boxes, scores, tight = [], [], []
         for _ in range(self.max_people):
             best = (0.0, None)
             for (t, tsum, rows_ok), (tv, bx, to) in zip(kernels, maps):
@@ -393,14 +429,18 @@ class SilhouetteMatcher:
             th, tw = t.shape
             top, left = r - th // 2, c - tw // 2  # filter2D anchors kernels at their centre
             box = [left, top, tw, th]
-            if not boxes or not self._is_part(box, boxes):
-                boxes.append(box)
-                scores.append(score)
-            # a part of a person already found is not reported, but its pixels are used up
             rr0, cc0 = max(top, 0), max(left, 0)
             rr1, cc1 = min(top + th, H), min(left + tw, W)
             sil = t[rr0 - top : rr1 - top, cc0 - left : cc1 - left] > self.occupy_level
             region = V[rr0:rr1, cc0:cc1]
+            if not boxes or not self._is_part(box, boxes):
+                boxes.append(box)
+                scores.append(score)
+                claimed = sil & (region > 0)  # the foreground this fit explains
+                rows, cols = np.flatnonzero(claimed.any(axis=1)), np.flatnonzero(claimed.any(axis=0))
+                tight.append([cc0 + cols[0], rr0 + rows[0], cols[-1] - cols[0] + 1,
+                              rows[-1] - rows[0] + 1] if len(rows) else box)
+            # a part of a person already found is not reported, but its pixels are used up
             O[rr0:rr1, cc0:cc1] = np.maximum(O[rr0:rr1, cc0:cc1], sil & (region > 0))
             region[sil] = 0.0
             for (k, _, _), m in zip(kernels, maps):  # refresh the affected window only
@@ -412,7 +452,7 @@ class SilhouetteMatcher:
                     m[0][o0:o1, q0:q1] = tv
                     m[1][o0:o1, q0:q1] = bx
                     m[2][o0:o1, q0:q1] = to
-        return boxes, scores
+        return boxes, scores, tight
 
 
 def fit_height_model(
