@@ -125,7 +125,7 @@ def blob_sample(blob: Blob, frame_shape: tuple[int, int], aspect: tuple[float, f
 def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
                     frame_height: int, tolerance: float = 0.15, min_bins: int = 6,
                     min_span: float = 0.15, bin_rows: float = 0.02, iterations: int = 500,
-                    seed: int = 0,
+                    seed: int = 0, horizon_above: float = 0.5,
                     ) -> Perspective | None:
     """RANSAC line height = a * foot + b (eq. 1) through person samples, then least squares
     on the inliers; None when the evidence is too thin (see the module docstring).
@@ -139,6 +139,10 @@ def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
         bin_rows: height of a foot-row bin, fraction of the frame height.
         iterations: RANSAC pairs drawn.
         seed: seed of the pair draws.
+        horizon_above: the horizon row may lie at most this many frame heights above the
+            frame's top (a perspective prior: people at the bottom of the frame are at least
+            (1 + 1 / horizon_above) times as tall as at its top; a camera looking
+            straight down has no usable line and gets the fallback).
     """
     y = np.asarray(feet, dtype=np.float64)
     h = np.asarray(heights, dtype=np.float64)
@@ -166,12 +170,12 @@ def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
     nb = int(bins.max()) + 1
     pred = a[:, None] * y[None, :] + b[:, None]  # (pairs, N)
     inl = (pred > 0) & (np.abs(h[None, :] - pred) <= tolerance * np.maximum(pred, 1e-6))
-    # a horizon more than one frame height above the image (a near-flat line) is not a
-    # surveillance camera's view of a floor
+    # a horizon far above the image (a near-flat line: people as tall at the bottom of the
+    # frame as at the top) is not a surveillance camera's view of a floor (``horizon_above``)
     occupied = np.zeros((len(a), nb), dtype=bool)
     rows, cols = np.nonzero(inl)
     occupied[rows, bins[cols]] = True
-    support = np.where(-b / a >= -frame_height, occupied.sum(axis=1), -1)
+    support = np.where(-b / a >= -horizon_above * frame_height, occupied.sum(axis=1), -1)
     best = int(np.argmax(support))
     keep = inl[best]
     for _ in range(2):  # least squares on the bins' median inliers, inliers again
@@ -186,7 +190,7 @@ def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
     nbins = len(np.unique(bins[keep]))
     if a1 <= 0 or nbins < min_bins or np.ptp(y[keep]) < min_span * frame_height:
         return None
-    if not -frame_height <= -b1 / a1 < y[keep].min():  # horizon above every person's feet
+    if not -horizon_above * frame_height <= -b1 / a1 < y[keep].min():  # above every foot
         return None
     spread = float(np.median(np.abs(h[keep] - pred1[keep]) / pred1[keep]))
     return Perspective(float(a1), float(b1), float(np.median(w[keep] / h[keep])),
@@ -204,12 +208,14 @@ class PerspectiveCalibration:
         min_bins: fewest inliers for a calibration (else: none, the fallback).
         min_span: smallest foot-row span of the inliers, fraction of the frame height.
         min_height: smallest blob height sampled, pixels.
+        horizon_above: see ``fit_perspective``.
         seed: RANSAC seed.
     """
 
     def __init__(self, aspect: tuple[float, float] = (0.25, 0.65), min_fill: float = 0.5,
                  head_ratio: float = 0.75, tolerance: float = 0.15, min_bins: int = 6,
-                 min_span: float = 0.15, min_height: float = 16.0, seed: int = 0) -> None:
+                 min_span: float = 0.15, min_height: float = 16.0, horizon_above: float = 0.5,
+                 seed: int = 0) -> None:
         lo, hi = (float(v) for v in aspect)
         if not 0 < lo < hi:
             raise ValueError(f"aspect must be [min, max] with 0 < min < max, got {list(aspect)}")
@@ -223,6 +229,9 @@ class PerspectiveCalibration:
         self.min_fill, self.head_ratio = float(min_fill), float(head_ratio)
         self.tolerance, self.min_bins = float(tolerance), int(min_bins)
         self.min_span, self.min_height, self.seed = float(min_span), float(min_height), int(seed)
+        if horizon_above <= 0:
+            raise ValueError(f"horizon_above must be > 0, got {horizon_above}")
+        self.horizon_above = float(horizon_above)
         self.reset()
 
     def reset(self) -> None:
@@ -246,7 +255,8 @@ class PerspectiveCalibration:
             return None
         s = np.asarray(self.samples, dtype=np.float64)
         return fit_perspective(s[:, 0], s[:, 1], s[:, 2], self.frame_height, self.tolerance,
-                               self.min_bins, self.min_span, seed=self.seed)
+                               self.min_bins, self.min_span, seed=self.seed,
+                               horizon_above=self.horizon_above)
 
 
 def active_area(frames: list[np.ndarray], flat: float = 2.0) -> tuple[int, int, int, int]:

@@ -285,9 +285,12 @@ class SilhouetteDetector(_ForegroundPipeline):
                   & (c[:, None, 1] >= bb[None, :, 1]) & (c[:, None, 1] < bb[None, :, 1] + bb[None, :, 3]))
         H, W = live.shape
         edge = 2 * self.matcher.downscale
+        lo, hi = (self.matcher._kernels[k][0].shape[0] * self.matcher.downscale for k in (0, -1))
         for j in np.flatnonzero(inside.sum(axis=0) == 1):
             x, y, w, h = boxes[int(np.flatnonzero(inside[:, j])[0])]
-            if y >= edge and x >= edge and y + h <= H - edge and x + w <= W - edge:
+            # fits at the smallest or largest height searched are censored (a fragment or a
+            # merge may be smaller or larger still): no evidence of a person's size
+            if lo < h < hi and y >= edge and x >= edge and y + h <= H - edge and x + w <= W - edge:
                 self.calibration.samples.append((float(y + h), float(h), float(w)))
 
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:

@@ -42,6 +42,7 @@ import numpy as np
 log = logging.getLogger(__name__)
 
 TEMPLATE_HEIGHT = 64  # rows of the stored template
+HEAD_FRACTION = 1 / 7  # head height / person height (PBM 2.1)
 
 
 def analytic_template(height: int = TEMPLATE_HEIGHT, width_ratio: float = 0.42) -> np.ndarray:
@@ -142,7 +143,15 @@ class SilhouetteMatcher:
             the height from the top (the head stays put).
         box: the reported box: "template" (the fitted template's box) or "foreground" (the
             bounding box of the foreground pixels the fit explains: its silhouette's pixels
-            that are foreground, as an annotator boxes the visible person).
+            that are foreground, as an annotator boxes the visible person) or "region" (the
+            bounding box of the region's foreground inside the template box: arms and feet
+            outside the mean silhouette included).
+        head_contrast: head evidence a fit needs: in the template's head rows (the top 1/7),
+            the foreground fill of the head minus the fill beside it (-1: no test). A
+            half-body (no head), a box straddling two people (a gap where the head should
+            be) and a floor reflection or shadow smear (as wide at the top as below) lack it.
+        symmetric: match the mean of the template and its mirror image (people face either
+            way; a template learnt from few walkers leans to their side).
         group_gap: foreground components less than this many rows (full resolution) apart
             vertically are searched as one region (a person cut in two by the background).
     """
@@ -171,6 +180,8 @@ class SilhouetteMatcher:
         box_scale: Sequence[float] = (1.0, 1.0),
         box: str = "template",
         group_gap: float = 0.0,
+        head_contrast: float = -1.0,
+        symmetric: bool = False,
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
@@ -184,6 +195,8 @@ class SilhouetteMatcher:
         if not 0.0 < min_visible <= 1.0:
             raise ValueError(f"min_visible must be in (0, 1], got {min_visible}")
         self.template = load_template(template)
+        if symmetric:  # people face either way: the mean of the template and its mirror
+            self.template = np.ascontiguousarray((self.template + self.template[:, ::-1]) / 2)
         self.min_height, self.max_height = float(min_height), float(max_height)
         self.n_scales, self.downscale = int(n_scales), int(downscale)
         self.alpha, self.beta, self.threshold = float(alpha), float(beta), float(threshold)
@@ -202,12 +215,15 @@ class SilhouetteMatcher:
         if bs.shape != (2,) or not ((bs > 0.2) & (bs <= 2.0)).all():
             raise ValueError(f"box_scale must be [w, h] factors in (0.2, 2], got {list(box_scale)}")
         self.box_scale = bs
-        if box not in ("template", "foreground"):
-            raise ValueError(f"box must be 'template' or 'foreground', got {box!r}")
+        if box not in ("template", "foreground", "region"):
+            raise ValueError(f"box must be 'template', 'foreground' or 'region', got {box!r}")
         self.box = box
         if group_gap < 0:
             raise ValueError(f"group_gap must be >= 0, got {group_gap}")
         self.group_gap = float(group_gap)
+        if not -1.0 <= head_contrast <= 1.0:
+            raise ValueError(f"head_contrast must be in [-1, 1], got {head_contrast}")
+        self.head_contrast = float(head_contrast)
         self.height_model: tuple[float, float] | None = None
         self.fixed_height_model: tuple[float, float] | None = None
         if height_model is not None:
@@ -238,7 +254,12 @@ class SilhouetteMatcher:
                 th = max(round(h), 3)
                 tw = max(round(h * aspect), 2)
                 t = cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA)
-                kernels.append((t, (1.0 - t), float(t.sum())))
+                kh = max(round(th * HEAD_FRACTION), 1)  # PBM 2.1: the head is 1/7 of the height
+                head = np.zeros_like(t)
+                head[:kh] = t[:kh] > 0.5
+                beside = np.zeros_like(t)
+                beside[:kh] = t[:kh] < 0.1
+                kernels.append((t, (head, beside), float(t.sum())))
             self._cache[key] = kernels
         return self._cache[key]
 
@@ -363,10 +384,12 @@ class SilhouetteMatcher:
             near = max(self.margin // self.downscale, 1)  # frames may have a dark border strip
             cut = bool(len(rows) and ((edges[0] and rows[0] < near) or (edges[1] and rows[-1] >= H - near)))
         kernels = []
-        for t, _inv, tsum in self._kernels:
+        heads = []
+        for t, head, tsum in self._kernels:
             rows_ok = self._allowed_rows(t.shape[0], H, row0)
             if (t.shape[0] <= 1.5 * region_height + 4 or cut) and (rows_ok is None or rows_ok.any()):
                 kernels.append((t, tsum, rows_ok))
+                heads.append(head)
         if not kernels:
             return [], [], []
         # zero-padded storage so that any window's kernel support is inside the array
@@ -386,6 +409,16 @@ class SilhouetteMatcher:
             if right:
                 op[:, px + W :] = 1.0
         V, O = vp[py : py + H, px : px + W], op[py : py + H, px : px + W]
+        F0 = vacant.copy()  # the region's foreground before any fit
+
+        def corr(img, k, r0, r1, c0, c1):
+            """Correlation of padded ``img`` with kernel ``k`` (anchored at its centre, as
+            filter2D's default) at output rows [r0, r1), cols [c0, c1) of the crop."""
+            th, tw = k.shape
+            ay, ax = th // 2, tw // 2
+            win = img[py + r0 - ay : py + r1 + th - 1 - ay, px + c0 - ax : px + c1 + tw - 1 - ax]
+            return cv2.filter2D(win, cv2.CV_32F, k, borderType=cv2.BORDER_CONSTANT)[
+                ay : ay + r1 - r0, ax : ax + c1 - c0]
 
         def sums(t, r0, r1, c0, c1):
             """(sum T V, box sum V, sum T O) at output rows [r0, r1), cols [c0, c1)."""
@@ -394,20 +427,40 @@ class SilhouetteMatcher:
             ys = slice(py + r0 - ay, py + r1 + th - 1 - ay)
             xs = slice(px + c0 - ax, px + c1 + tw - 1 - ax)
             inner = (slice(ay, ay + r1 - r0), slice(ax, ax + c1 - c0))
-            win = vp[ys, xs]
-            tv = cv2.filter2D(win, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)[inner]
-            bx = cv2.boxFilter(win, cv2.CV_32F, (tw, th), anchor=(ax, ay), normalize=False,
+            tv = corr(vp, t, r0, r1, c0, c1)
+            bx = cv2.boxFilter(vp[ys, xs], cv2.CV_32F, (tw, th), anchor=(ax, ay), normalize=False,
                                borderType=cv2.BORDER_CONSTANT)[inner]
-            owin = op[ys, xs]
-            to = (cv2.filter2D(owin, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)[inner]
-                  if owin.any() else np.zeros_like(tv))
+            to = corr(op, t, r0, r1, c0, c1) if op[ys, xs].any() else np.zeros_like(tv)
             return tv, bx, to
 
-        maps = [list(sums(t, 0, H, 0, W)) for t, _, _ in kernels]
+        # each scale is searched only on the band of centre rows its height is allowed at
+        # (the height prior), so a calibrated search costs a few scales per row
+        bands = []
+        for i, (t, tsum, rows_ok) in enumerate(kernels):
+            if rows_ok is None:
+                bands.append((0, H))
+            else:
+                okr = np.flatnonzero(rows_ok[:, 0])
+                b0, b1 = int(okr[0]), int(okr[-1]) + 1
+                bands.append((b0, b1))
+                kernels[i] = (t, tsum, rows_ok[b0:b1])
+        maps = [list(sums(t, b0, b1, 0, W)) for (t, _, _), (b0, b1) in zip(kernels, bands)]
+        head_ok = [None] * len(kernels)
+        if self.head_contrast > -1.0:
+            # head evidence on the region's foreground (fixed during the search), pixels
+            # beyond the frame's border counting as foreground (unknown): the head rows'
+            # fill inside the head minus their fill beside it (Reta: a person's head shows)
+            known = vp + op
+            for i, ((head, beside), (b0, b1)) in enumerate(zip(heads, bands)):
+                hin = corr(known, head, b0, b1, 0, W)
+                hout = corr(vp, beside, b0, b1, 0, W)
+                c = (np.minimum(hin, head.sum()) / max(head.sum(), 1e-6)
+                     - hout / max(beside.sum(), 1e-6))
+                head_ok[i] = c >= self.head_contrast
         boxes, scores, tight = [], [], []
         for _ in range(self.max_people):
             best = (0.0, None)
-            for (t, tsum, rows_ok), (tv, bx, to) in zip(kernels, maps):
+            for (t, tsum, rows_ok), (tv, bx, to), hok, (b0, _b1) in zip(kernels, maps, head_ok, bands):
                 visible = tsum - to
                 # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V,
                 # with sum (1 - T) V = box sum of V - sum T V
@@ -416,13 +469,15 @@ class SilhouetteMatcher:
                     visible >= self.min_visible * tsum)
                 if rows_ok is not None:
                     ok &= rows_ok
+                if hok is not None:
+                    ok &= hok
                 if not ok.any():
                     continue
                 e = np.where(ok, explained, -np.inf)
                 j = int(np.argmax(e))
                 r, c = divmod(j, W)
                 if e[r, c] > best[0]:
-                    best = (float(e[r, c]), (r, c, t, float(e[r, c] / max(visible[r, c], 1e-6))))
+                    best = (float(e[r, c]), (r + b0, c, t, float(e[r, c] / max(visible[r, c], 1e-6))))
             if best[1] is None:
                 break
             r, c, t, score = best[1]
@@ -436,22 +491,25 @@ class SilhouetteMatcher:
             if not boxes or not self._is_part(box, boxes):
                 boxes.append(box)
                 scores.append(score)
-                claimed = sil & (region > 0)  # the foreground this fit explains
+                if self.box == "region":  # the region's foreground inside the template box
+                    claimed = F0[rr0:rr1, cc0:cc1] > 0
+                else:
+                    claimed = sil & (region > 0)  # the foreground this fit explains
                 rows, cols = np.flatnonzero(claimed.any(axis=1)), np.flatnonzero(claimed.any(axis=0))
                 tight.append([cc0 + cols[0], rr0 + rows[0], cols[-1] - cols[0] + 1,
                               rows[-1] - rows[0] + 1] if len(rows) else box)
             # a part of a person already found is not reported, but its pixels are used up
             O[rr0:rr1, cc0:cc1] = np.maximum(O[rr0:rr1, cc0:cc1], sil & (region > 0))
             region[sil] = 0.0
-            for (k, _, _), m in zip(kernels, maps):  # refresh the affected window only
+            for (k, _, _), m, (b0, b1) in zip(kernels, maps, bands):  # refresh the affected window only
                 kh, kw = k.shape
-                o0, o1 = max(rr0 - (kh - 1 - kh // 2), 0), min(rr1 + kh // 2, H)
+                o0, o1 = max(rr0 - (kh - 1 - kh // 2), b0), min(rr1 + kh // 2, b1)
                 q0, q1 = max(cc0 - (kw - 1 - kw // 2), 0), min(cc1 + kw // 2, W)
                 if o1 > o0 and q1 > q0:
                     tv, bx, to = sums(k, o0, o1, q0, q1)
-                    m[0][o0:o1, q0:q1] = tv
-                    m[1][o0:o1, q0:q1] = bx
-                    m[2][o0:o1, q0:q1] = to
+                    m[0][o0 - b0 : o1 - b0, q0:q1] = tv
+                    m[1][o0 - b0 : o1 - b0, q0:q1] = bx
+                    m[2][o0 - b0 : o1 - b0, q0:q1] = to
         return boxes, scores, tight
 
 
