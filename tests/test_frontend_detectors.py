@@ -214,7 +214,7 @@ def test_windowed_greedy_equals_full_recompute():
     mask[rng.random(mask.shape) < 0.01] = 1.0
     m = SilhouetteMatcher(min_height=30, max_height=100, n_scales=6, downscale=1, max_overlap=1.0)
     m._kernels = m._kernels_for(120)
-    got, _ = m._greedy(mask.copy(), region_height=120)
+    got, _, _ = m._greedy(mask.copy(), region_height=120)
     want = _greedy_reference(m, mask.copy())
     assert len(want) >= 3
     np.testing.assert_array_equal(np.array(got), np.array(want))

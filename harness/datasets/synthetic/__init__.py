@@ -77,6 +77,8 @@ def load_scenario(
     mirror: bool | None = None,
     name: str | None = None,
     reflection: float = 0.0,
+    camera_height: float = 1.3,
+    horizon: float = 0.42,
 ) -> SyntheticSequence:
     """One synthetic sequence of preset ``scenario`` (arguments as in ``load_suite``;
     ``mirror`` forces the left-right orientation, None lets the seed choose)."""
@@ -90,7 +92,9 @@ def load_scenario(
         raise ValueError(f"density must be > 0 (persons per square metre), got {density}")
     if fps <= 0:
         raise ValueError(f"fps must be > 0, got {fps}")
-    cam = Camera.for_size(width, height)
+    if camera_height <= 0 or not 0.0 <= horizon < 1.0:
+        raise ValueError(f"need camera_height > 0 and 0 <= horizon < 1, got {camera_height}, {horizon}")
+    cam = Camera.for_size(width, height, camera_height=camera_height, horizon=horizon)
     rng = np.random.default_rng([int(seed), zlib.crc32(scenario.encode())])
     background = render_background(cam, rng)
     flip = bool(rng.random() < 0.5) if mirror is None else bool(mirror)
@@ -127,6 +131,8 @@ def load_suite(
     occluded_below: float = 0.3,
     frames: list[int] | None = None,
     reflection: float = 0.0,
+    camera_height: float = 1.3,
+    horizon: float = 0.42,
 ) -> list[SyntheticSequence]:
     """One sequence per scenario preset, named after it.
 
@@ -147,6 +153,10 @@ def load_suite(
             numbered as in the whole scene (``harness.datasets.base.window``); None = all.
         reflection: opacity of a mirrored floor reflection under each person (0 = none;
             ``SyntheticSequence``).
+        camera_height: height of the camera above the floor, metres, and
+        horizon: image row of the horizon, fraction of the frame height: the perspective.
+            A person ``height_m`` tall with feet at image row y is
+            height_m / camera_height * (y - horizon * height) pixels tall, linear in y.
     Raises:
         ValueError: an unknown scenario (the message lists the valid ones) or bad value.
     """
@@ -173,6 +183,8 @@ def load_suite(
             shadows,
             occluded_below,
             reflection=reflection,
+            camera_height=camera_height,
+            horizon=horizon,
         )
         for s in names
     ], frames)

@@ -42,12 +42,13 @@ class Camera:
     camera_height: float = 1.3
 
     @classmethod
-    def for_size(cls, width: int, height: int, camera_height: float = 1.3) -> Camera:
-        """The default camera of a ``width`` x ``height`` frame (focal = height, horizon at
-        42% of the height)."""
+    def for_size(cls, width: int, height: int, camera_height: float = 1.3,
+                 horizon: float = 0.42) -> Camera:
+        """The camera of a ``width`` x ``height`` frame (focal = height, horizon at
+        ``horizon`` x the height: 42% by default)."""
         if width < 64 or height < 64:
             raise ValueError(f"Camera: frame size must be at least 64x64, got {width}x{height}")
-        return cls(int(width), int(height), float(height), 0.42 * height, float(camera_height))
+        return cls(int(width), int(height), float(height), float(horizon) * height, float(camera_height))
 
     @property
     def cx(self) -> float:
