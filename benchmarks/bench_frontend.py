@@ -50,8 +50,8 @@ CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
 
 #: (label, detector config, overrides) compared in (a)
 QUALITY = [
-    ("silhouette (ours, Reta 3.1 adapted)", "silhouette", []),
-    ("silhouette + CAVIAR calibration (1-150)", "silhouette_caviar", []),
+    ("silhouette (ours, self-calibrated, default)", "silhouette", []),
+    ("ORACLE: silhouette + gt calibration (1-150)", "silhouette_caviar", []),
     ("foreground blobs + head split", "foreground", []),
     ("HOG+SVM on foreground, person box", "hog", []),
     ("HOG+SVM on foreground, raw 64x128 window", "hog", ["detector.detector.box_scale=[1.0,1.0]"]),

@@ -17,8 +17,9 @@ is affine in 1 / depth). ``PerspectiveCalibration`` learns ``a``, ``b`` and the 
    side are too wide; a person with its floor reflection is too thin.
 2. A robust line through (foot row, height): RANSAC over pairs of samples (seeded, so the
    same samples give the same line), inliers within ``tolerance`` of the line's height,
-   refined by least squares on the inliers; ``a > 0`` and a horizon above every inlier
-   (a camera above the heads sees nearer people lower in the image and larger).
+   refined by least squares on the inliers; ``a > 0`` and a horizon above every inlier and
+   above 95% of all samples' feet (a camera above the heads sees nearer people lower in the
+   image and larger, and feet only below the horizon).
 3. ``r`` is the median width / height of the inliers.
 
 With fewer than ``min_bins`` inliers, or inliers spanning less than ``min_span`` of the
@@ -175,7 +176,13 @@ def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
     occupied = np.zeros((len(a), nb), dtype=bool)
     rows, cols = np.nonzero(inl)
     occupied[rows, bins[cols]] = True
-    support = np.where(-b / a >= -horizon_above * frame_height, occupied.sum(axis=1), -1)
+    # feet are seen only below the horizon: it must lie above (nearly) every sampled foot
+    # row, outliers included (a line through merges may fit many rows yet put the horizon
+    # below where people are seen walking)
+    top_foot = float(np.quantile(y, 0.05))
+    horizon = -b / a
+    plausible = (horizon >= -horizon_above * frame_height) & (horizon < top_foot)
+    support = np.where(plausible, occupied.sum(axis=1), -1)
     best = int(np.argmax(support))
     keep = inl[best]
     for _ in range(2):  # least squares on the bins' median inliers, inliers again
@@ -190,7 +197,7 @@ def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
     nbins = len(np.unique(bins[keep]))
     if a1 <= 0 or nbins < min_bins or np.ptp(y[keep]) < min_span * frame_height:
         return None
-    if not -horizon_above * frame_height <= -b1 / a1 < y[keep].min():  # above every foot
+    if not -horizon_above * frame_height <= -b1 / a1 < min(y[keep].min(), top_foot):
         return None
     spread = float(np.median(np.abs(h[keep] - pred1[keep]) / pred1[keep]))
     return Perspective(float(a1), float(b1), float(np.median(w[keep] / h[keep])),
