@@ -512,6 +512,9 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
                 ax.errorbar(x, g[m], yerr=g[f"{m}_ci95"], marker="o", capsize=3, label=tracker)
             if not numeric:
                 ax.set_xticks(range(len(labels)), [_tick(v) for v in labels], rotation=30)
+            elif len(labels) <= MAX_HEATMAP_VALUES:  # a grid: ticks at its values
+                values = sorted({float(v) for v in labels})
+                ax.set_xticks(values, [_tick(v) for v in values])
             ax.set_xlabel(p)
             ax.set_title(m)
             ax.grid(alpha=0.3)
@@ -596,11 +599,36 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-plots", action="store_true")
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    from omegaconf import OmegaConf
+
+    from harness.tune import is_optuna
+
+    config = None  # Hydra's copy of a job's config (with hydra.sweeper): an Optuna study?
+    found = sorted(args.sweep_dir.glob("*/.hydra/hydra.yaml"))
+    first = found[0].parent if found else args.sweep_dir
+    if (first / "hydra.yaml").is_file() and (first / "config.yaml").is_file():
+        try:
+            config = OmegaConf.merge(OmegaConf.load(first / "config.yaml"),
+                                     OmegaConf.load(first / "hydra.yaml"))
+        except Exception:  # noqa: BLE001 - a damaged job folder: gathered as such below
+            config = None
+
+    optuna = config is not None and is_optuna(config)
     try:
-        frame = write_sweep(args.sweep_dir, args.metrics, not args.no_plots)
+        frame = write_sweep(args.sweep_dir, args.metrics, not args.no_plots and not optuna)
     except (OSError, ValueError, TypeError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    if optuna and not args.no_plots:
+        from harness.tune import plot_study
+
+        try:
+            plot_study(args.sweep_dir, config,
+                       metric=str(OmegaConf.select(config, "objective.metric") or "objective"))
+        except Exception:  # noqa: BLE001 - a plot is not worth losing the table for
+            log.exception("optuna plots of %s failed", args.sweep_dir)
+    if len(frame):
+        print(summary_text(frame, args.metrics, str(args.sweep_dir)), end="")
     print(args.sweep_dir / "sweep.md")
     bad = not_done(frame)
     if bad:

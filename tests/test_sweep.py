@@ -19,6 +19,7 @@ import pytest
 import yaml
 
 from harness.sweep import _tick  # noqa: I001 - private helper under test
+from harness.sweep import main as sweep_main
 from harness.sweep import (
     DONE,
     FAILED,
@@ -283,3 +284,8 @@ def test_optuna_study_starts_with_the_defaults_and_is_drawn_by_optuna(tmp_path):
     assert not [n for n in names if n.startswith(("sweep_", "heatmap_"))]
     # the summary once, at the end, on stdout; no job prints a table of its own
     assert proc.stdout.count("jobs (all with") == 1 and "results:" not in proc.stdout
+    # gathered by hand (occbench sweep DIR): the same Optuna views, found from the job folders
+    for png in (tmp_path / "plots").iterdir():
+        png.unlink()
+    assert sweep_main([str(tmp_path)]) == 0
+    assert sorted(p.name for p in (tmp_path / "plots").iterdir()) == names
