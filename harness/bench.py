@@ -97,7 +97,7 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
                           ) -> tuple[list[StageTiming], list[float]]:
     """Stage-by-stage timings of a front-end detector on ``images`` (frames 1..n), and the
     warm-up seconds of each run (empty lists when the source has no timed stages)."""
-    from harness.run import ForegroundProvider, clean_detections
+    from harness.loop import ForegroundProvider, clean_detections
     from trackers.frontend.blobs import blobs_from_mask
 
     if _staged_detector(make_source()) is None:
@@ -144,7 +144,7 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
                    background: Mapping[str, Any] | None = None) -> list[StageTiming]:
     """Time decode, front end and every tracker on the first ``frames`` frames of
     ``sequence`` (``repeats`` runs each; fresh source and trackers for every run)."""
-    from harness.run import ForegroundProvider, clean_detections
+    from harness.loop import frames as frame_loop
 
     if repeats < 1:
         raise ValueError(f"repeats must be >= 1, got {repeats}")
@@ -167,11 +167,9 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
 
     def front(source: Any) -> None:
         inputs.clear()
-        fg_of = ForegroundProvider(foreground, sequence, background)
-        for k, img in enumerate(images, 1):
-            dets, mask = source.detect(k, img)
-            dets, _ = clean_detections(dets)
-            inputs.append((dets, fg_of(k, img, mask)))
+        for step in frame_loop(sequence, source, foreground, background, images=images,
+                           start=False):
+            inputs.append((step.detections, step.foreground))
 
     front_s = []
     for _ in range(repeats):
@@ -219,8 +217,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     import pandas as pd
 
     cv2.setNumThreads(1)
-    from harness.report.video import compose_config, tracker_choice
-    from harness.run import build_source, build_tracker, load_sequences, tracker_configs
+    from harness.build import (
+        build_source,
+        build_tracker,
+        compose_config,
+        load_sequences,
+        tracker_choice,
+        tracker_configs,
+    )
 
     try:
         cfg = compose_config(args.overrides)

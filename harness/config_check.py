@@ -199,7 +199,7 @@ def _metric(v: str) -> str | None:
 
 
 def _foreground(v: str) -> str | None:
-    from harness.run import FOREGROUND_MODES
+    from harness.loop import FOREGROUND_MODES
 
     return None if v in FOREGROUND_MODES else f"must be one of {list(FOREGROUND_MODES)}"
 

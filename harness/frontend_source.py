@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.build import compose_config
 from harness.datasets.base import Sequence
 from trackers.records import Detections
 
@@ -55,14 +56,6 @@ class FrontendSource:
         if frame is None:
             raise ValueError(f"{self._sequence.info.name}: frame {index} has no pixels")
         return self.detector.detect(frame)
-
-
-def compose_config(overrides: list[str], config_name: str = "config"):
-    """Compose the project's Hydra config tree ``conf/`` with command-line overrides."""
-    from hydra import compose, initialize_config_dir
-
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base=None):
-        return compose(config_name=config_name, overrides=list(overrides))
 
 
 def load_sequences(overrides: list[str]) -> list[Sequence]:

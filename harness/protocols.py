@@ -29,7 +29,7 @@ import numpy as np
 
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable
-from harness.run import (
+from harness.loop import (
     ForegroundProvider,
     RunError,
     Tracker,

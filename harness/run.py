@@ -19,7 +19,6 @@ before the failure stays on disk.
 from __future__ import annotations
 
 import csv
-import importlib
 import io
 import logging
 import math
@@ -30,11 +29,23 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
-import numpy as np
 import pandas as pd
 
+from harness.build import (  # noqa: F401 - re-exported: harness.run's public names
+    _cfg_get,
+    _check_located,
+    _container,
+    _hydra_choice,
+    _locate_target,
+    _missing_library,
+    build_source,
+    build_tracker,
+    check_node,
+    load_sequences,
+    tracker_configs,
+)
 from harness.datasets.base import Sequence
 from harness.io.mot import (
     MotTable,
@@ -47,207 +58,34 @@ from harness.io.mot import (
     write_seqinfo,
     write_seqmap,
 )
+from harness.loop import (  # noqa: F401 - re-exported: harness.run's public names
+    FOREGROUND_MODES,
+    ForegroundProvider,
+    LoopFrame,
+    Progress,
+    ProgressFactory,
+    RunError,
+    Tracker,
+    TrackerOutput,
+    _copy,
+    _copy_detections,
+    _no_progress,
+    _NoProgress,
+    _Rows,
+    clean_detections,
+    frames,
+    start_trackers,
+)
 from harness.metrics import COLUMNS, SequenceScore, hota_alpha_table, score_sequence, summarize
 from harness.report.bars import DEFAULT_METRICS, metric_bars
 from harness.report.graph import GraphExport
 from harness.report.hota_alpha import hota_alpha_plot
 from harness.report.tables import comparison, direction, per_sequence, to_latex, to_markdown
 from harness.sources import DetectionSource
-from trackers.records import Detections, Track
 
 log = logging.getLogger(__name__)
 
 COMBINED = "COMBINED"
-FOREGROUND_MODES = ("auto", "exact", "none", "mog2")
-
-
-class RunError(RuntimeError):
-    """A run that cannot start or go on: bad config, unbuilt tracker, unreadable dataset."""
-
-
-class Tracker(Protocol):
-    def reset(self) -> None: ...
-
-    def update(self, frame: np.ndarray | None, detections: Detections,
-               foreground: np.ndarray | None = None) -> list[Track]: ...
-
-
-class Progress(Protocol):
-    def update(self, n: int = 1) -> Any: ...
-
-    def close(self) -> Any: ...
-
-
-ProgressFactory = Callable[..., Progress]  # called as factory(total=..., desc=...)
-
-
-class _NoProgress:
-    def update(self, n: int = 1) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-
-def _no_progress(total: int = 0, desc: str = "", unit: str = "frame") -> Progress:
-    return _NoProgress()
-
-
-# --------------------------------------------------------------------------- foreground
-
-
-class ForegroundProvider:
-    """The foreground image handed to the trackers, by mode.
-
-    Modes:
-        auto: the detection source's mask when it computes one, else the dataset's exact
-            person mask (synthetic scenes) when it has one, else None.
-        exact: the dataset's exact person mask; an error when the dataset has none.
-
-    The dataset's exact foreground is a label image of ground-truth ids; trackers get its
-    nonzero pixels as a bool mask, never the ids (which would leak the ground truth).
-        none: always None.
-        mog2: a background-subtraction mask (``trackers.frontend.BackgroundModel``, one
-            model per sequence, built with ``background`` as keyword arguments), unless
-            the detection source computes its own mask, which then takes precedence.
-    """
-
-    def __init__(self, mode: str, sequence: Sequence,
-                 background: Mapping[str, Any] | None = None) -> None:
-        if mode not in FOREGROUND_MODES:
-            raise RunError(f"foreground must be one of {FOREGROUND_MODES}, got {mode!r}")
-        self.mode = mode
-        self.sequence = sequence
-        self._model = None
-        if mode == "mog2":
-            try:
-                from trackers.frontend import BackgroundModel
-            except ImportError as err:  # the front end is an optional part of the build
-                raise RunError(f"foreground=mog2 needs trackers.frontend ({err})") from err
-            self._model = BackgroundModel(**dict(background or {}))
-            warm = getattr(self._model, "warm_up_sequence", None)
-            if warm is not None:
-                warm(sequence.info.length, sequence.nth_frame)
-
-    def __call__(self, index: int, frame: np.ndarray | None,
-                 source_mask: np.ndarray | None) -> np.ndarray | None:
-        if self.mode == "none":
-            return None
-        if self.mode == "exact":
-            fg = self.sequence.foreground(index)
-            if fg is None:
-                raise RunError(
-                    f"foreground=exact but {self.sequence.info.name!r} has no exact foreground "
-                    f"(frame {index}); use foreground=auto, none or mog2"
-                )
-            return fg != 0
-        if self.mode == "mog2":
-            mask = self._model.apply(frame) if frame is not None else None
-            return source_mask if source_mask is not None else mask
-        # auto
-        if source_mask is not None:
-            return source_mask
-        fg = self.sequence.foreground(index)
-        return None if fg is None else fg != 0
-
-
-# --------------------------------------------------------------------------- one sequence
-
-
-@dataclass
-class TrackerOutput:
-    """What one tracker reported on one sequence.
-
-    Attributes:
-        table: reported tracks as a ``MotTable`` (0-based xywh boxes, ``conf`` = score).
-        frames: frames the tracker processed.
-        seconds: wall-clock time spent in the tracker's ``update`` (not detection).
-        dropped: reported boxes dropped because they were not finite or had no area.
-        error: the exception text when the tracker failed (``table`` then holds the frames
-            before the failure), else None.
-        trace: the traceback of the failure, else None.
-    """
-
-    table: MotTable
-    frames: int = 0
-    seconds: float = 0.0
-    dropped: int = 0
-    error: str | None = None
-    trace: str | None = None
-
-    @property
-    def fps(self) -> float:
-        return self.frames / self.seconds if self.seconds > 0 else math.inf
-
-
-class _Rows:
-    """Accumulates reported tracks frame by frame."""
-
-    def __init__(self) -> None:
-        self.frames: list[int] = []
-        self.ids: list[int] = []
-        self.boxes: list[np.ndarray] = []
-        self.scores: list[float] = []
-        self.dropped = 0
-
-    def add(self, k: int, tracks: Iterable[Track]) -> None:
-        for t in tracks:
-            if not t.state.reported:
-                continue
-            box = np.asarray(t.box, dtype=np.float64).reshape(4)
-            if not (np.isfinite(box).all() and box[2] > 0 and box[3] > 0):
-                self.dropped += 1
-                continue
-            self.frames.append(k)
-            self.ids.append(int(t.id))
-            self.boxes.append(box)
-            self.scores.append(float(t.score))
-
-    def table(self, path: str = "<memory>") -> MotTable:
-        n = len(self.frames)
-        if n == 0:
-            return MotTable.empty(path)
-        frames = np.asarray(self.frames, dtype=np.int64)
-        ids = np.asarray(self.ids, dtype=np.int64)
-        order = np.lexsort((ids, frames))
-        return MotTable(frames[order], ids[order], np.asarray(self.boxes)[order],
-                        np.asarray(self.scores)[order], np.full(n, -1, dtype=np.int64),
-                        np.full(n, np.nan), path)
-
-
-def clean_detections(dets: Detections) -> tuple[Detections, int]:
-    """Drop detections with a non-finite box or score or a box without area.
-
-    Returns the kept detections and the number dropped.
-    """
-    ok = (np.isfinite(dets.boxes).all(axis=1) & (dets.boxes[:, 2] > 0) & (dets.boxes[:, 3] > 0)
-          & np.isfinite(dets.scores))
-    if ok.all():
-        return dets, 0
-    return dets.subset(ok), int((~ok).sum())
-
-
-def _copy_detections(d: Detections) -> Detections:
-    return Detections(d.boxes.copy(), d.scores.copy(),
-                      None if d.labels is None else d.labels.copy(),
-                      None if d.heads is None else d.heads.copy())
-
-
-def _copy(a: np.ndarray | None) -> np.ndarray | None:
-    return None if a is None else a.copy()
-
-
-def start_trackers(trackers: Mapping[str, Tracker], sequence: Sequence) -> None:
-    """Tell each tracker that has a ``start_sequence(info)`` method the sequence's
-    ``SequenceInfo`` (frame rate, size) before its first frame: trackers whose parameters
-    are in frames per second (e.g. BoxMOT's, ``trackers.outside.boxmot``) take the rate
-    from there rather than from a config value that would be wrong on another dataset."""
-    for tracker in trackers.values():
-        start = getattr(tracker, "start_sequence", None)
-        if callable(start):
-            start(sequence.info)
-
-
 def run_sequence(
     trackers: Mapping[str, Tracker],
     sequence: Sequence,
@@ -280,8 +118,7 @@ def run_sequence(
         cannot go on for any tracker.
     """
     name = sequence.info.name
-    source.start(sequence)
-    fg_of = ForegroundProvider(foreground, sequence, background)
+    loop = frames(sequence, source, foreground, background)
     start_trackers(trackers, sequence)
     rows = {t: _Rows() for t in trackers}
     out = {t: TrackerOutput(MotTable.empty()) for t in trackers}
@@ -289,14 +126,9 @@ def run_sequence(
     dropped_dets = 0
     bar = (progress or _no_progress)(total=sequence.info.length, desc=name)
     try:
-        for k in sequence.frame_numbers():
-            if not active:
-                break
-            frame = sequence.frame(k)
-            dets, mask = source.detect(k, frame)
-            dets, bad = clean_detections(dets)
-            dropped_dets += bad
-            fg = fg_of(k, frame, mask)
+        for step in loop if active else ():
+            k, frame, dets, fg = step.index, step.image, step.detections, step.foreground
+            dropped_dets += step.dropped
             shared = len(active) == 1
             for t, tracker in list(active.items()):
                 args = (frame, dets, fg) if shared else (_copy(frame), _copy_detections(dets),
@@ -318,6 +150,8 @@ def run_sequence(
                 if on_update is not None:
                     on_update(t, k, tracker)
             bar.update(1)
+            if not active:  # read no further frame
+                break
     finally:
         bar.close()
     if dropped_dets:
@@ -503,134 +337,6 @@ class RunWriter:
         return write_atomic(self.out_dir / name, text)
 
 
-def _cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
-    try:
-        value = cfg.get(key, default)
-    except AttributeError:
-        value = getattr(cfg, key, default)
-    return default if value is None else value
-
-
-def _container(node: Any) -> Any:
-    from omegaconf import DictConfig, ListConfig, OmegaConf
-
-    if isinstance(node, DictConfig | ListConfig):
-        return OmegaConf.to_container(node, resolve=True)
-    return node
-
-
-def _locate_target(target: str) -> Any:
-    """The object named by the dotted path ``target``; ImportError naming what is missing."""
-    parts = target.split(".")
-    first_error: ImportError | None = None
-    for i in range(len(parts) - 1, 0, -1):  # the longest importable module prefix
-        module_name = ".".join(parts[:i])
-        try:
-            obj = importlib.import_module(module_name)
-        except ModuleNotFoundError as err:
-            if err.name and (module_name + ".").startswith(err.name + "."):
-                first_error = first_error or err  # this prefix is not a module: try shorter
-                continue
-            raise  # the module exists but one of its own imports is missing
-        try:
-            for attr in parts[i:]:
-                obj = getattr(obj, attr)
-        except AttributeError as err:
-            raise first_error or ImportError(f"{target}: {err}") from err
-        return obj
-    raise first_error or ImportError(f"{target!r} is not a dotted path to an object")
-
-
-def _hydra_choice(group: str) -> str | None:
-    """The config choice of ``group`` in a running Hydra app, else None."""
-    from hydra.core.hydra_config import HydraConfig
-
-    if not HydraConfig.initialized():
-        return None
-    choice = HydraConfig.get().runtime.choices.get(group)
-    return None if choice is None else str(choice)
-
-
-def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
-    """Tracker configs by name from ``cfg.tracker``.
-
-    ``cfg.tracker`` is either one config with ``_target_`` (``tracker=baseline``; its name
-    is ``name``, by default the config choice of a running Hydra app, else the class name)
-    or a dict of such configs keyed by name
-    (``tracker=all``).
-    """
-    if node is None or len(node) == 0:
-        raise RunError("no tracker selected: set tracker=<name> or tracker=all")
-    if "_target_" in node:
-        if name is None:
-            name = _hydra_choice("tracker")
-        if name is None or name == "all":
-            name = str(node["_target_"]).rsplit(".", 1)[-1]
-        return {str(name): node}
-    out = {}
-    for key, sub in node.items():
-        if not hasattr(sub, "keys") or "_target_" not in sub:
-            raise RunError(f"tracker.{key}: a tracker config needs a _target_ key, got {sub!r}")
-        out[str(key)] = sub
-    return out
-
-
-def _missing_library(err: BaseException) -> bool:
-    """Whether ``err`` (or an exception it was raised from) is an outside tracker's missing
-    optional library (``trackers.outside._common.MissingLibrary``)."""
-    from trackers.outside._common import MissingLibrary
-
-    seen = set()
-    while err is not None and id(err) not in seen:
-        if isinstance(err, MissingLibrary):
-            return True
-        seen.add(id(err))
-        err = err.__cause__ or err.__context__
-    return False
-
-
-def check_node(node: Any, key: str, target: Any) -> None:
-    """Type-check a ``_target_`` config against ``target``'s signature
-    (``harness.config_check.check_target``); RunError naming ``key.<argument>``."""
-    from harness.config_check import ConfigError, check_target
-
-    try:
-        check_target(dict(_container(node)), key, target)
-    except ConfigError as err:
-        raise RunError(str(err)) from None
-
-
-def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
-    """Instantiate one tracker config; RunError with a clear message when it cannot be.
-
-    ``key`` is the config path of ``node`` for messages (default ``tracker.<name>``)."""
-    from hydra.utils import instantiate
-
-    target = str(node["_target_"])
-    try:
-        cls = _locate_target(target)
-    except Exception as err:
-        raise RunError(
-            f"tracker {name!r}: its code {target} is not built or cannot be imported "
-            f"({type(err).__name__}: {err}). conf/tracker/all.yaml lists the built trackers."
-        ) from err
-    check_node(node, key or f"tracker.{name}", cls)
-    try:
-        return instantiate(node, _convert_="all")
-    except Exception as err:
-        cause = err.__cause__ or err
-        raise RunError(f"tracker {name!r} ({target}): {type(cause).__name__}: {cause}") from err
-
-
-def _check_located(node: Any, key: str) -> None:
-    """``check_node`` when ``node``'s target imports (else instantiate reports it)."""
-    try:
-        target = _locate_target(str(node["_target_"]))
-    except Exception:  # noqa: BLE001 - instantiate gives the full message
-        return
-    check_node(node, key, target)
-
-
 def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence]) -> None:
     """Before anything is timed (``harness.warmup``): reject a tracker that needs frames when
     a sequence has none, then warm every tracker class up once per process."""
@@ -649,47 +355,6 @@ def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence]) 
                     "only (tracker=baseline)")
     warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
                   for n, node in configs.items()}, log.info)
-
-
-def load_sequences(node: Any) -> list[Sequence]:
-    """Instantiate the dataset config: a list of Sequence, RunError when it cannot be."""
-    from hydra.utils import instantiate
-
-    if node is None or "_target_" not in node:
-        raise RunError("dataset: no dataset selected (dataset=<name> with a _target_)")
-    _check_located(node, "dataset")
-    try:
-        seqs = instantiate(node, _convert_="all")
-    except Exception as err:
-        cause = err.__cause__ or err
-        raise RunError(f"dataset ({node['_target_']}): {type(cause).__name__}: {cause}") from err
-    if isinstance(seqs, Sequence):
-        seqs = [seqs]
-    seqs = list(seqs)
-    if not seqs:
-        raise RunError(f"dataset ({node['_target_']}) has no sequences")
-    for s in seqs:
-        if not isinstance(s, Sequence):
-            raise RunError(f"dataset ({node['_target_']}) yielded {type(s).__name__}, "
-                           "not a harness.datasets.base.Sequence")
-    names = [s.info.name for s in seqs]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise RunError(f"dataset: sequence names repeat: {dup}")
-    return seqs
-
-
-def build_source(node: Any) -> DetectionSource:
-    from hydra.utils import instantiate
-
-    if node is None or "_target_" not in node:
-        raise RunError("detector: no detection source selected (detector=<name>)")
-    _check_located(node, "detector")
-    try:
-        return instantiate(node, _convert_="all")
-    except Exception as err:
-        cause = err.__cause__ or err
-        raise RunError(f"detector ({node['_target_']}): {type(cause).__name__}: {cause}") from err
 
 
 def external_folders(node: Any, taken: Iterable[str]) -> dict[str, Path]:

@@ -8,15 +8,13 @@
   nodes.
 * parts (PBM, Fig. 7; ``Track.extra['parts']`` (5, 4) xywh part rectangles: head, left/right
   torso-arm, left/right leg): the five rectangles in the id's colour, frozen (occluded) parts
-  dashed; ``harness.report.parts.draw_parts`` is used instead when the PBM engineer's module
-  provides it.
+  dashed, when ``harness.report.parts.draw_parts`` (the paper's drawing) fails.
 
 All images are (H, W, 3) uint8 BGR; boxes are xywh with a 0-based top-left (pixels).
 """
 
 from __future__ import annotations
 
-import itertools
 import logging
 from collections.abc import Sequence
 
@@ -24,47 +22,16 @@ import cv2
 import numpy as np
 
 from harness.report.graph import id_colour
+from harness.report.parts import draw_parts as pbm_draw_parts
+from harness.report.primitives import GREY, WHITE, _label, _pt, dashed_polyline, dashed_rectangle
 from trackers.records import Track, TrackState
 
 log = logging.getLogger(__name__)
 
-GREY = (190, 190, 190)
-WHITE = (255, 255, 255)
 __all__ = ["STYLES", "TRACKER_STYLES", "draw_tracks", "grid", "id_colour", "infer_style"]
 STYLES = ("auto", "boxes", "ellipses", "parts")
 # the style of each known tracker (by config name); others are inferred from Track.extra
 TRACKER_STYLES = {"baseline": "boxes", "reta": "ellipses", "pbm": "parts"}
-
-
-def _pt(x: float, y: float) -> tuple[int, int]:
-    return round(x), round(y)
-
-
-def dashed_polyline(img: np.ndarray, pts: np.ndarray, colour, thickness: int = 1,
-                    closed: bool = True) -> None:
-    """Every other segment of a densely sampled polyline (OpenCV has no dashed style)."""
-    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
-    if closed:
-        pts = np.vstack([pts, pts[:1]])
-    for k in range(0, len(pts) - 1, 2):
-        cv2.line(img, _pt(*pts[k]), _pt(*pts[k + 1]), colour, thickness, cv2.LINE_AA)
-
-
-def dashed_rectangle(img: np.ndarray, box: np.ndarray, colour, thickness: int = 1,
-                     dash: float = 6.0) -> None:
-    x, y, w, h = (float(v) for v in box)
-    corners = np.array([[x, y], [x + w, y], [x + w, y + h], [x, y + h], [x, y]])
-    pts = []
-    for a, b in itertools.pairwise(corners):
-        n = max(int(np.hypot(*(b - a)) / dash), 1)
-        pts.append(a + (b - a) * (np.arange(n)[:, None] / n))
-    dashed_polyline(img, np.vstack(pts), colour, thickness)
-
-
-def _label(img: np.ndarray, text: str, org: tuple[int, int], colour, scale: float = 0.45) -> None:
-    org = (max(org[0], 0), max(org[1], 11))
-    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 3, cv2.LINE_AA)
-    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv2.LINE_AA)
 
 
 def _colour(t: Track):
@@ -105,18 +72,13 @@ def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) 
 
 
 def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1) -> None:
-    try:  # the PBM engineer's own drawing, when it exists
-        from harness.report.parts import draw_parts as pbm_draw_parts
-    except ImportError:
-        pbm_draw_parts = None
-    if pbm_draw_parts is not None:
-        try:
-            out = pbm_draw_parts(img, tracks)
-            if isinstance(out, np.ndarray) and out.shape == img.shape:
-                img[...] = out
-            return
-        except Exception:  # fall back to ours rather than lose the frame
-            log.exception("harness.report.parts.draw_parts failed: drawing parts here")
+    try:  # PBM's own drawing (harness.report.parts)
+        out = pbm_draw_parts(img, tracks)
+        if isinstance(out, np.ndarray) and out.shape == img.shape:
+            img[...] = out
+        return
+    except Exception:  # fall back to ours rather than lose the frame
+        log.exception("harness.report.parts.draw_parts failed: drawing parts here")
     for t in tracks:
         parts = t.extra.get("parts")
         if parts is None:

@@ -17,8 +17,8 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-from harness.report.draw import GREY, _label, _pt, dashed_rectangle
 from harness.report.graph import id_colour
+from harness.report.primitives import GREY, _label, _pt, dashed_rectangle
 from trackers.records import Track, TrackState
 
 

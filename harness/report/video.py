@@ -35,7 +35,9 @@ from typing import Any
 import cv2
 import numpy as np
 
+from harness.build import compose_config, tracker_choice
 from harness.datasets.base import Sequence as DataSequence
+from harness.loop import _copy, _copy_detections, frames, start_trackers
 from harness.report.draw import TRACKER_STYLES, draw_tracks, grid
 from harness.sources import DetectionSource
 from trackers.records import Track
@@ -88,35 +90,23 @@ class H264Writer:
         self._gen.close()
 
 
-def _copy(a: np.ndarray | None) -> np.ndarray | None:
-    return None if a is None else a.copy()
-
-
 def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: DetectionSource,
                  foreground: str = "auto", background: Mapping[str, Any] | None = None,
                  last: int | None = None) -> Iterable[tuple[int, np.ndarray | None,
                                                            dict[str, list[Track]]]]:
-    """Yield ``(k, frame, {tracker: tracks})`` for frames 1..``last`` (default: all), running
-    every tracker on the same detections as ``harness.run.run_sequence`` does."""
-    from harness.run import ForegroundProvider, clean_detections, start_trackers
-
-    source.start(sequence)
-    fg_of = ForegroundProvider(foreground, sequence, background)
+    """Yield ``(k, frame, {tracker: tracks})`` for frames up to ``last`` (default: all),
+    running every tracker on the frame loop of the runner (``harness.loop.frames``), each on
+    its own copy of the frame, the detections and the foreground."""
+    loop = frames(sequence, source, foreground, background, last)
     for t in trackers.values():
         t.reset()
     start_trackers(trackers, sequence)
-    last = sequence.info.length if last is None else min(last, sequence.info.length)
-    for k in range(1, last + 1):
-        frame = sequence.frame(k)
-        dets, mask = source.detect(k, frame)
-        dets, _ = clean_detections(dets)
-        fg = fg_of(k, frame, mask)
+    for step in loop:
         out = {}
         for name, tracker in trackers.items():
-            d = type(dets)(dets.boxes.copy(), dets.scores.copy(), _copy(dets.labels),
-                           _copy(dets.heads))
-            out[name] = list(tracker.update(_copy(frame), d, _copy(fg)))
-        yield k, frame, out
+            out[name] = list(tracker.update(_copy(step.image), _copy_detections(step.detections),
+                                            _copy(step.foreground)))
+        yield step.index, step.image, out
 
 
 class _GraphDrawing:
@@ -244,23 +234,6 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
 # --------------------------------------------------------------------------- command line
 
 
-def compose_config(overrides: Sequence[str], run_dir: Path | None = None) -> Any:
-    """The app's config composed with ``overrides``, or a finished run's saved config."""
-    from omegaconf import OmegaConf
-
-    if run_dir is not None:
-        path = run_dir / "config.yaml"
-        if not path.is_file():
-            raise FileNotFoundError(f"{path} not found (a run directory of python -m harness)")
-        cfg = OmegaConf.load(path)
-        return OmegaConf.merge(cfg, OmegaConf.from_dotlist(list(overrides)))
-    from hydra import compose, initialize_config_dir
-
-    conf = Path(__file__).resolve().parents[2] / "conf"
-    with initialize_config_dir(str(conf), version_base="1.3"):
-        return compose("config", overrides=list(overrides))
-
-
 def run_choice(run_dir: Path, group: str) -> str | None:
     """The config choice of ``group`` a finished run was started with (Hydra's
     ``.hydra/hydra.yaml``), None when unknown."""
@@ -272,15 +245,6 @@ def run_choice(run_dir: Path, group: str) -> str | None:
     body = yaml.safe_load(path.read_text()) or {}
     choice = (((body.get("hydra") or {}).get("runtime") or {}).get("choices") or {}).get(group)
     return None if choice is None else str(choice)
-
-
-def tracker_choice(overrides: Sequence[str]) -> str | None:
-    """The ``tracker=<name>`` choice among command-line overrides (names a single tracker)."""
-    for o in overrides:
-        key, _, value = o.partition("=")
-        if key.lstrip("+") == "tracker" and value:
-            return value
-    return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -300,7 +264,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
-    from harness.run import build_source, build_tracker, load_sequences, tracker_configs
+    from harness.build import build_source, build_tracker, load_sequences, tracker_configs
 
     try:
         cfg = compose_config(args.overrides, args.run)

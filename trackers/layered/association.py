@@ -23,14 +23,19 @@ docstring (the tests compare them value for value):
 from __future__ import annotations
 
 import functools
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 from scipy.special import ndtr
 
 from trackers.frontend.parts import N_PARTS, PartFeatures
-from trackers.layered.models import FEATURES, FeatureModels
 
+if TYPE_CHECKING:  # annotations only: models.py imports this module
+    from trackers.layered.models import FeatureModels
+
+FEATURES: tuple[str, ...] = ("area", "perimeter", "hsv", "xyz", "displacement", "overlap")
+"""The Nf = 6 features of every part (PBM 2.2), in the order of every (..., 6) array."""
 N_FEATURES = len(FEATURES)
 
 # ----------------------------------------------------------------------------- kernels

@@ -28,11 +28,10 @@ import yaml
 from scipy.special import ndtr
 
 from trackers.frontend.parts import N_PARTS, PART_NAMES
+from trackers.layered.association import FEATURES, survival_kernel
 
 logger = logging.getLogger(__name__)
 
-FEATURES: tuple[str, ...] = ("area", "perimeter", "hsv", "xyz", "displacement", "overlap")
-"""The Nf = 6 features of every part (PBM 2.2), in the order of every (..., 6) array."""
 
 DEFAULT_MODELS_PATH = Path(__file__).with_name("data") / "default_models.yaml"
 
@@ -196,8 +195,6 @@ class FeatureModels:
             raise ValueError(f"match_probability: expected (..., {len(FEATURES)}, {N_PARTS}) "
                              f"differences, got {d.shape}")
         # the compiled kernel lives with the layers it is fused into (association.py)
-        from trackers.layered.association import survival_kernel
-
         flat = np.ascontiguousarray(d).reshape(-1, *self._w.shape[:2])
         out = np.empty_like(flat)
         survival_kernel(flat, self._w, self._mu, self._s, out)
