@@ -41,12 +41,21 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
+
+from harness.jobs import (  # noqa: F401 - re-exported: harness.sweep's names
+    DAMAGED,
+    DONE,
+    FAILED,
+    STATUS_FILE,
+    SweepError,
+    job_dirs,
+    parse_override,
+    read_overrides,
+    read_status,
+)
 
 log = logging.getLogger(__name__)
 
-STATUS_FILE = "status.json"
-DONE, FAILED, DAMAGED = "done", "failed", "damaged"
 COMBINED = "COMBINED"
 SEED = "seed"
 DEFAULT_METRICS = ("HOTA", "IDF1", "MOTA", "IDs", "ReID")
@@ -54,34 +63,6 @@ MAX_HEATMAP_VALUES = 12  # a parameter with more distinct values gets no heatmap
 
 
 # --------------------------------------------------------------------------- job status
-
-
-def read_overrides(job_dir: str | Path) -> list[str]:
-    """The job's task overrides (``.hydra/overrides.yaml``), [] when there are none."""
-    path = Path(job_dir) / ".hydra" / "overrides.yaml"
-    if not path.is_file():
-        return []
-    value = yaml.safe_load(path.read_text()) or []
-    if not isinstance(value, list):
-        raise TypeError(f"{path}: expected a list of overrides, got {type(value).__name__}")
-    return [str(v) for v in value]
-
-
-def read_status(job_dir: str | Path) -> dict[str, Any] | None:
-    """The job's ``status.json`` as a dict, None when absent; an unreadable or malformed one
-    gives ``{"status": "damaged", "error": <message naming the file>}`` (never done)."""
-    path = Path(job_dir) / STATUS_FILE
-    if not path.is_file():
-        return None
-    try:
-        body = json.loads(path.read_text())
-        if not isinstance(body, dict) or not isinstance(body.get("status"), str):
-            raise ValueError("not an object with a 'status' string")
-        return body
-    except (OSError, UnicodeDecodeError, ValueError) as err:
-        msg = f"{path}: unreadable status ({err}): the job counts as not done"
-        log.warning("%s", msg)
-        return {"status": DAMAGED, "error": msg}
 
 
 def write_status(job_dir: str | Path, status: str, overrides: Sequence[str],
@@ -162,10 +143,6 @@ def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], flo
 # --------------------------------------------------------------------------- gathering
 
 
-class SweepError(ValueError):
-    """A folder that is not a sweep, or a sweep that cannot be gathered; names the path."""
-
-
 def read_metrics(path: Path) -> tuple[pd.DataFrame, str]:
     """A job's ``metrics.csv`` and "" when it is whole, else an empty frame and why not (the
     message names the file): empty, truncated (a row with fewer fields than the header or
@@ -197,15 +174,6 @@ def read_metrics(path: Path) -> tuple[pd.DataFrame, str]:
     return frame, ""
 
 
-def parse_override(text: str) -> tuple[str, str]:
-    """``key=value`` (``+key``/``++key``/``~key`` prefixes dropped) -> (key, value as written).
-
-    Values stay text, so sweep.csv shows them as the command line gave them; plots read
-    numbers out of them where every value is one."""
-    key, _, value = text.partition("=")
-    return key.lstrip("+~"), value
-
-
 # metrics.csv columns that an override key (a config-group choice) may share a name with
 _RESERVED = frozenset({"job", "status", "error", "tracker", "sequence"})
 
@@ -220,23 +188,6 @@ def _key(column: str) -> str:
     """The override key of a gathered column (``tracker_choice`` -> ``tracker``)."""
     base = column.removesuffix("_choice")
     return base if column.endswith("_choice") and base in _RESERVED else column
-
-
-def job_dirs(sweep_dir: str | Path) -> list[Path]:
-    """Job directories of a sweep (those with ``.hydra/`` or a status), by job number."""
-    root = Path(sweep_dir)
-    if not root.is_dir():
-        raise FileNotFoundError(f"sweep directory not found: {root}")
-    dirs = [d for d in root.iterdir()
-            if d.is_dir() and ((d / ".hydra").is_dir() or (d / STATUS_FILE).is_file())]
-    if not dirs:
-        raise SweepError(f"not a sweep folder: {root} holds no job folders (sub-folders with "
-                         f".hydra/ or {STATUS_FILE}, as a multirun writes them)")
-
-    def key(d: Path) -> tuple[int, int | str]:
-        return (0, int(d.name)) if d.name.isdigit() else (1, d.name)
-
-    return sorted(dirs, key=key)
 
 
 def gather(sweep_dir: str | Path) -> pd.DataFrame:
