@@ -413,12 +413,13 @@ class SilhouetteMatcher:
 
         def corr(img, k, r0, r1, c0, c1):
             """Correlation of padded ``img`` with kernel ``k`` (anchored at its centre, as
-            filter2D's default) at output rows [r0, r1), cols [c0, c1) of the crop."""
+            filter2D's default) at output rows [r0, r1), cols [c0, c1) of the crop: the valid
+            part of ``cv2.matchTemplate`` (TM_CCORR), the same sums as filter2D to float
+            rounding and 2-3x faster for person-sized kernels."""
             th, tw = k.shape
             ay, ax = th // 2, tw // 2
             win = img[py + r0 - ay : py + r1 + th - 1 - ay, px + c0 - ax : px + c1 + tw - 1 - ax]
-            return cv2.filter2D(win, cv2.CV_32F, k, borderType=cv2.BORDER_CONSTANT)[
-                ay : ay + r1 - r0, ax : ax + c1 - c0]
+            return cv2.matchTemplate(win, k, cv2.TM_CCORR)  # the valid part: (r1-r0, c1-c0)
 
         def sums(t, r0, r1, c0, c1):
             """(sum T V, box sum V, sum T O) at output rows [r0, r1), cols [c0, c1)."""
