@@ -9,7 +9,8 @@ more than one frame is held in memory.
 
 ``run_tracker`` runs one tracker on one sequence; ``run_sequence`` runs several side by
 side; ``run_experiment`` runs a whole composed config (dataset x detector x trackers, plus
-external result folders) and writes the run directory (see ``RunWriter``).
+external result folders) and writes the run directory (``harness.writer.RunWriter``; the
+Markdown summary is ``harness.summary``).
 
 A failing tracker (an exception in ``update``) or a failing sequence (an unreadable frame,
 a failing detector) is recorded in ``errors.txt`` and the run goes on; everything written
@@ -18,11 +19,8 @@ before the failure stays on disk.
 
 from __future__ import annotations
 
-import csv
-import io
 import logging
 import math
-import shutil
 import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
@@ -53,10 +51,6 @@ from harness.io.mot import (
     read_mot,
     read_mot_text,
     write_atomic,
-    write_mot,
-    write_mot_gt,
-    write_seqinfo,
-    write_seqmap,
 )
 from harness.loop import (  # noqa: F401 - re-exported: harness.run's public names
     FOREGROUND_MODES,
@@ -76,16 +70,26 @@ from harness.loop import (  # noqa: F401 - re-exported: harness.run's public nam
     frames,
     start_trackers,
 )
-from harness.metrics import COLUMNS, SequenceScore, hota_alpha_table, score_sequence, summarize
+from harness.metrics import COLUMNS, SequenceScore, score_sequence
 from harness.report.bars import DEFAULT_METRICS, metric_bars
 from harness.report.graph import GraphExport
 from harness.report.hota_alpha import hota_alpha_plot
-from harness.report.tables import comparison, direction, per_sequence, to_latex, to_markdown
+from harness.report.tables import comparison, to_latex
 from harness.sources import DetectionSource
+from harness.summary import (  # noqa: F401 - re-exported: harness.run's public names
+    COMBINED,
+    _hota_alpha_frame,
+    _metrics_frame,
+    _with_extras,
+    mark_complete,
+    run_status,
+    summary_markdown,
+    summary_rows,
+)
+from harness.writer import Failure, RunWriter
 
 log = logging.getLogger(__name__)
 
-COMBINED = "COMBINED"
 def run_sequence(
     trackers: Mapping[str, Tracker],
     sequence: Sequence,
@@ -187,27 +191,7 @@ def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScor
     return score_sequence(gt.table, result, iou_threshold=iou_threshold)
 
 
-def summary_rows(tracker: str, scores: Mapping[str, Any]) -> pd.DataFrame:
-    """``summarize(scores)`` with a leading ``tracker`` column."""
-    frame = summarize(dict(scores)).reset_index(drop=True)
-    if "sequence" not in frame.columns:
-        raise RunError("harness.metrics.summarize returned no 'sequence' column")
-    frame.insert(0, "tracker", tracker)
-    return frame
-
-
 # --------------------------------------------------------------------------- experiment
-
-
-@dataclass
-class Failure:
-    """One failed piece of a run: ``tracker`` is '*' when the whole sequence failed."""
-
-    tracker: str
-    sequence: str
-    stage: str
-    message: str
-    trace: str = ""
 
 
 @dataclass
@@ -245,96 +229,6 @@ class ExperimentResult:
         if rows.empty:
             return math.nan
         return float(rows[metric].iloc[0])
-
-
-class RunWriter:
-    """Writes a run directory as results arrive, so that a later failure loses nothing.
-
-    Layout: ``config.yaml`` (resolved config), ``tracks/<tracker>/<sequence>.txt`` (MOT
-    results, written as each tracker finishes a sequence), ``gt/<sequence>/gt/gt.txt`` and
-    ``gt/<sequence>/seqinfo.ini`` (the ground truth scored against, before the trackers run)
-    with ``gt/seqmap.txt`` (the sequences tracked so far): a MOTChallenge benchmark folder
-    that TrackEval re-scores as it is; ``metrics.csv`` and ``summary.md`` (rewritten after
-    each sequence), ``timings.csv``, ``errors.txt`` (only when something failed),
-    ``summary.tex`` (COMBINED LaTeX table), ``hota_alpha.csv`` (HOTA and its sub-metrics at
-    each alpha) and ``plots/`` (``metrics.png``, ``hota_alpha.png``) at the end.
-    """
-
-    #: outputs of an earlier run in the same folder, removed when a run starts there so that
-    #: nothing stale (a track file of a tracker or sequence not run again) is mistaken for
-    #: this run's; files of sweeps (status.json) and Hydra (.hydra/, the log) are kept
-    STALE = ("tracks", "metrics.csv", "summary.md", "summary.tex", "timings.csv", "errors.txt",
-             "plots/metrics.png", "config.yaml")
-
-    def __init__(self, out_dir: str | Path) -> None:
-        self.out_dir = Path(out_dir)
-        try:
-            self.out_dir.mkdir(parents=True, exist_ok=True)
-            for stale in self.STALE:
-                path = self.out_dir / stale
-                if path.is_dir() and not path.is_symlink():
-                    shutil.rmtree(path)
-                else:
-                    path.unlink(missing_ok=True)
-            for part in self.out_dir.rglob("*.part"):
-                part.unlink(missing_ok=True)
-        except OSError as err:
-            raise RunError(f"cannot prepare the run folder {self.out_dir}: "
-                           f"{err.strerror or err} ({err.filename or self.out_dir})") from None
-
-    def track_path(self, tracker: str, sequence: str) -> Path:
-        return self.out_dir / "tracks" / tracker / f"{sequence}.txt"
-
-    def tracks(self, tracker: str, sequence: str, table: MotTable) -> Path:
-        """Write a tracker's result file (raises ``WriteError`` naming it)."""
-        path = self.track_path(tracker, sequence)
-        write_mot(path, table.frames, table.ids, table.boxes, table.conf)
-        return path
-
-    def ground_truth(self, seq: Sequence) -> Path | None:
-        """Write ``gt/<sequence>/gt/gt.txt`` (``write_mot_gt``) and its ``seqinfo.ini``; None
-        when the sequence has no ground truth."""
-        if seq.gt is None:
-            return None
-        folder = self.out_dir / "gt" / seq.info.name
-        write_mot_gt(folder / "gt" / "gt.txt", seq.gt.table)
-        info = seq.info
-        write_seqinfo(folder / "seqinfo.ini", info.name, info.length, info.fps, info.width,
-                      info.height)
-        return folder / "gt" / "gt.txt"
-
-    def seqmap(self, names: list[str]) -> Path:
-        """Write ``gt/seqmap.txt`` naming ``names``."""
-        path = self.out_dir / "gt" / "seqmap.txt"
-        write_seqmap(path, names)
-        return path
-
-    def metrics(self, frame: pd.DataFrame) -> None:
-        write_atomic(self.out_dir / "metrics.csv", frame.to_csv(
-            index=False, float_format="%.6f", lineterminator="\n"))
-
-    def timings(self, rows: list[dict[str, Any]]) -> None:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, ["tracker", "sequence", "frames", "seconds", "fps"],
-                           lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
-        write_atomic(self.out_dir / "timings.csv", buf.getvalue())
-
-    def failure(self, f: Failure) -> None:
-        """Append ``f`` to errors.txt; a failure to write it is logged, never raised (the
-        failure is in the run's result and its log all the same)."""
-        text = f"[{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}\n"
-        if f.trace:
-            text += "    " + f.trace.rstrip().replace("\n", "\n    ") + "\n"
-        try:
-            with (self.out_dir / "errors.txt").open("a") as fh:
-                fh.write(text)
-        except OSError as err:
-            log.error("cannot write %s: %s", self.out_dir / "errors.txt", err.strerror or err)
-
-    def text(self, name: str, text: str) -> Path:
-        return write_atomic(self.out_dir / name, text)
 
 
 def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence]) -> None:
@@ -658,96 +552,3 @@ def _title(cfg: Any, sequences: list[Sequence]) -> str:
 
     return (f"dataset {target('dataset')} ({len(sequences)} sequences), "
             f"detector {target('detector')}")
-
-
-def mark_complete(metrics: pd.DataFrame, expected: int, finished: bool) -> pd.DataFrame:
-    """``metrics`` with a last column ``complete``: True on a sequence row (scored in full);
-    on a COMBINED row, True only when the run has finished and the tracker was scored on
-    all ``expected`` sequences (else its COMBINED covers only some of them)."""
-    if metrics.empty:
-        return metrics
-    out = metrics.drop(columns=["complete"], errors="ignore").copy()
-    per = out[out["sequence"] != COMBINED].groupby("tracker")["sequence"].nunique()
-    combined = out["sequence"] == COMBINED
-    whole = out["tracker"].map(per).fillna(0).astype(int) >= expected
-    out["complete"] = ~combined | (whole & finished)
-    return out
-
-
-def run_status(state: str, done: int, total: int, failures: list[Failure]) -> str | None:
-    """The line summary.md opens with when the run is not (yet) complete, else None."""
-    if state == "running":
-        return (f"**Incomplete run**: still running ({done} of {total} sequences scored so "
-                "far); COMBINED rows cover only those.")
-    if state == "interrupted":
-        return (f"**Incomplete run**: interrupted after {done} of {total} sequences; COMBINED "
-                "rows cover only those (metrics.csv: `complete` false). See errors.txt.")
-    if failures:
-        return (f"**Partly failed run**: {len(failures)} part(s) failed (see Failures below "
-                "and errors.txt); a COMBINED row whose `complete` is false in metrics.csv "
-                "misses some sequences.")
-    return None
-
-
-def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
-                     columns: list[str] | None = None, title: str = "",
-                     status: str | None = None) -> str:
-    """``summary.md``: the COMBINED comparison, per-sequence tables, and failures; opened by
-    ``status`` (``run_status``) when the run is incomplete or partly failed."""
-    lines = ["# occbench results", ""]
-    if title:
-        lines += [title, ""]
-    if status:
-        lines += [status, ""]
-    if metrics.empty:
-        lines += ["No sequence was scored.", ""]
-    else:
-        lines += ["## Combined (best per column in bold)", "",
-                  to_markdown(comparison(metrics, columns))]
-        occlusion = [c for c in metrics.columns if c.startswith(("Recall_v", "IDs_v", "ReID"))]
-        if occlusion:
-            lines += [("## Occlusion (COMBINED): recall and identity switches by gt "
-                       "visibility, re-identification after total occlusion"), "",
-                      to_markdown(comparison(metrics, occlusion))]
-        paper = [c for c in metrics.columns if c.startswith(("Song_", "PBM_"))]
-        if paper:
-            lines += ["## Paper-table metrics (COMBINED): Song et al. (Reta), PBM", "",
-                      to_markdown(comparison(metrics, paper))]
-        seqs = [s for s in dict.fromkeys(metrics["sequence"]) if s != COMBINED]
-        for metric in [m for m in ("IDF1", "HOTA", "MOTA") if m in metrics.columns]:
-            lines += [f"## {metric} per sequence", "",
-                      to_markdown(per_sequence(metrics, metric, seqs), sense=direction(metric))]
-    if failures:
-        lines += ["## Failures", ""]
-        lines += [f"- [{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}"
-                  for f in failures]
-        lines.append("")
-    return "\n".join(lines)
-
-
-def _with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
-    """``metrics`` with the paper-table and occlusion columns appended (same rows)."""
-    from harness.metrics.occlusion import extra_rows
-
-    if metrics.empty:
-        return metrics
-    return metrics.merge(extra_rows(extras), on=["tracker", "sequence"], how="left",
-                         validate="one_to_one")
-
-
-def _hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
-    """``hota_alpha.csv``: ``tracker`` + ``harness.metrics.hota_alpha_table`` per tracker."""
-    parts = []
-    for name, s in scores.items():
-        if s:
-            frame = hota_alpha_table(dict(s))
-            frame.insert(0, "tracker", name)
-            parts.append(frame)
-    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
-
-
-def _metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
-    parts = [summary_rows(n, s) for n, s in scores.items() if s]
-    if not parts:
-        return pd.DataFrame()
-    return pd.concat(parts, ignore_index=True)
