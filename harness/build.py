@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from harness.datasets.base import Sequence
-from harness.loop import RunError, Tracker
+from harness.loop import RunError
 from harness.sources import DetectionSource
+from trackers.protocol import Tracker
 
 CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
 

@@ -20,6 +20,7 @@ import numpy as np
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable
 from harness.sources import DetectionSource
+from trackers.protocol import Tracker
 from trackers.records import Detections, Track
 
 log = logging.getLogger(__name__)
@@ -29,13 +30,6 @@ FOREGROUND_MODES = ("auto", "exact", "none", "mog2")
 
 class RunError(RuntimeError):
     """A run that cannot start or go on: bad config, unbuilt tracker, unreadable dataset."""
-
-
-class Tracker(Protocol):
-    def reset(self) -> None: ...
-
-    def update(self, frame: np.ndarray | None, detections: Detections,
-               foreground: np.ndarray | None = None) -> list[Track]: ...
 
 
 class Progress(Protocol):

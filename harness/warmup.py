@@ -18,13 +18,13 @@ truth and detections only): does the tracker's ``update`` accept ``frame=None``?
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import logging
-from typing import Protocol
+from collections.abc import Callable
 
 import numpy as np
 
-from trackers.records import Detections, Track
+from trackers.protocol import Tracker
+from trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -37,13 +37,6 @@ PEOPLE = (
     (120.0, 1.0, 140.0, 26.0, 84.0, (60, 95, 205), (150, 150, 40)),
     (138.0, 1.0, 140.0, 26.0, 84.0, (60, 95, 205), (150, 150, 40)),
 )
-
-class _Tracker(Protocol):
-    def reset(self) -> None: ...
-
-    def update(self, frame: np.ndarray | None, detections: Detections,
-               foreground: np.ndarray | None = None) -> list[Track]: ...
-
 
 def scene(k: int, people: tuple = PEOPLE) -> tuple[np.ndarray, np.ndarray, Detections]:
     """Frame ``k`` of the scene: BGR frame, bool person mask and the detections (some
@@ -66,7 +59,7 @@ def scene(k: int, people: tuple = PEOPLE) -> tuple[np.ndarray, np.ndarray, Detec
     return frame, mask, dets
 
 
-def warm_up(tracker: _Tracker) -> None:
+def warm_up(tracker: Tracker) -> None:
     """Run ``tracker`` over the scene with and without a foreground mask, then with the
     first person alone (one match or none a frame: numba
     compiles a separate kernel for the contiguous one-element index arrays that gives), then
@@ -82,7 +75,7 @@ def warm_up(tracker: _Tracker) -> None:
     tracker.reset()
 
 
-def needs_pixels(tracker: _Tracker) -> str | None:
+def needs_pixels(tracker: Tracker) -> str | None:
     """Why ``tracker`` cannot run without frames (the error its ``update(None, ...)`` raises
     on the scene's first detections), or None when it can. Use a fresh tracker: it is
     left in whatever state the attempt leaves it."""
@@ -104,9 +97,9 @@ class WarmUp:
     def __init__(self) -> None:
         self.done: set[str] = set()
 
-    def __call__(self, builders: dict[str, Callable[[], _Tracker]],
+    def __call__(self, builders: dict[str, Callable[[], Tracker]],
                  announce: Callable[[str], None] | None = None) -> list[str]:
-        todo: dict[str, _Tracker] = {}
+        todo: dict[str, Tracker] = {}
         for name, build in builders.items():
             tracker = build()
             kind = _kind(tracker)
@@ -127,7 +120,7 @@ class WarmUp:
         return list(todo)
 
 
-def _kind(tracker: _Tracker) -> str:
+def _kind(tracker: Tracker) -> str:
     return f"{type(tracker).__module__}.{type(tracker).__qualname__}"
 
 
