@@ -128,11 +128,12 @@ def test_default_app_config():
         assert _missing_module(str(cfg.tracker[name]["_target_"])) is None, name
     tracker_targets = {n: OmegaConf.load(CONF / "tracker" / f"{n}.yaml").get("_target_")
                        for n in set(_configs("tracker")) - {"all"}}
-    # lists (everyone), the outside adapters (an extra) and PBM's single-target comparators
-    # (pbm_comparison) are not in all
+    # lists (everyone), the outside adapters (an extra), our ByteTrack (run beside them, in
+    # everyone) and PBM's single-target comparators (pbm_comparison) are not in all
     built = {n for n, target in tracker_targets.items()
              if target is not None
-             and not str(target).startswith(("trackers.outside.", "trackers.comparators."))
+             and not str(target).startswith(("trackers.outside.", "trackers.bytetrack.",
+                                             "trackers.comparators."))
              and _missing_module(str(target)) is None}
     assert built <= set(cfg.tracker), "conf/tracker/all.yaml must list every built tracker"
 

@@ -1,7 +1,8 @@
 """Outside-tracker adapters (trackers.outside) on short synthetic scenes with exact detections.
 
 Each library is optional (the ``outside`` extra): its tests are skipped when it is missing.
-ByteTrack is our re-implementation and always tested.
+ByteTrack (``trackers.bytetrack``) is our re-implementation, run through the same tests and
+always tested.
 """
 
 from __future__ import annotations
@@ -27,9 +28,9 @@ def _make(name: str, **kwargs):
     library = ADAPTERS[name]
     if library is not None:
         pytest.importorskip(library)
-    from trackers import outside
+    from trackers import bytetrack, outside
 
-    return getattr(outside, name)(**kwargs)
+    return getattr(bytetrack if name == "ByteTrackTracker" else outside, name)(**kwargs)
 
 
 def _two_walkers(n: int = 30) -> list[np.ndarray]:
@@ -134,7 +135,7 @@ def test_bytetrack_refinds_lost_track_within_buffer_and_reports_lost_when_asked(
 
 
 def test_bytetrack_rejects_bad_arguments():
-    from trackers.outside import ByteTrackTracker
+    from trackers.bytetrack import ByteTrackTracker
 
     with pytest.raises(ValueError, match="match_thresh"):
         ByteTrackTracker(match_thresh=1.5)

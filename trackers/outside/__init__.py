@@ -29,17 +29,16 @@ Modules:
     boxmot: ``BoxmotTracker`` (BoxMOT's motion-only trackers: BoT-SORT, ByteTrack, OC-SORT,
         DeepOCSORT, HybridSORT, BoostTrack, OccluBoost, SFSORT; no ReID, no camera-motion
         compensation; extra ``boxmot``).
-    bytetrack: ``ByteTrackTracker`` (Zhang et al. 2022, OUR re-implementation of BYTE on
-        the project's Kalman filter and Hungarian assignment: no installable package
-        implements it without torch or a second OpenCV).
+
+ByteTrack (``bytetrack`` in the configs) is our own re-implementation of BYTE and lives in
+``trackers.bytetrack``, not here.
 """
 
 from __future__ import annotations
 
 from trackers.outside.boxmot import BoxmotTracker
-from trackers.outside.bytetrack import ByteTrackTracker
 from trackers.outside.motpy import MotpyTracker
 from trackers.outside.norfair import NorfairTracker
 from trackers.outside.ocsort import OCSortTracker
 
-__all__ = ["BoxmotTracker", "ByteTrackTracker", "MotpyTracker", "NorfairTracker", "OCSortTracker"]
+__all__ = ["BoxmotTracker", "MotpyTracker", "NorfairTracker", "OCSortTracker"]
