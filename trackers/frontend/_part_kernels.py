@@ -250,8 +250,8 @@ def part_features(
         p[4, 0], p[4, 1], p[4, 2], p[4, 3] = xsplit, ysplit, right_w, leg_h
         head_end, torso_end, split = y + hh, top + torso_h, x + left_w
         # read every sample's pixel once in a loop without branches: the frame's cache
-        # misses then overlap instead of stalling the conversion below sample by sample
-        # (about 20% of a call on a frame not yet in cache); the sum only keeps the loads
+        # misses then overlap instead of stalling the conversion below sample by sample;
+        # the sum only keeps the loads
         for c in range(C):
             coff[c] = np.uint64(xi[c] * 3)
         warm = 0

@@ -219,7 +219,7 @@ def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 def _check_colour_formulas() -> None:
     """Raise RuntimeError unless the kernels' HSV and XYZ values (OpenCV's integer
     formulas, ``_part_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
-    once per process (~20 ms; tests/test_parts.py checks all 2**24)."""
+    once per process (tests/test_parts.py checks all 2**24)."""
     v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
     got = np.empty((len(pixels), 6), np.uint8)

@@ -415,7 +415,7 @@ class SilhouetteMatcher:
             """Correlation of padded ``img`` with kernel ``k`` (anchored at its centre, as
             filter2D's default) at output rows [r0, r1), cols [c0, c1) of the crop: the valid
             part of ``cv2.matchTemplate`` (TM_CCORR), the same sums as filter2D to float
-            rounding and 2-3x faster for person-sized kernels."""
+            rounding and faster for person-sized kernels."""
             th, tw = k.shape
             ay, ax = th // 2, tw // 2
             win = img[py + r0 - ay : py + r1 + th - 1 - ay, px + c0 - ax : px + c1 + tw - 1 - ax]

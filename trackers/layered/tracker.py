@@ -71,13 +71,13 @@ Adaptations (where the paper is vague or relies on what we do not have):
   lost target keep a person's size.
 - Multiple responses (PBM 4.1) whose heads coincide (within ``duplicate_radius`` head
   widths of the best one's) are one response: the best is kept, no head template is
-  matched (it could not tell them apart; measured, it chose worse and cost time).
+  matched (it could not tell them apart).
 - A target unfound for more than ``prune_max_misses`` frames is not pruned by its head
-  template (taken when it was last seen; it failed to match 57% of the time in a crowd):
+  template (taken when it was last seen, it has gone stale):
   an ambiguous choice keeps the best candidate, a weak candidate is left.
 - Stale parts (``stale_frames``, ``stale_cover``, ``stale_fill``, ``relearn_rate``): a
   frozen part (PBM 4.2) whose person's appearance has moved on keeps failing to match and
-  is never updated again (in a 10-person crowd, parts were frozen 41-68% of the time). A
+  is never updated again. A
   part is judged hidden from evidence other than p_j: another target's box over it, the
   image border, or its foreground area fallen below ``stale_fill`` of its model's (a wall).
   A part that is visible by all three yet fails to match ``stale_frames`` times is

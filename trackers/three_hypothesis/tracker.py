@@ -40,8 +40,8 @@ Adaptations of what the paper leaves open (also listed in the README):
 * the stage-2 validation gate is the circle approximating each node's Kalman validation
   region: radius ``gate_sigmas`` x the larger standard deviation of its predicted centre
   (innovation covariance H P H' + R), capped at mu_g. A fixed radius in pixels is too wide
-  for small, far people (CAVIAR: a 120 px gate let a standing person's track jump 25 px onto
-  a neighbour whose own track was not yet confirmed), while the Kalman region grows with
+  for small, far people (a standing person's track jumps onto a neighbour whose own track
+  is not yet confirmed), while the Kalman region grows with
   speed uncertainty and with every frame a person stays hidden (``gate_sigmas: 0`` gives
   the paper's fixed radius mu_g);
 * ``blend_visible``: the appearance q of a matched person behind others is not kept
@@ -49,10 +49,9 @@ Adaptations of what the paper leaves open (also listed in the README):
   visible by the people in front (q <- (1 - v) q + v p, v = 1 - the largest share of the
   region one of them covers): v = 1 (absent from any occlusion) replaces q as the paper
   does, v -> 0 (fully hidden) keeps it constant as the paper does. A fully frozen q goes
-  stale when an occlusion lasts: on CAVIAR people stand in a group for 200 frames, the
-  one behind kept a model learnt 20+ frames earlier (rho 0.63-0.75 with its own
-  detections) while the one in front, model refreshed every frame, matched the hidden
-  one's detection better (rho 0.92) whenever its own was missed, and took it;
+  stale when an occlusion lasts: the person behind keeps an old model while the one in
+  front, its model refreshed every frame, matches the hidden one's detection better
+  whenever its own is missed, and takes it;
 * eq. 3 on a tie or an unknown order puts the region with the lower bottom edge in front.
 * ``foreground_support``: a hypothesis whose ellipse holds (almost) no foreground is seen
   to be empty (nobody is there to be occluded): it counts as in plain view, is pruned after
