@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from harness.report.figures import save_figure
 from harness.report.tables import COMBINED
 
 log = logging.getLogger(__name__)
@@ -58,9 +59,4 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
     if title:
         ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8, ncol=min(len(trackers), 4), loc="upper right", frameon=False)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, metadata={"Software": None})
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from harness.report.figures import save_figure
 from harness.report.tables import COMBINED
 
 log = logging.getLogger(__name__)
@@ -53,9 +54,4 @@ def hota_alpha_plot(table: pd.DataFrame, path: str | Path, title: str | None = N
     ax.set_ylabel("score (COMBINED)")
     ax.set_title(f"HOTA(alpha): {title}" if title else "HOTA(alpha)", fontsize=9)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, metadata={"Software": None})
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
