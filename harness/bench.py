@@ -198,7 +198,7 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m harness.bench",
+    p = argparse.ArgumentParser(prog="occbench bench",
                                 description="Frames/s per stage (decode, front end, trackers), "
                                             "one core, median of several runs.")
     p.add_argument("overrides", nargs="*", help="config overrides, e.g. dataset=caviar")

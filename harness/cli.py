@@ -99,6 +99,17 @@ def _call_hydra(app: Callable, prog: str, args: Sequence[str]) -> int:
     return 0
 
 
+def _check_checkout() -> str | None:
+    """Why this installation cannot run, or None: the configs (``conf/``) and the shipped data
+    (``datasets/``) live in the project checkout, which only an editable install keeps."""
+    from harness.paths import PROJECT_ROOT
+
+    if (PROJECT_ROOT / "conf" / "config.yaml").is_file():
+        return None
+    return (f"{PROG}: no conf/ beside the installed package ({PROJECT_ROOT}): occbench runs from "
+            "its checkout; install it with `pip install -e <checkout>` as the README says")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``occbench`` and ``python -m harness``; returns the exit status."""
     args = list(sys.argv[1:] if argv is None else argv)
@@ -108,6 +119,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args and args[0] in ("-V", "--version"):
         print(f"{PROG} {version()}")
         return 0
+    problem = _check_checkout()
+    if problem:
+        print(problem, file=sys.stderr)
+        return 2
     command = "run"
     if args and args[0] in COMMANDS:
         command, args = args[0], args[1:]

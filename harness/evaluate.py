@@ -130,7 +130,7 @@ def format_table(table: pd.DataFrame) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="python -m harness.evaluate",
+        prog="occbench eval",
         description="CLEAR MOT, IDF1 and HOTA of MOT result files against ground truth.",
     )
     p.add_argument("gt", type=Path, help="gt file, or folder of <seq>/gt/gt.txt or <seq>.txt")

@@ -543,7 +543,7 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m harness.sweep",
+    p = argparse.ArgumentParser(prog="occbench sweep",
                                 description="Gather a Hydra multirun into sweep.csv/.md/plots.")
     p.add_argument("sweep_dir", type=Path)
     p.add_argument("--metrics", nargs="+", default=list(DEFAULT_METRICS))

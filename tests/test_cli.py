@@ -89,6 +89,17 @@ def test_version_help_and_hydra_pages_from_another_directory(tmp_path):
     assert p.returncode == 0 and "_target_: trackers.baseline" in p.stdout
 
 
+def test_an_install_without_its_checkout_says_how_to_install(monkeypatch, tmp_path, capsys):
+    """A non-editable install has no conf/ beside the package: one line naming the fix."""
+    import harness.paths
+
+    monkeypatch.setattr(harness.paths, "PROJECT_ROOT", tmp_path)
+    assert cli.main(["tracker=baseline"]) == 2
+    err = capsys.readouterr().err
+    assert str(tmp_path) in err and "pip install -e" in err
+    assert cli.main(["--version"]) == 0  # version and help need no checkout
+
+
 def test_missing_launcher_plugin_names_the_extra(monkeypatch):
     monkeypatch.setattr(plugins, "_installed", lambda module: False)
     msgs = plugins.missing(["-m", "hydra/launcher=slurm", "tracker=baseline"])

@@ -19,7 +19,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
         lines = [f"  {name:<11} {what}" for name, what in COMMANDS.items()]
-        print("usage: python -m harness.fit {" + ",".join(COMMANDS) + "} [options]\n" + "\n".join(lines))
+        print("usage: occbench fit {" + ",".join(COMMANDS) + "} [options]\n" + "\n".join(lines))
         return 0 if argv and argv[0] in ("-h", "--help") else 2
     module = importlib.import_module(f"harness.fit.{argv[0]}")
     return int(module.main(argv[1:]) or 0)

@@ -74,7 +74,7 @@ def head_pixels_of(sequences, step: int = 5, head_fraction: float = 1 / 7) -> np
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m harness.fit heads", description=__doc__,
+    ap = argparse.ArgumentParser(prog="occbench fit heads", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. dataset=synthetic")
     ap.add_argument("--references", action="store_true",

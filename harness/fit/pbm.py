@@ -521,7 +521,7 @@ def _tracker_settings(path: str | Path) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m harness.fit pbm", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="occbench fit pbm", description=__doc__.split("\n")[0])
     ap.add_argument("--synthetic", nargs="*", metavar="NAME", default=None,
                     help="synthetic scenarios (no names = the default suite)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the synthetic scenes")

@@ -81,7 +81,7 @@ def person_masks(sequences, step: int = 5, min_visibility: float = 0.95, min_hei
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m harness.fit silhouette", description=__doc__,
+    ap = argparse.ArgumentParser(prog="occbench fit silhouette", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. dataset=synthetic")
     ap.add_argument("--out", type=Path, default=None, help=f"output .npy (default {DEFAULT_OUT})")
