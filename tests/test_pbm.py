@@ -14,7 +14,7 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from trackers.baseline import BaselineTracker
-from trackers.frontend.parts import N_PARTS, PartFeatureExtractor
+from trackers.layered.parts import N_PARTS, PartFeatureExtractor
 from trackers.geometry import iou_matrix
 from trackers.layered import FeatureModels, PBMTracker, load_feature_models
 from trackers.layered.association import ambiguous, layered_scores
@@ -439,7 +439,7 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
 
 
 def test_selected_differences_equal_the_all_pairs_ones():
-    from trackers.frontend.parts import PartFeatureExtractor
+    from trackers.layered.parts import PartFeatureExtractor
     from trackers.layered.association import feature_differences, selected_differences
 
     rng = np.random.default_rng(8)
@@ -467,7 +467,7 @@ def test_bool_and_label_foreground_give_the_same_tracks():
 
 
 def test_update_parts_equals_the_numpy_running_averages():
-    from trackers.frontend.parts import part_boxes
+    from trackers.layered.parts import part_boxes
     from trackers.layered.model import update_parts
 
     rng = np.random.default_rng(11)

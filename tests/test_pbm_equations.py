@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from test_pbm_scoring import random_features, random_models
 
-from trackers.frontend.parts import N_PARTS, PartFeatureExtractor
+from trackers.layered.parts import N_PARTS, PartFeatureExtractor
 from trackers.layered import equations as E
 from trackers.layered.association import pair_scores, selected_differences
 from trackers.layered.search import search_boxes_many

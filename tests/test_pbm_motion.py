@@ -14,7 +14,7 @@ from harness.datasets.synthetic import load_scenario
 from harness.detection_sources import NoisyGroundTruth
 from harness.metrics import score_sequence
 from harness.run import run_sequence
-from trackers.frontend.parts import PartFeatureExtractor
+from trackers.layered.parts import PartFeatureExtractor
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import Targets
 

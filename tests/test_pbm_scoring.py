@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.special import ndtr
 
-from trackers.frontend.parts import N_PARTS, PartFeatures
+from trackers.layered.parts import N_PARTS, PartFeatures
 from trackers.layered.association import (
     _ndtr,
     ambiguous,

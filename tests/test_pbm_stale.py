@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pbm_scenes as S
 
-from trackers.frontend.parts import PartFeatureExtractor
+from trackers.layered.parts import PartFeatureExtractor
 from trackers.layered import PBMTracker
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import Targets, stale_parts

@@ -2,7 +2,7 @@
 and learn the feature weights omega of eq. 12 (PBM 4.1).
 
 Models. For every annotated person visible in two consecutive frames, the five parts of
-its ground-truth box are measured in both frames (``trackers.frontend.parts``) and the
+its ground-truth box are measured in both frames (``trackers.layered.parts``) and the
 absolute differences of the six features (eq. 11) are collected per feature and part.
 With the tracker config's ``motion_compensation`` (the default), overlap and displacement
 compare the person with its previous parts moved by its previous step, as the tracker
@@ -61,7 +61,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from trackers.frontend.parts import N_PARTS, PART_NAMES, PartFeatureExtractor, centroid_ratios
+from trackers.layered.parts import N_PARTS, PART_NAMES, PartFeatureExtractor, centroid_ratios
 from trackers.layered.association import feature_differences
 from trackers.layered.models import (
     FEATURES,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from trackers.frontend.parts import HEAD_FRACTION
+from trackers.layered.parts import HEAD_FRACTION
 
 
 @numba.njit(cache=True)

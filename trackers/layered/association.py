@@ -29,7 +29,7 @@ import numba
 import numpy as np
 from scipy.special import ndtr
 
-from trackers.frontend.parts import N_PARTS, PartFeatures
+from trackers.layered.parts import N_PARTS, PartFeatures
 
 if TYPE_CHECKING:  # annotations only: models.py imports this module
     from trackers.layered.models import FeatureModels

@@ -6,7 +6,7 @@ by Layered Data Association"), its number beside the line. Arrays: a parts model
 candidate is a ``PartFeatures`` (five parts: head, left/right torso-arm, left/right leg);
 boxes are xywh, 0-based, top-left corner.
 
-- eqs. 1-2, the centroid ratios alpha and beta: ``trackers.frontend.parts.centroid_ratios``
+- eqs. 1-2, the centroid ratios alpha and beta: ``trackers.layered.parts.centroid_ratios``
   (plain numpy, re-exported here);
 - eqs. 9-10, the head-anchored search boxes: ``trackers.layered.search.search_boxes``
   (plain numpy, re-exported here); the tracker runs the compiled ``search_boxes_many``;
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import ndtr
 
-from trackers.frontend.parts import N_PARTS, PartFeatures, centroid_ratios
+from trackers.layered.parts import N_PARTS, PartFeatures, centroid_ratios
 from trackers.layered.models import FEATURES, FeatureModels
 from trackers.layered.search import search_boxes
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from trackers.frontend.parts import (
+from trackers.layered.parts import (
     HEAD_FRACTION,
     N_PARTS,
     PartFeatures,

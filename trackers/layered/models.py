@@ -27,7 +27,7 @@ import numpy as np
 import yaml
 from scipy.special import ndtr
 
-from trackers.frontend.parts import N_PARTS, PART_NAMES
+from trackers.layered.parts import N_PARTS, PART_NAMES
 from trackers.layered.association import FEATURES, survival_kernel
 
 logger = logging.getLogger(__name__)

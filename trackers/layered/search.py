@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.frontend.parts import HEAD_FRACTION
+from trackers.layered.parts import HEAD_FRACTION
 from trackers.layered._search_kernels import (
     band_bounds,
     band_heads,

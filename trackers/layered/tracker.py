@@ -102,7 +102,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from trackers.common.assignment import assign
-from trackers.frontend.parts import (
+from trackers.layered.parts import (
     N_PARTS,
     PartFeatureExtractor,
     PartFeatures,

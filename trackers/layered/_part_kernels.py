@@ -1,4 +1,4 @@
-"""Compiled kernels of ``PartFeatureExtractor`` (trackers.frontend.parts, PBM 2.1-2.2).
+"""Compiled kernels of ``PartFeatureExtractor`` (trackers.layered.parts, PBM 2.1-2.2).
 
 A kernel call walks the sample grid of every box once and writes straight into the
 output arrays, with no (N, R, C) intermediates. The grid, the part split, the outline

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.frontend import _part_kernels
+from trackers.layered import _part_kernels
 from trackers.geometry import iou_matrix
 
 PART_NAMES: tuple[str, ...] = (
@@ -229,7 +229,7 @@ def _check_colour_formulas() -> None:
     if not np.array_equal(got, want):
         raise RuntimeError(
             f"OpenCV {cv2.__version__} converts BGR to 8-bit HSV or XYZ differently from "
-            "trackers/frontend/_part_kernels._hsv_xyz: update it")
+            "trackers/layered/_part_kernels._hsv_xyz: update it")
 
 
 class PartFeatureExtractor:
@@ -237,7 +237,7 @@ class PartFeatureExtractor:
 
     Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
     pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour).
-    One kernel call (``trackers.frontend._part_kernels``) walks the samples of every box
+    One kernel call (``trackers.layered._part_kernels``) walks the samples of every box
     once: foreground test, part label, counts, centroid sums, outline test, and the joint
     HSV and XYZ bins of each foreground sample by OpenCV's own integer formulas (equal to
     ``cv2.cvtColor`` for every colour), so every feature equals the earlier numpy version
