@@ -51,11 +51,12 @@ SHOWN = ["HOTA", "IDF1", "MOTA", "IDs", "Frag", "Recall", "Precision"]
 
 
 def build_pbm(models: Path, weights: dict[str, float] | None):
-    """``conf/tracker/pbm.yaml`` with ``models.path`` and, if given, ``feature_weights``."""
+    """``conf/tracker/pbm.yaml`` with ``features.models.path`` and, if given,
+    ``features.feature_weights``."""
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-    cfg.models.path = str(models)
+    cfg.features.models.path = str(models)
     if weights is not None:
-        cfg.feature_weights = dict(weights)
+        cfg.features.feature_weights = dict(weights)
     return instantiate(cfg)
 
 
@@ -103,7 +104,7 @@ def main() -> None:
     learned = load_feature_weights(models)
     if learned is None:
         raise SystemExit(f"{models} holds no feature_weights: run with --refit")
-    hand = dict(OmegaConf.to_container(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml").feature_weights))
+    hand = dict(OmegaConf.to_container(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml").features.feature_weights))
     print(f"models {models}\nhand-set omega {hand}\nlearned omega  {learned}")
     variants = {"hand": hand, "learned": learned}
     for seed in [] if args.skip_synthetic else args.seeds:

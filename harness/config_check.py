@@ -136,9 +136,23 @@ def _hints(func: Callable[..., Any]) -> dict[str, Any]:
     return out
 
 
+def _located(target: str) -> Any:
+    """The object a nested ``_target_`` names, or None when it cannot be imported (building
+    it reports that)."""
+    from hydra.utils import get_object
+
+    try:
+        return get_object(target)
+    except Exception:  # noqa: BLE001 - reported by instantiate, with the full message
+        return None
+
+
 def check_target(node: Mapping[str, Any], key: str, target: Any) -> None:
     """Check the keys of a ``_target_`` config ``node`` (a plain dict, interpolations
     resolved) against the signature of ``target`` (its class or function).
+
+    Nested ``_target_`` nodes (e.g. PBM's parameter groups) are checked against their own
+    targets' signatures, named ``<key>.<argument>.<field>``.
 
     Raises:
         ConfigError: a key that is not an argument, or a value of the wrong type, named as
@@ -163,7 +177,10 @@ def check_target(node: Mapping[str, Any], key: str, target: Any) -> None:
             raise ConfigError(f"{where}: not an argument of {node.get('_target_')} "
                               f"(its arguments: {', '.join(names)})")
         if isinstance(value, dict) and "_target_" in value:
-            continue  # a nested component, checked when it is built
+            nested = _located(str(value["_target_"]))
+            if nested is not None:  # a parameter group or component: its own signature
+                check_target(value, where, nested)
+            continue
         err = type_error(where, value, hints.get(arg, inspect.Parameter.empty))
         if err is not None:
             raise ConfigError(err)

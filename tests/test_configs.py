@@ -226,3 +226,21 @@ def test_hydra_plugin_config_composes(group, name):
     _skip_unbuilt(node)  # launcher/sweeper plugins are optional extras
     if "submitit" not in str(node["_target_"]):  # submitit needs a cluster to build
         assert _missing_module(str(node["_target_"])) is None
+
+
+@pytest.mark.parametrize("name", _configs("experiment"))
+def test_sweep_parameters_name_existing_keys(name):
+    """Every key an experiment sweeps or tunes (``hydra.sweeper.params``) is a key of the
+    config it composes, e.g. ``tracker.matching.match_threshold`` (a renamed tracker key
+    would otherwise be added as a new, ignored key)."""
+    try:
+        cfg = _compose("config", [f"+experiment={name}"], hydra=True)
+    except MissingConfigException as err:
+        if not str(err.missing_cfg_file).startswith("hydra/"):
+            raise
+        pytest.skip(f"experiment {name} needs {err.missing_cfg_file}: plugin not installed")
+    params = OmegaConf.select(cfg, "hydra.sweeper.params") or {}
+    for key in params:
+        if key.startswith(("+", "~")) or "=" in key:
+            continue
+        assert OmegaConf.select(cfg, key, default="<absent>") != "<absent>", f"{name}: {key}"

@@ -127,7 +127,7 @@ def test_yaml_round_trip_and_older_files(tmp_path):
     with pytest.raises(ValueError, match="bad.yaml: feature_weights"):
         load_feature_weights(bad)
     assert weights_override(fit.weights) == (
-        "'tracker.pbm.feature_weights={area:0.2,perimeter:0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0}'")
+        "'tracker.pbm.features.feature_weights={area:0.2,perimeter:0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0}'")
 
 
 def test_pairs_are_self_then_nearest_others_inside_the_gate():

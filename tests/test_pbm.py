@@ -16,7 +16,18 @@ from omegaconf import OmegaConf
 from trackers.baseline import BaselineTracker
 from trackers.layered.parts import N_PARTS, PartFeatureExtractor
 from trackers.geometry import iou_matrix
-from trackers.layered import FeatureModels, PBMTracker, load_feature_models
+from trackers.layered import (
+    Adaptations,
+    CandidateParams,
+    FeatureModels,
+    FeatureParams,
+    LifeCycleParams,
+    MatchParams,
+    PBMTracker,
+    PruneParams,
+    StaleParts,
+    load_feature_models,
+)
 from trackers.layered.association import ambiguous, layered_scores
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import Targets
@@ -72,7 +83,7 @@ def test_config_instantiates_with_shipped_models_and_is_in_all():
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
     tracker = instantiate(cfg)
     assert isinstance(tracker, PBMTracker)
-    assert "synthetic" in tracker.models.description
+    assert "synthetic" in tracker.features.models.description
     all_cfg = yaml.safe_load((ROOT / "conf" / "tracker" / "all.yaml").read_text())
     assert "pbm@pbm" in all_cfg["defaults"]
 
@@ -88,12 +99,16 @@ def test_bad_input_raises_clear_errors():
         t.update(None, Detections.empty())
     with pytest.raises(ValueError, match="foreground shape"):
         t.update(np.zeros((20, 30, 3), np.uint8), Detections.empty(), np.zeros((5, 5), bool))
-    with pytest.raises(ValueError, match="margin_ratio"):
-        PBMTracker(margin_ratio=0.5)
-    with pytest.raises(ValueError, match="part_weights"):
-        PBMTracker(part_weights=[1, 1, 1, 1])
+    with pytest.raises(ValueError, match="matching.margin_ratio"):
+        PBMTracker(matching=MatchParams(margin_ratio=0.5))
+    with pytest.raises(ValueError, match="features.part_weights"):
+        PBMTracker(features=FeatureParams(part_weights=[1, 1, 1, 1]))
     with pytest.raises(ValueError, match="unknown features"):
-        PBMTracker(feature_weights={"colour": 1.0})
+        PBMTracker(features=FeatureParams(feature_weights={"colour": 1.0}))
+    with pytest.raises(ValueError, match="adaptations.stale.frames"):
+        Adaptations(stale=StaleParts(frames=0))
+    with pytest.raises(ValueError, match="matching must be MatchParams"):
+        PBMTracker(matching={"margin_ratio": 1.2})
 
 
 def test_models_roundtrip_and_malformed_file(tmp_path):
@@ -302,7 +317,7 @@ def test_deterministic():
 
 def test_tentative_before_confirmation():
     scene, _ = S.uturn_behind(12)
-    tracker = PBMTracker(min_hits=3)
+    tracker = PBMTracker(life_cycle=LifeCycleParams(min_hits=3))
     states = []
     for k in range(8):
         img, lab = scene.render(k)
@@ -376,12 +391,12 @@ def test_head_detector_fills_missing_heads():
         def detect(self, frame, foreground, boxes):
             return np.array([[12.0, 21, 10, 10]] * len(boxes))
 
-    t = PBMTracker(head_detector=Fixed())
+    t = PBMTracker(candidates=CandidateParams(head_detector=Fixed()))
     anchors = t._anchors(None, Detections(np.array([[10.0, 20, 30, 90]]), np.ones(1)),
                          np.zeros((150, 120, 3), np.uint8))
     np.testing.assert_allclose(anchors.head[0], [17.0, 21.0, 10.0])
-    with pytest.raises(ValueError, match="head_detector"):
-        PBMTracker(head_detector=object())
+    with pytest.raises(ValueError, match="candidates.head_detector"):
+        CandidateParams(head_detector=object())
 
 
 def test_blobs_equal_opencv_default_labelling():
@@ -624,7 +639,7 @@ def test_prune_equals_the_numpy_centre_radius_and_nearest_head():
 
     rng = np.random.default_rng(4)
     frame = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (5, 5), 0)
-    t = PBMTracker(template_threshold=-1.0)  # every match counts: the refined head is used
+    t = PBMTracker(pruning=PruneParams(template_threshold=-1.0))  # every match counts: the refined head is used
     for K in [1, 2, 3, 5, 7, 8, 9, 12] * 3:
         heads = rng.uniform(20, 100, (K, 2))
         cands = rng.permutation(40)[:K]
@@ -747,7 +762,7 @@ def test_a_flickering_false_alarm_over_background_is_never_reported():
     hits, ids = reported_alarm(PBMTracker())
     assert hits == 0
     assert len(ids) == 1
-    assert reported_alarm(PBMTracker(min_support=0.0))[0] > 0
+    assert reported_alarm(PBMTracker(adaptations=Adaptations(min_support=0.0)))[0] > 0
 
 
 def test_identities_kept_through_a_crowd_crossing_where_the_baseline_switches():
@@ -783,10 +798,16 @@ def test_paper_mode_turns_every_adaptation_off():
 
     paper = instantiate(compose_config(["tracker=pbm_paper"]).tracker)
     ours = instantiate(compose_config(["tracker=pbm"]).tracker)
-    assert isinstance(paper, PBMTracker) and isinstance(paper.head_detector, HeadDetector)
-    assert ours.head_detector is None
-    assert (paper.model_spread, paper.stale_frames, paper.min_support, paper.relative_match,
-            paper.occluded_cover) == (1.0, 0, 0.0, 0.0, 0.0)
-    assert not (paper.motion_compensation or paper.report_predicted or paper.lone_growth)
-    assert paper.prune_max_misses >= 10**6 and paper.duplicate_radius < 0
-    assert paper.match_threshold == ours.match_threshold  # what the paper leaves open: ours
+    assert isinstance(paper, PBMTracker) and isinstance(paper.candidates.head_detector, HeadDetector)
+    assert ours.candidates.head_detector is None
+    a = paper.adaptations
+    assert (a.model_spread, a.stale, a.min_support, a.relative_match,
+            a.occluded_cover) == (1.0, None, 0.0, 0.0, 0.0)
+    assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
+    assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
+    assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
+    assert ours.adaptations != a
+    # what the paper leaves open: ours
+    for group in ("gate", "noise", "search", "matching", "pruning", "model_update", "life_cycle",
+                  "reporting"):
+        assert getattr(paper, group) == getattr(ours, group), group

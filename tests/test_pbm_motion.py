@@ -72,7 +72,7 @@ def test_motion_compensation_helps_in_a_crowd():
         seq = load_scenario("crowd", seed=seed, length=100, people=10)
         for mc in (False, True):
             cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-            cfg.motion_compensation = mc
+            cfg.adaptations.motion_compensation = mc
             res = run_sequence({"pbm": instantiate(cfg)}, seq, NoisyGroundTruth(seed=seed),
                                foreground="exact")
             row = score_sequence(seq.gt.table, res["pbm"].table).row()
@@ -121,7 +121,7 @@ def _walk_then_vanish(report_predicted: bool) -> list[np.ndarray]:
     from trackers.records import Detections, TrackState
 
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-    cfg.report_predicted = report_predicted
+    cfg.adaptations.report_predicted = report_predicted
     tracker = instantiate(cfg)
     rng = np.random.default_rng(0)
     background = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)
@@ -187,7 +187,7 @@ def _doorway(lone_growth: bool) -> list[float]:
     from trackers.records import Detections
 
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-    cfg.lone_growth = lone_growth
+    cfg.adaptations.lone_growth = lone_growth
     tracker = instantiate(cfg)
     background = np.random.default_rng(2).integers(60, 120, (240, 320, 3), dtype=np.uint8)
     widths = []

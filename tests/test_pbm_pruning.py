@@ -21,8 +21,8 @@ def _template_matches(duplicate_radius: float, prune_max_misses: int = 5,
     """The candidate heads (K, 2) of every head-template match of pbm on a crowd (and, in
     ``misses``, the frames the matched target had been unfound)."""
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
-    cfg.duplicate_radius = duplicate_radius
-    cfg.prune_max_misses = prune_max_misses
+    cfg.adaptations.duplicate_radius = duplicate_radius
+    cfg.adaptations.prune_max_misses = prune_max_misses
     tracker = instantiate(cfg)
     calls: list[np.ndarray] = []
     prune = tracker._prune

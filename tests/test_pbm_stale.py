@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pbm_scenes as S
 
-from trackers.layered.parts import PartFeatureExtractor
-from trackers.layered import PBMTracker
+from trackers.layered import Adaptations, PBMTracker
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import Targets, stale_parts
+from trackers.layered.parts import PartFeatureExtractor
 
 
 def _targets() -> Targets:
@@ -72,7 +72,7 @@ def _walk_with_a_stale_torso(tracker: PBMTracker) -> tuple[np.ndarray, list, lis
 
 def test_a_stale_visible_part_is_relearned():
     # the paper's rule: the spoiled part never matches again, so it is never updated again
-    spoiled, flags, scores, hsv = _walk_with_a_stale_torso(PBMTracker(stale_frames=0))
+    spoiled, flags, scores, hsv = _walk_with_a_stale_torso(PBMTracker(adaptations=Adaptations(stale=None)))
     assert all(flags) and max(scores) < 0.4
     np.testing.assert_array_equal(hsv, spoiled)
     # stale parts: re-learned after 3 visible failures, then it matches every frame

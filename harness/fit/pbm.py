@@ -4,7 +4,7 @@ and learn the feature weights omega of eq. 12 (PBM 4.1).
 Models. For every annotated person visible in two consecutive frames, the five parts of
 its ground-truth box are measured in both frames (``trackers.layered.parts``) and the
 absolute differences of the six features (eq. 11) are collected per feature and part.
-With the tracker config's ``motion_compensation`` (the default), overlap and displacement
+With the tracker config's ``adaptations.motion_compensation`` (the default), overlap and displacement
 compare the person with its previous parts moved by its previous step, as the tracker
 compares a candidate with the parts model moved by KF1's prediction. Each of the 30 sets is fitted by a half-normal, or by a two-component folded Gaussian
 mixture where that wins by BIC (the differences are not unimodal).
@@ -15,10 +15,11 @@ Samples are pairs of consecutive frames: positive = a person against itself in t
 frame (the pairs the models are fitted on); negative = a person against up to
 ``--neighbours`` other people of the next frame whose box centre lies within ``--radius``
 x its previous box width / height of its previous centre (the tracker's gate, PBM 3). Each
-pair is scored as the tracker scores it: eq. 11 differences divided by ``model_spread``,
+pair is scored as the tracker scores it: eq. 11 differences divided by
+``adaptations.model_spread``,
 match probabilities p(d_ij | theta_ij) of the fitted models, eq. 12 with omega, eq. 13
-with the configured gamma (``part_weights``), and classified as a match when the global
-score reaches ``match_threshold``. omega runs over a grid of [0, 1]^6 with step
+with the configured gamma (``features.part_weights``), and classified as a match when the
+global score reaches ``matching.match_threshold``. omega runs over a grid of [0, 1]^6 with step
 ``--weight-step`` (normalised to sum 1, all-zero skipped, duplicates after normalising
 merged); the accuracy (balanced: positives and negatives weigh half each) is
 cross-validated over ``--folds`` folds of whole frame blocks (``--block-frames`` frames of
@@ -27,7 +28,7 @@ omega with the best mean validation accuracy wins; ties go to the one nearest th
 weights, then to the first in grid order. gamma, threshold and spread are read from
 ``--tracker-config`` (default ``conf/tracker/pbm.yaml``).
 
-The YAML (for ``conf/tracker/pbm.yaml``'s ``models.path``) holds the models and, as extra
+The YAML (for ``conf/tracker/pbm.yaml``'s ``features.models.path``) holds the models and, as extra
 top-level keys that the model loader ignores, ``feature_weights`` and
 ``feature_weights_fit`` (accuracies, grid, folds, sample counts). A PNG shows the fitted
 densities over the histograms of the differences (the paper's Fig. 3).
@@ -43,9 +44,9 @@ Example:
     python -m harness.fit pbm --synthetic --seed 1 --out models.yaml --plot models.png
 
 Using the learned weights (the command prints the exact line):
-    python -m harness tracker.pbm.models.path=models.yaml \\
-        'tracker.pbm.feature_weights={area:0.2,perimeter:0.0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0.0}'
-(``tracker.feature_weights=...`` when the run selects ``tracker=pbm`` alone.) Measured on
+    python -m harness tracker.pbm.features.models.path=models.yaml \\
+        'tracker.pbm.features.feature_weights={area:0.2,perimeter:0.0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0.0}'
+(``tracker.features.feature_weights=...`` when the run selects ``tracker=pbm`` alone.) Measured on
 held-out data, the omega learned on synthetic seed 1 tracks worse than the hand-set default
 although it classifies held-out pairs better: see ``benchmarks/bench_pbm_weights.py``.
 """
@@ -475,7 +476,7 @@ def load_feature_weights(path: str | Path) -> dict[str, float] | None:
 def weights_override(weights: Mapping[str, float], prefix: str = "tracker.pbm") -> str:
     """The Hydra command-line override that sets omega, e.g. for ``python -m harness``."""
     body = ",".join(f"{f}:{float(weights[f]):g}" for f in FEATURES)
-    return f"'{prefix}.feature_weights={{{body}}}'"
+    return f"'{prefix}.features.feature_weights={{{body}}}'"
 
 
 def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str | Path) -> None:
@@ -504,19 +505,22 @@ def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str |
 
 
 def _tracker_settings(path: str | Path) -> dict:
-    """part_weights, match_threshold, model_spread and feature_weights of a tracker config,
-    and its motion_compensation (the tracker's default, true, when the key is absent)."""
+    """features.part_weights, matching.match_threshold, adaptations.model_spread and
+    features.feature_weights of a tracker config (as ``part_weights``, ...), and its
+    adaptations.motion_compensation (the tracker's default, true, when the key is absent)."""
     p = Path(path)
     try:
         cfg = yaml.safe_load(p.read_text())
     except (OSError, yaml.YAMLError) as exc:
         raise ValueError(f"cannot read tracker config {p}: {exc}") from exc
     out = {}
-    for key in ("part_weights", "match_threshold", "model_spread", "feature_weights"):
-        if not isinstance(cfg, dict) or key not in cfg:
-            raise ValueError(f"{p}: key {key!r} missing")
-        out[key] = cfg[key]
-    out["motion_compensation"] = bool(cfg.get("motion_compensation", True))
+    for group, key in (("features", "part_weights"), ("matching", "match_threshold"),
+                       ("adaptations", "model_spread"), ("features", "feature_weights")):
+        node = cfg.get(group) if isinstance(cfg, dict) else None
+        if not isinstance(node, dict) or key not in node:
+            raise ValueError(f"{p}: key {group}.{key!r} missing")
+        out[key] = node[key]
+    out["motion_compensation"] = bool(cfg["adaptations"].get("motion_compensation", True))
     return out
 
 
@@ -540,8 +544,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--radius", type=float, default=1.0,
                     help="negatives' centres within radius x (w, h) of the person's centre")
     ap.add_argument("--tracker-config", default=str(TRACKER_CONFIG),
-                    help="tracker YAML giving part_weights, match_threshold, model_spread and "
-                         "motion_compensation")
+                    help="tracker YAML giving features.part_weights, matching.match_threshold, "
+                         "adaptations.model_spread and adaptations.motion_compensation")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     sequences = []
@@ -588,7 +592,7 @@ def main(argv: list[str] | None = None) -> int:
     if fit is not None:
         header += ("\nfeature_weights: omega of eq. 12 with the best cross-validation accuracy "
                    "(PBM 4.1); use with\n"
-                   f"  tracker.pbm.models.path={args.out} {weights_override(fit.weights)}")
+                   f"  tracker.pbm.features.models.path={args.out} {weights_override(fit.weights)}")
     save_fit(models, args.out, header, fit)
     log.info("wrote %s (%d differences per part)", args.out, len(diffs["area"]))
     for f in FEATURES:
@@ -600,7 +604,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{args.folds}-fold cross-validation accuracy {fit.accuracy:.4f} "
               f"(nested {fit.nested_accuracy:.4f}{ref}) on {fit.settings['positives']} positive and "
               f"{fit.settings['negatives']} negative pairs, {fit.settings['grid_points']} grid points")
-        print(f"use with: python -m harness tracker.pbm.models.path={args.out} "
+        print(f"use with: python -m harness tracker.pbm.features.models.path={args.out} "
               f"{weights_override(fit.weights)}")
     if args.plot:
         plot_models(models, diffs, args.plot)

@@ -1,6 +1,22 @@
 """PBM: five-part model with layered data association (see ``trackers.layered.tracker``)."""
 
 from trackers.layered.models import FeatureModels, load_feature_models
+from trackers.layered.params import (
+    Adaptations,
+    CandidateParams,
+    FeatureParams,
+    GateParams,
+    LifeCycleParams,
+    MatchParams,
+    NoiseParams,
+    PruneParams,
+    ReportParams,
+    SearchParams,
+    StaleParts,
+    UpdateParams,
+)
 from trackers.layered.tracker import PBMTracker
 
-__all__ = ["FeatureModels", "PBMTracker", "load_feature_models"]
+__all__ = ["Adaptations", "CandidateParams", "FeatureModels", "FeatureParams", "GateParams",
+           "LifeCycleParams", "MatchParams", "NoiseParams", "PBMTracker", "PruneParams",
+           "ReportParams", "SearchParams", "StaleParts", "UpdateParams", "load_feature_models"]

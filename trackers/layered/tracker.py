@@ -16,8 +16,8 @@ frame (PBM Fig. 1):
    w (1 + delta i), h (1 + delta i); smaller ones are aligned on their head or dismissed.
 4. Layered association (PBM 4.1): eq. 11 differences -> eq. 12 part scores (weights
    omega) -> eq. 13 global score (weights gamma); per target the best gated candidate must
-   pass ``match_threshold`` and beat the runner-up by ``margin_ratio``; otherwise (or when
-   all scores are weak, above ``weak_threshold``) the target's head template is matched in
+   pass ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; otherwise (or when
+   all scores are weak, above ``matching.weak_threshold``) the target's head template is matched in
    a local neighbourhood and the candidate nearest the refined head is kept (multiple-
    response pruning). Targets then share candidates one-to-one by the Hungarian method on
    1 - p (a multi-target addition: the paper tracks one target at a time).
@@ -26,13 +26,13 @@ frame (PBM Fig. 1):
 
 Multi-target life cycle (an adaptation: the paper initialises by hand, PBM 3): a candidate
 that no target takes starts a TENTATIVE target (new blobs, and heads of a blob that split
-from another); it is CONFIRMED after ``min_hits`` matches in a row and dropped if it
+from another); it is CONFIRMED after ``life_cycle.min_hits`` matches in a row and dropped if it
 misses before. A confirmed target that is not found is reported OCCLUDED for up to
-``max_report_misses`` frames when ``report_occluded``: at its last validated box
+``reporting.max_misses`` frames when ``reporting.occluded``: at its last validated box
 (zero-order, as the gate), or moved by KF1's constant-velocity prediction when
-``report_predicted``; it is dropped after ``max_misses`` frames, or after ``exit_misses``
+``adaptations.report_predicted``; it is dropped after ``life_cycle.max_misses`` frames, or after ``adaptations.exit_misses``
 frames when its box moved by KF1's prediction has crossed the image border by more than
-``exit_margin`` (it left; someone standing at the border and missed is not leaving).
+``adaptations.exit_margin`` (it left; someone standing at the border and missed is not leaving).
 
 Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
 parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates were
@@ -41,12 +41,12 @@ validated in (None for a target born this frame).
 Adaptations (where the paper is vague or relies on what we do not have):
 
 - Heads: ``Detections.heads`` when given, else the PBM 2.3 hair/skin detector when
-  ``head_detector`` is set, else the top 1/7 band of a detection's foreground; on blobs,
+  ``candidates.head_detector`` is set, else the top 1/7 band of a detection's foreground; on blobs,
   the peaks of the top profile.
 - Features are measured on a fixed grid of samples per box (``PartFeatureExtractor``):
   scale-free area/perimeter/colour, one vectorised pass for all candidates of a frame.
 - p(d | theta) of eq. 12 is the model's survival function P(D >= d) (``models``), applied
-  to d / ``model_spread``: models fitted on clean annotated pairs are stretched for the
+  to d / ``adaptations.model_spread``: models fitted on clean annotated pairs are stretched for the
   larger differences of live tracking (overlapping people, detection noise).
 - delta of eqs. 9-10 is relative (w (1 + delta i)); eq. 2 is used sign-corrected.
 - Detection boxes and blob spans differ systematically (box margins, swinging limbs):
@@ -54,12 +54,12 @@ Adaptations (where the paper is vague or relies on what we do not have):
   pairs, and a blob candidate keeps KF2's width.
 - The occlusion test applies to every candidate as in the paper; a blob with several
   heads counts as merged (searched) whatever its size.
-- Lone growth (``lone_growth``): a region larger by size alone (one head) that holds the
+- Lone growth (``adaptations.lone_growth``): a region larger by size alone (one head) that holds the
   target and no other found or reported target is the target grown, not a merge: a person
   walking in through a border or a doorway, whose box widens over ten frames or so. The
   paper's search (w, h within +-10%) would keep the box it was first seen with.
 - After a gap of m frames the displacement and overlap differences are divided by 1 + m.
-- Motion compensation (``motion_compensation``): displacement and overlap (eq. 11) compare
+- Motion compensation (``adaptations.motion_compensation``): displacement and overlap (eq. 11) compare
   a candidate with the parts model moved by KF1's constant-velocity prediction since the
   target was last found. The paper compares the last frame as it is; in crowds a
   neighbour's box then overlaps the last box about as much as the person's own. The gate
@@ -69,27 +69,27 @@ Adaptations (where the paper is vague or relies on what we do not have):
 - KF2 holds the size of an unfound target (its size rates are zeroed at a miss): a hidden
   person's size is not extrapolated, so the occlusion test and the search boxes of a long
   lost target keep a person's size.
-- Multiple responses (PBM 4.1) whose heads coincide (within ``duplicate_radius`` head
+- Multiple responses (PBM 4.1) whose heads coincide (within ``adaptations.duplicate_radius`` head
   widths of the best one's) are one response: the best is kept, no head template is
   matched (it could not tell them apart).
-- A target unfound for more than ``prune_max_misses`` frames is not pruned by its head
+- A target unfound for more than ``adaptations.prune_max_misses`` frames is not pruned by its head
   template (taken when it was last seen, it has gone stale):
   an ambiguous choice keeps the best candidate, a weak candidate is left.
-- Stale parts (``stale_frames``, ``stale_cover``, ``stale_fill``, ``relearn_rate``): a
+- Stale parts (``adaptations.stale``): a
   frozen part (PBM 4.2) whose person's appearance has moved on keeps failing to match and
   is never updated again. A
   part is judged hidden from evidence other than p_j: another target's box over it, the
-  image border, or its foreground area fallen below ``stale_fill`` of its model's (a wall).
+  image border, or its foreground area fallen below ``fill`` of its model's (a wall).
   A part that is visible by all three yet fails to match ``stale_frames`` times is
   re-learned; a hidden part stays frozen, as in the paper.
-- Targets are born from detections (and from free blobs when ``blob_births``), and with
-  foreground only from candidates with a part holding foreground (``min_support``): a
+- Targets are born from detections (and from free blobs when ``life_cycle.blob_births``), and with
+  foreground only from candidates with a part holding foreground (``adaptations.min_support``): a
   detection over background is a false alarm, never a person.
-- Relative match (``relative_match``): a target found in the previous frame takes no
-  candidate scoring below ``relative_match`` times its last match's score: when its own
-  detection is missed, a neighbour's detection that merely passes ``match_threshold`` is
+- Relative match (``adaptations.relative_match``): a target found in the previous frame takes no
+  candidate scoring below ``adaptations.relative_match`` times its last match's score: when its own
+  detection is missed, a neighbour's detection that merely passes ``matching.match_threshold`` is
   not taken (in crowds that first swap started the cascades of identity switches).
-- ``occluded_cover`` (off by default): an unfound target is reported only while found
+- ``adaptations.occluded_cover`` (off by default): an unfound target is reported only while found
   targets' boxes cover it.
 """
 
@@ -97,17 +97,10 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from trackers.common.assignment import assign
-from trackers.layered.parts import (
-    N_PARTS,
-    PartFeatureExtractor,
-    PartFeatures,
-    centroid_ratios,
-)
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
 from trackers.layered._glue_kernels import (
     alive_rows,
@@ -125,7 +118,25 @@ from trackers.layered.model import (
     stale_parts,
     update_parts,
 )
-from trackers.layered.models import FEATURES, FeatureModels
+from trackers.layered.params import (
+    Adaptations,
+    CandidateParams,
+    FeatureParams,
+    GateParams,
+    LifeCycleParams,
+    MatchParams,
+    NoiseParams,
+    PruneParams,
+    ReportParams,
+    SearchParams,
+    UpdateParams,
+)
+from trackers.layered.parts import (
+    N_PARTS,
+    PartFeatureExtractor,
+    PartFeatures,
+    centroid_ratios,
+)
 from trackers.layered.search import (
     Candidates,
     blobs_boxes,
@@ -144,9 +155,6 @@ from trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
 
-DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
-                           "displacement": 0.1, "overlap": 0.15}
-DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
 _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
 
 
@@ -159,261 +167,62 @@ def _norms(v: np.ndarray) -> np.ndarray:
 class PBMTracker:
     """Five-part layered-association tracker (PBM), tracking every person in view.
 
+    Its settings come in groups, one per step of PBM Fig. 1 (``trackers.layered.params``;
+    each checks itself and raises ``ValueError`` naming ``<group>.<field>``); None takes
+    a group's defaults, which are ``conf/tracker/pbm.yaml``'s.
+
     Args:
-        models: feature-difference models (``FeatureModels``, a dict as written by
-            ``python -m harness.fit pbm``, or None for the shipped defaults).
-        feature_weights: omega_i of eq. 12, a mapping feature name -> weight.
-        part_weights: gamma_j of eq. 13, five weights (head, left/right torso-arm,
-            left/right leg).
-        match_threshold: smallest global score p (eq. 13) of an accepted match.
-        weak_threshold: scores in [weak, match) trigger head-template pruning (PBM 4.1).
-        margin_ratio: the best candidate must exceed ``margin_ratio`` x the runner-up.
-        part_match_threshold: a part with p_j below it does not match and stays frozen.
-        update_rate: running-average rate of matched parts (step = rate x p_j, PBM 4.2).
-        occlusion_threshold: relative size change that flags an occlusion (PBM 3.1, 50%).
-        search_step: delta of eqs. 9-10 (relative to the predicted size).
-        search_range: i runs over -range..range in eqs. 9-10.
-        search_overlap: a larger region is searched for a found target only when at least
-            this fraction of the target's last box lies inside it (0 = always).
-        lone_growth: a larger region with one head that holds (``search_overlap``) the
-            target and no other found or reported target is the target itself, grown:
-            unoccluded, not searched.
-        ratio_window: frames of the running averages of alpha and beta (PBM 2.1, 3-5).
-        occluded_window: DOF vectors averaged under occlusion (PBM 4.2).
-        gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
-        gate_max_fraction: KF1 gate half-size = speed_factor |v| + min_fraction (w, h),
-            x miss_factor after a miss, x growth per further miss, <= max_fraction (w, h).
-        kf1_position_noise, kf1_velocity_noise, kf1_measurement_noise: KF1 noise (per
-            person height / 10). kf2_*: the same for KF2.
-        min_blob_area: smallest foreground blob used as a candidate (pixels).
-        min_height: smallest candidate height that may start a target (pixels).
-        head_separation: smallest distance between two heads in a blob, x blob height.
-        head_min_fill: foreground fraction a head rectangle needs for alignment (PBM 3.1).
-        model_spread: the difference models are stretched by this factor (1 = as fitted).
-        histogram_bins: bins per channel of the HSV and XYZ part histograms.
-        grid_rows, grid_cols: sample grid each box is measured on (``PartFeatureExtractor``).
-        search_grid: (rows, cols) sample grid of the head-anchored search's 25 boxes per
-            head (coarser than ``grid_*``: the features are scale-free fractions).
-        blob_downsample: connected components run on the mask subsampled by this factor.
-        template_threshold: normalised correlation needed by head-template pruning.
-        prune_radius: ambiguous candidates closer than this many head widths are "nearby".
-        duplicate_radius: ambiguous candidates whose heads all lie within this many head
-            widths of the best one's are one response: the best is kept without template
-            matching (negative: always match the template).
-        prune_max_misses: a target unfound for more than this many frames is not pruned by
-            its (stale) head template: an ambiguous choice keeps the best candidate, a weak
-            candidate is not taken.
-        min_hits: matches in a row that confirm a new target.
-        max_misses: frames a confirmed target survives unfound.
-        exit_margin: pixels beyond the image border that an unfound target's box, moved by
-            KF1's prediction, must reach to count as gone.
-        exit_misses: frames unfound after which a gone target is dropped.
-        new_track_iou: a free candidate overlapping a live target by more IoU than this
-            does not start a new target.
-        head_detector: optional PBM 2.3 head detector (``trackers.frontend.heads.HeadDetector``)
-            locating the head in each detection box that ``Detections.heads`` leaves
-            without one; None: the top 1/7 band of the box's foreground.
-        blob_births: free foreground blobs (heads no detection explains) start targets too;
-            off, blobs only keep existing targets (clutter-prone masks, e.g. MOG2, would
-            otherwise start false targets). With ``foreground`` but no detections at all,
-            turn it on.
-        report_occluded: report unfound confirmed targets as OCCLUDED.
-        max_report_misses: frames an unfound target is reported.
-        report_predicted: an unfound target's reported box is its last validated box
-            moved by KF1's predicted motion since (the gate stays zero-order).
-        motion_compensation: displacement and overlap against the parts model moved by
-            KF1's predicted motion (an adaptation, see above).
-        stale_frames: a visible part that fails to match this many times is stale and
-            re-learned (``model.stale_parts``, an adaptation beyond PBM 4.2, see above);
-            0 = never (the paper: frozen until it matches again).
-        stale_cover: a part counts as visible when at most this fraction of its rectangle
-            lies under another target's box (found, or unfound for at most
-            ``max_report_misses`` frames, at its last box) or outside the image.
-        stale_fill: ... and its foreground area is at least this fraction of its model's.
-        relearn_rate: running-average step of a re-learned stale part (1 = replaced).
-        min_support: with foreground, a candidate starts a target only when the
-            foreground fraction of one of its five parts (``PartFeatures.area``) at least is this
-            (PBM 2: a person is a foreground region; a detection over background is a
-            false alarm); 0 = any detection starts one.
-        occluded_cover: with foreground, an unfound target is reported (OCCLUDED) only while
-            the boxes of found confirmed targets cover at least this fraction of its box
-            (evidence that it is hidden, not gone); 0 = off.
-        relative_match: a target found in the previous frame takes no candidate whose
-            score p (eq. 13) is below this fraction of the score of that match; 0 = off.
+        features: the parts' features and the layers' weights (PBM 2.2, 4.1, eqs. 11-13).
+        candidates: detections' heads and foreground blobs (PBM 2, 2.3).
+        gate: KF1's gate (PBM 3). noise: KF1 and KF2 noise (eqs. 7-8).
+        search: occlusion test and head-anchored search (PBM 3.1, eqs. 9-10).
+        matching: thresholds of a match (PBM 4, steps 4-5).
+        pruning: multiple-response pruning by the head template (PBM 4.1).
+        model_update: the parts and global models' update (PBM 4.2).
+        life_cycle: births, confirmation and deaths of targets (ours: PBM 3 starts targets
+            by hand).
+        reporting: unfound targets in the output.
+        adaptations: every rule the paper does not have (``tracker=pbm_paper``: all off).
     """
 
     def __init__(
         self,
-        models: FeatureModels | Mapping | None = None,
-        feature_weights: Mapping[str, float] | None = None,
-        part_weights: Sequence[float] = DEFAULT_PART_WEIGHTS,
-        match_threshold: float = 0.25,
-        weak_threshold: float = 0.1,
-        margin_ratio: float = 1.1,
-        part_match_threshold: float = 0.4,
-        update_rate: float = 0.3,
-        occlusion_threshold: float = 0.5,
-        search_step: float = 0.05,
-        search_range: int = 2,
-        search_overlap: float = 0.5,
-        lone_growth: bool = True,
-        ratio_window: int = 4,
-        occluded_window: int = 3,
-        gate_speed_factor: float = 3.0,
-        gate_min_fraction: float = 0.5,
-        gate_miss_factor: float = 2.0,
-        gate_growth: float = 1.15,
-        gate_max_fraction: float = 6.0,
-        kf1_position_noise: float = 0.5,
-        kf1_velocity_noise: float = 0.2,
-        kf1_measurement_noise: float = 0.5,
-        kf2_position_noise: float = 0.2,
-        kf2_velocity_noise: float = 0.02,
-        kf2_measurement_noise: float = 0.5,
-        min_blob_area: int = 300,
-        min_height: float = 12.0,
-        head_separation: float = 0.12,
-        head_min_fill: float = 0.2,
-        model_spread: float = 4.5,
-        histogram_bins: int = 4,
-        grid_rows: int = 35,
-        grid_cols: int = 15,
-        search_grid: Sequence[int] = (21, 9),
-        blob_downsample: int = 2,
-        template_threshold: float = 0.6,
-        prune_radius: float = 3.0,
-        duplicate_radius: float = 0.25,
-        prune_max_misses: int = 5,
-        min_hits: int = 3,
-        max_misses: int = 90,
-        exit_margin: float = 8.0,
-        exit_misses: int = 3,
-        new_track_iou: float = 0.6,
-        head_detector=None,
-        blob_births: bool = False,
-        report_occluded: bool = True,
-        max_report_misses: int = 5,
-        report_predicted: bool = True,
-        motion_compensation: bool = True,
-        stale_frames: int = 3,
-        stale_cover: float = 0.1,
-        stale_fill: float = 0.75,
-        relearn_rate: float = 1.0,
-        min_support: float = 0.3,
-        occluded_cover: float = 0.0,
-        relative_match: float = 0.5,
+        features: FeatureParams | None = None,
+        candidates: CandidateParams | None = None,
+        gate: GateParams | None = None,
+        noise: NoiseParams | None = None,
+        search: SearchParams | None = None,
+        matching: MatchParams | None = None,
+        pruning: PruneParams | None = None,
+        model_update: UpdateParams | None = None,
+        life_cycle: LifeCycleParams | None = None,
+        reporting: ReportParams | None = None,
+        adaptations: Adaptations | None = None,
     ) -> None:
-        self.relative_match = float(relative_match)
-        for name, v in (("min_support", min_support), ("occluded_cover", occluded_cover),
-                        ("relative_match", relative_match)):
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must lie in [0, 1], got {v}")
-        self.min_support = float(min_support)
-        self.occluded_cover = float(occluded_cover)
-        if models is None:
-            models = FeatureModels.default()
-        elif isinstance(models, Mapping):
-            models = FeatureModels.from_dict(dict(models), "models")
-        elif not isinstance(models, FeatureModels):
-            raise ValueError(f"models must be FeatureModels, a mapping or None, got {type(models).__name__}")
-        self.models = models
-        fw = dict(DEFAULT_FEATURE_WEIGHTS if feature_weights is None else feature_weights)
-        unknown = set(fw) - set(FEATURES)
-        if unknown:
-            raise ValueError(f"feature_weights: unknown features {sorted(unknown)}; known {FEATURES}")
-        omega = np.array([float(fw.get(f, 0.0)) for f in FEATURES])
-        if (omega < 0).any() or omega.sum() <= 0:
-            raise ValueError(f"feature_weights must be >= 0 with a positive sum, got {fw}")
-        gamma = np.asarray(list(part_weights), dtype=np.float64)
-        if gamma.shape != (N_PARTS,) or (gamma < 0).any() or gamma.sum() <= 0:
-            raise ValueError(f"part_weights must be {N_PARTS} weights >= 0 with a positive sum, got {part_weights}")
-        self.omega = omega / omega.sum()
-        self.gamma = gamma / gamma.sum()
-        for name, v in (("match_threshold", match_threshold), ("weak_threshold", weak_threshold),
-                        ("part_match_threshold", part_match_threshold), ("update_rate", update_rate),
-                        ("head_min_fill", head_min_fill), ("new_track_iou", new_track_iou)):
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must lie in [0, 1], got {v}")
-        if weak_threshold > match_threshold:
-            raise ValueError(f"weak_threshold ({weak_threshold}) must be <= match_threshold ({match_threshold})")
-        if margin_ratio < 1.0:
-            raise ValueError(f"margin_ratio must be >= 1, got {margin_ratio}")
-        if occlusion_threshold <= 0:
-            raise ValueError(f"occlusion_threshold must be > 0, got {occlusion_threshold}")
-        if not 0 < search_step < 0.5 or search_range < 0:
-            raise ValueError(f"search_step must be in (0, 0.5) and search_range >= 0, got {search_step}, {search_range}")
-        for name, v in (("ratio_window", ratio_window), ("occluded_window", occluded_window),
-                        ("min_hits", min_hits), ("histogram_bins", histogram_bins)):
-            if int(v) < 1:
-                raise ValueError(f"{name} must be >= 1, got {v}")
-        if max_misses < 0 or exit_misses < 0 or max_report_misses < 0:
-            raise ValueError("max_misses, exit_misses and max_report_misses must be >= 0")
-        if gate_miss_factor < 1 or gate_growth < 1 or gate_max_fraction <= 0:
-            raise ValueError("gate_miss_factor and gate_growth must be >= 1, gate_max_fraction > 0")
-        self.match_threshold = match_threshold
-        self.weak_threshold = weak_threshold
-        self.margin_ratio = margin_ratio
-        self.part_match_threshold = part_match_threshold
-        self.update_rate = update_rate
-        self.occlusion_threshold = occlusion_threshold
-        self.search_step = search_step
-        self.search_range = int(search_range)
-        if not 0.0 <= search_overlap <= 1.0:
-            raise ValueError(f"search_overlap must lie in [0, 1], got {search_overlap}")
-        self.search_overlap = float(search_overlap)
-        self.lone_growth = bool(lone_growth)
-        self.ratio_window = int(ratio_window)
-        self.occluded_window = int(occluded_window)
-        self._gate = Gate(gate_speed_factor, gate_min_fraction, gate_miss_factor, gate_growth,
-                          gate_max_fraction)
-        self._gate_noise = (kf1_position_noise, kf1_velocity_noise, kf1_measurement_noise)
-        self._size_noise = (kf2_position_noise, kf2_velocity_noise, kf2_measurement_noise)
-        self.min_blob_area = int(min_blob_area)
-        self.min_height = float(min_height)
-        self.head_separation = float(head_separation)
-        self.head_min_fill = head_min_fill
-        self.template_threshold = template_threshold
-        self.prune_radius = prune_radius
-        self.duplicate_radius = float(duplicate_radius)
-        self.prune_max_misses = int(prune_max_misses)
-        self.min_hits = int(min_hits)
-        self.max_misses = int(max_misses)
-        self.exit_margin = float(exit_margin)
-        self.exit_misses = int(exit_misses)
-        self.new_track_iou = new_track_iou
-        if head_detector is not None and not callable(getattr(head_detector, "detect", None)):
-            raise ValueError("head_detector must have a detect(frame, foreground, boxes) method")
-        self.head_detector = head_detector
-        self.blob_births = bool(blob_births)
-        self.report_occluded = bool(report_occluded)
-        self.max_report_misses = int(max_report_misses)
-        self.report_predicted = bool(report_predicted)
-        self.motion_compensation = bool(motion_compensation)
-        if int(stale_frames) < 0:
-            raise ValueError(f"stale_frames must be >= 0, got {stale_frames}")
-        for name, v in (("stale_cover", stale_cover), ("stale_fill", stale_fill),
-                        ("relearn_rate", relearn_rate)):
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must lie in [0, 1], got {v}")
-        self.stale_frames = int(stale_frames)
-        self.stale_cover = float(stale_cover)
-        self.stale_fill = float(stale_fill)
-        self.relearn_rate = float(relearn_rate)
-        if int(blob_downsample) < 1:
-            raise ValueError(f"blob_downsample must be >= 1, got {blob_downsample}")
-        self.blob_downsample = int(blob_downsample)
-        if model_spread <= 0:
-            raise ValueError(f"model_spread must be > 0, got {model_spread}")
-        self.model_spread = float(model_spread)
-        self._extractor = PartFeatureExtractor(int(histogram_bins), int(grid_rows), int(grid_cols))
-        sr, sc = (int(v) for v in search_grid)
-        self._search_extractor = PartFeatureExtractor(int(histogram_bins), sr, sc)
+        groups = {"features": (features, FeatureParams), "candidates": (candidates, CandidateParams),
+                  "gate": (gate, GateParams), "noise": (noise, NoiseParams),
+                  "search": (search, SearchParams), "matching": (matching, MatchParams),
+                  "pruning": (pruning, PruneParams), "model_update": (model_update, UpdateParams),
+                  "life_cycle": (life_cycle, LifeCycleParams), "reporting": (reporting, ReportParams),
+                  "adaptations": (adaptations, Adaptations)}
+        for name, (value, cls) in groups.items():
+            if value is None:
+                value = cls()
+            elif not isinstance(value, cls):
+                raise ValueError(f"{name} must be {cls.__name__} or None, got {type(value).__name__}")
+            setattr(self, name, value)
+        g = self.gate
+        self._gate = Gate(g.speed_factor, g.min_fraction, g.miss_factor, g.growth,
+                          self.adaptations.gate_max_fraction)
+        f = self.features
+        self._extractor = PartFeatureExtractor(f.histogram_bins, *f.grid)
+        self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         self.reset()
 
     def reset(self) -> None:
         """Forget every target and restart ids at 1."""
-        self.targets = Targets(self._gate, self._gate_noise, self._size_noise, self.ratio_window,
-                               self.occluded_window, self._extractor.bins)
+        self.targets = Targets(self._gate, self.noise.kf1, self.noise.kf2, self.model_update.ratio_window,
+                               self.model_update.occluded_window, self._extractor.bins)
         self._next_id = 1
         self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
         self._blob_pairs = 0
@@ -429,8 +238,8 @@ class PBMTracker:
         when known)."""
         det_boxes = detections.boxes
         heads = detections.heads
-        if heads is None and self.head_detector is not None and frame is not None and len(det_boxes):
-            heads = np.asarray(self.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
+        if heads is None and self.candidates.head_detector is not None and frame is not None and len(det_boxes):
+            heads = np.asarray(self.candidates.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
         valid = (np.logical_and.reduce(np.isfinite(det_boxes), axis=1)
                  & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)).nonzero()[0]
         box = det_boxes[valid]
@@ -450,11 +259,11 @@ class PBMTracker:
         # blobs matter only where foreground is left unexplained by the detections
         if fg_residual is None and len(det_boxes):
             fg_residual = residual_foreground(fg, det_boxes)
-        if len(det_boxes) and fg_residual < self.min_blob_area:
+        if len(det_boxes) and fg_residual < self.candidates.min_blob_area:
             return Candidates(*rows)
-        s = self.blob_downsample
+        s = self.candidates.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
-        labels, bboxes, numbers = blobs_boxes(small, max(self.min_blob_area // (s * s), 1))
+        labels, bboxes, numbers = blobs_boxes(small, max(self.candidates.min_blob_area // (s * s), 1))
         if len(bboxes) and len(det_boxes):
             blob_iou = iou_matrix(bboxes * s, det_boxes)  # for ``_calibrate``
             # the head zone of each detection: its top third (and a tenth above)
@@ -465,7 +274,7 @@ class PBMTracker:
         for i, (sbox, lab) in enumerate(zip(bboxes, numbers)):
             x, y, w, h = (int(v) for v in sbox)
             mask = labels[y:y + h, x:x + w] == lab
-            peaks = top_profile_heads(mask, max(self.head_separation * h, 3.0 / s),
+            peaks = top_profile_heads(mask, max(self.candidates.head_separation * h, 3.0 / s),
                                       max(0.06 * h, 2.0 / s))
             bbox = sbox * s
             hx = (peaks[:, 0] + x + 0.5) * s
@@ -480,7 +289,7 @@ class PBMTracker:
             if explained.all():
                 continue
             n = len(peaks)
-            head_w = max(self.head_separation * bbox[3], 3.0)
+            head_w = max(self.candidates.head_separation * bbox[3], 3.0)
             for k in np.nonzero(~explained)[0]:
                 own = (bbox.copy() if n == 1
                        else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
@@ -551,14 +360,14 @@ class PBMTracker:
             align_boxes = np.column_stack([ha[:, 0] - alpha_t[at] * w, ha[:, 1], w, h])
             if fg is not None:
                 fill = np.array([head_fill(fg, b) for b in align_boxes])
-                supported = fill >= self.head_min_fill
+                supported = fill >= self.search.head_min_fill
                 align_q, align_boxes = align_q[supported], align_boxes[supported]
         if not len(search_q) and not len(align_q):
             return None
-        m = (2 * self.search_range + 1) ** 2
+        m = (2 * self.search.range + 1) ** 2
         sti = ti[search_q]
         B = np.concatenate([search_boxes_many(heads[search_q], pred_wh[sti], alpha_t[sti],
-                                              self.search_step, self.search_range).reshape(-1, 4),
+                                              self.search.step, self.search.range).reshape(-1, 4),
                             align_boxes if len(align_q) else np.zeros((0, 4))])
         tis = np.concatenate([sti.repeat(m), ti[align_q]])
         feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
@@ -570,8 +379,8 @@ class PBMTracker:
     def _scores(self, model: PartFeatures, feats: PartFeatures, ti: np.ndarray,
                 n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eqs. 11-13 of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
-        return pair_scores(self.models, model, feats, ti, n, self.targets.misses,
-                           self.omega, self.gamma, self.model_spread)
+        return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
+                           self.features.omega, self.features.gamma, self.adaptations.model_spread)
 
     # ------------------------------------------------------------------ pruning
     def _prune(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
@@ -600,7 +409,7 @@ class PBMTracker:
             cx, cy = heads.mean(axis=0).tolist()
             radius = float(np.max(np.linalg.norm(heads - [cx, cy], axis=1)))
         tl, corr = match_head_template(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
-        if corr < self.template_threshold:
+        if corr < self.pruning.template_threshold:
             return -1, None
         rx, ry = tl[0] + 0.5 * tw, float(tl[1])
         if len(cands) < 8:
@@ -669,7 +478,7 @@ class PBMTracker:
         feats_h, pj_h, k_h, dof_h = None, np.zeros((0, N_PARTS)), np.zeros(0, np.intp), np.zeros((0, 6))
         if T and n_a:
             model = targets.parts
-            if self.motion_compensation:
+            if self.adaptations.motion_compensation:
                 model = model.shifted(targets.predicted_shift())
             gates = targets.gate_boxes()
             targets.last_gate = gates  # the gates this frame's candidates were validated in
@@ -679,12 +488,12 @@ class PBMTracker:
             # for a larger region, that holds the target (PBM 3.1: "the target needs to be
             # located within the blob"): a found target's last box lies at least
             # ``search_overlap`` inside it. A blob holding several heads is a merge: searched.
-            kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.occlusion_threshold)
-            present = (targets.misses <= self.max_report_misses) & self.lone_growth
+            kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
+            present = (targets.misses <= self.reporting.max_misses) & self.adaptations.lone_growth
             ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
                 boxes, cand.region, cand.head, cand.heads_in_region, gates,
                 pred_wh, kinds, targets.dof, targets.misses,
-                self.search_overlap, present)
+                self.search.overlap, present)
             # eqs. 11-13 for the unoccluded candidates
             pj_in, p_in = self._scores(model, feats, ti_in, n_in)
             pj_all[ti_in, n_in] = pj_in
@@ -697,29 +506,29 @@ class PBMTracker:
                 hyp[ti_s[kept], n_s[kept]] = kept.nonzero()[0]
             # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
             # (the loop below changes only row ti of S, after reading it)
-            bests, _, ambs = ambiguous_rows(S, self.match_threshold, self.margin_ratio)
-            weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= self.weak_threshold)
+            bests, _, ambs = ambiguous_rows(S, self.matching.match_threshold, self.matching.margin_ratio)
+            weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= self.matching.weak_threshold)
             heads_xy = cand.head[:, :2]
             for ti in (ambs | weaks).nonzero()[0].tolist():
                 row = S[ti]
                 best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
-                lo = self.match_threshold if amb else self.weak_threshold
+                lo = self.matching.match_threshold if amb else self.matching.weak_threshold
                 cands = (row >= lo).nonzero()[0]
                 # only nearby candidates are multiple responses of one person (PBM 4.1);
                 # distant rivals are left to the one-to-one assignment
                 r = best if best >= 0 else int(np.argmax(row))
                 hw = max(cand.head[r, 2], 1.0)
                 dist = _norms(heads_xy[cands] - heads_xy[r])
-                near = dist <= self.prune_radius * hw
+                near = dist <= self.pruning.radius * hw
                 cands = cands[near]
                 if amb and len(cands) < 2:
                     continue
-                if targets.misses[ti] > self.prune_max_misses:
+                if targets.misses[ti] > self.adaptations.prune_max_misses:
                     # a long-lost target's head template is stale: no pruning by it
                     if weak:
                         continue
                     chosen, refined = best, None
-                elif amb and dist[near].max() <= self.duplicate_radius * hw:
+                elif amb and dist[near].max() <= self.adaptations.duplicate_radius * hw:
                     chosen, refined = best, None  # one response: the heads coincide
                 else:
                     chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
@@ -735,72 +544,73 @@ class PBMTracker:
                                              targets.beta[ti])
                 keep = row[chosen]
                 S[ti, cands] = -np.inf
-                S[ti, chosen] = max(keep, self.match_threshold)
+                S[ti, chosen] = max(keep, self.matching.match_threshold)
         withheld = None
-        if self.relative_match > 0 and T and n_a:
+        if self.adaptations.relative_match > 0 and T and n_a:
             # a target found last frame takes no candidate scoring below relative_match x
             # the score of that match (its own detection missed, a neighbour's is no match)
             ref = np.where(targets.misses == 0, targets.score, 0.0)
-            weak = (S < self.relative_match * ref[:, None]) & (S >= self.match_threshold)
+            weak = (S < self.adaptations.relative_match * ref[:, None]) & (S >= self.matching.match_threshold)
             withheld = weak.any(axis=0)  # a poor match of a known target starts no new one
             S[weak] = -np.inf
         cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
-        matches, lost, free = assign(cost, 1.0 - self.match_threshold)
+        matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
         if len(matches):
             # model update (PBM 4.2): global models and filters of all matched targets at once
             mt, mn = matches[:, 0], matches[:, 1]
             dof, pj, occl, ks = matched_rows(mt, mn, hyp, boxes, cand.centroid, cand.blob, pred_wh,
                                              targets.alpha, pj_all, dof_h, pj_h, k_h)
             measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
-            shift = targets.update(mt, dof, measured, occl, pj, self.part_match_threshold)
+            shift = targets.update(mt, dof, measured, occl, pj, self.model_update.part_threshold)
             # then the parts models, from the feature arrays the candidates were measured in
             dof_t = targets.dof
             n_occl = np.count_nonzero(occl)
             groups = [(~occl, feats)] if n_occl < len(mt) else []
             if n_occl:
                 groups.append((occl, feats_h))
-            relearn = None
-            if self.stale_frames and n_occl < len(mt):
+            relearn, stale = None, self.adaptations.stale
+            if stale is not None and n_occl < len(mt):
                 # stale parts (adaptation): visible, failing to match, among unoccluded matches
                 # (before the update: the model's foreground area is the reference)
                 un = ~occl
                 relearn = stale_parts(targets, mt[un], feats, ks[un], pj[un],
-                                      self.part_match_threshold, self.max_report_misses, (W, H),
-                                      self.stale_cover, self.stale_fill, self.stale_frames)
+                                      self.model_update.part_threshold, self.reporting.max_misses, (W, H),
+                                      stale.cover, stale.fill, stale.frames)
             for g, (rows, f) in enumerate(groups):
                 r = mt[rows]
-                update_parts(targets.parts, r, f, ks[rows], pj[rows], self.part_match_threshold,
-                             self.update_rate, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
+                update_parts(targets.parts, r, f, ks[rows], pj[rows], self.model_update.part_threshold,
+                             self.model_update.rate, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
                              targets.alpha[r], targets.beta[r],
-                             relearn if g == 0 else None, self.relearn_rate)
+                             relearn if g == 0 else None,
+                             1.0 if stale is None else stale.relearn_rate)
             targets.score[mt] = S[mt, mn]
             # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
-            fresh = mt[~occl & (pj[:, 0] >= self.part_match_threshold)]
+            fresh = mt[~occl & (pj[:, 0] >= self.model_update.part_threshold)]
             for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
                 if tpl is not None:
                     targets.head_template[ti] = tpl
-            targets.confirmed[mt] |= targets.hits[mt] >= self.min_hits
+            targets.confirmed[mt] |= targets.hits[mt] >= self.life_cycle.min_hits
         if len(lost):
             targets.mark_missed(lost)
         # drop tentative misses, long-lost and leaving targets
         alive = alive_rows(targets.dof, targets.predicted_shift(), targets.misses,
-                           targets.confirmed, W, H, self.exit_margin, self.max_misses,
-                           self.exit_misses)
+                           targets.confirmed, W, H, self.adaptations.exit_margin, self.life_cycle.max_misses,
+                           self.adaptations.exit_misses)
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
         # new targets from free candidates (new blobs, split heads)
         live_boxes = targets.boxes if len(free) else None
         for n in free.tolist():  # (``assign`` leaves exactly the untaken candidates free)
             box = boxes[n]
-            if box[3] < self.min_height:
+            if box[3] < self.life_cycle.min_height:
                 continue
-            if cand.blob[n] and not self.blob_births:
+            if cand.blob[n] and not self.life_cycle.blob_births:
                 continue
             if withheld is not None and withheld[n]:
                 continue
-            if fg is not None and feats.area[n].max() < self.min_support:
+            if fg is not None and feats.area[n].max() < self.adaptations.min_support:
                 continue  # too little foreground under its parts to be a person (PBM 2)
-            if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > self.new_track_iou:
+            if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > self.life_cycle.new_track_iou:
                 continue
             centroid = cand.centroid[n]
             al_n, be_n = centroid_ratios(box[None], centroid[None])
@@ -808,7 +618,7 @@ class PBMTracker:
             targets.add(self._next_id, dof, float(al_n[0]), float(be_n[0]), feats.take(n),
                         head_patch(frame, dof[[0, 1, 4, 5]]))
             self._next_id += 1
-            if self._frame <= self.min_hits:
+            if self._frame <= self.life_cycle.min_hits:
                 targets.confirmed[-1] = True  # people present from the start are reported at once
             live_boxes = np.vstack([live_boxes, box[None]])
         return self._output()
@@ -819,19 +629,19 @@ class PBMTracker:
         tg = self.targets
         found = tg.misses == 0
         shown = found
-        if self.report_occluded:
-            shown = found | (tg.confirmed & (tg.misses <= self.max_report_misses))
+        if self.reporting.occluded:
+            shown = found | (tg.confirmed & (tg.misses <= self.reporting.max_misses))
         rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
-        if self.report_predicted:
+        if self.adaptations.report_predicted:
             boxes[:, :2] += np.where(found[rows, None], 0.0, tg.predicted_shift()[rows])
-        if self.occluded_cover > 0 and self._had_fg and not found[rows].all():
+        if self.adaptations.occluded_cover > 0 and self._had_fg and not found[rows].all():
             # evidence of occlusion: an unfound target is reported only while found
             # confirmed targets' boxes cover at least ``occluded_cover`` of its box
             fb = tg.dof[(found & tg.confirmed).nonzero()[0][:, None], _BOX_COLUMNS]
             cover = overlap_ratio_matrix(boxes, fb).sum(axis=1) if len(fb) else np.zeros(len(rows))
-            keep = found[rows] | (cover >= self.occluded_cover)
+            keep = found[rows] | (cover >= self.adaptations.occluded_cover)
             rows, boxes = rows[keep], boxes[keep]
         rects = tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]

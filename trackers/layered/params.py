@@ -1,0 +1,440 @@
+"""PBM's settings in groups, one per step of the paper's algorithm (PBM Fig. 1).
+
+Each group is a frozen dataclass that checks itself when built (``ValueError`` naming
+``<group>.<field>`` and the value); ``PBMTracker`` takes one of each, and Hydra builds them
+as nested ``_target_`` nodes (``conf/tracker/pbm.yaml``). What the paper has sits in the
+group of its step, with the paper's symbol and section; every rule the paper does not have
+sits in ``Adaptations`` (``docs/adaptations.md`` has one row per field, with the evidence);
+``tracker=pbm_paper`` sets each to the paper's value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from trackers.layered.models import FEATURES, FeatureModels
+from trackers.layered.parts import N_PARTS
+
+DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
+                           "displacement": 0.1, "overlap": 0.15}
+DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
+
+
+def _unit(group: str, **values: float) -> None:
+    """ValueError naming ``group.name`` unless each value lies in [0, 1]."""
+    for name, v in values.items():
+        if not 0.0 <= v <= 1.0:
+            raise ValueError(f"{group}.{name} must lie in [0, 1], got {v}")
+
+
+def _at_least(group: str, low: float, **values: float) -> None:
+    """ValueError naming ``group.name`` unless each value is >= low."""
+    for name, v in values.items():
+        if not v >= low:
+            raise ValueError(f"{group}.{name} must be >= {low}, got {v}")
+
+
+def _grid(group: str, name: str, value: Sequence[int]) -> tuple[int, int]:
+    """(rows, cols), both >= 1."""
+    rc = tuple(int(v) for v in value)
+    if len(rc) != 2 or min(rc) < 1:
+        raise ValueError(f"{group}.{name} must be two sizes >= 1 (rows, cols), got {list(value)}")
+    return rc  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class FeatureParams:
+    """What a part is measured by and how the layers weigh it (PBM 2.2, 4.1, eqs. 11-13).
+
+    Args:
+        models: theta_ij, the feature-difference models p(d | theta) (``FeatureModels``, a
+            mapping as written by ``python -m harness.fit pbm``, or None for the shipped
+            defaults).
+        feature_weights: omega_i of eq. 12, feature name -> weight (normalised to sum 1).
+        part_weights: gamma_j of eq. 13, five weights (head, left/right torso-arm,
+            left/right leg; normalised to sum 1).
+        histogram_bins: bins per channel of the HSV and XYZ part histograms (must match
+            the models' fit).
+        grid: (rows, cols) samples each candidate box is measured on (rows a multiple of
+            7: the head band is whole rows; ``PartFeatureExtractor``).
+        search_grid: (rows, cols) coarser samples of the head-anchored search's boxes.
+    Attributes:
+        omega: (6,) float64 normalised feature weights, ``FEATURES`` order.
+        gamma: (5,) float64 normalised part weights.
+    """
+
+    models: FeatureModels | Mapping | None = None
+    feature_weights: Mapping[str, float] | None = None
+    part_weights: Sequence[float] = DEFAULT_PART_WEIGHTS
+    histogram_bins: int = 4
+    grid: Sequence[int] = (35, 15)
+    search_grid: Sequence[int] = (21, 9)
+    omega: np.ndarray = field(init=False, repr=False, compare=False)
+    gamma: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        models = self.models
+        if models is None:
+            models = FeatureModels.default()
+        elif isinstance(models, Mapping):
+            models = FeatureModels.from_dict(dict(models), "features.models")
+        elif not isinstance(models, FeatureModels):
+            raise ValueError(f"features.models must be FeatureModels, a mapping or None, "
+                             f"got {type(models).__name__}")
+        fw = dict(DEFAULT_FEATURE_WEIGHTS if self.feature_weights is None else self.feature_weights)
+        unknown = set(fw) - set(FEATURES)
+        if unknown:
+            raise ValueError(f"features.feature_weights: unknown features {sorted(unknown)}; "
+                             f"known {FEATURES}")
+        omega = np.array([float(fw.get(f, 0.0)) for f in FEATURES])
+        if (omega < 0).any() or omega.sum() <= 0:
+            raise ValueError(f"features.feature_weights must be >= 0 with a positive sum, got {fw}")
+        gamma = np.asarray(list(self.part_weights), dtype=np.float64)
+        if gamma.shape != (N_PARTS,) or (gamma < 0).any() or gamma.sum() <= 0:
+            raise ValueError(f"features.part_weights must be {N_PARTS} weights >= 0 with a "
+                             f"positive sum, got {list(self.part_weights)}")
+        _at_least("features", 1, histogram_bins=self.histogram_bins)
+        set_ = object.__setattr__
+        set_(self, "models", models)
+        set_(self, "feature_weights", fw)
+        set_(self, "part_weights", tuple(float(g) for g in gamma))
+        set_(self, "histogram_bins", int(self.histogram_bins))
+        set_(self, "grid", _grid("features", "grid", self.grid))
+        set_(self, "search_grid", _grid("features", "search_grid", self.search_grid))
+        set_(self, "omega", omega / omega.sum())  # eq. 12: sum_i omega_i = 1
+        set_(self, "gamma", gamma / gamma.sum())  # eq. 13: sum_j gamma_j = 1
+
+
+@dataclass(frozen=True)
+class CandidateParams:
+    """Where candidates come from (PBM 2, 2.3): detection boxes with their heads, and the
+    heads of foreground blobs that no detection explains.
+
+    Args:
+        min_blob_area: smallest foreground blob used as a candidate (pixels).
+        head_separation: smallest distance between two heads of a blob, x blob height.
+        blob_downsample: connected components run on the mask subsampled by this factor.
+        head_detector: PBM 2.3 hair/skin head detector (``detect(frame, foreground,
+            boxes)``, e.g. ``trackers.frontend.heads.HeadDetector``) for detections without
+            heads; None: the top 1/7 band of the box's foreground (``docs/adaptations.md``).
+    """
+
+    min_blob_area: int = 300
+    head_separation: float = 0.12
+    blob_downsample: int = 2
+    head_detector: object | None = None
+
+    def __post_init__(self) -> None:
+        _at_least("candidates", 0, min_blob_area=self.min_blob_area,
+                  head_separation=self.head_separation)
+        _at_least("candidates", 1, blob_downsample=self.blob_downsample)
+        if self.head_detector is not None and not callable(getattr(self.head_detector, "detect", None)):
+            raise ValueError("candidates.head_detector must have a detect(frame, foreground, "
+                             "boxes) method")
+        object.__setattr__(self, "min_blob_area", int(self.min_blob_area))
+        object.__setattr__(self, "head_separation", float(self.head_separation))
+        object.__setattr__(self, "blob_downsample", int(self.blob_downsample))
+
+
+@dataclass(frozen=True)
+class GateParams:
+    """KF1's gate (PBM 3, Fig. 5): half-size = speed_factor |v| + min_fraction (w, h),
+    x miss_factor after a miss, x growth per further miss, until found or lost (its cap is
+    ``Adaptations.gate_max_fraction``).
+
+    Args:
+        speed_factor: half-size per unit KF1 speed |v|.
+        min_fraction: half-size floor, x target (w, h).
+        miss_factor: the gate after one miss, x (the paper: doubled).
+        growth: further growth per extra miss.
+    """
+
+    speed_factor: float = 3.0
+    min_fraction: float = 0.5
+    miss_factor: float = 2.0
+    growth: float = 1.15
+
+    def __post_init__(self) -> None:
+        _at_least("gate", 0, speed_factor=self.speed_factor, min_fraction=self.min_fraction)
+        _at_least("gate", 1, miss_factor=self.miss_factor, growth=self.growth)
+
+
+@dataclass(frozen=True)
+class NoiseParams:
+    """Standard deviations of the two Kalman filters (PBM 3, eqs. 7-8), per person height
+    / 10 (``dynamics.ConstantVelocity2D``): KF1 of the centre (xc, yc), KF2 of the size
+    (h, w).
+
+    Args:
+        kf1_position, kf1_velocity, kf1_measurement: KF1's Q (position, rate) and R.
+        kf2_position, kf2_velocity, kf2_measurement: KF2's Q (size, size rate) and R.
+    """
+
+    kf1_position: float = 0.5
+    kf1_velocity: float = 0.2
+    kf1_measurement: float = 0.5
+    kf2_position: float = 0.2
+    kf2_velocity: float = 0.02
+    kf2_measurement: float = 0.5
+
+    def __post_init__(self) -> None:
+        _at_least("noise", 0, kf1_position=self.kf1_position, kf1_velocity=self.kf1_velocity,
+                  kf1_measurement=self.kf1_measurement, kf2_position=self.kf2_position,
+                  kf2_velocity=self.kf2_velocity, kf2_measurement=self.kf2_measurement)
+
+    @property
+    def kf1(self) -> tuple[float, float, float]:
+        """(position, velocity, measurement) of KF1."""
+        return self.kf1_position, self.kf1_velocity, self.kf1_measurement
+
+    @property
+    def kf2(self) -> tuple[float, float, float]:
+        """(position, velocity, measurement) of KF2."""
+        return self.kf2_position, self.kf2_velocity, self.kf2_measurement
+
+
+@dataclass(frozen=True)
+class SearchParams:
+    """Occlusion test and head-anchored search (PBM 3.1, eqs. 9-10).
+
+    Args:
+        occlusion_threshold: relative w or h change that flags an occlusion (the paper: 50%).
+        step: delta of eqs. 9-10, relative to the predicted size (w (1 + delta i)).
+        range: i runs over -range..range in eqs. 9-10.
+        overlap: a larger region is searched for a found target only when at least this
+            fraction of the target's last box lies inside it ("the target needs to be
+            located within the blob"; 0 = always).
+        head_min_fill: foreground share of the head rectangle a smaller candidate needs
+            to be aligned on its head, else it is dismissed.
+    """
+
+    occlusion_threshold: float = 0.5
+    step: float = 0.05
+    range: int = 2
+    overlap: float = 0.5
+    head_min_fill: float = 0.2
+
+    def __post_init__(self) -> None:
+        if not self.occlusion_threshold > 0:
+            raise ValueError(f"search.occlusion_threshold must be > 0, got {self.occlusion_threshold}")
+        if not 0 < self.step < 0.5:
+            raise ValueError(f"search.step must lie in (0, 0.5), got {self.step}")
+        _at_least("search", 0, range=self.range)
+        _unit("search", overlap=self.overlap, head_min_fill=self.head_min_fill)
+        object.__setattr__(self, "range", int(self.range))
+        object.__setattr__(self, "overlap", float(self.overlap))
+
+
+@dataclass(frozen=True)
+class MatchParams:
+    """Selection of each target's candidate (PBM 4, steps 4-5).
+
+    Args:
+        match_threshold: smallest global score p (eq. 13) of a match.
+        weak_threshold: scores in [weak, match) try head-template pruning (PBM 4.1).
+        margin_ratio: the best candidate must beat the runner-up by this ratio, else the
+            choice is ambiguous and pruned.
+    """
+
+    match_threshold: float = 0.25
+    weak_threshold: float = 0.1
+    margin_ratio: float = 1.1
+
+    def __post_init__(self) -> None:
+        _unit("matching", match_threshold=self.match_threshold, weak_threshold=self.weak_threshold)
+        if self.weak_threshold > self.match_threshold:
+            raise ValueError(f"matching.weak_threshold ({self.weak_threshold}) must be <= "
+                             f"matching.match_threshold ({self.match_threshold})")
+        _at_least("matching", 1, margin_ratio=self.margin_ratio)
+
+
+@dataclass(frozen=True)
+class PruneParams:
+    """Multiple-response pruning by the head template (PBM 4.1).
+
+    Args:
+        template_threshold: normalised correlation a head-template match needs.
+        radius: candidates within this many head widths of the best are "nearby"
+            (multiple responses of one person); distant rivals are left to the assignment.
+    """
+
+    template_threshold: float = 0.6
+    radius: float = 3.0
+
+    def __post_init__(self) -> None:
+        _at_least("pruning", 0, radius=self.radius)
+
+
+@dataclass(frozen=True)
+class UpdateParams:
+    """Model update (PBM 4.2) and the running windows of the global model (PBM 2.1).
+
+    Args:
+        rate: running-average rate of a matched part, times p_j.
+        part_threshold: p_j (eq. 12) below this: the part does not match, its model is
+            frozen.
+        ratio_window: frames of the running averages of alpha, beta (eqs. 1-2; paper 3-5).
+        occluded_window: DOF vectors averaged under occlusion.
+    """
+
+    rate: float = 0.3
+    part_threshold: float = 0.4
+    ratio_window: int = 4
+    occluded_window: int = 3
+
+    def __post_init__(self) -> None:
+        _unit("update", rate=self.rate, part_threshold=self.part_threshold)
+        _at_least("update", 1, ratio_window=self.ratio_window, occluded_window=self.occluded_window)
+        object.__setattr__(self, "ratio_window", int(self.ratio_window))
+        object.__setattr__(self, "occluded_window", int(self.occluded_window))
+
+
+@dataclass(frozen=True)
+class LifeCycleParams:
+    """Births, confirmation and deaths of targets (a multi-target addition: the paper
+    initialises each target by hand, PBM 3, and tracks it "until lost").
+
+    Args:
+        min_hits: matches in a row that confirm a new target.
+        max_misses: frames a confirmed target survives unfound.
+        min_height: smallest candidate height that starts a target (pixels).
+        new_track_iou: a free candidate overlapping a live target by more IoU than this
+            starts no target.
+        blob_births: free foreground blobs (heads no detection explains) start targets too;
+            off, blobs only keep existing targets. With foreground but no detections at all,
+            turn it on.
+    """
+
+    min_hits: int = 3
+    max_misses: int = 90
+    min_height: float = 12.0
+    new_track_iou: float = 0.6
+    blob_births: bool = False
+
+    def __post_init__(self) -> None:
+        _at_least("life_cycle", 1, min_hits=self.min_hits)
+        _at_least("life_cycle", 0, max_misses=self.max_misses)
+        _unit("life_cycle", new_track_iou=self.new_track_iou)
+        object.__setattr__(self, "min_hits", int(self.min_hits))
+        object.__setattr__(self, "max_misses", int(self.max_misses))
+        object.__setattr__(self, "min_height", float(self.min_height))
+        object.__setattr__(self, "blob_births", bool(self.blob_births))
+
+
+@dataclass(frozen=True)
+class ReportParams:
+    """What each frame's output holds besides the found targets.
+
+    Args:
+        occluded: report unfound confirmed targets as OCCLUDED.
+        max_misses: frames an unfound target is reported (and counts as an occluder of
+            other targets' parts, ``Adaptations.stale``).
+    """
+
+    occluded: bool = True
+    max_misses: int = 5
+
+    def __post_init__(self) -> None:
+        _at_least("reporting", 0, max_misses=self.max_misses)
+        object.__setattr__(self, "occluded", bool(self.occluded))
+        object.__setattr__(self, "max_misses", int(self.max_misses))
+
+
+@dataclass(frozen=True)
+class StaleParts:
+    """Stale parts (an adaptation beyond PBM 4.2, ``model.stale_parts``): a visible part
+    that fails to match ``frames`` times is re-learned; the paper keeps it frozen until it
+    matches.
+
+    Args:
+        frames: failures in a row of a visible part before it is re-learned (>= 1).
+        cover: a part is visible when at most this fraction of its rectangle lies under
+            another target's box (found, or reported unfound) or outside the image.
+        fill: ... and its foreground area is at least this fraction of its model's (a part
+            behind a wall loses its foreground).
+        relearn_rate: running-average step of a re-learned part (1 = replaced).
+    """
+
+    frames: int = 3
+    cover: float = 0.1
+    fill: float = 0.75
+    relearn_rate: float = 1.0
+
+    def __post_init__(self) -> None:
+        _at_least("adaptations.stale", 1, frames=self.frames)
+        _unit("adaptations.stale", cover=self.cover, fill=self.fill, relearn_rate=self.relearn_rate)
+        object.__setattr__(self, "frames", int(self.frames))
+        object.__setattr__(self, "cover", float(self.cover))
+        object.__setattr__(self, "fill", float(self.fill))
+        object.__setattr__(self, "relearn_rate", float(self.relearn_rate))
+
+
+@dataclass(frozen=True)
+class Adaptations:
+    """Every rule of ours that the paper does not have (``docs/adaptations.md``: one row
+    each, with the paper's value and the evidence); ``tracker=pbm_paper`` sets each to
+    the paper's value.
+
+    Args:
+        model_spread: p(d | theta) applied to d / model_spread (paper: 1, as fitted).
+        motion_compensation: eq. 11's displacement and overlap against the parts model
+            moved by KF1's constant-velocity prediction (paper: the last frame as it is).
+        lone_growth: a larger region with one head that holds the target and no other found
+            or reported target is the target grown, not a merge (paper: searched).
+        min_support: with foreground, a candidate starts a target only when one of its parts
+            has this foreground fraction (paper: 0, any detection).
+        relative_match: a target found last frame takes no candidate scoring below this x
+            its last match's score, and a candidate so withheld starts no target (paper: 0).
+        duplicate_radius: ambiguous candidates whose heads all lie within this many head
+            widths of the best's are one response: best kept, no template match (paper:
+            negative, always match).
+        prune_max_misses: a target unfound for more frames is not pruned by its stale head
+            template (paper: unbounded).
+        stale: re-learning of stale parts (``StaleParts``); None: frozen until they match
+            (the paper).
+        gate_max_fraction: the gate stops growing at this many target sizes (paper:
+            unbounded).
+        exit_margin, exit_misses: an unfound target whose box, moved by KF1's prediction,
+            crossed the image border by more than exit_margin pixels is dropped after
+            exit_misses frames (paper: never, only after ``life_cycle.max_misses``).
+        report_predicted: an unfound target is reported at its last box moved by KF1's
+            prediction (paper: reporting is ours; at its last validated box).
+        occluded_cover: with foreground, an unfound target is reported only while found
+            targets' boxes cover this fraction of it (0 = off).
+    """
+
+    model_spread: float = 4.5
+    motion_compensation: bool = True
+    lone_growth: bool = True
+    min_support: float = 0.3
+    relative_match: float = 0.5
+    duplicate_radius: float = 0.25
+    prune_max_misses: int = 5
+    stale: StaleParts | None = field(default_factory=StaleParts)
+    gate_max_fraction: float = 6.0
+    exit_margin: float = 8.0
+    exit_misses: int = 3
+    report_predicted: bool = True
+    occluded_cover: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.model_spread > 0:
+            raise ValueError(f"adaptations.model_spread must be > 0, got {self.model_spread}")
+        _unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
+              occluded_cover=self.occluded_cover)
+        if not self.gate_max_fraction > 0:
+            raise ValueError(f"adaptations.gate_max_fraction must be > 0, got {self.gate_max_fraction}")
+        _at_least("adaptations", 0, exit_misses=self.exit_misses)
+        if self.stale is not None and not isinstance(self.stale, StaleParts):
+            raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
+        set_ = object.__setattr__
+        for name in ("model_spread", "min_support", "relative_match", "duplicate_radius",
+                     "gate_max_fraction", "exit_margin", "occluded_cover"):
+            set_(self, name, float(getattr(self, name)))
+        for name in ("motion_compensation", "lone_growth", "report_predicted"):
+            set_(self, name, bool(getattr(self, name)))
+        set_(self, "prune_max_misses", int(self.prune_max_misses))
+        set_(self, "exit_misses", int(self.exit_misses))
