@@ -81,6 +81,19 @@ def _time(fn: Callable[[], None]) -> float:
     return _clock() - t0
 
 
+class _Timed:
+    """A callable stage (the detector's shape verifier) that adds up its own time."""
+
+    def __init__(self, fn: Callable[..., Any]) -> None:
+        self.fn, self.seconds = fn, 0.0
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        t0 = _clock()
+        out = self.fn(*args, **kwargs)
+        self.seconds += _clock() - t0
+        return out
+
+
 def _staged_detector(source: Any) -> Any | None:
     """The detector inside a front-end source when its stages can be timed one by one."""
     det = getattr(source, "detector", None)
@@ -104,10 +117,13 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
         return [], []
     names = ("background", "cleaning", "detector", "hand-off", "blobs")
     runs: dict[str, list[float]] = {k: [] for k in names}
+    verifier_runs: list[float] = []
     warm: list[float] = []
     for _ in range(repeats):
         source = make_source()
         det = _staged_detector(source)
+        if getattr(det, "verifier", None) is not None:  # its share of the detector stage
+            det.verifier = _Timed(det.verifier)
         warm.append(_time(lambda source=source: source.start(sequence)))
         fg_of = ForegroundProvider(foreground, sequence, background)
         acc = dict.fromkeys(names, 0.0)
@@ -128,11 +144,15 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
                 acc[name] += dt
         for name in names:
             runs[name].append(acc[name])
+        if isinstance(getattr(det, "verifier", None), _Timed):
+            verifier_runs.append(det.verifier.seconds)
     n = len(images)
     total = [sum(runs[k][r] for k in names[:4]) for r in range(repeats)]
     fg_only = [runs["background"][r] + runs["cleaning"][r] + runs["blobs"][r]
                for r in range(repeats)]
     out = [StageTiming(f"  {k}", n, runs[k]) for k in names[:4]]
+    if verifier_runs:
+        out.insert(3, StageTiming("    of which shape verifier", n, verifier_runs))
     out += [StageTiming("front end (staged sum)", n, total),
             StageTiming("foreground only", n, fg_only)]
     return out, warm

@@ -12,13 +12,14 @@ COMMANDS = {
     "pbm": "feature-difference models of the PBM tracker (PBM 2.2)",
     "heads": "hair and skin colour mixtures of the head detector (PBM 2.3)",
     "silhouette": "mean person silhouette template of the silhouette detector (Reta 3.1)",
+    "active_basis": "active-basis (Gabor elements) person template of the shape verifier (Reta 3.1)",
 }
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
-        lines = [f"  {name:<11} {what}" for name, what in COMMANDS.items()]
+        lines = [f"  {name:<13} {what}" for name, what in COMMANDS.items()]
         print("usage: occbench fit {" + ",".join(COMMANDS) + "} [options]\n" + "\n".join(lines))
         return 0 if argv and argv[0] in ("-h", "--help") else 2
     module = importlib.import_module(f"harness.fit.{argv[0]}")

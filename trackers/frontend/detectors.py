@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 import cv2
 import numpy as np
 
+from trackers.frontend.active_basis import ShapeVerifier
 from trackers.frontend.background import BackgroundModel
 from trackers.frontend.blobs import Blob, blobs_from_mask
 from trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
@@ -206,6 +207,9 @@ class SilhouetteDetector(_ForegroundPipeline):
         calibration_evidence: "fits" (template fits without a size prior; the line is then
             in the template's own units, as the matcher uses it) or "blobs" (isolated
             person-like blobs).
+        verifier: optional shape verifier (``active_basis.ShapeVerifier``: Reta 3.1's
+            active-basis template of Gabor elements on the frame's grey levels) that keeps,
+            drops or splits the matcher's boxes.
     """
 
     def __init__(
@@ -216,9 +220,11 @@ class SilhouetteDetector(_ForegroundPipeline):
         calibration: PerspectiveCalibration | None = None,
         calibration_frames: int = 100,
         calibration_evidence: str = "fits",
+        verifier: ShapeVerifier | None = None,
     ) -> None:
         super().__init__(background)
         self.matcher = matcher if matcher is not None else SilhouetteMatcher()
+        self.verifier = verifier
         self.heads = heads
         self.calibration = calibration
         if calibration_frames < 0:
@@ -300,6 +306,10 @@ class SilhouetteDetector(_ForegroundPipeline):
             return Detections.empty()
         boxes[:, 0] += c0
         boxes[:, 1] += r0
+        if self.verifier is not None:
+            boxes, scores = self.verifier(frame, boxes, scores)
+            if len(boxes) == 0:
+                return Detections.empty()
         heads = None if self.heads is None else self.heads.detect(frame, fg, boxes)
         return Detections(boxes, np.clip(scores, 0.0, 1.0), _labels_from_boxes(boxes, fg), heads)
 
