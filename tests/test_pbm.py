@@ -380,7 +380,7 @@ def test_detection_heads_are_used_when_given():
     heads = np.array([[18.0, 22, 12, 12], [np.nan] * 4])
     fg = np.zeros((150, 120), bool)
     fg[25:110, 68:82] = True  # second person: its top 1/7 band has foreground from row 25
-    anchors = t._anchors(fg, Detections(boxes, np.ones(2), heads=heads))
+    anchors = t._finder.find(fg, Detections(boxes, np.ones(2), heads=heads))
     np.testing.assert_allclose(anchors.head[0], [24.0, 22.0, 12.0])  # from Detections.heads
     assert anchors.head[1, 1] == 25 and anchors.head[1, 0] == pytest.approx(75.0)
     assert len(anchors) == 2 and not anchors.blob.any()
@@ -392,7 +392,7 @@ def test_head_detector_fills_missing_heads():
             return np.array([[12.0, 21, 10, 10]] * len(boxes))
 
     t = PBMTracker(candidates=CandidateParams(head_detector=Fixed()))
-    anchors = t._anchors(None, Detections(np.array([[10.0, 20, 30, 90]]), np.ones(1)),
+    anchors = t._finder.find(None, Detections(np.array([[10.0, 20, 30, 90]]), np.ones(1)),
                          np.zeros((150, 120, 3), np.uint8))
     np.testing.assert_allclose(anchors.head[0], [17.0, 21.0, 10.0])
     with pytest.raises(ValueError, match="candidates.head_detector"):

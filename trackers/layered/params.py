@@ -15,8 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from trackers.layered.model import Targets, stale_parts
 from trackers.layered.models import FEATURES, FeatureModels
-from trackers.layered.parts import N_PARTS
+from trackers.layered.parts import N_PARTS, PartFeatures
 
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
@@ -370,6 +371,15 @@ class StaleParts:
         object.__setattr__(self, "cover", float(self.cover))
         object.__setattr__(self, "fill", float(self.fill))
         object.__setattr__(self, "relearn_rate", float(self.relearn_rate))
+
+    def relearn(self, targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
+                part_scores: np.ndarray, part_threshold: float, occluder_misses: int,
+                image_size: tuple[int, int]) -> np.ndarray:
+        """The (M, 5) parts of the targets at ``rows``, matched unoccluded to the candidates
+        at ``ks`` of ``cand``, to re-learn (``model.stale_parts``, which counts
+        ``targets.stale``)."""
+        return stale_parts(targets, rows, cand, ks, part_scores, part_threshold, occluder_misses,
+                           image_size, self.cover, self.fill, self.frames)
 
 
 @dataclass(frozen=True)

@@ -1,102 +1,48 @@
 """PBM: part-based model with layered data association, multi-target.
 
-Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM). Per
-frame (PBM Fig. 1):
+Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM).
+``PBMTracker.update`` runs the paper's Fig. 1 once per frame, one method per step:
 
-1. Candidates (``search.Candidates``): each detection box with its head, plus every head of
-   every foreground blob (connected components, PBM 2) that no detection explains. Heads
-   come from ``Detections.heads`` when given, else from the foreground: the top band (1/7)
-   of a detection box, and the peaks of a blob's top profile. With ``foreground=None`` the
-   detection boxes are the candidate blobs and every box pixel counts as foreground
-   (area and perimeter then carry no information; colour, displacement and overlap do).
-2. Dynamical model (PBM 3): KF1 gives the gate (zero-order centre, size from speed,
-   doubled after a miss and growing until found or dropped); KF2 predicts (w, h).
-3. Occlusion detection (PBM 3.1): size differs from the prediction by > 50%. Larger
-   candidates (and blobs holding several heads) get the head-anchored search over
-   w (1 + delta i), h (1 + delta i); smaller ones are aligned on their head or dismissed.
-4. Layered association (PBM 4.1): eq. 11 differences -> eq. 12 part scores (weights
-   omega) -> eq. 13 global score (weights gamma); per target the best gated candidate must
-   pass ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; otherwise (or when
-   all scores are weak, above ``matching.weak_threshold``) the target's head template is matched in
-   a local neighbourhood and the candidate nearest the refined head is kept (multiple-
-   response pruning). Targets then share candidates one-to-one by the Hungarian method on
-   1 - p (a multi-target addition: the paper tracks one target at a time).
-5. Model update (PBM 4.2): ``model.Targets.update`` (global model, KF1, KF2) and
-   ``model.update_parts`` (the parts models), for all matched targets at once.
+1. ``_find_candidates`` (PBM 2, 2.1, 2.3): detections with their heads, the heads of
+   foreground blobs no detection explains (``candidates.CandidateFinder``), and each
+   candidate's five parts and features on one sample grid.
+2. ``Targets.predict`` (PBM 3, eqs. 7-8): KF1 (the gate's size) and KF2 (the size).
+3. ``_score_in_gates`` (PBM 3, 3.1, 4.1, eqs. 11-13): each target scores the candidates in
+   its gate; a candidate whose size differs from the prediction by > 50% is occluded, and
+   ``_search_occluded`` searches it (larger: head-anchored boxes of eqs. 9-10; smaller:
+   aligned on its head, or dismissed).
+4. ``_prune_multiple_responses`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
+   ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
+   ambiguous or weak choice is settled by the target's head template. Targets then share
+   candidates one-to-one (Hungarian on 1 - p: the paper tracks one target at a time).
+5. ``_update_models`` (PBM 4.2): global models, KF1, KF2 and the parts of every matched
+   target at once.
+6. ``_end_targets`` and ``_start_targets`` (ours: PBM 3 starts each target by hand): a
+   candidate no target takes starts a TENTATIVE target, CONFIRMED after
+   ``life_cycle.min_hits`` matches; a target is dropped after ``life_cycle.max_misses``
+   frames unfound.
+7. ``_report``: found targets, and confirmed unfound ones for ``reporting.max_misses``
+   frames (OCCLUDED).
 
-Multi-target life cycle (an adaptation: the paper initialises by hand, PBM 3): a candidate
-that no target takes starts a TENTATIVE target (new blobs, and heads of a blob that split
-from another); it is CONFIRMED after ``life_cycle.min_hits`` matches in a row and dropped if it
-misses before. A confirmed target that is not found is reported OCCLUDED for up to
-``reporting.max_misses`` frames when ``reporting.occluded``: at its last validated box
-(zero-order, as the gate), or moved by KF1's constant-velocity prediction when
-``adaptations.report_predicted``; it is dropped after ``life_cycle.max_misses`` frames, or after ``adaptations.exit_misses``
-frames when its box moved by KF1's prediction has crossed the image border by more than
-``adaptations.exit_margin`` (it left; someone standing at the border and missed is not leaving).
+Every rule the paper does not have is a field of ``params.Adaptations`` (one row each in
+docs/adaptations.md; ``tracker=pbm_paper`` turns them off). Readings of the paper that are
+not switchable: features are measured on a fixed grid of samples per box
+(``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
+P(D >= d) (``models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2 is used
+sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
+1 + m; KF2 holds an unfound target's size; a blob with several heads counts as merged
+(searched) whatever its size.
 
-Output ``Track.extra``: ``parts`` (5, 4) part boxes, ``occluded_parts`` (5,) bool (frozen
-parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates were
-validated in (None for a target born this frame).
-
-Adaptations (where the paper is vague or relies on what we do not have):
-
-- Heads: ``Detections.heads`` when given, else the PBM 2.3 hair/skin detector when
-  ``candidates.head_detector`` is set, else the top 1/7 band of a detection's foreground; on blobs,
-  the peaks of the top profile.
-- Features are measured on a fixed grid of samples per box (``PartFeatureExtractor``):
-  scale-free area/perimeter/colour, one vectorised pass for all candidates of a frame.
-- p(d | theta) of eq. 12 is the model's survival function P(D >= d) (``models``), applied
-  to d / ``adaptations.model_spread``: models fitted on clean annotated pairs are stretched for the
-  larger differences of live tracking (overlapping people, detection noise).
-- delta of eqs. 9-10 is relative (w (1 + delta i)); eq. 2 is used sign-corrected.
-- Detection boxes and blob spans differ systematically (box margins, swinging limbs):
-  blob-born boxes are rescaled by a ratio learned online from isolated person/detection
-  pairs, and a blob candidate keeps KF2's width.
-- The occlusion test applies to every candidate as in the paper; a blob with several
-  heads counts as merged (searched) whatever its size.
-- Lone growth (``adaptations.lone_growth``): a region larger by size alone (one head) that holds the
-  target and no other found or reported target is the target grown, not a merge: a person
-  walking in through a border or a doorway, whose box widens over ten frames or so. The
-  paper's search (w, h within +-10%) would keep the box it was first seen with.
-- After a gap of m frames the displacement and overlap differences are divided by 1 + m.
-- Motion compensation (``adaptations.motion_compensation``): displacement and overlap (eq. 11) compare
-  a candidate with the parts model moved by KF1's constant-velocity prediction since the
-  target was last found. The paper compares the last frame as it is; in crowds a
-  neighbour's box then overlaps the last box about as much as the person's own. The gate
-  stays zero-order (PBM 3), so a person who turns back while hidden is still searched for
-  where they were last seen, and after a gap of m frames the differences are divided by
-  1 + m as above.
-- KF2 holds the size of an unfound target (its size rates are zeroed at a miss): a hidden
-  person's size is not extrapolated, so the occlusion test and the search boxes of a long
-  lost target keep a person's size.
-- Multiple responses (PBM 4.1) whose heads coincide (within ``adaptations.duplicate_radius`` head
-  widths of the best one's) are one response: the best is kept, no head template is
-  matched (it could not tell them apart).
-- A target unfound for more than ``adaptations.prune_max_misses`` frames is not pruned by its head
-  template (taken when it was last seen, it has gone stale):
-  an ambiguous choice keeps the best candidate, a weak candidate is left.
-- Stale parts (``adaptations.stale``): a
-  frozen part (PBM 4.2) whose person's appearance has moved on keeps failing to match and
-  is never updated again. A
-  part is judged hidden from evidence other than p_j: another target's box over it, the
-  image border, or its foreground area fallen below ``fill`` of its model's (a wall).
-  A part that is visible by all three yet fails to match ``stale_frames`` times is
-  re-learned; a hidden part stays frozen, as in the paper.
-- Targets are born from detections (and from free blobs when ``life_cycle.blob_births``), and with
-  foreground only from candidates with a part holding foreground (``adaptations.min_support``): a
-  detection over background is a false alarm, never a person.
-- Relative match (``adaptations.relative_match``): a target found in the previous frame takes no
-  candidate scoring below ``adaptations.relative_match`` times its last match's score: when its own
-  detection is missed, a neighbour's detection that merely passes ``matching.match_threshold`` is
-  not taken (in crowds that first swap started the cascades of identity switches).
-- ``adaptations.occluded_cover`` (off by default): an unfound target is reported only while found
-  targets' boxes cover it.
+Output ``Track.extra``: ``parts`` (5, 4) xywh part boxes, ``occluded_parts`` (5,) bool
+(frozen parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates
+were validated in (None for a target born this frame).
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -110,12 +56,12 @@ from trackers.layered._glue_kernels import (
 )
 from trackers.layered._search_kernels import foreground_counts
 from trackers.layered.association import ambiguous_rows, pair_scores
+from trackers.layered.candidates import CandidateFinder
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
     Targets,
     dof_from_box,
     dof_from_head,
-    stale_parts,
     update_parts,
 )
 from trackers.layered.params import (
@@ -139,17 +85,12 @@ from trackers.layered.parts import (
 )
 from trackers.layered.search import (
     Candidates,
-    blobs_boxes,
     head_fill,
     head_patch,
     head_patches,
-    heads_from_bands,
     match_head_template,
     occlusion_kinds,
-    residual_foreground,
     search_boxes_many,
-    split_blob_box,
-    top_profile_heads,
 )
 from trackers.records import Detections, Track, TrackState
 
@@ -162,6 +103,38 @@ def _norms(v: np.ndarray) -> np.ndarray:
     """(K,) Euclidean norms of the rows of v (K, 2), each equal bit for bit to
     ``np.linalg.norm(v[k])`` (the same dot product, one per row)."""
     return np.sqrt(np.vecdot(v, v))
+
+
+@dataclass
+class _Scores:
+    """One frame's association of T targets with N candidates.
+
+    Attributes:
+        S: (T, N) global scores p (eq. 13); -inf where n is no candidate of t.
+        pj: (T, N, 5) part scores p_j (eq. 12) of the unoccluded pairs.
+        hyp: (T, N) row of an occluded pair's best searched box in the ``*_h`` arrays, -1
+            for an unoccluded pair.
+        feats_h: features of the searched boxes (None: none). pj_h: (P, 5) p_j,
+            k_h: (P,) each pair's best box in ``feats_h``, dof_h: (P, 6) its global model.
+    """
+
+    S: np.ndarray
+    pj: np.ndarray
+    hyp: np.ndarray
+    feats_h: PartFeatures | None = None
+    pj_h: np.ndarray | None = None
+    k_h: np.ndarray | None = None
+    dof_h: np.ndarray | None = None
+
+    @classmethod
+    def empty(cls, T: int, N: int) -> _Scores:
+        """No pair scored yet."""
+        S = np.empty((T, N))
+        S.fill(-np.inf)
+        hyp = np.empty((T, N), dtype=np.intp)
+        hyp.fill(-1)
+        return cls(S, np.zeros((T, N, N_PARTS)), hyp, None, np.zeros((0, N_PARTS)),
+                   np.zeros(0, np.intp), np.zeros((0, 6)))
 
 
 class PBMTracker:
@@ -217,121 +190,132 @@ class PBMTracker:
         f = self.features
         self._extractor = PartFeatureExtractor(f.histogram_bins, *f.grid)
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
+        self._finder = CandidateFinder(self.candidates)
         self.reset()
 
     def reset(self) -> None:
         """Forget every target and restart ids at 1."""
-        self.targets = Targets(self._gate, self.noise.kf1, self.noise.kf2, self.model_update.ratio_window,
-                               self.model_update.occluded_window, self._extractor.bins)
+        u = self.model_update
+        self.targets = Targets(self._gate, self.noise.kf1, self.noise.kf2, u.ratio_window,
+                               u.occluded_window, self._extractor.bins)
+        self._finder.reset()
         self._next_id = 1
-        self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
-        self._blob_pairs = 0
         self._frame = 0
         self._had_fg = False
 
-    # ------------------------------------------------------------------ candidates
-    def _anchors(self, fg: np.ndarray | None, detections: Detections,
-                 frame: np.ndarray | None = None, fg_residual: int | None = None) -> Candidates:
-        """The frame's candidates (PBM 2, 3.1): the valid detection boxes with their heads,
-        then the heads of foreground blobs that no detection explains (``fg_residual``: the
-        number of foreground pixels that no detection box covers, ``residual_foreground``,
-        when known)."""
-        det_boxes = detections.boxes
-        heads = detections.heads
-        if heads is None and self.candidates.head_detector is not None and frame is not None and len(det_boxes):
-            heads = np.asarray(self.candidates.head_detector.detect(frame, fg, det_boxes), dtype=np.float64)
-        valid = (np.logical_and.reduce(np.isfinite(det_boxes), axis=1)
-                 & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)).nonzero()[0]
-        box = det_boxes[valid]
-        if fg is not None:  # the top 1/7 band's foreground (PBM 3.1)
-            head = heads_from_bands(fg, box)
-        else:  # the band's centre
-            x, y, w = box[:, 0], box[:, 1], box[:, 2]
-            head = np.column_stack([x + 0.5 * w, y, 0.5 * w])
-        if heads is not None:  # the source's heads where it gives them
-            has_head = np.logical_and.reduce(np.isfinite(heads[valid]), axis=1)
-            hx, hy, hw = heads[valid[has_head], :3].T
-            head[has_head] = np.column_stack([hx + 0.5 * hw, hy, hw])
-        rows = (box, box.copy(), head, np.zeros(len(valid), dtype=bool),
-                np.ones(len(valid), dtype=np.int64))
-        if fg is None:
-            return Candidates(*rows)
-        # blobs matter only where foreground is left unexplained by the detections
-        if fg_residual is None and len(det_boxes):
-            fg_residual = residual_foreground(fg, det_boxes)
-        if len(det_boxes) and fg_residual < self.candidates.min_blob_area:
-            return Candidates(*rows)
-        s = self.candidates.blob_downsample
-        small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
-        labels, bboxes, numbers = blobs_boxes(small, max(self.candidates.min_blob_area // (s * s), 1))
-        if len(bboxes) and len(det_boxes):
-            blob_iou = iou_matrix(bboxes * s, det_boxes)  # for ``_calibrate``
-            # the head zone of each detection: its top third (and a tenth above)
-            zx0, zx1 = det_boxes[:, 0, None], (det_boxes[:, 0] + det_boxes[:, 2])[:, None]
-            zy0 = (det_boxes[:, 1] - 0.1 * det_boxes[:, 3])[:, None]
-            zy1 = (det_boxes[:, 1] + det_boxes[:, 3] / 3.0)[:, None]
-        blob_rows: list[tuple] = []
-        for i, (sbox, lab) in enumerate(zip(bboxes, numbers)):
-            x, y, w, h = (int(v) for v in sbox)
-            mask = labels[y:y + h, x:x + w] == lab
-            peaks = top_profile_heads(mask, max(self.candidates.head_separation * h, 3.0 / s),
-                                      max(0.06 * h, 2.0 / s))
-            bbox = sbox * s
-            hx = (peaks[:, 0] + x + 0.5) * s
-            hy = (peaks[:, 1] + y) * s
-            # heads explained by a detection: inside a detection box's top third
-            if len(det_boxes):
-                explained = ((hx >= zx0) & (hx <= zx1) & (hy >= zy0) & (hy <= zy1)).any(axis=0)
-            else:
-                explained = np.zeros(len(peaks), dtype=bool)
-            if len(peaks) == 1 and explained[0]:
-                self._calibrate(bbox, blob_iou[i], det_boxes)
-            if explained.all():
-                continue
-            n = len(peaks)
-            head_w = max(self.candidates.head_separation * bbox[3], 3.0)
-            for k in np.nonzero(~explained)[0]:
-                own = (bbox.copy() if n == 1
-                       else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
-                blob_rows.append((self._blob_box_as_detection(own), bbox,
-                                  np.array([hx[k], hy[k], head_w]), n))
-        if not blob_rows:
-            return Candidates(*rows)
-        own, region, head, n = zip(*blob_rows)
-        return Candidates(np.vstack([rows[0], own]), np.vstack([rows[1], region]),
-                          np.vstack([rows[2], head]),
-                          np.concatenate([rows[3], np.ones(len(own), dtype=bool)]),
-                          np.concatenate([rows[4], np.array(n, dtype=np.int64)]))
-
-    def _calibrate(self, blob_box: np.ndarray, iou: np.ndarray, det_boxes: np.ndarray) -> None:
-        """Learn the ratio of detection box size to blob span from isolated people.
-
-        A detector's boxes and a foreground blob's span differ systematically (limbs, box
-        margins); a blob holding one head and overlapping exactly one detection (IoU >
-        0.5) gives one sample of (w_det / w_blob, h_det / h_blob); the first 20 samples
-        are averaged, later ones enter a running average with weight 0.05.
+    # ------------------------------------------------------------------ update (PBM Fig. 1)
+    def update(self, frame: np.ndarray, detections: Detections | None,
+               foreground: np.ndarray | None = None) -> list[Track]:
+        """Advance one frame: the steps of PBM Fig. 1 (module docstring).
 
         Args:
-            blob_box: (4,) xywh blob. iou: (D,) its IoU with each of ``det_boxes`` (D, 4).
+            frame: (H, W, 3) uint8 BGR image (required: PBM compares colours).
+            detections: person boxes (``Detections.heads`` used when present); None = none.
+            foreground: (H, W) bool mask or int label image (nonzero = foreground), or None.
+        Returns:
+            One Track per reported target: CONFIRMED when found, OCCLUDED while unfound,
+            TENTATIVE before confirmation.
         """
-        if (iou > 0.3).sum() != 1 or iou.max() < 0.5:
-            return
-        d = det_boxes[int(np.argmax(iou))]
-        r = d[2:] / np.maximum(blob_box[2:], 1.0)
-        self._blob_pairs += 1
-        rate = max(1.0 / self._blob_pairs, 0.05)
-        self._blob_to_box += rate * (r - self._blob_to_box)
+        frame, detections, fg, fg_residual = self._inputs(frame, detections, foreground)
+        self._frame += 1
+        self._had_fg = fg is not None
+        H, W = frame.shape[:2]
+        cand, feats = self._find_candidates(frame, detections, fg, fg_residual)  # PBM 2
+        pred_wh = self.targets.predict()  # PBM 3, eqs. 7-8
+        scores = _Scores.empty(len(self.targets), len(cand))
+        if len(self.targets) and len(cand):
+            self._score_in_gates(scores, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
+            self._prune_multiple_responses(scores, cand, frame)  # PBM 4, 4.1
+        withheld = self._withhold_relative(scores.S)  # adaptations.relative_match
+        cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
+        matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
+        if len(matches):
+            self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
+        if len(lost):
+            self.targets.mark_missed(lost)
+        self._end_targets(W, H)
+        self._start_targets(frame, free, cand, feats, fg, withheld)
+        return self._report()
 
-    def _blob_box_as_detection(self, box: np.ndarray) -> np.ndarray:
-        """A blob box rescaled about its centre to the detections' box convention."""
-        if self._blob_pairs == 0:
-            return box
-        c = box[:2] + 0.5 * box[2:]
-        wh = box[2:] * self._blob_to_box
-        return np.array([c[0] - 0.5 * wh[0], box[1], wh[0], wh[1]])
+    def _inputs(self, frame: np.ndarray, detections: Detections | None,
+                foreground: np.ndarray | None) -> tuple:
+        """Checked inputs: (frame, detections, fg (H, W) bool or None, fg_residual: the
+        foreground pixels no detection box covers when a label image gave them, else None)."""
+        if frame is None:
+            raise ValueError("PBMTracker.update: frame is None; PBM needs pixels (colour histograms of the parts)")
+        frame = np.asarray(frame)
+        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
+            raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
+        if detections is None:
+            detections = Detections.empty()
+        fg, fg_residual = None, None
+        if foreground is not None:
+            foreground = np.asarray(foreground)
+            if foreground.shape != frame.shape[:2]:
+                raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
+                                 f"differs from frame {frame.shape[:2]}")
+            if foreground.dtype == bool:
+                fg = np.ascontiguousarray(foreground)
+            elif foreground.dtype.kind in "iu" and foreground.dtype.isnative:
+                # a label image: the mask, its pixels and those the detections cover, in one pass
+                fg, count, covered = foreground_counts(
+                    foreground, np.asarray(detections.boxes, dtype=np.float64).reshape(-1, 4))
+                fg_residual = count - covered
+            else:
+                fg = foreground != 0
+        return frame, detections, fg, fg_residual
 
-    # ------------------------------------------------------------------ hypotheses
-    def _occluded_hypotheses(self, ti: np.ndarray, n: np.ndarray, kind: np.ndarray,
+    def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None,
+                         fg_residual: int | None) -> tuple[Candidates, PartFeatures]:
+        """PBM 2, 2.1: the frame's N candidates (``CandidateFinder``) with their foreground
+        centroids set, and their parts split at them (eqs. 1-2) with the features of PBM 2.2."""
+        self._extractor.start(frame, fg)
+        self._search_extractor.start(frame, fg)
+        cand = self._finder.find(fg, detections, frame, fg_residual)
+        cand.centroid, feats = self._extractor.extract_at_centroids(cand.box)
+        return cand, feats
+
+    def _compared_models(self) -> PartFeatures:
+        """The parts models candidates are compared with (eq. 11): as last updated, or moved
+        by KF1's constant-velocity prediction (``adaptations.motion_compensation``)."""
+        model = self.targets.parts
+        if self.adaptations.motion_compensation:
+            model = model.shifted(self.targets.predicted_shift())
+        return model
+
+    def _score_in_gates(self, scores: _Scores, cand: Candidates, feats: PartFeatures,
+                        fg: np.ndarray | None, pred_wh: np.ndarray) -> None:
+        """PBM 3, 3.1, eqs. 11-13: each target scores the candidates in its KF1 gate.
+
+        The unoccluded pairs are scored as measured; the occluded ones (PBM 3.1: size off
+        the prediction by more than ``search.occlusion_threshold``) whose carved
+        (head-anchored) candidate lies in the gate too (its centre hangs half a predicted
+        height below the head) and, for a larger region, that holds the target ("the target
+        needs to be located within the blob": a found target's last box lies at least
+        ``search.overlap`` inside it) are searched (``_search_occluded``). A blob holding
+        several heads is a merge: searched. With ``adaptations.lone_growth``, a larger
+        region holding only this target is the target grown: unoccluded.
+        """
+        targets = self.targets
+        model = self._compared_models()
+        gates = targets.gate_boxes()
+        targets.last_gate = gates  # the gates this frame's candidates were validated in
+        kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
+        present = (targets.misses <= self.reporting.max_misses) & self.adaptations.lone_growth
+        ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
+            cand.box, cand.region, cand.head, cand.heads_in_region, gates,
+            pred_wh, kinds, targets.dof, targets.misses, self.search.overlap, present)
+        pj_in, p_in = self._scores(model, feats, ti_in, n_in)
+        scores.pj[ti_in, n_in] = pj_in
+        scores.S[ti_in, n_in] = p_in
+        found = self._search_occluded(ti_s, n_s, kind_s, cand, fg, pred_wh, model) if len(ti_s) else None
+        if found is not None:
+            kept, p_h, scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found
+            scores.S[ti_s[kept], n_s[kept]] = p_h[kept]
+            scores.hyp[ti_s[kept], n_s[kept]] = kept.nonzero()[0]
+
+    # ------------------------------------------------------------------ search (PBM 3.1)
+    def _search_occluded(self, ti: np.ndarray, n: np.ndarray, kind: np.ndarray,
                              cand: Candidates, fg: np.ndarray | None, pred_wh: np.ndarray,
                              model: PartFeatures) -> tuple:
         """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for the P
@@ -382,7 +366,6 @@ class PBMTracker:
         return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
                            self.features.omega, self.features.gamma, self.adaptations.model_spread)
 
-    # ------------------------------------------------------------------ pruning
     def _prune(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
                frame: np.ndarray) -> tuple[int, np.ndarray | None]:
         """Multiple-response pruning (PBM 4.1): the target's head template is matched
@@ -419,198 +402,151 @@ class PBMTracker:
             nearest = int(np.argmin(np.linalg.norm(heads - [rx, ry], axis=1)))
         return int(cands[nearest]), np.array([rx, ry])
 
-    # ------------------------------------------------------------------ update
-    def update(self, frame: np.ndarray, detections: Detections | None,
-               foreground: np.ndarray | None = None) -> list[Track]:
-        """Advance one frame.
+    # ------------------------------------------------------------------ selection (PBM 4, 4.1)
+    def _prune_multiple_responses(self, scores: _Scores, cand: Candidates, frame: np.ndarray) -> None:
+        """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
+        by ``matching.margin_ratio`` (ambiguous), or whose candidates all score in
+        [weak_threshold, match_threshold) (weak), keeps the nearby candidate (within
+        ``pruning.radius`` head widths; distant rivals are left to the one-to-one
+        assignment) nearest its head template's best match (``_prune``), at a score of at
+        least ``match_threshold``; the others are struck from its row of S. A weak target
+        whose template does not match takes none.
 
-        Args:
-            frame: (H, W, 3) uint8 BGR image (required: PBM compares colours).
-            detections: person boxes (``Detections.heads`` used when present); None = none.
-            foreground: (H, W) bool mask or int label image (nonzero = foreground), or None.
-        Returns:
-            One Track per live target: CONFIRMED when found, OCCLUDED (last box) while
-            unfound, TENTATIVE before confirmation.
+        Adaptations: ambiguous candidates whose heads all lie within
+        ``adaptations.duplicate_radius`` head widths of the best's are one response (best
+        kept, no template match); a target unfound for more than
+        ``adaptations.prune_max_misses`` frames has a stale template: an ambiguous choice
+        keeps the best, a weak one takes none.
         """
-        if frame is None:
-            raise ValueError("PBMTracker.update: frame is None; PBM needs pixels (colour histograms of the parts)")
-        frame = np.asarray(frame)
-        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
-            raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
-        if detections is None:
-            detections = Detections.empty()
-        fg, fg_residual = None, None
-        if foreground is not None:
-            foreground = np.asarray(foreground)
-            if foreground.shape != frame.shape[:2]:
-                raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
-                                 f"differs from frame {frame.shape[:2]}")
-            if foreground.dtype == bool:
-                fg = np.ascontiguousarray(foreground)
-            elif foreground.dtype.kind in "iu" and foreground.dtype.isnative:
-                # a label image: the mask, its pixels and those the detections cover, in one pass
-                fg, count, covered = foreground_counts(
-                    foreground, np.asarray(detections.boxes, dtype=np.float64).reshape(-1, 4))
-                fg_residual = count - covered
-            else:
-                fg = foreground != 0
-        self._frame += 1
-        self._had_fg = fg is not None
-        H, W = frame.shape[:2]
-        self._extractor.start(frame, fg)
-        self._search_extractor.start(frame, fg)
-        cand = self._anchors(fg, detections, frame, fg_residual)
-        n_a = len(cand)
-        boxes = cand.box
-        # foreground centroids (PBM 2.1) and the parts split at them, on one grid
-        cand.centroid, feats = self._extractor.extract_at_centroids(boxes)
-        targets = self.targets
-        pred_wh = targets.predict()
-        T = len(targets)
-        S = np.empty((T, n_a))
-        S.fill(-np.inf)
-        # occluded candidates: hyp[ti, n] indexes the pair's row of the search's arrays
-        # (``_occluded_hypotheses``); the unoccluded ones are read from the frame's arrays
-        hyp = np.empty((T, n_a), dtype=np.intp)
-        hyp.fill(-1)
-        pj_all = np.zeros((T, n_a, N_PARTS))
-        # the search's rows (``_occluded_hypotheses``): none yet
-        feats_h, pj_h, k_h, dof_h = None, np.zeros((0, N_PARTS)), np.zeros(0, np.intp), np.zeros((0, 6))
-        if T and n_a:
-            model = targets.parts
-            if self.adaptations.motion_compensation:
-                model = model.shifted(targets.predicted_shift())
-            gates = targets.gate_boxes()
-            targets.last_gate = gates  # the gates this frame's candidates were validated in
-            # candidates in each target's gate (PBM 3) and the occlusion test (PBM 3.1): the
-            # unoccluded pairs; the occluded ones whose carved (head-anchored) candidate lies
-            # in the gate too (its centre hangs half a predicted height below the head) and,
-            # for a larger region, that holds the target (PBM 3.1: "the target needs to be
-            # located within the blob"): a found target's last box lies at least
-            # ``search_overlap`` inside it. A blob holding several heads is a merge: searched.
-            kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
-            present = (targets.misses <= self.reporting.max_misses) & self.adaptations.lone_growth
-            ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
-                boxes, cand.region, cand.head, cand.heads_in_region, gates,
-                pred_wh, kinds, targets.dof, targets.misses,
-                self.search.overlap, present)
-            # eqs. 11-13 for the unoccluded candidates
-            pj_in, p_in = self._scores(model, feats, ti_in, n_in)
-            pj_all[ti_in, n_in] = pj_in
-            S[ti_in, n_in] = p_in
-            found = (self._occluded_hypotheses(ti_s, n_s, kind_s, cand, fg, pred_wh, model)
-                     if len(ti_s) else None)
-            if found is not None:
-                kept, p_h, pj_h, feats_h, k_h, dof_h = found
-                S[ti_s[kept], n_s[kept]] = p_h[kept]
-                hyp[ti_s[kept], n_s[kept]] = kept.nonzero()[0]
-            # selection per target, with multiple-response pruning (PBM 4, steps 4-5)
-            # (the loop below changes only row ti of S, after reading it)
-            bests, _, ambs = ambiguous_rows(S, self.matching.match_threshold, self.matching.margin_ratio)
-            weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= self.matching.weak_threshold)
-            heads_xy = cand.head[:, :2]
-            for ti in (ambs | weaks).nonzero()[0].tolist():
-                row = S[ti]
-                best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
-                lo = self.matching.match_threshold if amb else self.matching.weak_threshold
-                cands = (row >= lo).nonzero()[0]
-                # only nearby candidates are multiple responses of one person (PBM 4.1);
-                # distant rivals are left to the one-to-one assignment
-                r = best if best >= 0 else int(np.argmax(row))
-                hw = max(cand.head[r, 2], 1.0)
-                dist = _norms(heads_xy[cands] - heads_xy[r])
-                near = dist <= self.pruning.radius * hw
-                cands = cands[near]
-                if amb and len(cands) < 2:
+        S, targets, m, a = scores.S, self.targets, self.matching, self.adaptations
+        bests, _, ambs = ambiguous_rows(S, m.match_threshold, m.margin_ratio)
+        weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= m.weak_threshold)
+        heads_xy = cand.head[:, :2]
+        for ti in (ambs | weaks).nonzero()[0].tolist():  # changes only row ti, after reading it
+            row = S[ti]
+            best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
+            lo = m.match_threshold if amb else m.weak_threshold
+            cands = (row >= lo).nonzero()[0]
+            r = best if best >= 0 else int(np.argmax(row))
+            hw = max(cand.head[r, 2], 1.0)
+            dist = _norms(heads_xy[cands] - heads_xy[r])
+            near = dist <= self.pruning.radius * hw
+            cands = cands[near]
+            if amb and len(cands) < 2:
+                continue
+            if targets.misses[ti] > a.prune_max_misses:
+                if weak:
                     continue
-                if targets.misses[ti] > self.adaptations.prune_max_misses:
-                    # a long-lost target's head template is stale: no pruning by it
-                    if weak:
-                        continue
-                    chosen, refined = best, None
-                elif amb and dist[near].max() <= self.adaptations.duplicate_radius * hw:
-                    chosen, refined = best, None  # one response: the heads coincide
-                else:
-                    chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
-                if chosen < 0:
-                    if weak:
-                        continue
-                    chosen = best
-                elif refined is not None and hyp[ti, chosen] >= 0:
-                    # "the matching candidate is then updated accordingly": a carved
-                    # (occluded) candidate is re-anchored on the refined head
-                    q = hyp[ti, chosen]
-                    dof_h[q] = dof_from_head(refined, dof_h[q, 4], dof_h[q, 5], targets.alpha[ti],
-                                             targets.beta[ti])
-                keep = row[chosen]
-                S[ti, cands] = -np.inf
-                S[ti, chosen] = max(keep, self.matching.match_threshold)
-        withheld = None
-        if self.adaptations.relative_match > 0 and T and n_a:
-            # a target found last frame takes no candidate scoring below relative_match x
-            # the score of that match (its own detection missed, a neighbour's is no match)
-            ref = np.where(targets.misses == 0, targets.score, 0.0)
-            weak = (S < self.adaptations.relative_match * ref[:, None]) & (S >= self.matching.match_threshold)
-            withheld = weak.any(axis=0)  # a poor match of a known target starts no new one
-            S[weak] = -np.inf
-        cost = np.where(np.isfinite(S), 1.0 - S, np.inf)
-        matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
-        if len(matches):
-            # model update (PBM 4.2): global models and filters of all matched targets at once
-            mt, mn = matches[:, 0], matches[:, 1]
-            dof, pj, occl, ks = matched_rows(mt, mn, hyp, boxes, cand.centroid, cand.blob, pred_wh,
-                                             targets.alpha, pj_all, dof_h, pj_h, k_h)
-            measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
-            shift = targets.update(mt, dof, measured, occl, pj, self.model_update.part_threshold)
-            # then the parts models, from the feature arrays the candidates were measured in
-            dof_t = targets.dof
-            n_occl = np.count_nonzero(occl)
-            groups = [(~occl, feats)] if n_occl < len(mt) else []
-            if n_occl:
-                groups.append((occl, feats_h))
-            relearn, stale = None, self.adaptations.stale
-            if stale is not None and n_occl < len(mt):
-                # stale parts (adaptation): visible, failing to match, among unoccluded matches
-                # (before the update: the model's foreground area is the reference)
-                un = ~occl
-                relearn = stale_parts(targets, mt[un], feats, ks[un], pj[un],
-                                      self.model_update.part_threshold, self.reporting.max_misses, (W, H),
-                                      stale.cover, stale.fill, stale.frames)
-            for g, (rows, f) in enumerate(groups):
-                r = mt[rows]
-                update_parts(targets.parts, r, f, ks[rows], pj[rows], self.model_update.part_threshold,
-                             self.model_update.rate, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
-                             targets.alpha[r], targets.beta[r],
-                             relearn if g == 0 else None,
-                             1.0 if stale is None else stale.relearn_rate)
-            targets.score[mt] = S[mt, mn]
-            # new head templates of the targets whose head matched, unoccluded (PBM 4.1)
-            fresh = mt[~occl & (pj[:, 0] >= self.model_update.part_threshold)]
-            for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
-                if tpl is not None:
-                    targets.head_template[ti] = tpl
-            targets.confirmed[mt] |= targets.hits[mt] >= self.life_cycle.min_hits
-        if len(lost):
-            targets.mark_missed(lost)
-        # drop tentative misses, long-lost and leaving targets
+                chosen, refined = best, None
+            elif amb and dist[near].max() <= a.duplicate_radius * hw:
+                chosen, refined = best, None  # one response: the heads coincide
+            else:
+                chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
+            if chosen < 0:
+                if weak:
+                    continue
+                chosen = best
+            elif refined is not None and scores.hyp[ti, chosen] >= 0:
+                # "the matching candidate is then updated accordingly": a carved
+                # (occluded) candidate is re-anchored on the refined head
+                q = scores.hyp[ti, chosen]
+                dof_h = scores.dof_h
+                dof_h[q] = dof_from_head(refined, dof_h[q, 4], dof_h[q, 5], targets.alpha[ti],
+                                         targets.beta[ti])
+            keep = row[chosen]
+            S[ti, cands] = -np.inf
+            S[ti, chosen] = max(keep, m.match_threshold)
+
+    def _withhold_relative(self, S: np.ndarray) -> np.ndarray | None:
+        """``adaptations.relative_match`` (ours; 0 = off, None returned): a target found last
+        frame takes no candidate scoring below relative_match x the score of that match
+        (its own detection missed, a neighbour's is no match); struck from S in place.
+        Returns the (N,) candidates so withheld (they start no target), or None."""
+        if not self.adaptations.relative_match > 0 or not S.size:
+            return None
+        targets = self.targets
+        ref = np.where(targets.misses == 0, targets.score, 0.0)
+        weak = (S < self.adaptations.relative_match * ref[:, None]) & (S >= self.matching.match_threshold)
+        S[weak] = -np.inf
+        return weak.any(axis=0)
+
+    # ------------------------------------------------------------------ model update (PBM 4.2)
+    def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: _Scores,
+                       cand: Candidates, feats: PartFeatures, fg: np.ndarray | None,
+                       pred_wh: np.ndarray, image_size: tuple[int, int]) -> None:
+        """PBM 4.2 for the (M, 2) matched (target, candidate) pairs, all at once: the global
+        models and filters (``Targets.update``: DOF measured when unoccluded, window-averaged
+        when occluded), then each part by a running average weighted by p_j, frozen below
+        ``model_update.part_threshold`` (``update_parts``; with ``adaptations.stale`` a
+        visible part failing to match is re-learned), the match scores, the head templates
+        of unoccluded targets whose head matched (PBM 4.1), and confirmation after
+        ``life_cycle.min_hits`` matches."""
+        targets, u = self.targets, self.model_update
+        mt, mn = matches[:, 0], matches[:, 1]
+        dof, pj, occl, ks = matched_rows(mt, mn, scores.hyp, cand.box, cand.centroid, cand.blob,
+                                         pred_wh, targets.alpha, scores.pj, scores.dof_h,
+                                         scores.pj_h, scores.k_h)
+        measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
+        shift = targets.update(mt, dof, measured, occl, pj, u.part_threshold)
+        # then the parts models, from the feature arrays the candidates were measured in
+        dof_t = targets.dof
+        n_occl = np.count_nonzero(occl)
+        groups = [(~occl, feats)] if n_occl < len(mt) else []
+        if n_occl:
+            groups.append((occl, scores.feats_h))
+        relearn, stale = None, self.adaptations.stale
+        if stale is not None and n_occl < len(mt):
+            # among unoccluded matches, before the update (the model's foreground area is
+            # the reference)
+            un = ~occl
+            relearn = stale.relearn(targets, mt[un], feats, ks[un], pj[un], u.part_threshold,
+                                    self.reporting.max_misses, image_size)
+        relearn_rate = 1.0 if stale is None else stale.relearn_rate
+        for g, (rows, f) in enumerate(groups):
+            r = mt[rows]
+            update_parts(targets.parts, r, f, ks[rows], pj[rows], u.part_threshold, u.rate,
+                         shift[rows], dof_t[r[:, None], _BOX_COLUMNS], targets.alpha[r],
+                         targets.beta[r], relearn if g == 0 else None, relearn_rate)
+        targets.score[mt] = scores.S[mt, mn]
+        fresh = mt[~occl & (pj[:, 0] >= u.part_threshold)]
+        for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
+            if tpl is not None:
+                targets.head_template[ti] = tpl
+        targets.confirmed[mt] |= targets.hits[mt] >= self.life_cycle.min_hits
+
+    # ------------------------------------------------------------------ life cycle (ours)
+    def _end_targets(self, W: int, H: int) -> None:
+        """Drop tentative targets that missed, confirmed ones unfound for more than
+        ``life_cycle.max_misses`` frames, and (``adaptations.exit_margin``) those unfound
+        for ``adaptations.exit_misses`` frames whose predicted box left the (W, H) image."""
+        targets, a = self.targets, self.adaptations
         alive = alive_rows(targets.dof, targets.predicted_shift(), targets.misses,
-                           targets.confirmed, W, H, self.adaptations.exit_margin, self.life_cycle.max_misses,
-                           self.adaptations.exit_misses)
+                           targets.confirmed, W, H, a.exit_margin, self.life_cycle.max_misses,
+                           a.exit_misses)
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
-        # new targets from free candidates (new blobs, split heads)
+
+    def _start_targets(self, frame: np.ndarray, free: np.ndarray, cand: Candidates,
+                       feats: PartFeatures, fg: np.ndarray | None, withheld: np.ndarray | None) -> None:
+        """A TENTATIVE target from each free candidate (new blobs, split heads) that is tall
+        enough (``life_cycle.min_height``), a detection or (``life_cycle.blob_births``) a
+        blob, not withheld (``_withhold_relative``), with a part holding foreground
+        (``adaptations.min_support``, PBM 2: people are foreground) and overlapping no live
+        target (``life_cycle.new_track_iou``). In the first ``min_hits`` frames targets are
+        confirmed at once (people present from the start)."""
+        targets, lc = self.targets, self.life_cycle
         live_boxes = targets.boxes if len(free) else None
         for n in free.tolist():  # (``assign`` leaves exactly the untaken candidates free)
-            box = boxes[n]
-            if box[3] < self.life_cycle.min_height:
+            box = cand.box[n]
+            if box[3] < lc.min_height:
                 continue
-            if cand.blob[n] and not self.life_cycle.blob_births:
+            if cand.blob[n] and not lc.blob_births:
                 continue
             if withheld is not None and withheld[n]:
                 continue
             if fg is not None and feats.area[n].max() < self.adaptations.min_support:
-                continue  # too little foreground under its parts to be a person (PBM 2)
-            if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > self.life_cycle.new_track_iou:
+                continue
+            if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > lc.new_track_iou:
                 continue
             centroid = cand.centroid[n]
             al_n, be_n = centroid_ratios(box[None], centroid[None])
@@ -618,14 +554,16 @@ class PBMTracker:
             targets.add(self._next_id, dof, float(al_n[0]), float(be_n[0]), feats.take(n),
                         head_patch(frame, dof[[0, 1, 4, 5]]))
             self._next_id += 1
-            if self._frame <= self.life_cycle.min_hits:
-                targets.confirmed[-1] = True  # people present from the start are reported at once
+            if self._frame <= lc.min_hits:
+                targets.confirmed[-1] = True
             live_boxes = np.vstack([live_boxes, box[None]])
-        return self._output()
 
-    def _output(self) -> list[Track]:
+    # ------------------------------------------------------------------ report
+    def _report(self) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
-        and unfound for at most ``max_report_misses`` frames (OCCLUDED, score 0)."""
+        and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
+        last box, moved by KF1's prediction with ``adaptations.report_predicted``, and only
+        while found targets cover ``adaptations.occluded_cover`` of it."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -637,8 +575,7 @@ class PBMTracker:
         if self.adaptations.report_predicted:
             boxes[:, :2] += np.where(found[rows, None], 0.0, tg.predicted_shift()[rows])
         if self.adaptations.occluded_cover > 0 and self._had_fg and not found[rows].all():
-            # evidence of occlusion: an unfound target is reported only while found
-            # confirmed targets' boxes cover at least ``occluded_cover`` of its box
+            # evidence of occlusion: found confirmed targets' boxes over an unfound one
             fb = tg.dof[(found & tg.confirmed).nonzero()[0][:, None], _BOX_COLUMNS]
             cover = overlap_ratio_matrix(boxes, fb).sum(axis=1) if len(fb) else np.zeros(len(rows))
             keep = found[rows] | (cover >= self.adaptations.occluded_cover)

@@ -1,0 +1,147 @@
+"""The frame's candidates (PBM 2, 2.3, 3.1): detection boxes with their heads, and the heads
+of foreground blobs that no detection explains.
+
+Heads come from ``Detections.heads`` when given, else from the PBM 2.3 head detector when
+``CandidateParams.head_detector`` is set, else from the foreground: the top band (1/7) of a
+detection box; on blobs, the peaks of the top profile. With ``foreground=None`` the
+detection boxes are the candidate blobs and every box pixel counts as foreground. Boxes
+are xywh float64 in pixels.
+
+Detection boxes and blob spans differ systematically (box margins, swinging limbs):
+blob-born boxes are rescaled by a ratio learned online from isolated person/detection
+pairs (``CandidateFinder``'s only state).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackers.geometry import iou_matrix
+from trackers.layered.params import CandidateParams
+from trackers.layered.search import (
+    Candidates,
+    blobs_boxes,
+    heads_from_bands,
+    residual_foreground,
+    split_blob_box,
+    top_profile_heads,
+)
+from trackers.records import Detections
+
+
+class CandidateFinder:
+    """Candidates of each frame (``find``), learning the blob-to-detection box ratio.
+
+    Args:
+        params: blob size, head separation, downsampling and the head detector.
+    """
+
+    def __init__(self, params: CandidateParams) -> None:
+        self.params = params
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the learned blob-to-detection ratio."""
+        self._blob_to_box = np.ones(2)  # detection (w, h) / blob span (w, h), learned online
+        self._blob_pairs = 0
+
+    def find(self, fg: np.ndarray | None, detections: Detections,
+             frame: np.ndarray | None = None, fg_residual: int | None = None) -> Candidates:
+        """The frame's candidates (PBM 2, 3.1): the valid detection boxes with their heads,
+        then the heads of foreground blobs that no detection explains (``fg_residual``: the
+        number of foreground pixels that no detection box covers, ``residual_foreground``,
+        when known)."""
+        det_boxes = detections.boxes
+        heads = detections.heads
+        detector = self.params.head_detector
+        if heads is None and detector is not None and frame is not None and len(det_boxes):
+            heads = np.asarray(detector.detect(frame, fg, det_boxes), dtype=np.float64)
+        valid = (np.logical_and.reduce(np.isfinite(det_boxes), axis=1)
+                 & (det_boxes[:, 2] > 1) & (det_boxes[:, 3] > 1)).nonzero()[0]
+        box = det_boxes[valid]
+        if fg is not None:  # the top 1/7 band's foreground (PBM 3.1)
+            head = heads_from_bands(fg, box)
+        else:  # the band's centre
+            x, y, w = box[:, 0], box[:, 1], box[:, 2]
+            head = np.column_stack([x + 0.5 * w, y, 0.5 * w])
+        if heads is not None:  # the source's heads where it gives them
+            has_head = np.logical_and.reduce(np.isfinite(heads[valid]), axis=1)
+            hx, hy, hw = heads[valid[has_head], :3].T
+            head[has_head] = np.column_stack([hx + 0.5 * hw, hy, hw])
+        rows = (box, box.copy(), head, np.zeros(len(valid), dtype=bool),
+                np.ones(len(valid), dtype=np.int64))
+        if fg is None:
+            return Candidates(*rows)
+        # blobs matter only where foreground is left unexplained by the detections
+        if fg_residual is None and len(det_boxes):
+            fg_residual = residual_foreground(fg, det_boxes)
+        if len(det_boxes) and fg_residual < self.params.min_blob_area:
+            return Candidates(*rows)
+        s = self.params.blob_downsample
+        small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg
+        labels, bboxes, numbers = blobs_boxes(small, max(self.params.min_blob_area // (s * s), 1))
+        if len(bboxes) and len(det_boxes):
+            blob_iou = iou_matrix(bboxes * s, det_boxes)  # for ``_calibrate``
+            # the head zone of each detection: its top third (and a tenth above)
+            zx0, zx1 = det_boxes[:, 0, None], (det_boxes[:, 0] + det_boxes[:, 2])[:, None]
+            zy0 = (det_boxes[:, 1] - 0.1 * det_boxes[:, 3])[:, None]
+            zy1 = (det_boxes[:, 1] + det_boxes[:, 3] / 3.0)[:, None]
+        blob_rows: list[tuple] = []
+        for i, (sbox, lab) in enumerate(zip(bboxes, numbers)):
+            x, y, w, h = (int(v) for v in sbox)
+            mask = labels[y:y + h, x:x + w] == lab
+            peaks = top_profile_heads(mask, max(self.params.head_separation * h, 3.0 / s),
+                                      max(0.06 * h, 2.0 / s))
+            bbox = sbox * s
+            hx = (peaks[:, 0] + x + 0.5) * s
+            hy = (peaks[:, 1] + y) * s
+            # heads explained by a detection: inside a detection box's top third
+            if len(det_boxes):
+                explained = ((hx >= zx0) & (hx <= zx1) & (hy >= zy0) & (hy <= zy1)).any(axis=0)
+            else:
+                explained = np.zeros(len(peaks), dtype=bool)
+            if len(peaks) == 1 and explained[0]:
+                self._calibrate(bbox, blob_iou[i], det_boxes)
+            if explained.all():
+                continue
+            n = len(peaks)
+            head_w = max(self.params.head_separation * bbox[3], 3.0)
+            for k in np.nonzero(~explained)[0]:
+                own = (bbox.copy() if n == 1
+                       else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
+                blob_rows.append((self._blob_box_as_detection(own), bbox,
+                                  np.array([hx[k], hy[k], head_w]), n))
+        if not blob_rows:
+            return Candidates(*rows)
+        own, region, head, n = zip(*blob_rows)
+        return Candidates(np.vstack([rows[0], own]), np.vstack([rows[1], region]),
+                          np.vstack([rows[2], head]),
+                          np.concatenate([rows[3], np.ones(len(own), dtype=bool)]),
+                          np.concatenate([rows[4], np.array(n, dtype=np.int64)]))
+
+    def _calibrate(self, blob_box: np.ndarray, iou: np.ndarray, det_boxes: np.ndarray) -> None:
+        """Learn the ratio of detection box size to blob span from isolated people.
+
+        A detector's boxes and a foreground blob's span differ systematically (limbs, box
+        margins); a blob holding one head and overlapping exactly one detection (IoU >
+        0.5) gives one sample of (w_det / w_blob, h_det / h_blob); the first 20 samples
+        are averaged, later ones enter a running average with weight 0.05.
+
+        Args:
+            blob_box: (4,) xywh blob. iou: (D,) its IoU with each of ``det_boxes`` (D, 4).
+        """
+        if (iou > 0.3).sum() != 1 or iou.max() < 0.5:
+            return
+        d = det_boxes[int(np.argmax(iou))]
+        r = d[2:] / np.maximum(blob_box[2:], 1.0)
+        self._blob_pairs += 1
+        rate = max(1.0 / self._blob_pairs, 0.05)
+        self._blob_to_box += rate * (r - self._blob_to_box)
+
+    def _blob_box_as_detection(self, box: np.ndarray) -> np.ndarray:
+        """A blob box rescaled about its centre to the detections' box convention."""
+        if self._blob_pairs == 0:
+            return box
+        c = box[:2] + 0.5 * box[2:]
+        wh = box[2:] * self._blob_to_box
+        return np.array([c[0] - 0.5 * wh[0], box[1], wh[0], wh[1]])
