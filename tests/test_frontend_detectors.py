@@ -173,51 +173,57 @@ def test_detector_arguments_validated():
         SilhouetteMatcher(min_height=100, max_height=50)
 
 
-def _greedy_reference(m: SilhouetteMatcher, vacant: np.ndarray) -> list:
-    """The greedy loop recomputing every sum over the whole crop (no windows, no parts)."""
-    occupied = np.zeros_like(vacant)
-    out = []
-    for _ in range(m.max_people):
-        best = (0.0, None)
-        for t, _inv, tsum in m._kernels:
-            tv = cv2.filter2D(vacant, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
-            iv = cv2.filter2D(vacant, cv2.CV_32F, 1.0 - t, borderType=cv2.BORDER_CONSTANT)
-            vis = tsum - cv2.filter2D(occupied, cv2.CV_32F, t, borderType=cv2.BORDER_CONSTANT)
-            e = tv - m.alpha * (vis - tv) - m.beta * iv
-            ok = (e >= m.threshold * np.maximum(vis, 1e-6)) & (vis >= m.min_visible * tsum)
-            if ok.any():
-                e = np.where(ok, e, -np.inf)
-                r, c = np.unravel_index(np.argmax(e), e.shape)
-                if e[r, c] > best[0]:
-                    best = (e[r, c], (r, c, t))
-        if best[1] is None:
-            return out
-        r, c, t = best[1]
-        top, left = r - t.shape[0] // 2, c - t.shape[1] // 2
-        out.append([left, top, t.shape[1], t.shape[0]])
-        r0, c0 = max(top, 0), max(left, 0)
-        r1, c1 = min(top + t.shape[0], vacant.shape[0]), min(left + t.shape[1], vacant.shape[1])
-        sil = t[r0 - top : r1 - top, c0 - left : c1 - left] > m.occupy_level
-        reg = vacant[r0:r1, c0:c1]
-        occupied[r0:r1, c0:c1] = np.maximum(occupied[r0:r1, c0:c1], sil & (reg > 0))
-        reg[sil] = 0.0
-    return out
+def test_template_cells_sum_like_the_piecewise_constant_template():
+    """sum_{a,b} coef I[Y + ys[a], X + xs[b]] (the cells' corners on an integral image) is the
+    correlation of the image with T~, the template averaged over each cell; sum T~ = sum T."""
+    from trackers.frontend.silhouette import _integral
+
+    m = SilhouetteMatcher(min_height=12, max_height=90, n_scales=5, downscale=1)
+    sc = m._kernels_for(200)
+    rng = np.random.default_rng(3)
+    img = (rng.random((120, 100)) < 0.5).astype(np.uint8)
+    I = _integral(img)
+    for s, t in enumerate(sc.templates):
+        th, tw = t.shape
+        tt = np.zeros_like(t, dtype=np.float64)  # T~ drawn cell by cell
+        ys, xs = sc.ys[s], sc.xs[s]
+        for a in range(len(ys) - 1):
+            for b in range(len(xs) - 1):
+                if ys[a + 1] > ys[a] and xs[b + 1] > xs[b]:
+                    tt[ys[a] : ys[a + 1], xs[b] : xs[b + 1]] = t[ys[a] : ys[a + 1], xs[b] : xs[b + 1]].mean()
+        assert tt.sum() == pytest.approx(sc.tsum[s], rel=1e-5)
+        for Y, X in rng.integers(0, [120 - th, 100 - tw], size=(5, 2)):
+            want = (tt * img[Y : Y + th, X : X + tw]).sum()
+            got = (sc.coef[s] * I[Y + ys[:, None], X + xs[None, :]]).sum()
+            assert got == pytest.approx(want, rel=1e-9, abs=1e-9)
+        kh, h0, h1, l1, r0 = sc.head[s]  # the head rule's rectangles
+        assert kh == max(round(th / 7), 1) and 0 <= l1 <= h0 < h1 <= r0 <= tw
 
 
-def test_windowed_greedy_equals_full_recompute():
+def test_compiled_greedy_search_equals_the_numpy_equations():
     rng = np.random.default_rng(5)
-    mask = np.zeros((120, 160), dtype=np.float32)
+    mask = np.zeros((120, 160), dtype=np.uint8)
     for _ in range(5):  # a cluster of overlapping people and a few specks
         h = int(rng.integers(40, 80))
         x, y = int(rng.integers(10, 110)), int(rng.integers(5, 120 - h))
-        mask[y : y + h, x : x + int(0.4 * h)] = _person_mask((h, int(0.4 * h)), (0, 0, int(0.4 * h), h))
-    mask[rng.random(mask.shape) < 0.01] = 1.0
-    m = SilhouetteMatcher(min_height=30, max_height=100, n_scales=6, downscale=1, max_overlap=1.0)
-    m._kernels = m._kernels_for(120)
-    got, _, _ = m._greedy(mask.copy(), region_height=120)
-    want = _greedy_reference(m, mask.copy())
-    assert len(want) >= 3
-    np.testing.assert_array_equal(np.array(got), np.array(want))
+        mask[y : y + h, x : x + int(0.4 * h)] |= _person_mask((h, int(0.4 * h)), (0, 0, int(0.4 * h), h))
+    mask[rng.random(mask.shape) < 0.01] = 1
+    got = {}
+    for compiled in (True, False):
+        for head in (-1.0, 0.2):
+            m = SilhouetteMatcher(min_height=30, max_height=100, n_scales=6, downscale=1,
+                                  max_overlap=1.0, head_contrast=head, frame_border=True,
+                                  compiled=compiled)
+            m._kernels = m._kernels_for(120)
+            got[compiled, head] = m.candidates(mask.copy(), region_height=120,
+                                               edges=(False, True, True, False))
+    for head in (-1.0, 0.2):
+        fast, ref = got[True, head], got[False, head]
+        assert len(ref[0]) >= 3
+        np.testing.assert_array_equal(np.array(fast[0]), np.array(ref[0]))  # template boxes
+        np.testing.assert_array_equal(np.array(fast[2]), np.array(ref[2]))  # explained boxes
+        np.testing.assert_allclose(fast[1], ref[1], rtol=1e-9)  # scores
+    assert len(got[True, 0.2][0]) <= len(got[True, -1.0][0])
 
 
 def test_frame_border_finds_a_person_cut_by_the_bottom_edge():
@@ -247,7 +253,7 @@ def test_box_scale_aspect_and_fixed_height_model():
     assert scaled[0, 1] == ref[0, 1]  # same top
     narrow = SilhouetteMatcher(**kw, aspect=0.3)
     narrow._kernels_for(288)
-    assert all(abs(t.shape[1] / t.shape[0] - 0.3) < 0.1 for t, _, _ in narrow._cache[0])
+    assert all(abs(t.shape[1] / t.shape[0] - 0.3) < 0.1 for t in narrow._cache[0].templates)
     # a fixed prior (camera calibration) survives set_height_model(None), e.g. a detector reset
     fixed = SilhouetteMatcher(**kw, height_model=(0.0, 40.0))
     fixed.set_height_model(None)

@@ -291,7 +291,7 @@ class SilhouetteDetector(_ForegroundPipeline):
                   & (c[:, None, 1] >= bb[None, :, 1]) & (c[:, None, 1] < bb[None, :, 1] + bb[None, :, 3]))
         H, W = live.shape
         edge = 2 * self.matcher.downscale
-        lo, hi = (self.matcher._kernels[k][0].shape[0] * self.matcher.downscale for k in (0, -1))
+        lo, hi = (self.matcher._kernels.size[k, 0] * self.matcher.downscale for k in (0, -1))
         for j in np.flatnonzero(inside.sum(axis=0) == 1):
             x, y, w, h = boxes[int(np.flatnonzero(inside[:, j])[0])]
             # fits at the smallest or largest height searched are censored (a fragment or a

@@ -18,8 +18,14 @@ E rewards foreground under the template, pays ``alpha`` for template pixels with
 foreground and ``beta`` for foreground where the template expects background; the greedy
 step takes the placement and scale of largest E (the active basis' log-likelihood also
 grows with the template's size), among placements with ``score >= threshold`` and
-M / sum T >= ``min_visible`` (Reta: people more than 30% visible). Every sum is one
-``cv2.filter2D`` per scale over a foreground crop, never a Python loop over pixels.
+M / sum T >= ``min_visible`` (Reta: people more than 30% visible).
+
+Every sum is a box sum on an integral image, O(1) per placement: the template is scored as
+T~, its mean over a grid of cells (the head band, the top 1/7, and ``CELL_ROWS`` - 1 bands
+below, by ``CELL_COLS`` columns; ``_Scales``), and the head rule as three rectangles. Each
+scale is tried only on the rows its height is allowed at (the height prior); after a fit only
+the placements its pixels touch are scored again (``greedy_search``, compiled in
+``_silhouette_kernel``).
 
 Scene knowledge, all optional: a ground-plane height prior (expected height linear in the
 foot row; fixed from a calibration, ``height_model``, or learnt by the detector), template
@@ -103,6 +109,142 @@ def load_template(path: str | Path | None = None) -> np.ndarray:
     return t
 
 
+CELL_ROWS = 12  # the template's box-sum cells: the head band (top 1/7) and 11 bands below it,
+CELL_COLS = 10  # ... by 10 columns
+
+
+class _Scales:
+    """The template at every searched height, as rectangles whose sums an integral image
+    gives in O(1) per placement.
+
+    Scale s (template ``templates[s]``, ``size[s]`` = (th, tw) rows and columns):
+
+    * cells: row edges ``ys[s]`` (CELL_ROWS + 1: the head band, the top 1/7, then equal bands)
+      and column edges ``xs[s]`` (CELL_COLS + 1, equal); T~ = T's mean over each cell, so
+      sum T~ = sum T = ``tsum[s]``. For an image with integral I (I[y, x] = sum of the
+      image above and left of (y, x)) and a placement with top-left (Y, X),
+
+          sum T~ img = sum_cells w_cell boxsum(cell) = sum_{a, b} coef[s, a, b] I[Y + ys[a], X + xs[b]]
+
+      (``coef``: each corner's signed share of the cells around it);
+    * the head rule's rectangles ``head[s]`` = (kh, h0, h1, l1, r0): rows [0, kh) (the head
+      band); the head, columns [h0, h1) where the band's mean T > 0.5; beside it, columns
+      [0, l1) and [r0, tw) where it is < 0.1;
+    * ``occ[s]``: (th, tw) pixels a fit marks occupied (T > occupy_level), zero-padded to
+      the largest scale.
+    """
+
+    def __init__(self, templates: list[np.ndarray], occupy_level: float) -> None:
+        S = len(templates)
+        self.templates = templates
+        self.size = np.array([t.shape for t in templates], dtype=np.int64)
+        self.tsum = np.array([float(t.sum()) for t in templates])
+        self.ys = np.zeros((S, CELL_ROWS + 1), dtype=np.int64)
+        self.xs = np.zeros((S, CELL_COLS + 1), dtype=np.int64)
+        self.coef = np.zeros((S, CELL_ROWS + 1, CELL_COLS + 1))
+        self.head = np.zeros((S, 5), dtype=np.int64)
+        hmax, wmax = self.size.max(axis=0)
+        self.occ = np.zeros((S, hmax, wmax), dtype=np.uint8)
+        for s, t in enumerate(templates):
+            th, tw = t.shape
+            kh = max(round(th * HEAD_FRACTION), 1)  # PBM 2.1: the head is 1/7 of the height
+            ys = np.r_[0, np.round(np.linspace(kh, th, CELL_ROWS)).astype(np.int64)]
+            xs = np.round(np.linspace(0, tw, CELL_COLS + 1)).astype(np.int64)
+            w = np.zeros((CELL_ROWS + 2, CELL_COLS + 2))  # zero border: corners' neighbours
+            for a in range(CELL_ROWS):
+                for b in range(CELL_COLS):
+                    cell = t[ys[a] : ys[a + 1], xs[b] : xs[b + 1]]
+                    w[a + 1, b + 1] = cell.mean() if cell.size else 0.0
+            self.coef[s] = w[:-1, :-1] - w[:-1, 1:] - w[1:, :-1] + w[1:, 1:]
+            self.ys[s], self.xs[s] = ys, xs
+            band = t[:kh].mean(axis=0)
+            inside = np.flatnonzero(band > 0.5)
+            h0, h1 = (inside[0], inside[-1] + 1) if len(inside) else (np.argmax(band), np.argmax(band) + 1)
+            l1 = int(np.argmax(band[:h0] >= 0.1)) if (band[:h0] >= 0.1).any() else int(h0)
+            right = band[h1:][::-1]
+            r0 = tw - (int(np.argmax(right >= 0.1)) if (right >= 0.1).any() else len(right))
+            self.head[s] = (kh, h0, h1, l1, r0)
+            self.occ[s, :th, :tw] = t > occupy_level
+
+
+def _box(I: np.ndarray, y0, x0, y1, x1):
+    """Box sums [y0, y1) x [x0, x1) of the image whose integral is I (arrays of boxes)."""
+    return I[y1, x1] - I[y0, x1] - I[y1, x0] + I[y0, x0]
+
+
+def _integral(img: np.ndarray) -> np.ndarray:
+    return cv2.integral(img, sdepth=cv2.CV_32S)
+
+
+def greedy_search(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, head, occ,
+                  alpha, beta, threshold, min_visible, head_contrast, fits) -> int:
+    """The greedy fits of one region (the plain-numpy equations; ``_silhouette_kernel``
+    compiles them).
+
+    Args:
+        vp, op: (H + 2 py, W + 2 px) uint8 0/1 vacant and occupied foreground of the region's
+            crop, zero-padded by (py, px) (occupied = 1 beyond a frame border: unknown);
+            updated in place as fits occupy pixels.
+        ids, bands: the scales searched, and for each the centre rows [b0, b1) of the crop
+            it is tried at (its height allowed there); every column is tried.
+        ys .. occ: the ``_Scales`` arrays.
+        fits: (max_people, 9) float64 output, one row per fit in greedy order: scale, top,
+            left (crop pixels), E, score E / M, and the box [x0, y0, x1) x [y0, y1) of the
+            foreground it explained (-1 when none).
+    Returns:
+        the number of fits.
+    """
+    s_, r_, c_ = [], [], []
+    for s, (b0, b1) in zip(ids, bands):
+        r, c = np.mgrid[b0:b1, 0:W]
+        s_.append(np.full(r.size, s))
+        r_.append(r.ravel())
+        c_.append(c.ravel())
+    s = np.concatenate(s_)
+    th, tw = size[s, 0], size[s, 1]
+    Y = np.concatenate(r_) - th // 2 + py  # a kernel is anchored at its centre
+    X = np.concatenate(c_) - tw // 2 + px
+    rows, cols = Y[:, None, None] + ys[s][:, :, None], X[:, None, None] + xs[s][:, None, :]
+
+    def cells(I):  # sum of T~ over the image of integral I at every placement
+        return (coef[s] * I[rows, cols]).sum(axis=(1, 2))
+
+    ts = tsum[s]
+    head_ok = np.ones(len(s), dtype=bool)
+    if head_contrast > -1.0:  # on the region's foreground before any fit (unknown = fg)
+        K, V0 = _integral(vp + op), _integral(vp)
+        kh, h0, h1, l1, r0 = head[s].T
+        hin = np.minimum(_box(K, Y, X + h0, Y + kh, X + h1), kh * (h1 - h0))
+        hout = _box(V0, Y, X, Y + kh, X + l1) + _box(V0, Y, X + r0, Y + kh, X + tw)
+        head_ok = (hin / np.maximum(kh * (h1 - h0), 1e-6)
+                   - hout / np.maximum(kh * (l1 + tw - r0), 1e-6)) >= head_contrast
+    n = 0
+    for _ in range(len(fits)):
+        IV, IO = _integral(vp), _integral(op)
+        tv, bx = cells(IV), _box(IV, Y, X, Y + th, X + tw)
+        visible = ts - cells(IO)
+        # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V
+        e = tv - alpha * (visible - tv) - beta * (bx - tv)
+        ok = (head_ok & (e >= threshold * np.maximum(visible, 1e-6))
+              & (visible >= min_visible * ts) & (e > 0))
+        if not ok.any():
+            break
+        j = int(np.argmax(np.where(ok, e, -np.inf)))
+        k, y, x = s[j], Y[j], X[j]
+        sil = occ[k, : th[j], : tw[j]] > 0
+        win_v, win_o = vp[y : y + th[j], x : x + tw[j]], op[y : y + th[j], x : x + tw[j]]
+        claimed = sil & (win_v > 0)  # the foreground this fit explains
+        win_o[claimed] = 1
+        win_v[sil] = 0
+        fits[n, :5] = k, y - py, x - px, e[j], e[j] / max(visible[j], 1e-6)
+        fits[n, 5:] = -1.0
+        if claimed.any():
+            rr, cc = np.flatnonzero(claimed.any(axis=1)), np.flatnonzero(claimed.any(axis=0))
+            fits[n, 5:] = x - px + cc[0], y - py + rr[0], x - px + cc[-1] + 1, y - py + rr[-1] + 1
+        n += 1
+    return n
+
+
 class SilhouetteMatcher:
     """Greedy multi-scale silhouette fitting over a foreground mask.
 
@@ -154,6 +296,8 @@ class SilhouetteMatcher:
             way; a template learnt from few walkers leans to their side).
         group_gap: foreground components less than this many rows (full resolution) apart
             vertically are searched as one region (a person cut in two by the background).
+        compiled: run the greedy search compiled (``_silhouette_kernel``, tested against
+            ``greedy_search``); False runs the numpy equations.
     """
 
     def __init__(
@@ -182,6 +326,7 @@ class SilhouetteMatcher:
         group_gap: float = 0.0,
         head_contrast: float = -1.0,
         symmetric: bool = False,
+        compiled: bool = True,
     ) -> None:
         if not 0 < min_height <= max_height:
             raise ValueError(f"need 0 < min_height <= max_height, got {min_height}, {max_height}")
@@ -235,32 +380,25 @@ class SilhouetteMatcher:
             raise ValueError(f"max_overlap must be in (0, 1], got {max_overlap}")
         self.max_overlap = float(max_overlap)
         self.part_height = float(part_height)
-        self._cache: dict[int, list] = {}
-        self._kernels: list = []
+        self.compiled = bool(compiled)
+        self._cache: dict[int, _Scales] = {}
+        self._kernels: _Scales | None = None
 
     def pixel_heights(self, frame_height: int) -> tuple[float, float]:
         """(min, max) person height searched in a frame ``frame_height`` rows high, pixels."""
         f = float(frame_height) if self.height_unit == "frame" else 1.0
         return self.min_height * f, self.max_height * f
 
-    def _kernels_for(self, frame_height: int) -> list:
+    def _kernels_for(self, frame_height: int) -> _Scales:
         key = int(frame_height) if self.height_unit == "frame" else 0
         if key not in self._cache:
             lo, hi = self.pixel_heights(frame_height)
             heights = np.geomspace(lo, hi, self.n_scales) / self.downscale
             aspect = self.aspect or self.template.shape[1] / self.template.shape[0]
-            kernels = []
-            for h in heights:
-                th = max(round(h), 3)
-                tw = max(round(h * aspect), 2)
-                t = cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA)
-                kh = max(round(th * HEAD_FRACTION), 1)  # PBM 2.1: the head is 1/7 of the height
-                head = np.zeros_like(t)
-                head[:kh] = t[:kh] > 0.5
-                beside = np.zeros_like(t)
-                beside[:kh] = t[:kh] < 0.1
-                kernels.append((t, (head, beside), float(t.sum())))
-            self._cache[key] = kernels
+            shapes = [(max(round(h), 3), max(round(h * aspect), 2)) for h in heights]
+            self._cache[key] = _Scales(
+                [cv2.resize(self.template, (tw, th), interpolation=cv2.INTER_AREA) for th, tw in shapes],
+                self.occupy_level)
         return self._cache[key]
 
     def set_height_model(self, model: tuple[float, float] | None) -> None:
@@ -305,11 +443,14 @@ class SilhouetteMatcher:
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Greedy fits: template boxes (N, 4), the boxes of the foreground each explains
         (N, 4), both xywh full-resolution pixels unclipped, and scores (N,).
-        ``group=False`` searches every component alone (``group_gap`` ignored)."""
+        ``group=False`` searches every component alone (``group_gap`` ignored).
+
+        Two steps per foreground region: ``candidates`` (the greedy search: every fit, in
+        the order found) and ``select`` (which of them are reported)."""
         d = self.downscale
         fg = (np.asarray(foreground) != 0).astype(np.uint8)
         H, W = fg.shape
-        self._kernels = self._kernels_for(H)
+        sc = self._kernels = self._kernels_for(H)
         small = fg if d == 1 else cv2.resize(fg, (W // d, H // d), interpolation=cv2.INTER_AREA)
         if d > 1:  # INTER_AREA on 0/1 uint8 rounds: keep cells at least half foreground
             small = cv2.resize(fg * np.uint8(255), (W // d, H // d), interpolation=cv2.INTER_AREA)
@@ -318,11 +459,11 @@ class SilhouetteMatcher:
         grouped = small if gap < 1 else cv2.dilate(small, np.ones((gap + 1, 1), np.uint8),
                                                    anchor=(0, 0))
         n, lab, stats, _ = cv2.connectedComponentsWithStats(grouped, connectivity=8)
+        allowed = self._allowed_bands(small.shape[0])
         boxes, scores, tight = [], [], []
         m = max(self.margin // d, 1)
-        hmax = max(k[0].shape[0] for k in self._kernels)
-        wmax = max(k[0].shape[1] for k in self._kernels)
-        min_area = 0.15 * self._kernels[0][2]
+        hmax, wmax = sc.size.max(axis=0)
+        min_area = 0.15 * sc.tsum[0]
         for i in range(1, n):
             x, y, w, h, area = stats[i]
             if area < min_area:
@@ -330,187 +471,127 @@ class SilhouetteMatcher:
             x0, y0 = max(x - m - wmax // 2, 0), max(y - m - hmax // 2, 0)
             x1, y1 = min(x + w + m + wmax // 2, small.shape[1]), min(y + h + m + hmax // 2, small.shape[0])
             # only this group's pixels in the crop (others are found from their own)
-            crop = ((lab[y0:y1, x0:x1] == i) & (small[y0:y1, x0:x1] > 0)).astype(np.float32)
+            crop = ((lab[y0:y1, x0:x1] == i) & (small[y0:y1, x0:x1] > 0)).astype(np.uint8)
             edges = None
             if self.frame_border:  # which crop sides are the frame's border
                 edges = (y0 == 0, y1 == small.shape[0], x0 == 0, x1 == small.shape[1])
-            b, s, t = self._greedy(crop, region_height=h, row0=y0, edges=edges)
-            for bx, sc, tb in zip(b, s, t):
+            bands = None if allowed is None else np.clip(allowed - y0, 0, y1 - y0)
+            b, s, t = self.candidates(crop, region_height=h, bands=bands, edges=edges)
+            for k in self.select(b, s):
+                bx, tb = b[k], t[k]
                 boxes.append([(bx[0] + x0) * d, (bx[1] + y0) * d, bx[2] * d, bx[3] * d])
                 tight.append([(tb[0] + x0) * d, (tb[1] + y0) * d, tb[2] * d, tb[3] * d])
-                scores.append(sc)
+                scores.append(s[k])
         if not boxes:
             return np.zeros((0, 4)), np.zeros((0, 4)), np.zeros(0)
         return (np.asarray(boxes, dtype=np.float64), np.asarray(tight, dtype=np.float64),
                 np.asarray(scores, dtype=np.float64))
 
-    def _is_part(self, box: list, boxes: list) -> bool:
-        """Whether ``box`` lies more than ``max_overlap`` inside an earlier, taller fit
-        (its height under ``part_height`` times that fit's)."""
+    def select(self, boxes: list, scores: list) -> list[int]:
+        """Which candidates of one region are reported (indices, in greedy order).
+
+        A candidate lying more than ``max_overlap`` inside an earlier, taller reported fit
+        (its height under ``part_height`` times that fit's) is a part of that person (an arm,
+        a bag, a hollow in the foreground): its pixels were used up in the search but it is
+        not reported. This is the step a verifier of candidate boxes plugs into.
+
+        Args:
+            boxes: candidate template boxes [x, y, w, h] (crop pixels), in greedy order.
+            scores: their scores E / M.
+        """
         from trackers.geometry import intersection_matrix
 
-        b = np.asarray(boxes, dtype=np.float64)
-        inter = intersection_matrix(np.asarray([box], dtype=np.float64), b)[0]
-        inside = inter / max(box[2] * box[3], 1e-9)
-        return bool(((inside > self.max_overlap) & (box[3] < self.part_height * b[:, 3])).any())
+        kept: list[int] = []
+        for k, box in enumerate(boxes):
+            if kept:
+                b = np.asarray([boxes[j] for j in kept], dtype=np.float64)
+                inter = intersection_matrix(np.asarray([box], dtype=np.float64), b)[0]
+                inside = inter / max(box[2] * box[3], 1e-9)
+                if ((inside > self.max_overlap) & (box[3] < self.part_height * b[:, 3])).any():
+                    continue
+            kept.append(k)
+        return kept
 
-    def _allowed_rows(self, th: int, rows: int, row0: int) -> np.ndarray | None:
-        """(rows, 1) bool: centre rows where a template th rows high fits the height model."""
+    def _allowed_bands(self, rows: int) -> np.ndarray | None:
+        """(n_scales, 2) int64: for each scale the centre rows [b0, b1) (working resolution,
+        of a frame ``rows`` high) where its height fits the height model (an interval: the
+        expected height grows with the row); None without one."""
         if self.height_model is None:
             return None
         a, b = self.height_model
         d = self.downscale
-        foot = (np.arange(rows) + row0 + th - th // 2) * d  # full-resolution foot row
+        th = self._kernels.size[:, :1]
+        foot = (np.arange(rows)[None, :] + th - th // 2) * d  # full-resolution foot row
         expected = (a * foot + b) / d
         ratio = th / np.maximum(expected, 1e-6)
         ok = (expected > 0) & (ratio >= 1 / self.height_tolerance) & (ratio <= self.height_tolerance)
-        return ok[:, None]
+        b0 = np.argmax(ok, axis=1)
+        b1 = rows - np.argmax(ok[:, ::-1], axis=1)
+        return np.where(ok.any(axis=1)[:, None], np.column_stack([b0, b1]), 0)
 
-    def _greedy(self, vacant: np.ndarray, region_height: int, row0: int = 0,
-                edges: tuple[bool, bool, bool, bool] | None = None) -> tuple[list, list]:
-        """Greedy fits in one (h, w) float32 0/1 crop; boxes in crop coordinates.
+    def candidates(self, vacant: np.ndarray, region_height: int,
+                   bands: np.ndarray | None = None,
+                   edges: tuple[bool, bool, bool, bool] | None = None) -> tuple[list, list, list]:
+        """Greedy fits in one (h, w) uint8 0/1 crop, in the order found: template boxes,
+        scores and the boxes of the foreground each explains (``box``), crop pixels.
 
-        ``edges`` (top, bottom, left, right): crop sides on the frame border, beyond which
-        template pixels are unknown (counted as occupied: outside the visible mass).
-
-        The per-scale sums (sum T V, box sum of V, sum T O) are computed once over the crop
-        and, after each fit, recomputed only in the window its marked pixels can affect.
+        ``bands`` (n_scales, 2): the centre rows [b0, b1) of the crop each scale may be
+        tried at (the height model), None: all. ``edges`` (top, bottom, left, right): crop sides on the frame
+        border, beyond which template pixels are unknown (counted as occupied: outside the
+        visible mass).
         """
         H, W = vacant.shape
+        sc = self._kernels
         cut = False  # a region cut by (or within margin of) the frame's top or bottom: its
         # height does not bound the template heights tried
         if edges is not None:
             rows = np.flatnonzero(vacant.any(axis=1))
             near = max(self.margin // self.downscale, 1)  # frames may have a dark border strip
             cut = bool(len(rows) and ((edges[0] and rows[0] < near) or (edges[1] and rows[-1] >= H - near)))
-        kernels = []
-        heads = []
-        for t, head, tsum in self._kernels:
-            rows_ok = self._allowed_rows(t.shape[0], H, row0)
-            if (t.shape[0] <= 1.5 * region_height + 4 or cut) and (rows_ok is None or rows_ok.any()):
-                kernels.append((t, tsum, rows_ok))
-                heads.append(head)
-        if not kernels:
+        if bands is None:
+            bands = np.tile(np.array([0, H], dtype=np.int64), (len(sc.size), 1))
+        # each scale only on its band of centre rows, and no taller than the region allows
+        ids_a = np.flatnonzero(((sc.size[:, 0] <= 1.5 * region_height + 4) | cut)
+                               & (bands[:, 1] > bands[:, 0]))
+        if not len(ids_a):
             return [], [], []
-        # zero-padded storage so that any window's kernel support is inside the array
-        py = max(t.shape[0] for t, _, _ in kernels)
-        px = max(t.shape[1] for t, _, _ in kernels)
-        vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.float32)
+        bands_a = np.ascontiguousarray(bands[ids_a], dtype=np.int64)
+        py, px = sc.size[ids_a].max(axis=0)  # zero padding: every placement inside the array
+        vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.uint8)
         op = np.zeros_like(vp)
         vp[py : py + H, px : px + W] = vacant
         if edges is not None:
             top, bottom, left, right = edges
             if top:
-                op[:py] = 1.0
+                op[:py] = 1
             if bottom:
-                op[py + H :] = 1.0
+                op[py + H :] = 1
             if left:
-                op[:, :px] = 1.0
+                op[:, :px] = 1
             if right:
-                op[:, px + W :] = 1.0
-        V, O = vp[py : py + H, px : px + W], op[py : py + H, px : px + W]
-        F0 = vacant.copy()  # the region's foreground before any fit
-
-        def corr(img, k, r0, r1, c0, c1):
-            """Correlation of padded ``img`` with kernel ``k`` (anchored at its centre, as
-            filter2D's default) at output rows [r0, r1), cols [c0, c1) of the crop: the valid
-            part of ``cv2.matchTemplate`` (TM_CCORR), the same sums as filter2D to float
-            rounding and faster for person-sized kernels."""
-            th, tw = k.shape
-            ay, ax = th // 2, tw // 2
-            win = img[py + r0 - ay : py + r1 + th - 1 - ay, px + c0 - ax : px + c1 + tw - 1 - ax]
-            return cv2.matchTemplate(win, k, cv2.TM_CCORR)  # the valid part: (r1-r0, c1-c0)
-
-        def sums(t, r0, r1, c0, c1):
-            """(sum T V, box sum V, sum T O) at output rows [r0, r1), cols [c0, c1)."""
-            th, tw = t.shape
-            ay, ax = th // 2, tw // 2  # filter2D's default anchor: the kernel centre
-            ys = slice(py + r0 - ay, py + r1 + th - 1 - ay)
-            xs = slice(px + c0 - ax, px + c1 + tw - 1 - ax)
-            inner = (slice(ay, ay + r1 - r0), slice(ax, ax + c1 - c0))
-            tv = corr(vp, t, r0, r1, c0, c1)
-            bx = cv2.boxFilter(vp[ys, xs], cv2.CV_32F, (tw, th), anchor=(ax, ay), normalize=False,
-                               borderType=cv2.BORDER_CONSTANT)[inner]
-            to = corr(op, t, r0, r1, c0, c1) if op[ys, xs].any() else np.zeros_like(tv)
-            return tv, bx, to
-
-        # each scale is searched only on the band of centre rows its height is allowed at
-        # (the height prior), so a calibrated search costs a few scales per row
-        bands = []
-        for i, (t, tsum, rows_ok) in enumerate(kernels):
-            if rows_ok is None:
-                bands.append((0, H))
-            else:
-                okr = np.flatnonzero(rows_ok[:, 0])
-                b0, b1 = int(okr[0]), int(okr[-1]) + 1
-                bands.append((b0, b1))
-                kernels[i] = (t, tsum, rows_ok[b0:b1])
-        maps = [list(sums(t, b0, b1, 0, W)) for (t, _, _), (b0, b1) in zip(kernels, bands)]
-        head_ok = [None] * len(kernels)
-        if self.head_contrast > -1.0:
-            # head evidence on the region's foreground (fixed during the search), pixels
-            # beyond the frame's border counting as foreground (unknown): the head rows'
-            # fill inside the head minus their fill beside it (Reta: a person's head shows)
-            known = vp + op
-            for i, ((head, beside), (b0, b1)) in enumerate(zip(heads, bands)):
-                hin = corr(known, head, b0, b1, 0, W)
-                hout = corr(vp, beside, b0, b1, 0, W)
-                c = (np.minimum(hin, head.sum()) / max(head.sum(), 1e-6)
-                     - hout / max(beside.sum(), 1e-6))
-                head_ok[i] = c >= self.head_contrast
+                op[:, px + W :] = 1
+        fits = np.zeros((self.max_people, 9))
+        if self.compiled:
+            from trackers.frontend._silhouette_kernel import greedy_kernel as search
+        else:
+            search = greedy_search
+        n = search(vp, op, int(py), int(px), H, W, ids_a, bands_a, sc.ys, sc.xs, sc.coef,
+                   sc.size, sc.tsum, sc.head, sc.occ, self.alpha, self.beta, self.threshold,
+                   self.min_visible, self.head_contrast, fits)
         boxes, scores, tight = [], [], []
-        for _ in range(self.max_people):
-            best = (0.0, None)
-            for (t, tsum, rows_ok), (tv, bx, to), hok, (b0, _b1) in zip(kernels, maps, head_ok, bands):
-                visible = tsum - to
-                # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V,
-                # with sum (1 - T) V = box sum of V - sum T V
-                explained = tv - self.alpha * (visible - tv) - self.beta * (bx - tv)
-                ok = (explained >= self.threshold * np.maximum(visible, 1e-6)) & (
-                    visible >= self.min_visible * tsum)
-                if rows_ok is not None:
-                    ok &= rows_ok
-                if hok is not None:
-                    ok &= hok
-                if not ok.any():
-                    continue
-                e = np.where(ok, explained, -np.inf)
-                j = int(np.argmax(e))
-                r, c = divmod(j, W)
-                if e[r, c] > best[0]:
-                    best = (float(e[r, c]), (r + b0, c, t, float(e[r, c] / max(visible[r, c], 1e-6))))
-            if best[1] is None:
-                break
-            r, c, t, score = best[1]
-            th, tw = t.shape
-            top, left = r - th // 2, c - tw // 2  # filter2D anchors kernels at their centre
-            box = [left, top, tw, th]
-            rr0, cc0 = max(top, 0), max(left, 0)
-            rr1, cc1 = min(top + th, H), min(left + tw, W)
-            sil = t[rr0 - top : rr1 - top, cc0 - left : cc1 - left] > self.occupy_level
-            region = V[rr0:rr1, cc0:cc1]
-            if not boxes or not self._is_part(box, boxes):
-                boxes.append(box)
-                scores.append(score)
-                if self.box == "region":  # the region's foreground inside the template box
-                    claimed = F0[rr0:rr1, cc0:cc1] > 0
-                else:
-                    claimed = sil & (region > 0)  # the foreground this fit explains
-                rows, cols = np.flatnonzero(claimed.any(axis=1)), np.flatnonzero(claimed.any(axis=0))
-                tight.append([cc0 + cols[0], rr0 + rows[0], cols[-1] - cols[0] + 1,
-                              rows[-1] - rows[0] + 1] if len(rows) else box)
-            # a part of a person already found is not reported, but its pixels are used up
-            O[rr0:rr1, cc0:cc1] = np.maximum(O[rr0:rr1, cc0:cc1], sil & (region > 0))
-            region[sil] = 0.0
-            for (k, _, _), m, (b0, b1) in zip(kernels, maps, bands):  # refresh the affected window only
-                kh, kw = k.shape
-                o0, o1 = max(rr0 - (kh - 1 - kh // 2), b0), min(rr1 + kh // 2, b1)
-                q0, q1 = max(cc0 - (kw - 1 - kw // 2), 0), min(cc1 + kw // 2, W)
-                if o1 > o0 and q1 > q0:
-                    tv, bx, to = sums(k, o0, o1, q0, q1)
-                    m[0][o0 - b0 : o1 - b0, q0:q1] = tv
-                    m[1][o0 - b0 : o1 - b0, q0:q1] = bx
-                    m[2][o0 - b0 : o1 - b0, q0:q1] = to
+        for k, top, left, _e, score, cx0, cy0, cx1, cy1 in fits[:n]:
+            th, tw = sc.size[int(k)]
+            box = [int(left), int(top), int(tw), int(th)]
+            if self.box == "region":  # the region's foreground inside the template box
+                r0, c0 = max(box[1], 0), max(box[0], 0)
+                claimed = vacant[r0 : box[1] + th, c0 : box[0] + tw] > 0
+                rr, cc = np.flatnonzero(claimed.any(axis=1)), np.flatnonzero(claimed.any(axis=0))
+                tb = [c0 + cc[0], r0 + rr[0], cc[-1] - cc[0] + 1, rr[-1] - rr[0] + 1] if len(rr) else box
+            else:  # the foreground this fit explains
+                tb = [int(cx0), int(cy0), int(cx1 - cx0), int(cy1 - cy0)] if cx0 >= 0 else box
+            boxes.append(box)
+            scores.append(float(score))
+            tight.append(tb)
         return boxes, scores, tight
 
 

@@ -1,0 +1,135 @@
+"""Compiled greedy search of ``SilhouetteMatcher`` (silhouette.py): the same equations as
+``greedy_search`` there, in one pass per fit over the candidates instead of (N, cells) numpy
+temporaries, and skipping candidates whose template box holds too little vacant foreground
+to pass the score test (a bound, so the fits are unchanged). Tested against the numpy
+version (tests/test_frontend_detectors.py): the same fits on synthetic masks.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def _box(I, y0, x0, y1, x1):
+    return I[y1, x1] - I[y0, x1] - I[y1, x0] + I[y0, x0]
+
+
+@numba.njit(cache=True)
+def _cells(I, Y, X, ys, xs, coef):
+    """Sum over the cells of w_cell x (box sum of the cell), from the cells' corners."""
+    acc = 0.0
+    for a in range(ys.shape[0]):
+        for b in range(xs.shape[0]):
+            acc += coef[a, b] * I[Y + ys[a], X + xs[b]]
+    return acc
+
+
+@numba.njit(cache=True)
+def _integral(img, I, row0):
+    """I[y, x] = sum of img[:y, :x] (int32), recomputed from row ``row0`` of I down."""
+    H, W = img.shape
+    row0 = max(row0, 1)
+    for y in range(row0, H + 1):
+        run = 0
+        for x in range(W):
+            run += img[y - 1, x]
+            I[y, x + 1] = I[y - 1, x + 1] + run
+
+
+@numba.njit(cache=True)
+def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, head, occ,
+                  alpha, beta, threshold, min_visible, head_contrast, fits):
+    """See ``silhouette.greedy_search`` (same arguments); returns the number of fits.
+
+    Every placement is scored once; after a fit only the placements whose box meets the
+    fit's box are scored again (the others' sums did not change)."""
+    Hp, Wp = vp.shape
+    IV = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
+    IO = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
+    IK = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
+    _integral(vp, IV, 1)
+    _integral(op, IO, 1)
+    _integral(vp + op, IK, 1)
+    IV0 = IV.copy()
+    bound = (alpha + threshold) * min_visible / (1.0 + alpha + beta)
+    nk = ids.shape[0]
+    start = np.zeros(nk + 1, dtype=np.int64)  # placements of scale k: start[k] .. start[k+1]
+    for k in range(nk):
+        start[k + 1] = start[k] + (bands[k, 1] - bands[k, 0]) * W
+    E = np.empty(start[nk])
+    score = np.empty(start[nk])
+    y0, y1, x0, x1 = 0, Hp, 0, Wp  # the window whose placements are (re)scored
+    n = 0
+    for _ in range(fits.shape[0]):
+        for k in range(nk):
+            s = ids[k]
+            th, tw = size[s, 0], size[s, 1]
+            b0 = bands[k, 0]
+            ys_s, xs_s, coef_s, hd = ys[s], xs[s], coef[s], head[s]
+            # centre rows r whose box [r - th // 2 + py, + th) meets [y0, y1), same for columns
+            r_lo, r_hi = max(b0, y0 - py + th // 2 - th + 1), min(bands[k, 1], y1 - py + th // 2)
+            c_lo, c_hi = max(0, x0 - px + tw // 2 - tw + 1), min(W, x1 - px + tw // 2)
+            ts = tsum[s]
+            kh, h0, h1, l1, r0 = hd[0], hd[1], hd[2], hd[3], hd[4]
+            h_area, b_area = max(kh * (h1 - h0), 1e-6), max(kh * (l1 + tw - r0), 1e-6)
+            for r in range(r_lo, r_hi):
+                Y = r - th // 2 + py
+                row = start[k] + (r - b0) * W
+                for c in range(c_lo, c_hi):
+                    X = c - tw // 2 + px
+                    E[row + c] = -np.inf
+                    bx = _box(IV, Y, X, Y + th, X + tw)
+                    if bx < bound * ts - 1e-9:  # too little vacant foreground (tv <= bx)
+                        continue
+                    if head_contrast > -1.0:
+                        hin = min(_box(IK, Y, X + h0, Y + kh, X + h1), kh * (h1 - h0))
+                        hout = _box(IV0, Y, X, Y + kh, X + l1) + _box(IV0, Y, X + r0, Y + kh, X + tw)
+                        if hin / h_area - hout / b_area < head_contrast:
+                            continue
+                    tv = _cells(IV, Y, X, ys_s, xs_s, coef_s)
+                    to = _cells(IO, Y, X, ys_s, xs_s, coef_s) if _box(IO, Y, X, Y + th, X + tw) > 0 else 0.0
+                    visible = ts - to
+                    # explained mass E = sum T V - alpha sum T (1 - V) - beta sum (1 - T) V
+                    e = tv - alpha * (visible - tv) - beta * (bx - tv)
+                    if e >= threshold * max(visible, 1e-6) and visible >= min_visible * ts:
+                        E[row + c] = e
+                        score[row + c] = e / max(visible, 1e-6)
+        best = 0.0
+        j = -1
+        for i in range(start[nk]):  # the first largest E > 0, in scale, row, column order
+            if E[i] > best:
+                best, j = E[i], i
+        if j < 0:
+            break
+        k = np.searchsorted(start, j, side="right") - 1
+        s = ids[k]
+        th, tw = size[s, 0], size[s, 1]
+        r, c = divmod(j - start[k], W)
+        best_y, best_x = r + bands[k, 0] - th // 2 + py, c - tw // 2 + px
+        cy0, cx0, cy1, cx1 = Hp, Wp, -1, -1
+        for i in range(th):
+            for jj in range(tw):
+                if occ[s, i, jj]:
+                    y, x = best_y + i, best_x + jj
+                    if vp[y, x]:
+                        op[y, x] = 1
+                        vp[y, x] = 0
+                        cy0, cx0 = min(cy0, y), min(cx0, x)
+                        cy1, cx1 = max(cy1, y + 1), max(cx1, x + 1)
+        _integral(vp, IV, best_y + 1)
+        _integral(op, IO, best_y + 1)
+        y0, y1, x0, x1 = best_y, best_y + th, best_x, best_x + tw
+        fits[n, 0] = s
+        fits[n, 1] = best_y - py
+        fits[n, 2] = best_x - px
+        fits[n, 3] = best
+        fits[n, 4] = score[j]
+        if cy1 >= 0:
+            fits[n, 5], fits[n, 6] = cx0 - px, cy0 - py
+            fits[n, 7], fits[n, 8] = cx1 - px, cy1 - py
+        else:
+            fits[n, 5:9] = -1.0
+        n += 1
+    return n
