@@ -14,7 +14,6 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from trackers.baseline import BaselineTracker
-from trackers.layered.parts import N_PARTS, PartFeatureExtractor
 from trackers.geometry import iou_matrix
 from trackers.layered import (
     Adaptations,
@@ -38,6 +37,7 @@ from trackers.layered.models import (
     fit_half_normal,
     save_feature_models,
 )
+from trackers.layered.parts import N_PARTS, PartFeatureExtractor
 from trackers.layered.search import (
     occlusion_kind,
     occlusion_kinds,
@@ -431,12 +431,12 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
     fp.F, fp.H, fp.Q, fp.R = F, H, Q, R
     fp.x, fp.P = x.reshape(4, 1).copy(), P.copy()
     for _ in range(40):
-        # the matrix form, operation for operation: equal bit for bit
+        # the matrix form: equal to rounding
         kf.predict()
         x, P = F @ x, F @ P @ F.T + Q
         fp.predict()
-        np.testing.assert_array_equal(kf.state(1)[0], x)
-        np.testing.assert_array_equal(kf.state(1)[1], P)
+        np.testing.assert_allclose(kf.state(1)[0], x, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(kf.state(1)[1], P, rtol=1e-12, atol=1e-12)
         z = x[:2] + rng.normal(0, 5, 2)
         kf.update(np.array([1]), z[None])
         S = P[:2, :2] + R
@@ -444,8 +444,8 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
         K = P[:, :2] @ (np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det)
         x, P = x + K @ (z - x[:2]), P - K @ P[:2, :]
         fp.update(z.reshape(2, 1))
-        np.testing.assert_array_equal(kf.state(1)[0], x)
-        np.testing.assert_array_equal(kf.state(1)[1], P)
+        np.testing.assert_allclose(kf.state(1)[0], x, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(kf.state(1)[1], P, rtol=1e-12, atol=1e-12)
         # filterpy (Joseph-form covariance update): equal up to rounding
         np.testing.assert_allclose(kf.state(1)[0], fp.x[:, 0], rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(kf.state(1)[1], fp.P, rtol=1e-9, atol=1e-9)
@@ -454,8 +454,8 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
 
 
 def test_selected_differences_equal_the_all_pairs_ones():
-    from trackers.layered.parts import PartFeatureExtractor
     from trackers.layered.association import feature_differences, selected_differences
+    from trackers.layered.parts import PartFeatureExtractor
 
     rng = np.random.default_rng(8)
     frame = rng.integers(0, 256, (200, 300, 3), dtype=np.uint8)
@@ -482,8 +482,8 @@ def test_bool_and_label_foreground_give_the_same_tracks():
 
 
 def test_update_parts_equals_the_numpy_running_averages():
-    from trackers.layered.parts import part_boxes
     from trackers.layered.model import update_parts
+    from trackers.layered.parts import part_boxes
 
     rng = np.random.default_rng(11)
     ex = PartFeatureExtractor()
@@ -552,7 +552,7 @@ def test_gated_pairs_equal_the_numpy_gating():
     """The compiled gating (PBM 3), occlusion-test pairs (PBM 3.1) and lone growth against
     numpy expressions, on random scenes with many boundary cases."""
     from trackers.geometry import overlap_ratio_matrix
-    from trackers.layered._glue_kernels import gated_pairs
+    from trackers.layered._kernels import gated_pairs
     from trackers.layered.search import occlusion_kinds
 
     rng = np.random.default_rng(11)
@@ -675,7 +675,7 @@ def test_foreground_counts_and_the_tracker_accept_every_foreground_dtype():
 
 
 def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
-    from trackers.layered._glue_kernels import alive_rows, matched_rows
+    from trackers.layered._kernels import alive_rows, matched_rows
 
     rng = np.random.default_rng(9)
     T, N, P = 6, 8, 5
@@ -710,7 +710,7 @@ def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
 
 
 def test_carved_rows_equal_the_numpy_selection_of_searched_and_aligned_boxes():
-    from trackers.layered._glue_kernels import carved_rows
+    from trackers.layered._kernels import carved_rows
     from trackers.layered.model import dofs_from_heads
 
     rng = np.random.default_rng(12)

@@ -14,9 +14,9 @@ from harness.datasets.synthetic import load_scenario
 from harness.detection_sources import NoisyGroundTruth
 from harness.metrics import score_sequence
 from harness.run import run_sequence
-from trackers.layered.parts import PartFeatureExtractor
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import Targets
+from trackers.layered.parts import PartFeatureExtractor
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -62,13 +62,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from trackers.layered.parts import N_PARTS, PART_NAMES, PartFeatureExtractor, centroid_ratios
 from trackers.layered.association import feature_differences
 from trackers.layered.models import (
     FEATURES,
     FeatureModels,
     fit_difference_model,
 )
+from trackers.layered.parts import N_PARTS, PART_NAMES, PartFeatureExtractor, centroid_ratios
 
 log = logging.getLogger(__name__)
 

@@ -18,11 +18,11 @@ test (PBM 3.1) and as the centre of the head-anchored size search (eqs. 9-10).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
+
+from trackers.layered import _kernels
 
 
 class ConstantVelocity2D:
@@ -36,9 +36,9 @@ class ConstantVelocity2D:
     predict x = F x, P = F P F' + Q; update y = z - H x, S = H P H' + R, K = P H' S^-1,
     x += K y, P = (I - K H) P. With diagonal P0, Q and R the two axes never couple, so P
     is kept as one 2 x 2 block per axis, ``p[:, axis] = (P[a, a], P[a, a'], P[a', a],
-    P[a', a'])``, and the arithmetic is written out element-wise (small numba kernels). Every sum is grouped as
-    the 4 x 4 matrix products group it (their other terms are exact zeros), so ``x`` and
-    ``P`` equal the matrix form bit for bit (tests/test_pbm.py checks this, and agreement
+    P[a', a'])``, and the arithmetic is written out element-wise (``_kernels.cv_predict``,
+    ``cv_update``); they equal the matrix form of ``equations.cv_predict`` / ``cv_update``
+    (eqs. 7-8) to rounding (tests/test_pbm_equations.py; tests/test_pbm.py checks agreement
     with filterpy's KalmanFilter).
 
     Args:
@@ -85,45 +85,13 @@ class ConstantVelocity2D:
 
     def predict(self) -> None:
         """x = F x; P = F P F' + Q, for every filter."""
-        _predict_kernel(self.x, self.p, self.qp, self.qv)
+        _kernels.cv_predict(self.x, self.p, self.qp, self.qv)
 
     def update(self, rows: np.ndarray, z: np.ndarray) -> None:
         """y = z - H x; S = H P H' + R; K = P H' S^-1; x += K y; P = (I - K H) P, for the
         filters at ``rows`` (unique) with measurements z (M, 2)."""
-        _update_kernel(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
+        _kernels.cv_update(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
                        np.asarray(z, dtype=np.float64))
-
-
-@numba.njit(cache=True)
-def _predict_kernel(x, p, qp, qv):  # pragma: no cover (compiled)
-    """``ConstantVelocity2D.predict`` on every row, per axis i (block A, B, C, D):
-    x_i += x_i'; A = ((A + C) + (B + D)) + q_p; B = B + D; C = C + D; D = D + q_v."""
-    for n in range(x.shape[0]):
-        for i in range(2):
-            x[n, i] = x[n, i] + x[n, i + 2]
-            A, B, C, D = p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3]
-            p[n, i, 0] = (A + C) + (B + D) + qp[n]
-            p[n, i, 1] = B + D
-            p[n, i, 2] = C + D
-            p[n, i, 3] = D + qv[n]
-
-
-@numba.njit(cache=True)
-def _update_kernel(x, p, r, rows, z):  # pragma: no cover (compiled)
-    """``ConstantVelocity2D.update`` of ``rows``: S = diag(A_0 + r, A_1 + r); per axis i,
-    y = z_i - x_i, K = (A, C) S_other / det S; x += K y; (A, B, C, D) -= K (A, B)."""
-    for q in range(rows.shape[0]):
-        n = rows[q]
-        s0, s1 = p[n, 0, 0] + r[n], p[n, 1, 0] + r[n]
-        det = s0 * s1
-        for i in range(2):
-            inv = s1 / det if i == 0 else s0 / det
-            y = z[q, i] - x[n, i]
-            A, B, C, D = p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3]
-            kp, kv = A * inv, C * inv
-            x[n, i] += kp * y
-            x[n, i + 2] += kv * y
-            p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3] = A - kp * A, B - kp * B, C - kv * A, D - kv * B
 
 
 @dataclass(frozen=True)
@@ -145,46 +113,17 @@ class Gate:
     def half_sizes(self, rates: np.ndarray, size_wh: np.ndarray, misses: np.ndarray) -> np.ndarray:
         """(T, 2) gate half-width and half-height of targets with KF1 rates (T, 2), size
         (w, h) (T, 2) and ``misses`` (T,) frames unfound."""
-        half = np.empty((len(size_wh), 2))
-        _half_kernel(np.asarray(rates, dtype=np.float64), np.asarray(size_wh, dtype=np.float64),
-                     np.asarray(misses, dtype=np.int64), self.speed_factor, self.min_fraction,
-                     self.miss_factor, self.growth, self.max_fraction, half)
-        return half
+        size_wh = np.asarray(size_wh, dtype=np.float64).reshape(-1, 2)
+        return 0.5 * self.boxes(np.zeros((len(size_wh), 2)), rates, size_wh, misses)[:, 2:]
 
     def boxes(self, centres: np.ndarray, rates: np.ndarray, size_wh: np.ndarray,
               misses: np.ndarray) -> np.ndarray:
         """(T, 4) xywh gates centred on ``centres`` (T, 2): (centre - half, 2 half)."""
         out = np.empty((len(size_wh), 4))
-        _boxes_kernel(np.asarray(centres, dtype=np.float64), np.asarray(rates, dtype=np.float64),
-                      np.asarray(size_wh, dtype=np.float64), np.asarray(misses, dtype=np.int64),
-                      self.speed_factor, self.min_fraction, self.miss_factor, self.growth,
-                      self.max_fraction, out)
+        _kernels.gate_boxes(np.asarray(centres, dtype=np.float64),
+                            np.asarray(rates, dtype=np.float64),
+                            np.asarray(size_wh, dtype=np.float64), np.asarray(misses, dtype=np.int64),
+                            (float(self.speed_factor), float(self.min_fraction),
+                             float(self.miss_factor), float(self.growth), float(self.max_fraction)),
+                            out)
         return out
-
-
-@numba.njit(cache=True)
-def _half_kernel(rates, size_wh, misses, speed_factor, min_fraction, miss_factor, growth,
-                 max_fraction, half):  # pragma: no cover (compiled)
-    """``Gate.half_sizes``: per row and axis, h = speed_factor |v| + min_fraction size;
-    after m > 0 misses h = h miss_factor growth^(m - 1); h = min(h, max_fraction max(size, 1))."""
-    for n in range(size_wh.shape[0]):
-        sp = speed_factor * math.hypot(rates[n, 0], rates[n, 1])
-        for i in range(2):
-            h = sp + min_fraction * size_wh[n, i]
-            if misses[n] > 0:
-                h = h * miss_factor * growth ** (misses[n] - 1.0)
-            half[n, i] = min(h, max_fraction * max(size_wh[n, i], 1.0))
-
-
-@numba.njit(cache=True)
-def _boxes_kernel(centres, rates, size_wh, misses, speed_factor, min_fraction, miss_factor, growth,
-                  max_fraction, out):  # pragma: no cover (compiled)
-    """``Gate.boxes``: the half-sizes of ``_half_kernel``, then per row and axis
-    out = (centre - half, 2 half)."""
-    half = np.empty((size_wh.shape[0], 2))
-    _half_kernel(rates, size_wh, misses, speed_factor, min_fraction, miss_factor, growth,
-                 max_fraction, half)
-    for n in range(size_wh.shape[0]):
-        for i in range(2):
-            out[n, i] = centres[n, i] - half[n, i]
-            out[n, 2 + i] = 2 * half[n, i]

@@ -21,17 +21,15 @@ it is re-learned (step ``relearn_rate``). A hidden part is never re-learned.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from trackers.layered import _kernels
+from trackers.layered.dynamics import ConstantVelocity2D, Gate
+from trackers.layered.equations import dof_from_head as dofs_from_heads
 from trackers.layered.parts import (
-    HEAD_FRACTION,
     N_PARTS,
     PartFeatures,
 )
-from trackers.layered.dynamics import ConstantVelocity2D, Gate
-from trackers.layered.dynamics import _predict_kernel as _kf_predict_kernel
-from trackers.layered.dynamics import _update_kernel as _kf_update_kernel
 
 
 def dof_from_box(box: np.ndarray, centroid: np.ndarray) -> np.ndarray:
@@ -44,19 +42,6 @@ def dof_from_head(head: np.ndarray, w: float, h: float, alpha: float, beta: floa
     """(6,) DOF under occlusion (PBM 2.1): xc, ytl from the head top; xtl (eq. 1) and yc
     (eq. 2) from the previous frame's alpha and beta (``dofs_from_heads`` of one head)."""
     return dofs_from_heads(np.asarray(head, dtype=np.float64)[None], w, h, alpha, beta)[0]
-
-
-def dofs_from_heads(heads: np.ndarray, w: np.ndarray, h: np.ndarray, alpha: np.ndarray,
-                    beta: np.ndarray) -> np.ndarray:
-    """(M, 6) DOF under occlusion (PBM 2.1) of M heads (M, >= 2) (x top-centre, y top)
-    with sizes w, h and ratios alpha, beta ((M,) or scalars): xc, ytl from the head top,
-    xtl = xc - alpha w (eq. 1), yc = ytl + hh + beta (h - hh) with hh = h / 7 (eq. 2)."""
-    xc, ytl = heads[:, 0], heads[:, 1]
-    xtl = xc - alpha * w
-    yc = ytl + HEAD_FRACTION * h + beta * (h - HEAD_FRACTION * h)
-    out = np.empty((len(heads), 6))
-    out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4], out[:, 5] = xtl, ytl, xc, yc, w, h
-    return out
 
 
 class Targets:
@@ -165,7 +150,7 @@ class Targets:
         """Advance KF1 and KF2 one frame; returns the predicted (w, h) (T, 2) (KF2), floored
         at 2 pixels (KF2's rates are zeroed where they would shrink it below)."""
         kf1, kf2 = self.kf1, self.kf2
-        _targets_predict_kernel(kf1.x, kf1.p, kf1.qp, kf1.qv, kf2.x, kf2.p, kf2.qp, kf2.qv)
+        _kernels.targets_predict((kf1.x, kf1.p, kf1.qp, kf1.qv), (kf2.x, kf2.p, kf2.qp, kf2.qv))
         return self.predicted_size()
 
     def predicted_size(self) -> np.ndarray:
@@ -209,104 +194,16 @@ class Targets:
         rows = np.asarray(rows, dtype=np.int64)
         shift = np.empty((len(rows), 2))
         kf1, kf2 = self.kf1, self.kf2
-        _targets_update_kernel(self.dof, self._history, self._n_history, self._ratios,
-                               self._n_ratios, self.alpha, self.beta, kf1.x, kf1.p, kf1.r, kf2.x,
-                               kf2.p, kf2.r, self.part_scores, self.occluded_parts, self.occluded,
-                               self.hits, self.misses, rows,
-                               np.asarray(dof, dtype=np.float64).reshape(-1, 6),
-                               np.asarray(centroid_measured, dtype=bool),
-                               np.asarray(occluded, dtype=bool),
-                               np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
-                               float(part_match_threshold), shift)
+        _kernels.targets_update(
+            (self.dof, self._history, self._n_history, self._ratios, self._n_ratios, self.alpha,
+             self.beta, self.part_scores, self.occluded_parts, self.occluded, self.hits,
+             self.misses),
+            (kf1.x, kf1.p, kf1.r), (kf2.x, kf2.p, kf2.r), rows,
+            np.asarray(dof, dtype=np.float64).reshape(-1, 6),
+            (np.asarray(centroid_measured, dtype=bool), np.asarray(occluded, dtype=bool)),
+            np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
+            float(part_match_threshold), shift)
         return shift
-
-
-@numba.njit(cache=True)
-def _targets_predict_kernel(x1, p1, qp1, qv1, x2, p2, qp2, qv2):  # pragma: no cover (compiled)
-    """``Targets.predict``: KF2's rates are zeroed where a step would take h or w below 2
-    pixels; then KF1 and KF2 predict (``ConstantVelocity2D.predict``)."""
-    for n in range(x2.shape[0]):
-        if x2[n, 0] + x2[n, 2] < 2 or x2[n, 1] + x2[n, 3] < 2:
-            x2[n, 2] = 0.0
-            x2[n, 3] = 0.0
-    _kf_predict_kernel(x1, p1, qp1, qv1)
-    _kf_predict_kernel(x2, p2, qp2, qv2)
-
-
-@numba.njit(cache=True)
-def _targets_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, beta, x1, p1, r1,
-                           x2, p2, r2, part_scores_all, occluded_parts, occluded_all, hits, misses,
-                           rows, dof, measured, occluded, part_scores, threshold,
-                           shift):  # pragma: no cover (compiled)
-    """``Targets.update`` in one call: ``_global_update_kernel``; then KF1 with z = (xc, yc)
-    and KF2 with z = (h, w) of the updated DOF (``ConstantVelocity2D.update``); then per
-    row p_j, the frozen parts (not p_j >= threshold), the occlusion flag, hits + 1 and
-    misses = 0."""
-    _global_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, beta, rows, dof,
-                          measured, occluded, shift)
-    M = rows.shape[0]
-    z1, z2 = np.empty((M, 2)), np.empty((M, 2))
-    for q in range(M):
-        n = rows[q]
-        z1[q, 0], z1[q, 1] = dof_all[n, 2], dof_all[n, 3]
-        z2[q, 0], z2[q, 1] = dof_all[n, 5], dof_all[n, 4]
-    _kf_update_kernel(x1, p1, r1, rows, z1)
-    _kf_update_kernel(x2, p2, r2, rows, z2)
-    for q in range(M):
-        n = rows[q]
-        for j in range(part_scores.shape[1]):
-            part_scores_all[n, j] = part_scores[q, j]
-            occluded_parts[n, j] = not part_scores[q, j] >= threshold
-        occluded_all[n] = occluded[q]
-        hits[n] += 1
-        misses[n] = 0
-
-
-@numba.njit(cache=True)
-def _push(window, count, n, values):  # pragma: no cover (compiled)
-    """Append ``values`` (K,) as the newest entry of window n of ``window`` (T, L, K) and
-    return the mean of its newest ``count[n]`` entries, summed oldest first from 0 (as
-    ``sum`` over a list of them)."""
-    L, K = window.shape[1], window.shape[2]
-    for j in range(L - 1):
-        for k in range(K):
-            window[n, j, k] = window[n, j + 1, k]
-    for k in range(K):
-        window[n, L - 1, k] = values[k]
-    c = min(count[n] + 1, L)
-    count[n] = c
-    mean = np.empty(K)
-    for k in range(K):
-        total = 0.0
-        for j in range(L - c, L):
-            total += window[n, j, k]
-        mean[k] = total / c
-    return mean
-
-
-@numba.njit(cache=True)
-def _global_update_kernel(dof_all, history, n_history, ratios, n_ratios, alpha, beta, rows, dof,
-                          measured, occluded, shift):  # pragma: no cover (compiled)
-    """``Targets.update`` of the global models (PBM 4.2) and the centroid ratios (eqs. 1-2):
-    per row, the DOF enters the occlusion window; an occluded row takes the window's mean;
-    an unoccluded row with a measured centroid pushes its clipped alpha, beta into the ratio
-    window, whose mean becomes the target's alpha, beta. ``shift`` gets the centroid moves."""
-    for q in range(rows.shape[0]):
-        n = rows[q]
-        x0, y0 = dof_all[n, 2], dof_all[n, 3]
-        mean = _push(history, n_history, n, dof[q])
-        new = mean if occluded[q] else dof[q]
-        for k in range(6):
-            dof_all[n, k] = new[k]
-        if measured[q] and not occluded[q]:
-            x, y, xc, yc, w, h = new[0], new[1], new[2], new[3], new[4], new[5]
-            hh = HEAD_FRACTION * h
-            a = min(max((xc - x) / max(w, 1e-9), 0.05), 0.95)
-            b = min(max((yc - y - hh) / max(h - hh, 1e-9), 0.05), 0.95)
-            ab = _push(ratios, n_ratios, n, np.array([a, b]))
-            alpha[n], beta[n] = ab[0], ab[1]
-        shift[q, 0] = dof_all[n, 2] - x0
-        shift[q, 1] = dof_all[n, 3] - y0
 
 
 def stale_parts(targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
@@ -328,46 +225,13 @@ def stale_parts(targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.n
     """
     relearn = np.zeros((len(rows), N_PARTS), dtype=np.bool_)
     W, H = image_size
-    _stale_parts_kernel(targets.stale, targets.occluded_parts, targets.parts.area, targets.dof,
-                        targets.misses, np.asarray(rows, dtype=np.int64), cand.parts, cand.area,
-                        np.asarray(ks, dtype=np.int64),
-                        np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
-                        float(part_match_threshold), int(occluder_misses), float(W), float(H),
-                        float(max_cover), float(min_fill), int(stale_frames), relearn)
+    _kernels.stale_parts(
+        (targets.stale, targets.occluded_parts, targets.parts.area), targets.dof, targets.misses,
+        np.asarray(rows, dtype=np.int64), (cand.parts, cand.area), np.asarray(ks, dtype=np.int64),
+        np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
+        (float(part_match_threshold), int(occluder_misses), float(W), float(H), float(max_cover),
+         float(min_fill), int(stale_frames)), relearn)
     return relearn
-
-
-@numba.njit(cache=True)
-def _stale_parts_kernel(stale, occluded_parts, m_area, dof, misses, rows, c_parts, c_area, ks,
-                        part_scores, threshold, occluder_misses, W, H, max_cover, min_fill,
-                        stale_frames, relearn):  # pragma: no cover (compiled)
-    """``stale_parts`` in one loop over rows x parts x targets; cover is the largest of
-    the fraction outside the image and the fractions under each other target's box."""
-    T = dof.shape[0]
-    for q in range(rows.shape[0]):
-        r, k = rows[q], ks[q]
-        for j in range(c_parts.shape[1]):
-            x0, y0 = c_parts[k, j, 0], c_parts[k, j, 1]
-            x1, y1 = x0 + c_parts[k, j, 2], y0 + c_parts[k, j, 3]
-            size = max(c_parts[k, j, 2] * c_parts[k, j, 3], 1e-9)
-            inside = ((min(max(x1, 0.0), W) - min(max(x0, 0.0), W))
-                      * (min(max(y1, 0.0), H) - min(max(y0, 0.0), H)))
-            cover = 1.0 - inside / size
-            for t in range(T):
-                if t == r or misses[t] > occluder_misses:
-                    continue
-                iw = min(x1, dof[t, 0] + dof[t, 4]) - max(x0, dof[t, 0])
-                ih = min(y1, dof[t, 1] + dof[t, 5]) - max(y0, dof[t, 1])
-                if iw > 0.0 and ih > 0.0:
-                    cover = max(cover, iw * ih / size)
-            if part_scores[q, j] >= threshold:
-                stale[r, j] = 0
-            elif cover <= max_cover and c_area[k, j] >= min_fill * m_area[r, j]:
-                stale[r, j] += 1
-                if stale[r, j] >= stale_frames:
-                    relearn[q, j] = True
-                    stale[r, j] = 0
-                    occluded_parts[r, j] = False
 
 
 def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
@@ -392,54 +256,12 @@ def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: 
     """
     if relearn is None:
         relearn = np.zeros((len(rows), N_PARTS), dtype=bool)
-    _update_parts_kernel(model.parts, model.area, model.perimeter, model.hsv, model.xyz,
-                         model.centroid, model.height, np.asarray(rows, dtype=np.int64),
-                         cand.area, cand.perimeter, cand.hsv, cand.xyz, cand.centroid,
-                         np.asarray(ks, dtype=np.int64), np.asarray(part_scores, dtype=np.float64),
-                         float(part_match_threshold), float(update_rate),
-                         np.asarray(shift, dtype=np.float64), np.asarray(boxes, dtype=np.float64),
-                         np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64),
-                         np.asarray(relearn, dtype=np.bool_), float(relearn_rate))
-
-
-@numba.njit(cache=True)
-def _update_parts_kernel(m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height, rows,
-                         c_area, c_perimeter, c_hsv, c_xyz, c_centroid, ks, part_scores,
-                         threshold, rate, shift, boxes, alpha, beta, relearn,
-                         relearn_rate):  # pragma: no cover (compiled)
-    """``update_parts`` in one loop; each value is computed by the same operations, in the
-    same order, as the numpy expressions
-
-        eta = where(p >= threshold, rate * p, 0); m += eta * (c - m)   (area, perimeter, hsv, xyz)
-        centroid = where(p >= threshold, c_centroid, m_centroid + shift)
-        parts = part_boxes(boxes, alpha, beta); height = boxes[:, 3]
-
-    except that a ``relearn`` part takes eta = relearn_rate and the candidate's centroid.
-    """
-    nb = m_hsv.shape[2]
-    for q in range(rows.shape[0]):
-        r, k = rows[q], ks[q]
-        for j in range(m_area.shape[1]):
-            p = part_scores[q, j]
-            matched = p >= threshold or relearn[q, j]
-            eta = relearn_rate if relearn[q, j] else (rate * p if p >= threshold else 0.0)
-            m_area[r, j] += eta * (c_area[k, j] - m_area[r, j])
-            m_perimeter[r, j] += eta * (c_perimeter[k, j] - m_perimeter[r, j])
-            for u in range(nb):
-                m_hsv[r, j, u] += eta * (c_hsv[k, j, u] - m_hsv[r, j, u])
-                m_xyz[r, j, u] += eta * (c_xyz[k, j, u] - m_xyz[r, j, u])
-            for a in range(2):
-                m_centroid[r, j, a] = c_centroid[k, j, a] if matched else m_centroid[r, j, a] + shift[q, a]
-        # part_boxes (PBM 2.1), operation for operation
-        x, y, w, h = boxes[q, 0], boxes[q, 1], boxes[q, 2], boxes[q, 3]
-        hh = HEAD_FRACTION * h
-        xs = x + alpha[q] * w
-        ys = y + hh + beta[q] * (h - hh)
-        top, left_w, right_w = y + hh, xs - x, x + w - xs
-        torso_h, leg_h = ys - y - hh, y + h - ys
-        rect = ((x, y, w, hh), (x, top, left_w, torso_h), (xs, top, right_w, torso_h),
-                (x, ys, left_w, leg_h), (xs, ys, right_w, leg_h))
-        for j in range(5):
-            for a in range(4):
-                m_parts[r, j, a] = rect[j][a]
-        m_height[r] = h
+    _kernels.update_parts(
+        (model.parts, model.area, model.perimeter, model.hsv, model.xyz, model.centroid,
+         model.height), np.asarray(rows, dtype=np.int64),
+        (cand.parts, cand.area, cand.perimeter, cand.hsv, cand.xyz, cand.centroid, cand.height),
+        np.asarray(ks, dtype=np.int64), np.asarray(part_scores, dtype=np.float64),
+        (float(part_match_threshold), float(update_rate), float(relearn_rate)),
+        np.asarray(shift, dtype=np.float64),
+        (np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64)),
+        np.asarray(boxes, dtype=np.float64), np.asarray(relearn, dtype=np.bool_))

@@ -27,8 +27,9 @@ import numpy as np
 import yaml
 from scipy.special import ndtr
 
+from trackers.layered._kernels import survival_kernel
+from trackers.layered.association import FEATURES
 from trackers.layered.parts import N_PARTS, PART_NAMES
-from trackers.layered.association import FEATURES, survival_kernel
 
 logger = logging.getLogger(__name__)
 
@@ -197,7 +198,7 @@ class FeatureModels:
         # the compiled kernel lives with the layers it is fused into (association.py)
         flat = np.ascontiguousarray(d).reshape(-1, *self._w.shape[:2])
         out = np.empty_like(flat)
-        survival_kernel(flat, self._w, self._mu, self._s, out)
+        survival_kernel(flat, (self._w, self._mu, self._s), out)
         return out.reshape(d.shape)
 
     def to_dict(self) -> dict:

@@ -10,7 +10,8 @@ the centroid ratios of PBM eqs. 1-2,
     xc = xtl + alpha * w                           (eq. 1)
     yc = ytl + h / 7 + beta * (h - h / 7)          (eq. 2, sign-corrected)
 
-so a box plus (alpha, beta) gives the five rectangles (``part_boxes``).
+so a box plus (alpha, beta) gives the five rectangles (``part_boxes``; both equations
+are in ``trackers.layered.equations``, re-exported here).
 
 PBM 2.2 describes each part by area, perimeter, HSV and XYZ colour histograms,
 displacement and overlap. ``PartFeatureExtractor.extract`` measures the first four (plus
@@ -37,8 +38,13 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.layered import _part_kernels
 from trackers.geometry import iou_matrix
+from trackers.layered import _kernels
+from trackers.layered.equations import (  # eqs. 1-2, re-exported here
+    HEAD_FRACTION,
+    centroid_ratios,  # noqa: F401
+    part_boxes,  # noqa: F401
+)
 
 PART_NAMES: tuple[str, ...] = (
     "head",
@@ -50,59 +56,11 @@ PART_NAMES: tuple[str, ...] = (
 """The five parts of PBM 2.1, in the order used by every (N, 5, ...) array."""
 
 N_PARTS = len(PART_NAMES)
-HEAD_FRACTION = _part_kernels.HEAD_FRACTION
-"""The head occupies one seventh of the person height (PBM 2.1)."""
 
 DEFAULT_ALPHA = 0.5
 """Centroid column ratio of an upright symmetric person (eq. 1)."""
 DEFAULT_BETA = (0.5 - HEAD_FRACTION) / (1.0 - HEAD_FRACTION)
 """Centroid row ratio of a person whose centroid is at mid-height (eq. 2)."""
-
-
-def centroid_ratios(boxes: np.ndarray, centroids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Ratios alpha (eq. 1) and beta (eq. 2) of centroids inside boxes.
-
-    The paper prints eq. 2 as ``(ytl - yc - h/7) / (h - h/7)``, which is negative for any
-    centroid below the head; the ratio it describes ("the height of the torso over the body
-    height") is ``(yc - ytl - h/7) / (h - h/7)``, used here.
-
-    Args:
-        boxes: (N, 4) xywh. centroids: (N, 2) (xc, yc).
-    Returns:
-        alpha (N,), beta (N,), clipped to [0.05, 0.95].
-    """
-    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    c = np.asarray(centroids, dtype=np.float64).reshape(-1, 2)
-    w = np.maximum(b[:, 2], 1e-9)
-    h = np.maximum(b[:, 3], 1e-9)
-    alpha = (c[:, 0] - b[:, 0]) / w
-    beta = (c[:, 1] - b[:, 1] - HEAD_FRACTION * h) / (h - HEAD_FRACTION * h)
-    return np.clip(alpha, 0.05, 0.95), np.clip(beta, 0.05, 0.95)
-
-
-def part_boxes(
-    boxes: np.ndarray, alpha: np.ndarray | float = DEFAULT_ALPHA, beta: np.ndarray | float = DEFAULT_BETA
-) -> np.ndarray:
-    """The five part rectangles of each box (PBM 2.1, Fig. 2).
-
-    Args:
-        boxes: (N, 4) xywh person boxes.
-        alpha, beta: (N,) or scalar centroid ratios (eqs. 1-2).
-    Returns:
-        (N, 5, 4) xywh part boxes in ``PART_NAMES`` order.
-    """
-    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    n = len(b)
-    a = np.broadcast_to(np.asarray(alpha, dtype=np.float64), (n,))
-    be = np.broadcast_to(np.asarray(beta, dtype=np.float64), (n,))
-    x, y, w, h = b.T
-    hh = HEAD_FRACTION * h
-    xs = x + a * w  # split column = centroid column xc
-    ys = y + hh + be * (h - hh)  # split row = centroid row yc
-    top, left_w, right_w = y + hh, xs - x, x + w - xs
-    torso_h, leg_h = ys - y - hh, y + h - ys
-    return np.stack([x, y, w, hh, x, top, left_w, torso_h, xs, top, right_w, torso_h,
-                     x, ys, left_w, leg_h, xs, ys, right_w, leg_h], axis=1).reshape(n, N_PARTS, 4)
 
 
 @dataclass
@@ -218,18 +176,18 @@ def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 @functools.lru_cache(maxsize=1)
 def _check_colour_formulas() -> None:
     """Raise RuntimeError unless the kernels' HSV and XYZ values (OpenCV's integer
-    formulas, ``_part_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
+    formulas, ``_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
     once per process (tests/test_parts.py checks all 2**24)."""
     v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
     got = np.empty((len(pixels), 6), np.uint8)
-    _part_kernels.convert(pixels, got)
+    _kernels.convert(pixels, got)
     want = np.concatenate([cv2.cvtColor(pixels[None], cv2.COLOR_BGR2HSV)[0],
                            cv2.cvtColor(pixels[None], cv2.COLOR_BGR2XYZ)[0]], axis=1)
     if not np.array_equal(got, want):
         raise RuntimeError(
             f"OpenCV {cv2.__version__} converts BGR to 8-bit HSV or XYZ differently from "
-            "trackers/layered/_part_kernels._hsv_xyz: update it")
+            "trackers/layered/_kernels._hsv_xyz: update it")
 
 
 class PartFeatureExtractor:
@@ -237,11 +195,11 @@ class PartFeatureExtractor:
 
     Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
     pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour).
-    One kernel call (``trackers.layered._part_kernels``) walks the samples of every box
+    One kernel call (``trackers.layered._kernels.part_features``) walks the samples of every box
     once: foreground test, part label, counts, centroid sums, outline test, and the joint
     HSV and XYZ bins of each foreground sample by OpenCV's own integer formulas (equal to
-    ``cv2.cvtColor`` for every colour), so every feature equals the earlier numpy version
-    (``cv2.cvtColor`` of the gathered samples, ``np.bincount``) bit for bit. Features are
+    ``cv2.cvtColor`` for every colour); the features equal a per-box numpy reference
+    (``cv2.cvtColor`` of the gathered samples, ``np.bincount``) to rounding. Features are
     thus scale-free by construction, and the 25 sizes of the head-anchored search (PBM
     3.1) cost one call. Outline (perimeter) samples are foreground samples with a
     background 4-neighbour on the grid (outside the box counts as background). Samples
@@ -294,10 +252,12 @@ class PartFeatureExtractor:
             raise RuntimeError("PartFeatureExtractor.start(frame, foreground) was not called")
         return np.array(boxes, dtype=np.float64).reshape(-1, 4)
 
-    def _mask(self) -> tuple[np.ndarray, bool]:
-        """The foreground mask the kernels read and whether there is one (a 1 x 1
-        placeholder when not: every sample inside the image is then foreground)."""
-        return (self._fg, True) if self._fg is not None else (_NO_MASK, False)
+    def _image(self) -> tuple[np.ndarray, np.ndarray, bool]:
+        """The kernels' (frame, foreground mask, whether there is one): a 1 x 1 placeholder
+        mask when not (every sample inside the image is then foreground)."""
+        if self._fg is None:
+            return self._frame, _NO_MASK, False
+        return self._frame, self._fg, True
 
     def centroids(self, boxes: np.ndarray) -> np.ndarray:
         """(N, 2) foreground centroid (xc, yc) of each xywh box from its sample grid (the
@@ -306,14 +266,9 @@ class PartFeatureExtractor:
         n = len(b)
         if n == 0:
             return np.zeros((0, 2))
-        count = np.empty(n, np.int64)
-        cx, cy = np.empty((n, self.grid_cols)), np.empty((n, self.grid_rows))
-        H, W = self._frame.shape[:2]
-        _part_kernels.grid_centroid_terms(b, self._fr, self._fc, H, W, *self._mask(), count, cx, cy)
-        centre = b[:, :2] + 0.5 * b[:, 2:]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(count[:, None] > 0,
-                            np.column_stack([cx.sum(1), cy.sum(1)]) / count[:, None], centre)
+        out = np.empty((n, 2))
+        _kernels.grid_centroids(b, (self._fr, self._fc), self._image(), out)
+        return out
 
     def extract_at_centroids(self, boxes: np.ndarray) -> tuple[np.ndarray, PartFeatures]:
         """Centroids of the boxes and their part features split at them (PBM 2.1): the
@@ -327,9 +282,6 @@ class PartFeatureExtractor:
         n = len(b)
         if n == 0:
             return np.zeros((0, 2)), PartFeatures.concatenate([], self.bins)
-        if max(self.grid_rows, self.grid_cols) > _part_kernels.PAIRWISE_BLOCK:
-            cents = self.centroids(b)  # numpy sums the longer rows and columns
-            return cents, self.extract(b, *centroid_ratios(b, cents))
         cents = np.empty((n, 2))
         return cents, self._extract(b, np.empty(n), np.empty(n), cents)
 
@@ -364,10 +316,8 @@ class PartFeatureExtractor:
         area, perimeter = np.empty((n, N_PARTS)), np.empty((n, N_PARTS))
         hsv, xyz = np.empty((n, N_PARTS, nb)), np.empty((n, N_PARTS, nb))
         centroid = np.empty((n, N_PARTS, 2))
-        H, W = self._frame.shape[:2]
         at_centroids = centres is not None
-        _part_kernels.part_features(
-            b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
-            self._fr, self._fc, self._frame, H, W, *self._mask(), *self._colour_luts(),
-            parts, area, perimeter, hsv, xyz, centroid)
+        _kernels.part_features(b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
+                               (self._fr, self._fc), self._image(), self._colour_luts(),
+                               (parts, area, perimeter, hsv, xyz, centroid))
         return PartFeatures(parts, area, perimeter, hsv, xyz, centroid, b[:, 3].copy())

@@ -29,7 +29,6 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.layered.parts import HEAD_FRACTION
 from trackers.layered._search_kernels import (
     band_bounds,
     band_heads,
@@ -43,6 +42,7 @@ from trackers.layered._search_kernels import (
     ncc_climb,
     profile_peaks,
 )
+from trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
 
 # head-template match (PBM 4.1), coarse to fine: block (rows, columns) of the coarse
 # pass (heads are wide and short: 3 columns, 2 rows), coarse local maxima refined,
@@ -251,21 +251,6 @@ def search_boxes_many(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.nda
                       np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2),
                       np.asarray(alpha, dtype=np.float64).reshape(-1), float(step),
                       int(search_range))
-
-
-def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step: float,
-                 search_range: int) -> np.ndarray:
-    """Head-anchored boxes of eqs. 9-10: ((2 r + 1)^2, 4) xywh.
-
-    w_i = w (1 + step i), h_k = h (1 + step k), i, k = -r..r; each box hangs from the head
-    top (y = head top) with its centroid column on the head (x = head x - alpha w_i, eq. 1).
-    """
-    i = np.arange(-search_range, search_range + 1, dtype=np.float64)
-    ws = predicted_wh[0] * (1.0 + step * i)
-    hs = predicted_wh[1] * (1.0 + step * i)
-    W, Hh = np.meshgrid(ws, hs, indexing="ij")
-    W, Hh = W.ravel(), Hh.ravel()
-    return np.column_stack([head[0] - alpha * W, np.full_like(W, head[1]), W, Hh])
 
 
 def aligned_box(head: np.ndarray, predicted_wh: np.ndarray, alpha: float) -> np.ndarray:

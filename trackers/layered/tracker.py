@@ -48,7 +48,7 @@ import numpy as np
 
 from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
-from trackers.layered._glue_kernels import (
+from trackers.layered._kernels import (
     alive_rows,
     carved_rows,
     gated_pairs,
