@@ -63,9 +63,7 @@ def warm_up(tracker: Tracker) -> None:
     """Run ``tracker`` over the scene with and without a foreground mask, then with the
     first person alone (one match or none a frame: numba
     compiles a separate kernel for the contiguous one-element index arrays that gives), then
-    ``reset`` it: its state afterwards is as built. (PBM's exhaustive small-window head
-    match, ``ncc_all``, is reached only near an image border and is not covered: on a fresh
-    install it compiles in the first sequence that needs it, a few seconds.)"""
+    ``reset`` it: its state afterwards is as built."""
     for people in (PEOPLE, PEOPLE[:1]):
         for with_mask in (True, False):
             tracker.reset()

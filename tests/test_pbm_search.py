@@ -73,7 +73,7 @@ def _top_profile_heads_reference(mask, min_separation, min_prominence):
 
 
 def _exhaustive_match(gray, template, centre, radius):
-    """The first ``match_head_template``: cv2.matchTemplate over the whole window."""
+    """cv2.matchTemplate over the whole window, written out independently."""
     th, tw = template.shape
     H, W = gray.shape
     r = int(np.ceil(radius))
@@ -85,25 +85,6 @@ def _exhaustive_match(gray, template, centre, radius):
     res = cv2.matchTemplate(gray[r0:r1, c0:c1], template, cv2.TM_CCOEFF_NORMED)
     _, best, _, loc = cv2.minMaxLoc(res)
     return np.array([c0 + loc[0], r0 + loc[1]], dtype=np.float64), float(best), (res, c0, r0)
-
-
-def _ncc_reference(win, tpl):
-    """(ny, nx) TM_CCOEFF_NORMED of every position from exact int64 sums, with the
-    kernels' float64 formula and OpenCV's conventions (the same operations, elementwise)."""
-    th, tw = tpl.shape
-    n = th * tw
-    w64, t64 = win.astype(np.int64), tpl.astype(np.int64)
-    view = np.lib.stride_tricks.sliding_window_view(w64, (th, tw))
-    sc = np.einsum("yxij,ij->yx", view, t64).astype(np.float64)
-    sw = view.sum(axis=(2, 3)).astype(np.float64)
-    sw2 = (view * view).sum(axis=(2, 3)).astype(np.float64)
-    st, st2 = float(t64.sum()), float((t64 * t64).sum())
-    tnorm = np.sqrt(max(st2 - st * (st / n), 0.0))
-    num = sc - sw * st / n
-    d = np.sqrt(np.maximum(sw2 - sw * (sw / n), 0.0)) * tnorm
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(np.abs(num) < d, num / d,
-                        np.where(np.abs(num) < d * 1.125, np.where(num > 0, 1.0, -1.0), 0.0))
 
 
 def _scene(rng, h=120, w=160):
@@ -133,14 +114,12 @@ def test_match_head_template_finds_a_planted_head_exactly():
         ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, centre, radius)
         np.testing.assert_array_equal(tl, ref_tl)
         assert corr == pytest.approx(ref_corr, abs=1e-4)
-        assert corr == pytest.approx(1.0, abs=1e-6)
+        assert corr == pytest.approx(1.0, abs=1e-4)  # OpenCV's float32 sums
 
 
-def test_match_head_template_scores_equal_opencv_and_never_beat_the_exhaustive_maximum():
+def test_match_head_template_is_the_exhaustive_maximum():
     rng = np.random.default_rng(1)
-    agree = 0
-    n = 60
-    for _ in range(n):
+    for _ in range(60):
         gray = _scene(rng)
         th, tw = int(rng.integers(6, 16)), int(rng.integers(10, 36))
         ty, tx = int(rng.integers(0, 120 - th)), int(rng.integers(0, 160 - tw))
@@ -150,15 +129,12 @@ def test_match_head_template_scores_equal_opencv_and_never_beat_the_exhaustive_m
         centre = rng.uniform([0, 0], [160 - tw, 120 - th])
         radius = float(rng.uniform(4, 45))
         tl, corr = S.match_head_template(gray, tpl, centre, radius)
-        ref_tl, ref_corr, (res, c0, r0) = _exhaustive_match(gray, tpl, centre, radius)
-        # the score is OpenCV's score at the returned position (up to its float32 rounding)
-        assert corr == pytest.approx(res[int(tl[1]) - r0, int(tl[0]) - c0], abs=1e-4)
-        assert corr <= ref_corr + 1e-4
-        agree += np.array_equal(tl, ref_tl)
-    assert agree >= 0.9 * n  # coarse to fine: the exhaustive maximum almost always
+        ref_tl, ref_corr, (res, _, _) = _exhaustive_match(gray, tpl, centre, radius)
+        np.testing.assert_array_equal(tl, ref_tl)
+        assert corr == ref_corr == res.max()
 
 
-def test_small_windows_are_scored_exhaustively_and_no_room_gives_minus_one():
+def test_small_windows_and_no_room_gives_minus_one():
     rng = np.random.default_rng(2)
     for _ in range(40):
         gray = rng.integers(0, 256, (40, 50), dtype=np.uint8)
@@ -180,31 +156,6 @@ def test_a_flat_template_scores_one_at_the_window_corner_as_opencv():
     ref_tl, ref_corr, _ = _exhaustive_match(gray, tpl, np.array([30.0, 30.0]), 20.0)
     np.testing.assert_array_equal(tl, ref_tl)
     assert corr == ref_corr == 1.0
-
-
-def test_compiled_scores_equal_an_exact_reference_bit_for_bit():
-    """ncc_all's maximum and ncc_climb's local maxima carry the exact reference score,
-    for templates scored eight positions at a time (up to 256 wide and tall) and for
-    wider or taller ones (one position at a time), right up to the window's last column."""
-    from trackers.layered import _search_kernels as K
-
-    rng = np.random.default_rng(7)
-    shapes = [(int(rng.integers(3, 20)), int(rng.integers(3, 40))) for _ in range(20)]
-    shapes += [(6, 257), (258, 4), (3, 300)]
-    for th, tw in shapes:
-        win = rng.integers(0, 256, (th + int(rng.integers(0, 9)), tw + int(rng.integers(0, 12))),
-                           dtype=np.uint8)
-        tpl = rng.integers(0, 256, (th, tw), dtype=np.uint8)
-        ref = _ncc_reference(win, tpl)
-        bx, by, best = K.ncc_all(win, tpl)
-        assert best == ref.max() and ref[by, bx] == best
-        assert (by, bx) == np.unravel_index(np.argmax(ref), ref.shape)  # first in raster order
-        xs = rng.integers(0, ref.shape[1], 3)
-        ys = rng.integers(0, ref.shape[0], 3)
-        cx, cy, score = K.ncc_climb(win, tpl, xs, ys, 1)
-        assert ref[cy, cx] == score
-        around = ref[max(cy - 1, 0):cy + 2, max(cx - 1, 0):cx + 2]
-        assert score == around.max()  # a local maximum of the exact scores
 
 
 # ---------------------------------------------------------------------- candidates

@@ -32,26 +32,13 @@ import numpy as np
 from trackers.layered._search_kernels import (
     band_bounds,
     band_heads,
-    coarse_peaks,
     covered_count,
     head_boxes,
     kinds_matrix,
-    label_stats,
     mask_span,
-    ncc_all,
-    ncc_climb,
     profile_peaks,
 )
 from trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
-
-# head-template match (PBM 4.1), coarse to fine: block (rows, columns) of the coarse
-# pass (heads are wide and short: 3 columns, 2 rows), coarse local maxima refined,
-# half-size of the full-resolution neighbourhood scored around each, and the largest
-# window (in positions) scored exhaustively instead
-COARSE_BLOCK = (2, 3)
-COARSE_PEAKS = 5
-REFINE_PAD = 3
-SMALL_WINDOW = 64
 
 
 def _floats(v: np.ndarray) -> list[float]:
@@ -89,8 +76,6 @@ def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, 
 
     Labels are 16-bit when the mask cannot hold 65,535 components (8-connected blobs are
     at least 2 pixels apart): OpenCV's 16-bit path is the same labelling, and faster.
-    Areas and boxes come from one compiled pass over the labels (``label_stats``; cheaper
-    than OpenCV's statistics, same values).
 
     Returns:
         labels (H, W) uint16 or int32, boxes (K, 4) xywh float64, label numbers (K,) of the
@@ -98,9 +83,9 @@ def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, 
     """
     h, w = fg.shape
     ltype = cv2.CV_16U if ((h + 1) // 2) * ((w + 1) // 2) < 65535 else cv2.CV_32S
-    n, labels = cv2.connectedComponents(fg.view(np.uint8), connectivity=8, ltype=ltype)
-    stats = label_stats(labels, n)
-    keep = np.nonzero(stats[1:, 4] >= min_area)[0] + 1
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(fg.view(np.uint8), connectivity=8,
+                                                           ltype=ltype)
+    keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area)[0] + 1
     boxes = stats[keep, :4].astype(np.float64)
     return labels, boxes, keep
 
@@ -307,26 +292,19 @@ def head_patches(image: np.ndarray, boxes: np.ndarray) -> list[np.ndarray | None
 
 def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndarray,
                         radius: float) -> tuple[np.ndarray, float]:
-    """Local template matching, coarse to fine (PBM 4.1, multiple-response pruning).
+    """Local template matching (PBM 4.1, multiple-response pruning: "an image template of
+    the target's head is exhaustively matched in a local neighborhood").
 
     The search window holds the top-left positions within ``radius`` (a square) of
-    ``centre``, clipped to the image. TM_CCOEFF_NORMED (zero-mean normalised
-    correlation) is first computed on the window and the template both summed over
-    ``COARSE_BLOCK`` (2 rows x 3 columns) blocks; from each of its ``COARSE_PEAKS`` best
-    local maxima the (2 ``REFINE_PAD`` + 1)^2 full-resolution positions around it are
-    scored exactly and the best climbs to a local maximum (``_search_kernels``). Windows
-    of at most ``SMALL_WINDOW`` positions are scored exhaustively (compiled); templates
-    smaller than 2 x 2 blocks or flat over blocks by ``cv2.matchTemplate`` over the
-    whole window. Scores equal ``cv2.matchTemplate``'s up to its float32 rounding;
-    the position is the exhaustive maximum's unless another local maximum ranks higher
-    at the coarse level (rare; then a near-equal local maximum is returned).
+    ``centre``, clipped to the image; every position is scored by ``cv2.matchTemplate``
+    (TM_CCOEFF_NORMED, zero-mean normalised correlation) and the best one (first in
+    raster order on ties, ``cv2.minMaxLoc``) is returned.
 
     Args:
         image: (H, W) uint8 grey or (H, W, 3) BGR frame (only the window is converted).
             template: (th, tw) grey or (th, tw, 3) BGR uint8 head patch (``head_patch``).
         centre: (2,) expected top-left corner (x, y) of the head patch (array or
-            sequence). radius: search
-            radius (pixels).
+            sequence). radius: search radius (pixels).
     Returns:
         best top-left corner (2,) float64 (x, y) and its normalised correlation (-1..1;
         -1 when the window cannot hold the template).
@@ -340,17 +318,6 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
     if c1 - c0 < tw or r1 - r0 < th:
         return np.asarray(centre, dtype=np.float64), -1.0
-    win = grey_region(image, r0, r1, c0, c1)
-    fy, fx = COARSE_BLOCK
-    if (r1 - r0 - th + 1) * (c1 - c0 - tw + 1) <= SMALL_WINDOW:
-        bx, by, best = ncc_all(win, template)
-        return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
-    xs = ys = None
-    if th >= 2 * fy and tw >= 2 * fx:
-        xs, ys = coarse_peaks(win, template, fy, fx, COARSE_PEAKS)
-    if xs is not None and len(xs):
-        bx, by, best = ncc_climb(win, template, xs, ys, REFINE_PAD)
-    else:  # a template too small for blocks, or flat over blocks: OpenCV, exhaustively
-        res = cv2.matchTemplate(win, template, cv2.TM_CCOEFF_NORMED)
-        _, best, _, (bx, by) = cv2.minMaxLoc(res)
+    res = cv2.matchTemplate(grey_region(image, r0, r1, c0, c1), template, cv2.TM_CCOEFF_NORMED)
+    _, best, _, (bx, by) = cv2.minMaxLoc(res)
     return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
