@@ -50,7 +50,7 @@ commands (without one, the arguments go to `run`):
 
 examples:
   {PROG}                                       every built tracker on the synthetic suite
-  {PROG} tracker=reta tracker.mu_g=40          one tracker, one parameter changed
+  {PROG} tracker=reta tracker.association.mu_g=40   one tracker, one parameter changed
   {PROG} +experiment=reta_table2               Reta et al.'s Table 2 on the CAVIAR corridor
   {PROG} -m tracker=baseline tracker.max_age=1,3,5 seed=0,1,2     a sweep
   {PROG} report results/<date>/<time>          video, contact sheet, trajectories of a run

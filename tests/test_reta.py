@@ -17,7 +17,13 @@ from trackers.common.assignment import assign
 from trackers.frontend.features import ellipse_histograms, region_similarity
 from trackers.geometry import intersection_matrix, iou_matrix
 from trackers.records import Detections, TrackState
-from trackers.three_hypothesis import RetaTracker
+from trackers.three_hypothesis import (
+    Adaptations,
+    Association,
+    LifeCycle,
+    Occlusion,
+    RetaTracker,
+)
 from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
 from trackers.three_hypothesis.association import _hungarian, _person_costs, associate
 from trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
@@ -236,18 +242,20 @@ def test_stage1_leaves_a_person_over_rather_than_exchange_a_good_pair_for_two_po
     assert sorted(map(tuple, ours.matches[:, :2])) == [(0, 0)]
     assert list(ours.unmatched_persons) == [1] and list(ours.unmatched_measurements) == [1]
     with pytest.raises(ValueError, match="stage1_unmatched_cost"):
-        RetaTracker(stage1_unmatched_cost=0.0)
+        Adaptations(stage1_unmatched_cost=0.0)
 
 
 def test_bad_input_raises_clear_errors():
     with pytest.raises(ValueError, match="frame"):
         RetaTracker().update(None, Detections.empty())
-    with pytest.raises(ValueError, match="mu_rho"):
-        RetaTracker(mu_rho=1.5)
-    with pytest.raises(ValueError, match="lam"):
-        RetaTracker(lam=0.5)
-    with pytest.raises(ValueError, match="m must"):
-        RetaTracker(m=0)
+    with pytest.raises(ValueError, match=r"Association\.mu_rho"):
+        Association(mu_rho=1.5)
+    with pytest.raises(ValueError, match=r"Occlusion\.lam"):
+        Occlusion(lam=0.5)
+    with pytest.raises(ValueError, match=r"LifeCycle\.m must"):
+        LifeCycle(m=0)
+    with pytest.raises(ValueError, match="association: expected a Association"):
+        RetaTracker(association={"mu_rho": 0.3})
 
 
 def test_config_maps_onto_the_constructor():
@@ -257,9 +265,30 @@ def test_config_maps_onto_the_constructor():
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "reta.yaml")
     params = set(inspect.signature(RetaTracker.__init__).parameters) - {"self"}
     assert set(cfg.keys()) - {"_target_"} == params
+    assert len(params) <= 12
     tracker = instantiate(cfg)
     assert isinstance(tracker, RetaTracker)
-    assert tracker.mu_rho == cfg.mu_rho and tracker.m == cfg.m
+    for group in params - {"min_score"}:  # every group's keys are its fields, all set
+        node = cfg[group]
+        fields = set(inspect.signature(type(getattr(tracker, group))).parameters)
+        assert set(node.keys()) - {"_target_"} == fields, group
+        assert {k: getattr(getattr(tracker, group), k) for k in fields} == {
+            k: node[k] for k in fields}, group
+    assert tracker.adaptations == Adaptations()  # the YAML defaults are the code's
+
+
+def test_paper_mode_turns_every_adaptation_off():
+    from harness.build import build_tracker, compose_config
+
+    paper = build_tracker("reta_paper", compose_config(["tracker=reta_paper"]).tracker)
+    ours = build_tracker("reta", compose_config(["tracker=reta"]).tracker)
+    assert paper.adaptations == Adaptations.paper() and paper.adaptations.changed() == []
+    assert set(ours.adaptations.changed()) == {
+        "gate_sigmas", "blend_visible", "shape_estimate", "foreground_histograms",
+        "foreground_support", "report_exposed", "report_spread", "tentative_misses",
+        "max_hidden"}  # stage1_unmatched_cost stays at the paper's 2 (docs/adaptations.md)
+    for group in ("association", "occlusion", "appearance", "motion", "lifecycle"):
+        assert getattr(paper, group) == getattr(ours, group), group
 
 
 # --------------------------------------------------------------------------- small scenes
@@ -392,7 +421,7 @@ def test_hypothesis_in_plain_view_is_reported_briefly_then_only_drawn_and_keeps_
     # back at frame 27: no visible person covers its hypotheses, so after report_exposed
     # frames they are contradicted (only drawn); the person keeps its id when found again
     frames = _scene([_line((40, 150), (2, 0), 40)], [RED])
-    tracker = RetaTracker(report_exposed=2, m=8)
+    tracker = RetaTracker(lifecycle=LifeCycle(m=8), adaptations=Adaptations(report_exposed=2))
     states = []
     for t, (img, label, dets, gt) in enumerate(frames):
         if 20 <= t < 27:
@@ -405,7 +434,7 @@ def test_hypothesis_in_plain_view_is_reported_briefly_then_only_drawn_and_keeps_
     assert all(TrackState.HYPOTHESIS in s for s in hidden[2:])  # still in the graph
     assert states[27] == [TrackState.CONFIRMED]  # re-found with its id (1)
     with pytest.raises(ValueError, match="report_exposed"):
-        RetaTracker(report_exposed=-1)
+        Adaptations(report_exposed=-1)
 
 
 # --------------------------------------------------------------------------- synthetic suite
@@ -510,7 +539,7 @@ def test_memory_stays_flat_over_a_long_run():
     rng = np.random.default_rng(5)
     frame = np.full((h, w, 3), 80, np.uint8)
     frame[:, ::2] = 120
-    tracker = RetaTracker(mu_g=20.0)
+    tracker = RetaTracker(Association(mu_g=20.0))
     most_nodes = most_persons = 0
     for t in range(10_000):
         phase = t % 100
@@ -525,7 +554,7 @@ def test_memory_stays_flat_over_a_long_run():
         most_nodes = max(most_nodes, tracker.graph.node_count)
         most_persons = max(most_persons, len(tracker._persons))
     assert most_persons <= 12
-    assert most_nodes <= (tracker.m + 1) * 3 * most_persons
+    assert most_nodes <= (tracker.lifecycle.m + 1) * 3 * most_persons
     assert len(tracker._pi) <= 4 * most_persons**2 + 16
 
 

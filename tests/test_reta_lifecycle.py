@@ -8,7 +8,7 @@ import numpy as np
 
 from trackers.geometry import iou_matrix
 from trackers.records import Detections, TrackState
-from trackers.three_hypothesis import RetaTracker
+from trackers.three_hypothesis import Adaptations, RetaTracker
 
 W, H = 160, 120
 RED = ((40, 40, 200), (60, 60, 120))
@@ -48,7 +48,7 @@ def test_standing_person_does_not_jump_to_a_neighbour_through_the_gate():
         tracks = tracker.update(_frame([a, b], [RED, RED]), _dets([b]))
         return first.id, tracks
 
-    ident, tracks = run(RetaTracker(gate_sigmas=0.0))  # the paper's fixed radius mu_g
+    ident, tracks = run(RetaTracker(adaptations=Adaptations(gate_sigmas=0.0)))  # the paper's fixed radius mu_g
     (jumped,) = [t for t in tracks if t.state == TrackState.CONFIRMED]
     assert jumped.id == ident and jumped.box[0] == b[0]  # the id moved 45 px onto b
 
@@ -86,7 +86,7 @@ def test_appearance_of_a_person_standing_behind_another_follows_the_light():
                         front.add(track.id)
         return set(seen), front
 
-    stale_b, _ = ids_on_b(RetaTracker(blend_visible=False))  # the paper's frozen appearance
+    stale_b, _ = ids_on_b(RetaTracker(adaptations=Adaptations(blend_visible=False)))  # the paper's frozen appearance
     assert len(stale_b) > 1
     b_ids, a_ids = ids_on_b(RetaTracker())
     assert len(b_ids) == 1 and len(a_ids) == 1 and b_ids != a_ids
@@ -119,4 +119,4 @@ def test_flickering_false_alarm_on_the_bare_floor_is_never_reported():
 
     assert run(RetaTracker()) == 0
     assert len(set(red)) == 1  # the walking person is tracked under one id throughout
-    assert run(RetaTracker(foreground_support=False)) > 10
+    assert run(RetaTracker(adaptations=Adaptations(foreground_support=False))) > 10

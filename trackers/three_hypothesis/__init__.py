@@ -2,9 +2,19 @@
 
 Modules: ``graph`` (G = <N, E>, nodes and edges, snapshot), ``occlusion`` (eq. 2, eq. 3),
 ``association`` (3.3.2 two-stage Hungarian), ``hypotheses`` (Alg. 1's three cases),
-``appearance`` (eq. 1 histograms), ``motion`` (Kalman M), ``tracker`` (``RetaTracker``).
+``appearance`` (eq. 1 histograms), ``motion`` (Kalman M), ``params`` (the constructor's
+parameter groups), ``tracker`` (``RetaTracker``).
 """
 
+from trackers.three_hypothesis.motion import MotionModel
+from trackers.three_hypothesis.params import (
+    Adaptations,
+    Appearance,
+    Association,
+    LifeCycle,
+    Occlusion,
+)
 from trackers.three_hypothesis.tracker import RetaTracker
 
-__all__ = ["RetaTracker"]
+__all__ = ["Adaptations", "Appearance", "Association", "LifeCycle", "MotionModel", "Occlusion",
+           "RetaTracker"]

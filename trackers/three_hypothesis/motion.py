@@ -18,13 +18,27 @@ from trackers.common.kalman import constant_velocity_box_filter
 
 @dataclass(frozen=True)
 class MotionModel:
-    """Noise set-up shared by all people of one tracker (standard deviations, scaled by the
-    person's height / 10 as in ``constant_velocity_box_filter``)."""
+    """Noise set-up of M shared by all people of one tracker (standard deviations, scaled by
+    the person's height / 10 as in ``constant_velocity_box_filter``).
+
+    Args:
+        position_noise: Kalman Q, position and size process noise std per 10 px of height.
+        velocity_noise: Kalman Q, velocity process noise std per 10 px of height.
+        measurement_noise: Kalman R, measurement noise std per 10 px of height.
+        initial_velocity_variance: Kalman P0, initial velocity variance per (10 px)^2.
+    """
 
     position_noise: float = 1.0
     velocity_noise: float = 0.1
     measurement_noise: float = 1.0
     initial_velocity_variance: float = 100.0
+
+    def __post_init__(self) -> None:
+        for name in ("position_noise", "velocity_noise", "measurement_noise",
+                     "initial_velocity_variance"):
+            value = getattr(self, name)
+            if not value > 0:
+                raise ValueError(f"MotionModel.{name} must be > 0, got {value!r}")
 
     def init(self, box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """First state of a person from its (4,) xywh box: x (8,), P (8, 8), F, H, Q, R."""

@@ -108,6 +108,13 @@ from trackers.three_hypothesis.occlusion import (
     depth_order,
     region_overlaps,
 )
+from trackers.three_hypothesis.params import (
+    Adaptations,
+    Appearance,
+    Association,
+    LifeCycle,
+    Occlusion,
+)
 
 log = logging.getLogger(__name__)
 
@@ -154,139 +161,61 @@ class RetaTracker:
     """Three-hypothesis tracking graph with occlusion reasoning (Reta et al. 2015).
 
     Args:
-        mu_rho: appearance threshold mu_rho (Alg. 1): smallest Bhattacharyya coefficient
-            (eq. 4) accepted for a match, in [0, 1].
-        mu_g: gate radius mu_g in pixels (3.3.2 stage 2).
-        m: frames before pruning (Alg. 1): contradicted hypotheses, false-positive tracks.
-        lam: overlap threshold lambda of eq. 2, in [0, 0.5).
-        confirm_frames: matches needed to confirm a tentative track.
-        max_hidden: most frames a person is kept without a match (adaptation).
+        association: mu_rho and mu_g of the two-stage association (3.3.2).
+        occlusion: lambda of eq. 2 and the integration of ellipse overlaps.
+        appearance: histogram bins (eq. 1), foreground share, pixel stride.
+        motion: Kalman noises of the motion model M (3.2).
+        lifecycle: m (pruning), cover (contradicted hypotheses), confirm_frames.
+        adaptations: every rule of ours the paper does not have
+            (``Adaptations.paper()``: the paper as written).
         min_score: detections below this score are ignored.
-        bins: histogram bins per colour channel (16 in the paper).
-        position_noise, velocity_noise, measurement_noise, initial_velocity_variance:
-            Kalman noise standard deviations (``trackers.common.kalman``), per 10 px height.
-        min_foreground: fraction of an ellipse that must be foreground for the histogram
-            to be restricted to foreground pixels.
-        cover: fraction of a hypothesis region hidden by a visible person's region above
-            which the hypothesis counts as covered (explains the missing detection);
-            otherwise it is in plain view and pruned after m such frames.
-        region_samples: grid points per side integrating ellipse overlaps (eqs. 2, 5).
-        pixel_stride: histogram every pixel_stride-th row and column of an ellipse (1 =
-            every pixel, as in the paper; 2 is four times cheaper for large people).
-        gate_sigmas: stage-2 gate radius in standard deviations of a node's predicted centre
-            (Kalman innovation H P H' + R), capped at mu_g; 0 = mu_g for every node
-            (adaptation, see the module notes).
-        blend_visible: a matched person behind others blends its measurement into its
-            appearance by the visible share of the measured region (adaptation, see the
-            module notes); False keeps it constant (the paper).
-        tentative_misses: frames a tentative track may go unmatched before it is dropped as
-            a false positive (0: its tracking ends at the first miss, as in Fig. 3; 2 tolerates missed detections).
-        report_exposed: frames a hidden person's best hypothesis may stand in plain view (not
-            covered by a visible person) and still be reported as OCCLUDED: a missed
-            detection is bridged, but a person who left behind the scenery (a door, a
-            pillar, the frame edge) is no longer reported; it stays in the graph as a
-            HYPOTHESIS (and is re-identified if detected again) until pruned after m frames.
-        foreground_support: with a foreground mask, a hypothesis whose ellipse holds less
-            than ``min_foreground`` foreground is seen to be empty: never covered (pruned
-            after m such frames) and never reported; a detection that empty does not count
-            towards confirming a tentative track (adaptation, see the module notes).
-        report_spread: a hidden person's best hypothesis is reported only while the
-            standard deviation of its centre (Kalman P) is at most this many person widths;
-            0 reports it however uncertain (the paper; adaptation, see the module notes).
-        shape_estimate: the region of a matched person behind others is the Kalman
-            estimate (prediction corrected by the measurement); False: the bare prediction
-            (the paper, 3.3.3).
-        foreground_histograms: histograms (eq. 1) count only foreground pixels when a mask
-            is given and covers at least ``min_foreground`` of the ellipse; False: every
-            pixel of the ellipse (the paper).
-        stage1_unmatched_cost: cost of leaving a person unmatched in association stage 1,
-            in (0, 2]; a stage-1 pair costlier than it is left to stage 2 (adaptation, see
-            the module notes); 2: every acceptable pair competes (the paper, default).
     """
 
     def __init__(
         self,
-        mu_rho: float = 0.3,
-        mu_g: float = 120.0,
-        m: int = 8,
-        lam: float = 0.05,
-        confirm_frames: int = 3,
-        max_hidden: int = 150,
+        association: Association | None = None,
+        occlusion: Occlusion | None = None,
+        appearance: Appearance | None = None,
+        motion: MotionModel | None = None,
+        lifecycle: LifeCycle | None = None,
+        adaptations: Adaptations | None = None,
         min_score: float = 0.0,
-        bins: int = 16,
-        position_noise: float = 1.0,
-        velocity_noise: float = 0.1,
-        measurement_noise: float = 1.0,
-        initial_velocity_variance: float = 100.0,
-        min_foreground: float = 0.2,
-        cover: float = 0.5,
-        region_samples: int = 12,
-        pixel_stride: int = 1,
-        tentative_misses: int = 2,
-        report_exposed: int = 4,
-        gate_sigmas: float = 3.0,
-        blend_visible: bool = True,
-        foreground_support: bool = True,
-        report_spread: float = 3.0,
-        shape_estimate: bool = True,
-        foreground_histograms: bool = True,
-        stage1_unmatched_cost: float = 2.0,
     ) -> None:
-        if not 0.0 <= mu_rho <= 1.0:
-            raise ValueError(f"mu_rho must lie in [0, 1], got {mu_rho}")
-        if mu_g <= 0:
-            raise ValueError(f"mu_g must be > 0 pixels, got {mu_g}")
-        if m < 1:
-            raise ValueError(f"m must be >= 1 frame, got {m}")
-        if not 0.0 <= lam < 0.5:
-            raise ValueError(f"lam must lie in [0, 0.5), got {lam}")
-        if not 0.0 < cover <= 1.0:
-            raise ValueError(f"cover must lie in (0, 1], got {cover}")
-        if region_samples < 2:
-            raise ValueError(f"region_samples must be >= 2, got {region_samples}")
-        if pixel_stride < 1:
-            raise ValueError(f"pixel_stride must be >= 1, got {pixel_stride}")
-        if tentative_misses < 0:
-            raise ValueError(f"tentative_misses must be >= 0, got {tentative_misses}")
-        if report_exposed < 0:
-            raise ValueError(f"report_exposed must be >= 0, got {report_exposed}")
-        if not report_spread >= 0:
-            raise ValueError(f"report_spread must be >= 0, got {report_spread}")
-        if not gate_sigmas >= 0:
-            raise ValueError(f"gate_sigmas must be >= 0, got {gate_sigmas}")
-        if not 0.0 < stage1_unmatched_cost <= 2.0:
-            raise ValueError(f"stage1_unmatched_cost must lie in (0, 2], got {stage1_unmatched_cost}")
-        if confirm_frames < 1:
-            raise ValueError(f"confirm_frames must be >= 1, got {confirm_frames}")
-        if max_hidden < 1:
-            raise ValueError(f"max_hidden must be >= 1, got {max_hidden}")
-        for name, value in (("position_noise", position_noise), ("velocity_noise", velocity_noise),
-                            ("measurement_noise", measurement_noise),
-                            ("initial_velocity_variance", initial_velocity_variance)):
-            if value <= 0:
-                raise ValueError(f"{name} must be > 0, got {value}")
-        self.mu_rho = mu_rho
-        self.mu_g = mu_g
-        self.gate_sigmas = gate_sigmas
-        self.blend_visible = bool(blend_visible)
-        self.foreground_support = bool(foreground_support)
-        self.report_spread = float(report_spread)
-        self.shape_estimate = bool(shape_estimate)
-        self.foreground_histograms = bool(foreground_histograms)
-        self.stage1_unmatched_cost = float(stage1_unmatched_cost)
-        self.m = m
-        self.lam = lam
-        self.confirm_frames = confirm_frames
-        self.cover = cover
-        self.tentative_misses = tentative_misses
-        self.report_exposed = report_exposed
-        self.region_samples = region_samples
-        self.max_hidden = max_hidden
+        self.association = association = association or Association()
+        self.occlusion = occlusion = occlusion or Occlusion()
+        self.appearance = appearance = appearance or Appearance()
+        self.motion = motion or MotionModel()
+        self.lifecycle = lifecycle = lifecycle or LifeCycle()
+        self.adaptations = adaptations = adaptations or Adaptations()
+        for name, group, kind in (("association", association, Association),
+                                  ("occlusion", occlusion, Occlusion),
+                                  ("appearance", appearance, Appearance),
+                                  ("motion", self.motion, MotionModel),
+                                  ("lifecycle", lifecycle, LifeCycle),
+                                  ("adaptations", adaptations, Adaptations)):
+            if not isinstance(group, kind):
+                raise ValueError(f"{name}: expected a {kind.__name__}, got {group!r}")
         self.min_score = min_score
-        self.motion = MotionModel(position_noise, velocity_noise, measurement_noise,
-                                  initial_velocity_variance)
-        self.histograms = EllipseHistogrammer(bins=bins, min_foreground=min_foreground,
-                                              stride=pixel_stride)
+        self.mu_rho = association.mu_rho
+        self.mu_g = association.mu_g
+        self.lam = occlusion.lam
+        self.region_samples = occlusion.region_samples
+        self.m = lifecycle.m
+        self.cover = lifecycle.cover
+        self.confirm_frames = lifecycle.confirm_frames
+        self.gate_sigmas = adaptations.gate_sigmas
+        self.blend_visible = adaptations.blend_visible
+        self.foreground_support = adaptations.foreground_support
+        self.report_spread = adaptations.report_spread
+        self.shape_estimate = adaptations.shape_estimate
+        self.foreground_histograms = adaptations.foreground_histograms
+        self.stage1_unmatched_cost = adaptations.stage1_unmatched_cost
+        self.tentative_misses = adaptations.tentative_misses
+        self.report_exposed = adaptations.report_exposed
+        self.max_hidden = adaptations.max_hidden
+        self.histograms = EllipseHistogrammer(bins=appearance.bins,
+                                              min_foreground=appearance.min_foreground,
+                                              stride=appearance.pixel_stride)
         _, _, self._F, self._H, _, _ = self.motion.init(np.array([0.0, 0.0, 10.0, 10.0]))
         self.reset()
 

@@ -1,0 +1,185 @@
+"""Parameter groups of ``RetaTracker``: small frozen dataclasses that check themselves.
+
+Each group gathers the parameters of one part of Reta et al. 2015 and raises ``ValueError``
+naming the field and the value when one is out of range. Hydra builds each group as a
+nested ``_target_`` of ``conf/tracker/reta.yaml``. ``Adaptations`` holds every rule the
+paper does not have (``Adaptations.paper()`` turns them all off, as ``tracker=reta_paper``);
+``docs/adaptations.md`` gives each one's paper section, value and evidence. The motion
+group is ``trackers.three_hypothesis.motion.MotionModel`` (Kalman noises of M, 3.2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+__all__ = ["Adaptations", "Appearance", "Association", "LifeCycle", "Occlusion"]
+
+
+def _coerce(group: object, kinds: dict[str, type]) -> None:
+    """Store each named field of a frozen ``group`` as ``kinds[name]`` (YAML gives 3 for 3.0)."""
+    for name, kind in kinds.items():
+        object.__setattr__(group, name, kind(getattr(group, name)))
+
+
+def _check(group: object, name: str, ok: bool, rule: str) -> None:
+    if not ok:
+        raise ValueError(f"{type(group).__name__}.{name} {rule}, got {getattr(group, name)!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class Association:
+    """Two-stage similarity association (3.3.2, Alg. 1's mu_rho and mu_g).
+
+    Args:
+        mu_rho: mu_rho, smallest Bhattacharyya coefficient rho (eq. 4) accepted for a
+            match, in [0, 1].
+        mu_g: mu_g, radius in pixels of the stage-2 validation gate, > 0.
+    """
+
+    mu_rho: float = 0.3
+    mu_g: float = 120.0
+
+    def __post_init__(self) -> None:
+        _check(self, "mu_rho", 0.0 <= self.mu_rho <= 1.0, "must lie in [0, 1]")
+        _check(self, "mu_g", self.mu_g > 0, "must be > 0 pixels")
+
+
+@dataclass(frozen=True, slots=True)
+class Occlusion:
+    """Occlusion relations O (3.3.1, eq. 2) and the integration of ellipse overlaps.
+
+    Args:
+        lam: lambda of eq. 2, the overlap |Si & Sj| / (|Si| + |Sj|) of two predicted
+            regions above which they occlude, in [0, 0.5).
+        region_samples: grid points per side integrating ellipse overlaps (eqs. 2, 5), >= 2.
+    """
+
+    lam: float = 0.05
+    region_samples: int = 12
+
+    def __post_init__(self) -> None:
+        _check(self, "lam", 0.0 <= self.lam < 0.5, "must lie in [0, 0.5)")
+        _check(self, "region_samples", self.region_samples >= 2, "must be >= 2")
+
+
+@dataclass(frozen=True, slots=True)
+class Appearance:
+    """Appearance model q (3.2, eq. 1): colour histogram over the ellipse.
+
+    Args:
+        bins: histogram bins per colour channel (16 in the paper); must divide 256.
+        min_foreground: with a foreground mask, the share of an ellipse that must be
+            foreground for its histogram to count foreground pixels only (with
+            ``Adaptations.foreground_histograms``) and for its region not to be seen empty
+            (with ``Adaptations.foreground_support``), in [0, 1].
+        pixel_stride: histogram every pixel_stride-th row and column of an ellipse (1 =
+            every pixel, as in eq. 1).
+    """
+
+    bins: int = 16
+    min_foreground: float = 0.2
+    pixel_stride: int = 1
+
+    def __post_init__(self) -> None:
+        _check(self, "bins", self.bins >= 1 and 256 % self.bins == 0, "must divide 256")
+        _check(self, "min_foreground", 0.0 <= self.min_foreground <= 1.0, "must lie in [0, 1]")
+        _check(self, "pixel_stride", self.pixel_stride >= 1, "must be >= 1")
+
+
+@dataclass(frozen=True, slots=True)
+class LifeCycle:
+    """Confirmation of tentative tracks (3.3) and pruning after m frames (Alg. 1).
+
+    Args:
+        m: m, frames before pruning: a hypothesis in plain view for m frames in a row is
+            contradicted by the missing detection and removed; the graph keeps m + 1 frames.
+        cover: share of a hypothesis region hidden by a visible person's region above
+            which the hypothesis counts as covered (explains its missing detection);
+            below it the hypothesis is in plain view (the paper's "contradictory"), in (0, 1].
+        confirm_frames: matches that confirm a tentative track, >= 1.
+    """
+
+    m: int = 8
+    cover: float = 0.5
+    confirm_frames: int = 3
+
+    def __post_init__(self) -> None:
+        _check(self, "m", self.m >= 1, "must be >= 1 frame")
+        _check(self, "cover", 0.0 < self.cover <= 1.0, "must lie in (0, 1]")
+        _check(self, "confirm_frames", self.confirm_frames >= 1, "must be >= 1")
+
+
+@dataclass(frozen=True, slots=True)
+class Adaptations:
+    """Every rule of ours that the paper does not have; ``paper()`` gives the paper's values.
+
+    Args:
+        gate_sigmas: the stage-2 gate of a node is the circle approximating its Kalman
+            validation region, radius gate_sigmas x the larger standard deviation of its
+            predicted centre (innovation H P H' + R), capped at mu_g; 0: mu_g for every node
+            (the paper, 3.3.2).
+        blend_visible: a matched person behind others moves its appearance q towards its
+            measurement p by the share v of the measured region left visible by the people
+            in front (q <- (1 - v) q + v p); False: q kept constant (the paper, 3.3.3).
+        shape_estimate: the region of a matched person behind others is the Kalman
+            estimate (prediction corrected by the measurement); False: the bare prediction
+            (the paper, 3.3.3).
+        foreground_histograms: histograms (eq. 1) count only foreground pixels when a mask
+            is given and covers at least ``Appearance.min_foreground`` of the ellipse;
+            False: every pixel of the ellipse (the paper, 3.2).
+        foreground_support: with a foreground mask, a hypothesis whose ellipse holds less
+            than ``Appearance.min_foreground`` foreground is seen to be empty: never
+            covered (pruned after m frames) and never reported, and a detection that empty
+            does not count towards confirming a tentative track; False: hypotheses judged
+            by coverage and time alone (the paper).
+        report_exposed: frames a hidden person's best hypothesis may stand in plain view
+            and still be reported as OCCLUDED (then it is only drawn, as a HYPOTHESIS);
+            the paper reports it until pruned (1000000).
+        report_spread: a hidden person's best hypothesis is reported only while the
+            standard deviation of its centre (Kalman P) is at most this many person
+            widths; 0 reports it however uncertain (the paper).
+        tentative_misses: frames a tentative track may go unmatched before it is dropped
+            as a false positive; 0: its tracking ends at the first miss (the paper, Fig. 3).
+        max_hidden: most frames a person is kept without a match (the paper: no limit,
+            1000000).
+        stage1_unmatched_cost: cost of leaving a person unmatched in association stage 1,
+            in (0, 2]; a stage-1 pair costlier than it is left to stage 2; 2: every
+            acceptable pair competes (the paper, and our default).
+    """
+
+    gate_sigmas: float = 3.0
+    blend_visible: bool = True
+    shape_estimate: bool = True
+    foreground_histograms: bool = True
+    foreground_support: bool = True
+    report_exposed: int = 4
+    report_spread: float = 3.0
+    tentative_misses: int = 2
+    max_hidden: int = 150
+    stage1_unmatched_cost: float = 2.0
+
+    def __post_init__(self) -> None:
+        _coerce(self, {"gate_sigmas": float, "report_spread": float,
+                       "stage1_unmatched_cost": float, "blend_visible": bool,
+                       "shape_estimate": bool, "foreground_histograms": bool,
+                       "foreground_support": bool})
+        _check(self, "gate_sigmas", self.gate_sigmas >= 0, "must be >= 0")
+        _check(self, "report_exposed", self.report_exposed >= 0, "must be >= 0")
+        _check(self, "report_spread", self.report_spread >= 0, "must be >= 0")
+        _check(self, "tentative_misses", self.tentative_misses >= 0, "must be >= 0")
+        _check(self, "max_hidden", self.max_hidden >= 1, "must be >= 1")
+        _check(self, "stage1_unmatched_cost", 0.0 < self.stage1_unmatched_cost <= 2.0,
+               "must lie in (0, 2]")
+
+    @classmethod
+    def paper(cls) -> Adaptations:
+        """Every adaptation off: the paper as written (``conf/tracker/reta_paper.yaml``)."""
+        return cls(gate_sigmas=0.0, blend_visible=False, shape_estimate=False,
+                   foreground_histograms=False, foreground_support=False,
+                   report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
+                   max_hidden=1_000_000, stage1_unmatched_cost=2.0)
+
+    def changed(self) -> list[str]:
+        """Names of the fields that differ from the paper's values."""
+        paper = self.paper()
+        return [f.name for f in fields(self) if getattr(self, f.name) != getattr(paper, f.name)]
