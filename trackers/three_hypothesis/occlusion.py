@@ -186,3 +186,25 @@ def depth_order(
         if up < down:
             return -1
     return previous
+
+
+def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24,
+                     near: np.ndarray | None = None) -> np.ndarray:
+    """(N,) largest fraction |S_i & S_v| / |S_i| of each region S_i hidden by one visible
+    region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2).
+
+    Args:
+        boxes: (N, 4) xywh regions S_i; visible: (M, 4) xywh regions S_v.
+        samples: integration grid per side (``region_overlaps``).
+        near: optional (N, M) bool restricting the visible regions each S_i is compared
+            with (default: all).
+    """
+    if len(boxes) == 0 or len(visible) == 0:
+        return np.zeros(len(boxes))
+    if near is not None:
+        near = near & boxes_meet(boxes, visible)
+    area_i = np.pi / 4 * boxes[:, 2] * boxes[:, 3]
+    area_v = np.pi / 4 * visible[:, 2] * visible[:, 3]
+    ratio = 0.5 * region_overlaps(boxes, visible, samples, near)  # eq. 2's ratio
+    inter = ratio * (area_i[:, None] + area_v[None, :])
+    return (inter / np.maximum(area_i, 1e-9)[:, None]).max(axis=1)

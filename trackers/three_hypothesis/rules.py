@@ -1,0 +1,176 @@
+"""The steps an adaptation changes, as small strategy objects: the paper's rule and ours.
+
+``build_rules`` picks one of each from ``params.Adaptations`` once, in the tracker's
+constructor, so ``RetaTracker.update`` calls a rule instead of testing a flag. Each pair
+names the step of Reta et al. 2015 it replaces; ``docs/adaptations.md`` gives the evidence.
+Boxes are (N, 4) float64 xywh, 0-based pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from trackers.three_hypothesis.appearance import EllipseHistogrammer
+from trackers.three_hypothesis.params import Adaptations
+
+# --------------------------------------------------------------- eq. 1: which pixels count
+
+
+class AllPixels:
+    """Eq. 1 as written: the histogram counts every pixel of the ellipse."""
+
+    def mask(self, foreground: np.ndarray | None) -> None:
+        return None
+
+
+class ForegroundPixels:
+    """``foreground_histograms``: with a foreground mask, count only the ellipse's
+    foreground pixels (``EllipseHistogrammer`` falls back to every pixel when fewer than
+    ``min_foreground`` of them are foreground)."""
+
+    def mask(self, foreground: np.ndarray | None) -> np.ndarray | None:
+        return foreground
+
+
+# --------------------------------------------------------------- 3.3.2: validation gate
+
+
+class FixedGate:
+    """3.3.2 as written: the validation gate of every prediction is the circle of radius mu_g."""
+
+    def radii(self, P: np.ndarray, R: np.ndarray) -> None:
+        return None  # associate() uses mu_g for every node
+
+
+@dataclass(frozen=True)
+class KalmanGate:
+    """``gate_sigmas``: the circle approximating each node's Kalman validation region,
+    radius ``sigmas`` x the larger standard deviation of its predicted centre (innovation
+    covariance H P H' + R over xc, yc); ``associate`` caps it at mu_g."""
+
+    sigmas: float
+
+    def radii(self, P: np.ndarray, R: np.ndarray) -> np.ndarray | None:
+        """(B,) radii from P (B, 8, 8) predicted covariances and R (B,) = R[0, 0] of each
+        node's person (R = (sigma_z h)^2 I)."""
+        if len(P) == 0:
+            return None
+        var = np.maximum(P[:, 0, 0], P[:, 1, 1]) + R  # S = H P H' + R, centre terms
+        return self.sigmas * np.sqrt(var)
+
+
+# --------------------------------------------------------------- 3.3.3: a person matched behind others
+
+
+class KeepAppearance:
+    """3.3.3 as written: the appearance q of a person behind others is kept constant."""
+
+    uses_visible_share = False
+
+    def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
+        return q
+
+
+class BlendVisible:
+    """``blend_visible``: q moves towards the measurement p by the share v of the measured
+    region left visible by the people in front: q <- (1 - v) q + v p (v = 1 replaces q as
+    for a person absent from any occlusion, v = 0 keeps it as the paper)."""
+
+    uses_visible_share = True
+
+    def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
+        if visible > 0:
+            return (1.0 - visible) * q + visible * p
+        return q
+
+
+class PredictionShape:
+    """3.3.3 as written: the shape of a person behind others is its prediction area."""
+
+    def region(self, estimate: list[float], prediction: np.ndarray) -> np.ndarray:
+        return prediction.copy()
+
+
+class EstimateShape:
+    """``shape_estimate``: the shape of a person behind others is the Kalman estimate, the
+    prediction corrected by the (possibly partial) measurement (a bare prediction carries a
+    size rate nothing corrects: the person shrinks or swells)."""
+
+    def region(self, estimate: list[float], prediction: np.ndarray) -> np.ndarray:
+        return np.array(estimate)
+
+
+# --------------------------------------------------------------- Alg. 1: what a region's foreground says
+
+
+class NoSupport:
+    """The paper: a hypothesis is judged by coverage and time alone; the image's foreground
+    says nothing."""
+
+    def empty(self, foreground: np.ndarray | None, boxes: np.ndarray) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class ForegroundSupport:
+    """``foreground_support``: a region whose ellipse holds less than ``min_foreground``
+    foreground is seen to be empty (nobody is there to be occluded, or to be detected)."""
+
+    histograms: EllipseHistogrammer
+
+    def empty(self, foreground: np.ndarray | None, boxes: np.ndarray) -> np.ndarray | None:
+        """(N,) bool per box, or None without a mask."""
+        if foreground is None:
+            return None
+        h = self.histograms
+        return h.foreground_share(foreground, boxes) < h.min_foreground
+
+
+# --------------------------------------------------------------- output: which hypothesis is reported
+
+
+@dataclass(frozen=True)
+class ReportRule:
+    """Whether a hidden person's best hypothesis is reported as OCCLUDED (else only drawn).
+
+    ``exposed``: frames it may stand in plain view (the paper: until pruned); ``spread``:
+    largest standard deviation of its centre, in person widths (0: any, the paper)."""
+
+    exposed: int
+    spread: float
+
+    def reported(self, hypothesis) -> bool:
+        """``hypothesis``: a hypothesis branch (``covered``, ``exposed``, ``unseen``, Kalman
+        ``x`` (8,) and ``P`` (8, 8)). A region seen empty is never reported."""
+        h = hypothesis
+        if h.unseen or (not h.covered and h.exposed > self.exposed):
+            return False
+        P = h.P
+        return not (self.spread > 0 and max(P[0, 0], P[1, 1]) > (self.spread * h.x[2]) ** 2)
+
+
+class Rules(NamedTuple):
+    """One rule per step an adaptation changes."""
+
+    pixels: AllPixels | ForegroundPixels
+    gate: FixedGate | KalmanGate
+    appearance_behind: KeepAppearance | BlendVisible
+    shape_behind: PredictionShape | EstimateShape
+    support: NoSupport | ForegroundSupport
+    report: ReportRule
+
+
+def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Rules:
+    """The rules ``adaptations`` selects (``Adaptations.paper()``: the paper's everywhere)."""
+    a = adaptations
+    return Rules(
+        pixels=ForegroundPixels() if a.foreground_histograms else AllPixels(),
+        gate=KalmanGate(a.gate_sigmas) if a.gate_sigmas > 0 else FixedGate(),
+        appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
+        shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
+        support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
+        report=ReportRule(a.report_exposed, a.report_spread),
+    )
