@@ -254,7 +254,7 @@ def test_bad_input_raises_clear_errors():
         Occlusion(lam=0.5)
     with pytest.raises(ValueError, match=r"LifeCycle\.m must"):
         LifeCycle(m=0)
-    with pytest.raises(ValueError, match="association: expected a Association"):
+    with pytest.raises(TypeError, match="association: expected a Association"):
         RetaTracker(association={"mu_rho": 0.3})
 
 
@@ -287,7 +287,7 @@ def test_paper_mode_turns_every_adaptation_off():
         "gate_sigmas", "blend_visible", "shape_estimate", "foreground_histograms",
         "foreground_support", "report_exposed", "report_spread", "tentative_misses",
         "max_hidden"}  # stage1_unmatched_cost stays at the paper's 2 (docs/adaptations.md)
-    for group in ("association", "occlusion", "appearance", "motion", "lifecycle"):
+    for group in ("association", "occlusion", "appearance", "motion", "life_cycle"):
         assert getattr(paper, group) == getattr(ours, group), group
 
 
@@ -421,7 +421,7 @@ def test_hypothesis_in_plain_view_is_reported_briefly_then_only_drawn_and_keeps_
     # back at frame 27: no visible person covers its hypotheses, so after report_exposed
     # frames they are contradicted (only drawn); the person keeps its id when found again
     frames = _scene([_line((40, 150), (2, 0), 40)], [RED])
-    tracker = RetaTracker(lifecycle=LifeCycle(m=8), adaptations=Adaptations(report_exposed=2))
+    tracker = RetaTracker(life_cycle=LifeCycle(m=8), adaptations=Adaptations(report_exposed=2))
     states = []
     for t, (img, label, dets, gt) in enumerate(frames):
         if 20 <= t < 27:
@@ -554,7 +554,7 @@ def test_memory_stays_flat_over_a_long_run():
         most_nodes = max(most_nodes, tracker.graph.node_count)
         most_persons = max(most_persons, len(tracker._persons))
     assert most_persons <= 12
-    assert most_nodes <= (tracker.lifecycle.m + 1) * 3 * most_persons
+    assert most_nodes <= (tracker.life_cycle.m + 1) * 3 * most_persons
     assert len(tracker._pi) <= 4 * most_persons**2 + 16
 
 

@@ -147,7 +147,7 @@ class RetaTracker:
         occlusion: lambda of eq. 2 and the integration of ellipse overlaps.
         appearance: histogram bins (eq. 1), foreground share, pixel stride.
         motion: Kalman noises of the motion model M (3.2).
-        lifecycle: m (pruning), cover (contradicted hypotheses), confirm_frames.
+        life_cycle: m (pruning), cover (contradicted hypotheses), confirm_frames.
         adaptations: every rule of ours the paper does not have
             (``Adaptations.paper()``: the paper as written).
         min_score: detections below this score are ignored.
@@ -159,17 +159,17 @@ class RetaTracker:
         occlusion: Occlusion | None = None,
         appearance: Appearance | None = None,
         motion: MotionModel | None = None,
-        lifecycle: LifeCycle | None = None,
+        life_cycle: LifeCycle | None = None,
         adaptations: Adaptations | None = None,
         min_score: float = 0.0,
     ) -> None:
         groups = {"association": (association, Association), "occlusion": (occlusion, Occlusion),
                   "appearance": (appearance, Appearance), "motion": (motion, MotionModel),
-                  "lifecycle": (lifecycle, LifeCycle), "adaptations": (adaptations, Adaptations)}
+                  "life_cycle": (life_cycle, LifeCycle), "adaptations": (adaptations, Adaptations)}
         for name, (group, kind) in groups.items():
             group = kind() if group is None else group
             if not isinstance(group, kind):
-                raise ValueError(f"{name}: expected a {kind.__name__}, got {group!r}")
+                raise TypeError(f"{name}: expected a {kind.__name__}, got {group!r}")
             setattr(self, name, group)
         self.min_score = min_score
         self.histograms = EllipseHistogrammer(bins=self.appearance.bins,
@@ -186,7 +186,7 @@ class RetaTracker:
         self._next_id = 1
         self._frame = 0
         self._pi: dict[tuple[int, int], int] = {}
-        self.graph = TrackingGraph(window=self.lifecycle.m + 1)
+        self.graph = TrackingGraph(window=self.life_cycle.m + 1)
 
     def graph_snapshot(self) -> dict:
         """The current frame's graph: {'frame', 'nodes': [records], 'edges': [records]}."""
@@ -366,7 +366,7 @@ class RetaTracker:
                 person.hits += 1
             person.misses = 0
             person.spawned = False
-            if not person.confirmed and person.hits >= self.lifecycle.confirm_frames:
+            if not person.confirmed and person.hits >= self.life_cycle.confirm_frames:
                 self._confirm(f, person, shape)
             fronts = in_front.get(n, [])
             branch = _Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
@@ -432,14 +432,14 @@ class RetaTracker:
         hyp_boxes = state_boxes(np.array([b.x for _, new in pending for b in new]))
         gone = hyp.outside_image(hyp_boxes, f.width, f.height).tolist()
         cover = (self._hidden_share(f, hyp_boxes, np.array(sources))
-                 >= self.lifecycle.cover)
+                 >= self.life_cycle.cover)
         unseen = self.rules.support.empty(f.foreground, hyp_boxes)
         if unseen is None:
             unseen = np.zeros(len(cover), dtype=bool)
         else:  # nobody can be seen where the region holds no foreground
             cover &= ~unseen
         cover, unseen, corners = cover.tolist(), unseen.tolist(), hyp_boxes.tolist()
-        m, a = self.lifecycle.m, self.adaptations
+        m, a = self.life_cycle.m, self.adaptations
         survivors: list[_Person] = []
         k = 0
         for person, new in pending:
@@ -481,7 +481,7 @@ class RetaTracker:
             person = _Person(self._next_key, f.p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)],
                              shape=f.dets[d])
             self._next_key += 1
-            if self.lifecycle.confirm_frames <= 1:
+            if self.life_cycle.confirm_frames <= 1:
                 person.id = self._next_id
                 self._next_id += 1
             person.branches[0].node = self._add_node(person, person.branches[0], f.dets[d],
