@@ -44,7 +44,7 @@ from harness.frontend_source import compose_config
 from harness.io.mot import read_mot
 from harness.paths import data_path
 from trackers.frontend.blobs import blobs_from_mask
-from trackers.frontend.features import ellipse_histograms
+from trackers.three_hypothesis.features import ellipse_histograms
 
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
 

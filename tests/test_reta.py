@@ -14,7 +14,6 @@ from scipy.optimize import linear_sum_assignment
 
 from trackers.baseline import BaselineTracker
 from trackers.common.assignment import assign
-from trackers.frontend.features import ellipse_histograms, region_similarity
 from trackers.geometry import intersection_matrix, iou_matrix
 from trackers.records import Detections, TrackState
 from trackers.three_hypothesis import (
@@ -26,6 +25,7 @@ from trackers.three_hypothesis import (
 )
 from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
 from trackers.three_hypothesis.association import _hungarian, _person_costs, associate
+from trackers.three_hypothesis.features import ellipse_histograms, region_similarity
 from trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
 from trackers.three_hypothesis.occlusion import (
     area_above,

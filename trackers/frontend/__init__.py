@@ -2,7 +2,9 @@
 
 Frames flow: ``background`` (MOG2/KNN foreground, shadows dropped) -> ``morphology``
 (open/close) -> ``blobs`` (connected components) -> a person detector (``detectors``:
-foreground blobs, silhouette template, HOG) -> ``features`` (ellipse histograms, rho, delta).
+foreground blobs, silhouette template, HOG). The trackers' own features live with them:
+Reta's ellipse histograms, rho and delta in ``trackers.three_hypothesis.features``, PBM's
+part features in ``trackers.layered.parts``.
 ``heads`` is the PBM 2.3 hair/skin head detector.
 """
 

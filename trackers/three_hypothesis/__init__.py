@@ -2,8 +2,10 @@
 
 Modules: ``graph`` (G = <N, E>, nodes and edges, snapshot), ``occlusion`` (eq. 2, eq. 3),
 ``association`` (3.3.2 two-stage Hungarian), ``hypotheses`` (Alg. 1's three cases),
-``appearance`` (eq. 1 histograms), ``motion`` (Kalman M), ``params`` (the constructor's
-parameter groups), ``tracker`` (``RetaTracker``).
+``features`` (eqs. 1, 4, 5 on ellipse regions: the definitions), ``appearance`` (eq. 1
+histograms, fast path), ``motion`` (Kalman M), ``params`` (the constructor's parameter
+groups), ``rules`` (the paper's rule and ours for each step an adaptation changes),
+``tracker`` (``RetaTracker``: Alg. 1).
 """
 
 from trackers.three_hypothesis.motion import MotionModel

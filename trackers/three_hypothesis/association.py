@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from trackers.frontend.features import bhattacharyya, region_similarity
 from trackers.geometry import centre_distance_matrix
+from trackers.three_hypothesis.features import bhattacharyya, region_similarity
 
 
 @dataclass

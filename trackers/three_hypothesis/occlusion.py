@@ -18,7 +18,7 @@ def region_overlaps(
     """Region similarity delta of eq. 5 for ellipse regions, integrated only where needed.
 
     delta(Sp, Sq) = 2 |Sp & Sq| / (|Sp| + |Sq|). The values are exactly those of
-    ``trackers.frontend.features.region_similarity(a, b, "ellipse", samples)`` (the
+    ``trackers.three_hypothesis.features.region_similarity(a, b, "ellipse", samples)`` (the
     definition; ``tests/test_reta.py`` checks equality): |Sa & Sb| is the share of a
     ``samples`` x ``samples`` grid over a's box lying in both ellipses, times |Sa| = pi/4 w h.
     Two things make it cheaper per frame: the grid is separable, so each ellipse test is

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.frontend.features import (
+from trackers.geometry import box_ellipses, ellipse_mask
+from trackers.histograms import masked_histogram
+from trackers.three_hypothesis.features import (
     bhattacharyya,
     bin_image,
     ellipse_histograms,
     region_similarity,
 )
-from trackers.geometry import box_ellipses, ellipse_mask
-from trackers.histograms import masked_histogram
 
 
 def test_known_colour_lands_in_known_bin():
