@@ -531,7 +531,7 @@ def test_occluded_update_averages_the_window_and_keeps_the_ratios():
 
 def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
     from trackers.layered.model import dof_from_head, dofs_from_heads
-    from trackers.layered.tracker import _norms
+    from trackers.layered.selection import _norms
 
     rng = np.random.default_rng(3)
     v = rng.normal(size=(500, 2)) * rng.uniform(0.1, 300.0, size=(500, 1))
@@ -633,8 +633,8 @@ def test_assign_equals_the_numpy_gated_hungarian():
 
 
 def test_prune_equals_the_numpy_centre_radius_and_nearest_head():
-    """``_prune``'s scalar arithmetic (few heads) and numpy path (many) against the
-    numpy form: mean centre, largest norm as radius, nearest head to the refined one."""
+    """``MultipleResponsePruning.match_template``'s scalar arithmetic (few heads) and numpy
+    path (many) against the numpy form: mean centre, largest norm as radius, nearest head to the refined one."""
     from trackers.layered.search import head_patch, match_head_template
 
     rng = np.random.default_rng(4)
@@ -650,10 +650,10 @@ def test_prune_equals_the_numpy_centre_radius_and_nearest_head():
         tl, _ = match_head_template(frame, template, np.array([centre[0] - 0.5 * tw, centre[1]]), radius)
         refined = np.array([tl[0] + 0.5 * tw, tl[1]])
         nearest = cands[int(np.argmin(np.linalg.norm(heads - refined, axis=1)))]
-        chosen, got = t._prune(template, cands, heads, frame)
+        chosen, got = t._pruning.match_template(template, cands, heads, frame)
         assert chosen == nearest
         np.testing.assert_array_equal(got, refined)
-    assert t._prune(None, cands, heads, frame) == (-1, None)
+    assert t._pruning.match_template(None, cands, heads, frame) == (-1, None)
 
 
 def test_foreground_counts_and_the_tracker_accept_every_foreground_dtype():

@@ -25,7 +25,7 @@ def _template_matches(duplicate_radius: float, prune_max_misses: int = 5,
     cfg.adaptations.prune_max_misses = prune_max_misses
     tracker = instantiate(cfg)
     calls: list[np.ndarray] = []
-    prune = tracker._prune
+    prune = tracker._pruning.match_template
 
     def recorded(template, cands, heads, frame):
         calls.append(np.array(heads, dtype=np.float64))
@@ -35,7 +35,7 @@ def _template_matches(duplicate_radius: float, prune_max_misses: int = 5,
             misses.append(int(tg.misses[ti]))
         return prune(template, cands, heads, frame)
 
-    tracker._prune = recorded
+    tracker._pruning.match_template = recorded
     seq = load_scenario("crowd", seed=0, length=60, people=10)
     src = NoisyGroundTruth(seed=0)
     src.start(seq)

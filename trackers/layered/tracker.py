@@ -11,7 +11,7 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
    its gate; a candidate whose size differs from the prediction by > 50% is occluded, and
    ``_search_occluded`` searches it (larger: head-anchored boxes of eqs. 9-10; smaller:
    aligned on its head, or dismissed).
-4. ``_prune_multiple_responses`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
+4. ``selection.MultipleResponsePruning`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
    ambiguous or weak choice is settled by the target's head template. Targets then share
    candidates one-to-one (Hungarian on 1 - p: the paper tracks one target at a time).
@@ -41,8 +41,6 @@ were validated in (None for a target born this frame).
 from __future__ import annotations
 
 import logging
-import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -55,13 +53,12 @@ from trackers.layered._kernels import (
     matched_rows,
 )
 from trackers.layered._search_kernels import foreground_counts
-from trackers.layered.association import ambiguous_rows, pair_scores
+from trackers.layered.association import pair_scores
 from trackers.layered.candidates import CandidateFinder
 from trackers.layered.dynamics import Gate
 from trackers.layered.model import (
     Targets,
     dof_from_box,
-    dof_from_head,
     update_parts,
 )
 from trackers.layered.params import (
@@ -78,7 +75,6 @@ from trackers.layered.params import (
     UpdateParams,
 )
 from trackers.layered.parts import (
-    N_PARTS,
     PartFeatureExtractor,
     PartFeatures,
     centroid_ratios,
@@ -88,53 +84,15 @@ from trackers.layered.search import (
     head_fill,
     head_patch,
     head_patches,
-    match_head_template,
     occlusion_kinds,
     search_boxes_many,
 )
+from trackers.layered.selection import FrameScores, MultipleResponsePruning
 from trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
 
 _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
-
-
-def _norms(v: np.ndarray) -> np.ndarray:
-    """(K,) Euclidean norms of the rows of v (K, 2), each equal bit for bit to
-    ``np.linalg.norm(v[k])`` (the same dot product, one per row)."""
-    return np.sqrt(np.vecdot(v, v))
-
-
-@dataclass
-class _Scores:
-    """One frame's association of T targets with N candidates.
-
-    Attributes:
-        S: (T, N) global scores p (eq. 13); -inf where n is no candidate of t.
-        pj: (T, N, 5) part scores p_j (eq. 12) of the unoccluded pairs.
-        hyp: (T, N) row of an occluded pair's best searched box in the ``*_h`` arrays, -1
-            for an unoccluded pair.
-        feats_h: features of the searched boxes (None: none). pj_h: (P, 5) p_j,
-            k_h: (P,) each pair's best box in ``feats_h``, dof_h: (P, 6) its global model.
-    """
-
-    S: np.ndarray
-    pj: np.ndarray
-    hyp: np.ndarray
-    feats_h: PartFeatures | None = None
-    pj_h: np.ndarray | None = None
-    k_h: np.ndarray | None = None
-    dof_h: np.ndarray | None = None
-
-    @classmethod
-    def empty(cls, T: int, N: int) -> _Scores:
-        """No pair scored yet."""
-        S = np.empty((T, N))
-        S.fill(-np.inf)
-        hyp = np.empty((T, N), dtype=np.intp)
-        hyp.fill(-1)
-        return cls(S, np.zeros((T, N, N_PARTS)), hyp, None, np.zeros((0, N_PARTS)),
-                   np.zeros(0, np.intp), np.zeros((0, 6)))
 
 
 class PBMTracker:
@@ -191,6 +149,7 @@ class PBMTracker:
         self._extractor = PartFeatureExtractor(f.histogram_bins, *f.grid)
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         self._finder = CandidateFinder(self.candidates)
+        self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
         self.reset()
 
     def reset(self) -> None:
@@ -222,10 +181,10 @@ class PBMTracker:
         H, W = frame.shape[:2]
         cand, feats = self._find_candidates(frame, detections, fg, fg_residual)  # PBM 2
         pred_wh = self.targets.predict()  # PBM 3, eqs. 7-8
-        scores = _Scores.empty(len(self.targets), len(cand))
+        scores = FrameScores.empty(len(self.targets), len(cand))
         if len(self.targets) and len(cand):
             self._score_in_gates(scores, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
-            self._prune_multiple_responses(scores, cand, frame)  # PBM 4, 4.1
+            self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
         withheld = self._withhold_relative(scores.S)  # adaptations.relative_match
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
@@ -283,7 +242,7 @@ class PBMTracker:
             model = model.shifted(self.targets.predicted_shift())
         return model
 
-    def _score_in_gates(self, scores: _Scores, cand: Candidates, feats: PartFeatures,
+    def _score_in_gates(self, scores: FrameScores, cand: Candidates, feats: PartFeatures,
                         fg: np.ndarray | None, pred_wh: np.ndarray) -> None:
         """PBM 3, 3.1, eqs. 11-13: each target scores the candidates in its KF1 gate.
 
@@ -366,97 +325,6 @@ class PBMTracker:
         return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
                            self.features.omega, self.features.gamma, self.adaptations.model_spread)
 
-    def _prune(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
-               frame: np.ndarray) -> tuple[int, np.ndarray | None]:
-        """Multiple-response pruning (PBM 4.1): the target's head template is matched
-        around the heads (x top-centre, y top) (K, 2) of the candidates ``cands`` (K,)
-        (``match_head_template``, on the grey of the BGR ``frame``'s search window only);
-        returns the candidate nearest the refined head and that head, or (-1, None) when
-        the template does not match.
-
-        The centre is the heads' mean, the radius their largest distance from it (plus
-        half the template width and 2 pixels); a few heads are summed as Python floats in
-        numpy's order (row by row), more by numpy itself.
-        """
-        if template is None or not len(cands):
-            return -1, None
-        tw = template.shape[1]
-        if len(cands) < 8:
-            hs = heads.tolist()
-            cx, cy = hs[0]
-            for hx, hy in hs[1:]:
-                cx, cy = cx + hx, cy + hy
-            cx, cy = cx / len(hs), cy / len(hs)
-            radius = max(math.sqrt((hx - cx) * (hx - cx) + (hy - cy) * (hy - cy)) for hx, hy in hs)
-        else:
-            cx, cy = heads.mean(axis=0).tolist()
-            radius = float(np.max(np.linalg.norm(heads - [cx, cy], axis=1)))
-        tl, corr = match_head_template(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
-        if corr < self.pruning.template_threshold:
-            return -1, None
-        rx, ry = tl[0] + 0.5 * tw, float(tl[1])
-        if len(cands) < 8:
-            dist = [math.sqrt((hx - rx) * (hx - rx) + (hy - ry) * (hy - ry)) for hx, hy in hs]
-            nearest = dist.index(min(dist))
-        else:
-            nearest = int(np.argmin(np.linalg.norm(heads - [rx, ry], axis=1)))
-        return int(cands[nearest]), np.array([rx, ry])
-
-    # ------------------------------------------------------------------ selection (PBM 4, 4.1)
-    def _prune_multiple_responses(self, scores: _Scores, cand: Candidates, frame: np.ndarray) -> None:
-        """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
-        by ``matching.margin_ratio`` (ambiguous), or whose candidates all score in
-        [weak_threshold, match_threshold) (weak), keeps the nearby candidate (within
-        ``pruning.radius`` head widths; distant rivals are left to the one-to-one
-        assignment) nearest its head template's best match (``_prune``), at a score of at
-        least ``match_threshold``; the others are struck from its row of S. A weak target
-        whose template does not match takes none.
-
-        Adaptations: ambiguous candidates whose heads all lie within
-        ``adaptations.duplicate_radius`` head widths of the best's are one response (best
-        kept, no template match); a target unfound for more than
-        ``adaptations.prune_max_misses`` frames has a stale template: an ambiguous choice
-        keeps the best, a weak one takes none.
-        """
-        S, targets, m, a = scores.S, self.targets, self.matching, self.adaptations
-        bests, _, ambs = ambiguous_rows(S, m.match_threshold, m.margin_ratio)
-        weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= m.weak_threshold)
-        heads_xy = cand.head[:, :2]
-        for ti in (ambs | weaks).nonzero()[0].tolist():  # changes only row ti, after reading it
-            row = S[ti]
-            best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
-            lo = m.match_threshold if amb else m.weak_threshold
-            cands = (row >= lo).nonzero()[0]
-            r = best if best >= 0 else int(np.argmax(row))
-            hw = max(cand.head[r, 2], 1.0)
-            dist = _norms(heads_xy[cands] - heads_xy[r])
-            near = dist <= self.pruning.radius * hw
-            cands = cands[near]
-            if amb and len(cands) < 2:
-                continue
-            if targets.misses[ti] > a.prune_max_misses:
-                if weak:
-                    continue
-                chosen, refined = best, None
-            elif amb and dist[near].max() <= a.duplicate_radius * hw:
-                chosen, refined = best, None  # one response: the heads coincide
-            else:
-                chosen, refined = self._prune(targets.head_template[ti], cands, heads_xy[cands], frame)
-            if chosen < 0:
-                if weak:
-                    continue
-                chosen = best
-            elif refined is not None and scores.hyp[ti, chosen] >= 0:
-                # "the matching candidate is then updated accordingly": a carved
-                # (occluded) candidate is re-anchored on the refined head
-                q = scores.hyp[ti, chosen]
-                dof_h = scores.dof_h
-                dof_h[q] = dof_from_head(refined, dof_h[q, 4], dof_h[q, 5], targets.alpha[ti],
-                                         targets.beta[ti])
-            keep = row[chosen]
-            S[ti, cands] = -np.inf
-            S[ti, chosen] = max(keep, m.match_threshold)
-
     def _withhold_relative(self, S: np.ndarray) -> np.ndarray | None:
         """``adaptations.relative_match`` (ours; 0 = off, None returned): a target found last
         frame takes no candidate scoring below relative_match x the score of that match
@@ -471,7 +339,7 @@ class PBMTracker:
         return weak.any(axis=0)
 
     # ------------------------------------------------------------------ model update (PBM 4.2)
-    def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: _Scores,
+    def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: FrameScores,
                        cand: Candidates, feats: PartFeatures, fg: np.ndarray | None,
                        pred_wh: np.ndarray, image_size: tuple[int, int]) -> None:
         """PBM 4.2 for the (M, 2) matched (target, candidate) pairs, all at once: the global

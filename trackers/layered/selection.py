@@ -1,0 +1,162 @@
+"""Selection of each target's candidate (PBM 4 steps 4-5, 4.1): one frame's scores, and
+multiple-response pruning by the head template.
+
+Boxes are xywh and heads (x top-centre, y top, width), float64 pixels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from trackers.layered.association import ambiguous_rows
+from trackers.layered.model import Targets, dof_from_head
+from trackers.layered.params import Adaptations, MatchParams, PruneParams
+from trackers.layered.parts import N_PARTS, PartFeatures
+from trackers.layered.search import Candidates, match_head_template
+
+
+def _norms(v: np.ndarray) -> np.ndarray:
+    """(K,) Euclidean norms of the rows of v (K, 2), each equal bit for bit to
+    ``np.linalg.norm(v[k])`` (the same dot product, one per row)."""
+    return np.sqrt(np.vecdot(v, v))
+
+
+@dataclass
+class FrameScores:
+    """One frame's association of T targets with N candidates.
+
+    Attributes:
+        S: (T, N) global scores p (eq. 13); -inf where n is no candidate of t.
+        pj: (T, N, 5) part scores p_j (eq. 12) of the unoccluded pairs.
+        hyp: (T, N) row of an occluded pair's best searched box in the ``*_h`` arrays, -1
+            for an unoccluded pair.
+        feats_h: features of the searched boxes (None: none). pj_h: (P, 5) p_j,
+            k_h: (P,) each pair's best box in ``feats_h``, dof_h: (P, 6) its global model.
+    """
+
+    S: np.ndarray
+    pj: np.ndarray
+    hyp: np.ndarray
+    feats_h: PartFeatures | None = None
+    pj_h: np.ndarray | None = None
+    k_h: np.ndarray | None = None
+    dof_h: np.ndarray | None = None
+
+    @classmethod
+    def empty(cls, T: int, N: int) -> FrameScores:
+        """No pair scored yet."""
+        S = np.empty((T, N))
+        S.fill(-np.inf)
+        hyp = np.empty((T, N), dtype=np.intp)
+        hyp.fill(-1)
+        return cls(S, np.zeros((T, N, N_PARTS)), hyp, None, np.zeros((0, N_PARTS)),
+                   np.zeros(0, np.intp), np.zeros((0, 6)))
+
+
+class MultipleResponsePruning:
+    """PBM 4 steps 4-5 and 4.1 on one frame's scores (``__call__``).
+
+    Args:
+        matching: thresholds and margin of a match. pruning: the template's threshold and
+            the radius of "nearby". adaptations: ``duplicate_radius`` and
+            ``prune_max_misses``.
+    """
+
+    def __init__(self, matching: MatchParams, pruning: PruneParams, adaptations: Adaptations) -> None:
+        self.matching = matching
+        self.pruning = pruning
+        self.adaptations = adaptations
+
+    def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray) -> None:
+        """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
+        by ``matching.margin_ratio`` (ambiguous), or whose candidates all score in
+        [weak_threshold, match_threshold) (weak), keeps the nearby candidate (within
+        ``pruning.radius`` head widths; distant rivals are left to the one-to-one
+        assignment) nearest its head template's best match (``match_template``), at a score of at
+        least ``match_threshold``; the others are struck from its row of S. A weak target
+        whose template does not match takes none.
+
+        Adaptations: ambiguous candidates whose heads all lie within
+        ``adaptations.duplicate_radius`` head widths of the best's are one response (best
+        kept, no template match); a target unfound for more than
+        ``adaptations.prune_max_misses`` frames has a stale template: an ambiguous choice
+        keeps the best, a weak one takes none.
+        """
+        S, m, a = scores.S, self.matching, self.adaptations
+        bests, _, ambs = ambiguous_rows(S, m.match_threshold, m.margin_ratio)
+        weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= m.weak_threshold)
+        heads_xy = cand.head[:, :2]
+        for ti in (ambs | weaks).nonzero()[0].tolist():  # changes only row ti, after reading it
+            row = S[ti]
+            best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
+            lo = m.match_threshold if amb else m.weak_threshold
+            cands = (row >= lo).nonzero()[0]
+            r = best if best >= 0 else int(np.argmax(row))
+            hw = max(cand.head[r, 2], 1.0)
+            dist = _norms(heads_xy[cands] - heads_xy[r])
+            near = dist <= self.pruning.radius * hw
+            cands = cands[near]
+            if amb and len(cands) < 2:
+                continue
+            if targets.misses[ti] > a.prune_max_misses:
+                if weak:
+                    continue
+                chosen, refined = best, None
+            elif amb and dist[near].max() <= a.duplicate_radius * hw:
+                chosen, refined = best, None  # one response: the heads coincide
+            else:
+                chosen, refined = self.match_template(targets.head_template[ti], cands, heads_xy[cands],
+                                                      frame)
+            if chosen < 0:
+                if weak:
+                    continue
+                chosen = best
+            elif refined is not None and scores.hyp[ti, chosen] >= 0:
+                # "the matching candidate is then updated accordingly": a carved
+                # (occluded) candidate is re-anchored on the refined head
+                q = scores.hyp[ti, chosen]
+                dof_h = scores.dof_h
+                dof_h[q] = dof_from_head(refined, dof_h[q, 4], dof_h[q, 5], targets.alpha[ti],
+                                         targets.beta[ti])
+            keep = row[chosen]
+            S[ti, cands] = -np.inf
+            S[ti, chosen] = max(keep, m.match_threshold)
+
+    def match_template(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
+                       frame: np.ndarray) -> tuple[int, np.ndarray | None]:
+        """PBM 4.1: the target's head template is matched
+        around the heads (x top-centre, y top) (K, 2) of the candidates ``cands`` (K,)
+        (``match_head_template``, on the grey of the BGR ``frame``'s search window only);
+        returns the candidate nearest the refined head and that head, or (-1, None) when
+        the template does not match.
+
+        The centre is the heads' mean, the radius their largest distance from it (plus
+        half the template width and 2 pixels); a few heads are summed as Python floats in
+        numpy's order (row by row), more by numpy itself.
+        """
+        if template is None or not len(cands):
+            return -1, None
+        tw = template.shape[1]
+        if len(cands) < 8:
+            hs = heads.tolist()
+            cx, cy = hs[0]
+            for hx, hy in hs[1:]:
+                cx, cy = cx + hx, cy + hy
+            cx, cy = cx / len(hs), cy / len(hs)
+            radius = max(math.sqrt((hx - cx) * (hx - cx) + (hy - cy) * (hy - cy)) for hx, hy in hs)
+        else:
+            cx, cy = heads.mean(axis=0).tolist()
+            radius = float(np.max(np.linalg.norm(heads - [cx, cy], axis=1)))
+        tl, corr = match_head_template(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
+        if corr < self.pruning.template_threshold:
+            return -1, None
+        rx, ry = tl[0] + 0.5 * tw, float(tl[1])
+        if len(cands) < 8:
+            dist = [math.sqrt((hx - rx) * (hx - rx) + (hy - ry) * (hy - ry)) for hx, hy in hs]
+            nearest = dist.index(min(dist))
+        else:
+            nearest = int(np.argmin(np.linalg.norm(heads - [rx, ry], axis=1)))
+        return int(cands[nearest]), np.array([rx, ry])
