@@ -208,22 +208,23 @@ def test_compiled_greedy_search_equals_the_numpy_equations():
         x, y = int(rng.integers(10, 110)), int(rng.integers(5, 120 - h))
         mask[y : y + h, x : x + int(0.4 * h)] |= _person_mask((h, int(0.4 * h)), (0, 0, int(0.4 * h), h))
     mask[rng.random(mask.shape) < 0.01] = 1
+    mask[70:, 120:152] |= _person_mask((80, 32), (0, 0, 32, 80))[:50]  # cut by the bottom edge
     got = {}
+    cases = [(-1.0, None), (0.2, None), (0.2, (0.5, 10.0))]  # head rule, height model
     for compiled in (True, False):
-        for head in (-1.0, 0.2):
+        for head, model in cases:
             m = SilhouetteMatcher(min_height=30, max_height=100, n_scales=6, downscale=1,
                                   max_overlap=1.0, head_contrast=head, frame_border=True,
-                                  compiled=compiled)
-            m._kernels = m._kernels_for(120)
-            got[compiled, head] = m.candidates(mask.copy(), region_height=120,
-                                               edges=(False, True, True, False))
-    for head in (-1.0, 0.2):
-        fast, ref = got[True, head], got[False, head]
-        assert len(ref[0]) >= 3
-        np.testing.assert_array_equal(np.array(fast[0]), np.array(ref[0]))  # template boxes
-        np.testing.assert_array_equal(np.array(fast[2]), np.array(ref[2]))  # explained boxes
-        np.testing.assert_allclose(fast[1], ref[1], rtol=1e-9)  # scores
-    assert len(got[True, 0.2][0]) <= len(got[True, -1.0][0])
+                                  height_model=model, compiled=compiled)
+            got[compiled, head, model] = m.candidates(mask.copy())
+    for key in cases:
+        fast, ref = got[(True, *key)], got[(False, *key)]
+        assert len(ref) >= 2
+        np.testing.assert_array_equal(fast.boxes, ref.boxes)  # template boxes
+        np.testing.assert_array_equal(fast.tight, ref.tight)  # explained foreground
+        np.testing.assert_array_equal(fast.region, ref.region)
+        np.testing.assert_allclose(fast.scores, ref.scores, rtol=1e-9)
+    assert len(got[True, 0.2, None]) <= len(got[True, -1.0, None])
 
 
 def test_frame_border_finds_a_person_cut_by_the_bottom_edge():

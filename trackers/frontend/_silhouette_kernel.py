@@ -1,5 +1,5 @@
 """Compiled greedy search of ``SilhouetteMatcher`` (silhouette.py): the same equations as
-``greedy_search`` there, in one pass per fit over the candidates instead of (N, cells) numpy
+``greedy_search`` and ``search_regions`` there, in one pass per fit over the candidates instead of (N, cells) numpy
 temporaries, and skipping candidates whose template box holds too little vacant foreground
 to pass the score test (a bound, so the fits are unchanged). Tested against the numpy
 version (tests/test_frontend_detectors.py): the same fits on synthetic masks.
@@ -48,19 +48,31 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
     Hp, Wp = vp.shape
     IV = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
     IO = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
-    IK = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
     _integral(vp, IV, 1)
     _integral(op, IO, 1)
-    _integral(vp + op, IK, 1)
-    IV0 = IV.copy()
-    bound = (alpha + threshold) * min_visible / (1.0 + alpha + beta)
+    IK, IV0 = IV, IV  # the head rule's sums, on the region before any fit
+    if head_contrast > -1.0:
+        IK = np.zeros((Hp + 1, Wp + 1), dtype=np.int32)
+        _integral(vp + op, IK, 1)
+        IV0 = IV.copy()
+    # a placement passes only if (1 + alpha + beta) tv >= (alpha + threshold) M + beta bx with
+    # M >= min_visible sum T and tv <= bx: so bx >= bound sum T
+    bound = (alpha + threshold) * min_visible / (1.0 + alpha)
     nk = ids.shape[0]
     start = np.zeros(nk + 1, dtype=np.int64)  # placements of scale k: start[k] .. start[k+1]
     for k in range(nk):
         start[k + 1] = start[k] + (bands[k, 1] - bands[k, 0]) * W
-    E = np.empty(start[nk])
-    score = np.empty(start[nk])
-    y0, y1, x0, x1 = 0, Hp, 0, Wp  # the window whose placements are (re)scored
+    E = np.full(start[nk], -np.inf)
+    alive = np.ones(start[nk], dtype=np.uint8)  # placements that may still pass
+    first = True
+    score = np.zeros(start[nk])
+    # the window whose placements are (re)scored: first the vacant pixels' box (a placement
+    # outside it has no foreground, E <= 0), then after each fit the pixels it changed
+    y0, y1, x0, x1 = Hp, 0, Wp, 0
+    for y in range(Hp):
+        for x in range(Wp):
+            if vp[y, x]:
+                y0, y1, x0, x1 = min(y0, y), max(y1, y + 1), min(x0, x), max(x1, x + 1)
     n = 0
     for _ in range(fits.shape[0]):
         for k in range(nk):
@@ -78,15 +90,19 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
                 Y = r - th // 2 + py
                 row = start[k] + (r - b0) * W
                 for c in range(c_lo, c_hi):
+                    if not alive[row + c]:
+                        continue
                     X = c - tw // 2 + px
                     E[row + c] = -np.inf
                     bx = _box(IV, Y, X, Y + th, X + tw)
-                    if bx < bound * ts - 1e-9:  # too little vacant foreground (tv <= bx)
+                    if bx < bound * ts - 1e-9:  # too little vacant foreground (tv <= bx), for
+                        alive[row + c] = 0  # good: vacant foreground only shrinks
                         continue
-                    if head_contrast > -1.0:
+                    if head_contrast > -1.0 and first:
                         hin = min(_box(IK, Y, X + h0, Y + kh, X + h1), kh * (h1 - h0))
                         hout = _box(IV0, Y, X, Y + kh, X + l1) + _box(IV0, Y, X + r0, Y + kh, X + tw)
                         if hin / h_area - hout / b_area < head_contrast:
+                            alive[row + c] = 0  # for good: the head rule is fixed
                             continue
                     tv = _cells(IV, Y, X, ys_s, xs_s, coef_s)
                     to = _cells(IO, Y, X, ys_s, xs_s, coef_s) if _box(IO, Y, X, Y + th, X + tw) > 0 else 0.0
@@ -96,6 +112,7 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
                     if e >= threshold * max(visible, 1e-6) and visible >= min_visible * ts:
                         E[row + c] = e
                         score[row + c] = e / max(visible, 1e-6)
+        first = False
         best = 0.0
         j = -1
         for i in range(start[nk]):  # the first largest E > 0, in scale, row, column order
@@ -120,7 +137,9 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
                         cy1, cx1 = max(cy1, y + 1), max(cx1, x + 1)
         _integral(vp, IV, best_y + 1)
         _integral(op, IO, best_y + 1)
-        y0, y1, x0, x1 = best_y, best_y + th, best_x, best_x + tw
+        if cy1 < 0:  # nothing changed: no placement to score again
+            cy0, cy1, cx0, cx1 = 0, 0, 0, 0
+        y0, y1, x0, x1 = cy0, cy1, cx0, cx1  # the pixels whose sums changed
         fits[n, 0] = s
         fits[n, 1] = best_y - py
         fits[n, 2] = best_x - px
@@ -133,3 +152,39 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
             fits[n, 5:9] = -1.0
         n += 1
     return n
+
+
+@numba.njit(cache=True)
+def search_regions_kernel(small, lab, regions, bands, ys, xs, coef, size, tsum, head, occ,
+                          alpha, beta, threshold, min_visible, head_contrast, fits, counts):
+    """See ``silhouette.search_regions`` (same arguments): every region of a frame in one call."""
+    for i in range(regions.shape[0]):
+        label, x0, y0, x1, y1 = regions[i, 0], regions[i, 1], regions[i, 2], regions[i, 3], regions[i, 4]
+        py, px = regions[i, 5], regions[i, 6]
+        H, W = y1 - y0, x1 - x0
+        vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.uint8)
+        op = np.zeros_like(vp)
+        for r in range(H):
+            for c in range(W):
+                if lab[y0 + r, x0 + c] == label and small[y0 + r, x0 + c] > 0:
+                    vp[py + r, px + c] = 1
+        if regions[i, 7]:
+            op[:py] = 1
+        if regions[i, 8]:
+            op[py + H :] = 1
+        if regions[i, 9]:
+            op[:, :px] = 1
+        if regions[i, 10]:
+            op[:, px + W :] = 1
+        n = 0
+        for k in range(bands.shape[1]):
+            n += bands[i, k, 1] > bands[i, k, 0]
+        ids = np.empty(n, dtype=np.int64)
+        b = np.empty((n, 2), dtype=np.int64)
+        n = 0
+        for k in range(bands.shape[1]):
+            if bands[i, k, 1] > bands[i, k, 0]:
+                ids[n], b[n, 0], b[n, 1] = k, bands[i, k, 0], bands[i, k, 1]
+                n += 1
+        counts[i] = greedy_kernel(vp, op, py, px, H, W, ids, b, ys, xs, coef, size, tsum, head,
+                                  occ, alpha, beta, threshold, min_visible, head_contrast, fits[i])

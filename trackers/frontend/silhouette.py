@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -194,6 +195,8 @@ def greedy_search(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
     Returns:
         the number of fits.
     """
+    if not len(ids):
+        return 0
     s_, r_, c_ = [], [], []
     for s, (b0, b1) in zip(ids, bands):
         r, c = np.mgrid[b0:b1, 0:W]
@@ -243,6 +246,69 @@ def greedy_search(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
             fits[n, 5:] = x - px + cc[0], y - py + rr[0], x - px + cc[-1] + 1, y - py + rr[-1] + 1
         n += 1
     return n
+
+
+def region_arrays(small: np.ndarray, lab: np.ndarray, region: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The zero-padded vacant and occupied arrays of one region (``search_regions``)."""
+    label, x0, y0, x1, y1, py, px, top, bottom, left, right = (int(v) for v in region)
+    H, W = y1 - y0, x1 - x0
+    vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.uint8)
+    op = np.zeros_like(vp)
+    # only this region's pixels (others are found from their own)
+    vp[py : py + H, px : px + W] = (lab[y0:y1, x0:x1] == label) & (small[y0:y1, x0:x1] > 0)
+    if top:  # beyond the frame's border: unknown, counted as occupied
+        op[:py] = 1
+    if bottom:
+        op[py + H :] = 1
+    if left:
+        op[:, :px] = 1
+    if right:
+        op[:, px + W :] = 1
+    return vp, op
+
+
+def search_regions(small, lab, regions, bands, ys, xs, coef, size, tsum, head, occ, alpha, beta,
+                   threshold, min_visible, head_contrast, fits, counts) -> None:
+    """``greedy_search`` on every region of a frame (compiled: ``_silhouette_kernel``).
+
+    Args:
+        small: (h, w) uint8 0/1 foreground at working resolution; lab: its (h, w) int32
+            component labels.
+        regions: (n, 11) int64 rows: label, crop x0, y0, x1, y1 (working pixels), padding
+            py, px, and whether the crop's top, bottom, left, right side is the frame border.
+        bands: (n, n_scales, 2) int64 centre rows [b0, b1) of the crop each scale is tried
+            at (b0 = b1: not tried).
+        fits: (n, max_people, 9) float64 output (``greedy_search``'s rows); counts: (n,)
+            int64 output, fits per region.
+    """
+    for i, region in enumerate(regions):
+        vp, op = region_arrays(small, lab, region)
+        ids = np.flatnonzero(bands[i, :, 1] > bands[i, :, 0])
+        counts[i] = greedy_search(vp, op, int(region[5]), int(region[6]), int(region[4] - region[2]),
+                                  int(region[3] - region[1]), ids, bands[i, ids], ys, xs, coef,
+                                  size, tsum, head, occ, alpha, beta, threshold, min_visible,
+                                  head_contrast, fits[i])
+
+
+@dataclass
+class Candidates:
+    """The greedy search's fits over one frame, in the order found (region by region).
+
+    Attributes:
+        boxes: (N, 4) float64 xywh fitted template boxes, full-resolution pixels, unclipped.
+        tight: (N, 4) float64 xywh boxes of the foreground each fit explains (``box``).
+        scores: (N,) float64 E / M.
+        region: (N,) int64 the foreground region each was found in.
+    """
+
+    boxes: np.ndarray
+    tight: np.ndarray
+    scores: np.ndarray
+    region: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.scores)
 
 
 class SilhouetteMatcher:
@@ -445,72 +511,113 @@ class SilhouetteMatcher:
         (N, 4), both xywh full-resolution pixels unclipped, and scores (N,).
         ``group=False`` searches every component alone (``group_gap`` ignored).
 
-        Two steps per foreground region: ``candidates`` (the greedy search: every fit, in
-        the order found) and ``select`` (which of them are reported)."""
+        Two steps: ``candidates`` (the greedy search: every fit, in the order found) and
+        ``select`` (which of them are reported)."""
+        c = self.candidates(foreground, group)
+        keep = self.select(c)
+        return c.boxes[keep], c.tight[keep], c.scores[keep]
+
+    def candidates(self, foreground: np.ndarray, group: bool = True) -> Candidates:
+        """The greedy search over a (H, W) foreground mask (nonzero = foreground): each
+        foreground region (a connected component at working resolution, with ``margin``
+        and half the largest template around it) searched on its own pixels."""
         d = self.downscale
-        fg = (np.asarray(foreground) != 0).astype(np.uint8)
+        fg = np.asarray(foreground)
+        fg = fg.view(np.uint8) if fg.dtype == np.bool_ else (fg != 0).astype(np.uint8)
         H, W = fg.shape
         sc = self._kernels = self._kernels_for(H)
-        small = fg if d == 1 else cv2.resize(fg, (W // d, H // d), interpolation=cv2.INTER_AREA)
+        small = fg
         if d > 1:  # INTER_AREA on 0/1 uint8 rounds: keep cells at least half foreground
             small = cv2.resize(fg * np.uint8(255), (W // d, H // d), interpolation=cv2.INTER_AREA)
             small = (small >= 128).astype(np.uint8)
+        hs, ws = small.shape
         gap = int(round(self.group_gap / d)) if group else 0
         grouped = small if gap < 1 else cv2.dilate(small, np.ones((gap + 1, 1), np.uint8),
                                                    anchor=(0, 0))
-        n, lab, stats, _ = cv2.connectedComponentsWithStats(grouped, connectivity=8)
-        allowed = self._allowed_bands(small.shape[0])
-        boxes, scores, tight = [], [], []
+        _, lab, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+            grouped, 8, cv2.CV_32S, cv2.CCL_GRANA)
+        label = 1 + np.flatnonzero(stats[1:, 4] >= 0.15 * sc.tsum[0])
+        if not len(label):
+            return self._no_candidates()
+        x, y, w, h = stats[label, :4].T
         m = max(self.margin // d, 1)
         hmax, wmax = sc.size.max(axis=0)
-        min_area = 0.15 * sc.tsum[0]
-        for i in range(1, n):
-            x, y, w, h, area = stats[i]
-            if area < min_area:
-                continue
-            x0, y0 = max(x - m - wmax // 2, 0), max(y - m - hmax // 2, 0)
-            x1, y1 = min(x + w + m + wmax // 2, small.shape[1]), min(y + h + m + hmax // 2, small.shape[0])
-            # only this group's pixels in the crop (others are found from their own)
-            crop = ((lab[y0:y1, x0:x1] == i) & (small[y0:y1, x0:x1] > 0)).astype(np.uint8)
-            edges = None
-            if self.frame_border:  # which crop sides are the frame's border
-                edges = (y0 == 0, y1 == small.shape[0], x0 == 0, x1 == small.shape[1])
-            bands = None if allowed is None else np.clip(allowed - y0, 0, y1 - y0)
-            b, s, t = self.candidates(crop, region_height=h, bands=bands, edges=edges)
-            for k in self.select(b, s):
-                bx, tb = b[k], t[k]
-                boxes.append([(bx[0] + x0) * d, (bx[1] + y0) * d, bx[2] * d, bx[3] * d])
-                tight.append([(tb[0] + x0) * d, (tb[1] + y0) * d, tb[2] * d, tb[3] * d])
-                scores.append(s[k])
-        if not boxes:
-            return np.zeros((0, 4)), np.zeros((0, 4)), np.zeros(0)
-        return (np.asarray(boxes, dtype=np.float64), np.asarray(tight, dtype=np.float64),
-                np.asarray(scores, dtype=np.float64))
+        x0, y0 = np.maximum(x - m - wmax // 2, 0), np.maximum(y - m - hmax // 2, 0)
+        x1, y1 = np.minimum(x + w + m + wmax // 2, ws), np.minimum(y + h + m + hmax // 2, hs)
+        edges = np.zeros((len(label), 4), dtype=bool)  # crop sides on the frame's border
+        cut = np.zeros(len(label), dtype=bool)  # regions cut by (or within margin of) the
+        # frame's top or bottom: their height does not bound the template heights tried
+        if self.frame_border:
+            edges = np.column_stack([y0 == 0, y1 == hs, x0 == 0, x1 == ws])
+            near = max(self.margin // d, 1)  # frames may have a dark border strip
+            cut = (edges[:, 0] & (y - y0 < near)) | (edges[:, 1] & (y + h > y1 - near))
+        allowed = self._allowed_bands(hs)  # each scale only on its band of centre rows
+        if allowed is None:
+            bands = np.zeros((len(label), len(sc.size), 2), dtype=np.int64)
+            bands[:, :, 1] = (y1 - y0)[:, None]
+        else:
+            bands = np.clip(allowed[None] - y0[:, None, None], 0, (y1 - y0)[:, None, None])
+        bands[~((sc.size[None, :, 0] <= 1.5 * h[:, None] + 4) | cut[:, None])] = 0
+        live = bands[:, :, 1] > bands[:, :, 0]
+        # zero padding holding every placement: a template is anchored at its centre
+        pad = np.where(live[:, :, None], sc.size[None] - sc.size[None] // 2, 0).max(axis=1)
+        regions = np.column_stack([label, x0, y0, x1, y1, pad, edges]).astype(np.int64)
+        fits = np.zeros((len(label), self.max_people, 9))
+        counts = np.zeros(len(label), dtype=np.int64)
+        if self.compiled:
+            from trackers.frontend._silhouette_kernel import search_regions_kernel as search
+        else:
+            search = search_regions
+        search(small, lab, regions, np.ascontiguousarray(bands, dtype=np.int64), sc.ys, sc.xs,
+               sc.coef, sc.size, sc.tsum, sc.head, sc.occ, self.alpha, self.beta, self.threshold,
+               self.min_visible, self.head_contrast, fits, counts)
+        # one row per fit: scale, top, left (crop), E, score, explained box x0, y0, x1, y1
+        which = np.repeat(np.arange(len(label)), counts)
+        f = np.concatenate([fits[i, :n] for i, n in enumerate(counts)]) if counts.any() else None
+        if f is None:
+            return self._no_candidates()
+        size = sc.size[f[:, 0].astype(np.int64)]
+        ox, oy = x0[which], y0[which]
+        boxes = np.column_stack([f[:, 2] + ox, f[:, 1] + oy, size[:, 1], size[:, 0]]).astype(np.float64)
+        tight = np.column_stack([f[:, 5] + ox, f[:, 6] + oy, f[:, 7] - f[:, 5], f[:, 8] - f[:, 6]])
+        tight = np.where(f[:, 5:6] >= 0, tight, boxes)  # no foreground explained: its box
+        if self.box == "region":  # the region's foreground inside the template box
+            for k, (bx, by, bw, bh) in enumerate(boxes.astype(np.int64)):
+                r = regions[which[k]]
+                sub = slice(max(by, r[2]), min(by + bh, r[4])), slice(max(bx, r[1]), min(bx + bw, r[3]))
+                own = (lab[sub] == r[0]) & (small[sub] > 0)
+                rr, cc = np.flatnonzero(own.any(axis=1)), np.flatnonzero(own.any(axis=0))
+                if len(rr):
+                    tight[k] = [sub[1].start + cc[0], sub[0].start + rr[0], cc[-1] - cc[0] + 1,
+                                rr[-1] - rr[0] + 1]
+                else:
+                    tight[k] = boxes[k]
+        return Candidates(boxes * d, tight * d, f[:, 4].copy(), which)
 
-    def select(self, boxes: list, scores: list) -> list[int]:
-        """Which candidates of one region are reported (indices, in greedy order).
+    @staticmethod
+    def _no_candidates() -> Candidates:
+        return Candidates(np.zeros((0, 4)), np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=np.int64))
 
-        A candidate lying more than ``max_overlap`` inside an earlier, taller reported fit
-        (its height under ``part_height`` times that fit's) is a part of that person (an arm,
-        a bag, a hollow in the foreground): its pixels were used up in the search but it is
-        not reported. This is the step a verifier of candidate boxes plugs into.
+    def select(self, c: Candidates) -> np.ndarray:
+        """Which candidates are reported: (N,) bool.
 
-        Args:
-            boxes: candidate template boxes [x, y, w, h] (crop pixels), in greedy order.
-            scores: their scores E / M.
+        A candidate lying more than ``max_overlap`` inside an earlier, taller reported fit of
+        its region (its height under ``part_height`` times that fit's) is a part of that
+        person (an arm, a bag, a hollow in the foreground): its pixels were used up in the
+        search but it is not reported. This is the step a verifier of candidate boxes plugs
+        into.
         """
         from trackers.geometry import intersection_matrix
 
-        kept: list[int] = []
-        for k, box in enumerate(boxes):
-            if kept:
-                b = np.asarray([boxes[j] for j in kept], dtype=np.float64)
-                inter = intersection_matrix(np.asarray([box], dtype=np.float64), b)[0]
-                inside = inter / max(box[2] * box[3], 1e-9)
-                if ((inside > self.max_overlap) & (box[3] < self.part_height * b[:, 3])).any():
-                    continue
-            kept.append(k)
-        return kept
+        keep = np.ones(len(c), dtype=bool)
+        for k in range(1, len(c)):
+            earlier = np.flatnonzero(keep[:k] & (c.region[:k] == c.region[k]))
+            if not len(earlier):
+                continue
+            b = c.boxes[earlier]
+            inside = intersection_matrix(c.boxes[k : k + 1], b)[0] / max(c.boxes[k, 2] * c.boxes[k, 3], 1e-9)
+            keep[k] = not ((inside > self.max_overlap) & (c.boxes[k, 3] < self.part_height * b[:, 3])).any()
+        return keep
 
     def _allowed_bands(self, rows: int) -> np.ndarray | None:
         """(n_scales, 2) int64: for each scale the centre rows [b0, b1) (working resolution,
@@ -528,71 +635,6 @@ class SilhouetteMatcher:
         b0 = np.argmax(ok, axis=1)
         b1 = rows - np.argmax(ok[:, ::-1], axis=1)
         return np.where(ok.any(axis=1)[:, None], np.column_stack([b0, b1]), 0)
-
-    def candidates(self, vacant: np.ndarray, region_height: int,
-                   bands: np.ndarray | None = None,
-                   edges: tuple[bool, bool, bool, bool] | None = None) -> tuple[list, list, list]:
-        """Greedy fits in one (h, w) uint8 0/1 crop, in the order found: template boxes,
-        scores and the boxes of the foreground each explains (``box``), crop pixels.
-
-        ``bands`` (n_scales, 2): the centre rows [b0, b1) of the crop each scale may be
-        tried at (the height model), None: all. ``edges`` (top, bottom, left, right): crop sides on the frame
-        border, beyond which template pixels are unknown (counted as occupied: outside the
-        visible mass).
-        """
-        H, W = vacant.shape
-        sc = self._kernels
-        cut = False  # a region cut by (or within margin of) the frame's top or bottom: its
-        # height does not bound the template heights tried
-        if edges is not None:
-            rows = np.flatnonzero(vacant.any(axis=1))
-            near = max(self.margin // self.downscale, 1)  # frames may have a dark border strip
-            cut = bool(len(rows) and ((edges[0] and rows[0] < near) or (edges[1] and rows[-1] >= H - near)))
-        if bands is None:
-            bands = np.tile(np.array([0, H], dtype=np.int64), (len(sc.size), 1))
-        # each scale only on its band of centre rows, and no taller than the region allows
-        ids_a = np.flatnonzero(((sc.size[:, 0] <= 1.5 * region_height + 4) | cut)
-                               & (bands[:, 1] > bands[:, 0]))
-        if not len(ids_a):
-            return [], [], []
-        bands_a = np.ascontiguousarray(bands[ids_a], dtype=np.int64)
-        py, px = sc.size[ids_a].max(axis=0)  # zero padding: every placement inside the array
-        vp = np.zeros((H + 2 * py, W + 2 * px), dtype=np.uint8)
-        op = np.zeros_like(vp)
-        vp[py : py + H, px : px + W] = vacant
-        if edges is not None:
-            top, bottom, left, right = edges
-            if top:
-                op[:py] = 1
-            if bottom:
-                op[py + H :] = 1
-            if left:
-                op[:, :px] = 1
-            if right:
-                op[:, px + W :] = 1
-        fits = np.zeros((self.max_people, 9))
-        if self.compiled:
-            from trackers.frontend._silhouette_kernel import greedy_kernel as search
-        else:
-            search = greedy_search
-        n = search(vp, op, int(py), int(px), H, W, ids_a, bands_a, sc.ys, sc.xs, sc.coef,
-                   sc.size, sc.tsum, sc.head, sc.occ, self.alpha, self.beta, self.threshold,
-                   self.min_visible, self.head_contrast, fits)
-        boxes, scores, tight = [], [], []
-        for k, top, left, _e, score, cx0, cy0, cx1, cy1 in fits[:n]:
-            th, tw = sc.size[int(k)]
-            box = [int(left), int(top), int(tw), int(th)]
-            if self.box == "region":  # the region's foreground inside the template box
-                r0, c0 = max(box[1], 0), max(box[0], 0)
-                claimed = vacant[r0 : box[1] + th, c0 : box[0] + tw] > 0
-                rr, cc = np.flatnonzero(claimed.any(axis=1)), np.flatnonzero(claimed.any(axis=0))
-                tb = [c0 + cc[0], r0 + rr[0], cc[-1] - cc[0] + 1, rr[-1] - rr[0] + 1] if len(rr) else box
-            else:  # the foreground this fit explains
-                tb = [int(cx0), int(cy0), int(cx1 - cx0), int(cy1 - cy0)] if cx0 >= 0 else box
-            boxes.append(box)
-            scores.append(float(score))
-            tight.append(tb)
-        return boxes, scores, tight
 
 
 def fit_height_model(
