@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from harness.io.mot import MotFormatError, read_mot, write_mot
-from trackers.common.assignment import assign
+import itertools
+
+from trackers.common.assignment import assign, assign_min_cost
 from trackers.geometry import (
     box_ellipses,
     centre_distance_matrix,
@@ -108,3 +110,34 @@ def test_assign_without_a_gate_skips_forbidden_pairs():
     cost = np.array([[0.2, np.inf], [np.inf, np.nan], [5.0, 0.1]])
     matches, rows, cols = assign(cost, np.inf)  # used to fail: "cost matrix is infeasible"
     assert matches.tolist() == [[0, 0], [2, 1]] and rows.tolist() == [1] and cols.tolist() == []
+
+
+def test_assign_min_cost_leaves_a_row_over_rather_than_trade_a_good_pair_for_two_poor_ones():
+    """Target 0 holds candidate 0 (cost 0.4); target 1, unfound, could take it (0.7) if
+    target 0 moved to a poor candidate 1 (0.74). ``assign`` keeps the most pairs (the
+    exchange: 1.44), ``assign_min_cost`` the cheaper total with target 1 left over
+    (0.4 + 0.75)."""
+    cost = np.array([[0.4, 0.74], [0.7, np.inf]])
+    assert assign(cost, 0.75)[0].tolist() == [[0, 1], [1, 0]]
+    matches, rows, cols = assign_min_cost(cost, 0.75)
+    assert matches.tolist() == [[0, 0]] and rows.tolist() == [1] and cols.tolist() == [1]
+    with pytest.raises(ValueError, match="max_cost"):
+        assign_min_cost(cost, np.inf)
+
+
+def test_assign_min_cost_equals_the_exhaustive_minimum():
+    """Over small random matrices, the total (pairs plus max_cost per row left over) equals
+    the minimum over every one-to-one partial assignment of allowed pairs."""
+    rng = np.random.default_rng(3)
+    for _ in range(150):
+        n, m = rng.integers(1, 5, 2)
+        cost = np.where(rng.random((n, m)) < 0.7, rng.uniform(0, 1, (n, m)), np.inf)
+        matches, rows, cols = assign_min_cost(cost, 0.75)
+        total = sum(cost[i, j] for i, j in matches) + 0.75 * len(rows)
+        assert (cost[matches[:, 0], matches[:, 1]] <= 0.75).all()
+        assert len(rows) + len(matches) == n and len(cols) + len(matches) == m
+        best = min(sum(cost[i, j] if j >= 0 else 0.75 for i, j in enumerate(p))
+                   for p in itertools.product(range(-1, m), repeat=n)
+                   if len({j for j in p if j >= 0}) == sum(j >= 0 for j in p)
+                   and all(j < 0 or cost[i, j] <= 0.75 for i, j in enumerate(p)))
+        assert total == pytest.approx(best)

@@ -71,3 +71,42 @@ def _split(allowed: np.ndarray, rows: np.ndarray, cols: np.ndarray
             free_rows[i], free_cols[j] = False, False
             k += 1
     return matches[:k].copy(), np.flatnonzero(free_rows), np.flatnonzero(free_cols)
+
+
+def assign_min_cost(
+    cost: np.ndarray, max_cost: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Minimum-cost assignment where leaving a row unmatched costs ``max_cost``, the
+    largest cost an accepted pair can have.
+
+    Unlike ``assign``, which keeps as many allowed pairs as it can and only then the
+    cheapest, a pair is taken only when it lowers the total: one pair of cost c and a
+    row left over (c + max_cost) beat two pairs c1 + c2 when they cost less. Row i stays
+    unmatched through its own dummy column M + i of cost ``max_cost``.
+
+    Args:
+        cost: (N, M) float matrix; +inf or NaN marks forbidden pairs.
+        max_cost: largest accepted cost and the cost of an unmatched row (finite).
+    Returns:
+        matches (K, 2) int rows (i, j), unmatched rows (N - K,), unmatched columns (M - K,).
+    Raises:
+        ValueError: ``max_cost`` is not finite.
+    """
+    cost = np.ascontiguousarray(cost, dtype=np.float64)
+    n, m = cost.shape
+    max_cost = float(max_cost)
+    if not math.isfinite(max_cost):
+        raise ValueError(f"assign_min_cost: max_cost must be finite, got {max_cost}")
+    if n == 0 or m == 0:
+        return np.zeros((0, 2), dtype=int), np.arange(n), np.arange(m)
+    allowed, _ = _gate(cost, max_cost, max_cost)
+    # a forbidden entry costs more than any assignment without one (e.g. every row left
+    # over, n max_cost)
+    largest = max(float(np.abs(cost[allowed]).max()) if allowed.any() else 0.0, abs(max_cost))
+    big = 1.0 + largest * (2 * n + m)
+    full = np.full((n, m + n), big)  # dummy columns: only row i's own is allowed
+    np.copyto(full[:, :m], cost, where=allowed)
+    full[np.arange(n), m + np.arange(n)] = max_cost
+    rows, cols = linear_sum_assignment(full)
+    keep = cols < m
+    return _split(allowed, rows[keep], cols[keep])

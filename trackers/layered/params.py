@@ -382,6 +382,11 @@ class StaleParts:
                            image_size, self.cover, self.fill, self.frames)
 
 
+ASSIGNMENTS = ("most_pairs", "min_cost")
+"""``Adaptations.assignment``'s values (``trackers.common.assignment``: ``assign``,
+``assign_min_cost``)."""
+
+
 @dataclass(frozen=True)
 class Adaptations:
     """Every rule of ours that the paper does not have (``docs/adaptations.md``: one row
@@ -414,6 +419,11 @@ class Adaptations:
             prediction (paper: reporting is ours; at its last validated box).
         occluded_cover: with foreground, an unfound target is reported only while found
             targets' boxes cover this fraction of it (0 = off).
+        assignment: how targets share candidates one-to-one (the paper tracks one target at
+            a time): ``most_pairs`` keeps as many pairs scoring at least
+            ``matching.match_threshold`` as it can, then the best; ``min_cost`` minimises
+            the summed 1 - p with a target left over costing 1 - match_threshold, so a
+            target never takes a worse candidate only so that another can be matched.
     """
 
     model_spread: float = 4.5
@@ -429,8 +439,12 @@ class Adaptations:
     exit_misses: int = 3
     report_predicted: bool = True
     occluded_cover: float = 0.0
+    assignment: str = "most_pairs"
 
     def __post_init__(self) -> None:
+        if self.assignment not in ASSIGNMENTS:
+            raise ValueError(f"adaptations.assignment must be one of {ASSIGNMENTS}, "
+                             f"got {self.assignment!r}")
         if not self.model_spread > 0:
             raise ValueError(f"adaptations.model_spread must be > 0, got {self.model_spread}")
         _unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,

@@ -14,7 +14,9 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
 4. ``selection.MultipleResponsePruning`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
    ambiguous or weak choice is settled by the target's head template. Targets then share
-   candidates one-to-one (Hungarian on 1 - p: the paper tracks one target at a time).
+   candidates one-to-one (Hungarian on 1 - p: the paper tracks one target at a time), keeping
+   as many pairs as possible or, with ``adaptations.assignment: min_cost``, at the least
+   summed cost with a target left over costing 1 - ``matching.match_threshold``.
 5. ``_update_models`` (PBM 4.2): global models, KF1, KF2 and the parts of every matched
    target at once.
 6. ``_end_targets`` and ``_start_targets`` (ours: PBM 3 starts each target by hand): a
@@ -44,7 +46,7 @@ import logging
 
 import numpy as np
 
-from trackers.common.assignment import assign
+from trackers.common.assignment import assign, assign_min_cost
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
 from trackers.layered._kernels import (
     alive_rows,
@@ -93,6 +95,7 @@ from trackers.records import Detections, Track, TrackState
 logger = logging.getLogger(__name__)
 
 _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
+_ASSIGN = {"most_pairs": assign, "min_cost": assign_min_cost}  # Adaptations.assignment
 
 
 class PBMTracker:
@@ -187,7 +190,8 @@ class PBMTracker:
             self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
         withheld = self._withhold_relative(scores.S)  # adaptations.relative_match
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
-        matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
+        matches, lost, free = _ASSIGN[self.adaptations.assignment](  # adaptations.assignment
+            cost, 1.0 - self.matching.match_threshold)
         if len(matches):
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
@@ -404,7 +408,7 @@ class PBMTracker:
         confirmed at once (people present from the start)."""
         targets, lc = self.targets, self.life_cycle
         live_boxes = targets.boxes if len(free) else None
-        for n in free.tolist():  # (``assign`` leaves exactly the untaken candidates free)
+        for n in free.tolist():  # (the assignment leaves exactly the untaken candidates free)
             box = cand.box[n]
             if box[3] < lc.min_height:
                 continue
