@@ -1,17 +1,16 @@
 """PBM layered-association scoring (eqs. 11-13): the compiled kernels of
-``trackers.layered.association`` against straightforward numpy references.
-
-The references are the numpy implementations the kernels replaced; the kernels equal them
-to rounding (rtol 1e-9; the kernels sum in their own order and take the normal CDF from
-``math.erfc``).
+``trackers.layered.association`` against the plain-numpy equations of
+``trackers.layered.equations``, equal to rounding (rtol 1e-9: the kernels sum in their own
+order and take the normal CDF from ``math.erfc``), on mixtures of 1-3 components, empty
+parts, degenerate rectangles and any histogram size; and the best/runner-up rule.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.special import ndtr
 
+from trackers.layered import equations as E
 from trackers.layered.association import (
     ambiguous,
     ambiguous_rows,
@@ -28,67 +27,6 @@ RTOL, ATOL = 1e-9, 1e-12  # rounding: the kernels' summation order and erfc agai
 
 
 # ----------------------------------------------------------------------------- references
-
-
-def ref_match_probability(models: FeatureModels, d: np.ndarray) -> np.ndarray:
-    """The numpy ``FeatureModels.match_probability`` the kernel replaced."""
-    d = np.maximum(np.asarray(d, dtype=np.float64), 0.0)[..., None]
-    s = ndtr((models._mu - d) / models._s) + ndtr((-models._mu - d) / models._s)
-    ws = models._w * s
-    if ws.shape[-1] == 2:
-        return np.clip(ws[..., 0] + ws[..., 1], 0.0, 1.0)
-    return np.clip(ws.sum(-1), 0.0, 1.0)
-
-
-def ref_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                    misses: np.ndarray | None, blas_rho: bool = False) -> np.ndarray:
-    """Eq. 11 for pairs (ti[k], n[k]), as the numpy ``selected_differences`` computed it;
-    rho = sqrt(p q).sum(-1), or with ``blas_rho`` the original sqrt(p) @ sqrt(q)' products."""
-    d = np.empty((len(ti), NF, N_PARTS))
-    d[:, 0] = np.abs(model.area[ti] - cand.area[n])
-    d[:, 1] = np.abs(model.perimeter[ti] - cand.perimeter[n])
-    for i, name in ((2, "hsv"), (3, "xyz")):
-        a, b = getattr(model, name), getattr(cand, name)
-        if blas_rho:
-            sa = np.sqrt(np.ascontiguousarray(a.transpose(1, 0, 2)))
-            sb = np.sqrt(np.ascontiguousarray(b.transpose(1, 0, 2)))
-            d[:, i] = 1.0 - (sa @ sb.transpose(0, 2, 1))[:, ti, n].T
-        else:
-            d[:, i] = 1.0 - np.sqrt(a[ti] * b[n]).sum(-1)
-    d[:, 4] = (np.linalg.norm(cand.centroid[n] - model.centroid[ti], axis=2)
-               / np.maximum(model.height, 1.0)[ti, None])
-    a, b = model.parts[ti], cand.parts[n]
-    iw = np.clip(np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2])
-                 - np.maximum(a[..., 0], b[..., 0]), 0, None)
-    ih = np.clip(np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3])
-                 - np.maximum(a[..., 1], b[..., 1]), 0, None)
-    inter = iw * ih
-    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
-    with np.errstate(invalid="ignore", divide="ignore"):
-        d[:, 5] = 1.0 - np.where(union > 0, inter / union, 0.0)
-    empty = cand.area[n] <= 0
-    d[:, 2] = np.where(empty, 1.0, d[:, 2])
-    d[:, 3] = np.where(empty, 1.0, d[:, 3])
-    if misses is not None:
-        g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64))[ti, None]
-        d[:, 4] *= g
-        d[:, 5] *= g
-    return np.clip(d, 0.0, None)
-
-
-def ref_part_scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, spread: float
-                    ) -> np.ndarray:
-    prob = ref_match_probability(models, np.asarray(d) / spread)
-    return np.einsum("...ij,i->...j", prob, np.asarray(omega, float) / np.sum(omega))
-
-
-def ref_global_scores(pj: np.ndarray, gamma: np.ndarray) -> np.ndarray:
-    """Eq. 13 summed j = 0..4 left to right from 0 (the kernels' order)."""
-    g = np.asarray(gamma, float) / np.sum(gamma)
-    out = np.zeros(pj.shape[:-1])
-    for j in range(N_PARTS):
-        out = out + pj[..., j] * g[j]
-    return out
 
 
 def ref_ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:
@@ -162,11 +100,11 @@ def test_match_probability_equals_numpy_for_1_2_and_3_components(rng):
                                                                    (400, NF, N_PARTS))
     d[::7] = 0.0
     d[1::11] *= -1.0  # negative differences count as 0
-    np.testing.assert_allclose(models.match_probability(d), ref_match_probability(models, d),
+    np.testing.assert_allclose(models.match_probability(d), E.match_probability(models, d),
                                rtol=RTOL, atol=ATOL)
     assert models.match_probability(d[0]).shape == (NF, N_PARTS)
     default = FeatureModels.default()
-    np.testing.assert_allclose(default.match_probability(d), ref_match_probability(default, d),
+    np.testing.assert_allclose(default.match_probability(d), E.match_probability(default, d),
                                rtol=RTOL, atol=ATOL)
 
 
@@ -176,12 +114,9 @@ def test_selected_and_all_pairs_differences_equal_numpy(rng, with_misses):
     misses = rng.integers(0, 4, 7) if with_misses else None
     ti, n = np.nonzero(rng.random((7, 9)) < 0.5)
     got = selected_differences(model, cand, ti, n, misses)
-    np.testing.assert_allclose(got, ref_differences(model, cand, ti, n, misses), rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(got, E.differences(model, cand, ti, n, misses), rtol=RTOL, atol=ATOL)
     np.testing.assert_array_equal(got, feature_differences(model, cand, misses)[ti, n])
     assert (got[:, 2:4][cand.area[n][:, None, :].repeat(2, 1) <= 0] == 1.0).all()  # empty parts
-    # the former BLAS products sqrt(p) @ sqrt(q)': the same up to rounding
-    np.testing.assert_allclose(got, ref_differences(model, cand, ti, n, misses, True),
-                               rtol=0, atol=1e-15)
     assert feature_differences(model, cand.take([]), misses).shape == (7, 0, NF, N_PARTS)
 
 
@@ -191,7 +126,7 @@ def test_histogram_term_for_any_bins(rng, bins):
     model, cand = random_features(rng, 3, bins), random_features(rng, 4, bins)
     ti, n = np.nonzero(np.ones((3, 4), bool))
     np.testing.assert_allclose(selected_differences(model, cand, ti, n),
-                               ref_differences(model, cand, ti, n, None), rtol=RTOL, atol=ATOL)
+                               E.differences(model, cand, ti, n, None), rtol=RTOL, atol=ATOL)
 
 
 def test_layered_scores_equal_numpy(rng):
@@ -201,10 +136,8 @@ def test_layered_scores_equal_numpy(rng):
     omega = rng.uniform(0.1, 1, NF)
     gamma = rng.uniform(0.1, 1, N_PARTS)
     pj, p = layered_scores(models, d, omega, gamma, 3.0)
-    np.testing.assert_allclose(pj, ref_part_scores(models, d, omega, 3.0), rtol=RTOL, atol=ATOL)
-    np.testing.assert_allclose(p, ref_global_scores(pj, gamma), rtol=RTOL, atol=ATOL)
-    # the former BLAS matrix-vector product: the same up to rounding
-    np.testing.assert_allclose(p, pj @ (gamma / gamma.sum()), atol=1e-15)
+    np.testing.assert_allclose(pj, E.part_scores(models, d, omega, 3.0), rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(p, E.global_score(pj, gamma), rtol=RTOL, atol=ATOL)
     assert pj.shape == (5, 8, N_PARTS) and p.shape == (5, 8)
     pj1, p1 = layered_scores(models, d[0, 0], omega, gamma)
     assert pj1.shape == (N_PARTS,) and p1.shape == ()
@@ -227,7 +160,7 @@ def test_pair_scores_fuse_the_three_layers(rng):
     tis = rng.integers(0, 6, 40)
     cand.parts[:5] = model.parts[tis[:5]]  # identical rectangles: IoU 1
     pj, p = pair_scores(models, model, cand, tis, np.arange(40), misses, omega, gamma, 2.5)
-    d_ref = ref_differences(model.take(tis), cand, np.arange(40), np.arange(40), misses[tis])
+    d_ref = E.differences(model.take(tis), cand, np.arange(40), np.arange(40), misses[tis])
     pj_ref, p_ref = layered_scores(models, d_ref, omega, gamma, 2.5)
     np.testing.assert_allclose(pj, pj_ref, rtol=RTOL, atol=ATOL)
     np.testing.assert_allclose(p, p_ref, rtol=RTOL, atol=ATOL)

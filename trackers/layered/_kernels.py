@@ -104,7 +104,8 @@ def _hsv_xyz(b: int, g: int, r: int) -> tuple[int, int, int, int, int, int]:
 
 @numba.njit(cache=True)
 def convert(pixels: np.ndarray, out: np.ndarray) -> None:
-    """(M, 3) uint8 BGR pixels to (M, 6) uint8 H, S, V, X, Y, Z (``_hsv_xyz``)."""
+    """(M, 3) uint8 BGR pixels to (M, 6) uint8 H, S, V, X, Y, Z (``_hsv_xyz``; the colour
+    spaces of PBM 2.2's histograms), for the check against ``cv2.cvtColor``."""
     for m in range(pixels.shape[0]):
         out[m, 0], out[m, 1], out[m, 2], out[m, 3], out[m, 4], out[m, 5] = _hsv_xyz(
             np.int64(pixels[m, 0]), np.int64(pixels[m, 1]), np.int64(pixels[m, 2]))
@@ -705,8 +706,10 @@ def _pair_scores_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misse
 @numba.njit(cache=True)
 def _ambiguous_kernel(scores: np.ndarray, threshold: float, margin: float
                       ) -> tuple[int, int, bool]:
-    """``ambiguous`` in one pass: the best and runner-up are the first and second entries
-    of a stable descending sort (ties: lower index first; NaN last)."""
+    """PBM 4, step 4 (``association.ambiguous``): the candidate with the highest global
+    score (eq. 13), above ``threshold``, and whether the runner-up is within ``margin``;
+    the best and runner-up are the first and second entries of a stable descending sort
+    (ties: lower index first; NaN last)."""
     best, runner = -1, -1
     for k in range(scores.shape[0]):
         v = scores[k]
@@ -849,7 +852,8 @@ def matched_rows(mt: np.ndarray, mn: np.ndarray, hyp: np.ndarray, boxes: np.ndar
     An occluded pair (``hyp[t, n]`` >= 0, a row of the search's ``dof_h``, ``pj_h``,
     ``k_h``) takes the carved box's; an unoccluded one its own box and centroid
     (xtl, ytl, xc, yc, w, h) and ``pj_all[t, n]``, except that a blob keeps KF2's width
-    (its span follows the swinging limbs, PBM 3): w = ``pred_wh[t, 0]``, xtl = xc - alpha w.
+    (its span follows the swinging limbs, PBM 3): w = ``pred_wh[t, 0]``, xtl = xc - alpha w
+    (eq. 1).
     """
     M = mt.shape[0]
     dof = np.empty((M, 6))
