@@ -9,7 +9,7 @@ Boxes are (N, 4) float64 xywh, 0-based pixels.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from trackers.three_hypothesis.params import Adaptations
 # --------------------------------------------------------------- eq. 1: which pixels count
 
 
+@dataclass(frozen=True)
 class AllPixels:
     """Eq. 1 as written: the histogram counts every pixel of the ellipse."""
 
@@ -26,6 +27,7 @@ class AllPixels:
         return None
 
 
+@dataclass(frozen=True)
 class ForegroundPixels:
     """``foreground_histograms``: with a foreground mask, count only the ellipse's
     foreground pixels (``EllipseHistogrammer`` falls back to every pixel when fewer than
@@ -38,6 +40,7 @@ class ForegroundPixels:
 # --------------------------------------------------------------- 3.3.2: validation gate
 
 
+@dataclass(frozen=True)
 class FixedGate:
     """3.3.2 as written: the validation gate of every prediction is the circle of radius mu_g."""
 
@@ -65,21 +68,23 @@ class KalmanGate:
 # --------------------------------------------------------------- 3.3.3: a person matched behind others
 
 
+@dataclass(frozen=True)
 class KeepAppearance:
     """3.3.3 as written: the appearance q of a person behind others is kept constant."""
 
-    uses_visible_share = False
+    uses_visible_share: ClassVar[bool] = False
 
     def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
         return q
 
 
+@dataclass(frozen=True)
 class BlendVisible:
     """``blend_visible``: q moves towards the measurement p by the share v of the measured
     region left visible by the people in front: q <- (1 - v) q + v p (v = 1 replaces q as
     for a person absent from any occlusion, v = 0 keeps it as the paper)."""
 
-    uses_visible_share = True
+    uses_visible_share: ClassVar[bool] = True
 
     def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
         if visible > 0:
@@ -87,6 +92,7 @@ class BlendVisible:
         return q
 
 
+@dataclass(frozen=True)
 class PredictionShape:
     """3.3.3 as written: the shape of a person behind others is its prediction area."""
 
@@ -94,6 +100,7 @@ class PredictionShape:
         return prediction.copy()
 
 
+@dataclass(frozen=True)
 class EstimateShape:
     """``shape_estimate``: the shape of a person behind others is the Kalman estimate, the
     prediction corrected by the (possibly partial) measurement (a bare prediction carries a
@@ -106,6 +113,7 @@ class EstimateShape:
 # --------------------------------------------------------------- Alg. 1: what a region's foreground says
 
 
+@dataclass(frozen=True)
 class NoSupport:
     """The paper: a hypothesis is judged by coverage and time alone; the image's foreground
     says nothing."""

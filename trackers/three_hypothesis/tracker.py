@@ -113,7 +113,10 @@ class _Person:
 
 @dataclass(slots=True)
 class _Frame:
-    """What the steps of one frame t share (Alg. 1's variables)."""
+    """What the steps of one frame t share (Alg. 1's variables), filled step by step:
+    ``_measure`` sets dets, p, support; ``_predict`` branches .. pred; ``_occlusions`` delta,
+    near, pairs; ``_associate`` matches, matched; ``_sort_occlusions`` in_front;
+    ``_update_matched`` visible, visible_dets and absorbed."""
 
     foreground: np.ndarray | None  # (H, W) mask or label image
     width: int

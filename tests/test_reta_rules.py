@@ -1,0 +1,121 @@
+"""Reta's parameter groups and the rules an adaptation switches (trackers.three_hypothesis
+params and rules): hand-derivable cases, the paper's rule beside ours."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from trackers.three_hypothesis import Adaptations, Appearance, MotionModel, RetaTracker
+from trackers.three_hypothesis.appearance import EllipseHistogrammer
+from trackers.three_hypothesis.rules import (
+    AllPixels,
+    BlendVisible,
+    EstimateShape,
+    FixedGate,
+    ForegroundPixels,
+    ForegroundSupport,
+    KalmanGate,
+    KeepAppearance,
+    NoSupport,
+    PredictionShape,
+    ReportRule,
+    build_rules,
+)
+
+
+def test_paper_mode_picks_the_papers_rule_at_every_step():
+    h = EllipseHistogrammer()
+    paper = build_rules(Adaptations.paper(), h)
+    assert isinstance(paper.pixels, AllPixels) and isinstance(paper.gate, FixedGate)
+    assert isinstance(paper.appearance_behind, KeepAppearance)
+    assert isinstance(paper.shape_behind, PredictionShape)
+    assert isinstance(paper.support, NoSupport)
+    assert paper.report == ReportRule(1_000_000, 0.0)
+    ours = build_rules(Adaptations(), h)
+    assert isinstance(ours.pixels, ForegroundPixels) and ours.gate == KalmanGate(3.0)
+    assert isinstance(ours.appearance_behind, BlendVisible)
+    assert isinstance(ours.shape_behind, EstimateShape)
+    assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0)
+    built = RetaTracker(adaptations=Adaptations.paper()).rules
+    assert [type(r) for r in built] == [type(r) for r in paper] and built.report == paper.report
+
+
+def test_gate_radius_is_sigmas_times_the_larger_centre_std():
+    P = np.zeros((2, 8, 8))
+    P[0, 0, 0], P[0, 1, 1] = 9.0, 16.0  # var xc 9, yc 16: the larger is 16
+    P[1, 0, 0], P[1, 1, 1] = 25.0, 4.0
+    R = np.array([9.0, 0.0])  # + R[0, 0]: 16 + 9 = 25 -> std 5; 25 + 0 -> std 5
+    np.testing.assert_allclose(KalmanGate(3.0).radii(P, R), [15.0, 15.0])
+    assert FixedGate().radii(P, R) is None  # mu_g for every node
+    assert KalmanGate(3.0).radii(np.zeros((0, 8, 8)), np.zeros(0)) is None
+
+
+def test_appearance_behind_others_kept_or_blended_by_the_visible_share():
+    q, p = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    assert KeepAppearance().update(q, p, 0.75) is q
+    np.testing.assert_allclose(BlendVisible().update(q, p, 0.25), [0.75, 0.25])
+    np.testing.assert_array_equal(BlendVisible().update(q, p, 1.0), p)
+    assert BlendVisible().update(q, p, 0.0) is q  # fully hidden: as the paper
+
+
+def test_shape_behind_others_is_the_prediction_or_the_estimate():
+    pred = np.array([10.0, 20.0, 30.0, 60.0])
+    got = PredictionShape().region([0.0, 0.0, 1.0, 1.0], pred)
+    np.testing.assert_array_equal(got, pred)
+    assert got is not pred  # a copy: the prediction array stays the frame's
+    np.testing.assert_array_equal(EstimateShape().region([1.0, 2.0, 3.0, 4.0], pred), [1, 2, 3, 4])
+
+
+def test_a_region_with_too_little_foreground_is_seen_empty():
+    fg = np.zeros((40, 40), bool)
+    fg[:, :20] = True
+    boxes = np.array([[0.0, 0.0, 20.0, 40.0], [20.0, 0.0, 20.0, 40.0]])
+    support = ForegroundSupport(EllipseHistogrammer(min_foreground=0.2))
+    np.testing.assert_array_equal(support.empty(fg, boxes), [False, True])
+    assert support.empty(None, boxes) is None  # no mask: nothing is seen empty
+    assert NoSupport().empty(fg, boxes) is None
+    assert ForegroundPixels().mask(fg) is fg and AllPixels().mask(fg) is None
+
+
+def test_report_rule_bounds_time_in_plain_view_and_spread():
+    P = np.diag([4.0, 4.0] + [1.0] * 6)  # centre std 2 px
+    x = np.array([0, 0, 1.0, 2.0, 0, 0, 0, 0])  # 1 px wide: std = 2 widths
+
+    def hyp(covered=True, exposed=0, unseen=False):
+        return SimpleNamespace(covered=covered, exposed=exposed, unseen=unseen, x=x, P=P)
+
+    rule = ReportRule(exposed=4, spread=3.0)
+    assert rule.reported(hyp()) and rule.reported(hyp(covered=False, exposed=4))
+    assert not rule.reported(hyp(covered=False, exposed=5))
+    assert not rule.reported(hyp(unseen=True))
+    assert not ReportRule(exposed=4, spread=1.5).reported(hyp())  # 2 widths > 1.5
+    assert ReportRule(exposed=4, spread=0.0).reported(hyp())  # 0: however uncertain
+
+
+@pytest.mark.parametrize("group,kwargs,name", [
+    (Adaptations, {"gate_sigmas": -1.0}, "Adaptations.gate_sigmas"),
+    (Adaptations, {"report_spread": float("nan")}, "Adaptations.report_spread"),
+    (Adaptations, {"stage1_unmatched_cost": 2.5}, "Adaptations.stage1_unmatched_cost"),
+    (Adaptations, {"tentative_misses": -1}, "Adaptations.tentative_misses"),
+    (Adaptations, {"max_hidden": 0}, "Adaptations.max_hidden"),
+    (Appearance, {"bins": 15}, "Appearance.bins"),
+    (Appearance, {"min_foreground": 1.5}, "Appearance.min_foreground"),
+    (Appearance, {"pixel_stride": 0}, "Appearance.pixel_stride"),
+    (MotionModel, {"velocity_noise": 0.0}, "MotionModel.velocity_noise"),
+])
+def test_each_group_names_its_bad_field(group, kwargs, name):
+    with pytest.raises(ValueError, match=name.replace(".", r"\.")):
+        group(**kwargs)
+
+
+def test_groups_are_frozen_and_paper_mode_changes_nothing_else():
+    a = Adaptations()
+    with pytest.raises(AttributeError):
+        a.gate_sigmas = 0.0
+    assert Adaptations(gate_sigmas=3).gate_sigmas == 3.0 and Adaptations.paper().changed() == []
+    assert Adaptations(gate_sigmas=0.0, blend_visible=False).changed() == [
+        "shape_estimate", "foreground_histograms", "foreground_support", "report_exposed",
+        "report_spread", "tentative_misses", "max_hidden"]
