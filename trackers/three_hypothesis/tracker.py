@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 
@@ -71,6 +72,7 @@ from trackers.three_hypothesis.params import (
 from trackers.three_hypothesis.rules import build_rules
 
 log = logging.getLogger(__name__)
+G = TypeVar("G")
 
 
 @dataclass(slots=True)
@@ -142,6 +144,14 @@ class _Frame:
     absorbed: set[int] = field(default_factory=set)  # hidden persons a new track confirmed
 
 
+def _group(name: str, value: G | None, kind: type[G]) -> G:
+    """A constructor's parameter group: ``value``, or the group's defaults when None."""
+    group = kind() if value is None else value
+    if not isinstance(group, kind):
+        raise TypeError(f"{name}: expected a {kind.__name__}, got {value!r}")
+    return group
+
+
 class RetaTracker:
     """Three-hypothesis tracking graph with occlusion reasoning (Reta et al. 2015).
 
@@ -166,14 +176,12 @@ class RetaTracker:
         adaptations: Adaptations | None = None,
         min_score: float = 0.0,
     ) -> None:
-        groups = {"association": (association, Association), "occlusion": (occlusion, Occlusion),
-                  "appearance": (appearance, Appearance), "motion": (motion, MotionModel),
-                  "life_cycle": (life_cycle, LifeCycle), "adaptations": (adaptations, Adaptations)}
-        for name, (group, kind) in groups.items():
-            group = kind() if group is None else group
-            if not isinstance(group, kind):
-                raise TypeError(f"{name}: expected a {kind.__name__}, got {group!r}")
-            setattr(self, name, group)
+        self.association = _group("association", association, Association)
+        self.occlusion = _group("occlusion", occlusion, Occlusion)
+        self.appearance = _group("appearance", appearance, Appearance)
+        self.motion = _group("motion", motion, MotionModel)
+        self.life_cycle = _group("life_cycle", life_cycle, LifeCycle)
+        self.adaptations = _group("adaptations", adaptations, Adaptations)
         self.min_score = min_score
         self.histograms = EllipseHistogrammer(bins=self.appearance.bins,
                                               min_foreground=self.appearance.min_foreground,
