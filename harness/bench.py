@@ -82,16 +82,26 @@ def _time(fn: Callable[[], None]) -> float:
 
 
 class _Timed:
-    """A callable stage (the detector's shape verifier) that adds up its own time."""
+    """A stage object (the detector's shape verifier) that adds up the time of its calls
+    and of its methods' calls."""
 
-    def __init__(self, fn: Callable[..., Any]) -> None:
-        self.fn, self.seconds = fn, 0.0
+    def __init__(self, obj: Any) -> None:
+        self._obj, self.seconds = obj, 0.0
 
-    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+    def _timed(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         t0 = _clock()
-        out = self.fn(*args, **kwargs)
+        out = fn(*args, **kwargs)
         self.seconds += _clock() - t0
         return out
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self._timed(self._obj, *args, **kwargs)
+
+    def __getattr__(self, name: str) -> Any:
+        attr = getattr(self._obj, name)
+        if not callable(attr):
+            return attr
+        return lambda *args, **kwargs: self._timed(attr, *args, **kwargs)
 
 
 def _staged_detector(source: Any) -> Any | None:

@@ -105,3 +105,43 @@ def test_silhouette_shape_config_composes_and_builds():
     assert isinstance(det.verifier, ShapeVerifier) and isinstance(det.verifier.template, ActiveBasis)
     plain = instantiate(compose_config(["detector=silhouette", "dataset=caviar"]).detector)
     assert plain.detector.verifier is None  # off by default
+
+
+def test_propose_finds_a_person_on_unexplained_foreground():
+    from trackers.geometry import iou_matrix
+
+    seq = load_scenario("crossing", seed=11, width=384, height=288, length=40)
+    k = 20
+    frame, labels = seq.frame(k), seq.foreground(k)
+    rows = seq.gt.rows_of(k)
+    boxes = seq.gt.table.boxes[rows]
+    j = int(np.argmax(boxes[:, 3] * (seq.gt.table.visibility[rows] > 0.95)))
+    pid, (x, y, w, h) = seq.gt.table.ids[rows[j]], boxes[j]
+    vacant = labels == pid
+    ys, xs = np.nonzero(vacant)
+    tight = np.array([xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1], float)
+    v = ShapeVerifier(load(), threshold=None, propose_above=8.0)
+    found, scores = v.propose(frame, vacant, lambda top: (tight[2], tight[3]))
+    assert len(found) == 1 and scores[0] >= 8.0
+    assert iou_matrix(found, tight[None])[0, 0] > 0.7
+    # a blob of floor (no person's edges) is not proposed; nothing without propose_above
+    floor = np.zeros_like(vacant)
+    floor[200:272, 5:35] = True
+    assert len(v.propose(frame, floor, lambda top: (30.0, 72.0))[0]) == 0
+    assert len(ShapeVerifier(load()).propose(frame, vacant, lambda top: (tight[2], tight[3]))[0]) == 0
+
+
+def test_silhouette_detector_with_the_verifier_runs_on_a_scene():
+    cfg = compose_config(["detector=silhouette_shape", "dataset=synthetic", "dataset.scenarios=[crossing]",
+                          "dataset.length=30", "dataset.width=384", "dataset.height=288",
+                          "detector.detector.calibration_frames=30"])
+    seq = next(iter(instantiate(cfg.dataset)))
+    source = instantiate(cfg.detector, _convert_="all")
+    source.start(seq)
+    n = 0
+    for k in (10, 20, 30):
+        dets, fg = source.detect(k, seq.frame(k))
+        assert dets.boxes.shape[1] == 4 and np.isfinite(dets.boxes).all()
+        assert ((dets.scores >= 0) & (dets.scores <= 1)).all() and fg.shape == (288, 384)
+        n += len(dets.boxes)
+    assert n >= 1

@@ -38,6 +38,7 @@ whole response maps (cv2.filter2D) and the max map, which ``score`` equals to fl
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cv2
@@ -406,21 +407,36 @@ class ShapeVerifier:
     both score at least ``threshold`` and together more than the wide box, the two replace
     it (a merged group split by shape evidence).
 
+    ``propose`` searches the foreground no kept box explains (Reta 3.1: the search repeats
+    on the vacant foreground): each of its components large enough gets the box of a person
+    whose head is at the component's top, of the size the scene's calibration expects
+    there, kept when its score is at least ``propose_above`` (a person whose blob merged
+    with another's, e.g. a far person above a near one).
+
     Args:
         template: the learnt ``ActiveBasis`` (built by the harness from a file).
-        threshold: smallest score kept.
+        threshold: smallest score of a candidate kept (None: keep every candidate).
         split_width: width / (template aspect x height) above which a split is tried
             (None: never).
+        propose_above: smallest score of a proposed box (None: no proposals).
+        propose_fill: smallest foreground area of a component searched, as a fraction of
+            the expected person box's area at its row.
     """
 
-    def __init__(self, template: ActiveBasis, threshold: float = 0.0, split_width: float | None = None) -> None:
+    def __init__(self, template: ActiveBasis, threshold: float | None = 0.0,
+                 split_width: float | None = None, propose_above: float | None = None,
+                 propose_fill: float = 0.15) -> None:
         if not isinstance(template, ActiveBasis):
             raise TypeError(f"template must be an ActiveBasis, got {type(template).__name__}")
         if split_width is not None and not split_width > 1.0:
             raise ValueError(f"split_width must be > 1 or None, got {split_width}")
+        if not 0.0 < propose_fill <= 1.0:
+            raise ValueError(f"propose_fill must be in (0, 1], got {propose_fill}")
         self.template = template
-        self.threshold = float(threshold)
+        self.threshold = -np.inf if threshold is None else float(threshold)
         self.split_width = np.inf if split_width is None else float(split_width)
+        self.propose_above = None if propose_above is None else float(propose_above)
+        self.propose_fill = float(propose_fill)
 
     def scores(self, grey: np.ndarray, boxes: np.ndarray) -> np.ndarray:
         """(N,) scores of (N, 4) xywh boxes in a (rows, cols) grey or BGR image."""
@@ -456,3 +472,49 @@ class ShapeVerifier:
         if not out:
             return np.zeros((0, 4)), np.zeros(0)
         return np.asarray(out, np.float64), np.asarray(out_s, np.float64)
+
+    def vacant(self, fg: np.ndarray, boxes: np.ndarray,
+               area: tuple[int, int, int, int] | None = None) -> np.ndarray:
+        """(H, W) bool: foreground of the (H, W) mask ``fg`` outside the xywh ``boxes`` (the
+        people found), opened by 3x3; only inside ``area`` (rows r0:r1, cols c0:c1) if given.
+        Empty without ``propose_above`` (nothing is proposed)."""
+        if self.propose_above is None:
+            return np.zeros(fg.shape, bool)
+        out = np.zeros(fg.shape, np.uint8)
+        r0, r1, c0, c1 = area if area is not None else (0, fg.shape[0], 0, fg.shape[1])
+        out[r0:r1, c0:c1] = fg[r0:r1, c0:c1]
+        for x, y, w, h in np.asarray(boxes, np.float64).reshape(-1, 4):
+            out[max(int(y), 0) : max(int(np.ceil(y + h)), 0), max(int(x), 0) : max(int(np.ceil(x + w)), 0)] = 0
+        return cv2.morphologyEx(out, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8)) > 0
+
+    def propose(self, frame: np.ndarray, vacant: np.ndarray,
+                person_size: Callable[[float], tuple[float, float] | None],
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Boxes (K, 4) xywh and shape scores (K,) of people on the (H, W) bool ``vacant``
+        foreground (none without ``propose_above``). ``person_size(top_row)`` gives the
+        (width, height) of a person's box whose top is at that row (None: nobody fits),
+        growing down the picture (a camera above the floor)."""
+        if self.propose_above is None or not vacant.any():
+            return np.zeros((0, 4)), np.zeros(0)
+        # components on every second row and column (4x fewer pixels; sizes scaled back)
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(
+            np.ascontiguousarray(vacant[::2, ::2], dtype=np.uint8), connectivity=8)
+        smallest = person_size(0.0)  # people are smallest at the top of the picture
+        min_area = self.propose_fill * smallest[0] * smallest[1] / 4 if smallest is not None else 0.0
+        cands = []
+        for i in np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= min_area):
+            if i == 0:
+                continue
+            x, top, w, _h, area = (int(v) for v in stats[i])
+            size = person_size(2.0 * top)
+            if size is None or 4 * area < self.propose_fill * size[0] * size[1]:
+                continue
+            head = lab[top : top + max(int(size[1] * 0.15 / 2), 1), x : x + w] == i  # top 1/7: the head
+            cx = 2.0 * (x + float(np.nonzero(head)[1].mean())) + 0.5
+            cands.append([cx - size[0] / 2, 2.0 * top, size[0], size[1]])
+        if not cands:
+            return np.zeros((0, 4)), np.zeros(0)
+        boxes = np.asarray(cands, np.float64)
+        s = self.scores(frame, boxes)
+        keep = s >= self.propose_above
+        return boxes[keep], s[keep]

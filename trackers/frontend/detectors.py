@@ -299,17 +299,43 @@ class SilhouetteDetector(_ForegroundPipeline):
             if lo < h < hi and y >= edge and x >= edge and y + h <= H - edge and x + w <= W - edge:
                 self.calibration.samples.append((float(y + h), float(h), float(w)))
 
+    def _person_size(self, top: float) -> tuple[float, float] | None:
+        """(width, height) of the reported box of a person whose box top is at live-picture
+        row ``top``, by the height model (template height t at foot row top + t), None
+        without one."""
+        if self.matcher.height_model is None:
+            return None
+        a, b = self.matcher.height_model
+        t = (a * top + b) / (1.0 - a) if a < 1.0 else -1.0
+        if t <= 0:
+            return None
+        T = self.matcher.template
+        aspect = self.matcher.aspect or T.shape[1] / T.shape[0]
+        sw, sh = self.matcher.box_scale
+        return aspect * t * sw, t * sh
+
+    def _template_boxes(self, boxes: np.ndarray) -> np.ndarray:
+        """(N, 4) xywh: the fitted template boxes of reported ``boxes`` (``box_scale`` undone)."""
+        sw, sh = self.matcher.box_scale
+        out = np.asarray(boxes, np.float64).reshape(-1, 4).copy()
+        tw = out[:, 2] / sw
+        out[:, 0] -= (tw - out[:, 2]) / 2
+        out[:, 2], out[:, 3] = tw, out[:, 3] / sh
+        return out
+
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
         live, r0, c0 = self._live(fg)
         boxes, scores = self.matcher.fit(live)
-        if len(boxes) == 0:
-            return Detections.empty()
         boxes[:, 0] += c0
         boxes[:, 1] += r0
         if self.verifier is not None:
             boxes, scores = self.verifier(frame, boxes, scores)
-            if len(boxes) == 0:
-                return Detections.empty()
+            vacant = self.verifier.vacant(fg, self._template_boxes(boxes), self.area)
+            extra, _ = self.verifier.propose(frame, vacant, lambda top: self._person_size(top - r0))
+            boxes = np.vstack([boxes, extra])
+            scores = np.r_[scores, np.full(len(extra), self.matcher.threshold)]
+        if len(boxes) == 0:
+            return Detections.empty()
         heads = None if self.heads is None else self.heads.detect(frame, fg, boxes)
         return Detections(boxes, np.clip(scores, 0.0, 1.0), _labels_from_boxes(boxes, fg), heads)
 
