@@ -116,7 +116,7 @@ def test_propose_finds_a_person_on_unexplained_foreground():
     rows = seq.gt.rows_of(k)
     boxes = seq.gt.table.boxes[rows]
     j = int(np.argmax(boxes[:, 3] * (seq.gt.table.visibility[rows] > 0.95)))
-    pid, (x, y, w, h) = seq.gt.table.ids[rows[j]], boxes[j]
+    pid = seq.gt.table.ids[rows[j]]
     vacant = labels == pid
     ys, xs = np.nonzero(vacant)
     tight = np.array([xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1], float)

@@ -497,7 +497,7 @@ class ShapeVerifier:
         if self.propose_above is None or not vacant.any():
             return np.zeros((0, 4)), np.zeros(0)
         # components on every second row and column (4x fewer pixels; sizes scaled back)
-        n, lab, stats, _ = cv2.connectedComponentsWithStats(
+        _, lab, stats, _ = cv2.connectedComponentsWithStats(
             np.ascontiguousarray(vacant[::2, ::2], dtype=np.uint8), connectivity=8)
         smallest = person_size(0.0)  # people are smallest at the top of the picture
         min_area = self.propose_fill * smallest[0] * smallest[1] / 4 if smallest is not None else 0.0
