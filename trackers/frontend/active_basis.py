@@ -451,8 +451,8 @@ class ShapeVerifier:
         """Kept (and split) boxes (K, 4) xywh and their detector scores (K,) (a split box's
         halves keep the wide box's) of one (H, W, 3) BGR or (H, W) grey frame."""
         boxes = np.asarray(boxes, np.float64).reshape(-1, 4)
-        if not len(boxes):
-            return boxes, np.asarray(scores, np.float64).reshape(-1)
+        if not len(boxes) or (self.threshold == -np.inf and self.split_width == np.inf):
+            return boxes, np.asarray(scores, np.float64).reshape(-1)  # nothing to decide
         grey = frame  # grey or BGR: crop_patch converts the patches only
         s = self.scores(grey, boxes)
         H, W = self.template.size
@@ -496,22 +496,28 @@ class ShapeVerifier:
         growing down the picture (a camera above the floor)."""
         if self.propose_above is None or not vacant.any():
             return np.zeros((0, 4)), np.zeros(0)
-        # components on every second row and column (4x fewer pixels; sizes scaled back)
+        # components on every second row and column (4x fewer pixels; sizes scaled back),
+        # inside the bounding box of what is left
+        half = vacant[::2, ::2]
+        rows, cols = np.flatnonzero(half.any(axis=1)), np.flatnonzero(half.any(axis=0))
+        if not len(rows):
+            return np.zeros((0, 4)), np.zeros(0)
+        r0, c0 = int(rows[0]), int(cols[0])
         _, lab, stats, _ = cv2.connectedComponentsWithStats(
-            np.ascontiguousarray(vacant[::2, ::2], dtype=np.uint8), connectivity=8)
+            np.ascontiguousarray(half[r0 : rows[-1] + 1, c0 : cols[-1] + 1], dtype=np.uint8), connectivity=8)
         smallest = person_size(0.0)  # people are smallest at the top of the picture
         min_area = self.propose_fill * smallest[0] * smallest[1] / 4 if smallest is not None else 0.0
         cands = []
         for i in np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= min_area):
             if i == 0:
                 continue
-            x, top, w, _h, area = (int(v) for v in stats[i])
-            size = person_size(2.0 * top)
+            x, top, w, _h, area = (int(v) for v in stats[i])  # in the crop of ``half``
+            size = person_size(2.0 * (top + r0))
             if size is None or 4 * area < self.propose_fill * size[0] * size[1]:
                 continue
             head = lab[top : top + max(int(size[1] * 0.15 / 2), 1), x : x + w] == i  # top 1/7: the head
-            cx = 2.0 * (x + float(np.nonzero(head)[1].mean())) + 0.5
-            cands.append([cx - size[0] / 2, 2.0 * top, size[0], size[1]])
+            cx = 2.0 * (c0 + x + float(np.nonzero(head)[1].mean())) + 0.5
+            cands.append([cx - size[0] / 2, 2.0 * (top + r0), size[0], size[1]])
         if not cands:
             return np.zeros((0, 4)), np.zeros(0)
         boxes = np.asarray(cands, np.float64)
