@@ -107,7 +107,7 @@ def test_bad_input_raises_clear_errors():
         PBMTracker(features=FeatureParams(feature_weights={"colour": 1.0}))
     with pytest.raises(ValueError, match="adaptations.stale.frames"):
         Adaptations(stale=StaleParts(frames=0))
-    with pytest.raises(ValueError, match="matching must be MatchParams"):
+    with pytest.raises(TypeError, match="matching: expected a MatchParams"):
         PBMTracker(matching={"margin_ratio": 1.2})
 
 
@@ -811,3 +811,30 @@ def test_paper_mode_turns_every_adaptation_off():
     for group in ("gate", "noise", "search", "matching", "pruning", "model_update", "life_cycle",
                   "reporting"):
         assert getattr(paper, group) == getattr(ours, group), group
+
+
+def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
+    """``rules.build_rules``: paper mode's values select the paper's rule for each step."""
+    from harness.frontend_source import compose_config
+    from trackers.common.assignment import assign, assign_min_cost
+    from trackers.layered import rules as R
+
+    ours = R.build_rules(Adaptations(occluded_cover=0.5))
+    paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
+    assert [type(r) for r in ours[:5]] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
+                                           R.PredictedBox, R.ReportedWhileCovered]
+    assert [type(r) for r in paper[:5]] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
+                                            R.LastBox, R.ReportedWhileCounted]
+    assert paper.assign is assign and R.build_rules(Adaptations(assignment="min_cost")).assign is assign_min_cost
+    # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
+    tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
+    tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])
+    S = np.array([[0.3, 0.7], [0.3, -np.inf]])
+    withheld = ours.match.withhold(S, tg, 0.25)
+    assert S[0, 0] == -np.inf and S[0, 1] == 0.7 and S[1, 0] == 0.3  # target 1 was unfound
+    assert withheld.tolist() == [True, False]
+    assert paper.match.withhold(S, tg, 0.25) is None
+    # birth support: a part with 0.3 foreground or more
+    assert not ours.birth.supported(np.full(5, 0.1), True)
+    assert ours.birth.supported(np.full(5, 0.1), False)
+    assert paper.birth.supported(np.zeros(5), True)

@@ -13,10 +13,11 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
    aligned on its head, or dismissed).
 4. ``selection.MultipleResponsePruning`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
-   ambiguous or weak choice is settled by the target's head template. Targets then share
-   candidates one-to-one (Hungarian on 1 - p: the paper tracks one target at a time), keeping
-   as many pairs as possible or, with ``adaptations.assignment: min_cost``, at the least
-   summed cost with a target left over costing 1 - ``matching.match_threshold``.
+   ambiguous or weak choice is settled by the target's head template (``rules.match`` may
+   withhold poor matches). Targets then share candidates one-to-one (Hungarian on 1 - p:
+   the paper tracks one target at a time), keeping as many pairs as possible or, with
+   ``adaptations.assignment: min_cost``, at the least summed cost with a target left over
+   costing 1 - ``matching.match_threshold``.
 5. ``_update_models`` (PBM 4.2): global models, KF1, KF2 and the parts of every matched
    target at once.
 6. ``_end_targets`` and ``_start_targets`` (ours: PBM 3 starts each target by hand): a
@@ -27,7 +28,8 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
    frames (OCCLUDED).
 
 Every rule the paper does not have is a field of ``params.Adaptations`` (one row each in
-docs/adaptations.md; ``tracker=pbm_paper`` turns them off). Readings of the paper that are
+docs/adaptations.md; ``tracker=pbm_paper`` turns them off); a step such a rule changes calls
+a strategy of ``rules.py`` (the paper's or ours, chosen once in the constructor). Readings of the paper that are
 not switchable: features are measured on a fixed grid of samples per box
 (``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
 P(D >= d) (``models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2 is used
@@ -46,8 +48,7 @@ import logging
 
 import numpy as np
 
-from trackers.common.assignment import assign, assign_min_cost
-from trackers.geometry import iou_matrix, overlap_ratio_matrix
+from trackers.geometry import iou_matrix
 from trackers.layered._kernels import (
     alive_rows,
     carved_rows,
@@ -81,6 +82,7 @@ from trackers.layered.parts import (
     PartFeatures,
     centroid_ratios,
 )
+from trackers.layered.rules import build_rules
 from trackers.layered.search import (
     Candidates,
     head_fill,
@@ -95,7 +97,6 @@ from trackers.records import Detections, Track, TrackState
 logger = logging.getLogger(__name__)
 
 _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
-_ASSIGN = {"most_pairs": assign, "min_cost": assign_min_cost}  # Adaptations.assignment
 
 
 class PBMTracker:
@@ -143,7 +144,7 @@ class PBMTracker:
             if value is None:
                 value = cls()
             elif not isinstance(value, cls):
-                raise ValueError(f"{name} must be {cls.__name__} or None, got {type(value).__name__}")
+                raise TypeError(f"{name}: expected a {cls.__name__} or None, got {value!r}")
             setattr(self, name, value)
         g = self.gate
         self._gate = Gate(g.speed_factor, g.min_fraction, g.miss_factor, g.growth,
@@ -153,6 +154,7 @@ class PBMTracker:
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         self._finder = CandidateFinder(self.candidates)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
+        self.rules = build_rules(self.adaptations)
         self.reset()
 
     def reset(self) -> None:
@@ -188,10 +190,9 @@ class PBMTracker:
         if len(self.targets) and len(cand):
             self._score_in_gates(scores, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
             self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
-        withheld = self._withhold_relative(scores.S)  # adaptations.relative_match
+        withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
-        matches, lost, free = _ASSIGN[self.adaptations.assignment](  # adaptations.assignment
-            cost, 1.0 - self.matching.match_threshold)
+        matches, lost, free = self.rules.assign(cost, 1.0 - self.matching.match_threshold)
         if len(matches):
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
@@ -238,14 +239,6 @@ class PBMTracker:
         cand.centroid, feats = self._extractor.extract_at_centroids(cand.box)
         return cand, feats
 
-    def _compared_models(self) -> PartFeatures:
-        """The parts models candidates are compared with (eq. 11): as last updated, or moved
-        by KF1's constant-velocity prediction (``adaptations.motion_compensation``)."""
-        model = self.targets.parts
-        if self.adaptations.motion_compensation:
-            model = model.shifted(self.targets.predicted_shift())
-        return model
-
     def _score_in_gates(self, scores: FrameScores, cand: Candidates, feats: PartFeatures,
                         fg: np.ndarray | None, pred_wh: np.ndarray) -> None:
         """PBM 3, 3.1, eqs. 11-13: each target scores the candidates in its KF1 gate.
@@ -260,7 +253,7 @@ class PBMTracker:
         region holding only this target is the target grown: unoccluded.
         """
         targets = self.targets
-        model = self._compared_models()
+        model = self.rules.compared.models(targets)  # eq. 11: the model compared with
         gates = targets.gate_boxes()
         targets.last_gate = gates  # the gates this frame's candidates were validated in
         kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
@@ -329,19 +322,6 @@ class PBMTracker:
         return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
                            self.features.omega, self.features.gamma, self.adaptations.model_spread)
 
-    def _withhold_relative(self, S: np.ndarray) -> np.ndarray | None:
-        """``adaptations.relative_match`` (ours; 0 = off, None returned): a target found last
-        frame takes no candidate scoring below relative_match x the score of that match
-        (its own detection missed, a neighbour's is no match); struck from S in place.
-        Returns the (N,) candidates so withheld (they start no target), or None."""
-        if not self.adaptations.relative_match > 0 or not S.size:
-            return None
-        targets = self.targets
-        ref = np.where(targets.misses == 0, targets.score, 0.0)
-        weak = (S < self.adaptations.relative_match * ref[:, None]) & (S >= self.matching.match_threshold)
-        S[weak] = -np.inf
-        return weak.any(axis=0)
-
     # ------------------------------------------------------------------ model update (PBM 4.2)
     def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: FrameScores,
                        cand: Candidates, feats: PartFeatures, fg: np.ndarray | None,
@@ -402,8 +382,8 @@ class PBMTracker:
                        feats: PartFeatures, fg: np.ndarray | None, withheld: np.ndarray | None) -> None:
         """A TENTATIVE target from each free candidate (new blobs, split heads) that is tall
         enough (``life_cycle.min_height``), a detection or (``life_cycle.blob_births``) a
-        blob, not withheld (``_withhold_relative``), with a part holding foreground
-        (``adaptations.min_support``, PBM 2: people are foreground) and overlapping no live
+        blob, not withheld (``rules.match``), supported by foreground (``rules.birth``)
+        and overlapping no live
         target (``life_cycle.new_track_iou``). In the first ``min_hits`` frames targets are
         confirmed at once (people present from the start)."""
         targets, lc = self.targets, self.life_cycle
@@ -416,7 +396,7 @@ class PBMTracker:
                 continue
             if withheld is not None and withheld[n]:
                 continue
-            if fg is not None and feats.area[n].max() < self.adaptations.min_support:
+            if not self.rules.birth.supported(feats.area[n], fg is not None):
                 continue
             if len(live_boxes) and iou_matrix(box[None], live_boxes).max() > lc.new_track_iou:
                 continue
@@ -434,8 +414,8 @@ class PBMTracker:
     def _report(self) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
-        last box, moved by KF1's prediction with ``adaptations.report_predicted``, and only
-        while found targets cover ``adaptations.occluded_cover`` of it."""
+        last box or where KF1 predicts it (``rules.report_box``), while covered by found
+        targets when ``adaptations.occluded_cover`` asks it (``rules.report_keep``)."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -444,13 +424,9 @@ class PBMTracker:
         rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
-        if self.adaptations.report_predicted:
-            boxes[:, :2] += np.where(found[rows, None], 0.0, tg.predicted_shift()[rows])
-        if self.adaptations.occluded_cover > 0 and self._had_fg and not found[rows].all():
-            # evidence of occlusion: found confirmed targets' boxes over an unfound one
-            fb = tg.dof[(found & tg.confirmed).nonzero()[0][:, None], _BOX_COLUMNS]
-            cover = overlap_ratio_matrix(boxes, fb).sum(axis=1) if len(fb) else np.zeros(len(rows))
-            keep = found[rows] | (cover >= self.adaptations.occluded_cover)
+        self.rules.report_box.place(boxes, tg, rows, found)
+        keep = self.rules.report_keep.keep(boxes, tg, rows, found, self._had_fg)
+        if keep is not None:
             rows, boxes = rows[keep], boxes[keep]
         rects = tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]

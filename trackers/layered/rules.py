@@ -1,0 +1,161 @@
+"""The steps an adaptation changes, as small strategy objects: the paper's rule and ours.
+
+``build_rules`` picks one of each from ``params.Adaptations`` once, in the tracker's
+constructor, so ``PBMTracker.update`` calls a rule instead of testing a flag. Each pair
+names the step of PBM it replaces; ``docs/adaptations.md`` gives the evidence. (Stale
+parts are ``params.StaleParts`` or None; the pruning adaptations live in
+``selection.MultipleResponsePruning``.) Boxes are (N, 4) float64 xywh pixels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from trackers.common.assignment import assign, assign_min_cost
+from trackers.geometry import overlap_ratio_matrix
+from trackers.layered.model import Targets
+from trackers.layered.params import Adaptations
+from trackers.layered.parts import PartFeatures
+
+_BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
+
+# --------------------------------------------------------------- eq. 11: the model compared
+
+
+class LastModels:
+    """Eq. 11 as written: candidates are compared with the parts models as last updated."""
+
+    def models(self, targets: Targets) -> PartFeatures:
+        return targets.parts
+
+
+class PredictedModels:
+    """``motion_compensation``: with the parts models moved by KF1's constant-velocity
+    prediction since each target was last found (the gate stays zero-order, PBM 3)."""
+
+    def models(self, targets: Targets) -> PartFeatures:
+        return targets.parts.shifted(targets.predicted_shift())
+
+
+# --------------------------------------------------------------- PBM 4 step 4: a match
+
+
+class AnyAboveThreshold:
+    """PBM 4 step 4 as written: any candidate above ``match_threshold`` may match."""
+
+    def withhold(self, S: np.ndarray, targets: Targets, match_threshold: float) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class RelativeMatch:
+    """``relative_match``: a target found last frame takes no candidate scoring below
+    ``fraction`` x the score of that match (its own detection missed, a neighbour's is no
+    match)."""
+
+    fraction: float
+
+    def withhold(self, S: np.ndarray, targets: Targets, match_threshold: float) -> np.ndarray | None:
+        """Strikes such pairs from the (T, N) scores S in place; returns the (N,)
+        candidates so withheld (they start no target), None when S is empty."""
+        if not S.size:
+            return None
+        ref = np.where(targets.misses == 0, targets.score, 0.0)
+        weak = (S < self.fraction * ref[:, None]) & (S >= match_threshold)
+        S[weak] = -np.inf
+        return weak.any(axis=0)
+
+
+# --------------------------------------------------------------- PBM 2: who may start a target
+
+
+class AnyCandidate:
+    """Any free candidate may start a target (the paper starts them by hand)."""
+
+    def supported(self, part_foreground: np.ndarray, has_foreground: bool) -> bool:
+        return True
+
+
+@dataclass(frozen=True)
+class ForegroundSupport:
+    """``min_support``: with foreground, a candidate starts a target only when one of its
+    parts holds at least ``fraction`` foreground (PBM 2: people are foreground)."""
+
+    fraction: float
+
+    def supported(self, part_foreground: np.ndarray, has_foreground: bool) -> bool:
+        """``part_foreground``: (5,) foreground fraction of each part (``PartFeatures.area``)."""
+        return not (has_foreground and part_foreground.max() < self.fraction)
+
+
+# --------------------------------------------------------------- reporting: an unfound target
+
+
+class LastBox:
+    """An unfound target is reported at its last validated box."""
+
+    def place(self, boxes: np.ndarray, targets: Targets, rows: np.ndarray, found: np.ndarray) -> None:
+        return None
+
+
+class PredictedBox:
+    """``report_predicted``: an unfound target is reported at its last box moved by KF1's
+    constant-velocity prediction since it was last found."""
+
+    def place(self, boxes: np.ndarray, targets: Targets, rows: np.ndarray, found: np.ndarray) -> None:
+        """Moves ``boxes`` (R, 4) of the targets at ``rows`` in place; found (T,) bool."""
+        boxes[:, :2] += np.where(found[rows, None], 0.0, targets.predicted_shift()[rows])
+
+
+class ReportedWhileCounted:
+    """An unfound target is reported for ``reporting.max_misses`` frames, whatever covers it."""
+
+    def keep(self, boxes: np.ndarray, targets: Targets, rows: np.ndarray, found: np.ndarray,
+             has_foreground: bool) -> np.ndarray | None:
+        return None
+
+
+@dataclass(frozen=True)
+class ReportedWhileCovered:
+    """``occluded_cover``: with foreground, an unfound target is reported only while found
+    confirmed targets' boxes cover at least ``fraction`` of its box (evidence that it is
+    hidden, not gone)."""
+
+    fraction: float
+
+    def keep(self, boxes: np.ndarray, targets: Targets, rows: np.ndarray, found: np.ndarray,
+             has_foreground: bool) -> np.ndarray | None:
+        """(R,) bool: which of the reported ``rows`` (boxes (R, 4)) stay; None: all."""
+        if not has_foreground or found[rows].all():
+            return None
+        fb = targets.dof[(found & targets.confirmed).nonzero()[0][:, None], _BOX_COLUMNS]
+        cover = overlap_ratio_matrix(boxes, fb).sum(axis=1) if len(fb) else np.zeros(len(rows))
+        return found[rows] | (cover >= self.fraction)
+
+
+class Rules(NamedTuple):
+    """One strategy per step an adaptation changes."""
+
+    compared: LastModels | PredictedModels
+    match: AnyAboveThreshold | RelativeMatch
+    birth: AnyCandidate | ForegroundSupport
+    report_box: LastBox | PredictedBox
+    report_keep: ReportedWhileCounted | ReportedWhileCovered
+    assign: Callable  # the one-to-one step: ``assign`` (most pairs) or ``assign_min_cost``
+
+
+def build_rules(a: Adaptations) -> Rules:
+    """The paper's rule where the adaptation is off (false, 0), ours where it is on."""
+    return Rules(
+        compared=PredictedModels() if a.motion_compensation else LastModels(),
+        match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
+        birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
+        report_box=PredictedBox() if a.report_predicted else LastBox(),
+        report_keep=(ReportedWhileCovered(a.occluded_cover) if a.occluded_cover > 0
+                     else ReportedWhileCounted()),
+        assign={"most_pairs": assign, "min_cost": assign_min_cost}[a.assignment],
+    )
