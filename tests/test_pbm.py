@@ -107,6 +107,8 @@ def test_bad_input_raises_clear_errors():
         PBMTracker(features=FeatureParams(feature_weights={"colour": 1.0}))
     with pytest.raises(ValueError, match="adaptations.stale.frames"):
         Adaptations(stale=StaleParts(frames=0))
+    with pytest.raises(ValueError, match="adaptations.assignment"):
+        Adaptations(assignment="greedy")
     with pytest.raises(TypeError, match="matching: expected a MatchParams"):
         PBMTracker(matching={"margin_ratio": 1.2})
 
@@ -806,6 +808,7 @@ def test_paper_mode_turns_every_adaptation_off():
     assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
     assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
     assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
+    assert a.assignment == "most_pairs"
     assert ours.adaptations != a
     # what the paper leaves open: ours
     for group in ("gate", "noise", "search", "matching", "pruning", "model_update", "life_cycle",
