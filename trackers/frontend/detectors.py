@@ -11,6 +11,7 @@ benchmarks can time them. Boxes are (N, 4) float64 xywh, 0-based pixels.
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Sequence
 
 import cv2
@@ -46,14 +47,15 @@ def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float) -> np.ndarr
 def _labels_from_boxes(boxes: np.ndarray, fg: np.ndarray) -> np.ndarray:
     """(H, W) int32 label image: detection k's box pixels that are foreground get k + 1
     (later boxes do not overwrite earlier ones)."""
+    fg = np.asarray(fg, dtype=bool)
     lab = np.zeros(fg.shape, dtype=np.int32)
     H, W = fg.shape
-    for k, (x, y, w, h) in enumerate(boxes):
-        r0, r1 = max(int(y), 0), min(int(np.ceil(y + h)), H)
-        c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
+    for k in range(len(boxes) - 1, -1, -1):  # last to first: earlier boxes written over later
+        x, y, w, h = boxes[k]
+        r0, r1 = max(int(y), 0), min(math.ceil(y + h), H)
+        c0, c1 = max(int(x), 0), min(math.ceil(x + w), W)
         if r1 > r0 and c1 > c0:
-            sub = lab[r0:r1, c0:c1]
-            sub[(sub == 0) & fg[r0:r1, c0:c1]] = k + 1
+            lab[r0:r1, c0:c1][fg[r0:r1, c0:c1]] = k + 1
     return lab
 
 
