@@ -66,6 +66,7 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
     alive = np.ones(start[nk], dtype=np.uint8)  # placements that may still pass
     first = True
     score = np.zeros(start[nk])
+    rowmax = np.full(start[nk] // W, -np.inf)  # the largest E of each row of W placements
     # the window whose placements are (re)scored: first the vacant pixels' box (a placement
     # outside it has no foreground, E <= 0), then after each fit the pixels it changed
     y0, y1, x0, x1 = Hp, 0, Wp, 0
@@ -112,14 +113,18 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
                     if e >= threshold * max(visible, 1e-6) and visible >= min_visible * ts:
                         E[row + c] = e
                         score[row + c] = e / max(visible, 1e-6)
+                rowmax[row // W] = E[row : row + W].max()
         first = False
         best = 0.0
         j = -1
-        for i in range(start[nk]):  # the first largest E > 0, in scale, row, column order
-            if E[i] > best:
-                best, j = E[i], i
+        for q in range(rowmax.shape[0]):  # the first largest E > 0, in scale, row, column order
+            if rowmax[q] > best:
+                best, j = rowmax[q], q
         if j < 0:
             break
+        j *= W
+        while E[j] < best:
+            j += 1
         k = np.searchsorted(start, j, side="right") - 1
         s = ids[k]
         th, tw = size[s, 0], size[s, 1]
