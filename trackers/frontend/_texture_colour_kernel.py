@@ -15,10 +15,11 @@ _DX = np.array([-1, 0, 1, 1, 1, 0, -1, -1], dtype=np.int64)
 @numba.njit(cache=True)
 def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_weight,
                  chroma_tol, shadow_ratio, highlight_ratio, noise, label):
-    """Label and update in place. frame (H, W, 3) uint8; mu (K, N, 3), t (K, N, 8), w (K, N)
-    float32; label (H, W) uint8 output (255 fg, 127 explained by invariance, 0 bg)."""
+    """Label and update in place. frame (H, W, 3) uint8; mu (N, K, 3), t (N, K, 8), w (N, K)
+    float32, pixel-major (one pixel's modes side by side in memory); label (H, W) uint8 output
+    (255 fg, 127 explained by invariance, 0 bg)."""
     H, W = frame.shape[0], frame.shape[1]
-    K = w.shape[0]
+    K = w.shape[1]
     grey = np.empty((H, W), dtype=np.float32)
     for y in range(H):
         for x in range(W):
@@ -34,14 +35,21 @@ def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_
             g = grey[y, x]
             step = max(g * np.float32(tau), np.float32(floor))
             hi, lo = g + step, g - step
-            inner = radius <= y < H - radius and radius <= x < W - radius
-            for j in range(8):  # SILTP, edge-replicated
-                if inner:
-                    nb = grey[y + _DY[j] * radius, x + _DX[j] * radius]
-                else:
+            if radius <= y < H - radius and radius <= x < W - radius:  # SILTP, inner
+                r = radius
+                s[0] = np.float32(grey[y - r, x - r] > hi) - np.float32(grey[y - r, x - r] < lo)
+                s[1] = np.float32(grey[y - r, x] > hi) - np.float32(grey[y - r, x] < lo)
+                s[2] = np.float32(grey[y - r, x + r] > hi) - np.float32(grey[y - r, x + r] < lo)
+                s[3] = np.float32(grey[y, x + r] > hi) - np.float32(grey[y, x + r] < lo)
+                s[4] = np.float32(grey[y + r, x + r] > hi) - np.float32(grey[y + r, x + r] < lo)
+                s[5] = np.float32(grey[y + r, x] > hi) - np.float32(grey[y + r, x] < lo)
+                s[6] = np.float32(grey[y + r, x - r] > hi) - np.float32(grey[y + r, x - r] < lo)
+                s[7] = np.float32(grey[y, x - r] > hi) - np.float32(grey[y, x - r] < lo)
+            else:
+                for j in range(8):  # SILTP, edge-replicated
                     nb = grey[min(max(y + _DY[j] * radius, 0), H - 1),
                               min(max(x + _DX[j] * radius, 0), W - 1)]
-                s[j] = np.float32(nb > hi) - np.float32(nb < lo)  # branch-free
+                    s[j] = np.float32(nb > hi) - np.float32(nb < lo)
             c0 = np.float32(frame[y, x, 0])
             c1 = np.float32(frame[y, x, 1])
             c2 = np.float32(frame[y, x, 2])
@@ -51,7 +59,7 @@ def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_
             for q in range(K):  # insertion sort by decreasing weight, stable (ties: lower k)
                 order[q] = q
                 i = q
-                while i > 0 and w[order[i - 1], n] < w[q, n]:
+                while i > 0 and w[n, order[i - 1]] < w[n, q]:
                     order[i] = order[i - 1]
                     i -= 1
                 order[i] = q
@@ -59,9 +67,9 @@ def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_
                 k = order[oi]
                 dt = np.float32(0.0)
                 for j in range(8):
-                    dt += abs(s[j] - t[k, n, j])
+                    dt += abs(s[j] - t[n, k, j])
                 dt = dt / np.float32(8.0) * np.float32(0.5)
-                m0, m1, m2 = mu[k, n, 0], mu[k, n, 1], mu[k, n, 2]
+                m0, m1, m2 = mu[n, k, 0], mu[n, k, 1], mu[n, k, 2]
                 p0, p1, p2 = c0 - m0, c1 - m1, c2 - m2
                 far_k = p0 * p0 + p1 * p1 + p2 * p2 > far_limit
                 dc = np.float32(0.0)
@@ -77,26 +85,26 @@ def apply_kernel(frame, mu, t, w, alpha, tau, radius, floor, lam, threshold, bg_
                 if np.float32(lam) * dt + np.float32(1.0 - lam) * dc < threshold:
                     best, far_best = k, far_k
                     break
-            if best >= 0 and w[best, n] >= bg_weight:
+            if best >= 0 and w[n, best] >= bg_weight:
                 label[y, x] = 127 if far_best else 0
             else:
                 label[y, x] = 255
             if alpha > 0:
                 for k in range(K):
-                    w[k, n] *= np.float32(1.0 - alpha)
+                    w[n, k] *= np.float32(1.0 - alpha)
                 if best >= 0:
-                    w[best, n] += np.float32(alpha)
-                    mu[best, n, 0] += np.float32(alpha) * (c0 - mu[best, n, 0])
-                    mu[best, n, 1] += np.float32(alpha) * (c1 - mu[best, n, 1])
-                    mu[best, n, 2] += np.float32(alpha) * (c2 - mu[best, n, 2])
+                    w[n, best] += np.float32(alpha)
+                    mu[n, best, 0] += np.float32(alpha) * (c0 - mu[n, best, 0])
+                    mu[n, best, 1] += np.float32(alpha) * (c1 - mu[n, best, 1])
+                    mu[n, best, 2] += np.float32(alpha) * (c2 - mu[n, best, 2])
                     for j in range(8):
-                        t[best, n, j] += np.float32(alpha) * (s[j] - t[best, n, j])
+                        t[n, best, j] += np.float32(alpha) * (s[j] - t[n, best, j])
                 else:  # replace the weakest mode
                     kn = 0
                     for k in range(1, K):
-                        if w[k, n] < w[kn, n]:
+                        if w[n, k] < w[n, kn]:
                             kn = k
-                    w[kn, n] = np.float32(alpha)
-                    mu[kn, n, 0], mu[kn, n, 1], mu[kn, n, 2] = c0, c1, c2
+                    w[n, kn] = np.float32(alpha)
+                    mu[n, kn, 0], mu[n, kn, 1], mu[n, kn, 2] = c0, c1, c2
                     for j in range(8):
-                        t[kn, n, j] = s[j]
+                        t[n, kn, j] = s[j]

@@ -128,9 +128,11 @@ class TextureColourMixture:
         self.shadow_ratio, self.highlight_ratio = float(shadow_ratio), float(highlight_ratio)
         self.noise = float(noise)
         self.compiled = bool(compiled)
-        self._mu: np.ndarray | None = None  # (K, N, 3) colour means
-        self._t: np.ndarray | None = None  # (K, N, 8) texture means
-        self._w: np.ndarray | None = None  # (K, N) weights
+        # pixel-major, as the compiled pass reads them; the numpy code below works on their
+        # (K, N, ...) transposed views
+        self._mu: np.ndarray | None = None  # (N, K, 3) colour means
+        self._t: np.ndarray | None = None  # (N, K, 8) texture means
+        self._w: np.ndarray | None = None  # (N, K) weights
         self._shape: tuple[int, int] | None = None
 
     def reset(self) -> None:
@@ -141,15 +143,19 @@ class TextureColourMixture:
     def _init(self, colour: np.ndarray, tex: np.ndarray, shape: tuple[int, int]) -> None:
         K, N = self.modes, colour.shape[0]
         self._shape = shape
-        self._mu = np.repeat(colour[None], K, axis=0)
-        self._t = np.repeat(tex.T[None], K, axis=0)
-        self._w = np.zeros((K, N), dtype=np.float32)
-        self._w[0] = 1.0
+        self._mu = np.repeat(colour[:, None], K, axis=1)
+        self._t = np.repeat(tex.T[:, None], K, axis=1)
+        self._w = np.zeros((N, K), dtype=np.float32)
+        self._w[:, 0] = 1.0
+
+    def _modes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """mu (K, N, 3), t (K, N, 8), w (K, N): views of the model, mode-major."""
+        return self._mu.transpose(1, 0, 2), self._t.transpose(1, 0, 2), self._w.T
 
     def distances(self, colour: np.ndarray, tex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """D (K, N) of each observation to each mode, and whether D_col relied on the
         invariance (K, N) bool (plain colour difference above ``noise``)."""
-        mu, t = self._mu, self._t
+        mu, t, _ = self._modes()
         # D_tex = mean_n |s_n - t_kn| / 2
         d_tex = np.abs(tex.T[None] - t).mean(axis=2) * 0.5
         # brightness ratio a = I.mu / |mu|^2, chromatic distortion c = |I - a mu| / (a |mu|)
@@ -189,7 +195,7 @@ class TextureColourMixture:
         d, far = self.distances(colour, tex)
         N = colour.shape[0]
         cols = np.arange(N)
-        w = self._w
+        mu, t, w = self._modes()
         ok = d < self.threshold
         k = np.argmax(np.where(ok, w, -1.0), axis=0)  # the strongest matching mode
         matched = ok[k, cols]
@@ -199,20 +205,20 @@ class TextureColourMixture:
             w *= 1.0 - alpha
             mk, mc = k[matched], cols[matched]
             w[mk, mc] += alpha
-            self._mu[mk, mc] += alpha * (colour[mc] - self._mu[mk, mc])
-            self._t[mk, mc] += alpha * (tex[:, mc].T - self._t[mk, mc])
+            mu[mk, mc] += alpha * (colour[mc] - mu[mk, mc])
+            t[mk, mc] += alpha * (tex[:, mc].T - t[mk, mc])
             new = np.flatnonzero(~matched)
             if len(new):  # replace the weakest mode
                 kn = np.argmin(w[:, new], axis=0)
                 w[kn, new] = alpha
-                self._mu[kn, new] = colour[new]
-                self._t[kn, new] = tex[:, new].T
+                mu[kn, new] = colour[new]
+                t[kn, new] = tex[:, new].T
         return label.reshape(H, W)
 
     def getBackgroundImage(self) -> np.ndarray | None:  # noqa: N802
         """(H, W, 3) uint8 colour of each pixel's strongest mode, or None before any frame."""
         if self._mu is None:
             return None
-        k = np.argmax(self._w, axis=0)
-        img = self._mu[k, np.arange(self._mu.shape[1])]
+        k = np.argmax(self._w, axis=1)
+        img = self._mu[np.arange(self._mu.shape[0]), k]
         return np.clip(img + 0.5, 0, 255).astype(np.uint8).reshape(*self._shape, 3)
