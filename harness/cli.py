@@ -14,7 +14,7 @@ eval       ``harness.evaluate.main``        argparse: ``GT RESULTS``
 sweep      ``harness.sweep.main``           argparse: ``SWEEP_DIR``
 report     ``harness.report.__main__.main`` argparse: ``RUN_DIR``
 bench      ``harness.bench.main``           argparse + overrides
-fit        ``harness.fit.__main__.main``    ``pbm | heads | silhouette``
+fit        ``harness.fit.__main__.main``    ``pbm | heads | silhouette | active_basis``
 =========  ==============================  ===========================================
 """
 
@@ -38,7 +38,8 @@ COMMANDS: dict[str, tuple[str, str, str, bool]] = {
                "annotated video, contact sheet, trajectory plot of a run", False),
     "bench": ("harness.bench", "main", "frames/s per stage: decode, front end, each tracker",
               False),
-    "fit": ("harness.fit.__main__", "main", "refit models: pbm | heads | silhouette", False),
+    "fit": ("harness.fit.__main__", "main",
+            "refit models: pbm | heads | silhouette | active_basis", False),
 }
 
 USAGE = f"""\
