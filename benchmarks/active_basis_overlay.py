@@ -22,6 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from harness.build import compose_config  # noqa: E402
+from harness.report.primitives import legend_strip  # noqa: E402
 from trackers.geometry import iou_matrix  # noqa: E402
 
 GREEN, RED, MAGENTA = (0, 200, 0), (0, 0, 255), (255, 0, 255)
@@ -69,13 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     while len(tiles) % 2:
         tiles.append(np.zeros_like(tiles[0]))
     grid = np.vstack([np.hstack(tiles[i : i + 2]) for i in range(0, len(tiles), 2)])
-    legend = np.full((26, grid.shape[1], 3), 255, np.uint8)
-    x = 8
-    for text, colour in (("both detectors", GREEN), ("added (shape proposal)", RED),
-                         ("dropped (shape score)", MAGENTA)):
-        cv2.rectangle(legend, (x, 8), (x + 14, 20), colour, 2)
-        cv2.putText(legend, text, (x + 20, 19), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (0, 0, 0), 1)
-        x += 30 + 8 * len(text)
+    legend = legend_strip([("both detectors", GREEN), ("added (shape proposal)", RED),
+                           ("dropped (shape score)", MAGENTA)], grid.shape[1])
     args.out.parent.mkdir(parents=True, exist_ok=True)
     cv2.imwrite(str(args.out), np.vstack([legend, grid]))
     print(args.out)

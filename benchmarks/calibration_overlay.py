@@ -24,6 +24,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from harness.build import compose_config  # noqa: E402
+from harness.report.draw import grid  # noqa: E402
+from harness.report.primitives import legend_strip  # noqa: E402
 
 VIDEOS = ROOT.parent / "shared" / "data" / "videos"
 DEFAULT = ["CAVIAR-ShopAssistant1cor.mp4", "CAVIAR-OneStopEnter1front.mp4",
@@ -69,17 +71,6 @@ def panel(video: Path, at: int) -> np.ndarray:
     return np.vstack([img, caption])
 
 
-def legend(width: int) -> np.ndarray:
-    strip = np.full((26, width, 3), 255, np.uint8)
-    x = 8
-    for text, colour in (("expected person at that foot row (learnt line)", EXPECTED),
-                         ("detections", DETECTED), ("foreground", FOREGROUND)):
-        cv2.rectangle(strip, (x, 8), (x + 14, 20), colour, 2)
-        cv2.putText(strip, text, (x + 20, 19), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (0, 0, 0), 1)
-        x += 30 + 8 * len(text)
-    return strip
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -90,13 +81,11 @@ def main(argv: list[str] | None = None) -> int:
     missing = [str(v) for v in args.videos if not v.is_file()]
     if missing:
         raise SystemExit(f"video(s) not found: {', '.join(missing)}")
-    tiles = [panel(v, args.frame) for v in args.videos]
-    height = max(t.shape[0] for t in tiles)
-    tiles = [cv2.copyMakeBorder(t, 0, height - t.shape[0], 0, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255))
-             for t in tiles]
-    row = np.hstack(tiles)
+    row = grid([panel(v, args.frame) for v in args.videos])
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(args.out), np.vstack([legend(row.shape[1]), row]))
+    legend = legend_strip([("expected person at that foot row (learnt line)", EXPECTED),
+                           ("detections", DETECTED), ("foreground", FOREGROUND)], row.shape[1])
+    cv2.imwrite(str(args.out), np.vstack([legend, row]))
     print(args.out)
     return 0
 

@@ -21,6 +21,15 @@ def _detector():
     return instantiate(cfg.detector).detector
 
 
+def _calibrated(masks):
+    """A fresh detector and the perspective it learns from every other mask."""
+    det = _detector()
+    det.reset()
+    for m in masks[::2]:
+        det._collect(m)
+    return det, det.calibration.fit()
+
+
 @pytest.fixture(scope="module")
 def scene():
     # camera 2.5 m above the floor, horizon at 10% of the frame: a person of height H metres
@@ -47,11 +56,7 @@ def test_renderer_perspective_is_linear_in_the_foot_row(scene):
 
 def test_calibration_recovers_the_known_perspective(scene):
     seq, masks = scene
-    det = _detector()
-    det.reset()
-    for m in masks[::2]:
-        det._collect(m)
-    p = det.calibration.fit()
+    _, p = _calibrated(masks)
     assert p is not None
     t = seq.gt.table
     foot = t.boxes[:, 1] + t.boxes[:, 3]
@@ -64,11 +69,7 @@ def test_calibration_recovers_the_known_perspective(scene):
 
 def test_detector_finds_the_people_of_a_synthetic_scene(scene):
     seq, masks = scene
-    det = _detector()
-    det.reset()
-    for m in masks[::2]:
-        det._collect(m)
-    p = det.calibration.fit()
+    det, p = _calibrated(masks)
     det.matcher.set_height_model((p.a, p.b))
     tp = nd = ng = 0
     t = seq.gt.table

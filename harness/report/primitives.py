@@ -1,5 +1,6 @@
-"""Drawing primitives shared by ``harness.report.draw`` and ``harness.report.parts``: points,
-dashed lines and rectangles (OpenCV has no dashed style), labels, colours.
+"""Drawing primitives shared by ``harness.report.draw``, ``harness.report.parts`` and the
+benchmarks' overlays: points, dashed lines and rectangles (OpenCV has no dashed style),
+labels, a legend strip, colours.
 
 All images are (H, W, 3) uint8 BGR; boxes are xywh with a 0-based top-left (pixels).
 """
@@ -44,3 +45,14 @@ def _label(img: np.ndarray, text: str, org: tuple[int, int], colour, scale: floa
     org = (max(org[0], 0), max(org[1], 11))
     cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 3, cv2.LINE_AA)
     cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv2.LINE_AA)
+
+
+def legend_strip(items: list[tuple[str, tuple[int, int, int]]], width: int) -> np.ndarray:
+    """A (26, width, 3) white strip with a coloured square and its text per (text, colour)."""
+    strip = np.full((26, width, 3), 255, np.uint8)
+    x = 8
+    for text, colour in items:
+        cv2.rectangle(strip, (x, 8), (x + 14, 20), colour, 2)
+        cv2.putText(strip, text, (x + 20, 19), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (0, 0, 0), 1)
+        x += 30 + 8 * len(text)
+    return strip
