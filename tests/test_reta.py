@@ -248,11 +248,11 @@ def test_stage1_leaves_a_person_over_rather_than_exchange_a_good_pair_for_two_po
 def test_bad_input_raises_clear_errors():
     with pytest.raises(ValueError, match="frame"):
         RetaTracker().update(None, Detections.empty())
-    with pytest.raises(ValueError, match=r"Association\.mu_rho"):
+    with pytest.raises(ValueError, match=r"association\.mu_rho"):
         Association(mu_rho=1.5)
-    with pytest.raises(ValueError, match=r"Occlusion\.lam"):
+    with pytest.raises(ValueError, match=r"occlusion\.lam"):
         Occlusion(lam=0.5)
-    with pytest.raises(ValueError, match=r"LifeCycle\.m must"):
+    with pytest.raises(ValueError, match=r"life_cycle\.m must"):
         LifeCycle(m=0)
     with pytest.raises(TypeError, match="association: expected a Association"):
         RetaTracker(association={"mu_rho": 0.3})

@@ -96,15 +96,15 @@ def test_report_rule_bounds_time_in_plain_view_and_spread():
 
 
 @pytest.mark.parametrize("group,kwargs,name", [
-    (Adaptations, {"gate_sigmas": -1.0}, "Adaptations.gate_sigmas"),
-    (Adaptations, {"report_spread": float("nan")}, "Adaptations.report_spread"),
-    (Adaptations, {"stage1_unmatched_cost": 2.5}, "Adaptations.stage1_unmatched_cost"),
-    (Adaptations, {"tentative_misses": -1}, "Adaptations.tentative_misses"),
-    (Adaptations, {"max_hidden": 0}, "Adaptations.max_hidden"),
-    (Appearance, {"bins": 15}, "Appearance.bins"),
-    (Appearance, {"min_foreground": 1.5}, "Appearance.min_foreground"),
-    (Appearance, {"pixel_stride": 0}, "Appearance.pixel_stride"),
-    (MotionModel, {"velocity_noise": 0.0}, "MotionModel.velocity_noise"),
+    (Adaptations, {"gate_sigmas": -1.0}, "adaptations.gate_sigmas"),
+    (Adaptations, {"report_spread": float("nan")}, "adaptations.report_spread"),
+    (Adaptations, {"stage1_unmatched_cost": 2.5}, "adaptations.stage1_unmatched_cost"),
+    (Adaptations, {"tentative_misses": -1}, "adaptations.tentative_misses"),
+    (Adaptations, {"max_hidden": 0}, "adaptations.max_hidden"),
+    (Appearance, {"bins": 15}, "appearance.bins"),
+    (Appearance, {"min_foreground": 1.5}, "appearance.min_foreground"),
+    (Appearance, {"pixel_stride": 0}, "appearance.pixel_stride"),
+    (MotionModel, {"velocity_noise": 0.0}, "motion.velocity_noise"),
 ])
 def test_each_group_names_its_bad_field(group, kwargs, name):
     with pytest.raises(ValueError, match=name.replace(".", r"\.")):

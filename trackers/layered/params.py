@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from trackers.common.checks import at_least, coerce, require, unit
 from trackers.layered.model import Targets, stale_parts
 from trackers.layered.models import FEATURES, FeatureModels
 from trackers.layered.parts import N_PARTS, PartFeatures
@@ -22,20 +23,6 @@ from trackers.layered.parts import N_PARTS, PartFeatures
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
 DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
-
-
-def _unit(group: str, **values: float) -> None:
-    """ValueError naming ``group.name`` unless each value lies in [0, 1]."""
-    for name, v in values.items():
-        if not 0.0 <= v <= 1.0:
-            raise ValueError(f"{group}.{name} must lie in [0, 1], got {v}")
-
-
-def _at_least(group: str, low: float, **values: float) -> None:
-    """ValueError naming ``group.name`` unless each value is >= low."""
-    for name, v in values.items():
-        if not v >= low:
-            raise ValueError(f"{group}.{name} must be >= {low}, got {v}")
 
 
 def _grid(group: str, name: str, value: Sequence[int]) -> tuple[int, int]:
@@ -97,7 +84,7 @@ class FeatureParams:
         if gamma.shape != (N_PARTS,) or (gamma < 0).any() or gamma.sum() <= 0:
             raise ValueError(f"features.part_weights must be {N_PARTS} weights >= 0 with a "
                              f"positive sum, got {list(self.part_weights)}")
-        _at_least("features", 1, histogram_bins=self.histogram_bins)
+        at_least("features", 1, histogram_bins=self.histogram_bins)
         set_ = object.__setattr__
         set_(self, "models", models)
         set_(self, "feature_weights", fw)
@@ -129,15 +116,13 @@ class CandidateParams:
     head_detector: object | None = None
 
     def __post_init__(self) -> None:
-        _at_least("candidates", 0, min_blob_area=self.min_blob_area,
-                  head_separation=self.head_separation)
-        _at_least("candidates", 1, blob_downsample=self.blob_downsample)
+        at_least("candidates", 0, min_blob_area=self.min_blob_area,
+                 head_separation=self.head_separation)
+        at_least("candidates", 1, blob_downsample=self.blob_downsample)
         if self.head_detector is not None and not callable(getattr(self.head_detector, "detect", None)):
             raise ValueError("candidates.head_detector must have a detect(frame, foreground, "
                              "boxes) method")
-        object.__setattr__(self, "min_blob_area", int(self.min_blob_area))
-        object.__setattr__(self, "head_separation", float(self.head_separation))
-        object.__setattr__(self, "blob_downsample", int(self.blob_downsample))
+        coerce(self, {"min_blob_area": int, "head_separation": float, "blob_downsample": int})
 
 
 @dataclass(frozen=True)
@@ -159,8 +144,8 @@ class GateParams:
     growth: float = 1.15
 
     def __post_init__(self) -> None:
-        _at_least("gate", 0, speed_factor=self.speed_factor, min_fraction=self.min_fraction)
-        _at_least("gate", 1, miss_factor=self.miss_factor, growth=self.growth)
+        at_least("gate", 0, speed_factor=self.speed_factor, min_fraction=self.min_fraction)
+        at_least("gate", 1, miss_factor=self.miss_factor, growth=self.growth)
 
 
 @dataclass(frozen=True)
@@ -182,9 +167,9 @@ class NoiseParams:
     kf2_measurement: float = 0.5
 
     def __post_init__(self) -> None:
-        _at_least("noise", 0, kf1_position=self.kf1_position, kf1_velocity=self.kf1_velocity,
-                  kf1_measurement=self.kf1_measurement, kf2_position=self.kf2_position,
-                  kf2_velocity=self.kf2_velocity, kf2_measurement=self.kf2_measurement)
+        at_least("noise", 0, kf1_position=self.kf1_position, kf1_velocity=self.kf1_velocity,
+                 kf1_measurement=self.kf1_measurement, kf2_position=self.kf2_position,
+                 kf2_velocity=self.kf2_velocity, kf2_measurement=self.kf2_measurement)
 
     @property
     def kf1(self) -> tuple[float, float, float]:
@@ -219,14 +204,12 @@ class SearchParams:
     head_min_fill: float = 0.2
 
     def __post_init__(self) -> None:
-        if not self.occlusion_threshold > 0:
-            raise ValueError(f"search.occlusion_threshold must be > 0, got {self.occlusion_threshold}")
-        if not 0 < self.step < 0.5:
-            raise ValueError(f"search.step must lie in (0, 0.5), got {self.step}")
-        _at_least("search", 0, range=self.range)
-        _unit("search", overlap=self.overlap, head_min_fill=self.head_min_fill)
-        object.__setattr__(self, "range", int(self.range))
-        object.__setattr__(self, "overlap", float(self.overlap))
+        require("search.occlusion_threshold", self.occlusion_threshold > 0, "must be > 0",
+                self.occlusion_threshold)
+        require("search.step", 0 < self.step < 0.5, "must lie in (0, 0.5)", self.step)
+        at_least("search", 0, range=self.range)
+        unit("search", overlap=self.overlap, head_min_fill=self.head_min_fill)
+        coerce(self, {"range": int, "overlap": float})
 
 
 @dataclass(frozen=True)
@@ -245,11 +228,11 @@ class MatchParams:
     margin_ratio: float = 1.1
 
     def __post_init__(self) -> None:
-        _unit("matching", match_threshold=self.match_threshold, weak_threshold=self.weak_threshold)
+        unit("matching", match_threshold=self.match_threshold, weak_threshold=self.weak_threshold)
         if self.weak_threshold > self.match_threshold:
             raise ValueError(f"matching.weak_threshold ({self.weak_threshold}) must be <= "
                              f"matching.match_threshold ({self.match_threshold})")
-        _at_least("matching", 1, margin_ratio=self.margin_ratio)
+        at_least("matching", 1, margin_ratio=self.margin_ratio)
 
 
 @dataclass(frozen=True)
@@ -266,7 +249,7 @@ class PruneParams:
     radius: float = 3.0
 
     def __post_init__(self) -> None:
-        _at_least("pruning", 0, radius=self.radius)
+        at_least("pruning", 0, radius=self.radius)
 
 
 @dataclass(frozen=True)
@@ -287,10 +270,9 @@ class UpdateParams:
     occluded_window: int = 3
 
     def __post_init__(self) -> None:
-        _unit("update", rate=self.rate, part_threshold=self.part_threshold)
-        _at_least("update", 1, ratio_window=self.ratio_window, occluded_window=self.occluded_window)
-        object.__setattr__(self, "ratio_window", int(self.ratio_window))
-        object.__setattr__(self, "occluded_window", int(self.occluded_window))
+        unit("update", rate=self.rate, part_threshold=self.part_threshold)
+        at_least("update", 1, ratio_window=self.ratio_window, occluded_window=self.occluded_window)
+        coerce(self, {"ratio_window": int, "occluded_window": int})
 
 
 @dataclass(frozen=True)
@@ -316,13 +298,11 @@ class LifeCycleParams:
     blob_births: bool = False
 
     def __post_init__(self) -> None:
-        _at_least("life_cycle", 1, min_hits=self.min_hits)
-        _at_least("life_cycle", 0, max_misses=self.max_misses)
-        _unit("life_cycle", new_track_iou=self.new_track_iou)
-        object.__setattr__(self, "min_hits", int(self.min_hits))
-        object.__setattr__(self, "max_misses", int(self.max_misses))
-        object.__setattr__(self, "min_height", float(self.min_height))
-        object.__setattr__(self, "blob_births", bool(self.blob_births))
+        at_least("life_cycle", 1, min_hits=self.min_hits)
+        at_least("life_cycle", 0, max_misses=self.max_misses)
+        unit("life_cycle", new_track_iou=self.new_track_iou)
+        coerce(self, {"min_hits": int, "max_misses": int, "min_height": float,
+                      "blob_births": bool})
 
 
 @dataclass(frozen=True)
@@ -339,9 +319,8 @@ class ReportParams:
     max_misses: int = 5
 
     def __post_init__(self) -> None:
-        _at_least("reporting", 0, max_misses=self.max_misses)
-        object.__setattr__(self, "occluded", bool(self.occluded))
-        object.__setattr__(self, "max_misses", int(self.max_misses))
+        at_least("reporting", 0, max_misses=self.max_misses)
+        coerce(self, {"occluded": bool, "max_misses": int})
 
 
 @dataclass(frozen=True)
@@ -365,12 +344,9 @@ class StaleParts:
     relearn_rate: float = 1.0
 
     def __post_init__(self) -> None:
-        _at_least("adaptations.stale", 1, frames=self.frames)
-        _unit("adaptations.stale", cover=self.cover, fill=self.fill, relearn_rate=self.relearn_rate)
-        object.__setattr__(self, "frames", int(self.frames))
-        object.__setattr__(self, "cover", float(self.cover))
-        object.__setattr__(self, "fill", float(self.fill))
-        object.__setattr__(self, "relearn_rate", float(self.relearn_rate))
+        at_least("adaptations.stale", 1, frames=self.frames)
+        unit("adaptations.stale", cover=self.cover, fill=self.fill, relearn_rate=self.relearn_rate)
+        coerce(self, {"frames": int, "cover": float, "fill": float, "relearn_rate": float})
 
     def relearn(self, targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
                 part_scores: np.ndarray, part_threshold: float, occluder_misses: int,
@@ -442,23 +418,20 @@ class Adaptations:
     assignment: str = "most_pairs"
 
     def __post_init__(self) -> None:
-        if self.assignment not in ASSIGNMENTS:
-            raise ValueError(f"adaptations.assignment must be one of {ASSIGNMENTS}, "
-                             f"got {self.assignment!r}")
-        if not self.model_spread > 0:
-            raise ValueError(f"adaptations.model_spread must be > 0, got {self.model_spread}")
-        _unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
-              occluded_cover=self.occluded_cover)
-        if not self.gate_max_fraction > 0:
-            raise ValueError(f"adaptations.gate_max_fraction must be > 0, got {self.gate_max_fraction}")
-        _at_least("adaptations", 0, exit_misses=self.exit_misses)
+        require("adaptations.assignment", self.assignment in ASSIGNMENTS,
+                f"must be one of {ASSIGNMENTS}", self.assignment)
+        require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
+                self.model_spread)
+        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
+             occluded_cover=self.occluded_cover)
+        require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
+                self.gate_max_fraction)
+        at_least("adaptations", 0, exit_misses=self.exit_misses)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
-        set_ = object.__setattr__
-        for name in ("model_spread", "min_support", "relative_match", "duplicate_radius",
-                     "gate_max_fraction", "exit_margin", "occluded_cover"):
-            set_(self, name, float(getattr(self, name)))
-        for name in ("motion_compensation", "lone_growth", "report_predicted"):
-            set_(self, name, bool(getattr(self, name)))
-        set_(self, "prune_max_misses", int(self.prune_max_misses))
-        set_(self, "exit_misses", int(self.exit_misses))
+        coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
+                                       "duplicate_radius", "gate_max_fraction", "exit_margin",
+                                       "occluded_cover"), float),
+                      **dict.fromkeys(("motion_compensation", "lone_growth",
+                                       "report_predicted"), bool),
+                      "prune_max_misses": int, "exit_misses": int})

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackers.common.checks import require
 from trackers.common.kalman import constant_velocity_box_filter
 
 
@@ -37,8 +38,7 @@ class MotionModel:
         for name in ("position_noise", "velocity_noise", "measurement_noise",
                      "initial_velocity_variance"):
             value = getattr(self, name)
-            if not value > 0:
-                raise ValueError(f"MotionModel.{name} must be > 0, got {value!r}")
+            require(f"motion.{name}", value > 0, "must be > 0", value)
 
     def init(self, box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """First state of a person from its (4,) xywh box: x (8,), P (8, 8), F, H, Q, R."""

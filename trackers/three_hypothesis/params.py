@@ -12,18 +12,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+from trackers.common.checks import at_least, coerce, require, unit
+
 __all__ = ["Adaptations", "Appearance", "Association", "LifeCycle", "Occlusion"]
-
-
-def _coerce(group: object, kinds: dict[str, type]) -> None:
-    """Store each named field of a frozen ``group`` as ``kinds[name]`` (YAML gives 3 for 3.0)."""
-    for name, kind in kinds.items():
-        object.__setattr__(group, name, kind(getattr(group, name)))
-
-
-def _check(group: object, name: str, ok: bool, rule: str) -> None:
-    if not ok:
-        raise ValueError(f"{type(group).__name__}.{name} {rule}, got {getattr(group, name)!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -40,8 +31,8 @@ class Association:
     mu_g: float = 120.0
 
     def __post_init__(self) -> None:
-        _check(self, "mu_rho", 0.0 <= self.mu_rho <= 1.0, "must lie in [0, 1]")
-        _check(self, "mu_g", self.mu_g > 0, "must be > 0 pixels")
+        unit("association", mu_rho=self.mu_rho)
+        require("association.mu_g", self.mu_g > 0, "must be > 0 pixels", self.mu_g)
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,8 +49,8 @@ class Occlusion:
     region_samples: int = 12
 
     def __post_init__(self) -> None:
-        _check(self, "lam", 0.0 <= self.lam < 0.5, "must lie in [0, 0.5)")
-        _check(self, "region_samples", self.region_samples >= 2, "must be >= 2")
+        require("occlusion.lam", 0.0 <= self.lam < 0.5, "must lie in [0, 0.5)", self.lam)
+        at_least("occlusion", 2, region_samples=self.region_samples)
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,9 +72,10 @@ class Appearance:
     pixel_stride: int = 1
 
     def __post_init__(self) -> None:
-        _check(self, "bins", self.bins >= 1 and 256 % self.bins == 0, "must divide 256")
-        _check(self, "min_foreground", 0.0 <= self.min_foreground <= 1.0, "must lie in [0, 1]")
-        _check(self, "pixel_stride", self.pixel_stride >= 1, "must be >= 1")
+        require("appearance.bins", self.bins >= 1 and 256 % self.bins == 0, "must divide 256",
+                self.bins)
+        unit("appearance", min_foreground=self.min_foreground)
+        at_least("appearance", 1, pixel_stride=self.pixel_stride)
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,9 +96,8 @@ class LifeCycle:
     confirm_frames: int = 3
 
     def __post_init__(self) -> None:
-        _check(self, "m", self.m >= 1, "must be >= 1 frame")
-        _check(self, "cover", 0.0 < self.cover <= 1.0, "must lie in (0, 1]")
-        _check(self, "confirm_frames", self.confirm_frames >= 1, "must be >= 1")
+        at_least("life_cycle", 1, m=self.m, confirm_frames=self.confirm_frames)
+        require("life_cycle.cover", 0.0 < self.cover <= 1.0, "must lie in (0, 1]", self.cover)
 
 
 @dataclass(frozen=True, slots=True)
@@ -159,17 +150,16 @@ class Adaptations:
     stage1_unmatched_cost: float = 2.0
 
     def __post_init__(self) -> None:
-        _coerce(self, {"gate_sigmas": float, "report_spread": float,
-                       "stage1_unmatched_cost": float, "blend_visible": bool,
-                       "shape_estimate": bool, "foreground_histograms": bool,
-                       "foreground_support": bool})
-        _check(self, "gate_sigmas", self.gate_sigmas >= 0, "must be >= 0")
-        _check(self, "report_exposed", self.report_exposed >= 0, "must be >= 0")
-        _check(self, "report_spread", self.report_spread >= 0, "must be >= 0")
-        _check(self, "tentative_misses", self.tentative_misses >= 0, "must be >= 0")
-        _check(self, "max_hidden", self.max_hidden >= 1, "must be >= 1")
-        _check(self, "stage1_unmatched_cost", 0.0 < self.stage1_unmatched_cost <= 2.0,
-               "must lie in (0, 2]")
+        coerce(self, {"gate_sigmas": float, "report_spread": float,
+                      "stage1_unmatched_cost": float, "blend_visible": bool,
+                      "shape_estimate": bool, "foreground_histograms": bool,
+                      "foreground_support": bool})
+        at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
+                 report_exposed=self.report_exposed, report_spread=self.report_spread,
+                 tentative_misses=self.tentative_misses)
+        at_least("adaptations", 1, max_hidden=self.max_hidden)
+        require("adaptations.stage1_unmatched_cost", 0.0 < self.stage1_unmatched_cost <= 2.0,
+                "must lie in (0, 2]", self.stage1_unmatched_cost)
 
     @classmethod
     def paper(cls) -> Adaptations:

@@ -1,0 +1,30 @@
+"""Range checks of the trackers' parameter groups, one error format for all of them:
+``ValueError("<group>.<field> <rule>, got <value>")``, where ``<group>.<field>`` is the key
+under ``tracker.`` in the config (``matching.match_threshold``, ``association.mu_rho``)."""
+
+from __future__ import annotations
+
+
+def require(key: str, ok: bool, rule: str, value: object) -> None:
+    """ValueError ``"<key> <rule>, got <value>"`` unless ``ok``."""
+    if not ok:
+        raise ValueError(f"{key} {rule}, got {value!r}")
+
+
+def unit(group: str, **values: float) -> None:
+    """ValueError naming ``group.name`` unless each value lies in [0, 1] (NaN does not)."""
+    for name, v in values.items():
+        require(f"{group}.{name}", 0.0 <= v <= 1.0, "must lie in [0, 1]", v)
+
+
+def at_least(group: str, low: float, **values: float) -> None:
+    """ValueError naming ``group.name`` unless each value is >= ``low`` (NaN is not)."""
+    for name, v in values.items():
+        require(f"{group}.{name}", v >= low, f"must be >= {low}", v)
+
+
+def coerce(group: object, kinds: dict[str, type]) -> None:
+    """Store each named field of the frozen dataclass ``group`` as ``kinds[name]`` (YAML
+    gives 3 for 3.0 and a tracker compares types in its hot loop)."""
+    for name, kind in kinds.items():
+        object.__setattr__(group, name, kind(getattr(group, name)))
