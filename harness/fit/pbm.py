@@ -4,10 +4,11 @@ and learn the feature weights omega of eq. 12 (PBM 4.1).
 Models. For every annotated person visible in two consecutive frames, the five parts of
 its ground-truth box are measured in both frames (``trackers.layered.parts``) and the
 absolute differences of the six features (eq. 11) are collected per feature and part.
-With the tracker config's ``adaptations.motion_compensation`` (the default), overlap and displacement
-compare the person with its previous parts moved by its previous step, as the tracker
-compares a candidate with the parts model moved by KF1's prediction. Each of the 30 sets is fitted by a half-normal, or by a two-component folded Gaussian
-mixture where that wins by BIC (the differences are not unimodal).
+With the tracker config's ``adaptations.motion_compensation`` (the default), overlap and
+displacement compare the person with its previous parts moved by its previous step, as the
+tracker compares a candidate with the parts model moved by KF1's prediction. Each of the 30
+sets is fitted by a half-normal, or by a two-component folded Gaussian mixture where that
+wins by BIC (the differences are not unimodal).
 
 Weights (PBM 4.1: "The weights in (12), omega_i, have been trained with maximum
 cross-validation accuracy by a search over interval [0,1] and normalized to add up to 1").
@@ -16,10 +17,10 @@ frame (the pairs the models are fitted on); negative = a person against up to
 ``--neighbours`` other people of the next frame whose box centre lies within ``--radius``
 x its previous box width / height of its previous centre (the tracker's gate, PBM 3). Each
 pair is scored as the tracker scores it: eq. 11 differences divided by
-``adaptations.model_spread``,
-match probabilities p(d_ij | theta_ij) of the fitted models, eq. 12 with omega, eq. 13
-with the configured gamma (``features.part_weights``), and classified as a match when the
-global score reaches ``matching.match_threshold``. omega runs over a grid of [0, 1]^6 with step
+``adaptations.model_spread``, match probabilities p(d_ij | theta_ij) of the fitted models,
+eq. 12 with omega, eq. 13 with the configured gamma (``features.part_weights``), and
+classified as a match when the global score reaches ``matching.match_threshold``. omega runs
+over a grid of [0, 1]^6 with step
 ``--weight-step`` (normalised to sum 1, all-zero skipped, duplicates after normalising
 merged); the accuracy (balanced: positives and negatives weigh half each) is
 cross-validated over ``--folds`` folds of whole frame blocks (``--block-frames`` frames of
@@ -28,8 +29,8 @@ omega with the best mean validation accuracy wins; ties go to the one nearest th
 weights, then to the first in grid order. gamma, threshold and spread are read from
 ``--tracker-config`` (default ``conf/tracker/pbm.yaml``).
 
-The YAML (for ``conf/tracker/pbm.yaml``'s ``features.models.path``) holds the models and, as extra
-top-level keys that the model loader ignores, ``feature_weights`` and
+The YAML (for ``conf/tracker/pbm.yaml``'s ``features.models.path``) holds the models and, as
+extra top-level keys that the model loader ignores, ``feature_weights`` and
 ``feature_weights_fit`` (accuracies, grid, folds, sample counts). A PNG shows the fitted
 densities over the histograms of the differences (the paper's Fig. 3).
 
@@ -46,9 +47,9 @@ Example:
 Using the learned weights (the command prints the exact line):
     python -m harness tracker.pbm.features.models.path=models.yaml \\
         'tracker.pbm.features.feature_weights={area:0.2,perimeter:0.0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0.0}'
-(``tracker.features.feature_weights=...`` when the run selects ``tracker=pbm`` alone.) Measured on
-held-out data, the omega learned on synthetic seed 1 tracks worse than the hand-set default
-although it classifies held-out pairs better: see ``benchmarks/bench_pbm_weights.py``.
+(``tracker.features.feature_weights=...`` when the run selects ``tracker=pbm`` alone.)
+Measured on held-out data, the omega learned on synthetic seed 1 tracks worse than the
+hand-set default although it classifies held-out pairs better: see ``benchmarks/bench_pbm_weights.py``.
 """
 
 from __future__ import annotations
