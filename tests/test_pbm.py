@@ -805,7 +805,8 @@ def test_paper_mode_turns_every_adaptation_off():
     a = paper.adaptations
     assert (a.model_spread, a.stale, a.min_support, a.relative_match,
             a.occluded_cover) == (1.0, None, 0.0, 0.0, 0.0)
-    assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
+    assert not (a.motion_compensation or a.report_predicted or a.lone_growth
+                or a.overlap_as_measured)
     assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
     assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
     assert a.assignment == "most_pairs"
@@ -814,6 +815,28 @@ def test_paper_mode_turns_every_adaptation_off():
     for group in ("gate", "noise", "search", "matching", "pruning", "model_update", "life_cycle",
                   "reporting"):
         assert getattr(paper, group) == getattr(ours, group), group
+
+
+def test_overlap_as_measured_reaches_the_scores_of_a_lost_target():
+    """``adaptations.overlap_as_measured``: the tracker scores a target unfound for m frames
+    with eq. 11's overlap undivided, and only such a target."""
+    from trackers.layered.association import pair_scores
+
+    scene, _ = S.uturn_behind(8)
+    trackers = [PBMTracker(adaptations=Adaptations(overlap_as_measured=v)) for v in (False, True)]
+    for tracker in trackers:
+        run(tracker, scene)
+        tracker.targets.misses[0] = 3  # as if unfound for 3 frames
+    tg = trackers[0].targets
+    assert len(tg) >= 2
+    model = trackers[0].rules.compared.models(tg)
+    ti, n = np.array([0, 1]), np.array([1, 0])  # each target's parts model as the other's candidate
+    off, on = (t._scores(model, tg.parts, ti, n)[1] for t in trackers)
+    f = trackers[0].features
+    ref = pair_scores(f.models, model, tg.parts, ti, n, tg.misses, f.omega, f.gamma,
+                      trackers[0].adaptations.model_spread, True)[1]
+    np.testing.assert_array_equal(on, ref)
+    assert on[1] == off[1] and on[0] < off[0]  # found target unchanged; lost one loses the bonus
 
 
 def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():

@@ -400,6 +400,11 @@ class Adaptations:
             ``matching.match_threshold`` as it can, then the best; ``min_cost`` minimises
             the summed 1 - p with a target left over costing 1 - match_threshold, so a
             target never takes a worse candidate only so that another can be matched.
+        overlap_as_measured: after a gap of m frames eq. 11's overlap difference 1 - IoU is
+            taken as measured, only the displacement divided by 1 + m (paper: both
+            consecutive-frame differences; dividing both is our reading of a gap). 1 - IoU
+            is bounded by 1: divided, it scores every candidate in a lost target's gate as a
+            full overlap, a bonus over the target that held the candidate a frame before.
     """
 
     model_spread: float = 4.5
@@ -416,6 +421,7 @@ class Adaptations:
     report_predicted: bool = True
     occluded_cover: float = 0.0
     assignment: str = "most_pairs"
+    overlap_as_measured: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.assignment", self.assignment in ASSIGNMENTS,
@@ -433,5 +439,5 @@ class Adaptations:
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "occluded_cover"), float),
                       **dict.fromkeys(("motion_compensation", "lone_growth",
-                                       "report_predicted"), bool),
+                                       "report_predicted", "overlap_as_measured"), bool),
                       "prune_max_misses": int, "exit_misses": int})
