@@ -35,6 +35,7 @@ from trackers.three_hypothesis.occlusion import (
     overlap_ratio,
     region_overlaps,
 )
+from trackers.three_hypothesis.rules import AppearanceMargin
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -243,6 +244,24 @@ def test_stage1_leaves_a_person_over_rather_than_exchange_a_good_pair_for_two_po
     assert list(ours.unmatched_persons) == [1] and list(ours.unmatched_measurements) == [1]
     with pytest.raises(ValueError, match="stage1_unmatched_cost"):
         Adaptations(stage1_unmatched_cost=0.0)
+
+
+def test_stage1_appearance_margin_lets_the_regions_decide_among_look_alikes():
+    # everyone looks alike (rho = 1 for every pair). Person 1's detection is missed; it
+    # overlaps person 0's detection (delta 0.4) as person 0 overlaps a newcomer's (0.4).
+    # rho itself: the exchange costs 0.6 + 0.6 < 0 + 2 (person 1 left over), so person 1
+    # takes person 0's detection. Margins: rho says nothing here (every margin 0), each
+    # pair costs 1 + (1 - delta): the exchange 3.2 > 1 + 2, person 0 keeps its own.
+    node_boxes = np.array([[100.0, 100, 40, 100], [130.0, 100, 40, 100]])
+    meas = np.array([[100.0, 100, 40, 100], [70.0, 100, 40, 100]])
+    q, p = np.array([_hist(1), _hist(1)]), np.array([_hist(1), _hist(1)])
+    kw = {"mu_rho": 0.3, "mu_g": 10.0, "delta": np.array([[1.0, 0.4], [0.4, 0.0]])}
+    paper = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw)
+    assert sorted(map(tuple, paper.matches[:, :2])) == [(0, 1), (1, 0)]
+    ours = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw,
+                     evidence=AppearanceMargin().evidence)
+    assert sorted(map(tuple, ours.matches[:, :2])) == [(0, 0)]
+    assert list(ours.unmatched_persons) == [1] and list(ours.unmatched_measurements) == [1]
 
 
 def test_bad_input_raises_clear_errors():

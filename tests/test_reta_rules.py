@@ -11,7 +11,9 @@ import pytest
 from trackers.three_hypothesis import Adaptations, Appearance, MotionModel, RetaTracker
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.rules import (
+    AbsoluteAppearance,
     AllPixels,
+    AppearanceMargin,
     BlendVisible,
     EstimateShape,
     FixedGate,
@@ -30,12 +32,16 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     h = EllipseHistogrammer()
     paper = build_rules(Adaptations.paper(), h)
     assert isinstance(paper.pixels, AllPixels) and isinstance(paper.gate, FixedGate)
+    assert isinstance(paper.stage1_appearance, AbsoluteAppearance)
     assert isinstance(paper.appearance_behind, KeepAppearance)
     assert isinstance(paper.shape_behind, PredictionShape)
     assert isinstance(paper.support, NoSupport)
     assert paper.report == ReportRule(1_000_000, 0.0)
     ours = build_rules(Adaptations(), h)
     assert isinstance(ours.pixels, ForegroundPixels) and ours.gate == KalmanGate(3.0)
+    assert isinstance(ours.stage1_appearance, AbsoluteAppearance)  # not taken (docs/adaptations.md)
+    assert isinstance(build_rules(Adaptations(appearance_margin=True), h).stage1_appearance,
+                      AppearanceMargin)
     assert isinstance(ours.appearance_behind, BlendVisible)
     assert isinstance(ours.shape_behind, EstimateShape)
     assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0)
@@ -51,6 +57,21 @@ def test_gate_radius_is_sigmas_times_the_larger_centre_std():
     np.testing.assert_allclose(KalmanGate(3.0).radii(P, R), [15.0, 15.0])
     assert FixedGate().radii(P, R) is None  # mu_g for every node
     assert KalmanGate(3.0).radii(np.zeros((0, 8, 8)), np.zeros(0)) is None
+
+
+def test_appearance_margin_is_rho_over_the_best_rival_of_row_and_column():
+    rho = np.array([[0.9, 0.6, 0.2],
+                    [0.7, 0.8, 0.0],
+                    [0.0, 0.0, 0.5]])
+    admissible = rho > 0
+    admissible[0, 2] = False  # not a stage-1 pair: no rival, no evidence
+    a = AppearanceMargin().evidence(rho, admissible)
+    np.testing.assert_allclose(a, [[0.2, 0.0, 0.0],   # 0.9 - max(0.7 column, 0.6 row)
+                                   [0.0, 0.1, 0.0],   # 0.8 - max(0.6, 0.7)
+                                   [0.0, 0.0, 0.5]])  # alone in row and column: rho kept
+    assert AbsoluteAppearance().evidence(rho, admissible) is rho
+    np.testing.assert_allclose(AppearanceMargin().evidence(rho[:1, :1], admissible[:1, :1]),
+                               [[0.9]])  # one person, one measurement
 
 
 def test_appearance_behind_others_kept_or_blended_by_the_visible_share():

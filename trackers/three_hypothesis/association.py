@@ -9,6 +9,7 @@ person can be pruned. Boxes are (N, 4) float64 xywh, 0-based pixels.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,6 +100,7 @@ def associate(
     gated: np.ndarray | None = None,
     gate: np.ndarray | None = None,
     stage1_unmatched_cost: float = 2.0,
+    evidence: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> Association:
     """Match measurements to persons in two stages.
 
@@ -136,6 +138,9 @@ def associate(
         gate: optional (B,) gate radius of each node in pixels; the node's validation
             region is the circle of radius min(mu_g, gate) (default mu_g for every node).
         stage1_unmatched_cost: cost of leaving a person unmatched in stage 1, in (0, 2].
+        evidence: optional map (rho (P, D), admissible (P, D) bool) -> (P, D) appearance
+            term a of stage 1, whose cost becomes (1 - a) + (1 - delta); default a = rho
+            (e.g. ``rules.AppearanceMargin().evidence``).
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(q), len(measurement_boxes)
@@ -162,6 +167,8 @@ def associate(
         delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
     c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
     cost1, best1 = _person_costs(c1, starts, owners)
+    if evidence is not None:  # (1 - a) in place of (1 - rho); rho is one per person
+        cost1 = cost1 + (rho - evidence(rho, np.isfinite(cost1)))
     m1 = _hungarian(cost1, stage1_unmatched_cost)
 
     matched_p = np.zeros(n_persons, dtype=bool)

@@ -136,6 +136,11 @@ class Adaptations:
         stage1_unmatched_cost: cost of leaving a person unmatched in association stage 1,
             in (0, 2]; a stage-1 pair costlier than it is left to stage 2; 2: every
             acceptable pair competes (the paper, and our default).
+        appearance_margin: stage 1 scores a pair's appearance by its margin over its rivals,
+            rho minus the larger of the best rho of another person for that measurement and
+            of another measurement for that person (0 when the pair is not the best both
+            ways), instead of rho itself; a pair with no rival keeps rho. False: rho (eq. 4,
+            the paper, and our default).
     """
 
     gate_sigmas: float = 3.0
@@ -148,12 +153,13 @@ class Adaptations:
     tentative_misses: int = 2
     max_hidden: int = 150
     stage1_unmatched_cost: float = 2.0
+    appearance_margin: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float,
                       "stage1_unmatched_cost": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
-                      "foreground_support": bool})
+                      "foreground_support": bool, "appearance_margin": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  tentative_misses=self.tentative_misses)
@@ -167,7 +173,8 @@ class Adaptations:
         return cls(gate_sigmas=0.0, blend_visible=False, shape_estimate=False,
                    foreground_histograms=False, foreground_support=False,
                    report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
-                   max_hidden=1_000_000, stage1_unmatched_cost=2.0)
+                   max_hidden=1_000_000, stage1_unmatched_cost=2.0,
+                   appearance_margin=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -65,6 +65,41 @@ class KalmanGate:
         return self.sigmas * np.sqrt(var)
 
 
+# --------------------------------------------------------------- 3.3.2 step 2: appearance in stage 1
+
+
+@dataclass(frozen=True)
+class AbsoluteAppearance:
+    """3.3.2 as written: a stage-1 pair's appearance term is rho itself (eq. 4)."""
+
+    def evidence(self, rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
+        return rho
+
+
+@dataclass(frozen=True)
+class AppearanceMargin:
+    """``appearance_margin``: a stage-1 pair's appearance term is what rho says for this
+    pair against its rivals, rho_ij - max(max_{k != i} rho_kj, max_{l != j} rho_il) over
+    the admissible pairs, floored at 0: people who all look alike earn no pair its place,
+    so the region term (eq. 5) decides; a pair with no rival keeps rho."""
+
+    def evidence(self, rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
+        """(P, D) margins from rho (P, D) in [0, 1] and admissible (P, D) bool (pairs
+        stage 1 may choose; the others count as rho 0)."""
+        r = np.where(admissible, rho, 0.0)
+        rival = np.maximum(_rival(r, axis=0), _rival(r, axis=1))
+        return np.clip(r - rival, 0.0, 1.0)
+
+
+def _rival(x: np.ndarray, axis: int) -> np.ndarray:
+    """For every entry of x, the largest other entry along ``axis`` (0 when alone)."""
+    if x.shape[axis] < 2:
+        return np.zeros_like(x)
+    s = np.sort(x, axis=axis)
+    first, second = np.take(s, [-1], axis=axis), np.take(s, [-2], axis=axis)
+    return np.where(x >= first, second, first)
+
+
 # --------------------------------------------------------------- 3.3.3: a person matched behind others
 
 
@@ -165,6 +200,7 @@ class Rules(NamedTuple):
 
     pixels: AllPixels | ForegroundPixels
     gate: FixedGate | KalmanGate
+    stage1_appearance: AbsoluteAppearance | AppearanceMargin
     appearance_behind: KeepAppearance | BlendVisible
     shape_behind: PredictionShape | EstimateShape
     support: NoSupport | ForegroundSupport
@@ -177,6 +213,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Ru
     return Rules(
         pixels=ForegroundPixels() if a.foreground_histograms else AllPixels(),
         gate=KalmanGate(a.gate_sigmas) if a.gate_sigmas > 0 else FixedGate(),
+        stage1_appearance=AppearanceMargin() if a.appearance_margin else AbsoluteAppearance(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
