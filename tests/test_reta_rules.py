@@ -8,6 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from trackers.three_hypothesis import Adaptations, Appearance, MotionModel, RetaTracker
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.rules import (
@@ -37,6 +38,7 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     assert isinstance(paper.shape_behind, PredictionShape)
     assert isinstance(paper.support, NoSupport)
     assert paper.report == ReportRule(1_000_000, 0.0)
+    assert isinstance(paper.velocity, FilterPrediction)
     ours = build_rules(Adaptations(), h)
     assert isinstance(ours.pixels, ForegroundPixels) and ours.gate == KalmanGate(3.0)
     assert isinstance(ours.stage1_appearance, AbsoluteAppearance)  # not taken (docs/adaptations.md)
@@ -45,6 +47,7 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     assert isinstance(ours.appearance_behind, BlendVisible)
     assert isinstance(ours.shape_behind, EstimateShape)
     assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0)
+    assert isinstance(ours.velocity, MeasuredVelocity)
     built = RetaTracker(adaptations=Adaptations.paper()).rules
     assert [type(r) for r in built] == [type(r) for r in paper] and built.report == paper.report
 
@@ -139,4 +142,4 @@ def test_groups_are_frozen_and_paper_mode_changes_nothing_else():
     assert Adaptations(gate_sigmas=3).gate_sigmas == 3.0 and Adaptations.paper().changed() == []
     assert Adaptations(gate_sigmas=0.0, blend_visible=False).changed() == [
         "shape_estimate", "foreground_histograms", "foreground_support", "report_exposed",
-        "report_spread", "tentative_misses", "max_hidden"]
+        "report_spread", "tentative_misses", "max_hidden", "measured_velocity"]

@@ -395,6 +395,9 @@ class Adaptations:
             prediction (paper: reporting is ours; at its last validated box).
         occluded_cover: with foreground, an unfound target is reported only while found
             targets' boxes cover this fraction of it (0 = off).
+        measured_velocity: a reported unfound target stands at its last box moved by its
+            measured velocity when that velocity has predicted its boxes better than KF1's
+            so far (``trackers.common.measured_velocity``; paper: reporting is ours).
         assignment: how targets share candidates one-to-one (the paper tracks one target at
             a time): ``most_pairs`` keeps as many pairs scoring at least
             ``matching.match_threshold`` as it can, then the best; ``min_cost`` minimises
@@ -420,6 +423,7 @@ class Adaptations:
     exit_misses: int = 3
     report_predicted: bool = True
     occluded_cover: float = 0.0
+    measured_velocity: bool = False
     assignment: str = "most_pairs"
     overlap_as_measured: bool = False
 
@@ -439,5 +443,6 @@ class Adaptations:
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "occluded_cover"), float),
                       **dict.fromkeys(("motion_compensation", "lone_growth",
-                                       "report_predicted", "overlap_as_measured"), bool),
+                                       "report_predicted", "overlap_as_measured",
+                                       "measured_velocity"), bool),
                       "prune_max_misses": int, "exit_misses": int})

@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from trackers.common.assignment import assign, assign_min_cost
+from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from trackers.geometry import overlap_ratio_matrix
 from trackers.layered.model import Targets
 from trackers.layered.params import Adaptations
@@ -146,6 +147,7 @@ class Rules(NamedTuple):
     report_box: LastBox | PredictedBox
     report_keep: ReportedWhileCounted | ReportedWhileCovered
     assign: Callable  # the one-to-one step: ``assign`` (most pairs) or ``assign_min_cost``
+    velocity: FilterPrediction | MeasuredVelocity  # where a reported unfound target stands
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -158,4 +160,5 @@ def build_rules(a: Adaptations) -> Rules:
         report_keep=(ReportedWhileCovered(a.occluded_cover) if a.occluded_cover > 0
                      else ReportedWhileCounted()),
         assign={"most_pairs": assign, "min_cost": assign_min_cost}[a.assignment],
+        velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )

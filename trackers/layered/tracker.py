@@ -166,6 +166,7 @@ class PBMTracker:
         self._next_id = 1
         self._frame = 0
         self._had_fg = False
+        self.rules.velocity.reset()
 
     # ------------------------------------------------------------------ update (PBM Fig. 1)
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -413,6 +414,20 @@ class PBMTracker:
             live_boxes = np.vstack([live_boxes, box[None]])
 
     # ------------------------------------------------------------------ report
+    def _place_unfound(self, boxes: np.ndarray, rows: np.ndarray, found: np.ndarray) -> None:
+        """``rules.velocity``: record the found confirmed targets' boxes and KF1 velocities,
+        and move the boxes (R, 4) of the unfound ones among ``rows`` in place where their
+        measured velocity wins; found (T,) bool."""
+        tg, rule = self.targets, self.rules.velocity
+        seen = found[rows] & tg.confirmed[rows]
+        rule.found(self._frame, tg.id[rows[seen]].tolist(), boxes[seen], tg.kf1.x[rows[seen], 2:4])
+        hidden = ~found[rows]
+        if hidden.any():
+            moved = boxes[hidden]
+            rule.place(self._frame, tg.id[rows[hidden]].tolist(), moved)
+            boxes[hidden] = moved
+        rule.forget(set(tg.id.tolist()))
+
     def _report(self) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
@@ -427,6 +442,7 @@ class PBMTracker:
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
+        self._place_unfound(boxes, rows, found)
         keep = self.rules.report_keep.keep(boxes, tg, rows, found, self._had_fg)
         if keep is not None:
             rows, boxes = rows[keep], boxes[keep]

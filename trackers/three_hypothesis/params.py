@@ -141,6 +141,10 @@ class Adaptations:
             of another measurement for that person (0 when the pair is not the best both
             ways), instead of rho itself; a pair with no rival keeps rho. False: rho (eq. 4,
             the paper, and our default).
+        measured_velocity: a reported hidden person stands at its last measured box moved
+            by its measured velocity when that velocity has predicted its measurements
+            better than the Kalman filter's so far (``trackers.common.measured_velocity``);
+            False: where M predicts it (the paper's hypothesis region).
     """
 
     gate_sigmas: float = 3.0
@@ -154,12 +158,14 @@ class Adaptations:
     max_hidden: int = 150
     stage1_unmatched_cost: float = 2.0
     appearance_margin: bool = False
+    measured_velocity: bool = True
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float,
                       "stage1_unmatched_cost": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
-                      "foreground_support": bool, "appearance_margin": bool})
+                      "foreground_support": bool, "appearance_margin": bool,
+                      "measured_velocity": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  tentative_misses=self.tentative_misses)
@@ -174,7 +180,7 @@ class Adaptations:
                    foreground_histograms=False, foreground_support=False,
                    report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
                    max_hidden=1_000_000, stage1_unmatched_cost=2.0,
-                   appearance_margin=False)
+                   appearance_margin=False, measured_velocity=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -13,6 +13,7 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.params import Adaptations
 
@@ -205,6 +206,7 @@ class Rules(NamedTuple):
     shape_behind: PredictionShape | EstimateShape
     support: NoSupport | ForegroundSupport
     report: ReportRule
+    velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
 
 
 def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Rules:
@@ -218,4 +220,5 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Ru
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
         report=ReportRule(a.report_exposed, a.report_spread),
+        velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )

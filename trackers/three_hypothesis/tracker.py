@@ -198,6 +198,7 @@ class RetaTracker:
         self._frame = 0
         self._pi: dict[tuple[int, int], int] = {}
         self.graph = TrackingGraph(window=self.life_cycle.m + 1)
+        self.rules.velocity.reset()
 
     def graph_snapshot(self) -> dict:
         """The current frame's graph: {'frame', 'nodes': [records], 'edges': [records]}."""
@@ -582,13 +583,19 @@ class RetaTracker:
         return node.key
 
     def _outputs(self) -> list[Track]:
+        """One Track per node of every person (CONFIRMED, OCCLUDED, HYPOTHESIS, TENTATIVE:
+        the module docstring); a reported hidden person where ``rules.velocity`` places it."""
         out: list[Track] = []
         report = self.rules.report
+        found, velocities = [], []
         for person in self._persons:
             branches = person.branches
             if branches[0].kind == VISIBLE:
                 state = TrackState.CONFIRMED if person.confirmed else TrackState.TENTATIVE
                 out.append(self._track(person, branches[0], person.shape, state))
+                if person.confirmed:
+                    found.append(out[-1])
+                    velocities.append(branches[0].x[4:6])
                 continue
             if not person.confirmed:
                 out.append(self._track(person, branches[0], None, TrackState.TENTATIVE))
@@ -600,7 +607,23 @@ class RetaTracker:
             for k, b in enumerate(branches):
                 state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS
                 out.append(self._track(person, b, None, state))
+        self._place_hidden(out, found, velocities)
         return out
+
+    def _place_hidden(self, out: list[Track], found: list[Track], velocities: list) -> None:
+        """``rules.velocity``: record the found people's boxes and filter velocities, and
+        move the reported hidden people's boxes where their measured velocity wins."""
+        rule = self.rules.velocity
+        rule.found(self._frame, [t.id for t in found],
+                   np.array([t.box for t in found]).reshape(-1, 4),
+                   np.array(velocities).reshape(-1, 2))
+        hidden = [t for t in out if t.state == TrackState.OCCLUDED]
+        if hidden:
+            boxes = np.array([t.box for t in hidden])
+            rule.place(self._frame, [t.id for t in hidden], boxes)
+            for t, box in zip(hidden, boxes):
+                t.box = box
+        rule.forget({person.public_id for person in self._persons})
 
     @staticmethod
     def _track(person: _Person, branch: _Branch, box: np.ndarray | None, state: TrackState) -> Track:
