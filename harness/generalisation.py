@@ -14,7 +14,9 @@ Which data is which (docs/generalisation.md says the same, with the latest table
 * untouched: synthetic seeds >= 1000 (the project's defaults and adaptations were measured
   on seeds 0-15 and tuned on seed 100), OneLeaveShop1cor frames 151-295, the replayed real
   trajectories (CAVIAR OneLeaveShop2cor, PETS09-S2L1, TUD-Campus) at their real frame rates,
-  the synthetic crowd at three densities (seeds >= 1000).
+  the synthetic crowd at three densities (seeds 2000-2009: ten seeds, because one late
+  identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds 1000-1009 decided a default,
+  ``adaptations.appearance_margin``, so they count as looked at).
 
 Used by ``benchmarks/bench_generalisation.py`` (the command line); ``run_table`` is the
 library entry point.
@@ -40,6 +42,8 @@ METRICS = ("IDF1", "HOTA", "MOTA")
 TUNING, UNTOUCHED = "tuning", "untouched"
 #: synthetic seeds never used for any choice (the project used 0-15 and 100)
 UNTOUCHED_SEEDS = (1000, 1001)
+#: crowd seeds never used for any choice (one exchange moves a seed by up to 0.1 IDF1)
+CROWD_SEEDS = tuple(range(2000, 2010))
 #: every tracker of ours and outside, in table order; unavailable ones are skipped, and
 #: every conf/tracker/*_tuned.yaml is added after the tracker it tunes
 TRACKERS = ("baseline", "reta", "reta_paper", "pbm", "pbm_paper", "bytetrack", "ocsort",
@@ -110,7 +114,7 @@ SETS: tuple[EvalSet, ...] = (
             requires=("TUD-Campus",)),
     *(EvalSet(f"crowd d{d}", UNTOUCHED,
               ("dataset=synthetic", "dataset.scenarios=[crowd]", "dataset.people=12",
-               f"dataset.density={d}", *GT03), UNTOUCHED_SEEDS,
+               f"dataset.density={d}", *GT03), CROWD_SEEDS,
               description=f"synthetic crowd, 12 people at {d} persons/m^2, noisy gt miss 0.3")
       for d in (0.2, 0.4, 0.8)),
 )

@@ -41,9 +41,7 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     assert isinstance(paper.velocity, FilterPrediction)
     ours = build_rules(Adaptations(), h)
     assert isinstance(ours.pixels, ForegroundPixels) and ours.gate == KalmanGate(3.0)
-    assert isinstance(ours.stage1_appearance, AbsoluteAppearance)  # not taken (docs/adaptations.md)
-    assert isinstance(build_rules(Adaptations(appearance_margin=True), h).stage1_appearance,
-                      AppearanceMargin)
+    assert isinstance(ours.stage1_appearance, AppearanceMargin)
     assert isinstance(ours.appearance_behind, BlendVisible)
     assert isinstance(ours.shape_behind, EstimateShape)
     assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0)
@@ -142,4 +140,5 @@ def test_groups_are_frozen_and_paper_mode_changes_nothing_else():
     assert Adaptations(gate_sigmas=3).gate_sigmas == 3.0 and Adaptations.paper().changed() == []
     assert Adaptations(gate_sigmas=0.0, blend_visible=False).changed() == [
         "shape_estimate", "foreground_histograms", "foreground_support", "report_exposed",
-        "report_spread", "tentative_misses", "max_hidden", "measured_velocity"]
+        "report_spread", "tentative_misses", "max_hidden", "appearance_margin",
+        "measured_velocity"]

@@ -139,8 +139,8 @@ class Adaptations:
         appearance_margin: stage 1 scores a pair's appearance by its margin over its rivals,
             rho minus the larger of the best rho of another person for that measurement and
             of another measurement for that person (0 when the pair is not the best both
-            ways), instead of rho itself; a pair with no rival keeps rho. False: rho (eq. 4,
-            the paper, and our default).
+            ways), instead of rho itself; a pair with no rival keeps rho (our default).
+            False: rho (eq. 4, the paper).
         measured_velocity: a reported hidden person stands at its last measured box moved
             by its measured velocity when that velocity has predicted its measurements
             better than the Kalman filter's so far (``trackers.common.measured_velocity``);
@@ -157,7 +157,7 @@ class Adaptations:
     tentative_misses: int = 2
     max_hidden: int = 150
     stage1_unmatched_cost: float = 2.0
-    appearance_margin: bool = False
+    appearance_margin: bool = True
     measured_velocity: bool = True
 
     def __post_init__(self) -> None:
