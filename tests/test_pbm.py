@@ -40,7 +40,6 @@ from trackers.layered.models import (
 from trackers.layered.parts import N_PARTS, PartFeatureExtractor
 from trackers.layered.search import (
     occlusion_kind,
-    occlusion_kinds,
     search_boxes,
     search_boxes_many,
     top_profile_heads,
@@ -217,7 +216,7 @@ def test_occlusion_rule_and_search_sizes():
     np.testing.assert_allclose(boxes[:, 0] + 0.5 * boxes[:, 2], 200.0)  # xc on the head (eq. 1)
 
 
-def test_batched_occlusion_rule_and_search_equal_the_single_ones():
+def test_batched_search_boxes_equal_the_single_ones():
     rng = np.random.default_rng(4)
     heads = rng.uniform(0, 300, (6, 3))
     wh = rng.uniform(10, 100, (6, 2))
@@ -225,12 +224,6 @@ def test_batched_occlusion_rule_and_search_equal_the_single_ones():
     many = search_boxes_many(heads, wh, alpha, 0.05, 2)
     for s in range(6):
         np.testing.assert_array_equal(many[s], search_boxes(heads[s], wh[s], alpha[s], 0.05, 2))
-    regions = rng.uniform(5, 150, (9, 2))
-    kinds = occlusion_kinds(regions, wh, 0.5)
-    assert set(np.unique(kinds)) == {-1, 0, 1}
-    for t in range(6):
-        for n in range(9):
-            assert kinds[t, n] == occlusion_kind(regions[n], wh[t], 0.5)
 
 
 def test_two_heads_in_one_blob():

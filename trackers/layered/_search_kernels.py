@@ -1,6 +1,6 @@
 """Compiled kernels of ``trackers.layered.search`` (numba, one core): the image scans of
 candidate finding (PBM 2, 3.1) that numpy would spell as many temporaries per blob or box
-(top-profile heads, head bands, foreground counts), the occlusion test (PBM 3.1) and the
+(top-profile heads, head bands, foreground counts) and the
 head-anchored boxes of eqs. 9-10 (``head_boxes``, tested against
 ``equations.search_boxes``). None calls a kernel of another file.
 """
@@ -95,24 +95,6 @@ def mask_span(mask: np.ndarray, lo: int, hi: int) -> tuple[int, int, int, int]:
     if r0 < 0:
         return 0, 0, 0, 0
     return r0, r1 + 1, c0, c1 + 1
-
-
-@numba.njit(cache=True)
-def kinds_matrix(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> np.ndarray:
-    """``search.occlusion_kinds`` compiled: (T, N) int64 of 0, +1 (larger), -1 (smaller)."""
-    T, N = predicted_wh.shape[0], region_wh.shape[0]
-    out = np.zeros((T, N), np.int64)
-    for t in range(T):
-        pw, ph = predicted_wh[t, 0], predicted_wh[t, 1]
-        dw, dh = max(pw, 1.0), max(ph, 1.0)
-        for n in range(N):
-            rw = (region_wh[n, 0] - pw) / dw
-            rh = (region_wh[n, 1] - ph) / dh
-            if rw > threshold or rh > threshold:
-                out[t, n] = 1
-            elif rw < -threshold or rh < -threshold:
-                out[t, n] = -1
-    return out
 
 
 @numba.njit(cache=True)

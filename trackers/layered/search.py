@@ -34,7 +34,6 @@ from trackers.layered._search_kernels import (
     band_heads,
     covered_count,
     head_boxes,
-    kinds_matrix,
     mask_span,
     profile_peaks,
 )
@@ -199,28 +198,27 @@ def split_blob_box(mask: np.ndarray, offset: np.ndarray, heads_x: np.ndarray, k:
 
 
 def occlusion_kind(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> int:
-    """PBM 3.1 occlusion test: 0 unoccluded, +1 larger region, -1 smaller region.
-
-    Occluded when |w_c - w| / w or |h_c - h| / h exceeds ``threshold``; larger when either
-    dimension grew beyond it, else smaller.
-    """
-    rel = (np.asarray(region_wh, dtype=np.float64) - predicted_wh) / np.maximum(predicted_wh, 1.0)
-    if (rel > threshold).any():
-        return 1
-    if (rel < -threshold).any():
-        return -1
-    return 0
+    """PBM 3.1 occlusion test of one region against one target (``occlusion_kinds``):
+    0 unoccluded, +1 larger region, -1 smaller region."""
+    return int(occlusion_kinds(region_wh, predicted_wh, threshold)[0, 0])
 
 
 def occlusion_kinds(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> np.ndarray:
-    """``occlusion_kind`` of N candidate regions against T targets at once: (T, N) int
-    (0 unoccluded, +1 larger, -1 smaller; PBM 3.1). Compiled (``kinds_matrix``).
+    """PBM 3.1 occlusion test of N candidate regions against T targets: (T, N) int64,
+    0 unoccluded, +1 larger region, -1 smaller region.
+
+    Occluded when |w_c - w| / w or |h_c - h| / h exceeds ``threshold`` (w, h floored at
+    1 pixel); larger when either dimension grew beyond it, else smaller.
 
     Args:
         region_wh: (N, 2) candidate region sizes. predicted_wh: (T, 2) KF2 predictions.
     """
-    return kinds_matrix(np.asarray(region_wh, dtype=np.float64).reshape(-1, 2),
-                        np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2), float(threshold))
+    region_wh = np.asarray(region_wh, dtype=np.float64).reshape(-1, 2)
+    predicted_wh = np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2)
+    rel = ((region_wh[None, :, :] - predicted_wh[:, None, :])
+           / np.maximum(predicted_wh, 1.0)[:, None, :])                 # (T, N, 2)
+    larger, smaller = (rel > threshold).any(axis=2), (rel < -threshold).any(axis=2)
+    return np.where(larger, 1, np.where(smaller, -1, 0)).astype(np.int64)
 
 
 def search_boxes_many(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray,
