@@ -13,22 +13,6 @@ from trackers.layered import search as S
 # ---------------------------------------------------------------------- references
 
 
-def _split_blob_box_reference(mask, offset, heads_x, k):
-    h, w = mask.shape
-    order = np.sort(heads_x)
-    xk = heads_x[k]
-    i = int(np.searchsorted(order, xk))
-    lo = 0 if i == 0 else round(0.5 * (order[i - 1] + xk))
-    hi = w if i == len(order) - 1 else round(0.5 * (order[i + 1] + xk))
-    sub = mask[:, lo:hi]
-    rows = np.nonzero(sub.any(axis=1))[0]
-    cols = np.nonzero(sub.any(axis=0))[0]
-    if len(rows) == 0:
-        return np.array([offset[0] + lo, offset[1], max(hi - lo, 1), h], dtype=np.float64)
-    return np.array([offset[0] + lo + cols[0], offset[1] + rows[0], cols[-1] + 1 - cols[0],
-                     rows[-1] + 1 - rows[0]], dtype=np.float64)
-
-
 def _head_from_band_reference(fg, box):
     x, y, w, h = box
     if fg is not None:
@@ -183,18 +167,19 @@ def test_top_profile_heads_equal_the_reference_including_edge_cases():
     assert S.top_profile_heads(np.zeros((0, 7), bool), 2.0, 1.0).shape == (0, 2)
 
 
-def test_split_blob_box_equals_the_reference():
-    rng = np.random.default_rng(5)
-    for _ in range(200):
-        h, w = int(rng.integers(5, 60)), int(rng.integers(5, 60))
-        mask = _random_blob(rng, h, w)
-        heads_x = rng.uniform(0, w, int(rng.integers(1, 5)))
-        if rng.random() < 0.2:
-            heads_x = np.round(heads_x * 2) / 2  # half-way splits at .5: round half to even
-        offset = rng.uniform(0, 100, 2)
-        for k in range(len(heads_x)):
-            np.testing.assert_array_equal(S.split_blob_box(mask, offset, heads_x, k),
-                                          _split_blob_box_reference(mask, offset, heads_x, k))
+def test_split_blob_box_cuts_half_way_between_heads_and_bounds_the_foreground():
+    mask = np.zeros((100, 80), bool)
+    mask[20:100, 5:35] = True  # left body
+    mask[5:20, 14:26] = True  # its head, top row 5, centre column 19.5
+    mask[28:100, 35:75] = True  # right body (touching: one blob)
+    mask[12:28, 48:62] = True  # its head, top row 12
+    heads_x, offset = np.array([54.5, 19.5]), np.array([100.0, 200.0])
+    # cut at round((19.5 + 54.5) / 2) = 37: columns 5..36 rows 5..99, columns 37..74 rows 12..99
+    np.testing.assert_array_equal(S.split_blob_box(mask, offset, heads_x, 1), [105.0, 205.0, 32.0, 95.0])
+    np.testing.assert_array_equal(S.split_blob_box(mask, offset, heads_x, 0), [137.0, 212.0, 38.0, 88.0])
+    empty = np.zeros((10, 20), bool)  # no foreground in the slice: the slice itself
+    np.testing.assert_array_equal(S.split_blob_box(empty, offset, np.array([5.0, 15.0]), 1),
+                                  [110.0, 200.0, 10.0, 10.0])
 
 
 def test_blobs_boxes_equal_opencv_statistics():

@@ -79,25 +79,6 @@ def profile_peaks(mask: np.ndarray, min_separation: float, min_prominence: float
 
 
 @numba.njit(cache=True)
-def mask_span(mask: np.ndarray, lo: int, hi: int) -> tuple[int, int, int, int]:
-    """First and last+1 row, first and last+1 column (relative to ``lo``) of the True
-    pixels of ``mask[:, lo:hi]``; (0, 0, 0, 0) when there are none."""
-    r0, r1, c0, c1 = -1, -1, hi - lo, -1
-    for r in range(mask.shape[0]):
-        row = mask[r]
-        for c in range(lo, hi):
-            if row[c]:
-                if r0 < 0:
-                    r0 = r
-                r1 = r
-                c0 = min(c0, c - lo)
-                c1 = max(c1, c - lo)
-    if r0 < 0:
-        return 0, 0, 0, 0
-    return r0, r1 + 1, c0, c1 + 1
-
-
-@numba.njit(cache=True)
 def head_boxes(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray, step: float,
                search_range: int) -> np.ndarray:
     """``search.search_boxes_many`` compiled: (S, (2 r + 1)^2, 4) xywh (eqs. 9-10)."""

@@ -34,7 +34,6 @@ from trackers.layered._search_kernels import (
     band_heads,
     covered_count,
     head_boxes,
-    mask_span,
     profile_peaks,
 )
 from trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
@@ -191,10 +190,13 @@ def split_blob_box(mask: np.ndarray, offset: np.ndarray, heads_x: np.ndarray, k:
     lo = 0 if i == 0 else round(0.5 * (order[i - 1] + xk))
     hi = w if i == len(order) - 1 else round(0.5 * (order[i + 1] + xk))
     ox, oy = float(offset[0]), float(offset[1])
-    r0, r1, c0, c1 = mask_span(np.ascontiguousarray(mask, dtype=np.bool_), lo, max(hi, lo))
-    if r1 == 0:
+    part = mask[:, lo:max(hi, lo)]
+    rows = np.flatnonzero(part.any(axis=1))
+    if len(rows) == 0:
         return np.array([ox + lo, oy, max(hi - lo, 1), h], dtype=np.float64)
-    return np.array([ox + lo + c0, oy + r0, c1 - c0, r1 - r0], dtype=np.float64)
+    cols = np.flatnonzero(part.any(axis=0))
+    return np.array([ox + lo + cols[0], oy + rows[0], cols[-1] + 1 - cols[0], rows[-1] + 1 - rows[0]],
+                    dtype=np.float64)
 
 
 def occlusion_kind(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float) -> int:
