@@ -1,6 +1,6 @@
 """Compiled kernels of ``trackers.layered.search`` (numba, one core): the image scans of
 candidate finding (PBM 2, 3.1) that numpy would spell as many temporaries per blob or box
-(top-profile heads, head bands, foreground counts) and the
+(head bands, foreground counts) and the
 head-anchored boxes of eqs. 9-10 (``head_boxes``, tested against
 ``equations.search_boxes``). None calls a kernel of another file.
 """
@@ -9,73 +9,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-
-
-@numba.njit(cache=True)
-def profile_peaks(mask: np.ndarray, min_separation: float, min_prominence: float) -> np.ndarray:
-    """``search.top_profile_heads`` compiled: (K, 2) float64 (column centre, top row) of
-    the peaks of a bool blob crop's top profile, highest first (PBM 3.1 heads)."""
-    h, w = mask.shape
-    top = np.full(w, np.float64(h))
-    left_to_find = w
-    for r in range(h):  # the first foreground row of each column
-        if left_to_find == 0:
-            break
-        row = mask[r]
-        for c in range(w):
-            if row[c] and top[c] == h:
-                top[c] = r
-                left_to_find -= 1
-    if left_to_find == w:
-        return np.zeros((0, 2))
-    rad = max(int(min_separation // 2), 1)
-    span = int(2 * min_separation)
-    # plateau runs of columns equal to the running minimum over 2 rad + 1 columns (edges
-    # replicated) and holding foreground; a run's columns share one top row
-    cand = np.empty((w, 2))
-    nc = 0
-    c = 0
-    while c < w:
-        if top[c] == h or top[c] != np.min(top[max(c - rad, 0):min(c + rad + 1, w)]):
-            c += 1
-            continue
-        g0 = c
-        g1 = c
-        while (g1 + 1 < w and top[g1 + 1] != h
-               and top[g1 + 1] == np.min(top[max(g1 + 1 - rad, 0):min(g1 + rad + 2, w)])):
-            g1 += 1
-        t = top[g0]
-        ok_left = g0 - span <= 0
-        if not ok_left and g0 > max(g0 - span, 0):
-            ok_left = np.max(top[max(g0 - span, 0):g0]) - t >= min_prominence
-        ok_right = g1 + span >= w - 1
-        if not ok_right and min(g1 + span + 1, w) > g1 + 1:
-            ok_right = np.max(top[g1 + 1:min(g1 + span + 1, w)]) - t >= min_prominence
-        if ok_left and ok_right:
-            # insertion by top row, stable: the highest first, column order on ties
-            j = nc
-            while j > 0 and cand[j - 1, 1] > t:
-                cand[j, 0], cand[j, 1] = cand[j - 1, 0], cand[j - 1, 1]
-                j -= 1
-            cand[j, 0], cand[j, 1] = 0.5 * (g0 + g1), t
-            nc += 1
-        c = g1 + 1
-    if nc == 0:
-        best = int(np.argmin(top))
-        cand[0, 0], cand[0, 1] = float(best), top[best]
-        nc = 1
-    kept = np.empty((nc, 2))
-    nk = 0
-    for i in range(nc):  # non-maximum suppression, highest first
-        ok = True
-        for j in range(nk):
-            if abs(cand[i, 0] - kept[j, 0]) < min_separation:
-                ok = False
-                break
-        if ok:
-            kept[nk, 0], kept[nk, 1] = cand[i, 0], cand[i, 1]
-            nk += 1
-    return kept[:nk].copy()
 
 
 @numba.njit(cache=True)

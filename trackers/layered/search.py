@@ -28,13 +28,13 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.ndimage import minimum_filter1d
 
 from trackers.layered._search_kernels import (
     band_bounds,
     band_heads,
     covered_count,
     head_boxes,
-    profile_peaks,
 )
 from trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
 
@@ -97,7 +97,7 @@ def top_profile_heads(mask: np.ndarray, min_separation: float, min_prominence: f
     (a grey erosion, edges replicated) whose profile drops by ``min_prominence`` rows on
     both sides within ``2 * min_separation`` columns (or reaches the crop edge); without
     any, the highest column. Peaks closer than ``min_separation`` to a higher one are
-    suppressed. Compiled (``_search_kernels.profile_peaks``).
+    suppressed.
 
     Args:
         mask: (h, w) bool crop of one blob.
@@ -108,10 +108,31 @@ def top_profile_heads(mask: np.ndarray, min_separation: float, min_prominence: f
         (K, 2) float64 (column centre, top row) in crop coordinates, highest head first.
     """
     h, w = mask.shape
-    if h == 0 or w == 0:
+    has = mask.any(axis=0)
+    if not has.any():
         return np.zeros((0, 2))
-    return profile_peaks(np.ascontiguousarray(mask, dtype=np.bool_), float(min_separation),
-                         float(min_prominence))
+    top = np.where(has, mask.argmax(axis=0), h).astype(np.float64)  # the top profile
+    erosion = minimum_filter1d(top, size=2 * max(int(min_separation // 2), 1) + 1, mode="nearest")
+    cols = np.flatnonzero((top == erosion) & has)
+    span = int(2 * min_separation)
+    peaks = []
+    for run in np.split(cols, np.flatnonzero(np.diff(cols) > 1) + 1):  # runs share one top row
+        c0, c1 = int(run[0]), int(run[-1])
+        t = top[c0]
+        left, right = top[max(c0 - span, 0):c0], top[c1 + 1:min(c1 + span + 1, w)]
+        ok_left = c0 - span <= 0 or (len(left) > 0 and left.max() - t >= min_prominence)
+        ok_right = c1 + span >= w - 1 or (len(right) > 0 and right.max() - t >= min_prominence)
+        if ok_left and ok_right:
+            peaks.append((0.5 * (c0 + c1), t))
+    if not peaks:  # the highest column
+        best = int(np.argmin(top))
+        peaks = [(float(best), top[best])]
+    peaks.sort(key=lambda p: p[1])  # highest first, column order on ties
+    kept: list[tuple[float, float]] = []
+    for p in peaks:  # non-maximum suppression
+        if all(abs(p[0] - q[0]) >= min_separation for q in kept):
+            kept.append(p)
+    return np.array(kept, dtype=np.float64).reshape(-1, 2)
 
 
 def head_from_band(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
