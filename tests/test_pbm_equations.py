@@ -36,7 +36,7 @@ def test_eq11_to_13_kernels_equal_the_equations(overlap_as_measured):
     assert ((p >= 0) & (p <= 1)).all()
 
 
-def test_eq9_10_kernel_equals_the_equation():
+def test_eq9_10_batch_equals_the_equation():
     rng = np.random.default_rng(8)
     heads = np.column_stack([rng.uniform(0, 300, 5), rng.uniform(0, 200, 5), rng.uniform(4, 20, 5)])
     wh = rng.uniform(10, 120, (5, 2))

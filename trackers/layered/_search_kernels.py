@@ -1,34 +1,15 @@
-"""Compiled kernels of ``trackers.layered.search`` (numba, one core): the image scans of
-candidate finding (PBM 2, 3.1) that numpy would spell as many temporaries per blob or box
-(head bands, foreground counts) and the
-head-anchored boxes of eqs. 9-10 (``head_boxes``, tested against
-``equations.search_boxes``). None calls a kernel of another file.
+"""Compiled kernels of ``trackers.layered.search`` (numba, one core), kept where
+``benchmarks/bench_pbm.py`` shows their numpy forms cost the tracker's speed: the head
+bands of the detection boxes (``band_heads``, PBM 3.1, tested against
+``cv2.boundingRect`` of each band) and the foreground the detection boxes cover
+(``covered_count``, PBM 2, tested against ``geometry.box_slices``). None calls a kernel of
+another file.
 """
 
 from __future__ import annotations
 
 import numba
 import numpy as np
-
-
-@numba.njit(cache=True)
-def head_boxes(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray, step: float,
-               search_range: int) -> np.ndarray:
-    """``search.search_boxes_many`` compiled: (S, (2 r + 1)^2, 4) xywh (eqs. 9-10)."""
-    S = heads.shape[0]
-    m = 2 * search_range + 1
-    out = np.empty((S, m * m, 4))
-    for s in range(S):
-        for i in range(m):
-            w = predicted_wh[s, 0] * (1.0 + step * np.float64(i - search_range))
-            x = heads[s, 0] - alpha[s] * w
-            for k in range(m):
-                b = i * m + k
-                out[s, b, 0] = x
-                out[s, b, 1] = heads[s, 1]
-                out[s, b, 2] = w
-                out[s, b, 3] = predicted_wh[s, 1] * (1.0 + step * np.float64(k - search_range))
-    return out
 
 
 @numba.njit(cache=True)

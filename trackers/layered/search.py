@@ -34,7 +34,6 @@ from trackers.layered._search_kernels import (
     band_bounds,
     band_heads,
     covered_count,
-    head_boxes,
 )
 from trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
 
@@ -246,17 +245,25 @@ def occlusion_kinds(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: 
 
 def search_boxes_many(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray,
                       step: float, search_range: int) -> np.ndarray:
-    """``search_boxes`` (eqs. 9-10) of S heads at once: (S, (2 r + 1)^2, 4) xywh, box
+    """``search_boxes`` (eqs. 9-10) of S heads: (S, (2 r + 1)^2, 4) xywh, box
     i * (2 r + 1) + k of head s having width w_s (1 + step i) and height h_s (1 + step k).
-    Compiled (``head_boxes``).
 
     Args:
         heads: (S, 3) heads. predicted_wh: (S, 2) KF2 sizes. alpha: (S,) eq. 1 ratios.
     """
-    return head_boxes(np.asarray(heads, dtype=np.float64).reshape(-1, 3),
-                      np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2),
-                      np.asarray(alpha, dtype=np.float64).reshape(-1), float(step),
-                      int(search_range))
+    heads = np.asarray(heads, dtype=np.float64).reshape(-1, 3)
+    predicted_wh = np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2)
+    alpha = np.asarray(alpha, dtype=np.float64).reshape(-1)
+    i = np.arange(-search_range, search_range + 1, dtype=np.float64)
+    ws = predicted_wh[:, 0, None] * (1.0 + step * i)                        # eq. 9, (S, m)
+    hs = predicted_wh[:, 1, None] * (1.0 + step * i)                        # eq. 10, (S, m)
+    S, m = len(heads), len(i)
+    out = np.empty((S, m, m, 4))  # [s, i, k]: width w_i, height h_k
+    out[..., 0] = (heads[:, 0, None] - alpha[:, None] * ws)[:, :, None]  # centroid on the head (eq. 1)
+    out[..., 1] = heads[:, 1, None, None]                                  # hanging from the head top
+    out[..., 2] = ws[:, :, None]
+    out[..., 3] = hs[:, None, :]
+    return out.reshape(S, m * m, 4)
 
 
 def aligned_box(head: np.ndarray, predicted_wh: np.ndarray, alpha: float) -> np.ndarray:
