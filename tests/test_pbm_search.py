@@ -258,23 +258,3 @@ def test_bgr_frames_give_the_grey_frames_results():
         b = S.match_head_template(gray, tpl_grey, centre, radius)
         np.testing.assert_array_equal(a[0], b[0])
         assert a[1] == b[1]
-
-
-def test_foreground_counts_equal_the_mask_its_count_and_the_residual():
-    from trackers.layered._search_kernels import foreground_counts
-    rng = np.random.default_rng(11)
-    for trial in range(100):
-        H, W = int(rng.integers(1, 60)), int(rng.integers(1, 60))
-        labels = np.where(rng.random((H, W)) < rng.uniform(0.0, 0.9), rng.integers(1, 5, (H, W)), 0)
-        labels = labels.astype(np.int32 if trial % 2 else np.uint8)
-        n = int(rng.integers(0, 7))
-        boxes = np.column_stack([rng.uniform(-20, W + 20, n), rng.uniform(-20, H + 20, n),
-                                 rng.uniform(-5, 50, n), rng.uniform(-5, 70, n)])
-        if n and trial % 3 == 0:
-            boxes[0, int(rng.integers(0, 4))] = np.nan  # a non-finite box covers nothing
-        mask, count, covered = foreground_counts(labels, boxes)
-        np.testing.assert_array_equal(mask, labels != 0)
-        assert mask.dtype == bool and count == np.count_nonzero(labels)
-        assert count - covered == S.residual_foreground(labels != 0, boxes)
-    mask, count, covered = foreground_counts(np.ones((4, 6), np.int64)[:, ::-1], np.zeros((0, 4)))
-    assert mask.all() and (count, covered) == (24, 0)

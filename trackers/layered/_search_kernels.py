@@ -126,26 +126,3 @@ def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
     for r in range(rmin, rmax):
         total += _covered_in_row(fg[r], r, spans, starts, ends)
     return total
-
-
-@numba.njit(cache=True)
-def foreground_counts(values: np.ndarray, boxes: np.ndarray) -> tuple:  # pragma: no cover (compiled)
-    """The foreground (PBM 2) of an (H, W) label image or mask in one pass: (H, W) bool
-    ``values != 0``, its number of True pixels (``np.count_nonzero``) and the number of
-    them inside the union of the xywh boxes (``covered_count``), each row counted while
-    it is still in cache."""
-    H, W = values.shape
-    mask = np.empty((H, W), np.bool_)
-    spans = _box_spans(boxes, H, W)
-    starts, ends = np.empty(boxes.shape[0], np.int64), np.empty(boxes.shape[0], np.int64)
-    rmin, rmax = _span_rows(spans, H)
-    count, covered = 0, 0
-    for r in range(H):
-        src, dst = values[r], mask[r]
-        for c in range(W):
-            v = src[c] != 0
-            dst[c] = v
-            count += v
-        if rmin <= r < rmax:
-            covered += _covered_in_row(dst, r, spans, starts, ends)
-    return mask, count, covered

@@ -46,11 +46,9 @@ class CandidateFinder:
         self._blob_pairs = 0
 
     def find(self, fg: np.ndarray | None, detections: Detections,
-             frame: np.ndarray | None = None, fg_residual: int | None = None) -> Candidates:
+             frame: np.ndarray | None = None) -> Candidates:
         """The frame's candidates (PBM 2, 3.1): the valid detection boxes with their heads,
-        then the heads of foreground blobs that no detection explains (``fg_residual``: the
-        number of foreground pixels that no detection box covers, ``residual_foreground``,
-        when known)."""
+        then the heads of foreground blobs that no detection explains."""
         det_boxes = detections.boxes
         heads = detections.heads
         detector = self.params.head_detector
@@ -73,9 +71,7 @@ class CandidateFinder:
         if fg is None:
             return Candidates(*rows)
         # blobs matter only where foreground is left unexplained by the detections
-        if fg_residual is None and len(det_boxes):
-            fg_residual = residual_foreground(fg, det_boxes)
-        if len(det_boxes) and fg_residual < self.params.min_blob_area:
+        if len(det_boxes) and residual_foreground(fg, det_boxes) < self.params.min_blob_area:
             return Candidates(*rows)
         s = self.params.blob_downsample
         small = np.ascontiguousarray(fg[::s, ::s]) if s > 1 else fg

@@ -55,7 +55,6 @@ from trackers.layered._kernels import (
     gated_pairs,
     matched_rows,
 )
-from trackers.layered._search_kernels import foreground_counts
 from trackers.layered.association import pair_scores
 from trackers.layered.candidates import CandidateFinder
 from trackers.layered.dynamics import Gate
@@ -181,11 +180,11 @@ class PBMTracker:
             One Track per reported target: CONFIRMED when found, OCCLUDED while unfound,
             TENTATIVE before confirmation.
         """
-        frame, detections, fg, fg_residual = self._inputs(frame, detections, foreground)
+        frame, detections, fg = self._inputs(frame, detections, foreground)
         self._frame += 1
         self._had_fg = fg is not None
         H, W = frame.shape[:2]
-        cand, feats = self._find_candidates(frame, detections, fg, fg_residual)  # PBM 2
+        cand, feats = self._find_candidates(frame, detections, fg)  # PBM 2
         pred_wh = self.targets.predict()  # PBM 3, eqs. 7-8
         scores = FrameScores.empty(len(self.targets), len(cand))
         if len(self.targets) and len(cand):
@@ -204,8 +203,7 @@ class PBMTracker:
 
     def _inputs(self, frame: np.ndarray, detections: Detections | None,
                 foreground: np.ndarray | None) -> tuple:
-        """Checked inputs: (frame, detections, fg (H, W) bool or None, fg_residual: the
-        foreground pixels no detection box covers when a label image gave them, else None)."""
+        """Checked inputs: (frame, detections, fg (H, W) C-contiguous bool or None)."""
         if frame is None:
             raise ValueError("PBMTracker.update: frame is None; PBM needs pixels (colour histograms of the parts)")
         frame = np.asarray(frame)
@@ -213,30 +211,22 @@ class PBMTracker:
             raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
         if detections is None:
             detections = Detections.empty()
-        fg, fg_residual = None, None
+        fg = None
         if foreground is not None:
             foreground = np.asarray(foreground)
             if foreground.shape != frame.shape[:2]:
                 raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
                                  f"differs from frame {frame.shape[:2]}")
-            if foreground.dtype == bool:
-                fg = np.ascontiguousarray(foreground)
-            elif foreground.dtype.kind in "iu" and foreground.dtype.isnative:
-                # a label image: the mask, its pixels and those the detections cover, in one pass
-                fg, count, covered = foreground_counts(
-                    foreground, np.asarray(detections.boxes, dtype=np.float64).reshape(-1, 4))
-                fg_residual = count - covered
-            else:
-                fg = foreground != 0
-        return frame, detections, fg, fg_residual
+            fg = np.ascontiguousarray(foreground if foreground.dtype == bool else foreground != 0)
+        return frame, detections, fg
 
-    def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None,
-                         fg_residual: int | None) -> tuple[Candidates, PartFeatures]:
+    def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None
+                         ) -> tuple[Candidates, PartFeatures]:
         """PBM 2, 2.1: the frame's N candidates (``CandidateFinder``) with their foreground
         centroids set, and their parts split at them (eqs. 1-2) with the features of PBM 2.2."""
         self._extractor.start(frame, fg)
         self._search_extractor.start(frame, fg)
-        cand = self._finder.find(fg, detections, frame, fg_residual)
+        cand = self._finder.find(fg, detections, frame)
         cand.centroid, feats = self._extractor.extract_at_centroids(cand.box)
         return cand, feats
 
