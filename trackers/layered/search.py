@@ -31,7 +31,6 @@ import numpy as np
 from scipy.ndimage import minimum_filter1d
 
 from trackers.layered._search_kernels import (
-    band_bounds,
     band_heads,
     covered_count,
 )
@@ -146,16 +145,19 @@ def head_from_band(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
         r0, r1 = max(int(y), 0), min(math.ceil(y + HEAD_FRACTION * h) + 1, H)
         c0, c1 = max(int(x), 0), min(math.ceil(x + w), W)
         if r1 > r0 and c1 > c0:
-            # bounding rectangle of the band's foreground: first column bx, width bw
-            bx, by, bw = band_bounds(fg, r0, r1, c0, c1)
-            if bw > 0:
-                return np.array([c0 + 0.5 * (2 * bx + bw), r0 + by, max(bw, 1)], dtype=np.float64)
+            band = fg[r0:r1, c0:c1]
+            cols = np.flatnonzero(band.any(axis=0))  # the band's foreground columns
+            if len(cols):
+                top = int(np.flatnonzero(band.any(axis=1))[0])
+                return np.array([c0 + 0.5 * (cols[0] + cols[-1] + 1), r0 + top,
+                                 max(cols[-1] + 1 - cols[0], 1)], dtype=np.float64)
     return np.array([x + 0.5 * w, y, 0.5 * w])
 
 
 def heads_from_bands(fg: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """``head_from_band`` of N xywh boxes at once (PBM 3.1): (N, 3) float64 heads
     (x top-centre, y top, width); a non-finite box gets its band centre (non-finite).
+    Compiled (``_search_kernels.band_heads``, tested against ``head_from_band``).
 
     Args:
         fg: (H, W) bool foreground. boxes: (N, 4) xywh.
