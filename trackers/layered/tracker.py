@@ -34,8 +34,9 @@ not switchable: features are measured on a fixed grid of samples per box
 (``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
 P(D >= d) (``models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2 is used
 sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
-1 + m (the overlap taken as measured with ``adaptations.overlap_as_measured``); KF2 holds an unfound target's size; a blob with several heads counts as merged
-(searched) whatever its size.
+1 + m (the overlap taken as measured with ``adaptations.overlap_as_measured``); KF2 holds an
+unfound target's size; a blob with several heads counts as merged (searched) whatever its
+size.
 
 Output ``Track.extra``: ``parts`` (5, 4) xywh part boxes, ``occluded_parts`` (5,) bool
 (frozen parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates
