@@ -51,9 +51,10 @@ ground truth at detector seeds 1000-1001, and the front end's silhouette detecto
 trajectories of CAVIAR OneLeaveShop2cor (25 fps), PETS09-S2L1 (7 fps) and TUD-Campus (25 fps)
 replayed at their real frame rates (seed 1000), and the synthetic crowd (12 people) at 0.2,
 0.4 and 0.8 persons per square metre (seeds 2000-2009: one late identity exchange moves a
-crowd seed's IDF1 by up to 0.1, and seeds 1000-1009 decided reta's `appearance_margin`). Caveat: whole-sequence CAVIAR
-OneLeaveShop1cor figures (seeds 0-7) appear in earlier commit messages, so frames 151-295 were
-seen as part of the whole; from now on only frames 1-150 are for choosing.
+crowd seed's IDF1 by up to 0.1, and seeds 1000-1009 decided reta's `appearance_margin`).
+Caveat: whole-sequence CAVIAR OneLeaveShop1cor figures (seeds 0-7) appear in earlier commit
+messages, so frames 151-295 were seen as part of the whole; from now on only frames 1-150 are
+for choosing.
 
 **Tuned rows.** `<name>_tuned` = the best IDF1 trial of `+experiment=tune_<name>` (Optuna TPE,
 10 random start-up trials, sampler seed 0) on the tuning data of `tune_reta` / `tune_pbm`

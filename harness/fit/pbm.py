@@ -49,7 +49,8 @@ Using the learned weights (the command prints the exact line):
         'tracker.pbm.features.feature_weights={area:0.2,perimeter:0.0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0.0}'
 (``tracker.features.feature_weights=...`` when the run selects ``tracker=pbm`` alone.)
 Measured on held-out data, the omega learned on synthetic seed 1 tracks worse than the
-hand-set default although it classifies held-out pairs better: see ``benchmarks/bench_pbm_weights.py``.
+hand-set default although it classifies held-out pairs better: see
+``benchmarks/bench_pbm_weights.py``.
 """
 
 from __future__ import annotations

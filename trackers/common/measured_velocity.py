@@ -20,6 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+def _squared_miss(last: np.ndarray, velocity: np.ndarray, frames: int, centre: np.ndarray,
+                  height: float) -> float:
+    """Squared distance, in box heights^2, of ``centre`` from ``last`` + frames x velocity."""
+    return float(((last + frames * velocity - centre) ** 2).sum()) / max(height, 1.0) ** 2
+
+
 @dataclass
 class _Record:
     frame: int  # frame of the last measured box
@@ -53,9 +59,9 @@ class MeasuredVelocity:
             n = frame - rec.frame
             last = rec.box[:2] + rec.box[2:] / 2
             if rec.measured_velocity is not None:
-                h2 = max(rec.box[3], 1.0) ** 2
-                rec.filter_error += float(((last + n * rec.filter_velocity - centre) ** 2).sum()) / h2
-                rec.measured_error += float(((last + n * rec.measured_velocity - centre) ** 2).sum()) / h2
+                h = rec.box[3]
+                rec.filter_error += _squared_miss(last, rec.filter_velocity, n, centre, h)
+                rec.measured_error += _squared_miss(last, rec.measured_velocity, n, centre, h)
             rec.measured_velocity = (centre - last) / max(n, 1)
             rec.frame, rec.box, rec.filter_velocity = frame, box.copy(), v.copy()
 
