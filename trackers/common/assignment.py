@@ -103,7 +103,7 @@ def assign_min_cost(
     # a forbidden entry costs more than any assignment without one (e.g. every row left
     # over, n max_cost)
     largest = max(float(np.abs(cost[allowed]).max()) if allowed.any() else 0.0, abs(max_cost))
-    big = 1.0 + largest * (2 * n + m)
+    big = max_cost + 1.0 + largest * (2 * n + m)
     full = np.full((n, m + n), big)  # dummy columns: only row i's own is allowed
     np.copyto(full[:, :m], cost, where=allowed)
     full[np.arange(n), m + np.arange(n)] = max_cost

@@ -13,8 +13,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
+from trackers.common.assignment import assign_min_cost
 from trackers.geometry import centre_distance_matrix
 from trackers.three_hypothesis.features import bhattacharyya, region_similarity
 
@@ -64,26 +64,12 @@ def _rows(*columns: np.ndarray) -> np.ndarray:
 
 def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
     """Hungarian method where leaving a person unmatched costs ``leave``, which is also the
-    largest cost an accepted pair can have. Returns (K, 2) rows (person, measurement),
-    sorted by person.
-
-    Person i stays unmatched through its own dummy column D + i of cost ``leave``;
-    forbidden pairs (inf, NaN or above ``leave``) get a cost larger than any complete
-    assignment of allowed ones, as in ``trackers.common.assignment.assign``."""
-    n, m = cost.shape
+    largest cost an accepted pair can have (``trackers.common.assignment.assign_min_cost``).
+    Returns (K, 2) rows (person, measurement), sorted by person."""
     allowed = np.isfinite(cost) & (cost <= leave)
-    if not allowed.any():
-        return np.zeros((0, 2), dtype=int)
     if allowed.sum(axis=0).max() <= 1 and allowed.sum(axis=1).max() <= 1:
         return np.argwhere(allowed)  # no competing pairs: the assignment is immediate
-    big = leave + 1.0 + max(np.abs(cost[allowed]).max(), abs(leave)) * (2 * n + m)
-    full = np.full((n, m + n), big)
-    np.copyto(full[:, :m], cost, where=allowed)
-    k = np.arange(n)
-    full[k, m + k] = leave
-    r, c = linear_sum_assignment(full)
-    keep = c < m
-    return _rows(r[keep], c[keep])
+    return assign_min_cost(cost, leave)[0]
 
 
 def associate(
