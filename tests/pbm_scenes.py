@@ -133,6 +133,17 @@ def draw_person(img: np.ndarray | None, lab: np.ndarray, p: Person, box: np.ndar
     rect(x + 0.53 * w, y + 0.55 * h, x + 0.85 * w, y + h, p.pants)
 
 
+def two_heads_blob() -> np.ndarray:
+    """(100, 80) bool foreground of two touching people in one blob: the left one's head
+    top row 5, centre column 19.5; the right one's head top row 12, centre column 54.5."""
+    mask = np.zeros((100, 80), bool)
+    mask[20:100, 5:35] = True  # left body
+    mask[5:20, 14:26] = True  # its head, top row 5, centre column 19.5
+    mask[28:100, 35:75] = True  # right body (touching: one blob)
+    mask[12:28, 48:62] = True  # its head, top row 12
+    return mask
+
+
 def walk(length: int, start: tuple[float, float], velocity, size: tuple[float, float],
          turn_at: int | None = None, present: tuple[int, int] | None = None) -> np.ndarray:
     """(L, 4) boxes of a walk from ``start`` (top-left) with per-frame velocity (vx, vy);

@@ -227,11 +227,7 @@ def test_batched_search_boxes_equal_the_single_ones():
 
 
 def test_two_heads_in_one_blob():
-    mask = np.zeros((100, 80), bool)
-    mask[20:100, 5:35] = True  # left body
-    mask[5:20, 14:26] = True  # its head, top row 5, centre column 19.5
-    mask[28:100, 35:75] = True  # right body (touching: one blob)
-    mask[12:28, 48:62] = True  # its head, top row 12
+    mask = S.two_heads_blob()
     heads = top_profile_heads(mask, 12.0, 5.0)
     np.testing.assert_allclose(heads, [[19.5, 5.0], [54.5, 12.0]])
     single = np.zeros((60, 30), bool)

@@ -1,11 +1,13 @@
-"""The compiled PBM search helpers (trackers/layered/search.py) against straightforward
-references (the first numpy / OpenCV implementations) on seeded random inputs."""
+"""The PBM search helpers (trackers/layered/search.py): the compiled ones against
+straightforward references (numpy / OpenCV) on seeded random inputs, the numpy ones on
+hand-derived cases."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 import pytest
+from pbm_scenes import two_heads_blob
 
 from trackers.geometry import box_slices
 from trackers.layered import search as S
@@ -137,11 +139,7 @@ def test_top_profile_heads_need_prominence_and_separation():
 
 
 def test_split_blob_box_cuts_half_way_between_heads_and_bounds_the_foreground():
-    mask = np.zeros((100, 80), bool)
-    mask[20:100, 5:35] = True  # left body
-    mask[5:20, 14:26] = True  # its head, top row 5, centre column 19.5
-    mask[28:100, 35:75] = True  # right body (touching: one blob)
-    mask[12:28, 48:62] = True  # its head, top row 12
+    mask = two_heads_blob()
     heads_x, offset = np.array([54.5, 19.5]), np.array([100.0, 200.0])
     # cut at round((19.5 + 54.5) / 2) = 37: columns 5..36 rows 5..99, columns 37..74 rows 12..99
     np.testing.assert_array_equal(S.split_blob_box(mask, offset, heads_x, 1), [105.0, 205.0, 32.0, 95.0])
