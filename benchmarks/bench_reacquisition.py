@@ -13,7 +13,7 @@ For choosing rules on tuning data only (docs/generalisation.md): the sets are th
 list are refused unless ``--untouched`` is given.
 
     .venv/bin/python benchmarks/bench_reacquisition.py --set "crowd d0.8" --seeds 0 1 \\
-        --trackers reta pbm "pbm_min=pbm:tracker.adaptations.assignment=min_cost"
+        --trackers reta pbm "pbm_rm0=pbm:tracker.adaptations.relative_match=0"
 
 A tracker is ``<config>`` or ``<label>=<config>[:<override>,<override>...]`` (Hydra
 overrides of the composed config). Run it niced on a shared machine: ``nice -n 10``.

@@ -511,6 +511,20 @@ def test_unknown_key_exits_nonzero_naming_it():
     assert "foo" in p.stderr
 
 
+@pytest.mark.parametrize("tracker,key", [
+    ("reta", "stage1_unmatched_cost"), ("pbm", "occluded_cover"), ("pbm", "measured_velocity"),
+    ("pbm", "assignment"), ("pbm", "overlap_as_measured")])
+def test_an_adaptation_key_a_tracker_does_not_have_is_named(tracker, key):
+    """A user config naming an adaptation that does not exist (these were removed, not
+    taken: docs/adaptations.md) stops the build with the key named, not silently ignored."""
+    from harness.build import build_tracker, compose_config
+    from harness.loop import RunError
+
+    node = compose_config([f"tracker={tracker}", f"+tracker.adaptations.{key}=0"]).tracker
+    with pytest.raises(RunError, match=rf"tracker\.{tracker}\.adaptations\.{key}: not an argument"):
+        build_tracker(tracker, node)
+
+
 def test_cli_missing_dataset_exits_nonzero_with_message(tmp_path):
     p = run_app("dataset=mot", f"dataset.root={tmp_path / 'absent'}",
                 f"hydra.run.dir={tmp_path / 'run'}")

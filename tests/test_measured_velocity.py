@@ -1,6 +1,6 @@
-"""Where a reported hidden person stands (``adaptations.measured_velocity``, both trackers):
-its last measured box moved by its measured velocity when that velocity has predicted its
-measurements better than the tracker's filter, else the filter's prediction."""
+"""Where reta reports a hidden person (``adaptations.measured_velocity``): its last measured
+box moved by its measured velocity when that velocity has predicted its measurements better
+than the tracker's filter, else the filter's prediction."""
 
 from __future__ import annotations
 
@@ -9,8 +9,6 @@ import pbm_scenes as S
 
 from trackers.common.measured_velocity import MeasuredVelocity
 from trackers.geometry import iou_matrix
-from trackers.layered import PBMTracker
-from trackers.layered.params import Adaptations as PbmAdaptations
 from trackers.records import TrackState
 from trackers.three_hypothesis import Adaptations as RetaAdaptations
 from trackers.three_hypothesis import RetaTracker
@@ -61,11 +59,3 @@ def test_reta_reports_a_hidden_walker_closer_to_the_truth_with_its_measured_velo
     assert len(on) == len(off) >= 3
     assert np.mean(on) > np.mean(off) + 0.02
     assert min(on) > 0.9  # exact boxes, steady new speed: the measured velocity is the truth's
-
-
-def test_pbm_reports_a_hidden_walker_closer_to_the_truth_with_its_measured_velocity():
-    off = _hidden_iou(PBMTracker())  # the default
-    on = _hidden_iou(PBMTracker(adaptations=PbmAdaptations(measured_velocity=True)))
-    assert len(on) == len(off) >= 3
-    assert np.mean(on) > np.mean(off) + 0.02
-    assert min(on) > 0.9

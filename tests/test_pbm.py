@@ -106,8 +106,6 @@ def test_bad_input_raises_clear_errors():
         PBMTracker(features=FeatureParams(feature_weights={"colour": 1.0}))
     with pytest.raises(ValueError, match="adaptations.stale.frames"):
         Adaptations(stale=StaleParts(frames=0))
-    with pytest.raises(ValueError, match="adaptations.assignment"):
-        Adaptations(assignment="greedy")
     with pytest.raises(TypeError, match="matching: expected a MatchParams"):
         PBMTracker(matching={"margin_ratio": 1.2})
 
@@ -787,13 +785,10 @@ def test_paper_mode_turns_every_adaptation_off():
     assert isinstance(paper, PBMTracker) and isinstance(paper.candidates.head_detector, HeadDetector)
     assert ours.candidates.head_detector is None
     a = paper.adaptations
-    assert (a.model_spread, a.stale, a.min_support, a.relative_match,
-            a.occluded_cover) == (1.0, None, 0.0, 0.0, 0.0)
-    assert not (a.motion_compensation or a.report_predicted or a.lone_growth
-                or a.overlap_as_measured)
+    assert (a.model_spread, a.stale, a.min_support, a.relative_match) == (1.0, None, 0.0, 0.0)
+    assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
     assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
     assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
-    assert a.assignment == "most_pairs"
     assert ours.adaptations != a
     # what the paper leaves open: ours
     for group in ("gate", "noise", "search", "matching", "pruning", "model_update", "life_cycle",
@@ -801,41 +796,17 @@ def test_paper_mode_turns_every_adaptation_off():
         assert getattr(paper, group) == getattr(ours, group), group
 
 
-def test_overlap_as_measured_reaches_the_scores_of_a_lost_target():
-    """``adaptations.overlap_as_measured``: the tracker scores a target unfound for m frames
-    with eq. 11's overlap undivided, and only such a target."""
-    from trackers.layered.association import pair_scores
-
-    scene, _ = S.uturn_behind(8)
-    trackers = [PBMTracker(adaptations=Adaptations(overlap_as_measured=v)) for v in (False, True)]
-    for tracker in trackers:
-        run(tracker, scene)
-        tracker.targets.misses[0] = 3  # as if unfound for 3 frames
-    tg = trackers[0].targets
-    assert len(tg) >= 2
-    model = trackers[0].rules.compared.models(tg)
-    ti, n = np.array([0, 1]), np.array([1, 0])  # each target's parts model as the other's candidate
-    off, on = (t._scores(model, tg.parts, ti, n)[1] for t in trackers)
-    f = trackers[0].features
-    ref = pair_scores(f.models, model, tg.parts, ti, n, tg.misses, f.omega, f.gamma,
-                      trackers[0].adaptations.model_spread, True)[1]
-    np.testing.assert_array_equal(on, ref)
-    assert on[1] == off[1] and on[0] < off[0]  # found target unchanged; lost one loses the bonus
-
-
 def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     """``rules.build_rules``: paper mode's values select the paper's rule for each step."""
     from harness.frontend_source import compose_config
-    from trackers.common.assignment import assign, assign_min_cost
     from trackers.layered import rules as R
 
-    ours = R.build_rules(Adaptations(occluded_cover=0.5))
+    ours = R.build_rules(Adaptations())
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
-    assert [type(r) for r in ours[:5]] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
-                                           R.PredictedBox, R.ReportedWhileCovered]
-    assert [type(r) for r in paper[:5]] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
-                                            R.LastBox, R.ReportedWhileCounted]
-    assert paper.assign is assign and R.build_rules(Adaptations(assignment="min_cost")).assign is assign_min_cost
+    assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
+                                       R.PredictedBox]
+    assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
+                                        R.LastBox]
     # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
     tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])

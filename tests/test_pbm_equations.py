@@ -5,7 +5,6 @@ update), to a tolerance (rtol 1e-9), not bit for bit."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from test_pbm_scoring import random_features, random_models
 
 from trackers.layered import equations as E
@@ -16,21 +15,19 @@ from trackers.layered.search import search_boxes_many
 RTOL, ATOL = 1e-9, 1e-12
 
 
-@pytest.mark.parametrize("overlap_as_measured", [False, True])
-def test_eq11_to_13_kernels_equal_the_equations(overlap_as_measured):
+def test_eq11_to_13_kernels_equal_the_equations():
     rng = np.random.default_rng(7)
     models = random_models(rng)
     model, cand = random_features(rng, 6), random_features(rng, 30)
     misses = rng.integers(0, 4, 6)
     omega, gamma = rng.uniform(0.1, 1, 6), rng.uniform(0.1, 1, N_PARTS)
     ti, n = np.nonzero(rng.random((6, 30)) < 0.4)
-    d = E.differences(model, cand, ti, n, misses, overlap_as_measured)  # eq. 11
-    np.testing.assert_allclose(selected_differences(model, cand, ti, n, misses, overlap_as_measured),
-                               d, rtol=RTOL, atol=ATOL)
+    d = E.differences(model, cand, ti, n, misses)  # eq. 11
+    np.testing.assert_allclose(selected_differences(model, cand, ti, n, misses), d,
+                               rtol=RTOL, atol=ATOL)
     pj_ref = E.part_scores(models, d, omega, 2.5)                       # eq. 12
     p_ref = E.global_score(pj_ref, gamma)                               # eq. 13
-    pj, p = pair_scores(models, model, cand, ti, n, misses, omega, gamma, 2.5,
-                        overlap_as_measured)
+    pj, p = pair_scores(models, model, cand, ti, n, misses, omega, gamma, 2.5)
     np.testing.assert_allclose(pj, pj_ref, rtol=RTOL, atol=ATOL)
     np.testing.assert_allclose(p, p_ref, rtol=RTOL, atol=ATOL)
     assert ((p >= 0) & (p <= 1)).all()

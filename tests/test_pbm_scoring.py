@@ -120,24 +120,19 @@ def test_selected_and_all_pairs_differences_equal_numpy(rng, with_misses):
     assert feature_differences(model, cand.take([]), misses).shape == (7, 0, NF, N_PARTS)
 
 
-def test_a_gap_divides_displacement_and_overlap_only_displacement_as_measured(rng):
-    """Eq. 11 after m frames unfound: displacement / (1 + m) always; overlap 1 - IoU / (1 + m)
-    (our reading), or as measured with ``overlap_as_measured``: a candidate that does not
-    overlap a target lost 3 frames keeps the difference 1, not 1/4."""
+def test_a_gap_divides_displacement_and_overlap(rng):
+    """Eq. 11 after m frames unfound: displacement and overlap 1 - IoU / (1 + m) (our
+    reading); a target found last frame has no gap."""
     model, cand = random_features(rng, 2), random_features(rng, 1)
     cand.parts[0] = model.parts[1] + [500.0, 0.0, 0.0, 0.0]  # far right of target 1: IoU 0
     ti, n, misses = np.array([0, 1]), np.array([0, 0]), np.array([0, 3])
     step = selected_differences(model, cand, ti, n)
     divided = selected_differences(model, cand, ti, n, misses)
-    measured = selected_differences(model, cand, ti, n, misses, overlap_as_measured=True)
     np.testing.assert_array_equal(step[1, 5], 1.0)
     np.testing.assert_allclose(divided[1, 4:6], step[1, 4:6] / 4, rtol=RTOL)
-    np.testing.assert_allclose(measured[1, 4], step[1, 4] / 4, rtol=RTOL)
-    np.testing.assert_array_equal(measured[1, 5], step[1, 5])
-    np.testing.assert_array_equal(measured[0], divided[0])  # found last frame: no gap
-    np.testing.assert_array_equal(measured[:, :4], divided[:, :4])
-    np.testing.assert_array_equal(
-        feature_differences(model, cand, misses, overlap_as_measured=True)[ti, n], measured)
+    np.testing.assert_array_equal(divided[0], step[0])  # found last frame: no gap
+    np.testing.assert_array_equal(divided[:, :4], step[:, :4])
+    np.testing.assert_array_equal(feature_differences(model, cand, misses)[ti, n], divided)
 
 
 @pytest.mark.parametrize("bins", [1, 2, 3, 5, 6, 8])

@@ -120,7 +120,6 @@ def test_report_rule_bounds_time_in_plain_view_and_spread():
 @pytest.mark.parametrize("group,kwargs,name", [
     (Adaptations, {"gate_sigmas": -1.0}, "adaptations.gate_sigmas"),
     (Adaptations, {"report_spread": float("nan")}, "adaptations.report_spread"),
-    (Adaptations, {"stage1_unmatched_cost": 2.5}, "adaptations.stage1_unmatched_cost"),
     (Adaptations, {"tentative_misses": -1}, "adaptations.tentative_misses"),
     (Adaptations, {"max_hidden": 0}, "adaptations.max_hidden"),
     (Appearance, {"bins": 15}, "appearance.bins"),

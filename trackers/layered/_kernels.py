@@ -620,15 +620,14 @@ def _rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int) -> float:
 
 
 @numba.njit(cache=True, inline="always")
-def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, g_overlap: float,
-                      d: np.ndarray, k: int) -> None:
+def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray,
+                      k: int) -> None:
     """Eq. 11, d_ij = |f_ij - F_ij| (``equations.differences``), of model t of ``m`` against
     candidate n of ``c`` into d[k] (6, 5).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
-    no foreground), |c_n - C_t| / max(H_t, 1) times g = 1 / (1 + misses) and 1 - IoU (IoU 0
-    when union <= 0) times ``g_overlap`` (g, or 1 with ``overlap_as_measured``); all
-    clipped at 0.
+    no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), both
+    times g = 1 / (1 + misses); all clipped at 0.
     """
     m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height = m
     c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid, _ = c
@@ -652,7 +651,7 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, g_overlap: f
         inter = iw * ih
         union = aw * ah + bw * bh - inter
         iou = inter / union if union > 0 else 0.0
-        d[k, 5, j] = (1.0 - iou) * g_overlap
+        d[k, 5, j] = (1.0 - iou) * g
         for i in range(d.shape[1]):
             if d[k, i, j] < 0.0:  # np.clip(d, 0, None)  # noqa: PLR1730
                 d[k, i, j] = 0.0
@@ -660,16 +659,15 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, g_overlap: f
 
 @numba.njit(cache=True)
 def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
-                        overlap_as_measured: bool, out: np.ndarray) -> None:
+                        out: np.ndarray) -> None:
     """Eq. 11 (``_pair_differences``) of the pairs (ti[k], n[k]) into out (K, 6, 5);
-    misses (T,) float64 per target, g = 1 / (1 + misses) on displacement, and on overlap
-    unless ``overlap_as_measured``."""
+    misses (T,) float64 per target, g = 1 / (1 + misses) on displacement and overlap."""
     for k in range(ti.shape[0]):
         if not (0 <= ti[k] < m[1].shape[0] and 0 <= n[k] < c[1].shape[0]):
             raise IndexError("selected pair index out of range")
     for k in range(ti.shape[0]):
         g = 1.0 / (1.0 + misses[ti[k]])
-        _pair_differences(m, c, ti[k], n[k], g, 1.0 if overlap_as_measured else g, out, k)
+        _pair_differences(m, c, ti[k], n[k], g, out, k)
 
 
 @numba.njit(cache=True)
@@ -694,13 +692,13 @@ def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.nd
 
 @numba.njit(cache=True)
 def _pair_scores_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
-                        overlap_as_measured: bool, spread: float, omega: np.ndarray,
-                        gamma: np.ndarray, theta: tuple) -> tuple[np.ndarray, np.ndarray]:
+                        spread: float, omega: np.ndarray, gamma: np.ndarray, theta: tuple
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 of the pairs (ti[k], n[k]) in one call: ``_differences_kernel`` then
     ``_scores_kernel``; returns p_j (K, 5) and p (K,)."""
     K = ti.shape[0]
     d = np.empty((K, theta[0].shape[0], m[1].shape[1]))
-    _differences_kernel(m, c, ti, n, misses, overlap_as_measured, d)
+    _differences_kernel(m, c, ti, n, misses, d)
     pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
     _scores_kernel(d, spread, omega, gamma, theta, pj, p)
     return pj, p

@@ -72,42 +72,38 @@ def _pairs(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarra
 
 
 def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                 misses: np.ndarray | None, overlap_as_measured: bool) -> np.ndarray:
+                 misses: np.ndarray | None) -> np.ndarray:
     """Eq. 11 of pairs (ti[k], n[k]), indices in [0, T) and [0, N) (IndexError else)."""
     ti, n = _pairs(model, cand, ti, n)
     out = np.empty((len(ti), N_FEATURES, N_PARTS))
-    _differences_kernel(_arrays(model), _arrays(cand), ti, n, _misses(misses, len(model)),
-                        bool(overlap_as_measured), out)
+    _differences_kernel(_arrays(model), _arrays(cand), ti, n, _misses(misses, len(model)), out)
     return out
 
 
-def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None,
-                        overlap_as_measured: bool = False) -> np.ndarray:
+def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
+                        ) -> np.ndarray:
     """Eq. 11 for every target/candidate pair.
 
     Args:
         model: T targets' parts models. cand: N candidates' part features.
         misses: (T,) frames since each target was last found; displacement and overlap
             differences are divided by (1 + misses) so they stay per-frame after a gap.
-        overlap_as_measured: the overlap difference 1 - IoU is not divided (our
-            ``adaptations.overlap_as_measured``): it is bounded by 1, not a distance.
     Returns:
         (T, N, 6, 5) differences, features in ``FEATURES`` order.
     """
     T, N = len(model), len(cand)
     ti, n = np.divmod(np.arange(T * N, dtype=np.intp), max(N, 1))
-    return _differences(model, cand, ti, n, misses, overlap_as_measured).reshape(
+    return _differences(model, cand, ti, n, misses).reshape(
         T, N, N_FEATURES, N_PARTS)
 
 
 def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                         misses: np.ndarray | None = None, overlap_as_measured: bool = False
-                         ) -> np.ndarray:
+                         misses: np.ndarray | None = None) -> np.ndarray:
     """Eq. 11 for the selected pairs (target ti[k], candidate n[k]) only: (K, 6, 5), equal
-    to ``feature_differences(model, cand, misses, overlap_as_measured)[ti, n]`` value for
+    to ``feature_differences(model, cand, misses)[ti, n]`` value for
     value. The tracker scores only the candidates inside a target's gate (PBM 3).
     """
-    return _differences(model, cand, ti, n, misses, overlap_as_measured)
+    return _differences(model, cand, ti, n, misses)
 
 
 def _weights(w: np.ndarray, size: int, name: str) -> np.ndarray:
@@ -150,19 +146,17 @@ def _scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.n
 
 def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, ti: np.ndarray,
                 n: np.ndarray, misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
-                spread: float = 1.0, overlap_as_measured: bool = False
-                ) -> tuple[np.ndarray, np.ndarray]:
+                spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 in one call for the pairs (target ti[k], candidate n[k]), equal value for
-    value to ``layered_scores(models, selected_differences(model, cand, ti, n, misses,
-    overlap_as_measured), omega, gamma, spread)``.
+    value to ``layered_scores(models, selected_differences(model, cand, ti, n, misses),
+    omega, gamma, spread)``.
 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
     """
     ti, n = _pairs(model, cand, ti, n)
     return _pair_scores_kernel(_arrays(model), _arrays(cand), ti, n, _misses(misses, len(model)),
-                               bool(overlap_as_measured), float(spread),
-                               _weights(omega, N_FEATURES, "omega"),
+                               float(spread), _weights(omega, N_FEATURES, "omega"),
                                _weights(gamma, N_PARTS, "gamma"), _theta(models))
 
 

@@ -181,17 +181,14 @@ def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step:
 
 
 def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                misses: np.ndarray | None = None, overlap_as_measured: bool = False
-                ) -> np.ndarray:
+                misses: np.ndarray | None = None) -> np.ndarray:
     """Eq. 11, d_ij = |f_ij - F_ij|, for the pairs (target ti[k], candidate n[k]).
 
     Features i in ``models.FEATURES`` order: area and perimeter (absolute differences),
     HSV and XYZ histograms (1 - Bhattacharyya coefficient; 1 when the candidate's part
     has no foreground), displacement of the part centroid over the target's height, and
     1 - IoU of the part rectangles. After a gap of ``misses`` frames the last two are
-    divided by 1 + misses (our reading: per-frame differences), the overlap not with
-    ``overlap_as_measured`` (our adaptation: 1 - IoU is bounded by 1, not a distance that
-    grows with the gap; divided, it scores every candidate as a full overlap).
+    divided by 1 + misses (our reading: per-frame differences).
 
     Returns:
         (K, 6, 5) differences, >= 0.
@@ -218,8 +215,7 @@ def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.n
     if misses is not None:
         g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64)[ti])
         d[:, 4] *= g[:, None]                                                # per frame
-        if not overlap_as_measured:
-            d[:, 5] *= g[:, None]
+        d[:, 5] *= g[:, None]
     return np.clip(d, 0.0, None)                                             # eq. 11
 
 

@@ -358,11 +358,6 @@ class StaleParts:
                            image_size, self.cover, self.fill, self.frames)
 
 
-ASSIGNMENTS = ("most_pairs", "min_cost")
-"""``Adaptations.assignment``'s values (``trackers.common.assignment``: ``assign``,
-``assign_min_cost``)."""
-
-
 @dataclass(frozen=True)
 class Adaptations:
     """Every rule of ours that the paper does not have (``docs/adaptations.md``: one row
@@ -393,21 +388,6 @@ class Adaptations:
             exit_misses frames (paper: never, only after ``life_cycle.max_misses``).
         report_predicted: an unfound target is reported at its last box moved by KF1's
             prediction (paper: reporting is ours; at its last validated box).
-        occluded_cover: with foreground, an unfound target is reported only while found
-            targets' boxes cover this fraction of it (0 = off).
-        measured_velocity: a reported unfound target stands at its last box moved by its
-            measured velocity when that velocity has predicted its boxes better than KF1's
-            so far (``trackers.common.measured_velocity``; paper: reporting is ours).
-        assignment: how targets share candidates one-to-one (the paper tracks one target at
-            a time): ``most_pairs`` keeps as many pairs scoring at least
-            ``matching.match_threshold`` as it can, then the best; ``min_cost`` minimises
-            the summed 1 - p with a target left over costing 1 - match_threshold, so a
-            target never takes a worse candidate only so that another can be matched.
-        overlap_as_measured: after a gap of m frames eq. 11's overlap difference 1 - IoU is
-            taken as measured, only the displacement divided by 1 + m (paper: both
-            consecutive-frame differences; dividing both is our reading of a gap). 1 - IoU
-            is bounded by 1: divided, it scores every candidate in a lost target's gate as a
-            full overlap, a bonus over the target that held the candidate a frame before.
     """
 
     model_spread: float = 4.5
@@ -422,27 +402,19 @@ class Adaptations:
     exit_margin: float = 8.0
     exit_misses: int = 3
     report_predicted: bool = True
-    occluded_cover: float = 0.0
-    measured_velocity: bool = False
-    assignment: str = "most_pairs"
-    overlap_as_measured: bool = False
 
     def __post_init__(self) -> None:
-        require("adaptations.assignment", self.assignment in ASSIGNMENTS,
-                f"must be one of {ASSIGNMENTS}", self.assignment)
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
                 self.model_spread)
-        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
-             occluded_cover=self.occluded_cover)
+        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
-                                       "duplicate_radius", "gate_max_fraction", "exit_margin",
-                                       "occluded_cover"), float),
+                                       "duplicate_radius", "gate_max_fraction", "exit_margin"),
+                                      float),
                       **dict.fromkeys(("motion_compensation", "lone_growth",
-                                       "report_predicted", "overlap_as_measured",
-                                       "measured_velocity"), bool),
+                                       "report_predicted"), bool),
                       "prune_max_misses": int, "exit_misses": int})

@@ -9,20 +9,14 @@ parts are ``params.StaleParts`` or None; the pruning adaptations live in
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
-from trackers.common.assignment import assign, assign_min_cost
-from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
-from trackers.geometry import overlap_ratio_matrix
 from trackers.layered.model import Targets
 from trackers.layered.params import Adaptations
 from trackers.layered.parts import PartFeatures
-
-_BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h)
 
 # --------------------------------------------------------------- eq. 11: the model compared
 
@@ -112,32 +106,6 @@ class PredictedBox:
         boxes[:, :2] += np.where(found[rows, None], 0.0, targets.predicted_shift()[rows])
 
 
-class ReportedWhileCounted:
-    """An unfound target is reported for ``reporting.max_misses`` frames, whatever covers it."""
-
-    def keep(self, boxes: np.ndarray, targets: Targets, rows: np.ndarray, found: np.ndarray,
-             has_foreground: bool) -> np.ndarray | None:
-        return None
-
-
-@dataclass(frozen=True)
-class ReportedWhileCovered:
-    """``occluded_cover``: with foreground, an unfound target is reported only while found
-    confirmed targets' boxes cover at least ``fraction`` of its box (evidence that it is
-    hidden, not gone)."""
-
-    fraction: float
-
-    def keep(self, boxes: np.ndarray, targets: Targets, rows: np.ndarray, found: np.ndarray,
-             has_foreground: bool) -> np.ndarray | None:
-        """(R,) bool: which of the reported ``rows`` (boxes (R, 4)) stay; None: all."""
-        if not has_foreground or found[rows].all():
-            return None
-        fb = targets.dof[(found & targets.confirmed).nonzero()[0][:, None], _BOX_COLUMNS]
-        cover = overlap_ratio_matrix(boxes, fb).sum(axis=1) if len(fb) else np.zeros(len(rows))
-        return found[rows] | (cover >= self.fraction)
-
-
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -145,9 +113,6 @@ class Rules(NamedTuple):
     match: AnyAboveThreshold | RelativeMatch
     birth: AnyCandidate | ForegroundSupport
     report_box: LastBox | PredictedBox
-    report_keep: ReportedWhileCounted | ReportedWhileCovered
-    assign: Callable  # the one-to-one step: ``assign`` (most pairs) or ``assign_min_cost``
-    velocity: FilterPrediction | MeasuredVelocity  # where a reported unfound target stands
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -157,8 +122,4 @@ def build_rules(a: Adaptations) -> Rules:
         match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
         birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
         report_box=PredictedBox() if a.report_predicted else LastBox(),
-        report_keep=(ReportedWhileCovered(a.occluded_cover) if a.occluded_cover > 0
-                     else ReportedWhileCounted()),
-        assign={"most_pairs": assign, "min_cost": assign_min_cost}[a.assignment],
-        velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )

@@ -15,9 +15,7 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
    ambiguous or weak choice is settled by the target's head template (``rules.match`` may
    withhold poor matches). Targets then share candidates one-to-one (Hungarian on 1 - p:
-   the paper tracks one target at a time), keeping as many pairs as possible or, with
-   ``adaptations.assignment: min_cost``, at the least summed cost with a target left over
-   costing 1 - ``matching.match_threshold``.
+   the paper tracks one target at a time), keeping as many pairs as possible.
 5. ``_update_models`` (PBM 4.2): global models, KF1, KF2 and the parts of every matched
    target at once.
 6. ``_end_targets`` and ``_start_targets`` (ours: PBM 3 starts each target by hand): a
@@ -34,8 +32,7 @@ not switchable: features are measured on a fixed grid of samples per box
 (``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
 P(D >= d) (``models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2 is used
 sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
-1 + m (the overlap taken as measured with ``adaptations.overlap_as_measured``); KF2 holds an
-unfound target's size; a blob with several heads counts as merged (searched) whatever its
+1 + m; KF2 holds an unfound target's size; a blob with several heads counts as merged (searched) whatever its
 size.
 
 Output ``Track.extra``: ``parts`` (5, 4) xywh part boxes, ``occluded_parts`` (5,) bool
@@ -49,6 +46,7 @@ import logging
 
 import numpy as np
 
+from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix
 from trackers.layered._kernels import (
     alive_rows,
@@ -165,8 +163,6 @@ class PBMTracker:
         self._finder.reset()
         self._next_id = 1
         self._frame = 0
-        self._had_fg = False
-        self.rules.velocity.reset()
 
     # ------------------------------------------------------------------ update (PBM Fig. 1)
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -183,7 +179,6 @@ class PBMTracker:
         """
         frame, detections, fg = self._inputs(frame, detections, foreground)
         self._frame += 1
-        self._had_fg = fg is not None
         H, W = frame.shape[:2]
         cand, feats = self._find_candidates(frame, detections, fg)  # PBM 2
         pred_wh = self.targets.predict()  # PBM 3, eqs. 7-8
@@ -193,7 +188,7 @@ class PBMTracker:
             self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
         withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
-        matches, lost, free = self.rules.assign(cost, 1.0 - self.matching.match_threshold)
+        matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
         if len(matches):
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
@@ -313,8 +308,7 @@ class PBMTracker:
         """Eqs. 11-13 of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
         a = self.adaptations
         return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
-                           self.features.omega, self.features.gamma, a.model_spread,
-                           a.overlap_as_measured)
+                           self.features.omega, self.features.gamma, a.model_spread)
 
     # ------------------------------------------------------------------ model update (PBM 4.2)
     def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: FrameScores,
@@ -405,25 +399,10 @@ class PBMTracker:
             live_boxes = np.vstack([live_boxes, box[None]])
 
     # ------------------------------------------------------------------ report
-    def _place_unfound(self, boxes: np.ndarray, rows: np.ndarray, found: np.ndarray) -> None:
-        """``rules.velocity``: record the found confirmed targets' boxes and KF1 velocities,
-        and move the boxes (R, 4) of the unfound ones among ``rows`` in place where their
-        measured velocity wins; found (T,) bool."""
-        tg, rule = self.targets, self.rules.velocity
-        seen = found[rows] & tg.confirmed[rows]
-        rule.found(self._frame, tg.id[rows[seen]].tolist(), boxes[seen], tg.kf1.x[rows[seen], 2:4])
-        hidden = ~found[rows]
-        if hidden.any():
-            moved = boxes[hidden]
-            rule.place(self._frame, tg.id[rows[hidden]].tolist(), moved)
-            boxes[hidden] = moved
-        rule.forget(set(tg.id.tolist()))
-
     def _report(self) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
-        last box or where KF1 predicts it (``rules.report_box``), while covered by found
-        targets when ``adaptations.occluded_cover`` asks it (``rules.report_keep``)."""
+        last box or where KF1 predicts it (``rules.report_box``)."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -433,10 +412,6 @@ class PBMTracker:
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
-        self._place_unfound(boxes, rows, found)
-        keep = self.rules.report_keep.keep(boxes, tg, rows, found, self._had_fg)
-        if keep is not None:
-            rows, boxes = rows[keep], boxes[keep]
         rects = tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
         found = found[rows]

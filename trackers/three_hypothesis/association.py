@@ -85,7 +85,6 @@ def associate(
     sqrt_p: np.ndarray | None = None,
     gated: np.ndarray | None = None,
     gate: np.ndarray | None = None,
-    stage1_unmatched_cost: float = 2.0,
     evidence: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> Association:
     """Match measurements to persons in two stages.
@@ -98,14 +97,9 @@ def associate(
     distance; Hungarian method; accept only rho >= mu_rho.
 
     Pairs with rho < mu_rho are excluded before the Hungarian step, so a rejected best
-    pair never blocks an acceptable alternative. Leaving a person unmatched in stage 2
-    costs 2, the largest cost of an acceptable pair, so every acceptable isolated pair is
-    matched; in stage 1 it costs ``stage1_unmatched_cost`` (2: the same), and a stage-1
-    pair costlier than that is left to stage 2, where a person who has one is still gated
-    by its own validation region. At 2, two poor pairs (each cost < 1) beat one good pair
-    plus a person left over, so a person whose detection is missed takes a neighbour's and
-    pushes the neighbour onto a third; at 1 a stage-1 pair is only worth matching when its
-    similarities rho and delta average at least 1/2.
+    pair never blocks an acceptable alternative. Leaving a person unmatched costs 2 in
+    both stages, the largest cost of an acceptable pair, so every acceptable pair competes
+    and every acceptable isolated pair is matched (the Hungarian method of 3.3.2).
 
     Args:
         node_boxes: (B, 4) xywh predicted regions of the nodes.
@@ -123,7 +117,6 @@ def associate(
         gated: optional (P,) bool: persons that may take part in stage 2 (default all).
         gate: optional (B,) gate radius of each node in pixels; the node's validation
             region is the circle of radius min(mu_g, gate) (default mu_g for every node).
-        stage1_unmatched_cost: cost of leaving a person unmatched in stage 1, in (0, 2].
         evidence: optional map (rho (P, D), admissible (P, D) bool) -> (P, D) appearance
             term a of stage 1, whose cost becomes (1 - a) + (1 - delta); default a = rho
             (e.g. ``rules.AppearanceMargin().evidence``).
@@ -155,7 +148,7 @@ def associate(
     cost1, best1 = _person_costs(c1, starts, owners)
     if evidence is not None:  # (1 - a) in place of (1 - rho); rho is one per person
         cost1 = cost1 + (rho - evidence(rho, np.isfinite(cost1)))
-    m1 = _hungarian(cost1, stage1_unmatched_cost)
+    m1 = _hungarian(cost1, 2.0)
 
     matched_p = np.zeros(n_persons, dtype=bool)
     matched_d = np.zeros(n_meas, dtype=bool)

@@ -133,9 +133,6 @@ class Adaptations:
             as a false positive; 0: its tracking ends at the first miss (the paper, Fig. 3).
         max_hidden: most frames a person is kept without a match (the paper: no limit,
             1000000).
-        stage1_unmatched_cost: cost of leaving a person unmatched in association stage 1,
-            in (0, 2]; a stage-1 pair costlier than it is left to stage 2; 2: every
-            acceptable pair competes (the paper, and our default).
         appearance_margin: stage 1 scores a pair's appearance by its margin over its rivals,
             rho minus the larger of the best rho of another person for that measurement and
             of another measurement for that person (0 when the pair is not the best both
@@ -156,13 +153,11 @@ class Adaptations:
     report_spread: float = 3.0
     tentative_misses: int = 2
     max_hidden: int = 150
-    stage1_unmatched_cost: float = 2.0
     appearance_margin: bool = True
     measured_velocity: bool = True
 
     def __post_init__(self) -> None:
-        coerce(self, {"gate_sigmas": float, "report_spread": float,
-                      "stage1_unmatched_cost": float, "blend_visible": bool,
+        coerce(self, {"gate_sigmas": float, "report_spread": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool})
@@ -170,8 +165,6 @@ class Adaptations:
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  tentative_misses=self.tentative_misses)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
-        require("adaptations.stage1_unmatched_cost", 0.0 < self.stage1_unmatched_cost <= 2.0,
-                "must lie in (0, 2]", self.stage1_unmatched_cost)
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -179,8 +172,7 @@ class Adaptations:
         return cls(gate_sigmas=0.0, blend_visible=False, shape_estimate=False,
                    foreground_histograms=False, foreground_support=False,
                    report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
-                   max_hidden=1_000_000, stage1_unmatched_cost=2.0,
-                   appearance_margin=False, measured_velocity=False)
+                   max_hidden=1_000_000, appearance_margin=False, measured_velocity=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -308,7 +308,6 @@ class RetaTracker:
             sqrt_q=sqrt_q, sqrt_p=sqrt_p,
             gated=np.array([person.confirmed for person in persons], dtype=bool),
             gate=self.rules.gate.radii(f.Pp, R),
-            stage1_unmatched_cost=self.adaptations.stage1_unmatched_cost,
             evidence=self.rules.stage1_appearance.evidence)
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())}
