@@ -20,25 +20,30 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-def _squared_miss(last: np.ndarray, velocity: np.ndarray, frames: int, centre: np.ndarray,
-                  height: float) -> float:
+def _squared_miss(last: tuple[float, float], velocity: tuple[float, float], frames: int,
+                  centre: tuple[float, float], height: float) -> float:
     """Squared distance, in box heights^2, of ``centre`` from ``last`` + frames x velocity."""
-    return float(((last + frames * velocity - centre) ** 2).sum()) / max(height, 1.0) ** 2
+    dx = last[0] + frames * velocity[0] - centre[0]
+    dy = last[1] + frames * velocity[1] - centre[1]
+    return (dx * dx + dy * dy) / max(height, 1.0) ** 2
 
 
 @dataclass
 class _Record:
+    """One id's last measurement and its two predictors' track record, as Python floats
+    (a handful of 2-vectors per person and frame: numpy's per-call cost would dominate)."""
+
     frame: int  # frame of the last measured box
-    box: np.ndarray  # (4,) last measured box
-    filter_velocity: np.ndarray  # (2,) the filter's velocity after that measurement
-    measured_velocity: np.ndarray | None = None  # (2,) displacement per frame, last two boxes
+    box: tuple[float, float, float, float]  # last measured box, xywh
+    filter_velocity: tuple[float, float]  # the filter's velocity after that measurement
+    measured_velocity: tuple[float, float] | None = None  # displacement per frame, last two boxes
     filter_error: float = 0.0  # summed squared error / h^2 of the filter's predictions
     measured_error: float = 0.0  # ... of the measured velocity's predictions
 
 
 @dataclass
 class MeasuredVelocity:
-    """``report_velocity: measured`` (both trackers): per-id records of the two predictors."""
+    """Reta's ``adaptations.measured_velocity``: per-id records of the two predictors."""
 
     _records: dict[int, _Record] = field(default_factory=dict)
 
@@ -49,21 +54,23 @@ class MeasuredVelocity:
               filter_velocity: np.ndarray) -> None:
         """Record the measured boxes (N, 4) of the found ``ids`` at ``frame`` with their
         filters' velocities (N, 2) after the update; score both predictors of each box."""
-        for tid, box, v in zip(ids, np.asarray(boxes, dtype=np.float64),
-                               np.asarray(filter_velocity, dtype=np.float64)):
-            rec = self._records.get(tid)
-            centre = box[:2] + box[2:] / 2
+        records = self._records
+        for tid, box, v in zip(ids, np.asarray(boxes, dtype=np.float64).tolist(),
+                               np.asarray(filter_velocity, dtype=np.float64).tolist()):
+            rec = records.get(tid)
+            centre = (box[0] + box[2] / 2, box[1] + box[3] / 2)
             if rec is None:
-                self._records[tid] = _Record(frame, box.copy(), v.copy())
+                records[tid] = _Record(frame, tuple(box), tuple(v))
                 continue
             n = frame - rec.frame
-            last = rec.box[:2] + rec.box[2:] / 2
+            x, y, w, h = rec.box
+            last = (x + w / 2, y + h / 2)
             if rec.measured_velocity is not None:
-                h = rec.box[3]
                 rec.filter_error += _squared_miss(last, rec.filter_velocity, n, centre, h)
                 rec.measured_error += _squared_miss(last, rec.measured_velocity, n, centre, h)
-            rec.measured_velocity = (centre - last) / max(n, 1)
-            rec.frame, rec.box, rec.filter_velocity = frame, box.copy(), v.copy()
+            k = max(n, 1)
+            rec.measured_velocity = ((centre[0] - last[0]) / k, (centre[1] - last[1]) / k)
+            rec.frame, rec.box, rec.filter_velocity = frame, tuple(box), tuple(v)
 
     def place(self, frame: int, ids: list[int], boxes: np.ndarray) -> None:
         """Move, in place, the boxes (N, 4) of hidden ``ids`` whose measured velocity has
@@ -73,8 +80,9 @@ class MeasuredVelocity:
             if rec is None or rec.measured_velocity is None:
                 continue
             if rec.measured_error < rec.filter_error:
-                boxes[r] = rec.box
-                boxes[r, :2] += (frame - rec.frame) * rec.measured_velocity
+                k = frame - rec.frame
+                x, y, w, h = rec.box
+                boxes[r] = (x + k * rec.measured_velocity[0], y + k * rec.measured_velocity[1], w, h)
 
     def forget(self, alive: set[int]) -> None:
         """Drop the records of ids no longer tracked."""
