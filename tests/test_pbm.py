@@ -786,8 +786,7 @@ def test_paper_mode_turns_every_adaptation_off():
     assert ours.candidates.head_detector is None
     a = paper.adaptations
     assert (a.model_spread, a.stale, a.min_support, a.relative_match) == (1.0, None, 0.0, 0.0)
-    assert not (a.motion_compensation or a.report_predicted or a.lone_growth
-                or a.position_gate)
+    assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
     assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
     assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
     assert ours.adaptations != a
@@ -805,10 +804,9 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     ours = R.build_rules(Adaptations())
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
-                                       R.PredictedBox, R.RectangleGate]
+                                       R.PredictedBox]
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
-                                        R.LastBox, R.RectangleGate]
-    assert type(R.build_rules(Adaptations(position_gate=0.99)).position) is R.PositionGate
+                                        R.LastBox]
     # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
     tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])

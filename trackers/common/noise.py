@@ -181,34 +181,10 @@ class KalmanNoiseML:
     def estimate(self) -> tuple[float, float, float]:
         """(sigma_p, sigma_v, sigma_z): the grid's maximum-likelihood candidate once it beats
         the prior by the likelihood-ratio test, else the prior."""
-        return tuple(float(v) for v in self.candidates[self._chosen()])
-
-    def _chosen(self) -> int:
-        """Row of ``candidates`` that ``estimate`` gives (the last row: the prior)."""
         best = int(np.argmax(self.loglik[:-1]))
-        return best if self.loglik[best] - self.loglik[-1] > self.threshold else len(self.loglik) - 1
-
-    def predicted(self, frame: int, keys: list[int]) -> tuple[np.ndarray, np.ndarray]:
-        """Each track's predicted box centre (K, 2) pixels at ``frame`` and the innovation
-        variance S (K,) pixels^2 of either coordinate (S = H P H' + R after predicting to
-        ``frame``), under the noises ``estimate`` gives; S is inf for a track not measured
-        yet. ``frame`` is after each track's last measurement."""
-        g = self._chosen()
-        qp, qv, r = self._qp[g], self._qv[g], self._r[g]
-        mean = np.zeros((len(keys), 2))
-        S = np.full(len(keys), np.inf)
-        for i, key in enumerate(keys):
-            s = self._slots.get(key)
-            if s is None or self._n[s] == 0:
-                continue
-            k = frame - self._last[s]
-            p11, p12, p22 = self._P[s, g]
-            for _ in range(k):  # P = F P F' + Q
-                p11, p12, p22 = p11 + 2.0 * p12 + p22 + qp, p12 + p22, p22 + qv
-            scale = self._scale[s]
-            mean[i] = (self._X[s, g, :2] + k * self._U[s, g, :2]) * scale  # H F^k x
-            S[i] = (p11 + r) * scale**2  # S = H P H' + R
-        return mean, S
+        if self.loglik[best] - self.loglik[-1] > self.threshold:
+            return tuple(float(v) for v in self.candidates[best])
+        return self.prior
 
 
 class ConfiguredNoise:

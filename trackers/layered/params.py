@@ -388,13 +388,6 @@ class Adaptations:
             exit_misses frames (paper: never, only after ``life_cycle.max_misses``).
         report_predicted: an unfound target is reported at its last box moved by KF1's
             prediction (paper: reporting is ours; at its last validated box).
-        position_gate: a target found last frame takes no candidate whose box centre lies
-            outside this probability of its predicted one: squared Mahalanobis distance
-            above the chi-square (2 dof) quantile, under the innovation covariance of a
-            constant-velocity box filter whose noises are estimated from the targets' own
-            matched boxes by maximum likelihood (``trackers.common.noise.KalmanNoiseML``,
-            KF1's noises the prior; KF1 itself unchanged); 0 = off (paper: KF1's gate
-            rectangle only).
     """
 
     model_spread: float = 4.5
@@ -409,23 +402,18 @@ class Adaptations:
     exit_margin: float = 8.0
     exit_misses: int = 3
     report_predicted: bool = True
-    position_gate: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
                 self.model_spread)
-        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
-             position_gate=self.position_gate)
-        require("adaptations.position_gate", self.position_gate < 1, "must be < 1",
-                self.position_gate)
+        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
-                                       "duplicate_radius", "gate_max_fraction", "exit_margin",
-                                       "position_gate"),
+                                       "duplicate_radius", "gate_max_fraction", "exit_margin"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth",
                                        "report_predicted"), bool),

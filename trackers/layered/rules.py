@@ -14,11 +14,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trackers.common.noise import KalmanNoiseML
 from trackers.layered.model import Targets
-from trackers.layered.params import Adaptations, NoiseParams
+from trackers.layered.params import Adaptations
 from trackers.layered.parts import PartFeatures
-from trackers.layered.selection import FrameScores
 
 # --------------------------------------------------------------- eq. 11: the model compared
 
@@ -108,80 +106,6 @@ class PredictedBox:
         boxes[:, :2] += np.where(found[rows, None], 0.0, targets.predicted_shift()[rows])
 
 
-# --------------------------------------------------------------- PBM 3-4: which candidates
-
-
-class RectangleGate:
-    """PBM 3 as written: a target may take any candidate in KF1's gate rectangle."""
-
-    def reset(self) -> None:
-        return None
-
-    def withhold(self, frame: int, scores: FrameScores, boxes: np.ndarray,
-                 targets: Targets) -> None:
-        return None
-
-    def found(self, frame: int, ids: np.ndarray, boxes: np.ndarray, alive: np.ndarray) -> None:
-        return None
-
-
-class PositionGate:
-    """``position_gate``: a target found last frame takes no candidate whose box centre lies
-    outside ``probability`` of its predicted centre: y' S^-1 y > the chi-square 2-dof
-    quantile -2 ln(1 - probability), with the prediction and S of a constant-velocity box
-    filter whose noises ``KalmanNoiseML`` estimates from the targets' matched boxes of this
-    sequence (``prior``, KF1's noises, until the data beat them). KF1 is unchanged.
-
-    Args:
-        probability: the gate's probability, in (0, 1).
-        prior: KF1's (position, velocity, measurement) noise per h/10.
-        initial_velocity_std: KF1's prior rate standard deviation per h/10.
-    """
-
-    def __init__(self, probability: float, prior: tuple[float, float, float],
-                 initial_velocity_std: float = 1.0) -> None:
-        self.threshold = -2.0 * np.log1p(-float(probability))  # chi-square 2 dof quantile
-        self.noise = KalmanNoiseML(prior, initial_velocity_std**2)
-
-    def reset(self) -> None:
-        self.noise.reset()
-
-    def withhold(self, frame: int, scores: FrameScores, boxes: np.ndarray,
-                 targets: Targets) -> None:
-        """Strikes from ``scores.S`` (T, N), in place, the pairs of targets found last frame
-        whose box (``pair_boxes``; ``boxes`` (N, 4) xywh the candidates') has its centre
-        beyond the quantile."""
-        S = scores.S
-        ti, n = (np.isfinite(S) & (targets.misses == 0)[:, None]).nonzero()
-        if not len(ti):
-            return
-        centres = pair_boxes(scores, boxes, ti, n)
-        centres = centres[:, :2] + centres[:, 2:] / 2
-        mean, var = self.noise.predicted(frame, targets.id[ti].tolist())
-        d2 = ((centres - mean) ** 2).sum(axis=1) / var                       # y' S^-1 y
-        far = d2 > self.threshold
-        S[ti[far], n[far]] = -np.inf
-
-    def found(self, frame: int, ids: np.ndarray, boxes: np.ndarray, alive: np.ndarray) -> None:
-        """The boxes (M, 4) xywh the targets ``ids`` (M,) were matched to (``pair_boxes``)
-        or born from at ``frame`` enter the estimate; tracks not in ``alive`` (the live ids)
-        are forgotten."""
-        self.noise.forget(set(alive.tolist()))
-        self.noise.measure(frame, ids.tolist(), boxes)
-
-
-def pair_boxes(scores: FrameScores, boxes: np.ndarray, ti: np.ndarray, n: np.ndarray
-               ) -> np.ndarray:
-    """(K, 4) xywh box of each (target ti[k], candidate n[k]) pair as the model update takes
-    it: the carved box of a searched pair (``scores.hyp`` >= 0; PBM 3.1), else the
-    candidate's (``boxes`` (N, 4))."""
-    out = boxes[n].copy()
-    h = scores.hyp[ti, n]
-    if (h >= 0).any():
-        out[h >= 0] = scores.dof_h[h[h >= 0]][:, [0, 1, 4, 5]]
-    return out
-
-
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -189,17 +113,13 @@ class Rules(NamedTuple):
     match: AnyAboveThreshold | RelativeMatch
     birth: AnyCandidate | ForegroundSupport
     report_box: LastBox | PredictedBox
-    position: RectangleGate | PositionGate
 
 
-def build_rules(a: Adaptations, noise: NoiseParams | None = None) -> Rules:
-    """The paper's rule where the adaptation is off (false, 0), ours where it is on;
-    ``noise``: the filters' noises (KF1's: the prior of an estimate; None: the defaults)."""
-    kf1_noise = (noise or NoiseParams()).kf1
+def build_rules(a: Adaptations) -> Rules:
+    """The paper's rule where the adaptation is off (false, 0), ours where it is on."""
     return Rules(
         compared=PredictedModels() if a.motion_compensation else LastModels(),
         match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
         birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
         report_box=PredictedBox() if a.report_predicted else LastBox(),
-        position=PositionGate(a.position_gate, kf1_noise) if a.position_gate > 0 else RectangleGate(),
     )

@@ -80,7 +80,7 @@ from trackers.layered.parts import (
     PartFeatures,
     centroid_ratios,
 )
-from trackers.layered.rules import build_rules, pair_boxes
+from trackers.layered.rules import build_rules
 from trackers.layered.search import (
     Candidates,
     head_fill,
@@ -152,7 +152,7 @@ class PBMTracker:
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         self._finder = CandidateFinder(self.candidates)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
-        self.rules = build_rules(self.adaptations, self.noise)
+        self.rules = build_rules(self.adaptations)
         self.reset()
 
     def reset(self) -> None:
@@ -163,7 +163,6 @@ class PBMTracker:
         self._finder.reset()
         self._next_id = 1
         self._frame = 0
-        self.rules.position.reset()
 
     # ------------------------------------------------------------------ update (PBM Fig. 1)
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -188,21 +187,14 @@ class PBMTracker:
             self._score_in_gates(scores, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
             self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
         withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
-        self.rules.position.withhold(self._frame, scores, cand.box, self.targets)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
-        found_ids = self.targets.id[matches[:, 0]]
-        found_boxes = pair_boxes(scores, cand.box, matches[:, 0], matches[:, 1])
         if len(matches):
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
             self.targets.mark_missed(lost)
         self._end_targets(W, H)
-        born = len(self.targets)
         self._start_targets(frame, free, cand, feats, fg, withheld)
-        self.rules.position.found(self._frame, np.concatenate([found_ids, self.targets.id[born:]]),
-                                  np.concatenate([found_boxes, self.targets.boxes[born:]]),
-                                  self.targets.id)
         return self._report()
 
     def _inputs(self, frame: np.ndarray, detections: Detections | None,
