@@ -28,24 +28,12 @@ def constant_velocity_box_filter(
     kf.F = np.eye(8)
     kf.F[:4, 4:] = dt * np.eye(4)  # x' = F x
     kf.H = np.eye(4, 8)  # z = H x
-    scale = box_scale(h)
-    kf.Q, kf.R = box_noises(scale, position_noise, velocity_noise, measurement_noise)
+    scale = max(h, 1.0) / 10.0
+    kf.Q = np.diag([position_noise**2] * 4 + [velocity_noise**2] * 4) * scale**2
+    kf.R = np.eye(4) * (measurement_noise * scale) ** 2
     kf.P = np.diag([measurement_noise**2] * 4 + [initial_velocity_variance] * 4) * scale**2
     kf.x = np.array([x + w / 2, y + h / 2, w, h, 0, 0, 0, 0], dtype=np.float64).reshape(8, 1)
     return kf
-
-
-def box_scale(height: float) -> float:
-    """The unit of the noise standard deviations of a box of this height: h / 10 pixels."""
-    return max(height, 1.0) / 10.0
-
-
-def box_noises(scale: float, position_noise: float, velocity_noise: float,
-               measurement_noise: float) -> tuple[np.ndarray, np.ndarray]:
-    """Q (8, 8) and R (4, 4) of ``constant_velocity_box_filter`` for a box of scale h / 10."""
-    Q = np.diag([position_noise**2] * 4 + [velocity_noise**2] * 4) * scale**2
-    R = np.eye(4) * (measurement_noise * scale) ** 2
-    return Q, R
 
 
 def state_box(kf: KalmanFilter) -> np.ndarray:

@@ -142,11 +142,6 @@ class Adaptations:
             by its measured velocity when that velocity has predicted its measurements
             better than the Kalman filter's so far (``trackers.common.measured_velocity``);
             False: where M predicts it (the paper's hypothesis region).
-        noise_estimate: M's noises (``motion``'s sigma_p, sigma_v, sigma_z) are the
-            maximum-likelihood ones of the found people's measurements so far in the
-            sequence, over a grid, once they beat the configured ones by a likelihood-ratio
-            test (``trackers.common.noise``); False: the configured ones (the paper gives
-            none).
     """
 
     gate_sigmas: float = 3.0
@@ -160,13 +155,12 @@ class Adaptations:
     max_hidden: int = 150
     appearance_margin: bool = True
     measured_velocity: bool = True
-    noise_estimate: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
-                      "measured_velocity": bool, "noise_estimate": bool})
+                      "measured_velocity": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  tentative_misses=self.tentative_misses)
@@ -178,8 +172,7 @@ class Adaptations:
         return cls(gate_sigmas=0.0, blend_visible=False, shape_estimate=False,
                    foreground_histograms=False, foreground_support=False,
                    report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
-                   max_hidden=1_000_000, appearance_margin=False, measured_velocity=False,
-                   noise_estimate=False)
+                   max_hidden=1_000_000, appearance_margin=False, measured_velocity=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

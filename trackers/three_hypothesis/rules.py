@@ -14,9 +14,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
-from trackers.common.noise import ConfiguredNoise, EstimatedNoise
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.motion import MotionModel
 from trackers.three_hypothesis.params import Adaptations
 
 # --------------------------------------------------------------- eq. 1: which pixels count
@@ -209,15 +207,11 @@ class Rules(NamedTuple):
     support: NoSupport | ForegroundSupport
     report: ReportRule
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
-    noise: ConfiguredNoise | EstimatedNoise  # M's Kalman noises (3.2)
 
 
-def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
-                motion: MotionModel | None = None) -> Rules:
-    """The rules ``adaptations`` selects (``Adaptations.paper()``: the paper's everywhere);
-    ``motion``: the configured noises an estimate starts from."""
+def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Rules:
+    """The rules ``adaptations`` selects (``Adaptations.paper()``: the paper's everywhere)."""
     a = adaptations
-    m = MotionModel() if motion is None else motion
     return Rules(
         pixels=ForegroundPixels() if a.foreground_histograms else AllPixels(),
         gate=KalmanGate(a.gate_sigmas) if a.gate_sigmas > 0 else FixedGate(),
@@ -227,7 +221,4 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
         report=ReportRule(a.report_exposed, a.report_spread),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
-        noise=EstimatedNoise((m.position_noise, m.velocity_noise, m.measurement_noise),
-                             m.initial_velocity_variance)
-        if a.noise_estimate else ConfiguredNoise(),
     )

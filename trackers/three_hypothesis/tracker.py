@@ -37,12 +37,11 @@ HYPOTHESIS (its other hypotheses), TENTATIVE. ``Track.extra`` holds {'ellipse',
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TypeVar
 
 import numpy as np
 
-from trackers.common.kalman import box_noises, box_scale
 from trackers.geometry import iou_matrix, valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
@@ -104,7 +103,6 @@ class _Person:
     hits: int = 1
     misses: int = 0
     spawned: bool = False  # occlusion hypotheses created in this hidden streak
-    scale: float = 1.0  # unit of M's noise stds: the first box's height / 10
 
     @property
     def confirmed(self) -> bool:
@@ -188,7 +186,7 @@ class RetaTracker:
         self.histograms = EllipseHistogrammer(bins=self.appearance.bins,
                                               min_foreground=self.appearance.min_foreground,
                                               stride=self.appearance.pixel_stride)
-        self.rules = build_rules(self.adaptations, self.histograms, self.motion)
+        self.rules = build_rules(self.adaptations, self.histograms)
         _, _, self._F, self._H, _, _ = self.motion.init(np.array([0.0, 0.0, 10.0, 10.0]))
         self.reset()
 
@@ -201,8 +199,6 @@ class RetaTracker:
         self._pi: dict[tuple[int, int], int] = {}
         self.graph = TrackingGraph(window=self.life_cycle.m + 1)
         self.rules.velocity.reset()
-        self.rules.noise.reset()
-        self._motion = self.motion  # M's noises now (``rules.noise`` may re-estimate them)
 
     def graph_snapshot(self) -> dict:
         """The current frame's graph: {'frame', 'nodes': [records], 'edges': [records]}."""
@@ -241,7 +237,6 @@ class RetaTracker:
         survivors += self._prune(f, *self._continue_unmatched(f))
         survivors += self._start_tracks(f)
         alive = {person.key for person in survivors}
-        self.rules.noise.forget(alive)
         if len(self._pi) > 4 * len(alive) ** 2 + 16:
             self._pi = {k: v for k, v in self._pi.items() if k[0] in alive and k[1] in alive}
         self._persons = survivors
@@ -391,11 +386,6 @@ class RetaTracker:
             branch.node = self._add_node(person, branch, shape, f.branches[n].node, stage, rho)
             person.shape = shape
             person.branches = [branch]
-        found = [r for r, (i, _) in enumerate(rows) if persons[i].confirmed]
-        noise = self.rules.noise.measured(self._frame, [persons[rows[r][0]].key for r in found],
-                                          dbox[found])
-        if noise is not None:
-            self._set_noise(persons, noise)
         return [persons[i] for i in sorted(f.matched)]
 
     def _continue_unmatched(self, f: _Frame) -> tuple[list, list[int]]:
@@ -499,9 +489,9 @@ class RetaTracker:
         frames (at once when ``confirm_frames`` is 1)."""
         out: list[_Person] = []
         for d in f.matches.unmatched_measurements:
-            x0, P0, _, _, Q0, R0 = self._motion.init(f.dets[d])
+            x0, P0, _, _, Q0, R0 = self.motion.init(f.dets[d])
             person = _Person(self._next_key, f.p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)],
-                             shape=f.dets[d], scale=box_scale(f.dets[d][3]))
+                             shape=f.dets[d])
             self._next_key += 1
             if self.life_cycle.confirm_frames <= 1:
                 person.id = self._next_id
@@ -512,15 +502,6 @@ class RetaTracker:
         return out
 
     # ------------------------------------------------------------------ helpers
-    def _set_noise(self, persons: list[_Person], noise: tuple[float, float, float]) -> None:
-        """``rules.noise`` re-estimated M's (sigma_p, sigma_v, sigma_z): every person's Q and
-        R from now on, and P0 of new people."""
-        sp, sv, sz = noise
-        self._motion = replace(self.motion, position_noise=sp, velocity_noise=sv,
-                               measurement_noise=sz)
-        for person in persons:
-            person.Q, person.R = box_noises(person.scale, sp, sv, sz)
-
     def _visible_share(self, f: _Frame, rows: list, behind: np.ndarray) -> list[float]:
         """Per matched row, the share v of its measured region left visible by the matched
         people in front of it (1 - the largest share one of them covers; 1 for rows not
