@@ -9,7 +9,7 @@ docs/generalisation.md.
     .venv/bin/python benchmarks/bench_generalisation.py --sets "cav151-295 sil" PETS09 \\
         --trackers reta pbm norfair norfair_tuned
     .venv/bin/python benchmarks/bench_generalisation.py --list          # sets and trackers
-    .venv/bin/python benchmarks/bench_generalisation.py --docs          # also docs/generalisation.md
+    .venv/bin/python benchmarks/bench_generalisation.py --docs          # also the table of docs/generalisation.md
 
 Writes ``generalisation.csv`` (long: set, role, tracker, IDF1, HOTA, MOTA, n_seeds,
 failures) and ``generalisation.md`` (the wide table and the legend of the sets) into
@@ -88,7 +88,8 @@ def main(argv=None) -> int:
     ap.add_argument("--length", type=int, help="cut every synthetic scene / replay to N frames "
                     "(exploring only: not the reported table)")
     ap.add_argument("--out", type=Path, help="output folder")
-    ap.add_argument("--docs", action="store_true", help="write docs/generalisation.md too")
+    ap.add_argument("--docs", action="store_true",
+                    help="replace the table section of docs/generalisation.md too")
     ap.add_argument("--list", action="store_true", help="list sets and trackers, run nothing")
     ap.add_argument("--combine", nargs="+", type=Path, metavar="CSV",
                     help="run nothing: join generalisation.csv files of earlier runs (e.g. the "
@@ -149,12 +150,13 @@ def _report(table, sets, out: Path, args, argv) -> int:
         note = "" if args.length is None else f" (sequences cut to {args.length} frames)"
         missing = [s.name for s in G.SETS if s.name not in set(table["set"])]
         scope = "all sets" if not missing else f"not run: {', '.join(missing)}"
-        (ROOT / "docs").mkdir(exist_ok=True)
-        (ROOT / "docs" / "generalisation.md").write_text(
-            DOCS_HEAD + f"## Latest table ({G.provenance()}; {scope}{note})\n\n"
-            f"`{' '.join(['benchmarks/bench_generalisation.py', *(argv or sys.argv[1:])])}`\n\n"
-            + text)
-        print("wrote docs/generalisation.md")
+        doc = ROOT / "docs" / "generalisation.md"
+        doc.parent.mkdir(exist_ok=True)
+        section = (f"{G.TABLE_HEADING} ({G.provenance()}; {scope}{note})\n\n"
+                   f"`{' '.join(['benchmarks/bench_generalisation.py', *(argv or sys.argv[1:])])}`"
+                   f"\n\n{text}")
+        doc.write_text(G.with_table(doc.read_text() if doc.exists() else DOCS_HEAD, section))
+        print("wrote docs/generalisation.md (its table section; the text around it kept)")
     return 0
 
 

@@ -288,6 +288,21 @@ def write(table: pd.DataFrame, sets: Sequence[EvalSet], out_dir: Path) -> None:
     (out_dir / "generalisation.md").write_text(markdown(table, sets))
 
 
+TABLE_HEADING = "## Latest table"
+
+
+def with_table(doc: str, section: str) -> str:
+    """``doc`` (docs/generalisation.md's text) with its table section replaced by ``section``
+    (which starts with ``TABLE_HEADING``): the text before the heading and the hand-written
+    reading after the table (from the next ``### `` heading on) are kept; a doc without the
+    heading gets the section appended."""
+    start = doc.find(TABLE_HEADING)
+    if start < 0:
+        return doc.rstrip("\n") + "\n\n" + section
+    end = doc.find("\n### ", start)
+    return doc[:start] + section.rstrip("\n") + "\n" + ("" if end < 0 else doc[end:])
+
+
 def provenance() -> str:
     """Date and commit (with ``+dirty`` when the worktree has changes) of this run."""
     def git(*args: str) -> str:

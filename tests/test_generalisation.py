@@ -72,3 +72,15 @@ def test_combine_joins_earlier_tables(tmp_path):
     assert list(out["tracker"]) == ["reta", "pbm", "norfair_tuned"]  # table order
     assert out.set_index("tracker").loc["pbm", "IDF1"] == 0.55
     assert "0.700 / 0.600 / 0.400" in (tmp_path / "out" / "generalisation.md").read_text()
+
+
+def test_docs_table_replaced_and_the_reading_around_it_kept():
+    """``--docs`` replaces only the table section of docs/generalisation.md: the head before
+    it and the hand-written reading after it (from the next ``### `` heading) survive."""
+    doc = ("# Head\n\nintro\n\n## Latest table (old)\n\n| old |\n\nold legend\n\n"
+           "### Reading it\n\nwhy the gaps\n")
+    new = G.with_table(doc, "## Latest table (new)\n\n| new |\n")
+    assert new == ("# Head\n\nintro\n\n## Latest table (new)\n\n| new |\n\n"
+                   "### Reading it\n\nwhy the gaps\n")
+    assert G.with_table("# Head\n", "## Latest table (x)\n") == "# Head\n\n## Latest table (x)\n"
+    assert G.with_table(new, "## Latest table (new)\n\n| new |\n") == new  # idempotent
