@@ -388,10 +388,6 @@ class Adaptations:
             exit_misses frames (paper: never, only after ``life_cycle.max_misses``).
         report_predicted: an unfound target is reported at its last box moved by KF1's
             prediction (paper: reporting is ours; at its last validated box).
-        merge_stacked: two reported targets whose boxes coincide (IoU >= 0.5) for
-            ``life_cycle.min_hits`` frames, each found while the other was not and never
-            both at once, are one person: the one with fewer matches is ended (paper: each
-            target is kept until lost).
     """
 
     model_spread: float = 4.5
@@ -406,7 +402,6 @@ class Adaptations:
     exit_margin: float = 8.0
     exit_misses: int = 3
     report_predicted: bool = True
-    merge_stacked: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -421,5 +416,5 @@ class Adaptations:
                                        "duplicate_radius", "gate_max_fraction", "exit_margin"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth",
-                                       "report_predicted", "merge_stacked"), bool),
+                                       "report_predicted"), bool),
                       "prune_max_misses": int, "exit_misses": int})

@@ -14,7 +14,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trackers.geometry import iou_matrix
 from trackers.layered.model import Targets
 from trackers.layered.params import Adaptations
 from trackers.layered.parts import PartFeatures
@@ -107,65 +106,6 @@ class PredictedBox:
         boxes[:, :2] += np.where(found[rows, None], 0.0, targets.predicted_shift()[rows])
 
 
-# --------------------------------------------------------------- life cycle: stacked targets
-
-
-class KeepStacked:
-    """Targets whose boxes coincide are left as they are (the paper tracks each by hand)."""
-
-    def reset(self) -> None:
-        return None
-
-    def ended(self, targets: Targets, boxes: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        return np.zeros(0, dtype=np.intp)
-
-
-class MergeStacked:
-    """``merge_stacked``: two reported targets whose boxes coincide (IoU >= ``iou``) for
-    ``frames`` frames in a row, in which each was found while the other was not and never
-    both in one frame, are one person taking its one detection in turn: the one with fewer
-    matches (hits; then the younger id) is ended. A person hidden behind another is never
-    found while covered, and two people are found together as soon as both are detected.
-
-    State (per pair of ids, reset with the tracker): frames stacked in a row, whether each
-    was found alone, whether both were found together.
-    """
-
-    def __init__(self, frames: int, iou: float = 0.5) -> None:
-        if frames < 1:
-            raise ValueError(f"MergeStacked: frames must be >= 1, got {frames!r}")
-        self.frames, self.iou = int(frames), float(iou)
-        self.reset()
-
-    def reset(self) -> None:
-        self._pairs: dict[tuple[int, int], tuple[int, bool, bool, bool]] = {}
-
-    def ended(self, targets: Targets, boxes: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Rows of ``targets`` to end this frame.
-
-        Args:
-            boxes: (R, 4) xywh reported boxes of the targets at ``rows`` (R,), as reported
-                (an unfound target where it is predicted).
-        """
-        pairs: dict[tuple[int, int], tuple[int, bool, bool, bool]] = {}
-        end: set[int] = set()
-        if len(rows) >= 2:
-            stacked = np.triu(iou_matrix(boxes, boxes) >= self.iou, 1)
-            ids, found, hits = targets.id, targets.misses == 0, targets.hits
-            for x, y in zip(*np.nonzero(stacked)):
-                a, b = int(rows[x]), int(rows[y])
-                key = (int(ids[a]), int(ids[b]))
-                run, a_alone, b_alone, both = self._pairs.get(key, (0, False, False, False))
-                fa, fb = bool(found[a]), bool(found[b])
-                state = (run + 1, a_alone or (fa and not fb), b_alone or (fb and not fa),
-                         both or (fa and fb))
-                pairs[key] = state
-                if state[0] >= self.frames and state[1] and state[2] and not state[3]:
-                    end.add(b if (hits[a], -ids[a]) >= (hits[b], -ids[b]) else a)
-        self._pairs = pairs
-        return np.array(sorted(end), dtype=np.intp)
-
-
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -173,16 +113,13 @@ class Rules(NamedTuple):
     match: AnyAboveThreshold | RelativeMatch
     birth: AnyCandidate | ForegroundSupport
     report_box: LastBox | PredictedBox
-    stacked: KeepStacked | MergeStacked
 
 
-def build_rules(a: Adaptations, min_hits: int) -> Rules:
-    """The paper's rule where the adaptation is off (false, 0), ours where it is on
-    (``min_hits``: ``life_cycle.min_hits``, the frames ``merge_stacked`` waits)."""
+def build_rules(a: Adaptations) -> Rules:
+    """The paper's rule where the adaptation is off (false, 0), ours where it is on."""
     return Rules(
         compared=PredictedModels() if a.motion_compensation else LastModels(),
         match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
         birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
         report_box=PredictedBox() if a.report_predicted else LastBox(),
-        stacked=MergeStacked(min_hits) if a.merge_stacked else KeepStacked(),
     )

@@ -152,7 +152,7 @@ class PBMTracker:
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         self._finder = CandidateFinder(self.candidates)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
-        self.rules = build_rules(self.adaptations, self.life_cycle.min_hits)
+        self.rules = build_rules(self.adaptations)
         self.reset()
 
     def reset(self) -> None:
@@ -161,7 +161,6 @@ class PBMTracker:
         self.targets = Targets(self._gate, self.noise.kf1, self.noise.kf2, u.ratio_window,
                                u.occluded_window, self._extractor.bins)
         self._finder.reset()
-        self.rules.stacked.reset()
         self._next_id = 1
         self._frame = 0
 
@@ -194,7 +193,6 @@ class PBMTracker:
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
             self.targets.mark_missed(lost)
-        self._end_stacked()
         self._end_targets(W, H)
         self._start_targets(frame, free, cand, feats, fg, withheld)
         return self._report()
@@ -368,16 +366,6 @@ class PBMTracker:
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
 
-    def _end_stacked(self) -> None:
-        """End the targets ``rules.stacked`` finds standing on a person another target
-        holds (``adaptations.merge_stacked``), judged on the boxes as reported."""
-        rows, found = self._reported_rows()
-        boxes = self.targets.dof[rows[:, None], _BOX_COLUMNS]
-        self.rules.report_box.place(boxes, self.targets, rows, found)
-        end = self.rules.stacked.ended(self.targets, boxes, rows)
-        if len(end):
-            self.targets.take(np.setdiff1d(np.arange(len(self.targets)), end))
-
     def _start_targets(self, frame: np.ndarray, free: np.ndarray, cand: Candidates,
                        feats: PartFeatures, fg: np.ndarray | None, withheld: np.ndarray | None) -> None:
         """A TENTATIVE target from each free candidate (new blobs, split heads) that is tall
@@ -411,21 +399,16 @@ class PBMTracker:
             live_boxes = np.vstack([live_boxes, box[None]])
 
     # ------------------------------------------------------------------ report
-    def _reported_rows(self) -> tuple[np.ndarray, np.ndarray]:
-        """(rows (R,) of the targets reported now, found (T,) bool: matched this frame)."""
-        tg = self.targets
-        found = tg.misses == 0
-        shown = found
-        if self.reporting.occluded:
-            shown = found | (tg.confirmed & (tg.misses <= self.reporting.max_misses))
-        return shown.nonzero()[0], found
-
     def _report(self) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
         last box or where KF1 predicts it (``rules.report_box``)."""
         tg = self.targets
-        rows, found = self._reported_rows()
+        found = tg.misses == 0
+        shown = found
+        if self.reporting.occluded:
+            shown = found | (tg.confirmed & (tg.misses <= self.reporting.max_misses))
+        rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
