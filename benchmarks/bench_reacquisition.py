@@ -8,6 +8,16 @@ total, COMBINED IDF1 / HOTA / MOTA / IDs, wrong / all re-acquisitions and exchan
 ``--events`` every wrong re-acquisition: frame, id, last and new person, frames unfound,
 state, and the id that was on the new person before it (with how many frames before).
 
+With ``--stacks``, pbm's (or any tracker's) *stacks*: two reported boxes at IoU >= 0.5 with
+each other for >= 3 frames in a row. Under the CLEAR matching (``paper.match_rows``) a stack
+frame is *two people* when the two boxes are matched to two different people, else *one
+person*; a stack is counted by its majority. A *duplicate* is a one-person stack in which the
+detection went to one and then to the other (found in turn) and never to both in one frame.
+Prints the false positives and CLEAR ID switches (at a frame where one of the ids is in a
+stack that frame or the one before) at one-person frames of stacks and in duplicates, and
+the two-person stacks that are found in turn and never together (what the boxes and the
+found states alone cannot tell from a duplicate); docs/adaptations.md, "stacked targets".
+
 For choosing rules on tuning data only (docs/generalisation.md): the sets are those of
 ``harness.generalisation`` but the seeds are yours (default 0-5); seeds of a set's untouched
 list are refused unless ``--untouched`` is given.
@@ -24,6 +34,7 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import dataclass, field
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +48,7 @@ from harness.build import build_source, build_tracker, load_sequences  # noqa: E
 from harness.io.mot import MotTable  # noqa: E402
 from harness.loop import frames  # noqa: E402
 from harness.metrics import combine, score_sequence  # noqa: E402
+from harness.metrics.paper import considered, match_rows  # noqa: E402
 from trackers.geometry import iou_matrix  # noqa: E402
 
 
@@ -47,6 +59,7 @@ class Tally:
     reacquired: int = 0
     wrong: int = 0
     exchanges: int = 0
+    stacks: dict[str, int] = field(default_factory=dict)
     events: list[dict] = field(default_factory=list)
     scores: list = field(default_factory=list)
 
@@ -54,6 +67,8 @@ class Tally:
         self.reacquired += other.reacquired
         self.wrong += other.wrong
         self.exchanges += other.exchanges
+        for k, v in other.stacks.items():
+            self.stacks[k] = self.stacks.get(k, 0) + v
         self.events += other.events
         self.scores += other.scores
 
@@ -75,8 +90,8 @@ def set_overrides(name: str, seed: int, length: int | None) -> list[str]:
     return out
 
 
-def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], gap: int
-             ) -> dict[str, Tally]:
+def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], gap: int,
+             stacks: bool = False) -> dict[str, Tally]:
     """Every tracker on every sequence of one composed run; the tallies per tracker."""
     cfg = G.compose(overrides)
     tallies = {label: Tally() for label, _, _ in trackers}
@@ -86,7 +101,7 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
                  for label, config, extra in trackers}
         last = {label: {} for label in built}  # id -> (person, frame)
         holder = {label: {} for label in built}  # person -> (id, frame)
-        rows = {label: ([], [], []) for label in built}
+        rows = {label: ([], [], [], []) for label in built}
         gt = seq.gt.table
         for step in frames(seq, build_source(cfg.detector), str(cfg.get("foreground", "auto"))):
             k = step.index
@@ -97,11 +112,12 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
                 image = None if step.image is None else step.image.copy()
                 tracks = [t for t in tracker.update(image, step.detections, step.foreground)
                           if t.state.reported]
-                fr, ids, boxes = rows[label]
+                fr, ids, boxes, hidden = rows[label]
                 for t in tracks:
                     fr.append(k)
                     ids.append(int(t.id))
                     boxes.append(np.asarray(t.box, dtype=np.float64))
+                    hidden.append(t.state.name == "OCCLUDED")
                 if not tracks or not len(gtb):
                     continue
                 iou = iou_matrix(np.array([t.box for t in tracks]), gtb)
@@ -125,14 +141,75 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
                                     before=None if before is None else (before[0], k - before[1])))
                     last[label][i] = (g, k)
                     holder[label][g] = (i, k)
-        for label, (fr, ids, boxes) in rows.items():
+        for label, (fr, ids, boxes, hidden) in rows.items():
             n = len(fr)
             fr, ids = np.asarray(fr, dtype=np.int64), np.asarray(ids, dtype=np.int64)
             order = np.lexsort((ids, fr))  # MOT order: by frame, then id
             table = MotTable(fr[order], ids[order], np.asarray(boxes).reshape(n, 4)[order],
                              np.ones(n), np.full(n, -1, dtype=np.int64), np.full(n, np.nan))
             tallies[label].scores.append(score_sequence(gt, table))
+            if stacks:
+                counts = stack_counts(gt, table, np.asarray(hidden, dtype=bool)[order])
+                for key, v in counts.items():
+                    tallies[label].stacks[key] = tallies[label].stacks.get(key, 0) + v
     return tallies
+
+
+def stack_counts(gt: MotTable, res: MotTable, hidden: np.ndarray, frames: int = 3
+                 ) -> dict[str, int]:
+    """Stacks of a result table (module docstring); ``hidden`` (len(res),) bool: OCCLUDED."""
+    gt = considered(gt)
+    m = match_rows(gt, res)
+    person = np.full(len(res), -1)
+    person[m[m >= 0]] = gt.ids[m >= 0]
+    runs: dict[tuple[int, int], list[tuple[int, int, int]]] = {}  # (id, id) -> [(frame, row, row)]
+    for f, rr in res.frame_index().items():
+        rr = rr[np.argsort(res.ids[rr])]
+        for x, y in zip(*np.nonzero(np.triu(iou_matrix(res.boxes[rr], res.boxes[rr]) >= 0.5, 1))):
+            runs.setdefault((int(res.ids[rr[x]]), int(res.ids[rr[y]])), []).append(
+                (f, rr[x], rr[y]))
+    one: set[tuple[int, int]] = set()  # (frame, id) in a one-person stack frame
+    dup: set[tuple[int, int]] = set()  # (frame, id) in a duplicate
+    c = {"one_person": 0, "two_people": 0, "duplicates": 0, "two_in_turn": 0}
+    for key, rows in runs.items():
+        cut = [0] + [k for k in range(1, len(rows)) if rows[k][0] != rows[k - 1][0] + 1]
+        for a, b in zip(cut, cut[1:] + [len(rows)]):
+            run = rows[a:b]
+            if len(run) < frames:
+                continue
+            two = [person[i] >= 0 and person[j] >= 0 and person[i] != person[j] for _, i, j in run]
+            found = [(not hidden[i], not hidden[j]) for _, i, j in run]
+            alone = [fi for fi, fj in found if fi != fj]
+            in_turn = any(p != q for p, q in pairwise(alone)) and not any(
+                fi and fj for fi, fj in found)
+            for (f, _, _), t in zip(run, two):
+                if not t:
+                    one.update({(f, key[0]), (f, key[1])})
+            if 2 * sum(two) >= len(run):
+                c["two_people"] += 1
+                c["two_in_turn"] += in_turn
+                continue
+            c["one_person"] += 1
+            c["duplicates"] += in_turn
+            if in_turn:
+                dup.update((f, k) for f, _, _ in run for k in key)
+    fp = [(int(res.frames[r]), int(res.ids[r])) for r in np.flatnonzero(
+        ~np.isin(np.arange(len(res)), m[m >= 0]))]
+    switches, last = [], {}
+    for r in np.flatnonzero(m >= 0):  # gt rows in (frame, id) order
+        g, i = int(gt.ids[r]), int(res.ids[m[r]])
+        if last.get(g, i) != i:
+            switches.append((int(gt.frames[r]), last[g], i))
+        last[g] = i
+
+    def near(where: set, f: int, a: int, b: int) -> bool:
+        return bool({(f, a), (f, b), (f - 1, a), (f - 1, b)} & where)
+
+    c.update(false_positives=len(fp), fp_one_person=sum(k in one for k in fp),
+             fp_duplicates=sum(k in dup for k in fp), switches=len(switches),
+             switches_one_person=sum(near(one, *s) for s in switches),
+             switches_duplicates=sum(near(dup, *s) for s in switches))
+    return c
 
 
 def metrics(tally: Tally) -> np.ndarray:
@@ -156,6 +233,7 @@ def main(argv=None) -> int:
     ap.add_argument("--length", type=int, help="cut synthetic scenes / replays to N frames")
     ap.add_argument("--events", action="store_true", help="print every wrong re-acquisition")
     ap.add_argument("--untouched", action="store_true", help="allow the set's untouched seeds")
+    ap.add_argument("--stacks", action="store_true", help="count stacked targets (docstring)")
     args = ap.parse_args(argv)
     sets = {e.name: e for e in G.SETS}
     if args.set not in sets:
@@ -169,7 +247,8 @@ def main(argv=None) -> int:
     total = {label: Tally() for label, _, _ in trackers}
     per_seed: dict[str, list[np.ndarray]] = {label: [] for label in total}
     for seed in args.seeds:
-        tallies = run_seed(set_overrides(args.set, seed, args.length), trackers, args.gap)
+        tallies = run_seed(set_overrides(args.set, seed, args.length), trackers, args.gap,
+                           args.stacks)
         for label, tally in tallies.items():
             m = metrics(tally)
             per_seed[label].append(m)
@@ -182,6 +261,8 @@ def main(argv=None) -> int:
         m = np.mean(per_seed[label], axis=0)  # the generalisation table's mean over seeds
         m[3] = sum(x[3] for x in per_seed[label])  # IDs summed
         print(f"{args.set} seeds {args.seeds} (mean; IDs summed) {line(label, tally, m)}")
+        if args.stacks:
+            print(f"{args.set} seeds {args.seeds} {label} stacks: {tally.stacks}")
     return 0
 
 
