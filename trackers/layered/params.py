@@ -388,9 +388,6 @@ class Adaptations:
             exit_misses frames (paper: never, only after ``life_cycle.max_misses``).
         report_predicted: an unfound target is reported at its last box moved by KF1's
             prediction (paper: reporting is ours; at its last validated box).
-        twin_refind: a target unfound last frame is not re-found on a candidate overlapping
-            the candidate of a target found last frame by more than
-            ``life_cycle.new_track_iou`` (paper: any candidate; off).
     """
 
     model_spread: float = 4.5
@@ -405,7 +402,6 @@ class Adaptations:
     exit_margin: float = 8.0
     exit_misses: int = 3
     report_predicted: bool = True
-    twin_refind: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -420,5 +416,5 @@ class Adaptations:
                                        "duplicate_radius", "gate_max_fraction", "exit_margin"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth",
-                                       "report_predicted", "twin_refind"), bool),
+                                       "report_predicted"), bool),
                       "prune_max_misses": int, "exit_misses": int})

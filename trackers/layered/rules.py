@@ -14,7 +14,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trackers.geometry import intersection_matrix
 from trackers.layered.model import Targets
 from trackers.layered.params import Adaptations
 from trackers.layered.parts import PartFeatures
@@ -107,44 +106,6 @@ class PredictedBox:
         boxes[:, :2] += np.where(found[rows, None], 0.0, targets.predicted_shift()[rows])
 
 
-# --------------------------------------------------------------- PBM 4: a lost target re-found
-
-
-class AnyRefind:
-    """A target unfound last frame may take any candidate the assignment gives it."""
-
-    def refused(self, matches: np.ndarray, targets: Targets, boxes: np.ndarray) -> np.ndarray:
-        return np.zeros(len(matches), dtype=bool)
-
-
-@dataclass(frozen=True)
-class NoTwinRefind:
-    """``twin_refind``: a target unfound last frame is not re-found on a candidate whose
-    overlap with the candidate a target found last frame takes is more than ``cover`` (the
-    life cycle's ``new_track_iou``) of the smaller of the two boxes: two such candidates are one person (the detector's two boxes
-    on one silhouette, or a detection and a blob head of it), and the assignment, keeping
-    as many pairs as possible, would give the lost target the second one and double the
-    person."""
-
-    cover: float
-    after: int = 0
-
-    def refused(self, matches: np.ndarray, targets: Targets, boxes: np.ndarray) -> np.ndarray:
-        """(M,) bool: the (M, 2) (target, candidate) matches refused; ``boxes`` (N, 4) the
-        candidates' boxes."""
-        m = targets.misses[matches[:, 0]]
-        refind = m > self.after
-        if not refind.any() or (m > 0).all():
-            return np.zeros(len(matches), dtype=bool)
-        kept = boxes[matches[m == 0, 1]]
-        out = np.zeros(len(matches), dtype=bool)
-        b = boxes[matches[refind, 1]]
-        smaller = np.minimum(b[:, None, 2] * b[:, None, 3], kept[None, :, 2] * kept[None, :, 3])
-        cover = intersection_matrix(b, kept) / np.maximum(smaller, 1e-9)
-        out[refind] = cover.max(axis=1) > self.cover
-        return out
-
-
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -152,15 +113,13 @@ class Rules(NamedTuple):
     match: AnyAboveThreshold | RelativeMatch
     birth: AnyCandidate | ForegroundSupport
     report_box: LastBox | PredictedBox
-    refind: AnyRefind | NoTwinRefind
 
 
-def build_rules(a: Adaptations, new_track_iou: float = 0.6) -> Rules:
+def build_rules(a: Adaptations) -> Rules:
     """The paper's rule where the adaptation is off (false, 0), ours where it is on."""
     return Rules(
         compared=PredictedModels() if a.motion_compensation else LastModels(),
         match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
         birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
         report_box=PredictedBox() if a.report_predicted else LastBox(),
-        refind=NoTwinRefind(new_track_iou, a.prune_max_misses) if a.twin_refind else AnyRefind(),
     )

@@ -152,7 +152,7 @@ class PBMTracker:
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         self._finder = CandidateFinder(self.candidates)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
-        self.rules = build_rules(self.adaptations, self.life_cycle.new_track_iou)
+        self.rules = build_rules(self.adaptations)
         self.reset()
 
     def reset(self) -> None:
@@ -189,10 +189,6 @@ class PBMTracker:
         withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
         matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
-        refused = self.rules.refind.refused(matches, self.targets, cand.box) if len(matches) else None
-        if refused is not None and refused.any():
-            lost = np.concatenate([lost, matches[refused, 0]]).astype(lost.dtype)
-            matches = matches[~refused]
         if len(matches):
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
