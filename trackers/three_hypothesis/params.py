@@ -142,6 +142,11 @@ class Adaptations:
             by its measured velocity when that velocity has predicted its measurements
             better than the Kalman filter's so far (``trackers.common.measured_velocity``);
             False: where M predicts it (the paper's hypothesis region).
+        foreground_presence: with a foreground mask, a hypothesis in plain view whose
+            ellipse holds at least ``Appearance.min_foreground`` foreground is not
+            contradicted by the missing detection: its count of frames in plain view does not
+            grow (the detector missed a person who is there); False: every frame in plain
+            view counts towards the m frames of pruning (the paper).
     """
 
     gate_sigmas: float = 3.0
@@ -155,12 +160,13 @@ class Adaptations:
     max_hidden: int = 150
     appearance_margin: bool = True
     measured_velocity: bool = True
+    foreground_presence: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
-                      "measured_velocity": bool})
+                      "measured_velocity": bool, "foreground_presence": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  tentative_misses=self.tentative_misses)
@@ -172,7 +178,8 @@ class Adaptations:
         return cls(gate_sigmas=0.0, blend_visible=False, shape_estimate=False,
                    foreground_histograms=False, foreground_support=False,
                    report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
-                   max_hidden=1_000_000, appearance_margin=False, measured_velocity=False)
+                   max_hidden=1_000_000, appearance_margin=False, measured_velocity=False,
+                   foreground_presence=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

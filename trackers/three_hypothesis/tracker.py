@@ -450,6 +450,9 @@ class RetaTracker:
             unseen = np.zeros(len(cover), dtype=bool)
         else:  # nobody can be seen where the region holds no foreground
             cover &= ~unseen
+        # foreground_presence: a hypothesis on foreground is not contradicted by a missed detection
+        held = ((~unseen) if self.adaptations.foreground_presence and f.foreground is not None
+                else np.zeros(len(cover), dtype=bool)).tolist()
         cover, unseen, corners = cover.tolist(), unseen.tolist(), hyp_boxes.tolist()
         m, a = self.life_cycle.m, self.adaptations
         survivors: list[_Person] = []
@@ -463,7 +466,7 @@ class RetaTracker:
                 b.unseen = unseen[k]
                 k += 1
                 b.covered = c
-                b.exposed = 0 if c else b.exposed + 1
+                b.exposed = 0 if c else b.exposed + (0 if held[k - 1] else 1)
                 if g or b.exposed >= m:
                     continue
                 if any(max(abs(u - v) for u, v in zip(corner, kc)) < 0.5 for kc in kept_corners):
