@@ -61,7 +61,7 @@ FIGURES = (
            ("ShopAssistant1cor 1390-1470: three people walk towards the camera; the woman with "
             "the bag is hidden behind the man in black (1400-1450). "
             "baseline: woman 40 -> 44 -> merged into 43's box -> 46, man 43 -> 47 (swap). "
-            "reta: woman 24, man 26, light shirt 25 kept (dashed: hypotheses while hidden). "
+            "reta: woman 15, man 17, light shirt 16 kept (dashed: hypotheses while hidden). "
             "pbm: 25, 27, 26 kept (1440: 25? is the hidden woman's predicted box, drawn above "
             "her, and 27's box covers both).")),
     Figure("by_eye_shop_crossing", "CAVIAR-ShopAssistant1cor.mp4", (1540, 1585, 1595, 1620, 1635),
@@ -69,8 +69,8 @@ FIGURES = (
            ("ShopAssistant1cor 1540-1635: a man in a brown jacket passes behind the man in black "
             "and walks away up the corridor. "
             "baseline: 57 -> 61 -> no box at 1620 -> 63; the light-shirted man 42 -> 52. "
-            "reta: 34 kept through the crossing (1595 dashed hypotheses, 1620 34v). "
-            "reta lost the light-shirted man at 1492 (25 -> 30 at 1548). pbm: brown jacket "
+            "reta: 25 kept through the crossing (1595 dashed hypotheses, 1620 25v). "
+            "reta lost the light-shirted man at 1517 (16 -> 21 at 1548). pbm: brown jacket "
             "35 kept (35? while hidden, 1595; the 36 beside it is tentative); light shirt 26 kept, "
             "its box on his legs only at 1540.")),
     Figure("by_eye_shop_assistant", "CAVIAR-ShopAssistant1cor.mp4", (150, 215, 290, 300),
@@ -80,13 +80,13 @@ FIGURES = (
             "All three box his trousers only at 150. pbm: two targets on him, 9 on the torso and "
             "4 on the legs (128-220), then 12; 4 comes back at 290 on empty floor (4?) "
             "and takes a person entering at the bottom (300-575): a wrong re-acquisition after "
-            "70 frames. baseline 13/14/18/20, reta 6/9/10: new ids at each loss.")),
+            "70 frames. baseline 13/14/18/20 (new ids at each loss), reta 3 then 7 from 218.")),
     Figure("by_eye_enter", "CAVIAR-OneStopEnter1front.mp4", (346, 390, 406, 455, 650),
            (150, 62, 320, 150),
            ("OneStopEnter1front 346-650: red jacket (walking right, then into the shop) and dark "
             "coat (walking left) cross at 385-400. "
-            "baseline: red 10 -> 12 -> 14 -> 17, dark 11 -> 18 -> lost. reta: red 4 -> 6, then 6 "
-            "kept into the shop; dark 5 -> 7 -> lost (417). "
+            "baseline: red 10 -> 12 -> 14 -> 17, dark 11 -> 18 -> lost. reta: red 3 kept from 259 "
+            "into the shop (-7 at 455: a tentative on the second box), dark 4 kept until 433. "
             "pbm: red 4, dark 5 kept through the crossing; 5, unfound for 41 frames, takes the "
             "detector's second box on the red jacket at 455: 4 and 5 on one man until 784."), 1.0),
     Figure("by_eye_move", "CAVIAR-OneStopMoveNoEnter1front.mp4", (560, 680, 760, 800, 880),
@@ -94,7 +94,7 @@ FIGURES = (
            ("OneStopMoveNoEnter1front 560-880: one man walks right, stands at the shop window "
             "(about 590-750) and walks on to the right edge (910). "
             "The detector misses him while he stands (one box in 590-720): no tracker draws him "
-            "at 680. baseline 7, 12, 13, 14, 16 and reta 5, 6, 8 (ids 1-9 in all) start new ids; "
+            "at 680. baseline 7, 12, 13, 14, 16 (12 ids in all); reta 2, then 3 from 730; "
             "pbm keeps id 4 from 289 to 910 (its target survives 90 frames unfound)."), 1.0),
 )
 

@@ -300,7 +300,7 @@ def test_paper_mode_turns_every_adaptation_off():
     assert set(ours.adaptations.changed()) == {
         "gate_sigmas", "blend_visible", "shape_estimate", "foreground_histograms",
         "foreground_support", "report_exposed", "report_spread", "tentative_misses",
-        "max_hidden", "measured_velocity", "appearance_margin"}
+        "max_hidden", "measured_velocity", "appearance_margin", "foreground_presence"}
     for group in ("association", "occlusion", "appearance", "motion", "life_cycle"):
         assert getattr(paper, group) == getattr(ours, group), group
 
@@ -433,9 +433,12 @@ def test_person_detected_half_behind_another_keeps_its_measured_size():
 def test_hypothesis_in_plain_view_is_reported_briefly_then_only_drawn_and_keeps_the_id():
     # a lone walker's detections stop at frame 20 (it stepped behind the scenery) and come
     # back at frame 27: no visible person covers its hypotheses, so after report_exposed
-    # frames they are contradicted (only drawn); the person keeps its id when found again
+    # frames they are contradicted (only drawn); the person keeps its id when found again.
+    # (The scene's mask still holds the walker, which foreground_presence would take as the
+    # person being there, undetected: off here, as behind real scenery.)
     frames = _scene([_line((40, 150), (2, 0), 40)], [RED])
-    tracker = RetaTracker(life_cycle=LifeCycle(m=8), adaptations=Adaptations(report_exposed=2))
+    tracker = RetaTracker(life_cycle=LifeCycle(m=8),
+                          adaptations=Adaptations(report_exposed=2, foreground_presence=False))
     states = []
     for t, (img, label, dets, gt) in enumerate(frames):
         if 20 <= t < 27:

@@ -120,3 +120,28 @@ def test_flickering_false_alarm_on_the_bare_floor_is_never_reported():
     assert run(RetaTracker()) == 0
     assert len(set(red)) == 1  # the walking person is tracked under one id throughout
     assert run(RetaTracker(adaptations=Adaptations(foreground_support=False))) > 10
+
+
+def test_person_standing_undetected_on_foreground_keeps_the_id():
+    """Unlabelled CAVIAR front views: the silhouette detector misses people in plain view
+    for 5-40 frames; Alg. 1 prunes a hypothesis after m = 8 frames in plain view, and the
+    person comes back under a new id. Here a person stands, detected for 10 frames, then
+    missed for 15 while the foreground mask still holds them, then detected again: a
+    hypothesis on foreground is not contradicted (``foreground_presence``), so the id
+    stays; the paper's rule prunes it and starts a new id."""
+    p = [60.0, 30.0, 18.0, 60.0]
+    mask = np.zeros((H, W), bool)
+    x, y, w, h = (int(v) for v in p)
+    mask[y:y + h, x:x + w] = True
+
+    def ids(tracker):
+        seen = set()
+        for t in range(35):
+            dets = _dets([p] if t < 10 or t >= 25 else [])
+            for track in tracker.update(_frame([p], [RED]), dets, mask):
+                if track.state == TrackState.CONFIRMED:
+                    seen.add(track.id)
+        return seen
+
+    assert len(ids(RetaTracker())) == 1
+    assert len(ids(RetaTracker(adaptations=Adaptations(foreground_presence=False)))) == 2

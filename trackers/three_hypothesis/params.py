@@ -145,8 +145,8 @@ class Adaptations:
         foreground_presence: with a foreground mask, a hypothesis in plain view whose
             ellipse holds at least ``Appearance.min_foreground`` foreground is not
             contradicted by the missing detection: its count of frames in plain view does not
-            grow (the detector missed a person who is there); False: every frame in plain
-            view counts towards the m frames of pruning (the paper).
+            grow (the detector missed a person who is there; up to ``max_hidden``); False:
+            every frame in plain view counts towards the m frames of pruning (the paper).
     """
 
     gate_sigmas: float = 3.0
@@ -160,7 +160,7 @@ class Adaptations:
     max_hidden: int = 150
     appearance_margin: bool = True
     measured_velocity: bool = True
-    foreground_presence: bool = False
+    foreground_presence: bool = True
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "blend_visible": bool,
