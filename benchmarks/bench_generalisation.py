@@ -9,7 +9,7 @@ docs/generalisation.md.
     .venv/bin/python benchmarks/bench_generalisation.py --sets "cav151-295 sil" PETS09 \\
         --trackers reta pbm norfair norfair_tuned
     .venv/bin/python benchmarks/bench_generalisation.py --list          # sets and trackers
-    .venv/bin/python benchmarks/bench_generalisation.py --docs          # also the table of docs/generalisation.md
+    .venv/bin/python benchmarks/bench_generalisation.py --docs          # + docs' table section
 
 Writes ``generalisation.csv`` (long: set, role, tracker, IDF1, HOTA, MOTA, n_seeds,
 failures) and ``generalisation.md`` (the wide table and the legend of the sets) into
