@@ -19,9 +19,11 @@ from trackers.three_hypothesis.rules import (
     EstimateShape,
     FixedGate,
     ForegroundPixels,
+    ForegroundPresence,
     ForegroundSupport,
     KalmanGate,
     KeepAppearance,
+    NoPresence,
     NoSupport,
     PredictionShape,
     ReportRule,
@@ -36,7 +38,7 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     assert isinstance(paper.stage1_appearance, AbsoluteAppearance)
     assert isinstance(paper.appearance_behind, KeepAppearance)
     assert isinstance(paper.shape_behind, PredictionShape)
-    assert isinstance(paper.support, NoSupport)
+    assert isinstance(paper.support, NoSupport) and isinstance(paper.presence, NoPresence)
     assert paper.report == ReportRule(1_000_000, 0.0)
     assert isinstance(paper.velocity, FilterPrediction)
     ours = build_rules(Adaptations(), h)
@@ -45,6 +47,7 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     assert isinstance(ours.appearance_behind, BlendVisible)
     assert isinstance(ours.shape_behind, EstimateShape)
     assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0)
+    assert ours.presence == ForegroundPresence(h)
     assert isinstance(ours.velocity, MeasuredVelocity)
     built = RetaTracker(adaptations=Adaptations.paper()).rules
     assert [type(r) for r in built] == [type(r) for r in paper] and built.report == paper.report
@@ -100,6 +103,20 @@ def test_a_region_with_too_little_foreground_is_seen_empty():
     assert support.empty(None, boxes) is None  # no mask: nothing is seen empty
     assert NoSupport().empty(fg, boxes) is None
     assert ForegroundPixels().mask(fg) is fg and AllPixels().mask(fg) is None
+
+
+def test_a_region_on_foreground_is_held_against_a_missing_detection():
+    """``foreground_presence`` measures the foreground itself when the support rule is off
+    (its ``empty`` None), so a region on bare floor is still contradicted."""
+    fg = np.zeros((40, 40), bool)
+    fg[:, :20] = True
+    boxes = np.array([[0.0, 0.0, 20.0, 40.0], [20.0, 0.0, 20.0, 40.0]])
+    presence = ForegroundPresence(EllipseHistogrammer(min_foreground=0.2))
+    np.testing.assert_array_equal(presence.held(fg, boxes, None), [True, False])
+    np.testing.assert_array_equal(presence.held(fg, boxes, np.array([True, True])),
+                                  [False, False])  # the support rule's verdict is reused
+    assert presence.held(None, boxes, None) is None  # no mask: every frame counts
+    assert NoPresence().held(fg, boxes, None) is None
 
 
 def test_report_rule_bounds_time_in_plain_view_and_spread():

@@ -173,6 +173,37 @@ class ForegroundSupport:
         return h.foreground_share(foreground, boxes) < h.min_foreground
 
 
+# ------------------------------------- Alg. 1: what contradicts a hypothesis in plain view
+
+
+class NoPresence:
+    """The paper: every frame a hypothesis spends in plain view without a detection counts
+    towards the m frames after which it is contradicted and pruned."""
+
+    def held(self, foreground: np.ndarray | None, boxes: np.ndarray,
+             empty: np.ndarray | None) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class ForegroundPresence:
+    """``foreground_presence``: a hypothesis whose ellipse holds at least ``min_foreground``
+    foreground is not contradicted by the missing detection (the detector missed a person
+    who is there); its frames in plain view do not count towards m."""
+
+    histograms: EllipseHistogrammer
+
+    def held(self, foreground: np.ndarray | None, boxes: np.ndarray,
+             empty: np.ndarray | None) -> np.ndarray | None:
+        """(N,) bool per box, or None without a mask; ``empty``: the support rule's (N,)
+        verdict on the same boxes when it measured them (None: measured here)."""
+        if foreground is None:
+            return None
+        if empty is None:
+            empty = ForegroundSupport(self.histograms).empty(foreground, boxes)
+        return ~empty
+
+
 # --------------------------------------------------------------- output: which hypothesis is reported
 
 
@@ -205,6 +236,7 @@ class Rules(NamedTuple):
     appearance_behind: KeepAppearance | BlendVisible
     shape_behind: PredictionShape | EstimateShape
     support: NoSupport | ForegroundSupport
+    presence: NoPresence | ForegroundPresence  # what contradicts a hypothesis (Alg. 1)
     report: ReportRule
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
 
@@ -219,6 +251,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Ru
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
+        presence=ForegroundPresence(histograms) if a.foreground_presence else NoPresence(),
         report=ReportRule(a.report_exposed, a.report_spread),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )

@@ -435,7 +435,8 @@ class RetaTracker:
         """PruneHypothesis(G, m): a hypothesis whose centre left the image ends; one in
         plain view (less than ``cover`` of it hidden by a person visible at t, or, with
         ``rules.support``, seen empty) for m frames in a row is contradicted by the missing
-        detection and removed; of two at the same place the preferred kind stays; a
+        detection and removed (with ``rules.presence``, frames it spends on foreground do not
+        count); of two at the same place the preferred kind stays; a
         tentative track missed more than ``tentative_misses`` frames is a false positive;
         a person hidden more than ``max_hidden`` frames, or with no hypothesis left, ends.
         Returns the persons kept, their hypotheses added to the graph."""
@@ -445,14 +446,14 @@ class RetaTracker:
         gone = hyp.outside_image(hyp_boxes, f.width, f.height).tolist()
         cover = (self._hidden_share(f, hyp_boxes, np.array(sources))
                  >= self.life_cycle.cover)
-        unseen = self.rules.support.empty(f.foreground, hyp_boxes)
-        if unseen is None:
+        empty = self.rules.support.empty(f.foreground, hyp_boxes)
+        held = self.rules.presence.held(f.foreground, hyp_boxes, empty)
+        held = [False] * len(cover) if held is None else held.tolist()
+        if empty is None:
             unseen = np.zeros(len(cover), dtype=bool)
         else:  # nobody can be seen where the region holds no foreground
+            unseen = empty
             cover &= ~unseen
-        # foreground_presence: a hypothesis on foreground is not contradicted by a missed detection
-        held = ((~unseen) if self.adaptations.foreground_presence and f.foreground is not None
-                else np.zeros(len(cover), dtype=bool)).tolist()
         cover, unseen, corners = cover.tolist(), unseen.tolist(), hyp_boxes.tolist()
         m, a = self.life_cycle.m, self.adaptations
         survivors: list[_Person] = []
