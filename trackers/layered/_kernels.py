@@ -620,14 +620,14 @@ def _rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int) -> float:
 
 
 @numba.njit(cache=True, inline="always")
-def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray,
-                      k: int) -> None:
+def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray, k: int
+                      ) -> None:
     """Eq. 11, d_ij = |f_ij - F_ij| (``equations.differences``), of model t of ``m`` against
     candidate n of ``c`` into d[k] (6, 5).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
-    no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), both
-    times g = 1 / (1 + misses); all clipped at 0.
+    no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), the
+    last two times g = 1 / (1 + misses); all clipped at 0.
     """
     m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height = m
     c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid, _ = c
@@ -661,13 +661,12 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarra
 def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
                         out: np.ndarray) -> None:
     """Eq. 11 (``_pair_differences``) of the pairs (ti[k], n[k]) into out (K, 6, 5);
-    misses (T,) float64 per target, g = 1 / (1 + misses) on displacement and overlap."""
+    misses (T,) float64 per target, g = 1 / (1 + misses)."""
     for k in range(ti.shape[0]):
         if not (0 <= ti[k] < m[1].shape[0] and 0 <= n[k] < c[1].shape[0]):
             raise IndexError("selected pair index out of range")
     for k in range(ti.shape[0]):
-        g = 1.0 / (1.0 + misses[ti[k]])
-        _pair_differences(m, c, ti[k], n[k], g, out, k)
+        _pair_differences(m, c, ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), out, k)
 
 
 @numba.njit(cache=True)

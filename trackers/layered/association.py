@@ -93,15 +93,14 @@ def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndar
     """
     T, N = len(model), len(cand)
     ti, n = np.divmod(np.arange(T * N, dtype=np.intp), max(N, 1))
-    return _differences(model, cand, ti, n, misses).reshape(
-        T, N, N_FEATURES, N_PARTS)
+    return _differences(model, cand, ti, n, misses).reshape(T, N, N_FEATURES, N_PARTS)
 
 
 def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
                          misses: np.ndarray | None = None) -> np.ndarray:
     """Eq. 11 for the selected pairs (target ti[k], candidate n[k]) only: (K, 6, 5), equal
-    to ``feature_differences(model, cand, misses)[ti, n]`` value for
-    value. The tracker scores only the candidates inside a target's gate (PBM 3).
+    to ``feature_differences(model, cand, misses)[ti, n]`` value for value. The tracker
+    scores only the candidates inside a target's gate (PBM 3).
     """
     return _differences(model, cand, ti, n, misses)
 

@@ -214,8 +214,7 @@ def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.n
         d[:, 5] = 1.0 - np.where(union > 0, inter / union, 0.0)               # 1 - IoU
     if misses is not None:
         g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64)[ti])
-        d[:, 4] *= g[:, None]                                                # per frame
-        d[:, 5] *= g[:, None]
+        d[:, 4:6] *= g[:, None, None]                                        # per frame
     return np.clip(d, 0.0, None)                                             # eq. 11
 
 

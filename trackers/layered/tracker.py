@@ -32,8 +32,8 @@ not switchable: features are measured on a fixed grid of samples per box
 (``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
 P(D >= d) (``models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2 is used
 sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
-1 + m; KF2 holds an unfound target's size; a blob with several heads counts as merged (searched) whatever its
-size.
+1 + m; KF2 holds an unfound target's size; a blob with several heads counts as merged
+(searched) whatever its size.
 
 Output ``Track.extra``: ``parts`` (5, 4) xywh part boxes, ``occluded_parts`` (5,) bool
 (frozen parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates
@@ -306,9 +306,8 @@ class PBMTracker:
     def _scores(self, model: PartFeatures, feats: PartFeatures, ti: np.ndarray,
                 n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eqs. 11-13 of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
-        a = self.adaptations
         return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
-                           self.features.omega, self.features.gamma, a.model_spread)
+                           self.features.omega, self.features.gamma, self.adaptations.model_spread)
 
     # ------------------------------------------------------------------ model update (PBM 4.2)
     def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: FrameScores,

@@ -463,11 +463,11 @@ class RetaTracker:
             kept_boxes: list[np.ndarray] = []
             kept_corners: list[list[float]] = []
             for b in new:
-                box, corner, g, c = hyp_boxes[k], corners[k], gone[k], cover[k]
+                box, corner, g, c, held_k = hyp_boxes[k], corners[k], gone[k], cover[k], held[k]
                 b.unseen = unseen[k]
                 k += 1
                 b.covered = c
-                b.exposed = 0 if c else b.exposed + (0 if held[k - 1] else 1)
+                b.exposed = 0 if c else b.exposed + (0 if held_k else 1)
                 if g or b.exposed >= m:
                     continue
                 if any(max(abs(u - v) for u, v in zip(corner, kc)) < 0.5 for kc in kept_corners):
