@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections import Counter
 from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
@@ -59,7 +60,7 @@ class Tally:
     reacquired: int = 0
     wrong: int = 0
     exchanges: int = 0
-    stacks: dict[str, int] = field(default_factory=dict)
+    stacks: Counter = field(default_factory=Counter)  # ``stack_counts`` summed
     events: list[dict] = field(default_factory=list)
     scores: list = field(default_factory=list)
 
@@ -67,8 +68,7 @@ class Tally:
         self.reacquired += other.reacquired
         self.wrong += other.wrong
         self.exchanges += other.exchanges
-        for k, v in other.stacks.items():
-            self.stacks[k] = self.stacks.get(k, 0) + v
+        self.stacks.update(other.stacks)
         self.events += other.events
         self.scores += other.scores
 
@@ -149,9 +149,8 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
                              np.ones(n), np.full(n, -1, dtype=np.int64), np.full(n, np.nan))
             tallies[label].scores.append(score_sequence(gt, table))
             if stacks:
-                counts = stack_counts(gt, table, np.asarray(hidden, dtype=bool)[order])
-                for key, v in counts.items():
-                    tallies[label].stacks[key] = tallies[label].stacks.get(key, 0) + v
+                tallies[label].stacks.update(
+                    stack_counts(gt, table, np.asarray(hidden, dtype=bool)[order]))
     return tallies
 
 
@@ -262,7 +261,7 @@ def main(argv=None) -> int:
         m[3] = sum(x[3] for x in per_seed[label])  # IDs summed
         print(f"{args.set} seeds {args.seeds} (mean; IDs summed) {line(label, tally, m)}")
         if args.stacks:
-            print(f"{args.set} seeds {args.seeds} {label} stacks: {tally.stacks}")
+            print(f"{args.set} seeds {args.seeds} {label} stacks: {dict(tally.stacks)}")
     return 0
 
 
