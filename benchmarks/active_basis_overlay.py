@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from harness.build import compose_config  # noqa: E402
+from harness.pipeline.build import compose_config  # noqa: E402
 from harness.report.primitives import legend_strip  # noqa: E402
 from trackers.geometry import iou_matrix  # noqa: E402
 

@@ -39,10 +39,10 @@ sys.path.insert(0, str(ROOT))
 
 from hydra.utils import instantiate
 
-from harness.detect import match_count, run_detection
-from harness.frontend_source import compose_config
+from harness.commands.detect import match_count, run_detection
 from harness.io.mot import read_mot
 from harness.paths import data_path
+from harness.sources.frontend import compose_config
 from trackers.frontend.blobs import blobs_from_mask
 from trackers.three_hypothesis.features import ellipse_histograms
 

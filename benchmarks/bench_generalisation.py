@@ -1,7 +1,7 @@
 """Generalisation table: every tracker (ours and outside, at defaults and tuned where a
 ``conf/tracker/<name>_tuned.yaml`` exists) x every evaluation set, COMBINED IDF1 / HOTA /
 MOTA, each set marked tuning (T: a default or tuned parameter was chosen on it) or
-untouched (U). The sets and the seed choice: ``harness/generalisation.py`` and
+untouched (U). The sets and the seed choice: ``harness/sweeps/generalisation.py`` and
 docs/generalisation.md.
 
     .venv/bin/python benchmarks/bench_generalisation.py                 # everything
@@ -32,7 +32,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from harness import generalisation as G  # noqa: E402
+from harness.sweeps import generalisation as G  # noqa: E402
 
 DOCS_HEAD = """# Generalisation: every tracker on data nobody chose anything on
 

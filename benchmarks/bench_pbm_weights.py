@@ -39,11 +39,11 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
-from harness.detection_sources import NoisyGroundTruth
 from harness.fit.pbm import load_feature_weights
 from harness.fit.pbm import main as fit_main
 from harness.paths import data_path
-from harness.run import run_sequence, score, summary_rows
+from harness.pipeline.experiment import run_sequence, score, summary_rows
+from harness.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[1]
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")

@@ -19,7 +19,7 @@ the two-person stacks that are found in turn and never together (what the boxes 
 found states alone cannot tell from a duplicate); docs/adaptations.md, "stacked targets".
 
 For choosing rules on tuning data only (docs/generalisation.md): the sets are those of
-``harness.generalisation`` but the seeds are yours (default 0-5); seeds of a set's untouched
+``harness.sweeps.generalisation`` but the seeds are yours (default 0-5); seeds of a set's untouched
 list are refused unless ``--untouched`` is given.
 
     .venv/bin/python benchmarks/bench_reacquisition.py --set "crowd d0.8" --seeds 0 1 \\
@@ -44,12 +44,12 @@ from scipy.optimize import linear_sum_assignment
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from harness import generalisation as G  # noqa: E402
-from harness.build import build_source, build_tracker, load_sequences  # noqa: E402
 from harness.io.mot import MotTable  # noqa: E402
-from harness.loop import frames  # noqa: E402
 from harness.metrics import combine, score_sequence  # noqa: E402
 from harness.metrics.paper import considered, match_rows  # noqa: E402
+from harness.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
+from harness.pipeline.loop import frames  # noqa: E402
+from harness.sweeps import generalisation as G  # noqa: E402
 from trackers.geometry import iou_matrix  # noqa: E402
 
 
@@ -225,7 +225,7 @@ def line(label: str, tally: Tally, m: np.ndarray) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--set", default="crowd d0.4", help="a set of harness.generalisation")
+    ap.add_argument("--set", default="crowd d0.4", help="a set of harness.sweeps.generalisation")
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(6)))
     ap.add_argument("--trackers", nargs="+", default=["reta", "pbm"])
     ap.add_argument("--gap", type=int, default=5, help="frames unfound before a re-acquisition")

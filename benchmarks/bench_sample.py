@@ -28,11 +28,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from harness.commands.detect import run_detection
 from harness.datasets.caviar import load_caviar
-from harness.detect import run_detection
-from harness.frontend_source import compose_config
 from harness.paths import data_path
-from harness.run import run_experiment
+from harness.pipeline.experiment import run_experiment
+from harness.sources.frontend import compose_config
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = data_path("CAVIAR-OneLeaveShop1cor")

@@ -29,7 +29,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from harness.build import (
+from harness.pipeline.build import (
     build_source,
     build_tracker,
     compose_config,

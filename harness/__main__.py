@@ -1,106 +1,13 @@
-"""``occbench run`` (plain ``occbench``, ``python -m harness``): the Hydra app.
-
-Runs the selected trackers (default: every built tracker, ``conf/tracker/all.yaml``) on the
-selected dataset (default: the synthetic suite) with the selected detection source, writes
-the run directory (``results/<date>/<time>/``: metrics.csv, summary.md, tracks/, plots/,
-config.yaml) and prints the COMBINED comparison table. Examples::
-
-    python -m harness tracker=baseline
-    python -m harness dataset=synthetic dataset.scenarios=[stop_behind] dataset.seed=3
-    python -m harness detector=noisy_gt detector.miss_rate=0.3
-    python -m harness dataset=mot dataset.root=datasets/trajectories/TUD-Campus dataset.image_size=[640,480] tracker=baseline
-    python -m harness +external.sort=path/to/results   # score another tracker's files too
-
-The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
-``objective.tracker`` (default IDF1 of the first tracker).
-"""
+"""``python -m harness`` and the console script ``occbench``: the commands of
+``harness.commands.cli`` (without one, ``occbench run``, the Hydra app of
+``harness.commands.run``)."""
 
 from __future__ import annotations
 
-import contextlib
-import logging
-from pathlib import Path
-
-import hydra
-from hydra.core.hydra_config import HydraConfig
-from hydra.errors import CompactHydraException
-from hydra.types import RunMode
-from omegaconf import DictConfig
-
-log = logging.getLogger("harness")
-
-# Columns of the table printed at the end (all columns are in summary.md and metrics.csv).
-PRINTED = ("HOTA", "DetA", "AssA", "IDF1", "MOTA", "MOTP", "Recall", "Precision", "MT", "ML",
-           "FP", "FN", "IDs", "Frag", "ReID")
-
-
-class AppError(CompactHydraException):
-    """A run that failed with a clear message: Hydra prints it (no traceback), exit code 1."""
-
-
-# An absolute path: relative config paths resolve against the calling *module* when the app
-# is started as the console script `occbench` (pkg://conf, not a package), and fail there.
-CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
-
-
-@hydra.main(version_base="1.3", config_path=CONF_DIR, config_name="config")
-def app(cfg: DictConfig) -> float:
-    """The Hydra task: run the experiment, print the table, return the objective.
-
-    In a multirun each job goes through ``harness.sweep.guarded``: a job already done with
-    the same overrides and the same inputs (config, code, data: ``harness.fingerprint``) is
-    skipped, a failing job is recorded in its ``status.json`` (and
-    gathered into sweep.csv) while the other jobs go on.
-    """
-    hc = HydraConfig.get()
-    if hc.mode == RunMode.MULTIRUN:
-        from harness.fingerprint import inputs
-        from harness.sweep import guarded
-
-        return guarded(hc.runtime.output_dir, list(hc.overrides.task), lambda: run_app(cfg),
-                       inputs=lambda: inputs(cfg))
-    return run_app(cfg)
-
-
-def run_app(cfg: DictConfig) -> float:
-    """One run: the experiment, the printed table, the objective (raises AppError on failure)."""
-    from tqdm.contrib.logging import logging_redirect_tqdm
-
-    from harness.progress import progress_factory
-    from harness.report.tables import comparison, to_text
-    from harness.run import RunError, run_experiment
-
-    hc = HydraConfig.get()
-    out_dir = Path(hc.runtime.output_dir)
-    choice = hc.runtime.choices.get("tracker")
-    objective = cfg.get("objective") or {}
-    multirun = hc.mode == RunMode.MULTIRUN
-    progress = progress_factory(bool(cfg.get("progress", True)), multirun)
-    try:
-        with logging_redirect_tqdm() if progress is not None else contextlib.nullcontext():
-            result = run_experiment(cfg, out_dir, tracker_name=choice, progress=progress)
-        value = result.objective(objective.get("tracker"), objective.get("metric") or "IDF1")
-    except RunError as err:
-        raise AppError(f"occbench: {err}") from None
-    if multirun:  # one line per job; the sweep's summary is printed when the multirun ends
-        log.info("job %s [%s]: %s %s = %.4g", hc.job.num, " ".join(hc.overrides.task),
-                 objective.get("tracker") or result.trackers[0],
-                 objective.get("metric") or "IDF1", value)
-    else:
-        if not result.metrics.empty:
-            print(to_text(comparison(result.metrics, PRINTED)), end="")
-        print(f"results: {out_dir}")
-    if result.failures:
-        raise AppError(  # each failure was logged once when it happened
-            f"occbench: {len(result.failures)} part(s) of the run failed (the rest is written; "
-            f"each is logged above, with its traceback in {out_dir / 'errors.txt'})")
-    return value
-
 
 def main() -> None:
-    """Console-script entry point ``occbench`` (same as ``python -m harness``): the
-    subcommands of ``harness.cli``; without one, this Hydra app."""
-    from harness.cli import main as cli
+    """Console-script entry point ``occbench`` (same as ``python -m harness``)."""
+    from harness.commands.cli import main as cli
 
     raise SystemExit(cli())
 

@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from trackers.layered.models import FEATURES, FeatureModels, FoldedMixture
+from trackers.layered.parts import N_PARTS, PartFeatures
 from trackers.records import Detections
 
 
@@ -197,3 +199,47 @@ def legs_behind_wall(length: int = 70) -> tuple[Scene, tuple[int, int]]:
     xs = a[:, 0]
     hidden = np.nonzero((xs + 0.15 * 30 >= wall[0]) & (xs + 0.85 * 30 <= wall[0] + wall[2]))[0]
     return Scene(260, 200, people, walls=[wall], seed=3), (int(hidden[0]), int(hidden[-1]))
+
+
+# ------------------------------------------------- random inputs of the PBM kernel tests
+
+
+def random_models(rng: np.random.Generator) -> FeatureModels:
+    """Half-normals, 2-component mixtures (one with a zero mean) and 3-component mixtures
+    (so the padded arrays have zero-weight slots)."""
+    models = {}
+    for f in FEATURES:
+        row = []
+        for j in range(N_PARTS):
+            kind = (FEATURES.index(f) + j) % 3
+            if kind == 0:
+                row.append(FoldedMixture([1.0], [0.0], [rng.uniform(0.01, 0.5)]))
+            elif kind == 1:
+                w = rng.uniform(0.2, 0.8)
+                row.append(FoldedMixture([w, 1 - w], [0.0, rng.uniform(0.01, 0.5)],
+                                         rng.uniform(0.005, 0.3, 2)))
+            else:
+                w = rng.dirichlet(np.ones(3))
+                row.append(FoldedMixture(w, rng.uniform(0.0, 0.5, 3), rng.uniform(0.01, 0.3, 3)))
+        models[f] = row
+    return FeatureModels(models)
+
+
+def random_features(rng: np.random.Generator, n: int, bins: int = 4) -> PartFeatures:
+    """n boxes' part features: sparse joint histograms, some parts empty (area 0, zero
+    histograms), some part rectangles disjoint or touching."""
+    nb = bins**3
+    xy = rng.uniform(0, 60, (n, N_PARTS, 2))
+    wh = rng.uniform(0.5, 30, (n, N_PARTS, 2))
+    wh[rng.random((n, N_PARTS)) < 0.05, 0] = 0.0  # a degenerate part rectangle
+    area = rng.uniform(0, 1, (n, N_PARTS))
+    area[rng.random((n, N_PARTS)) < 0.15] = 0.0
+    hists = []
+    for _ in range(2):
+        h = rng.random((n, N_PARTS, nb)) * (rng.random((n, N_PARTS, nb)) < 0.2)
+        h[area <= 0] = 0.0
+        s = h.sum(-1, keepdims=True)
+        hists.append(np.divide(h, s, out=np.zeros_like(h), where=s > 0))
+    return PartFeatures(np.concatenate([xy, wh], axis=2), area, rng.uniform(0, 3, (n, N_PARTS)),
+                        hists[0], hists[1], rng.uniform(0, 80, (n, N_PARTS, 2)),
+                        rng.uniform(0.5, 100, n))

@@ -3,7 +3,7 @@
 - No import circles: no module in ``trackers/`` or ``harness/`` imports (directly or through
   other modules of ours) a module that imports it back.
 - ``trackers`` never imports ``harness``.
-- ``harness/report/`` imports nothing from ``harness.run``.
+- ``harness/report/`` imports nothing from ``harness.pipeline.experiment``.
 
 Run as a script (``python tests/test_architecture.py``) to print every circle found.
 """
@@ -116,10 +116,10 @@ def test_checker_sees_function_level_imports_and_circles() -> None:
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
     assert circles(graph) == [["a", "b", "c"]]
     assert circles({"a": {"b"}, "b": set()}) == []
-    src = "def f():\n    from harness.run import run_sequence\n"
+    src = "def f():\n    from harness.pipeline.experiment import run_sequence\n"
     tree = ast.parse(src)
     node = next(n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom))
-    assert _absolute(node, "harness.report.video", False) == "harness.run"
+    assert _absolute(node, "harness.report.video", False) == "harness.pipeline.experiment"
     assert len([n for n in _runtime_nodes(tree) if isinstance(n, ast.ImportFrom)]) == 1
     guarded = ast.parse("if TYPE_CHECKING:\n    from a import b\nelse:\n    import c\n")
     found = [n for n in _runtime_nodes(guarded) if isinstance(n, ast.Import | ast.ImportFrom)]
@@ -138,10 +138,29 @@ def test_trackers_never_import_harness() -> None:
     assert {m: ts for m, ts in bad.items() if ts} == {}
 
 
-def test_report_imports_nothing_from_run() -> None:
+def test_report_imports_nothing_from_the_run() -> None:
     graph = _graph()
-    bad = {m: sorted(t for t in ts if t == "harness.run" or t.startswith("harness.run."))
+    bad = {m: sorted(t for t in ts if t == "harness.pipeline.experiment")
            for m, ts in graph.items() if m.startswith("harness.report")}
+    assert {m: ts for m, ts in bad.items() if ts} == {}
+
+
+# harness/'s rooms: the commands apart from the library rooms they call
+ROOMS = {"commands", "pipeline", "sources", "sweeps", "metrics", "datasets", "report", "fit", "io"}
+MAX_TOP_MODULES = 8
+
+
+def test_harness_top_holds_few_modules_and_only_rooms() -> None:
+    top = sorted(p.name for p in (ROOT / "harness").glob("*.py"))
+    assert len(top) <= MAX_TOP_MODULES, top
+    rooms = {p.name for p in (ROOT / "harness").iterdir() if (p / "__init__.py").is_file()}
+    assert rooms <= ROOMS, sorted(rooms - ROOMS)
+
+
+def test_library_rooms_never_import_a_command() -> None:
+    bad = {m: sorted(t for t in ts if t.startswith("harness.commands"))
+           for m, ts in _graph().items()
+           if m.startswith("harness.") and not m.startswith(("harness.commands", "harness.__main__"))}
     assert {m: ts for m, ts in bad.items() if ts} == {}
 
 

@@ -25,13 +25,13 @@ def test_import_names_come_from_this_repository(name):
     path = Path(module.__file__).resolve()
     assert path.is_relative_to(ROOT), f"{name} imported from {path}, not from {ROOT}"
     # and it is ours: modules only this project has
-    ours = {"trackers": "trackers.records", "harness": "harness.run"}[name]
+    ours = {"trackers": "trackers.records", "harness": "harness.pipeline.experiment"}[name]
     assert Path(importlib.import_module(ours).__file__).resolve().is_relative_to(ROOT)
 
 
 def test_console_script_is_the_app():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert project["scripts"]["occbench"] == "harness.__main__:main"  # -> harness.cli.main
+    assert project["scripts"]["occbench"] == "harness.__main__:main"  # -> harness.commands.cli.main
     from harness.__main__ import main
 
     assert callable(main)
@@ -48,7 +48,7 @@ def test_installed_console_script_points_to_the_app():
 
 
 def test_app_finds_its_configs():
-    import harness.__main__ as app
+    import harness.commands.run as app
 
     assert Path(app.CONF_DIR).is_absolute()
     assert (Path(app.CONF_DIR) / "config.yaml").is_file()

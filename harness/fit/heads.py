@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
             ),
         )
     else:
-        from harness.frontend_source import load_sequences
+        from harness.sources.frontend import load_sequences
 
         sequences = load_sequences(args.overrides)
         pixels = head_pixels_of(sequences, step=args.step)

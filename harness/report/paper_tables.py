@@ -7,7 +7,7 @@ An experiment config (``conf/experiment/reta_table2.yaml`` ...) holds a ``paper_
     paper_table:
       name: reta_table2
       title: "Reta et al. 2015, Table 2: ..."
-      source: metrics.csv           # or detection_metrics.csv (python -m harness.detect)
+      source: metrics.csv           # or detection_metrics.csv (occbench detect)
       layout: rows                  # rows: one row per method (Reta); columns: one column
                                     # per method, one row per metric (PBM)
       per_sequence: false           # true: one line per (tracker, sequence), else COMBINED
@@ -20,7 +20,7 @@ An experiment config (``conf/experiment/reta_table2.yaml`` ...) holds a ``paper_
 
 ``paper_table(metrics, spec)`` builds the table (reported lines labelled ``reported:``, ours
 ``ours:``); ``write_paper_table(run_dir, spec)`` writes ``paper_table.md`` and
-``paper_table.csv`` into the run directory (the ``harness.callbacks.PaperTable`` callback
+``paper_table.csv`` into the run directory (the ``harness.sweeps.callbacks.PaperTable`` callback
 calls it at the end of the job); ``python -m harness.report.paper_tables RUN_DIR`` rebuilds
 it from a finished run (its ``config.yaml`` holds the spec). The reported figures are the
 papers', on the papers' data: they are reference figures, not results of this project.

@@ -1,6 +1,6 @@
 """Comparison tables: one row per tracker, one column per metric, best value per column marked.
 
-Input is a metrics frame as ``harness.run`` writes to ``metrics.csv``: columns ``tracker``,
+Input is a metrics frame as ``harness.pipeline.experiment`` writes to ``metrics.csv``: columns ``tracker``,
 ``sequence`` plus metric columns. ``comparison`` picks one sequence (``COMBINED`` by
 default) and indexes the rows by tracker; the writers format it as Markdown (best value in
 ``**bold**``), LaTeX (booktabs, ``\\textbf``) or aligned plain text (best value followed by

@@ -145,7 +145,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--iou", type=float, default=0.5)
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from harness.build import compose_config, load_sequences
+    from harness.pipeline.build import compose_config, load_sequences
 
     try:
         tracks = args.run_dir / "tracks"

@@ -35,11 +35,11 @@ from typing import Any
 import cv2
 import numpy as np
 
-from harness.build import compose_config, tracker_choice
 from harness.datasets.base import Sequence as DataSequence
-from harness.loop import _copy, _copy_detections, frames, start_trackers
+from harness.pipeline.build import compose_config, tracker_choice
+from harness.pipeline.loop import _copy, _copy_detections, frames, start_trackers
 from harness.report.draw import TRACKER_STYLES, draw_tracks, grid
-from harness.sources import DetectionSource
+from harness.sources.base import DetectionSource
 from trackers.records import Track
 
 log = logging.getLogger(__name__)
@@ -95,7 +95,7 @@ def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: De
                  last: int | None = None) -> Iterable[tuple[int, np.ndarray | None,
                                                            dict[str, list[Track]]]]:
     """Yield ``(k, frame, {tracker: tracks})`` for frames up to ``last`` (default: all),
-    running every tracker on the frame loop of the runner (``harness.loop.frames``), each on
+    running every tracker on the frame loop of the runner (``harness.pipeline.loop.frames``), each on
     its own copy of the frame, the detections and the foreground."""
     loop = frames(sequence, source, foreground, background, last)
     for t in trackers.values():
@@ -264,7 +264,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
-    from harness.build import build_source, build_tracker, load_sequences, tracker_configs
+    from harness.pipeline.build import build_source, build_tracker, load_sequences, tracker_configs
 
     try:
         cfg = compose_config(args.overrides, args.run)

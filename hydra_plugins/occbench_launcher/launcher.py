@@ -5,7 +5,7 @@ a segfault in a compiled kernel), joblib aborts the whole ``Parallel`` call
 (``TerminatedWorkerError``): the other in-flight jobs are lost, later jobs never run and
 the sweep is not gathered. Here a job whose process dies is recorded as failed in its
 ``status.json`` ("process died: killed by SIGKILL"), returns NaN to the sweeper, and the
-sweep goes on; the sweep then exits with status 1 (``harness.callbacks.GatherSweep``).
+sweep goes on; the sweep then exits with status 1 (``harness.sweeps.callbacks.GatherSweep``).
 
 Each job process asks the kernel to end it when the launcher ends
 (``PR_SET_PDEATHSIG``, Linux) and also watches its parent, so killing the launcher ends
@@ -30,7 +30,14 @@ from typing import Any
 
 from hydra.core.hydra_config import HydraConfig
 from hydra.core.singleton import Singleton
-from hydra.core.utils import JobReturn, JobStatus, configure_log, filter_overrides, run_job, setup_globals
+from hydra.core.utils import (
+    JobReturn,
+    JobStatus,
+    configure_log,
+    filter_overrides,
+    run_job,
+    setup_globals,
+)
 from hydra.plugins.launcher import Launcher
 from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf, open_dict
@@ -120,7 +127,7 @@ class ProcessLauncher(Launcher):
                 cfg.hydra.job.num = idx
             job_dir = Path(str(OmegaConf.select(cfg, "hydra.sweep.dir"))) / str(
                 OmegaConf.select(cfg, "hydra.sweep.subdir"))
-            from harness.sweep import read_status, write_status
+            from harness.sweeps.gather import read_status, write_status
 
             old = read_status(job_dir) or {}
             write_status(job_dir, "failed", list(overrides), error=msg,

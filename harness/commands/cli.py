@@ -1,0 +1,145 @@
+"""``occbench``: one command line for every tool of the harness.
+
+``occbench COMMAND ARGS...`` hands ``ARGS`` to the command's own parser; without a command
+(plain ``occbench``, or ``occbench key=value ...``, ``occbench -m ...``) the arguments go to
+``run``, the Hydra app (``harness.commands.run.app``), as they always did. ``python -m harness``
+is the same command.
+
+Commands and where they live:
+
+=========  ==================================  =========================================
+run        ``harness.commands.run.app``        Hydra: overrides, ``-m``, ``--cfg job``
+detect     ``harness.commands.detect.app``     Hydra (``conf/detect.yaml``)
+eval       ``harness.commands.evaluate.main``  argparse: ``GT RESULTS``
+sweep      ``harness.sweeps.gather.main``      argparse: ``SWEEP_DIR``
+report     ``harness.commands.report.main``    argparse: ``RUN_DIR``
+bench      ``harness.commands.bench.main``     argparse + overrides
+fit        ``harness.commands.fit.main``       ``pbm | heads | silhouette | active_basis``
+=========  ==================================  =========================================
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+
+PROG = "occbench"
+
+# name -> (module, function, one-line description, True when the function is a Hydra app)
+COMMANDS: dict[str, tuple[str, str, str, bool]] = {
+    "run": ("harness.commands.run", "app",
+            "run trackers on a dataset and score them (default)", True),
+    "detect": ("harness.commands.detect", "app",
+               "run one detector alone: det/ files, precision, recall", True),
+    "eval": ("harness.commands.evaluate", "main",
+             "score MOT result files against ground truth", False),
+    "sweep": ("harness.sweeps.gather", "main",
+              "gather a multirun folder into sweep.csv, .md, plots/", False),
+    "report": ("harness.commands.report", "main",
+               "annotated video, contact sheet, trajectory plot of a run", False),
+    "bench": ("harness.commands.bench", "main",
+              "frames/s per stage: decode, front end, each tracker", False),
+    "fit": ("harness.commands.fit", "main",
+            "refit models: pbm | heads | silhouette | active_basis", False),
+}
+
+USAGE = f"""\
+usage: {PROG} [COMMAND] [ARGS...]
+       {PROG} --version | --help
+
+commands (without one, the arguments go to `run`):
+{{commands}}
+
+examples:
+  {PROG}                                       every built tracker on the synthetic suite
+  {PROG} tracker=reta tracker.association.mu_g=40   one tracker, one parameter changed
+  {PROG} +experiment=reta_table2               Reta et al.'s Table 2 on the CAVIAR corridor
+  {PROG} -m tracker=baseline tracker.max_age=1,3,5 seed=0,1,2     a sweep
+  {PROG} report results/<date>/<time>          video, contact sheet, trajectories of a run
+  {PROG} eval GT_FOLDER RESULTS_FOLDER         score another tracker's result files
+  {PROG} detect dataset=caviar detector=silhouette
+
+`{PROG} run --help` lists every config group and its choices (Hydra's page),
+`{PROG} run --cfg job` prints the composed config, `{PROG} run --hydra-help` Hydra's options,
+`{PROG} COMMAND --help` each command's options. Docs: README.md.
+"""
+
+
+def version() -> str:
+    """The installed package's version (``pyproject.toml``), else the source tree's."""
+    import importlib.metadata
+
+    try:
+        return importlib.metadata.version("occbench")
+    except importlib.metadata.PackageNotFoundError:  # run from a source tree, not installed
+        import tomllib
+        from pathlib import Path
+
+        path = Path(__file__).resolve().parents[2] / "pyproject.toml"
+        return str(tomllib.loads(path.read_text())["project"]["version"])
+
+
+def usage() -> str:
+    width = max(len(c) for c in COMMANDS)
+    lines = [f"  {name:<{width}}  {spec[2]}" for name, spec in COMMANDS.items()]
+    return USAGE.format(commands="\n".join(lines))
+
+
+def _resolve(command: str) -> Callable:
+    module, attr, _, _ = COMMANDS[command]
+    return getattr(importlib.import_module(module), attr)
+
+
+def _call_hydra(app: Callable, prog: str, args: Sequence[str]) -> int:
+    """Run a ``@hydra.main`` app with ``args`` as its command line (Hydra reads sys.argv)."""
+    saved = sys.argv
+    sys.argv = [prog, *args]
+    try:
+        app()
+    finally:
+        sys.argv = saved
+    return 0
+
+
+def _check_checkout() -> str | None:
+    """Why this installation cannot run, or None: the configs (``conf/``) and the shipped data
+    (``datasets/``) live in the project checkout, which only an editable install keeps."""
+    from harness.paths import PROJECT_ROOT
+
+    if (PROJECT_ROOT / "conf" / "config.yaml").is_file():
+        return None
+    return (f"{PROG}: no conf/ beside the installed package ({PROJECT_ROOT}): occbench runs from "
+            "its checkout; install it with `pip install -e <checkout>` as the README says")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``occbench`` and ``python -m harness``; returns the exit status."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args and args[0] in ("-h", "--help", "help"):
+        print(usage(), end="")
+        return 0
+    if args and args[0] in ("-V", "--version"):
+        print(f"{PROG} {version()}")
+        return 0
+    problem = _check_checkout()
+    if problem:
+        print(problem, file=sys.stderr)
+        return 2
+    command = "run"
+    if args and args[0] in COMMANDS:
+        command, args = args[0], args[1:]
+    func = _resolve(command)
+    if COMMANDS[command][3]:
+        if "--version" in args or "-V" in args:  # Hydra's own would print Hydra's version
+            print(f"{PROG} {version()}")
+            return 0
+        from harness.sweeps.plugins import check_plugins
+
+        check_plugins(args)  # a missing launcher or sweeper names the extra to install
+        return _call_hydra(func, f"{PROG} {command}" if command != "run" else PROG, args)
+    return int(func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

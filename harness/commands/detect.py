@@ -1,0 +1,255 @@
+"""``occbench detect``: run one person detector over a dataset and score it.
+
+Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) with the
+``dataset=`` and ``detector=`` groups. Writes into the Hydra run directory:
+
+* ``det/<sequence>.txt``: MOTChallenge detection rows ``frame,-1,left,top,w,h,score,-1,-1,-1``
+  (written by ``harness.io.mot.write_mot``, the one place converting to 1-based boxes);
+* ``detection_metrics.csv``: TP, FP, FN, precision, recall and F1 at IoU >= ``iou_threshold``
+  per sequence and COMBINED (counts summed, ratios recomputed), from a one-to-one Hungarian
+  matching of detections to ground truth per frame;
+* with ``overlays.frames=[first,last]``: ``overlays/<sequence>/<frame>.png`` showing the
+  foreground (tinted), blobs (blue), detections (green), ground truth (white) and heads
+  (yellow ellipses: the detections' own, else with ``overlays.heads`` the PBM head
+  detector's search in each detection box).
+
+Examples::
+
+    occbench detect detector=silhouette
+    occbench detect dataset=caviar detector=hog overlays.frames=[10,20]
+    occbench detect dataset=synthetic dataset.scenarios=[crowd] detector=foreground
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import hydra
+import numpy as np
+import pandas as pd
+from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
+from omegaconf import DictConfig
+
+from harness.io.mot import write_atomic, write_mot
+from harness.progress import bars_wanted
+from trackers.common.assignment import assign
+from trackers.geometry import iou_matrix
+
+log = logging.getLogger("harness.commands.detect")
+
+METRIC_COLUMNS = ("frames", "gt", "detections", "TP", "FP", "FN", "precision", "recall", "F1",
+                  "frames_per_second")
+
+
+@dataclass
+class DetectionCounts:
+    """Matching counts of one sequence (sum them to combine sequences)."""
+
+    frames: int = 0
+    gt: int = 0
+    detections: int = 0
+    tp: int = 0
+    seconds: float = 0.0
+
+    def add(self, other: DetectionCounts) -> None:
+        self.frames += other.frames
+        self.gt += other.gt
+        self.detections += other.detections
+        self.tp += other.tp
+        self.seconds += other.seconds
+
+    def row(self) -> dict:
+        fp, fn = self.detections - self.tp, self.gt - self.tp
+        p = self.tp / self.detections if self.detections else float("nan")
+        r = self.tp / self.gt if self.gt else float("nan")
+        f1 = 2 * self.tp / (self.detections + self.gt) if self.detections + self.gt else float("nan")
+        fps = self.frames / self.seconds if self.seconds > 0 else float("nan")
+        return {"frames": self.frames, "gt": self.gt, "detections": self.detections, "TP": self.tp,
+                "FP": fp, "FN": fn, "precision": p, "recall": r, "F1": f1, "frames_per_second": fps}
+
+
+def match_count(gt: np.ndarray, det: np.ndarray, iou_threshold: float = 0.5) -> int:
+    """True positives of one frame: a one-to-one Hungarian matching maximising the summed IoU
+    among pairs with IoU >= ``iou_threshold``. gt (N, 4), det (M, 4) xywh."""
+    if len(gt) == 0 or len(det) == 0:
+        return 0
+    cost = 1.0 - iou_matrix(gt, det)
+    matches, _, _ = assign(cost, max_cost=1.0 - iou_threshold)
+    return len(matches)
+
+
+def metrics_table(counts: dict[str, DetectionCounts]) -> pd.DataFrame:
+    """One row per sequence plus COMBINED (counts summed, ratios recomputed)."""
+    total = DetectionCounts()
+    rows = []
+    for name, c in counts.items():
+        rows.append({"sequence": name, **c.row()})
+        total.add(c)
+    rows.append({"sequence": "COMBINED", **total.row()})
+    return pd.DataFrame(rows, columns=["sequence", *METRIC_COLUMNS])
+
+
+def draw_overlay(frame: np.ndarray, fg: np.ndarray | None, dets, gt: np.ndarray | None,
+                 blob_boxes: np.ndarray | None) -> np.ndarray:
+    """A BGR picture of one frame's front-end output."""
+    img = frame.copy()
+    if fg is not None:
+        tint = img.copy()
+        tint[np.asarray(fg) != 0] = (255, 0, 255)
+        img = cv2.addWeighted(img, 0.6, tint, 0.4, 0)
+
+    def rect(b, colour, t=1):
+        x, y, w, h = (round(v) for v in b)
+        cv2.rectangle(img, (x, y), (x + w - 1, y + h - 1), colour, t)
+
+    for b in [] if blob_boxes is None else blob_boxes:
+        rect(b, (255, 128, 0))
+    for b in [] if gt is None else gt:
+        rect(b, (255, 255, 255))
+    for b, s in zip(dets.boxes, dets.scores):
+        rect(b, (0, 255, 0), 2)
+        cv2.putText(img, f"{s:.2f}", (int(b[0]), int(b[1]) - 2), cv2.FONT_HERSHEY_PLAIN, 0.8,
+                    (0, 255, 0), 1)
+    if dets.heads is not None:
+        for h in dets.heads[np.isfinite(dets.heads).all(axis=1)]:
+            x, y, w, hh = h
+            cv2.ellipse(img, (int(x + w / 2), int(y + hh / 2)), (int(w / 2), int(hh / 2)), 0, 0,
+                        360, (0, 255, 255), 1)
+    return img
+
+
+def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.DataFrame:
+    """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
+    from hydra.utils import instantiate
+
+    sequences = list(instantiate(cfg.dataset))
+    source = instantiate(cfg.detector)
+    iou = cfg.get("iou_threshold", 0.5)
+    if isinstance(iou, bool) or not isinstance(iou, int | float) or not 0 < iou <= 1:
+        raise ValueError(f"iou_threshold={iou}: must be a number in (0, 1]")
+    iou = float(iou)
+    ov = cfg.get("overlays") or {}
+    ov_frames = ov.get("frames")
+    if ov_frames is not None:
+        if len(ov_frames) != 2 or int(ov_frames[0]) > int(ov_frames[1]):
+            raise ValueError(f"overlays.frames must be [first, last], got {list(ov_frames)}")
+        ov_frames = (int(ov_frames[0]), int(ov_frames[1]))
+    head_detector = None
+    if ov_frames is not None and ov.get("heads", True):
+        from trackers.frontend.heads import HeadDetector
+
+        head_detector = HeadDetector()
+    counts: dict[str, DetectionCounts] = {}
+    failures: list[str] = []
+    (out_dir / "errors.txt").unlink(missing_ok=True)
+    for seq in sequences:
+        try:
+            _detect_sequence(seq, source, out_dir, iou, ov_frames, head_detector, progress,
+                             counts)
+        except Exception as err:  # noqa: BLE001 - this sequence fails, the next goes on
+            msg = f"sequence {seq.info.name}: {type(err).__name__}: {err}"
+            log.error("%s", msg)
+            failures.append(msg)
+            with (out_dir / "errors.txt").open("a") as fh:
+                fh.write(msg + "\n    " + traceback.format_exc().rstrip().replace(
+                    "\n", "\n    ") + "\n")
+    table = metrics_table(counts)
+    write_atomic(out_dir / "detection_metrics.csv",
+                 table.to_csv(index=False, float_format="%.4f", lineterminator="\n"))
+    if failures:
+        raise DetectionFailed(failures, table)
+    return table
+
+
+class DetectionFailed(RuntimeError):
+    """Some sequences failed (recorded in errors.txt); the others' outputs are written.
+
+    Attributes:
+        failures: one line per failed sequence.
+        table: detection_metrics.csv of the sequences that were scored.
+    """
+
+    def __init__(self, failures: list[str], table: pd.DataFrame) -> None:
+        super().__init__(f"{len(failures)} sequence(s) failed: " + "; ".join(failures))
+        self.failures = failures
+        self.table = table
+
+
+def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_detector,
+                     progress: bool, counts: dict[str, DetectionCounts]) -> None:
+    """Detect one sequence: its det file, overlays and counts (added to ``counts``)."""
+    from trackers.frontend.blobs import blob_boxes, blobs_from_mask
+
+    name = seq.info.name
+    source.start(seq)
+    c = DetectionCounts()
+    frames, boxes, scores = [], [], []
+    it = seq.frames()
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(it, total=seq.info.length, desc=name, leave=False)
+    for k, frame in it:
+        t0 = time.perf_counter()
+        dets, fg = source.detect(k, frame)
+        c.seconds += time.perf_counter() - t0
+        c.frames += 1
+        frames.append(np.full(len(dets), k))
+        boxes.append(dets.boxes)
+        scores.append(dets.scores)
+        gt = None
+        if seq.gt is not None:
+            rows = seq.gt.rows_of(k)
+            rows = rows[seq.gt.table.conf[rows] > 0]
+            gt = seq.gt.table.boxes[rows]
+            c.gt += len(gt)
+            c.detections += len(dets)
+            c.tp += match_count(gt, dets.boxes, iou)
+        if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
+            bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
+            if dets.heads is None and head_detector is not None and len(dets):
+                dets = type(dets)(dets.boxes, dets.scores, dets.labels,
+                                  head_detector.detect(frame, fg, dets.boxes))
+            path = out_dir / "overlays" / name / f"{k:06d}.png"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            cv2.imwrite(str(path), draw_overlay(frame, fg, dets, gt, bb))
+    n = sum(len(f) for f in frames)
+    write_mot(out_dir / "det" / f"{name}.txt",
+              np.concatenate(frames) if n else np.zeros(0),
+              np.full(n, -1), np.concatenate(boxes) if n else np.zeros((0, 4)),
+              np.concatenate(scores) if n else np.zeros(0))
+    if seq.gt is not None:
+        counts[name] = c
+    log.info("%s: %d frames, %d detections", name, c.frames, n)
+
+
+# absolute: a relative path resolves against the calling module (pkg://) under `occbench detect`
+@hydra.main(version_base="1.3", config_path=str(Path(__file__).resolve().parents[2] / "conf"),
+            config_name="detect")
+def app(cfg: DictConfig) -> None:
+    out_dir = Path(HydraConfig.get().runtime.output_dir)
+    failed = None
+    try:
+        table = run_detection(cfg, out_dir, progress=bars_wanted(
+            bool(cfg.get("progress", True)), HydraConfig.get().mode == RunMode.MULTIRUN))
+    except DetectionFailed as err:
+        table, failed = err.table, err
+    except (ValueError, OSError) as err:
+        raise SystemExit(f"harness.commands.detect: {err}") from None
+    with pd.option_context("display.width", 160, "display.float_format", "{:.3f}".format):
+        print(table.to_string(index=False))
+    print(f"results: {out_dir}")
+    if failed is not None:
+        raise SystemExit(f"harness.commands.detect: {len(failed.failures)} sequence(s) failed (the "
+                         f"others are written; see {out_dir / 'errors.txt'}):\n  "
+                         + "\n  ".join(failed.failures))
+
+
+if __name__ == "__main__":
+    app()

@@ -1,0 +1,166 @@
+"""Score MOT result files against ground truth: ``occbench eval GT RESULTS``.
+
+GT is a gt file or a folder, either in MOTChallenge layout (``<seq>/gt/gt.txt``) or flat
+(``<seq>.txt``). RESULTS is a result file or a folder of ``<seq>.txt`` files. A sequence
+without a result file is scored as an empty result (a warning is logged). The table (one
+row per sequence and a ``COMBINED`` row; ratios as fractions with 3 decimals, as the app
+prints them) is printed, and written as CSV with ``--csv`` (6 decimals). Exit status 0 on success, 2 on bad paths.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from harness.io.mot import MotTable, read_mot
+from harness.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
+
+log = logging.getLogger(__name__)
+
+
+class EvaluationInputError(ValueError):
+    """GT or RESULTS paths that cannot be paired; the message names the path."""
+
+
+def sequence_name(gt_file: Path) -> str:
+    """``<seq>/gt/gt.txt`` or ``<seq>/gt.txt`` -> ``<seq>``; ``<seq>.txt`` -> ``<seq>``."""
+    if gt_file.name == "gt.txt":
+        parent = gt_file.resolve().parent
+        return parent.parent.name if parent.name == "gt" else parent.name
+    return gt_file.stem
+
+
+def find_gt(gt: Path) -> dict[str, Path]:
+    """Sequence name -> gt file, for a gt file or folder (sorted by name).
+
+    Raises:
+        FileNotFoundError: ``gt`` does not exist.
+        EvaluationInputError: a folder with no gt files in either layout.
+    """
+    if not gt.exists():
+        raise FileNotFoundError(f"ground truth not found: {gt}")
+    if gt.is_file():
+        return {sequence_name(gt): gt}
+    nested = sorted(gt.glob("*/gt/gt.txt"))
+    if nested:
+        return {p.parent.parent.name: p for p in nested}
+    flat = sorted(p for p in gt.glob("*.txt") if p.is_file())
+    if not flat:
+        raise EvaluationInputError(
+            f"{gt}: no ground truth found (expected <seq>/gt/gt.txt or <seq>.txt)"
+        )
+    return {p.stem: p for p in flat}
+
+
+def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
+    """Sequence name -> (gt file, result file or None when missing).
+
+    Raises:
+        FileNotFoundError: ``gt`` or ``results`` does not exist.
+        EvaluationInputError: a single result file against several gt sequences.
+    """
+    gt_files = find_gt(gt)
+    if not results.exists():
+        raise FileNotFoundError(f"results not found: {results}")
+    if results.is_file():
+        if len(gt_files) != 1:
+            raise EvaluationInputError(
+                f"{results} is one file but {gt} holds {len(gt_files)} sequences; "
+                "give a results folder with <seq>.txt files"
+            )
+        ((name, g),) = gt_files.items()
+        return {name: (g, results)}
+    pairs: dict[str, tuple[Path, Path | None]] = {}
+    for name, g in gt_files.items():
+        r = results / f"{name}.txt"
+        pairs[name] = (g, r if r.is_file() else None)
+    extra = sorted(p.stem for p in results.glob("*.txt") if p.stem not in gt_files and p.is_file())
+    if extra:
+        log.warning("%s: result files without ground truth ignored: %s", results, ", ".join(extra))
+    return pairs
+
+
+def _sequence_length(gt_file: Path) -> int | None:
+    """``seqLength`` of the ``seqinfo.ini`` beside a ``<seq>/gt/gt.txt``, else None."""
+    import configparser
+
+    ini = gt_file.parent.parent / "seqinfo.ini"
+    if gt_file.name != "gt.txt" or not ini.is_file():
+        return None
+    parser = configparser.ConfigParser()
+    try:
+        parser.read(ini)
+        return int(parser["Sequence"]["seqLength"])
+    except (KeyError, ValueError, configparser.Error):
+        return None
+
+
+def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) -> pd.DataFrame:
+    """Score all sequences; returns ``summarize`` of the scores (fractions, COMBINED row)."""
+    scores: dict[str, SequenceScore] = {}
+    for name, (g, r) in pair_files(Path(gt), Path(results)).items():
+        gt_table = read_mot(g, gt=True)
+        if r is None:
+            log.warning(
+                "%s: no result file %s; scored as an empty result",
+                name,
+                Path(results) / f"{name}.txt",
+            )
+            res_table = MotTable.empty(str(Path(results) / f"{name}.txt"))
+        else:
+            res_table = read_mot(r, kind="result", last_frame=_sequence_length(g))
+        scores[name] = score_sequence(gt_table, res_table, iou_threshold)
+        log.debug(
+            "%s: scored %d gt rows against %d result rows", name, len(gt_table), len(res_table)
+        )
+    return summarize(scores)
+
+
+def format_table(table: pd.DataFrame) -> str:
+    """The table as text: ratios as fractions with 3 decimals, counts as integers."""
+    ratios = [c for c in COLUMNS if c not in COUNT_COLUMNS]
+    formatters = {c: "{:.3f}".format for c in ratios}
+    return table.to_string(index=False, formatters=formatters, na_rep="-")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="occbench eval",
+        description="CLEAR MOT, IDF1 and HOTA of MOT result files against ground truth.",
+    )
+    p.add_argument("gt", type=Path, help="gt file, or folder of <seq>/gt/gt.txt or <seq>.txt")
+    p.add_argument("results", type=Path, help="result file, or folder of <seq>.txt")
+    p.add_argument("--csv", type=Path, default=None, help="write the table here")
+    p.add_argument(
+        "--iou",
+        type=float,
+        default=0.5,
+        help="IoU threshold of a CLEAR/ID match, in (0, 1] (default 0.5)",
+    )
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        table = evaluate(args.gt, args.results, args.iou)
+    except (FileNotFoundError, ValueError) as err:  # MotFormatError is a ValueError
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(f"IoU threshold {args.iou:g}; ratios as fractions")
+    print(format_table(table))
+    if args.csv is not None:
+        args.csv.parent.mkdir(parents=True, exist_ok=True)
+        table.to_csv(args.csv, index=False, float_format="%.6f", lineterminator="\n")
+        log.info("wrote %s", args.csv)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,318 @@
+"""Generalisation table: every tracker x every evaluation set, marking the sets any default
+or tuned parameter was chosen on (``tuning``) and those nobody chose anything on
+(``untouched``).
+
+An evaluation set is a list of Hydra overrides (dataset, detector, their keys) run at one
+or more seeds; every tracker of a set runs in one ``harness.pipeline.experiment.run_experiment``, so all of
+them see the same frames and the same detections. A set run at several seeds reports the
+mean of its COMBINED IDF1 / HOTA / MOTA over the seeds.
+
+Which data is which (docs/generalisation.md says the same, with the latest table):
+
+* tuning: the ``tune_*`` experiments' data (synthetic suite, seed 100, 120 frames, exact
+  detections), CAVIAR OneLeaveShop1cor frames 1-150.
+* untouched: synthetic seeds >= 1000 (the project's defaults and adaptations were measured
+  on seeds 0-15 and tuned on seed 100), OneLeaveShop1cor frames 151-295, the replayed real
+  trajectories (CAVIAR OneLeaveShop2cor, PETS09-S2L1, TUD-Campus) at their real frame rates,
+  the synthetic crowd at three densities (seeds 2000-2009: ten seeds, because one late
+  identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds 1000-1009 decided a default,
+  ``adaptations.appearance_margin``, so they count as looked at).
+
+Used by ``benchmarks/bench_generalisation.py`` (the command line); ``run_table`` is the
+library entry point.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+import math
+import subprocess
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+log = logging.getLogger(__name__)
+
+ROOT = Path(__file__).resolve().parents[2]
+CONF = ROOT / "conf"
+METRICS = ("IDF1", "HOTA", "MOTA")
+TUNING, UNTOUCHED = "tuning", "untouched"
+#: synthetic seeds never used for any choice (the project used 0-15 and 100)
+UNTOUCHED_SEEDS = (1000, 1001)
+#: crowd seeds never used for any choice (one exchange moves a seed by up to 0.1 IDF1)
+CROWD_SEEDS = tuple(range(2000, 2010))
+#: every tracker of ours and outside, in table order; unavailable ones are skipped, and
+#: every conf/tracker/*_tuned.yaml is added after the tracker it tunes
+TRACKERS = ("baseline", "reta", "reta_paper", "pbm", "pbm_paper", "bytetrack", "ocsort",
+            "norfair", "motpy", "boxmot_botsort", "boxmot_bytetrack", "boxmot_ocsort",
+            "boxmot_deepocsort", "boxmot_hybridsort", "boxmot_boosttrack",
+            "boxmot_occluboost", "boxmot_sfsort")
+
+
+@dataclass(frozen=True)
+class EvalSet:
+    """One evaluation set.
+
+    Attributes:
+        name: short name (a table column).
+        role: ``tuning`` (something was chosen on it) or ``untouched``.
+        overrides: Hydra overrides selecting dataset, detector and their keys.
+        seeds: values of the top-level ``seed`` (rendering and detector noise), one run each.
+        quick: part of the quick subset (``--quick``).
+        description: one line for the legend of the table.
+        requires: folders under the trajectories folder (``trajectories_root()``) that must
+            exist; a set whose data is absent is skipped with a message.
+    """
+
+    name: str
+    role: str
+    overrides: tuple[str, ...]
+    seeds: tuple[int, ...] = (0,)
+    quick: bool = False
+    description: str = ""
+    requires: tuple[str, ...] = field(default=())
+
+
+CAVIAR = ("dataset=caviar",)
+GT03 = ("detector=noisy_gt", "detector.miss_rate=0.3")
+SILHOUETTE = ("detector=silhouette",)
+
+
+def _replay(name: str, *extra: str) -> tuple[str, ...]:
+    return ("dataset=replay", f"dataset.gt_path=${{trajectories:{name}}}", *extra)
+
+
+SETS: tuple[EvalSet, ...] = (
+    EvalSet("synth-tune", TUNING, ("dataset=synthetic", "dataset.length=120"), (100,),
+            description="the tune_* data: synthetic suite, seed 100, 120 frames, exact detections"),
+    EvalSet("synth", UNTOUCHED, ("dataset=synthetic", *GT03), UNTOUCHED_SEEDS, quick=True,
+            description="synthetic suite (8 scenes x 150 frames), noisy gt miss 0.3"),
+    EvalSet("cav1-150 gt", TUNING, (*CAVIAR, "dataset.frames=[1,150]", *GT03), UNTOUCHED_SEEDS,
+            quick=True, description="CAVIAR OneLeaveShop1cor frames 1-150, noisy gt miss 0.3"),
+    EvalSet("cav151-295 gt", UNTOUCHED, (*CAVIAR, "dataset.frames=[151,295]", *GT03),
+            UNTOUCHED_SEEDS, quick=True,
+            description="CAVIAR OneLeaveShop1cor frames 151-295, noisy gt miss 0.3"),
+    EvalSet("cav1-150 sil", TUNING, (*CAVIAR, "dataset.frames=[1,150]", *SILHOUETTE), (0,),
+            quick=True,
+            description="CAVIAR OneLeaveShop1cor frames 1-150, the front end's silhouette detector"),
+    EvalSet("cav151-295 sil", UNTOUCHED, (*CAVIAR, "dataset.frames=[151,295]", *SILHOUETTE),
+            (0,), quick=True,
+            description="CAVIAR OneLeaveShop1cor frames 151-295, the silhouette detector"),
+    EvalSet("OLS2cor", UNTOUCHED, _replay("CAVIAR-OneLeaveShop2cor", *GT03), (1000,),
+            description="CAVIAR OneLeaveShop2cor trajectories replayed (25 fps), noisy gt miss 0.3",
+            requires=("CAVIAR-OneLeaveShop2cor",)),
+    EvalSet("PETS09", UNTOUCHED, _replay("PETS09-S2L1", *GT03), (1000,),
+            description="PETS09-S2L1 trajectories replayed (7 fps), noisy gt miss 0.3",
+            requires=("PETS09-S2L1",)),
+    EvalSet("TUD-Campus", UNTOUCHED,
+            _replay("TUD-Campus", "dataset.width=640", "dataset.height=480", "dataset.fps=25",
+                    *GT03), (1000,), quick=True,
+            description="TUD-Campus trajectories replayed (640x480, 25 fps), noisy gt miss 0.3",
+            requires=("TUD-Campus",)),
+    *(EvalSet(f"crowd d{d}", UNTOUCHED,
+              ("dataset=synthetic", "dataset.scenarios=[crowd]", "dataset.people=12",
+               f"dataset.density={d}", *GT03), CROWD_SEEDS,
+              description=f"synthetic crowd, 12 people at {d} persons/m^2, noisy gt miss 0.3")
+      for d in (0.2, 0.4, 0.8)),
+)
+
+
+# --------------------------------------------------------------------------- configs
+
+
+def compose(overrides: Sequence[str]):
+    """The project's config composed with ``overrides`` (no Hydra app needed)."""
+    from hydra import compose as _compose
+    from hydra import initialize_config_dir
+
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        return _compose("config", overrides=list(overrides))
+
+
+def trajectories_root() -> Path:
+    """The folder of replayable trajectories: the parent of ``dataset=replay``'s default
+    ``gt_path`` (relative paths from the working directory, as the app reads them)."""
+    return Path(str(compose(["dataset=replay"]).dataset.gt_path)).parent
+
+
+def _resolve(overrides: Iterable[str], trajectories: Path) -> list[str]:
+    out = []
+    for o in overrides:
+        if "${trajectories:" in o:
+            key, rest = o.split("${trajectories:", 1)
+            name, tail = rest.split("}", 1)
+            o = f"{key}{trajectories / name}{tail}"
+        out.append(o)
+    return out
+
+
+def ordered_trackers() -> list[str]:
+    """``TRACKERS`` with every ``conf/tracker/*_tuned.yaml`` after the tracker it tunes."""
+    tuned = sorted(p.stem for p in (CONF / "tracker").glob("*_tuned.yaml"))
+    names = []
+    for n in TRACKERS:
+        names.append(n)
+        names += [t for t in tuned if t == f"{n}_tuned"]
+    return names + [t for t in tuned if t not in names]
+
+
+def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[str, str]]:
+    """Tracker configs by name whose code imports, and the skipped ones with the reason.
+
+    ``names`` None = ``TRACKERS`` plus every ``conf/tracker/*_tuned.yaml`` (after the
+    tracker it tunes).
+    """
+    from harness.pipeline.experiment import RunError, build_tracker
+
+    if names is None:
+        names = ordered_trackers()
+    configs, skipped = {}, {}
+    for n in names:
+        if not (CONF / "tracker" / f"{n}.yaml").is_file():
+            skipped[n] = "no conf/tracker/%s.yaml" % n
+            continue
+        node = compose([f"tracker={n}"]).tracker
+        try:
+            build_tracker(n, node)
+        except (RunError, ImportError) as err:
+            skipped[n] = str(err).split("\n")[0][:200]
+            continue
+        configs[n] = node
+    return configs, skipped
+
+
+# --------------------------------------------------------------------------- running
+
+
+def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
+            length: int | None = None) -> pd.DataFrame:
+    """Run every tracker on set ``s`` at each of its seeds; one row per tracker with the
+    mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too)."""
+    from omegaconf import OmegaConf, open_dict
+
+    from harness.pipeline.experiment import COMBINED, run_experiment
+
+    rows = []
+    for seed in s.seeds:
+        overrides = _resolve(s.overrides, trajectories) + [f"seed={seed}", "progress=false"]
+        if length is not None:  # exploring: shorter synthetic scenes and replays
+            key = {"dataset=synthetic": "length", "dataset=replay": "max_frames"}
+            overrides += [f"dataset.{key[o]}={length}" for o in overrides if o in key]
+        cfg = compose(overrides)
+        with open_dict(cfg):
+            cfg.tracker = OmegaConf.create({n: OmegaConf.to_container(c) for n, c in trackers.items()})
+        res = run_experiment(cfg, out_dir / f"seed{seed}")
+        comb = res.metrics[res.metrics["sequence"] == COMBINED]
+        for n in trackers:
+            r = comb[comb["tracker"] == n]
+            failed = [f.message for f in res.failures if f.tracker in (n, "*")]
+            row = {"tracker": n, "seed": seed, "failures": len(failed)}
+            for m in METRICS:
+                row[m] = float(r[m].iloc[0]) if len(r) else math.nan
+            rows.append(row)
+    per_seed = pd.DataFrame(rows)
+    out = per_seed.groupby("tracker", sort=False).agg(
+        **{m: (m, "mean") for m in METRICS}, n_seeds=("seed", "count"),
+        failures=("failures", "sum")).reset_index()
+    out.insert(0, "role", s.role)
+    out.insert(0, "set", s.name)
+    return out
+
+
+def run_table(sets: Sequence[EvalSet], trackers: dict, out_dir: Path,
+              length: int | None = None) -> pd.DataFrame:
+    """Every tracker on every set (skipping sets whose data is absent, with a message);
+    writes ``generalisation.csv`` and ``generalisation.md`` into ``out_dir`` after each set
+    (a later failure loses nothing) and returns the long table (set, role, tracker,
+    IDF1, HOTA, MOTA, n_seeds, failures)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    trajectories = trajectories_root()
+    parts = []
+    for s in sets:
+        missing = [r for r in s.requires if not (trajectories / r).exists()]
+        if missing:
+            print(f"[skip] {s.name}: {', '.join(str(trajectories / m) for m in missing)} absent")
+            continue
+        print(f"[run] {s.name} ({s.role}): {s.description}, seeds {list(s.seeds)}", flush=True)
+        try:
+            parts.append(run_set(s, trackers, out_dir / "runs" / s.name.replace(" ", "_"),
+                                 trajectories, length))
+        except Exception as err:  # noqa: BLE001 - one set's failure must not lose the others
+            print(f"[fail] {s.name}: {type(err).__name__}: {err}")
+            continue
+        table = pd.concat(parts, ignore_index=True)
+        write(table, sets, out_dir)
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+
+
+# --------------------------------------------------------------------------- tables
+
+
+def _cell(r) -> str:
+    vals = [r[m] for m in METRICS]
+    if all(isinstance(v, float) and math.isnan(v) for v in vals):
+        return "failed"
+    text = " / ".join("-" if math.isnan(v) else f"{v:.3f}" for v in vals)
+    return text + (" (!)" if r["failures"] else "")
+
+
+def markdown(table: pd.DataFrame, sets: Sequence[EvalSet]) -> str:
+    """The wide table: one row per tracker, one column per set (``IDF1 / HOTA / MOTA``),
+    tuning sets marked ``T``, untouched ``U``; then the legend of the sets."""
+    order = [s for s in sets if s.name in set(table["set"])]
+    trackers = list(dict.fromkeys(table["tracker"]))
+    head = ["tracker", *(f"{s.name} ({'T' if s.role == TUNING else 'U'})" for s in order)]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for t in trackers:
+        cells = [t]
+        for s in order:
+            r = table[(table["set"] == s.name) & (table["tracker"] == t)]
+            cells.append(_cell(r.iloc[0]) if len(r) else "")
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "Cells: COMBINED IDF1 / HOTA / MOTA (mean over the set's seeds); (!) = a "
+              "failure recorded in that set's errors.txt. T = tuning set (a default or a "
+              "tuned parameter was chosen on it), U = untouched (nothing was chosen on it).", ""]
+    lines += ["| set | role | seeds | what |", "|---|---|---|---|"]
+    for s in order:
+        lines.append(f"| {s.name} | {s.role} | {', '.join(map(str, s.seeds))} | {s.description} |")
+    return "\n".join(lines) + "\n"
+
+
+def write(table: pd.DataFrame, sets: Sequence[EvalSet], out_dir: Path) -> None:
+    table.to_csv(out_dir / "generalisation.csv", index=False, float_format="%.4f",
+                 lineterminator="\n")
+    (out_dir / "generalisation.md").write_text(markdown(table, sets))
+
+
+TABLE_HEADING = "## Latest table"
+
+
+def with_table(doc: str, section: str) -> str:
+    """``doc`` (docs/generalisation.md's text) with its table section replaced by ``section``
+    (which starts with ``TABLE_HEADING``): the text before the heading and the hand-written
+    reading after the table (from the next ``### `` heading on) are kept; a doc without the
+    heading gets the section appended."""
+    start = doc.find(TABLE_HEADING)
+    if start < 0:
+        return doc.rstrip("\n") + "\n\n" + section
+    end = doc.find("\n### ", start)
+    return doc[:start] + section.rstrip("\n") + "\n" + ("" if end < 0 else doc[end:])
+
+
+def provenance() -> str:
+    """Date and commit (with ``+dirty`` when the worktree has changes) of this run."""
+    def git(*args: str) -> str:
+        try:
+            return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                                  check=True).stdout.strip()
+        except (OSError, subprocess.CalledProcessError):
+            return ""
+
+    commit = git("rev-parse", "--short", "HEAD") or "unknown"
+    if git("status", "--porcelain", "--untracked-files=no"):
+        commit += "+dirty"
+    return f"{_dt.date.today().isoformat()}, commit {commit}"

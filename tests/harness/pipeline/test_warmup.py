@@ -1,0 +1,116 @@
+"""The harness's warm-up before timing (harness/pipeline/warmup.py): it loads every kernel a PBM run
+uses, it leaves a tracker exactly as built, it runs once per tracker class and process, and a
+tracker that needs frames is refused before a run on frameless data."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hydra.utils import instantiate
+from omegaconf import OmegaConf
+
+from harness.datasets.synthetic import load_scenario
+from harness.pipeline.experiment import run_sequence
+from harness.pipeline.warmup import WarmUp, needs_pixels, warm_up
+from harness.sources.annotations import NoisyGroundTruth
+
+ROOT = Path(__file__).resolve().parents[3]
+
+# in a fresh process: warm a tracker up as the harness does, then count the numba
+# signatures a crowd run adds, with and without a foreground mask
+_FRESH = r"""
+import importlib, pkgutil, sys
+from hydra.utils import instantiate
+from numba.core.registry import CPUDispatcher
+from omegaconf import OmegaConf
+import trackers
+from harness.datasets.synthetic import load_scenario
+from harness.sources.annotations import NoisyGroundTruth
+from harness.pipeline.experiment import run_sequence
+from harness.pipeline.warmup import warm_up_once
+
+warm_up_once({"pbm": lambda: instantiate(OmegaConf.load(sys.argv[1]))})
+kernels = {}
+for m in pkgutil.walk_packages(trackers.__path__, "trackers."):
+    if m.name.startswith("trackers.outside"):
+        continue
+    for v in vars(importlib.import_module(m.name)).values():
+        if isinstance(v, CPUDispatcher):
+            kernels[f"{v.__module__}.{v.__name__}"] = v
+before = {k: len(v.signatures) for k, v in kernels.items()}
+for seq in (load_scenario("crowd", seed=0, length=60, people=8),
+            load_scenario("crossing", seed=0, length=60)):  # often one match or none a frame
+    for fg in ("exact", "none"):
+        run_sequence({"pbm": instantiate(OmegaConf.load(sys.argv[1]))}, seq,
+                     NoisyGroundTruth(miss_rate=0.3, seed=0), foreground=fg)
+print(sorted(k for k, v in kernels.items() if len(v.signatures) != before[k]))
+print(sum(before.values()))
+"""
+
+
+def test_a_warmed_up_process_has_loaded_every_kernel_a_run_uses():
+    out = subprocess.run([sys.executable, "-c", _FRESH, str(ROOT / "conf" / "tracker" / "pbm.yaml")],
+                         capture_output=True, text=True, cwd=ROOT, check=True).stdout.splitlines()
+    assert out[-2] == "[]"  # no kernel compiled or loaded during the run
+    assert int(out[-1]) >= 20  # and the warm-up did load the kernels
+
+
+def test_warm_up_leaves_the_tracker_as_built():
+    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    seq = load_scenario("pair_walk", seed=1, length=60)
+    plain, warmed = instantiate(cfg), instantiate(cfg)
+    warm_up(warmed)
+    res = run_sequence({"plain": plain, "warmed": warmed}, seq, NoisyGroundTruth(miss_rate=0.3, seed=1),
+                       foreground="exact")
+    a, b = res["plain"].table, res["warmed"].table
+    assert len(a) > 100
+    np.testing.assert_array_equal(a.ids, b.ids)
+    np.testing.assert_array_equal(a.boxes, b.boxes)
+
+
+class _Counting:
+    """A box-only tracker that counts its updates (class-level: the warm-up builds its own)."""
+
+    updates = 0
+
+    def reset(self) -> None:
+        pass
+
+    def update(self, frame, detections, foreground=None):
+        type(self).updates += 1
+        return []
+
+
+class _Pixels(_Counting):
+    def update(self, frame, detections, foreground=None):
+        if frame is None:
+            raise ValueError("needs pixels")
+        return super().update(frame, detections, foreground)
+
+
+def test_warm_up_runs_once_per_tracker_class_and_announces_it():
+    once, said = WarmUp(), []
+    _Counting.updates = 0
+    assert once({"a": _Counting, "b": _Counting}, said.append) == ["a"]
+    assert _Counting.updates > 0 and len(said) == 1 and "warming up a" in said[0]
+    n = _Counting.updates
+    assert once({"c": _Counting}, said.append) == []  # the class is warm: nothing run or said
+    assert _Counting.updates == n and len(said) == 1
+
+
+def test_needs_pixels_asks_the_tracker():
+    assert needs_pixels(_Counting()) is None
+    assert needs_pixels(_Pixels()) == "ValueError: needs pixels"
+
+
+
+def test_a_tracker_failing_in_the_warm_up_is_left_to_the_run():
+    class Failing(_Counting):
+        def update(self, frame, detections, foreground=None):
+            raise RuntimeError("not on this scene")
+
+    assert WarmUp()({"f": Failing}) == ["f"]  # no exception: the run reports real failures

@@ -1,0 +1,95 @@
+"""Front-end configs, the harness adapter, ``occbench detect`` and the fit commands."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hydra.utils import instantiate
+
+from harness.commands.detect import DetectionCounts, match_count, metrics_table, run_detection
+from harness.io.mot import read_mot
+from harness.sources.frontend import FrontendSource, compose_config
+
+TINY = ["dataset=synthetic", "dataset.scenarios=[pair_walk]", "dataset.length=12",
+        "dataset.width=320", "dataset.height=240"]
+
+
+def test_imports_come_from_this_repository():
+    import harness.sources.frontend
+    import trackers.frontend
+
+    root = Path(__file__).resolve().parents[3]
+    assert Path(trackers.frontend.__file__).resolve().parents[2] == root
+    assert Path(harness.sources.frontend.__file__).resolve().parents[2] == root
+
+
+@pytest.mark.parametrize("name", ["foreground", "silhouette", "hog"])
+def test_detector_configs_compose_and_instantiate(name):
+    cfg = compose_config([f"detector={name}"], config_name="detect")
+    source = instantiate(cfg.detector)
+    assert isinstance(source, FrontendSource)
+    assert type(source.detector).__name__.lower().startswith(name[:3])
+
+
+def test_match_count_hand_cases():
+    gt = np.array([[0, 0, 10, 10], [20, 0, 10, 10]], float)
+    det = np.array([[1, 0, 10, 10], [100, 100, 5, 5], [0, 0, 10, 10]], float)
+    assert match_count(gt, det) == 1  # one-to-one: two detections on gt 0 count once
+    assert match_count(gt, det[:0]) == 0
+    assert match_count(gt, np.array([[25, 0, 10, 10]], float)) == 0  # IoU 1/3 < 0.5
+    assert match_count(gt, np.array([[25, 0, 10, 10]], float), iou_threshold=0.3) == 1
+
+
+def test_metrics_table_sums_counts():
+    t = metrics_table({"a": DetectionCounts(10, 10, 5, 5, 1.0), "b": DetectionCounts(10, 30, 15, 5, 1.0)})
+    combined = t[t.sequence == "COMBINED"].iloc[0]
+    assert combined.TP == 10 and combined.FP == 10 and combined.FN == 30
+    assert combined.precision == pytest.approx(0.5) and combined.recall == pytest.approx(0.25)
+    assert combined.F1 == pytest.approx(2 * 10 / 60)  # not the mean of per-sequence F1
+
+
+def test_run_detection_writes_det_files_metrics_and_overlays(tmp_path):
+    cfg = compose_config([*TINY, "detector=foreground", "overlays.frames=[3,4]",
+                          "detector.detector.background.warmup_frames=6"], config_name="detect")
+    table = run_detection(cfg, tmp_path)
+    assert list(table.sequence) == ["pair_walk", "COMBINED"]
+    det = read_mot(tmp_path / "det" / "pair_walk.txt")
+    assert len(det) > 0 and (det.ids == -1).all() and det.frames.max() <= 12
+    saved = pd.read_csv(tmp_path / "detection_metrics.csv")
+    assert saved.TP.iloc[-1] == table.TP.iloc[-1] and saved.recall.iloc[-1] > 0.3
+    assert sorted(p.name for p in (tmp_path / "overlays" / "pair_walk").iterdir()) == [
+        "000003.png", "000004.png"]
+    # the same run gives the same bytes
+    run_detection(cfg, tmp_path / "again")
+    assert (tmp_path / "again" / "det" / "pair_walk.txt").read_bytes() == (
+        tmp_path / "det" / "pair_walk.txt").read_bytes()
+
+
+def test_frontend_source_requires_start_and_pixels():
+    src = instantiate(compose_config(["detector=foreground"], config_name="detect").detector)
+    with pytest.raises(RuntimeError, match="start"):
+        src.detect(1, np.zeros((10, 10, 3), np.uint8))
+    with pytest.raises(ValueError, match="reset"):
+        FrontendSource(object())
+
+
+def test_fit_silhouette_and_heads_commands(tmp_path):
+    from harness.fit.heads import main as fit_heads
+    from harness.fit.silhouette import main as fit_silhouette
+    from trackers.frontend.heads import ColourMixtures
+    from trackers.frontend.silhouette import load_template
+
+    assert fit_silhouette([*TINY, "--step", "3", "--out", str(tmp_path / "t.npy")]) == 0
+    t = load_template(tmp_path / "t.npy")
+    assert t.shape[0] == 64 and 0.3 < t.shape[1] / t.shape[0] < 0.6
+    assert t[32, t.shape[1] // 2] > 0.9 and t[0, 0] < 0.1  # body centre in, corner out
+    assert fit_heads([*TINY, "--step", "3", "--min-pixels", "50",
+                      "--out", str(tmp_path / "h.npz")]) == 0
+    mix = ColourMixtures.load(tmp_path / "h.npz")
+    assert "annotated head pixels" in mix.provenance
+    assert fit_heads(["--references", "--out", str(tmp_path / "r.npz")]) == 0
+    shipped = ColourMixtures.load()
+    np.testing.assert_allclose(ColourMixtures.load(tmp_path / "r.npz").means, shipped.means)

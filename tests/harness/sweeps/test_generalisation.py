@@ -1,0 +1,86 @@
+"""The generalisation table (harness.sweeps.generalisation, benchmarks/bench_generalisation.py)."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from harness.sweeps import generalisation as G
+
+
+def test_every_set_composes_and_is_marked():
+    names = [s.name for s in G.SETS]
+    assert len(set(names)) == len(names)
+    roles = {s.name: s.role for s in G.SETS}
+    assert roles["cav1-150 gt"] == G.TUNING and roles["cav151-295 gt"] == G.UNTOUCHED
+    assert roles["synth-tune"] == G.TUNING
+    for s in G.SETS:
+        assert s.role in (G.TUNING, G.UNTOUCHED)
+        if s.role == G.UNTOUCHED and "dataset=synthetic" in s.overrides:
+            # untouched synthetic sets never use a seed the project chose anything on
+            assert min(s.seeds) >= 1000
+        cfg = G.compose(G._resolve(s.overrides, G.trajectories_root()))
+        assert "_target_" in cfg.dataset and "_target_" in cfg.detector
+
+
+def test_tiny_table_same_detections_for_every_tracker(tmp_path):
+    """Two trackers on a tiny synthetic set: one run per seed, both scored, the table
+    marks the set, and a missing data set is skipped, not failed."""
+    tiny = G.EvalSet("tiny", G.UNTOUCHED, ("dataset=synthetic", "dataset.scenarios=[crossing]",
+                                           "dataset.length=12"), (1000, 1001))
+    absent = G.EvalSet("absent", G.UNTOUCHED, ("dataset=synthetic",), (1000,),
+                       requires=("no-such-trajectory-folder",))
+    trackers, _ = G.available_trackers(["baseline", "bytetrack"])
+    table = G.run_table([tiny, absent], trackers, tmp_path)
+    assert set(table["set"]) == {"tiny"}
+    assert list(table["tracker"]) == ["baseline", "bytetrack"]
+    assert (table["n_seeds"] == 2).all() and (table["failures"] == 0).all()
+    assert table[["IDF1", "HOTA", "MOTA"]].notna().all().all()
+    csv = pd.read_csv(tmp_path / "generalisation.csv")
+    assert list(csv["set"]) == ["tiny", "tiny"]
+    md = (tmp_path / "generalisation.md").read_text()
+    assert "| tiny (U) |" in md
+    # each seed's run directory holds both trackers' tracks
+    for seed in (1000, 1001):
+        assert (tmp_path / "runs" / "tiny" / f"seed{seed}" / "tracks" / "bytetrack"
+                / "crossing.txt").is_file()
+
+
+def test_unknown_tracker_is_skipped_with_its_reason():
+    trackers, skipped = G.available_trackers(["baseline", "no_such_tracker"])
+    assert list(trackers) == ["baseline"] and "no_such_tracker" in skipped
+
+
+def test_combine_joins_earlier_tables(tmp_path):
+    """``--combine``: rows of separate runs (e.g. tuned trackers run later) in one table,
+    a later run's row replacing an earlier one of the same set and tracker."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_generalisation", G.ROOT / "benchmarks" / "bench_generalisation.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    a = pd.DataFrame({"set": ["synth", "synth"], "role": "untouched", "tracker": ["pbm", "reta"],
+                      "IDF1": [0.5, 0.6], "HOTA": 0.5, "MOTA": 0.5, "n_seeds": 2, "failures": 0})
+    b = pd.DataFrame({"set": ["synth"], "role": "untouched", "tracker": ["norfair_tuned"],
+                      "IDF1": [0.7], "HOTA": 0.6, "MOTA": 0.4, "n_seeds": 2, "failures": 0})
+    c = a.iloc[[0]].assign(IDF1=0.55)
+    for name, t in (("a", a), ("b", b), ("c", c)):
+        t.to_csv(tmp_path / f"{name}.csv", index=False)
+    assert bench.main(["--combine", *(str(tmp_path / f"{n}.csv") for n in "abc"),
+                       "--out", str(tmp_path / "out")]) == 0
+    out = pd.read_csv(tmp_path / "out" / "generalisation.csv")
+    assert list(out["tracker"]) == ["reta", "pbm", "norfair_tuned"]  # table order
+    assert out.set_index("tracker").loc["pbm", "IDF1"] == 0.55
+    assert "0.700 / 0.600 / 0.400" in (tmp_path / "out" / "generalisation.md").read_text()
+
+
+def test_docs_table_replaced_and_the_reading_around_it_kept():
+    """``--docs`` replaces only the table section of docs/generalisation.md: the head before
+    it and the hand-written reading after it (from the next ``### `` heading) survive."""
+    doc = ("# Head\n\nintro\n\n## Latest table (old)\n\n| old |\n\nold legend\n\n"
+           "### Reading it\n\nwhy the gaps\n")
+    new = G.with_table(doc, "## Latest table (new)\n\n| new |\n")
+    assert new == ("# Head\n\nintro\n\n## Latest table (new)\n\n| new |\n\n"
+                   "### Reading it\n\nwhy the gaps\n")
+    assert G.with_table("# Head\n", "## Latest table (x)\n") == "# Head\n\n## Latest table (x)\n"
+    assert G.with_table(new, "## Latest table (new)\n\n| new |\n") == new  # idempotent
