@@ -1,24 +1,30 @@
 """PBM tracker: speed (tracker only) and accuracy against the SORT-like baseline.
 
-Speed: the ``crowd`` preset (10 people, 640x480) is rendered once into memory with exact
-detections (the gt boxes of people at least 30% visible) and the exact person mask (bool,
-as the harness hands it to trackers); then only ``PBMTracker.update`` is timed, on one
-core (``cv2.setNumThreads(1)``), with the foreground mask and without it (detection boxes
-as candidates), as CPU time (``time.process_time``, best of ``--repeats`` runs: the
-machine may be shared). Target: >= 1,000 frames/s.
+Speed: the ``crowd`` preset (10, 40 and 100 people, ``--people``; 640x480) is rendered once
+into memory with exact detections (the gt boxes of people at least 30% visible) and the
+exact person mask (bool, as the harness hands it to trackers); then only
+``PBMTracker.update`` is timed, on one core (``cv2.setNumThreads(1)``), with the foreground
+mask and without it (detection boxes as candidates), as CPU time (``time.process_time``,
+median of ``--repeats`` runs, and in units of a reference workload run in the same process:
+the machine may be shared), with the CPU time of each step (one more, instrumented run;
+``tracker_timing``). Targets (foreground mask): >= 1,000 frames/s at 10 people, >= 200 at
+100. ``--check [DIGESTS.json]`` prints the sha256 of the reported rows (and writes or
+compares the file): a speed-up must leave them unchanged.
 
 Accuracy: IDF1, HOTA, MOTA, IDs and Frag of ``pbm`` and ``baseline`` (both with their
 ``conf/tracker`` defaults) on the synthetic suite and on the shipped CAVIAR OneLeaveShop1cor, with ``NoisyGroundTruth(miss_rate, seed)`` detections.
 
     .venv/bin/python benchmarks/bench_pbm.py [--speed-frames 300] [--repeats 3] [--miss 0.3]
-        [--seed 0] [--skip-speed] [--skip-accuracy] [--length 150]
+        [--seed 0] [--skip-speed] [--skip-accuracy] [--length 150] [--people 10 40 100]
+        [--check [DIGESTS.json]]
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
-import time
+import os
+import statistics
 from pathlib import Path
 
 import cv2
@@ -26,6 +32,7 @@ import numpy as np
 import pandas as pd
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
+from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
 
 from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
 from harness.paths import data_path
@@ -41,7 +48,18 @@ def build(name: str):
     return instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / f"{name}.yaml"))
 
 
-def speed(frames: int, people: int, seed: int, repeats: int = 3) -> None:
+PBM_STAGES = (("_find_candidates", "candidates + features"), ("_score_in_gates", "gating"),
+              ("_search_occluded", "search (PBM 3.1)"), ("_scores", "scores (eqs. 11-13)"),
+              ("_pruning", "response pruning (4.1)"), ("_update_models", "model update (4.2)"),
+              ("_end_targets", "end targets"), ("_start_targets", "start targets"),
+              ("_report", "report"))
+"""PBMTracker's steps (its module docstring), timed one by one in ``stages``."""
+TARGETS = {10: 1000, 100: 200}
+"""frames/s targets of PBMTracker.update (with the foreground mask) per number of people."""
+
+
+def scene(frames: int, people: int, seed: int) -> list[tuple]:
+    """The ``crowd`` preset rendered once: (image, exact detections, exact person mask)."""
     seq = load_scenario("crowd", seed=seed, length=frames, people=people)
     src = NoisyGroundTruth(seed=seed)
     src.start(seq)
@@ -50,20 +68,34 @@ def speed(frames: int, people: int, seed: int, repeats: int = 3) -> None:
         img = seq.frame(k)
         dets, _ = src.detect(k, img)
         data.append((img, dets, seq.foreground(k) != 0))  # the harness's exact person mask
-    mean_people = np.mean([len(d) for _, d, _ in data])
+    return data
+
+
+def speed(frames: int, people: int, seed: int, repeats: int = 3) -> tuple[list[dict], dict, dict]:
+    """Frames/s of ``PBMTracker.update`` with and without the foreground mask (median of
+    ``repeats``), the digest of its reported rows and the stage table of one more,
+    instrumented run, per mode."""
+    data = scene(frames, people, seed)
+    rows, digests, stages = [], {}, {}
     for label, use_fg in (("foreground mask", True), ("no foreground", False)):
-        best_cpu, best_wall = np.inf, np.inf
-        for _ in range(repeats):  # the machine may be shared: keep the best of a few runs
-            tracker = build("pbm")
-            n_out = 0
-            t0, c0 = time.perf_counter(), time.process_time()
-            for img, dets, fg in data:
-                n_out += len(tracker.update(img, dets, fg if use_fg else None))
-            best_cpu = min(best_cpu, time.process_time() - c0)
-            best_wall = min(best_wall, time.perf_counter() - t0)
-        print(f"speed, {label:16s}: {frames / best_cpu:8.1f} frames/s CPU ({1e3 * best_cpu / frames:.2f} ms/frame; "
-              f"wall {frames / best_wall:.1f} frames/s), {mean_people:.1f} detections/frame, "
-              f"{n_out / frames:.1f} tracks/frame")
+        def run(tracker, use_fg=use_fg):
+            return [tracker.update(img, dets, fg if use_fg else None) for img, dets, fg in data]
+
+        times = [cpu_seconds(lambda: run(build("pbm"))) for _ in range(repeats)]
+        digests[f"pbm people={people} {label}"] = rows_digest(run(build("pbm")))
+        clock, tracker = StageClock(), build("pbm")
+        for attr, name in PBM_STAGES:
+            clock.wrap(tracker, attr, name)
+        clock.wrap(tracker.targets, "predict", "predict (eqs. 7-8)")
+        clock.wrap(tracker._search_extractor, "extract", "search features (2.2)")
+        stages[label] = clock.table(cpu_seconds(lambda t=tracker: run(t)), frames)
+        med = statistics.median(times)
+        rows.append({"people": people, "mode": label,
+                     "detections": np.mean([len(d) for _, d, _ in data]),
+                     "fps": frames / med, "fps_min": frames / max(times),
+                     "ms_per_frame": 1e3 * med / frames,
+                     "ref_units": med / frames / reference_seconds()})
+    return rows, digests, stages
 
 
 def accuracy(sequences, miss: float, seed: int, foreground: str, title: str) -> pd.DataFrame:
@@ -88,18 +120,42 @@ def accuracy(sequences, miss: float, seed: int, foreground: str, title: str) -> 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speed-frames", type=int, default=300)
-    ap.add_argument("--people", type=int, default=10)
-    ap.add_argument("--repeats", type=int, default=3, help="speed runs; the best is shown")
+    ap.add_argument("--people", type=int, nargs="+", default=[10, 40, 100],
+                    help="numbers of people of the speed runs")
+    ap.add_argument("--repeats", type=int, default=3, help="speed runs; the median is shown")
     ap.add_argument("--length", type=int, default=150, help="frames per synthetic scene")
     ap.add_argument("--miss", type=float, default=0.3, help="noisy-gt miss rate")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--skip-speed", action="store_true")
     ap.add_argument("--skip-accuracy", action="store_true")
+    ap.add_argument("--check", type=Path, nargs="?", const=None, default=False,
+                    metavar="DIGESTS.json",
+                    help="print the sha256 of the reported rows; with a file: write it when "
+                         "absent, else compare (exit 1 when they differ)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
     cv2.setNumThreads(1)
     if not args.skip_speed:
-        speed(args.speed_frames, args.people, args.seed, args.repeats)
+        print(f"load average (uptime): {os.getloadavg()}")
+        rows, digests = [], {}
+        for people in args.people:
+            r, d, stages = speed(args.speed_frames, people, args.seed, args.repeats)
+            rows += r
+            digests.update(d)
+            for label, table in stages.items():
+                print(f"stages at {people} people, {label} (one instrumented run, exclusive CPU time):")
+                print(table)
+        table = pd.DataFrame(rows)
+        print(f"Speed of PBMTracker.update (CPU time, median of {args.repeats}), crowd preset "
+              "640x480, one core; ref_units: ms per frame / the reference workload's ms")
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}" if v < 1 else f"{v:.1f}"))
+        for people, target in TARGETS.items():
+            if people in args.people:
+                fps = table.loc[(table.people == people) & (table["mode"] == "foreground mask"), "fps"].iloc[0]
+                print(f"{people} people, foreground mask: {fps:.0f} frames/s -> target {target}: "
+                      f"{'met' if fps >= target else 'NOT met'}")
+        if args.check is not False and not check_digests(args.check, digests):
+            raise SystemExit(1)
     if args.skip_accuracy:
         return
     suite = load_suite(DEFAULT_SCENARIOS, seed=args.seed, length=args.length)

@@ -2,17 +2,22 @@
 
 Speed: time of ``RetaTracker.update`` (its feature extraction included; frame decoding,
 rendering and background subtraction excluded) with N people walking and crossing at
-640x480 on one core (``cv2.setNumThreads(1)``, BLAS threads 1), for N = 5, 10, 20, 40;
-the targets are at least 1,000 frames/s with 10 people and 500 with 40. Frames are pre-rendered with
-OpenCV (coloured ellipses on a noisy background, drawn far to near) and the detections
-are the boxes of people at least 30 % visible.
+640x480 on one core (``cv2.setNumThreads(1)``, BLAS threads 1), for N = 10, 40, 100
+(``--people``); the targets are at least 1,000 frames/s with 10 people, 500 with 40 and
+300 with 100. Frames are pre-rendered with OpenCV (coloured ellipses on a noisy background,
+drawn far to near) and the detections are the boxes of people at least 30 % visible. Per
+number of people: the median of ``--repeats`` runs, the time in units of a reference
+workload run in the same process, and the CPU time of each step of Alg. 1 (one more,
+instrumented run; ``tracker_timing``). ``--check [DIGESTS.json]`` prints the sha256 of the
+reported rows (and writes or compares the file): a speed-up must leave them unchanged.
 
 Accuracy: IDF1 and HOTA (``harness.metrics``) of reta and the baseline on the synthetic
 suite (``harness.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
 (miss rate 0 and 0.3), and on CAVIAR OneLeaveShop1cor (noisy gt, miss 0.3, seed 0) when
 the data root (``harness.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
-Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]``.
+Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]
+[--people 10 40 100] [--repeats 3] [--check [DIGESTS.json]]``.
 """
 
 from __future__ import annotations
@@ -23,8 +28,8 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse
+import statistics
 import sys
-import time
 from pathlib import Path
 
 import cv2
@@ -34,6 +39,8 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
+
+from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
 
 from harness.paths import data_path
 from trackers.baseline import BaselineTracker
@@ -75,32 +82,49 @@ def make_scene(people: int, frames: int, seed: int = 0) -> list[tuple[np.ndarray
     return out
 
 
-def speed(people_counts=(5, 10, 20, 40), frames: int = 300, repeats: int = 3,
-          pixel_stride: int = 1) -> pd.DataFrame:
-    """Frames/s of ``RetaTracker.update`` (best of ``repeats``) per number of people, with
+RETA_STAGES = ("_measure", "_predict", "_occlusions", "_associate", "_sort_occlusions",
+               "_update_matched", "_continue_unmatched", "_prune", "_start_tracks", "_outputs")
+"""RetaTracker's steps of Alg. 1 (its module docstring), timed one by one in ``stages``."""
+TARGETS = {10: 1000, 40: 500, 100: 300}
+"""frames/s targets of RetaTracker.update per number of people."""
+
+
+def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
+          pixel_stride: int = 1) -> tuple[pd.DataFrame, dict[str, str], dict[int, str]]:
+    """Frames/s of ``RetaTracker.update`` (median of ``repeats``) per number of people, with
     the histograms of every ``pixel_stride``-th pixel row and column (``Appearance``).
 
     Time is the process's CPU time (``time.process_time``), so other jobs sharing the
-    machine do not count; on an idle machine it equals wall time for this one thread."""
+    machine count less; ``reference`` is the median time of ``reference_seconds`` in the
+    same process, ``ref_units`` the time per frame in units of it (comparable across runs
+    on a loaded machine). Returns the table, the digest of the reported rows per number of
+    people, and per number of people the stage table of one more (instrumented) run."""
     cv2.setNumThreads(1)
-    rows = []
+    rows, digests, stage_tables = [], {}, {}
     for n in people_counts:
         scene = make_scene(n, frames, seed=n)
-        best = np.inf
-        for _ in range(repeats):
-            tracker = RetaTracker(appearance=Appearance(pixel_stride=pixel_stride))
-            t0 = time.process_time()
-            for img, dets in scene:
-                tracker.update(img, dets)
-            best = min(best, time.process_time() - t0)
-        base = BaselineTracker()
-        t0 = time.process_time()
-        for img, dets in scene:
-            base.update(img, dets)
-        tb = time.process_time() - t0
-        rows.append({"people": n, "reta_fps": frames / best, "reta_ms_per_frame": 1e3 * best / frames,
+
+        def run(tracker, scene=scene):
+            return [tracker.update(img, dets) for img, dets in scene]
+
+        def build():
+            return RetaTracker(appearance=Appearance(pixel_stride=pixel_stride))
+
+        times = [cpu_seconds(lambda: run(build())) for _ in range(repeats)]
+        digests[f"reta people={n}"] = rows_digest(run(build()))
+        clock, tracker = StageClock(), build()
+        for name in RETA_STAGES:
+            clock.wrap(tracker, name)
+        total = cpu_seconds(lambda t=tracker: run(t))
+        stage_tables[n] = clock.table(total, frames)
+        tb = statistics.median(cpu_seconds(lambda: run(BaselineTracker())) for _ in range(repeats))
+        ref = reference_seconds()
+        med = statistics.median(times)
+        rows.append({"people": n, "detections": np.mean([len(d) for _, d in scene]),
+                     "reta_fps": frames / med, "reta_fps_min": frames / max(times),
+                     "reta_ms_per_frame": 1e3 * med / frames, "ref_units": med / frames / ref,
                      "baseline_fps": frames / tb})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows), digests, stage_tables
 
 
 def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
@@ -147,17 +171,33 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=int, default=300)
     parser.add_argument("--pixel-stride", type=int, default=1,
                         help="Appearance.pixel_stride of the speed run (1 = exact eq. 1)")
+    parser.add_argument("--people", type=int, nargs="+", default=[10, 40, 100],
+                        help="numbers of people of the speed runs")
+    parser.add_argument("--repeats", type=int, default=3, help="speed runs; the median is shown")
+    parser.add_argument("--check", type=Path, nargs="?", const=None, default=False,
+                        metavar="DIGESTS.json",
+                        help="print the sha256 of the reported rows; with a file: write it when "
+                             "absent, else compare (exit 1 when they differ)")
     args = parser.parse_args(argv)
     pd.set_option("display.width", 160)
+    status = 0
     if not args.accuracy_only:
-        table = speed(frames=args.frames, pixel_stride=args.pixel_stride)
-        print("Speed of RetaTracker.update (CPU time), 640x480, one core, pixel_stride="
-              f"{args.pixel_stride} (targets >= 1000 frames/s at 10 people, >= 500 at 40)")
-        print(table.to_string(index=False, float_format=lambda v: f"{v:.1f}"))
-        for people, target in ((10, 1000), (40, 500)):
-            fps = table.loc[table.people == people, "reta_fps"].iloc[0]
-            print(f"{people} people: {fps:.0f} frames/s -> target {target}: "
-                  f"{'met' if fps >= target else 'NOT met'}")
+        print(f"load average (uptime): {os.getloadavg()}")
+        table, digests, stages = speed(args.people, args.frames, args.repeats, args.pixel_stride)
+        print("Speed of RetaTracker.update (CPU time, median of "
+              f"{args.repeats}), 640x480, one core, pixel_stride={args.pixel_stride}; "
+              f"ref_units: ms per frame / the reference workload's ms")
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}" if v < 1 else f"{v:.1f}"))
+        for people in args.people:
+            print(f"stages at {people} people (one instrumented run, exclusive CPU time):")
+            print(stages[people])
+        for people, target in TARGETS.items():
+            if people in args.people:
+                fps = table.loc[table.people == people, "reta_fps"].iloc[0]
+                print(f"{people} people: {fps:.0f} frames/s -> target {target}: "
+                      f"{'met' if fps >= target else 'NOT met'}")
+        if args.check is not False and not check_digests(args.check, digests):
+            status = 1
     if not args.speed_only:
         acc = accuracy()
         combined = acc[acc.sequence == "COMBINED"].drop(columns="sequence")
@@ -166,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
         print("\nPer sequence IDF1")
         print(acc.pivot_table(index=["data", "miss", "sequence"], columns="tracker",
                               values=["IDF1", "HOTA"]).to_string(float_format=lambda v: f"{v:.3f}"))
-    return 0
+    return status
 
 
 if __name__ == "__main__":

@@ -1,0 +1,107 @@
+"""Timing helpers shared by ``bench_reta.py`` and ``bench_pbm.py``: per-stage CPU time of a
+tracker's steps, a reference workload timed in the same process, and a digest of the
+reported rows (``--check``: the same tracks byte for byte before and after a speed-up).
+
+The stages are the tracker's own step methods, wrapped on one instance for one extra run
+(never on the runs whose frames/s are quoted); a stage's time excludes the stages it calls,
+so the stages and "other" add up to ``update``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import statistics
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import numpy as np
+
+
+class StageClock:
+    """Exclusive CPU time (``time.process_time``) of wrapped methods, per label."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+        self._stack: list[list[float]] = []  # per open stage: [start, time of its children]
+
+    def wrap(self, owner: object, attr: str, label: str | None = None) -> None:
+        """Time ``owner.attr`` (a method or callable attribute) under ``label`` from now on."""
+        fn = getattr(owner, attr)
+        name = label or attr.lstrip("_")
+        self.seconds.setdefault(name, 0.0)
+
+        def timed(*args, **kwargs):
+            self._stack.append([time.process_time(), 0.0])
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                start, children = self._stack.pop()
+                spent = time.process_time() - start
+                self.seconds[name] += spent - children
+                if self._stack:
+                    self._stack[-1][1] += spent
+
+        setattr(owner, attr, timed)
+
+    def table(self, total: float, frames: int) -> str:
+        """One line per stage, ms per frame and share of ``total`` seconds, then 'other'."""
+        rows = sorted(self.seconds.items(), key=lambda kv: -kv[1])
+        rows.append(("other", total - sum(self.seconds.values())))
+        return "\n".join(f"    {name:28s} {1e3 * s / frames:7.3f} ms/frame {100 * s / total:5.1f} %"
+                         for name, s in rows)
+
+
+def cpu_seconds(run: Callable[[], object]) -> float:
+    """CPU seconds of one call of ``run``."""
+    t0 = time.process_time()
+    run()
+    return time.process_time() - t0
+
+
+def reference_seconds(repeats: int = 5) -> float:
+    """Median CPU seconds of a fixed workload (numpy sorting, bincount, a Python loop): the
+    yardstick a tracker's time is divided by, so runs on a loaded machine compare."""
+    data = np.random.default_rng(0).random(200_000)
+
+    def work() -> None:
+        np.sort(data)
+        np.bincount((data * 4096).astype(np.int64), minlength=4096)
+        total = 0.0
+        for v in data[:50_000].tolist():
+            total += v * v
+
+    return statistics.median(cpu_seconds(work) for _ in range(repeats))
+
+
+def rows_digest(frames: Iterable[list]) -> str:
+    """sha256 of every reported Track row (frame, id, state, score, box float64 bytes)."""
+    h = hashlib.sha256()
+    for k, tracks in enumerate(frames):
+        for t in tracks:
+            h.update(f"{k} {t.id} {t.state.name} {float(t.score)!r} ".encode())
+            h.update(np.asarray(t.box, dtype=np.float64).tobytes())
+    return h.hexdigest()
+
+
+def check_digests(path: Path | None, digests: dict[str, str]) -> bool:
+    """Print the digests; with ``path``: write them when the file is absent, else compare
+    with the file (False and the keys that differ when any does)."""
+    for key, value in digests.items():
+        print(f"  rows {key}: {value}")
+    if path is None:
+        return True
+    if not path.exists():
+        path.write_text(json.dumps(digests, indent=1, sort_keys=True) + "\n")
+        print(f"  digests written to {path}")
+        return True
+    expected = json.loads(path.read_text())
+    differ = [k for k in digests if expected.get(k) != digests[k]]
+    missing = [k for k in digests if k not in expected]
+    if differ:
+        print(f"  DIFFERENT from {path}: {', '.join(differ)}"
+              + (f" (not in the file: {', '.join(missing)})" if missing else ""))
+        return False
+    print(f"  identical to {path}")
+    return True

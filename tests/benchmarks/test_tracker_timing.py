@@ -1,0 +1,51 @@
+"""benchmarks/tracker_timing.py: the rows digest and its check, the stage clock's wrapping."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from trackers.records import Track, TrackState
+
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "tracker_timing.py"
+_spec = importlib.util.spec_from_file_location("tracker_timing", _PATH)
+timing = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = timing
+_spec.loader.exec_module(timing)
+
+
+def _frames(x: float) -> list[list[Track]]:
+    return [[Track(1, np.array([x, 2.0, 3.0, 4.0]), TrackState.CONFIRMED, 1.0, {})], []]
+
+
+def test_digest_sees_one_ulp_and_the_check_writes_then_compares(tmp_path):
+    a = timing.rows_digest(_frames(1.0))
+    assert a == timing.rows_digest(_frames(1.0))
+    assert a != timing.rows_digest(_frames(np.nextafter(1.0, 2.0)))
+    path = tmp_path / "digests.json"
+    assert timing.check_digests(path, {"s": a}) and path.exists()  # written
+    assert timing.check_digests(path, {"s": a})
+    assert not timing.check_digests(path, {"s": timing.rows_digest(_frames(2.0))})
+    assert not timing.check_digests(path, {"other scene": a})
+
+
+class _Steps:
+    def outer(self, x):
+        return self.inner(x) + 1
+
+    def inner(self, x):
+        return 2 * x
+
+
+def test_stage_clock_keeps_results_and_counts_every_stage():
+    clock, steps = timing.StageClock(), _Steps()
+    clock.wrap(steps, "outer")
+    clock.wrap(steps, "inner", "the inner step")
+    assert steps.outer(3) == 7
+    assert set(clock.seconds) == {"outer", "the inner step"}
+    assert all(s >= 0 for s in clock.seconds.values())
+    lines = clock.table(total=1.0, frames=1).splitlines()
+    assert [line.split()[0] for line in lines][-1] == "other" and len(lines) == 3
