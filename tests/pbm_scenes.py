@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from trackers.layered.models import FEATURES, FeatureModels, FoldedMixture
-from trackers.layered.parts import N_PARTS, PartFeatures
+from trackers.layered.feature_models import FeatureModels, FoldedMixture
+from trackers.layered.parts import FEATURES, N_PARTS, PartFeatures
 from trackers.records import Detections
 
 

@@ -65,12 +65,17 @@ import numpy as np
 import yaml
 
 from trackers.layered.association import feature_differences
-from trackers.layered.models import (
-    FEATURES,
+from trackers.layered.feature_models import (
     FeatureModels,
     fit_difference_model,
 )
-from trackers.layered.parts import N_PARTS, PART_NAMES, PartFeatureExtractor, centroid_ratios
+from trackers.layered.parts import (
+    FEATURES,
+    N_PARTS,
+    PART_NAMES,
+    PartFeatureExtractor,
+    centroid_ratios,
+)
 
 log = logging.getLogger(__name__)
 

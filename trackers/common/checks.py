@@ -4,6 +4,20 @@ under ``tracker.`` in the config (``matching.match_threshold``, ``association.mu
 
 from __future__ import annotations
 
+from typing import TypeVar
+
+G = TypeVar("G")
+
+
+def parameter_group(name: str, value: G | None, kind: type[G]) -> G:
+    """A tracker constructor's parameter group ``name``: ``value``, or the group's defaults
+    (``kind()``) when None; TypeError naming ``name`` when it is not a ``kind``."""
+    if value is None:
+        return kind()
+    if not isinstance(value, kind):
+        raise TypeError(f"{name}: expected a {kind.__name__} or None, got {value!r}")
+    return value
+
 
 def require(key: str, ok: bool, rule: str, value: object) -> None:
     """ValueError ``"<key> <rule>, got <value>"`` unless ``ok``."""

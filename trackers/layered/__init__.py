@@ -1,6 +1,6 @@
 """PBM: five-part model with layered data association (see ``trackers.layered.tracker``)."""
 
-from trackers.layered.models import FeatureModels, load_feature_models
+from trackers.layered.feature_models import FeatureModels, load_feature_models
 from trackers.layered.params import (
     Adaptations,
     CandidateParams,

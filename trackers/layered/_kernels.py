@@ -3,7 +3,7 @@
 Each kernel computes one named equation or rule of the paper ("Tracking People under
 Heavy Occlusions by Layered Data Association") and is tested against its plain-numpy
 function in ``trackers.layered.equations`` (or the numpy expression its docstring quotes)
-to a tolerance, not bit for bit (``tests/test_pbm_equations.py``, rtol 1e-9):
+to a tolerance, not bit for bit (``tests/trackers/layered/test_equations.py``, rtol 1e-9):
 
 - part features (PBM 2.1-2.2): the split of a box at its centroid (eqs. 1-2,
   ``_part_rects``; the ratios ``_centroid_ratios``; the inverse under occlusion
@@ -344,8 +344,8 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
 
 
 @numba.njit(cache=True)
-def cv_predict(x: np.ndarray, p: np.ndarray, qp: np.ndarray, qv: np.ndarray) -> None:
-    """Predict step of KF1 (eq. 7) and KF2 (eq. 8) (``equations.cv_predict``: x = F x,
+def cv_predict_inplace(x: np.ndarray, p: np.ndarray, qp: np.ndarray, qv: np.ndarray) -> None:
+    """Predict step of KF1 (eq. 7) and KF2 (eq. 8) (``equations.cv_predicted``: x = F x,
     P = F P F' + Q) of every row, in place: x (T, 4) = (a, b, a', b'); P kept per axis i
     as its 2 x 2 block p[:, i] = (A, B, C, D) = (P[a, a], P[a, a'], P[a', a], P[a', a'])
     (diagonal P0, Q and R never couple the axes); qp, qv (T,) the noise variances."""
@@ -360,11 +360,11 @@ def cv_predict(x: np.ndarray, p: np.ndarray, qp: np.ndarray, qv: np.ndarray) -> 
 
 
 @numba.njit(cache=True)
-def cv_update(x: np.ndarray, p: np.ndarray, r: np.ndarray, rows: np.ndarray, z: np.ndarray
-              ) -> None:
+def cv_update_inplace(x: np.ndarray, p: np.ndarray, r: np.ndarray, rows: np.ndarray,
+                      z: np.ndarray) -> None:
     """Update step of KF1 (eq. 7, z = (xc, yc)) and KF2 (eq. 8, z = (h, w))
-    (``equations.cv_update``) of the filters at ``rows`` with measurements z (M, 2), in
-    place (layout as ``cv_predict``; r (T,) the measurement variance)."""
+    (``equations.cv_updated``) of the filters at ``rows`` with measurements z (M, 2), in
+    place (layout as ``cv_predict_inplace``; r (T,) the measurement variance)."""
     for q in range(rows.shape[0]):
         n = rows[q]
         for i in range(2):
@@ -403,16 +403,16 @@ def gate_boxes(centres: np.ndarray, rates: np.ndarray, size_wh: np.ndarray, miss
 
 @numba.njit(cache=True)
 def targets_predict(kf1: tuple, kf2: tuple) -> None:
-    """KF1 (eq. 7) and KF2 (eq. 8) predict (``cv_predict``) of every target; KF2's rates
-    are zeroed first where a step would take h or w below 2 pixels. ``kf1``, ``kf2``:
+    """KF1 (eq. 7) and KF2 (eq. 8) predict (``cv_predict_inplace``) of every target; KF2's
+    rates are zeroed first where a step would take h or w below 2 pixels. ``kf1``, ``kf2``:
     (x, p, qp, qv) of ``ConstantVelocity2D``."""
     x2 = kf2[0]
     for n in range(x2.shape[0]):
         if x2[n, 0] + x2[n, 2] < 2 or x2[n, 1] + x2[n, 3] < 2:
             x2[n, 2] = 0.0
             x2[n, 3] = 0.0
-    cv_predict(kf1[0], kf1[1], kf1[2], kf1[3])
-    cv_predict(kf2[0], kf2[1], kf2[2], kf2[3])
+    cv_predict_inplace(kf1[0], kf1[1], kf1[2], kf1[3])
+    cv_predict_inplace(kf2[0], kf2[1], kf2[2], kf2[3])
 
 
 @numba.njit(cache=True, inline="always")
@@ -441,8 +441,8 @@ def targets_update(state: tuple, kf1: tuple, kf2: tuple, rows: np.ndarray, dof: 
                    ) -> None:
     """Section 4.2, the global models' update (``equations.update_global``) of the
     targets at ``rows`` from their candidates' DOF (M, 6), then KF1 (eq. 7) with z = (xc,
-    yc) and KF2 (eq. 8) with z = (h, w) of the updated DOF (``cv_update``), then p_j, the
-    frozen parts (not p_j >= threshold), the occlusion flag, hits + 1 and misses = 0.
+    yc) and KF2 (eq. 8) with z = (h, w) of the updated DOF (``cv_update_inplace``), then
+    p_j, the frozen parts (not p_j >= threshold), the occlusion flag, hits + 1 and misses = 0.
 
     Per row the DOF enters the occlusion window; an occluded row takes the window's mean,
     an unoccluded one the candidate's DOF; an unoccluded row with a measured centroid
@@ -474,8 +474,8 @@ def targets_update(state: tuple, kf1: tuple, kf2: tuple, rows: np.ndarray, dof: 
         shift[q, 0], shift[q, 1] = d[2] - x0, d[3] - y0
         z1[q, 0], z1[q, 1] = d[2], d[3]                                      # eq. 7
         z2[q, 0], z2[q, 1] = d[5], d[4]                                      # eq. 8
-    cv_update(kf1[0], kf1[1], kf1[2], rows, z1)
-    cv_update(kf2[0], kf2[1], kf2[2], rows, z2)
+    cv_update_inplace(kf1[0], kf1[1], kf1[2], rows, z1)
+    cv_update_inplace(kf2[0], kf2[1], kf2[2], rows, z2)
     for q in range(M):
         n = rows[q]
         for j in range(part_scores.shape[1]):

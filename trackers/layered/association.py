@@ -12,7 +12,7 @@ The layers run in small numba kernels over the scored (target, candidate) pairs 
 selected pairs in one call (the models indexed, not copied per pair). The plain-numpy
 equations they compute are ``trackers.layered.equations.differences`` (eq. 11),
 ``part_scores`` (eq. 12) and ``global_score`` (eq. 13); the kernels equal them to
-rounding (rtol 1e-9, ``tests/test_pbm_equations.py``).
+rounding (rtol 1e-9, ``tests/trackers/layered/test_equations.py``).
 """
 
 from __future__ import annotations
@@ -28,14 +28,10 @@ from trackers.layered._kernels import (
     _pair_scores_kernel,
     _scores_kernel,
 )
-from trackers.layered.parts import N_PARTS, PartFeatures
+from trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatures
 
-if TYPE_CHECKING:  # annotations only: models.py imports this module
-    from trackers.layered.models import FeatureModels
-
-FEATURES: tuple[str, ...] = ("area", "perimeter", "hsv", "xyz", "displacement", "overlap")
-"""The Nf = 6 features of every part (PBM 2.2), in the order of every (..., 6) array."""
-N_FEATURES = len(FEATURES)
+if TYPE_CHECKING:  # annotations only
+    from trackers.layered.feature_models import FeatureModels
 
 # ----------------------------------------------------------------------------- public API
 

@@ -36,10 +36,11 @@ class ConstantVelocity2D:
     predict x = F x, P = F P F' + Q; update y = z - H x, S = H P H' + R, K = P H' S^-1,
     x += K y, P = (I - K H) P. With diagonal P0, Q and R the two axes never couple, so P
     is kept as one 2 x 2 block per axis, ``p[:, axis] = (P[a, a], P[a, a'], P[a', a],
-    P[a', a'])``, and the arithmetic is written out element-wise (``_kernels.cv_predict``,
-    ``cv_update``); they equal the matrix form of ``equations.cv_predict`` / ``cv_update``
-    (eqs. 7-8) to rounding (tests/test_pbm_equations.py; tests/test_pbm.py checks agreement
-    with filterpy's KalmanFilter).
+    P[a', a'])``, and the arithmetic is written out element-wise, in place
+    (``_kernels.cv_predict_inplace``, ``cv_update_inplace``); they equal the matrix form of
+    ``equations.cv_predicted`` / ``cv_updated`` (eqs. 7-8) to rounding
+    (tests/trackers/layered/test_equations.py; tests/trackers/layered/test_dynamics.py checks
+    agreement with filterpy's KalmanFilter).
 
     Args:
         position_noise, velocity_noise, measurement_noise: q_p, q_v, r.
@@ -85,12 +86,12 @@ class ConstantVelocity2D:
 
     def predict(self) -> None:
         """x = F x; P = F P F' + Q, for every filter."""
-        _kernels.cv_predict(self.x, self.p, self.qp, self.qv)
+        _kernels.cv_predict_inplace(self.x, self.p, self.qp, self.qv)
 
     def update(self, rows: np.ndarray, z: np.ndarray) -> None:
         """y = z - H x; S = H P H' + R; K = P H' S^-1; x += K y; P = (I - K H) P, for the
         filters at ``rows`` (unique) with measurements z (M, 2)."""
-        _kernels.cv_update(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
+        _kernels.cv_update_inplace(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
                        np.asarray(z, dtype=np.float64))
 
 

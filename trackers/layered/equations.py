@@ -1,5 +1,5 @@
 """PBM's equations in plain numpy: the source of truth the compiled kernels are tested
-against (``tests/test_pbm_equations.py``, to rtol 1e-9, not bit for bit).
+against (``tests/trackers/layered/test_equations.py``, to rtol 1e-9, not bit for bit).
 
 Each function computes one equation or rule of the paper ("Tracking People under Heavy
 Occlusions by Layered Data Association"), its number beside the line (filterpy's
@@ -9,8 +9,8 @@ model (DOF) is (xtl, ytl, xc, yc, w, h).
 
 - eqs. 1-2, the centroid ratios alpha and beta: ``centroid_ratios``; the part split they
   fix: ``part_boxes``; the DOF they give under occlusion: ``dof_from_head``;
-- eq. 7 (KF1, Z1 = (xc, yc)) and eq. 8 (KF2, Z2 = (h, w)): ``kf1_measurement``,
-  ``kf2_measurement``, both constant-velocity filters ``cv_predict`` / ``cv_update``;
+- eq. 7 (KF1, Z1 = (xc, yc)) and eq. 8 (KF2, Z2 = (h, w)): ``kf1_z``,
+  ``kf2_z``, both constant-velocity filters ``cv_predicted`` / ``cv_updated``;
 - eqs. 9-10, the head-anchored search boxes: ``search_boxes``;
 - eq. 11, feature differences: ``differences``;
 - eq. 12, part scores: ``part_scores`` (with ``match_probability``, p(d | theta));
@@ -28,19 +28,19 @@ import numpy as np
 from scipy.special import ndtr
 
 if TYPE_CHECKING:  # annotations only
-    from trackers.layered.models import FeatureModels
+    from trackers.layered.feature_models import FeatureModels
     from trackers.layered.parts import PartFeatures
 
 __all__ = [
     "HEAD_FRACTION",
     "centroid_ratios",
-    "cv_predict",
-    "cv_update",
+    "cv_predicted",
+    "cv_updated",
     "differences",
     "dof_from_head",
     "global_score",
-    "kf1_measurement",
-    "kf2_measurement",
+    "kf1_z",
+    "kf2_z",
     "match_probability",
     "part_boxes",
     "part_scores",
@@ -121,12 +121,12 @@ def dof_from_head(heads: np.ndarray, w: np.ndarray, h: np.ndarray, alpha: np.nda
 # ----------------------------------------------------------------------------- PBM 3
 
 
-def kf1_measurement(dof: np.ndarray) -> np.ndarray:
+def kf1_z(dof: np.ndarray) -> np.ndarray:
     """Eq. 7, KF1: Z1 = (xc, yc) of (..., 6) DOF; its state is X1 = (xc, yc, xc', yc')."""
     return np.asarray(dof)[..., [2, 3]]                                      # eq. 7
 
 
-def kf2_measurement(dof: np.ndarray) -> np.ndarray:
+def kf2_z(dof: np.ndarray) -> np.ndarray:
     """Eq. 8, KF2: Z2 = (h, w) of (..., 6) DOF; its state is X2 = (h, w, h', w')."""
     return np.asarray(dof)[..., [5, 4]]                                      # eq. 8
 
@@ -135,7 +135,7 @@ _F = np.block([[np.eye(2), np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])
 
 
-def cv_predict(x: np.ndarray, P: np.ndarray, q_p: float, q_v: float
+def cv_predicted(x: np.ndarray, P: np.ndarray, q_p: float, q_v: float
                ) -> tuple[np.ndarray, np.ndarray]:
     """Predict step of KF1 (eq. 7) and KF2 (eq. 8), constant velocity, unit time step:
     x (4,) = (a, b, a', b'), P (4, 4), Q = diag(q_p, q_p, q_v, q_v) (variances)."""
@@ -145,7 +145,7 @@ def cv_predict(x: np.ndarray, P: np.ndarray, q_p: float, q_v: float
     return x, P
 
 
-def cv_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: float
+def cv_updated(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: float
               ) -> tuple[np.ndarray, np.ndarray]:
     """Update step of KF1 (eq. 7, z = Z1) and KF2 (eq. 8, z = Z2): measurement z (2,),
     R = r I (variance)."""
@@ -184,7 +184,7 @@ def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.n
                 misses: np.ndarray | None = None) -> np.ndarray:
     """Eq. 11, d_ij = |f_ij - F_ij|, for the pairs (target ti[k], candidate n[k]).
 
-    Features i in ``models.FEATURES`` order: area and perimeter (absolute differences),
+    Features i in ``parts.FEATURES`` order: area and perimeter (absolute differences),
     HSV and XYZ histograms (1 - Bhattacharyya coefficient; 1 when the candidate's part
     has no foreground), displacement of the part centroid over the target's height, and
     1 - IoU of the part rectangles. After a gap of ``misses`` frames the last two are

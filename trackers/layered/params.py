@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trackers.common.checks import at_least, coerce, require, unit
-from trackers.layered.model import Targets, stale_parts
-from trackers.layered.models import FEATURES, FeatureModels
-from trackers.layered.parts import N_PARTS, PartFeatures
+from trackers.layered.feature_models import FeatureModels
+from trackers.layered.parts import FEATURES, N_PARTS, PartFeatures
+from trackers.layered.targets import Targets, stale_parts
 
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}

@@ -57,6 +57,10 @@ PART_NAMES: tuple[str, ...] = (
 
 N_PARTS = len(PART_NAMES)
 
+FEATURES: tuple[str, ...] = ("area", "perimeter", "hsv", "xyz", "displacement", "overlap")
+"""The Nf = 6 features of every part (PBM 2.2), in the order of every (..., 6) array."""
+N_FEATURES = len(FEATURES)
+
 DEFAULT_ALPHA = 0.5
 """Centroid column ratio of an upright symmetric person (eq. 1)."""
 DEFAULT_BETA = (0.5 - HEAD_FRACTION) / (1.0 - HEAD_FRACTION)
@@ -177,7 +181,7 @@ def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 def _check_colour_formulas() -> None:
     """Raise RuntimeError unless the kernels' HSV and XYZ values (OpenCV's integer
     formulas, ``_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
-    once per process (tests/test_parts.py checks all 2**24)."""
+    once per process (tests/trackers/layered/test_parts.py checks all 2**24)."""
     v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
     got = np.empty((len(pixels), 6), np.uint8)

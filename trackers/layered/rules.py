@@ -14,9 +14,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trackers.layered.model import Targets
 from trackers.layered.params import Adaptations
 from trackers.layered.parts import PartFeatures
+from trackers.layered.targets import Targets
 
 # --------------------------------------------------------------- eq. 11: the model compared
 

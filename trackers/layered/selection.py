@@ -12,10 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackers.layered.association import ambiguous_rows
-from trackers.layered.model import Targets, dof_from_head
 from trackers.layered.params import Adaptations, MatchParams, PruneParams
 from trackers.layered.parts import N_PARTS, PartFeatures
 from trackers.layered.search import Candidates, match_head_template
+from trackers.layered.targets import Targets, dof_from_head
 
 
 def _norms(v: np.ndarray) -> np.ndarray:

@@ -27,11 +27,11 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
 
 Every rule the paper does not have is a field of ``params.Adaptations`` (one row each in
 docs/adaptations.md; ``tracker=pbm_paper`` turns them off); a step such a rule changes calls
-a strategy of ``rules.py`` (the paper's or ours, chosen once in the constructor). Readings of the paper that are
-not switchable: features are measured on a fixed grid of samples per box
-(``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
-P(D >= d) (``models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2 is used
-sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
+a strategy of ``rules.py`` (the paper's or ours, chosen once in the constructor). Readings
+of the paper that are not switchable: features are measured on a fixed grid of samples per
+box (``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
+P(D >= d) (``feature_models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2
+is used sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
 1 + m; KF2 holds an unfound target's size; a blob with several heads counts as merged
 (searched) whatever its size.
 
@@ -47,6 +47,7 @@ import logging
 import numpy as np
 
 from trackers.common.assignment import assign
+from trackers.common.checks import parameter_group
 from trackers.geometry import iou_matrix
 from trackers.layered._kernels import (
     alive_rows,
@@ -57,11 +58,6 @@ from trackers.layered._kernels import (
 from trackers.layered.association import pair_scores
 from trackers.layered.candidates import CandidateFinder
 from trackers.layered.dynamics import Gate
-from trackers.layered.model import (
-    Targets,
-    dof_from_box,
-    update_parts,
-)
 from trackers.layered.params import (
     Adaptations,
     CandidateParams,
@@ -90,6 +86,11 @@ from trackers.layered.search import (
     search_boxes_many,
 )
 from trackers.layered.selection import FrameScores, MultipleResponsePruning
+from trackers.layered.targets import (
+    Targets,
+    dof_from_box,
+    update_parts,
+)
 from trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
@@ -132,18 +133,17 @@ class PBMTracker:
         reporting: ReportParams | None = None,
         adaptations: Adaptations | None = None,
     ) -> None:
-        groups = {"features": (features, FeatureParams), "candidates": (candidates, CandidateParams),
-                  "gate": (gate, GateParams), "noise": (noise, NoiseParams),
-                  "search": (search, SearchParams), "matching": (matching, MatchParams),
-                  "pruning": (pruning, PruneParams), "model_update": (model_update, UpdateParams),
-                  "life_cycle": (life_cycle, LifeCycleParams), "reporting": (reporting, ReportParams),
-                  "adaptations": (adaptations, Adaptations)}
-        for name, (value, cls) in groups.items():
-            if value is None:
-                value = cls()
-            elif not isinstance(value, cls):
-                raise TypeError(f"{name}: expected a {cls.__name__} or None, got {value!r}")
-            setattr(self, name, value)
+        self.features = parameter_group("features", features, FeatureParams)
+        self.candidates = parameter_group("candidates", candidates, CandidateParams)
+        self.gate = parameter_group("gate", gate, GateParams)
+        self.noise = parameter_group("noise", noise, NoiseParams)
+        self.search = parameter_group("search", search, SearchParams)
+        self.matching = parameter_group("matching", matching, MatchParams)
+        self.pruning = parameter_group("pruning", pruning, PruneParams)
+        self.model_update = parameter_group("model_update", model_update, UpdateParams)
+        self.life_cycle = parameter_group("life_cycle", life_cycle, LifeCycleParams)
+        self.reporting = parameter_group("reporting", reporting, ReportParams)
+        self.adaptations = parameter_group("adaptations", adaptations, Adaptations)
         g = self.gate
         self._gate = Gate(g.speed_factor, g.min_fraction, g.miss_factor, g.growth,
                           self.adaptations.gate_max_fraction)

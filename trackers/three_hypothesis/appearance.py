@@ -1,14 +1,14 @@
 """Appearance model q (Reta 3.2, eq. 1) and its similarity rho (eq. 4), fast path.
 
-The definition lives in ``trackers.three_hypothesis.features.ellipse_histograms``: joint 16x16x16
-colour histogram over the pixels whose centres lie in the ellipse inscribed in a box,
-optionally restricted to foreground pixels. This module computes exactly the same
-histograms for boxes snapped to whole pixels (``tests/test_reta.py`` checks equality) but
-with ``cv2.calcHist`` over each box crop and ellipse masks (and their pixel counts) cached
-by box size, so the tracker's per-frame feature cost is one pass over each box's pixels
-instead of binning the whole frame. ``measure`` also gives the bins any measurement
-occupies, over which the tracker sums rho (eq. 4). Boxes are (N, 4) float64 xywh, 0-based
-pixels.
+The definition lives in ``trackers.three_hypothesis.features.ellipse_histograms``: joint
+16x16x16 colour histogram over the pixels whose centres lie in the ellipse inscribed in a
+box, optionally restricted to foreground pixels. This module computes exactly the same
+histograms for boxes snapped to whole pixels (``tests/trackers/three_hypothesis/
+test_tracker.py`` checks equality) but with ``cv2.calcHist`` over each box crop and
+ellipse masks (and their pixel counts) cached by box size, so the tracker's per-frame
+feature cost is one pass over each box's pixels instead of binning the whole frame.
+``measure`` also gives the bins any measurement occupies, over which the tracker sums rho
+(eq. 4). Boxes are (N, 4) float64 xywh, 0-based pixels.
 """
 
 from __future__ import annotations

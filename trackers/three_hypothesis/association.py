@@ -16,11 +16,11 @@ import numpy as np
 
 from trackers.common.assignment import assign_min_cost
 from trackers.geometry import centre_distance_matrix
-from trackers.three_hypothesis.features import bhattacharyya, region_similarity
+from trackers.three_hypothesis.features import region_similarity
 
 
 @dataclass
-class Association:
+class Matches:
     """Result of one frame's association.
 
     Attributes:
@@ -75,18 +75,16 @@ def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
 def associate(
     node_boxes: np.ndarray,
     owners: np.ndarray,
-    q: np.ndarray,
+    sqrt_q: np.ndarray,
     measurement_boxes: np.ndarray,
-    p: np.ndarray,
+    sqrt_p: np.ndarray,
     mu_rho: float,
     mu_g: float,
     delta: np.ndarray | None = None,
-    sqrt_q: np.ndarray | None = None,
-    sqrt_p: np.ndarray | None = None,
     gated: np.ndarray | None = None,
     gate: np.ndarray | None = None,
     evidence: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-) -> Association:
+) -> Matches:
     """Match measurements to persons in two stages.
 
     Stage 1 (steps 1-4): pairs whose predicted and measured regions intersect; cost
@@ -105,15 +103,14 @@ def associate(
         node_boxes: (B, 4) xywh predicted regions of the nodes.
         owners: (B,) int person index of each node, sorted, covering 0..P-1 (every
             person owns at least one node).
-        q: (P, bins) person appearance histograms (only its length is read when
-            ``sqrt_q`` and ``sqrt_p`` are given).
+        sqrt_q: (P, K) element-wise square roots of the persons' appearance histograms q
+            (eq. 1), possibly restricted to K of the bins, e.g. those where some p is
+            nonzero (the other terms of eq. 4 are 0).
         measurement_boxes: (D, 4) xywh.
-        p: (D, bins) measurement histograms.
+        sqrt_p: (D, K) square roots of the measurements' histograms p, same K bins.
         mu_rho: appearance threshold mu_rho in [0, 1].
         mu_g: gate radius mu_g in pixels.
         delta: optional precomputed (B, D) region similarity of nodes and measurements.
-        sqrt_q, sqrt_p: optional element-wise square roots of q and p (rho = sqrt_q sqrt_p'),
-            possibly restricted to the same columns, e.g. the bins where some p is nonzero.
         gated: optional (P,) bool: persons that may take part in stage 2 (default all).
         gate: optional (B,) gate radius of each node in pixels; the node's validation
             region is the circle of radius min(mu_g, gate) (default mu_g for every node).
@@ -122,19 +119,16 @@ def associate(
             (e.g. ``rules.AppearanceMargin().evidence``).
     """
     owners = np.asarray(owners, dtype=int)
-    n_persons, n_meas = len(q), len(measurement_boxes)
+    n_persons, n_meas = len(sqrt_q), len(measurement_boxes)
     steps = owners[1:] - owners[:-1]
     if len(owners) and not (owners[0] == 0 and owners[-1] == n_persons - 1
                             and (len(steps) == 0 or (steps.min() >= 0 and steps.max() <= 1))):
         raise ValueError("associate: owners must be sorted and cover persons 0..P-1")
     empty = np.zeros(0, dtype=int)
     if n_persons == 0 or n_meas == 0:
-        return Association(np.zeros((0, 3), dtype=int), empty, np.zeros(0), np.arange(n_persons),
+        return Matches(np.zeros((0, 3), dtype=int), empty, np.zeros(0), np.arange(n_persons),
                            np.arange(n_meas))
-    if sqrt_q is not None and sqrt_p is not None:
-        rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4
-    else:
-        rho = bhattacharyya(q, p)  # (P, D) eq. 4
+    rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4: sum_u sqrt(q_u p_u)
     np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)  # clipped to [0, 1]
     one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
     rho_nodes = rho if one_node else rho[owners]  # (B, D)
@@ -171,7 +165,7 @@ def associate(
     m12 = np.concatenate([m1, m2])
     nodes = np.concatenate([m[:, 0] if best is None else best[m[:, 0], m[:, 1]]
                             for m, best in ((m1, best1), (m2, best2))])
-    return Association(
+    return Matches(
         _rows(m12[:, 0], m12[:, 1], nodes),
         np.array([1] * len(m1) + [2] * len(m2), dtype=int),
         rho[m12[:, 0], m12[:, 1]],

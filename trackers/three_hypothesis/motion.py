@@ -4,7 +4,8 @@ Each node carries its own state x (8,) = (xc, yc, w, h, vx, vy, vw, vh) and cova
 P (8, 8). The matrices F, H, Q, R come from filterpy through
 ``trackers.common.kalman.constant_velocity_box_filter`` (one set-up for the project); the
 predict and correct steps below are filterpy's equations applied to all nodes of a frame
-at once (``tests/test_reta.py`` checks them against ``filterpy.kalman.KalmanFilter``).
+at once (``tests/trackers/three_hypothesis/test_tracker.py`` checks them against
+``filterpy.kalman.KalmanFilter``).
 """
 
 from __future__ import annotations

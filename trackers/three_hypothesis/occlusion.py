@@ -19,8 +19,9 @@ def region_overlaps(
 
     delta(Sp, Sq) = 2 |Sp & Sq| / (|Sp| + |Sq|). The values are exactly those of
     ``trackers.three_hypothesis.features.region_similarity(a, b, "ellipse", samples)`` (the
-    definition; ``tests/test_reta.py`` checks equality): |Sa & Sb| is the share of a
-    ``samples`` x ``samples`` grid over a's box lying in both ellipses, times |Sa| = pi/4 w h.
+    definition; ``tests/trackers/three_hypothesis/test_tracker.py`` checks equality):
+    |Sa & Sb| is the share of a ``samples`` x ``samples`` grid over a's box lying in both
+    ellipses, times |Sa| = pi/4 w h.
     Two things make it cheaper per frame: the grid is separable, so each ellipse test is
     an outer sum of a row term and a column term, and a's own ellipse test is done once per
     box instead of once per pair; and ``near`` restricts the integration to the pairs the

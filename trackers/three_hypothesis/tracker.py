@@ -38,16 +38,15 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from typing import TypeVar
 
 import numpy as np
 
+from trackers.common.checks import parameter_group
 from trackers.geometry import iou_matrix, valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.association import Association as Matches
-from trackers.three_hypothesis.association import associate
+from trackers.three_hypothesis.association import Matches, associate
 from trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE, Node, TrackingGraph
 from trackers.three_hypothesis.motion import (
     MotionModel,
@@ -72,7 +71,6 @@ from trackers.three_hypothesis.params import (
 from trackers.three_hypothesis.rules import build_rules
 
 log = logging.getLogger(__name__)
-G = TypeVar("G")
 
 
 @dataclass(slots=True)
@@ -144,14 +142,6 @@ class _Frame:
     absorbed: set[int] = field(default_factory=set)  # hidden persons a new track confirmed
 
 
-def _group(name: str, value: G | None, kind: type[G]) -> G:
-    """A constructor's parameter group: ``value``, or the group's defaults when None."""
-    group = kind() if value is None else value
-    if not isinstance(group, kind):
-        raise TypeError(f"{name}: expected a {kind.__name__}, got {value!r}")
-    return group
-
-
 class RetaTracker:
     """Three-hypothesis tracking graph with occlusion reasoning (Reta et al. 2015).
 
@@ -176,12 +166,12 @@ class RetaTracker:
         adaptations: Adaptations | None = None,
         min_score: float = 0.0,
     ) -> None:
-        self.association = _group("association", association, Association)
-        self.occlusion = _group("occlusion", occlusion, Occlusion)
-        self.appearance = _group("appearance", appearance, Appearance)
-        self.motion = _group("motion", motion, MotionModel)
-        self.life_cycle = _group("life_cycle", life_cycle, LifeCycle)
-        self.adaptations = _group("adaptations", adaptations, Adaptations)
+        self.association = parameter_group("association", association, Association)
+        self.occlusion = parameter_group("occlusion", occlusion, Occlusion)
+        self.appearance = parameter_group("appearance", appearance, Appearance)
+        self.motion = parameter_group("motion", motion, MotionModel)
+        self.life_cycle = parameter_group("life_cycle", life_cycle, LifeCycle)
+        self.adaptations = parameter_group("adaptations", adaptations, Adaptations)
         self.min_score = min_score
         self.histograms = EllipseHistogrammer(bins=self.appearance.bins,
                                               min_foreground=self.appearance.min_foreground,
@@ -305,7 +295,6 @@ class RetaTracker:
         a = self.association
         f.matches = m = associate(
             f.pred, f.owners, sqrt_q, f.dets, sqrt_p, a.mu_rho, a.mu_g, delta=f.delta,
-            sqrt_q=sqrt_q, sqrt_p=sqrt_p,
             gated=np.array([person.confirmed for person in persons], dtype=bool),
             gate=self.rules.gate.radii(f.Pp, R),
             evidence=self.rules.stage1_appearance.evidence)

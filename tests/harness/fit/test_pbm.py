@@ -18,7 +18,8 @@ from harness.fit.pbm import (
     weight_grid,
     weights_override,
 )
-from trackers.layered.models import FEATURES, FeatureModels, FoldedMixture, load_feature_models
+from trackers.layered.feature_models import FeatureModels, FoldedMixture, load_feature_models
+from trackers.layered.parts import FEATURES
 
 N_PARTS = 5
 

@@ -15,8 +15,8 @@ from harness.metrics import score_sequence
 from harness.pipeline.experiment import run_sequence
 from harness.sources.annotations import NoisyGroundTruth
 from trackers.layered.dynamics import Gate
-from trackers.layered.model import Targets
 from trackers.layered.parts import PartFeatureExtractor
+from trackers.layered.targets import Targets
 
 ROOT = Path(__file__).resolve().parents[3]
 

@@ -62,7 +62,7 @@ def test_eq1_2_ratios_of_the_extractor_equal_the_equation():
 
 def test_eq7_8_filter_kernels_equal_the_equations():
     """KF1 (eq. 7) and KF2 (eq. 8): the per-axis compiled steps of ``ConstantVelocity2D``
-    against the matrix form of ``equations.cv_predict`` / ``cv_update``."""
+    against the matrix form of ``equations.cv_predicted`` / ``cv_updated``."""
     from trackers.layered.dynamics import ConstantVelocity2D
 
     rng = np.random.default_rng(10)
@@ -72,16 +72,16 @@ def test_eq7_8_filter_kernels_equal_the_equations():
     x, P = kf.state(1)
     for _ in range(30):
         kf.predict()
-        x, P = E.cv_predict(x, P, kf.qp[1], kf.qv[1])
+        x, P = E.cv_predicted(x, P, kf.qp[1], kf.qv[1])
         np.testing.assert_allclose(kf.state(1)[0], x, rtol=RTOL, atol=ATOL)
         np.testing.assert_allclose(kf.state(1)[1], P, rtol=RTOL, atol=ATOL)
         dof = np.r_[0.0, 0.0, x[:2] + rng.normal(0, 3, 2), 30.0, 80.0]
-        z = E.kf1_measurement(dof)                                      # eq. 7
+        z = E.kf1_z(dof)  # eq. 7
         kf.update(np.array([1]), z[None])
-        x, P = E.cv_update(x, P, z, kf.r[1])
+        x, P = E.cv_updated(x, P, z, kf.r[1])
         np.testing.assert_allclose(kf.state(1)[0], x, rtol=RTOL, atol=ATOL)
         np.testing.assert_allclose(kf.state(1)[1], P, rtol=RTOL, atol=ATOL)
-    assert np.array_equal(E.kf2_measurement(np.arange(6.0)), [5.0, 4.0])  # eq. 8: (h, w)
+    assert np.array_equal(E.kf2_z(np.arange(6.0)), [5.0, 4.0])  # eq. 8: (h, w)
 
 
 def test_section_4_2_update_kernels_equal_the_equations():
@@ -89,7 +89,7 @@ def test_section_4_2_update_kernels_equal_the_equations():
     ``update_parts`` (running averages, frozen parts, rectangles) against
     ``equations.update_global`` and ``equations.update_parts``."""
     from trackers.layered.dynamics import Gate
-    from trackers.layered.model import Targets, update_parts
+    from trackers.layered.targets import Targets, update_parts
 
     rng = np.random.default_rng(12)
     ex = PartFeatureExtractor()

@@ -10,8 +10,8 @@ import pbm_scenes as S
 
 from trackers.layered import Adaptations, PBMTracker
 from trackers.layered.dynamics import Gate
-from trackers.layered.model import Targets, stale_parts
 from trackers.layered.parts import PartFeatureExtractor
+from trackers.layered.targets import Targets, stale_parts
 
 
 def _targets() -> Targets:

@@ -29,21 +29,20 @@ from trackers.layered import (
 )
 from trackers.layered.association import ambiguous, layered_scores
 from trackers.layered.dynamics import Gate
-from trackers.layered.model import Targets
-from trackers.layered.models import (
-    FEATURES,
+from trackers.layered.feature_models import (
     FoldedMixture,
     fit_difference_model,
     fit_half_normal,
     save_feature_models,
 )
-from trackers.layered.parts import N_PARTS, PartFeatureExtractor
+from trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor
 from trackers.layered.search import (
     occlusion_kind,
     search_boxes,
     search_boxes_many,
     top_profile_heads,
 )
+from trackers.layered.targets import Targets
 from trackers.records import Detections, TrackState
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -471,8 +470,8 @@ def test_bool_and_label_foreground_give_the_same_tracks():
 
 
 def test_update_parts_equals_the_numpy_running_averages():
-    from trackers.layered.model import update_parts
     from trackers.layered.parts import part_boxes
+    from trackers.layered.targets import update_parts
 
     rng = np.random.default_rng(11)
     ex = PartFeatureExtractor()
@@ -519,8 +518,8 @@ def test_occluded_update_averages_the_window_and_keeps_the_ratios():
 
 
 def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
-    from trackers.layered.model import dof_from_head, dofs_from_heads
     from trackers.layered.selection import _norms
+    from trackers.layered.targets import dof_from_head, dofs_from_heads
 
     rng = np.random.default_rng(3)
     v = rng.normal(size=(500, 2)) * rng.uniform(0.1, 300.0, size=(500, 1))
@@ -695,7 +694,7 @@ def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
 
 def test_carved_rows_equal_the_numpy_selection_of_searched_and_aligned_boxes():
     from trackers.layered._kernels import carved_rows
-    from trackers.layered.model import dofs_from_heads
+    from trackers.layered.targets import dofs_from_heads
 
     rng = np.random.default_rng(12)
     m, P, T = 25, 7, 4

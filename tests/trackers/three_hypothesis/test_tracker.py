@@ -192,11 +192,12 @@ def test_association_stage1_appearance_decides_between_intersecting_pairs():
     q = np.array([_hist(1), _hist(2)])
     meas = np.array([[101.0, 100, 30, 80], [101.0, 101, 30, 80]])
     p = np.array([_hist(2), _hist(1)])
-    a = associate(node_boxes, np.array([0, 1]), q, meas, p, mu_rho=0.5, mu_g=50)
+    a = associate(node_boxes, np.array([0, 1]), np.sqrt(q), meas, np.sqrt(p), mu_rho=0.5, mu_g=50)
     assert sorted(map(tuple, a.matches[:, :2])) == [(0, 1), (1, 0)]
     assert set(a.stages) == {1}
     # nobody looks like anybody: every pair rejected by mu_rho
-    a = associate(node_boxes, np.array([0, 1]), q, meas, np.array([_hist(3), _hist(4)]), 0.5, 50)
+    a = associate(node_boxes, np.array([0, 1]), np.sqrt(q), meas,
+                  np.sqrt(np.array([_hist(3), _hist(4)])), 0.5, 50)
     assert len(a.matches) == 0 and len(a.unmatched_measurements) == 2
 
 
@@ -205,10 +206,10 @@ def test_association_stage2_gate_and_best_hypothesis():
     node_boxes = np.array([[0.0, 0, 20, 40], [200.0, 0, 20, 40]])
     meas = np.array([[240.0, 0, 20, 40]])
     q, p = np.array([_hist(1)]), np.array([_hist(1)])
-    a = associate(node_boxes, np.array([0, 0]), q, meas, p, mu_rho=0.5, mu_g=50)
+    a = associate(node_boxes, np.array([0, 0]), np.sqrt(q), meas, np.sqrt(p), mu_rho=0.5, mu_g=50)
     np.testing.assert_array_equal(a.matches, [[0, 0, 1]])  # matched through node 1
     assert a.stages[0] == 2
-    a = associate(node_boxes, np.array([0, 0]), q, meas, p, mu_rho=0.5, mu_g=30)
+    a = associate(node_boxes, np.array([0, 0]), np.sqrt(q), meas, np.sqrt(p), mu_rho=0.5, mu_g=30)
     assert len(a.matches) == 0  # outside the gate
 
 
@@ -220,7 +221,7 @@ def test_association_keeps_one_good_pair_rather_than_two_poor_ones():
     base = np.full(4096, 1 / 4096)
     q = np.array([_hist(1), 0.5 * _hist(1) + 0.5 * base])
     p = np.array([_hist(1), 0.6 * _hist(1) + 0.4 * base])
-    a = associate(node_boxes, np.array([0, 1]), q, meas, p, mu_rho=0.3, mu_g=10)
+    a = associate(node_boxes, np.array([0, 1]), np.sqrt(q), meas, np.sqrt(p), mu_rho=0.3, mu_g=10)
     assert (0, 0) in set(map(tuple, a.matches[:, :2]))
 
 
@@ -236,7 +237,7 @@ def test_stage1_matches_every_acceptable_pair_even_by_exchanging_a_good_one():
     p = np.array([_hist(1), 0.5 * _hist(1) + 0.5 * _hist(3)])
     delta = np.array([[0.8, 0.6], [0.6, 0.0]])
     kw = dict(mu_rho=0.3, mu_g=50.0, delta=delta)
-    paper = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw)
+    paper = associate(node_boxes, np.array([0, 1]), np.sqrt(q), meas, np.sqrt(p), **kw)
     assert sorted(map(tuple, paper.matches[:, :2])) == [(0, 1), (1, 0)]
     assert list(paper.stages) == [1, 1]
 
@@ -251,9 +252,9 @@ def test_stage1_appearance_margin_lets_the_regions_decide_among_look_alikes():
     meas = np.array([[100.0, 100, 40, 100], [70.0, 100, 40, 100]])
     q, p = np.array([_hist(1), _hist(1)]), np.array([_hist(1), _hist(1)])
     kw = {"mu_rho": 0.3, "mu_g": 10.0, "delta": np.array([[1.0, 0.4], [0.4, 0.0]])}
-    paper = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw)
+    paper = associate(node_boxes, np.array([0, 1]), np.sqrt(q), meas, np.sqrt(p), **kw)
     assert sorted(map(tuple, paper.matches[:, :2])) == [(0, 1), (1, 0)]
-    ours = associate(node_boxes, np.array([0, 1]), q, meas, p, **kw,
+    ours = associate(node_boxes, np.array([0, 1]), np.sqrt(q), meas, np.sqrt(p), **kw,
                      evidence=AppearanceMargin().evidence)
     assert sorted(map(tuple, ours.matches[:, :2])) == [(0, 0)]
     assert list(ours.unmatched_persons) == [1] and list(ours.unmatched_measurements) == [1]

@@ -28,8 +28,7 @@ import yaml
 from scipy.special import ndtr
 
 from trackers.layered._kernels import survival_kernel
-from trackers.layered.association import FEATURES
-from trackers.layered.parts import N_PARTS, PART_NAMES
+from trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
 
 logger = logging.getLogger(__name__)
 
