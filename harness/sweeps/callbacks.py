@@ -41,6 +41,17 @@ class GatherSweep(Callback):
         self.metrics = list(metrics)
         self.plots = bool(plots)
 
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        """Mark the sweep folder as this multirun's (``sweep.json``), so that the job folders
+        an earlier sweep left in it are never gathered as this one's."""
+        from harness.sweeps.jobs import begin_sweep
+
+        sweep_dir = Path(str(config.hydra.sweep.dir))
+        try:
+            begin_sweep(sweep_dir, list(config.hydra.overrides.task))
+        except OSError as err:
+            _exit_failed(f"occbench: cannot use the sweep folder {sweep_dir}: {err}")
+
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
         sweep_dir = Path(str(config.hydra.sweep.dir))
         if not sweep_dir.is_dir():
@@ -51,7 +62,7 @@ class GatherSweep(Callback):
         optuna = is_optuna(config)
         try:  # an Optuna study is drawn with Optuna's own views, not as parameter lines
             frame = write_sweep(sweep_dir, self.metrics, self.plots and not optuna)
-        except Exception as err:  # noqa: BLE001 - the jobs' own results stay on disk
+        except Exception as err:
             log.exception("gathering the sweep in %s failed", sweep_dir)
             _exit_failed(f"occbench: gathering the sweep in {sweep_dir} failed: "
                          f"{type(err).__name__}: {err}")

@@ -7,9 +7,18 @@
   default in ``conf/`` counts, not only the command line's overrides);
 * ``code``: the package version and the bytes of every ``.py`` file of ``harness`` and
   ``trackers`` and every ``.yaml`` under ``conf/``;
-* ``data``: every file under each existing path named in ``cfg.dataset`` (and
-  ``cfg.external``): its relative path and size, and its bytes when under ``HASH_BYTES``,
-  else its modification time (large videos are not read whole).
+* ``data``: every file under each path named in ``cfg.dataset``, ``cfg.detector`` and
+  ``cfg.external``, resolved to an absolute path (a relative one against the working
+  folder, as the loaders read it): its path and size, and its bytes when under
+  ``HASH_BYTES``, else its modification time (large videos are not read whole).
+
+A path is the value of a path key (``PATH_KEYS``: ``root``, ``path``, ``gt``, ``*_path``,
+every value under ``external``...) whatever it looks like (``dataset.root=rs2``), or any
+other string with a "/" or "." naming an existing file or folder. A path key naming nothing
+that exists, or a data path holding no file, raises ``FingerprintError``: the job then runs
+(``harness.sweeps.resume.guarded``), it is never skipped on a fingerprint of nothing. A
+dataset without files (synthetic) is fingerprinted by its config alone; its data digest says
+so, it is never the digest of no bytes.
 """
 
 from __future__ import annotations
@@ -23,6 +32,14 @@ from typing import Any
 
 HASH_BYTES = 8 << 20  # files up to this size are hashed by content
 ROOT = Path(__file__).resolve().parents[2]
+# config keys whose string values are data paths (besides every ``*_path``/``*_dir``/``*_file``)
+PATH_KEYS = frozenset({"root", "path", "gt", "det", "xml", "video", "images",
+                       "model", "weights", "mixtures", "template", "file", "folder", "dir"})
+DATA_NODES = ("dataset", "detector", "external")
+
+
+class FingerprintError(ValueError):
+    """A data path that cannot be fingerprinted; names the key and the path."""
 
 
 def inputs(cfg: Any) -> dict[str, str]:
@@ -31,7 +48,8 @@ def inputs(cfg: Any) -> dict[str, str]:
 
     plain = OmegaConf.to_container(cfg, resolve=True) if OmegaConf.is_config(cfg) else cfg
     text = OmegaConf.to_yaml(OmegaConf.create(plain), sort_keys=True)
-    paths = list(_paths(plain.get("dataset"))) + list(_paths(plain.get("external")))
+    paths = [p for node in DATA_NODES
+             for p in _paths(plain.get(node), node, path_key=node == "external")]
     return {"config": _digest([text.encode()]), "code": code_version(),
             "data": data_fingerprint(paths)}
 
@@ -55,10 +73,18 @@ def code_version() -> str:
 
 
 def data_fingerprint(paths: Iterable[Path]) -> str:
-    """Digest of every file under ``paths`` (see the module docstring)."""
-    h = hashlib.sha256()
+    """Digest of every file under ``paths`` (see the module docstring).
+
+    Raises:
+        FingerprintError: a path holds no file.
+    """
+    h = hashlib.sha256(b"data files:")  # no paths: "data files:", never the empty digest
     for root in sorted({Path(p).resolve() for p in paths}):
-        for f in _files(root):
+        h.update(f"{root}\0".encode())
+        files = list(_files(root))
+        if not files:
+            raise FingerprintError(f"{root}: no data file in it to fingerprint")
+        for f in files:
             st = f.stat()
             h.update(f"{f}\0{st.st_size}\0".encode())
             if st.st_size <= HASH_BYTES:
@@ -78,22 +104,32 @@ def _files(root: Path) -> Iterator[Path]:
             yield Path(dirpath) / name
 
 
-def _paths(node: Any) -> Iterator[Path]:
-    """Existing files and folders named by the string values of a config node."""
+def _paths(node: Any, key: str = "", path_key: bool = False) -> Iterator[Path]:
+    """Absolute data paths named by the string values of a config node (``key``: its dotted
+    name, for messages; ``path_key``: its values are paths whatever they look like)."""
     if isinstance(node, dict):
-        for key, value in node.items():
-            if key != "_target_":
-                yield from _paths(value)
+        for k, value in node.items():
+            if k != "_target_":
+                yield from _paths(value, f"{key}.{k}", path_key or _is_path_key(str(k)))
     elif isinstance(node, list | tuple):
-        for value in node:
-            yield from _paths(value)
-    elif isinstance(node, str) and node and ("/" in node or "." in node):
+        for i, value in enumerate(node):
+            yield from _paths(value, f"{key}[{i}]", path_key)
+    elif isinstance(node, str) and node:
         p = Path(node).expanduser()
-        if p.exists():
+        if path_key:
+            if not p.exists():
+                raise FingerprintError(f"{key}={node}: no such file or folder "
+                                       f"({p.absolute()})")
+            yield p.resolve()
+        elif ("/" in node or "." in node) and p.exists():
             r = p.resolve()
             if r in (Path.cwd(), *Path.cwd().parents, ROOT, *ROOT.parents):
                 return  # "." or a parent: not a data path
-            yield p
+            yield r
+
+
+def _is_path_key(name: str) -> bool:
+    return name in PATH_KEYS or name.endswith(("_path", "_dir", "_file", "_root"))
 
 
 def _digest(chunks: Iterable[bytes]) -> str:

@@ -1,12 +1,19 @@
 """A sweep folder's job folders: their status (``status.json``) and overrides
-(``.hydra/overrides.yaml``), read by ``harness.sweeps.gather`` (tables, plots) and ``harness.sweeps.tune``
-(an Optuna study of a finished sweep).
+(``.hydra/overrides.yaml``), read by ``harness.sweeps.gather`` (tables, plots) and
+``harness.sweeps.tune`` (an Optuna study of a finished sweep).
+
+A sweep folder may be reused by a later multirun with other settings: ``begin_sweep`` (called
+when a multirun starts) writes ``sweep.json`` with a new id, every ``status.json`` written
+afterwards in the folder's jobs carries that id (``harness.sweeps.resume.write_status``), and
+``members`` tells the jobs of the latest sweep from the folders an earlier one left behind.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import uuid
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +22,7 @@ import yaml
 log = logging.getLogger(__name__)
 
 STATUS_FILE = "status.json"
+SWEEP_FILE = "sweep.json"  # in the sweep folder: the id of the multirun that last used it
 DONE, FAILED, DAMAGED = "done", "failed", "damaged"
 
 
@@ -74,3 +82,50 @@ def job_dirs(sweep_dir: str | Path) -> list[Path]:
         return (0, int(d.name)) if d.name.isdigit() else (1, d.name)
 
     return sorted(dirs, key=key)
+
+
+def begin_sweep(sweep_dir: str | Path, overrides: Sequence[str]) -> str:
+    """Mark ``sweep_dir`` as used by a new multirun (``sweep.json``: a fresh id and the
+    multirun's overrides); returns the id."""
+    from harness.io.mot import write_atomic
+
+    ident = uuid.uuid4().hex[:16]
+    body = {"id": ident, "overrides": [str(o) for o in overrides]}
+    write_atomic(Path(sweep_dir) / SWEEP_FILE, json.dumps(body, indent=1) + "\n")
+    return ident
+
+
+def sweep_id(sweep_dir: str | Path) -> str | None:
+    """The id of the multirun that last used ``sweep_dir`` (``sweep.json``), None when the
+    folder has none (a sweep made before sweep.json existed) or it is unreadable."""
+    path = Path(sweep_dir) / SWEEP_FILE
+    try:
+        body = json.loads(path.read_text())
+    except FileNotFoundError:
+        return None
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        log.warning("%s: unreadable (%s): every job folder is gathered", path, err)
+        return None
+    ident = body.get("id") if isinstance(body, dict) else None
+    return ident if isinstance(ident, str) else None
+
+
+def members(sweep_dir: str | Path) -> tuple[list[Path], list[tuple[Path, str]]]:
+    """The job folders of the sweep that last used ``sweep_dir``, and the others with why
+    they are left out (a job of an earlier sweep, or one without a status). Without
+    ``sweep.json`` every job folder is a member."""
+    dirs = job_dirs(sweep_dir)
+    current = sweep_id(sweep_dir)
+    if current is None:
+        return dirs, []
+    kept: list[Path] = []
+    left: list[tuple[Path, str]] = []
+    for d in dirs:
+        status = read_status(d)
+        if status is None:
+            left.append((d, f"no {STATUS_FILE}: never started by this sweep"))
+        elif status.get("sweep") != current and status.get("status") != DAMAGED:
+            left.append((d, "left by an earlier sweep in this folder"))
+        else:
+            kept.append(d)
+    return kept, left

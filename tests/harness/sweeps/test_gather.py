@@ -21,7 +21,6 @@ import yaml
 from harness.sweeps.gather import (
     DONE,
     FAILED,
-    _tick,  # noqa: I001 - private helper under test
     aggregate,
     finished,
     gather,
@@ -32,6 +31,7 @@ from harness.sweeps.gather import (
     setting_table,
     summary_text,
     swept,
+    tick,
     write_status,
     write_sweep,
 )
@@ -184,8 +184,8 @@ def test_summary_shows_settings_and_every_jobs_overrides(tmp_path):
 
 
 def test_ticks_are_rounded():
-    assert _tick("0.30000000000000004") == "0.3" and _tick(41.999999999) == "42"
-    assert _tick("reta") == "reta" and _tick(3) == "3"
+    assert tick("0.30000000000000004") == "0.3" and tick(41.999999999) == "42"
+    assert tick("reta") == "reta" and tick(3) == "3"
 
 
 # --------------------------------------------------------------------------- end to end
