@@ -16,14 +16,13 @@ in ``harness.metrics.frames`` (MOTChallenge devkit ignore rules).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-import motmetrics as mm
 import numpy as np
 import pandas as pd
 
 from harness.io.mot import MotTable
-from harness.metrics.clear import ClearCounts, accumulate, clear_counts
+from harness.metrics.clear import ClearCounts, clear_counts
 from harness.metrics.frames import pair_frames
 from harness.metrics.hota import HotaCounts, combine_hota, hota_counts
 
@@ -61,8 +60,6 @@ class SequenceScore:
         iou_threshold: IoU threshold used for CLEAR/ID matching.
         ignored_gt: gt rows not scored (conf 0 or non-pedestrian class).
         removed_tracker: tracker rows removed for matching a distractor-class gt box.
-        accumulator: the motmetrics accumulator (events) of the sequence; None for a
-            combined score.
     """
 
     clear: ClearCounts
@@ -70,7 +67,6 @@ class SequenceScore:
     iou_threshold: float = 0.5
     ignored_gt: int = 0
     removed_tracker: int = 0
-    accumulator: mm.MOTAccumulator | None = field(default=None, repr=False, compare=False)
 
     def row(self) -> dict[str, float | int]:
         """The values of ``COLUMNS`` for this score."""
@@ -98,20 +94,18 @@ def score_sequence(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> S
     """
     if not 0.0 < iou_threshold <= 1.0:
         raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold!r}")
-    pairs = pair_frames(gt, res)
-    acc = accumulate(pairs, iou_threshold)
+    pairs = pair_frames(gt, res)  # one IoU matrix per frame, read by every metric
     return SequenceScore(
-        clear=clear_counts(acc, pairs, iou_threshold),
-        hota=hota_counts(pairs.gt_ids, pairs.tracker_ids, pairs.iou),
+        clear=clear_counts(pairs, iou_threshold),
+        hota=hota_counts(pairs),
         iou_threshold=iou_threshold,
         ignored_gt=pairs.ignored_gt,
         removed_tracker=pairs.removed_tracker,
-        accumulator=acc,
     )
 
 
 def combine(scores: Mapping[str, SequenceScore] | list[SequenceScore]) -> SequenceScore:
-    """Combined score: counts summed, HOTA combined as TrackEval; no accumulator."""
+    """Combined score: counts summed, HOTA combined as TrackEval."""
     parts = list(scores.values()) if isinstance(scores, Mapping) else list(scores)
     thresholds = {s.iou_threshold for s in parts}
     if len(thresholds) > 1:

@@ -17,11 +17,8 @@ TrackEval re-scores a run folder to the same figures (``clear_counts``):
 * MT / ML: matched in more than 80 % / fewer than 20 % of their annotated frames.
 
 Identity metrics (IDF1, IDP, IDR: a global one-to-one assignment of ids) come from
-py-motmetrics' ``MOTAccumulator``, fed with our own distances: per frame ``1 - IoU`` from
-``trackers.geometry.iou_matrix``, with pairs below the IoU threshold set to NaN (not
-pairable); they equal TrackEval's ``Identity``. motmetrics' own ``iou_matrix`` and
-``compare_to_groundtruth`` call ``np.asfarray`` and fail on numpy 2; note also that its
-``max_iou`` / ``distth`` arguments are *distance* thresholds (1 - IoU), not IoU.
+``harness.metrics.identity`` (sparse over the id pairs that overlap; equal to TrackEval's
+``Identity``). Both read the IoU matrices of ``harness.metrics.frames``, computed once.
 
 What is kept per sequence are counts (``ClearCounts``), so sequences combine by summing and
 recomputing ratios; MOTP is reported as the mean IoU of the matched pairs.
@@ -31,19 +28,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-import motmetrics as mm
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from harness.metrics.frames import FramePairs
+from harness.metrics.identity import identity_counts
 
-# motmetrics metric name -> ClearCounts field (identity metrics only)
-_MM_COUNTS = {
-    "num_frames": "frames",
-    "idtp": "idtp",
-    "idfp": "idfp",
-    "idfn": "idfn",
-}
 MT_ABOVE = 0.8  # mostly tracked: matched in more than 80 % of the annotated frames
 ML_BELOW = 0.2  # mostly lost: matched in fewer than 20 %
 
@@ -102,30 +92,13 @@ class ClearCounts:
         }
 
 
-def accumulate(pairs: FramePairs, iou_threshold: float = 0.5) -> mm.MOTAccumulator:
-    """A motmetrics accumulator fed with ``1 - IoU`` distances (NaN below the threshold)."""
+def clear_counts(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearCounts:
+    """CLEAR counts of one sequence (``clear_matching``) with its identity counts."""
     if not 0.0 < iou_threshold <= 1.0:
         raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold!r}")
-    acc = mm.MOTAccumulator(auto_id=False)
-    for f, g, t, iou in zip(pairs.frames.tolist(), pairs.gt_ids, pairs.tracker_ids, pairs.iou):
-        dist = 1.0 - iou
-        dist[iou < iou_threshold] = np.nan
-        acc.update(g, t, dist, frameid=f)
-    return acc
-
-
-def clear_counts(acc: mm.MOTAccumulator, pairs: FramePairs,
-                 iou_threshold: float = 0.5) -> ClearCounts:
-    """CLEAR counts of one sequence (``clear_matching``) with the identity counts of ``acc``
-    (the motmetrics accumulator of the same ``pairs``)."""
     counts = clear_matching(pairs, iou_threshold)
-    if len(acc.mot_events) == 0:
-        counts.frames = len(acc.events.index.unique(level="FrameId"))
-        return counts
-    mh = mm.metrics.create()
-    values = mh.compute(acc, metrics=list(_MM_COUNTS), return_dataframe=False)
-    for key, name in _MM_COUNTS.items():
-        setattr(counts, name, int(values[key]))
+    counts.frames = len(pairs)
+    counts.idtp, counts.idfp, counts.idfn = identity_counts(pairs, iou_threshold)
     return counts
 
 
@@ -141,49 +114,69 @@ def clear_matching(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearCounts
         iou_sum filled (identity counts and frames left 0).
     """
     eps = np.finfo(float).eps
-    c = ClearCounts()
-    gt_all = np.concatenate([np.zeros(0, np.int64), *pairs.gt_ids])
-    ids = np.unique(gt_all)  # gt person -> index
+    pairable = np.flatnonzero(pairs.iou >= iou_threshold - eps)  # entries a match may take
+    matched = pairable[matched_entries(pairs, pairable)]
+    c = ClearCounts(objects=len(pairs.gt_ids), predictions=len(pairs.tracker_ids))
+    ids, g_all = np.unique(pairs.gt_ids, return_inverse=True)  # gt person -> index
     n = len(ids)
-    annotated = np.zeros(n)  # frames each gt person is scored in
-    matched = np.zeros(n)  # ... and matched in
-    stretches = np.zeros(n)  # tracked stretches (Frag = stretches - 1)
-    last_id = np.full(n, np.nan)  # last matched tracker id, any frame before (switches)
-    prev_id = np.full(n, np.nan)  # tracker id matched in the previous scored frame
-    for g_ids, t_ids, iou in zip(pairs.gt_ids, pairs.tracker_ids, pairs.iou):
-        c.objects += len(g_ids)
-        c.predictions += len(t_ids)
-        if len(g_ids) == 0:
-            c.false_positives += len(t_ids)
-            continue
-        g = np.searchsorted(ids, g_ids)
-        annotated[g] += 1
-        if len(t_ids) == 0:
-            c.misses += len(g_ids)
-            continue
-        # continuing the previous frame's pairs first (+1000), then the largest IoU
-        score = 1000.0 * (t_ids[None, :] == prev_id[g][:, None]) + iou
-        score[iou < iou_threshold - eps] = 0.0
-        rows, cols = linear_sum_assignment(-score)
-        keep = score[rows, cols] > eps
-        rows, cols = rows[keep], cols[keep]
-        gm, tm = g[rows], t_ids[cols].astype(float)
-        switch = ~np.isnan(last_id[gm]) & (tm != last_id[gm])
-        was_tracked = ~np.isnan(prev_id)
-        last_id[gm] = tm
-        prev_id[:] = np.nan
-        prev_id[gm] = tm
-        stretches += ~was_tracked & ~np.isnan(prev_id)
-        matched[gm] += 1
-        c.switches += int(switch.sum())
-        c.matches += int(len(rows) - switch.sum())
-        c.misses += len(g_ids) - len(rows)
-        c.false_positives += len(t_ids) - len(rows)
-        c.iou_sum += float(iou[rows, cols].sum())
-    ratio = matched / np.maximum(1.0, annotated)
+    g, t = g_all[pairs.row[matched]], pairs.tracker_ids[pairs.col[matched]]
+    active = np.cumsum((np.diff(pairs.gt_start) > 0) & (np.diff(pairs.tracker_start) > 0))
+    when = active[np.searchsorted(pairs.entry_start, matched, side="right") - 1]
+    order = np.argsort(g, kind="stable")  # each person's matches in time order
+    g, t, when = g[order], t[order], when[order]
+    same, switch, next_frame = (np.zeros(len(g), dtype=bool) for _ in range(3))
+    same[1:] = g[1:] == g[:-1]  # the person's previous match is the one before
+    switch[1:] = same[1:] & (t[1:] != t[:-1])
+    next_frame[1:] = same[1:] & (when[1:] - when[:-1] == 1)
+    c.switches = int(switch.sum())
+    c.matches = len(matched) - c.switches
+    c.misses = c.objects - len(matched)
+    c.false_positives = c.predictions - len(matched)
+    # MOTP's sum frame by frame, as TrackEval adds it
+    bounds = np.searchsorted(matched, pairs.entry_start[1:-1])
+    c.iou_sum = sum(float(x.sum()) for x in np.split(pairs.iou[matched], bounds))
+    # a tracked stretch starts at a match whose person was not matched the frame before
+    c.fragmentations = int((~next_frame).sum()) - len(np.unique(g))
+    ratio = np.bincount(g, minlength=n) / np.maximum(1.0, np.bincount(g_all, minlength=n))
     c.unique_objects = n
     c.mostly_tracked = int(np.sum(ratio > MT_ABOVE))
     c.partially_tracked = int(np.sum(ratio >= ML_BELOW)) - c.mostly_tracked
     c.mostly_lost = n - c.mostly_tracked - c.partially_tracked
-    c.fragmentations = int(np.sum(stretches[stretches > 0] - 1))
     return c
+
+
+def matched_entries(pairs: FramePairs, pairable: np.ndarray) -> np.ndarray:
+    """(E,) bool: which of the ``pairable`` entries (indices into ``pairs.iou``, IoU at least
+    the threshold) CLEAR matches.
+
+    Frame by frame, a gt person matched to a tracker id in the previous frame with both gt
+    and tracker boxes keeps it (the pair scores 1000 + IoU), the rest goes by the largest
+    IoU: one Hungarian assignment per frame. Where no gt box and no tracker box of a frame
+    has two pairable entries, every optimal assignment takes them all, whatever the frame
+    before: only the other frames are solved, in order.
+    """
+    take = np.ones(len(pairable), dtype=bool)
+    if len(pairable) == 0:
+        return take
+    frame = np.searchsorted(pairs.entry_start, pairable, side="right") - 1
+    row, col = pairs.row[pairable], pairs.col[pairable]
+    shared = (np.bincount(row)[row] > 1) | (np.bincount(col)[col] > 1)
+    both = np.flatnonzero((np.diff(pairs.gt_start) > 0) & (np.diff(pairs.tracker_start) > 0))
+    starts = np.searchsorted(frame, np.arange(len(pairs) + 1))
+    for k in np.unique(frame[shared]).tolist():
+        g, t = pairs.ids(k)
+        before = both[np.searchsorted(both, k) - 1] if k > both[0] else -1
+        e = slice(starts[before], starts[before + 1]) if before >= 0 else slice(0, 0)
+        last = dict(zip(pairs.gt_ids[row[e][take[e]]].tolist(),
+                        pairs.tracker_ids[col[e][take[e]]].tolist()))
+        here = slice(starts[k], starts[k + 1])
+        r, cc = row[here] - pairs.gt_start[k], col[here] - pairs.tracker_start[k]
+        kept = np.array([last.get(gi) == ti for gi, ti in zip(g[r].tolist(), t[cc].tolist())])
+        score = np.zeros((len(g), len(t)))
+        score[r, cc] = 1000.0 * kept + pairs.iou[pairable[here]]
+        index = np.full(score.shape, -1)
+        index[r, cc] = np.arange(here.start, here.stop)
+        rows, cols = linear_sum_assignment(-score)
+        take[here] = False
+        take[index[rows, cols][index[rows, cols] >= 0]] = True
+    return take

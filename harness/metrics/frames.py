@@ -21,12 +21,14 @@ Tracker rows are never filtered on their confidence column.
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from harness.io.mot import MotTable
+from harness.metrics.kernels import sparse_iou
 from trackers.geometry import iou_matrix
 
 log = logging.getLogger(__name__)
@@ -40,23 +42,90 @@ _EPS = np.finfo(float).eps
 
 @dataclass
 class FramePairs:
-    """Scored gt and tracker boxes of one sequence, frame by frame.
+    """Scored gt and tracker boxes of one sequence and their overlaps, frame by frame.
+
+    The IoU matrix of each frame is computed once (``pair_frames``) and kept sparse: only
+    its nonzero entries, as COO arrays over the whole sequence, so memory grows with the
+    overlapping box pairs, not with gt boxes x tracker boxes. ``frame(k)`` gives frame k's
+    dense (N_k, M_k) matrix again, bit for bit, for the metrics that read it whole (the
+    Hungarian steps of CLEAR and HOTA, HOTA's row and column sums).
 
     Attributes:
         frames: (F,) int64 frame numbers present in gt or results, ascending.
-        gt_ids: F arrays (N_t,) int64, ids of the scored gt boxes.
-        tracker_ids: F arrays (M_t,) int64, ids of the kept tracker boxes.
-        iou: F arrays (N_t, M_t) float64 IoU of scored gt x kept tracker boxes.
+        gt_ids: (N,) int64 ids of the scored gt boxes, frame by frame.
+        tracker_ids: (M,) int64 ids of the kept tracker boxes, frame by frame.
+        gt_start, tracker_start: (F + 1,) int64 offsets: frame k's boxes are
+            ``gt_ids[gt_start[k]:gt_start[k + 1]]`` (and likewise for the tracker).
+        row, col: (K,) int64 gt and tracker box indices (into ``gt_ids``, ``tracker_ids``)
+            of every nonzero IoU, frame by frame, row-major within a frame.
+        iou: (K,) float64 those IoUs, in (0, 1].
+        entry_start: (F + 1,) int64 offsets of each frame's entries in row, col, iou.
         ignored_gt: number of gt rows not scored (conf 0 or non-pedestrian class).
         removed_tracker: number of tracker rows removed for matching a distractor.
     """
 
     frames: np.ndarray
-    gt_ids: list[np.ndarray]
-    tracker_ids: list[np.ndarray]
-    iou: list[np.ndarray]
+    gt_ids: np.ndarray
+    tracker_ids: np.ndarray
+    gt_start: np.ndarray
+    tracker_start: np.ndarray
+    row: np.ndarray
+    col: np.ndarray
+    iou: np.ndarray
+    entry_start: np.ndarray
     ignored_gt: int = 0
     removed_tracker: int = 0
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def ids(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Frame k's (N_k,) gt ids and (M_k,) tracker ids."""
+        return (self.gt_ids[self.gt_start[k] : self.gt_start[k + 1]],
+                self.tracker_ids[self.tracker_start[k] : self.tracker_start[k + 1]])
+
+    def entries(self, k: int) -> tuple[np.ndarray, np.ndarray, slice]:
+        """Frame k's nonzero entries: (E,) rows and columns within the frame, and the slice
+        of them in ``row``, ``col``, ``iou``."""
+        e = slice(int(self.entry_start[k]), int(self.entry_start[k + 1]))
+        return self.row[e] - self.gt_start[k], self.col[e] - self.tracker_start[k], e
+
+    def frame(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Frame k's gt ids (N_k,), tracker ids (M_k,) and dense IoU (N_k, M_k) float64."""
+        g, t = self.ids(k)
+        r, c, e = self.entries(k)
+        iou = np.zeros((len(g), len(t)))
+        iou[r, c] = self.iou[e]
+        return g, t, iou
+
+    def __iter__(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(gt ids, tracker ids, dense IoU) of each frame in turn (see ``frame``)."""
+        return (self.frame(k) for k in range(len(self.frames)))
+
+    @classmethod
+    def from_dense(cls, gt_ids: Sequence[np.ndarray], tracker_ids: Sequence[np.ndarray],
+                   iou: Sequence[np.ndarray]) -> FramePairs:
+        """From per-frame (N_t,) gt ids, (M_t,) tracker ids and (N_t, M_t) IoU matrices
+        (frames numbered 1, 2, ...); the reference form the tests compare against."""
+        if not len(gt_ids) == len(tracker_ids) == len(iou):
+            raise ValueError(
+                f"gt_ids, tracker_ids and iou must have one entry per frame, got "
+                f"{len(gt_ids)}, {len(tracker_ids)}, {len(iou)}"
+            )
+        n = np.cumsum([0, *map(len, gt_ids)], dtype=np.int64)
+        m = np.cumsum([0, *map(len, tracker_ids)], dtype=np.int64)
+        rows, cols, vals = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)], [np.zeros(0)]
+        for k, s in enumerate(iou):
+            s = np.asarray(s, dtype=np.float64).reshape(n[k + 1] - n[k], m[k + 1] - m[k])
+            r, c = np.nonzero(s)
+            rows.append(r + n[k])
+            cols.append(c + m[k])
+            vals.append(s[r, c])
+        ids = [np.concatenate([np.zeros(0, np.int64), *x]).astype(np.int64)
+               for x in (gt_ids, tracker_ids)]
+        return cls(np.arange(1, len(iou) + 1), *ids, n, m, np.concatenate(rows),
+                   np.concatenate(cols), np.concatenate(vals),
+                   np.cumsum([0, *map(len, vals[1:])], dtype=np.int64))
 
 
 def _check_unique_ids(table: MotTable, what: str) -> None:
@@ -90,26 +159,42 @@ def pair_frames(gt: MotTable, res: MotTable) -> FramePairs:
     _check_unique_ids(gt, "gt")
     _check_unique_ids(res, "tracker")
     scored = scored_gt_mask(gt)
+    frames = np.union1d(gt.frames, res.frames).astype(np.int64)
+    g_order = np.argsort(gt.frames, kind="stable")  # rows grouped by frame, in file order
+    r_order = np.argsort(res.frames, kind="stable")
+    kept = r_order[~distractor_matches(gt, res)[r_order]]
+    scored_rows = g_order[scored[g_order]]
+    g_start = np.searchsorted(gt.frames[scored_rows], frames, side="left")
+    r_start = np.searchsorted(res.frames[kept], frames, side="left")
+    g_start = np.r_[g_start, len(scored_rows)].astype(np.int64)
+    r_start = np.r_[r_start, len(kept)].astype(np.int64)
+    row, col, iou, entry_start = sparse_iou(gt.boxes[scored_rows], g_start, res.boxes[kept],
+                                            r_start)
+    removed = len(res) - len(kept)
+    if removed:
+        log.info("%s: %d tracker boxes on distractors removed", res.path, removed)
+    return FramePairs(frames, gt.ids[scored_rows], res.ids[kept], g_start, r_start, row, col,
+                      iou, entry_start, ignored_gt=int((~scored).sum()), removed_tracker=removed)
+
+
+def distractor_matches(gt: MotTable, res: MotTable) -> np.ndarray:
+    """(M,) bool: tracker rows matched to a distractor-class gt box (removed before scoring).
+
+    In each frame holding a distractor, all its gt and tracker boxes are matched by a
+    Hungarian assignment on IoU (pairs below ``DISTRACTOR_IOU`` not allowed).
+    """
+    hit_rows = np.zeros(len(res), dtype=bool)
     distractor = np.isin(gt.classes, DISTRACTOR_CLASSES)
+    if not distractor.any() or len(res) == 0:
+        return hit_rows
     g_index, r_index = gt.frame_index(), res.frame_index()
-    frames = np.array(sorted(set(g_index) | set(r_index)), dtype=np.int64)
-    empty = np.zeros(0, dtype=np.int64)
-    out = FramePairs(frames, [], [], [], ignored_gt=int((~scored).sum()))
-    for f in frames.tolist():
-        g = g_index.get(f, empty)
-        r = r_index.get(f, empty)
+    for f in np.unique(gt.frames[distractor]).tolist():
+        g, r = g_index[f], r_index.get(f)
+        if r is None:
+            continue
         iou = iou_matrix(gt.boxes[g], res.boxes[r])
-        keep_r = np.ones(len(r), dtype=bool)
-        if len(r) and distractor[g].any():
-            m = np.where(iou < DISTRACTOR_IOU - _EPS, 0.0, iou)
-            rows, cols = linear_sum_assignment(-m)
-            hit = (m[rows, cols] > 0 + _EPS) & distractor[g[rows]]
-            keep_r[cols[hit]] = False
-            out.removed_tracker += int(hit.sum())
-        keep_g = scored[g]
-        out.gt_ids.append(gt.ids[g[keep_g]])
-        out.tracker_ids.append(res.ids[r[keep_r]])
-        out.iou.append(iou[np.ix_(keep_g, keep_r)])
-    if out.removed_tracker:
-        log.info("%s: %d tracker boxes on distractors removed", res.path, out.removed_tracker)
-    return out
+        m = np.where(iou < DISTRACTOR_IOU - _EPS, 0.0, iou)
+        rows, cols = linear_sum_assignment(-m)
+        hit = (m[rows, cols] > 0 + _EPS) & distractor[g[rows]]
+        hit_rows[r[cols[hit]]] = True
+    return hit_rows

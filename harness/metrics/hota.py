@@ -15,9 +15,13 @@ Per sequence, for the localisation thresholds alpha = 0.05, 0.10, ..., 0.95:
 Sequences are combined as TrackEval's ``combine_sequences``: TP, FN, FP summed per alpha;
 AssA, AssRe, AssPr and LocA averaged with the per-sequence TP counts as weights.
 
-Everything is vectorised over pairs and alphas; the only Python loop is over frames (one
-Hungarian per frame). Association counts are kept sparse (one entry per gt/tracker id pair
-that ever co-occurs), so memory does not grow with ``#gt ids * #tracker ids``.
+The similarities are the nonzero IoUs of ``harness.metrics.frames.FramePairs``; everything
+is kept sparse over the gt/tracker id pairs that ever overlap (potential matches, alignment
+scores, match counts per alpha), so memory does not grow with ``#gt ids * #tracker ids``
+(TrackEval holds a dense matrix of each, 19 of them for the match counts). The only Python
+loops are over frames: a frame's dense similarity for its row and column sums, and one
+Hungarian assignment per frame on the same dense score matrix as TrackEval (ties broken
+alike).
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+
+from harness.metrics.frames import FramePairs
 
 ALPHAS: np.ndarray = np.arange(0.05, 0.99, 0.05)  # the 19 thresholds, exactly TrackEval's
 _EPS = np.finfo(float).eps
@@ -84,85 +90,77 @@ class HotaCounts:
         }
 
 
-def hota_counts(
-    gt_ids: Sequence[np.ndarray],
-    tracker_ids: Sequence[np.ndarray],
-    similarity: Sequence[np.ndarray],
-) -> HotaCounts:
+def hota_counts(pairs: FramePairs) -> HotaCounts:
     """HOTA counts of one sequence.
 
     Args:
-        gt_ids: per frame, (N_t,) int ids of the scored gt boxes (unique within a frame).
-        tracker_ids: per frame, (M_t,) int ids of the tracker boxes (unique within a frame).
-        similarity: per frame, (N_t, M_t) float64 similarity in [0, 1] (IoU for boxes).
+        pairs: the scored gt and tracker boxes per frame and their IoU, the similarity
+            (``harness.metrics.frames``).
     Returns:
         HotaCounts with TrackEval's per-alpha TP/FN/FP, AssA/AssRe/AssPr and LocA.
     """
-    if not len(gt_ids) == len(tracker_ids) == len(similarity):
-        raise ValueError(
-            f"gt_ids, tracker_ids and similarity must have one entry per frame, got "
-            f"{len(gt_ids)}, {len(tracker_ids)}, {len(similarity)}"
-        )
-    n_alpha = len(ALPHAS)
     res = HotaCounts()
-    n_gt_dets = sum(len(g) for g in gt_ids)
-    n_tr_dets = sum(len(t) for t in tracker_ids)
-    if n_tr_dets == 0:
-        res.fn[:] = n_gt_dets
+    if len(pairs.tracker_ids) == 0:
+        res.fn[:] = len(pairs.gt_ids)
         return res
-    if n_gt_dets == 0:
-        res.fp[:] = n_tr_dets
+    if len(pairs.gt_ids) == 0:
+        res.fp[:] = len(pairs.tracker_ids)
         return res
-
     # contiguous id indices (TrackEval relabels the same way)
-    all_g = np.concatenate([np.asarray(g, dtype=np.int64) for g in gt_ids])
-    all_t = np.concatenate([np.asarray(t, dtype=np.int64) for t in tracker_ids])
-    g_uniq, g_idx = np.unique(all_g, return_inverse=True)
-    t_uniq, t_idx = np.unique(all_t, return_inverse=True)
-    n_t_ids = len(t_uniq)
-    gt_id_count = np.bincount(g_idx, minlength=len(g_uniq)).astype(float)  # |g|
-    tr_id_count = np.bincount(t_idx, minlength=n_t_ids).astype(float)  # |t|
+    g_uniq, g_idx = np.unique(pairs.gt_ids, return_inverse=True)
+    t_uniq, t_idx = np.unique(pairs.tracker_ids, return_inverse=True)
+    g_count = np.bincount(g_idx, minlength=len(g_uniq)).astype(float)  # |g|
+    t_count = np.bincount(t_idx, minlength=len(t_uniq)).astype(float)  # |t|
+    # one code g * T + t per nonzero similarity entry; the pairs that ever overlap
+    codes = g_idx[pairs.row] * len(t_uniq) + t_idx[pairs.col]
+    pair_codes, pair_of_entry = np.unique(codes, return_inverse=True)
+    pg, pt = np.divmod(pair_codes, len(t_uniq))
+    alignment = global_alignment(pairs, pair_of_entry, len(pair_codes), g_count[pg], t_count[pt])
+    matched_pair, matched_sim = match_frames(pairs, alignment, pair_of_entry, res)
+    association(res, matched_pair, matched_sim, g_count[pg], t_count[pt])
+    return res
 
-    # 1. potential matches, one flat key g * n_t_ids + t per co-occurring pair
-    g_off = np.cumsum([0] + [len(g) for g in gt_ids])
-    t_off = np.cumsum([0] + [len(t) for t in tracker_ids])
-    keys: list[np.ndarray] = []
-    sim_ious: list[np.ndarray] = []
-    frames: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []
-    n_pairs = 0
-    for f, s in enumerate(similarity):
-        gi = g_idx[g_off[f] : g_off[f + 1]]
-        ti = t_idx[t_off[f] : t_off[f + 1]]
-        n, m = len(gi), len(ti)
-        if n == 0 or m == 0:
-            frames.append((gi, ti, np.zeros((n, m)), -1))
+
+def global_alignment(pairs: FramePairs, pair_of_entry: np.ndarray, n_pairs: int,
+                     g_count: np.ndarray, t_count: np.ndarray) -> np.ndarray:
+    """(P,) global alignment score of each overlapping id pair (step 1): the potential
+    matches ``S / (rowsum + colsum - S)`` summed over frames, over ``|g| + |t| - potential``.
+
+    The sums run in frame order over the nonzero entries only (a zero entry adds 0 exactly),
+    so they equal TrackEval's dense accumulation bit for bit.
+    """
+    sim_iou = np.zeros(len(pairs.iou))
+    for k in range(len(pairs)):
+        _, _, s = pairs.frame(k)
+        if s.size == 0:
             continue
-        s = np.asarray(s, dtype=np.float64).reshape(n, m)
-        denom = s.sum(0)[None, :] + s.sum(1)[:, None] - s
-        sim_iou = np.zeros_like(s)
-        ok = denom > 0 + _EPS
-        sim_iou[ok] = s[ok] / denom[ok]
-        keys.append((gi[:, None] * n_t_ids + ti[None, :]).ravel())
-        sim_ious.append(sim_iou.ravel())
-        frames.append((gi, ti, s, n_pairs))
-        n_pairs += n * m
-    pair_keys, pair_inv = np.unique(np.concatenate(keys), return_inverse=True)
-    potential = np.bincount(pair_inv, weights=np.concatenate(sim_ious), minlength=len(pair_keys))
-    pg, pt = np.divmod(pair_keys, n_t_ids)
-    alignment = potential / (gt_id_count[pg] + tr_id_count[pt] - potential)
+        r, c, e = pairs.entries(k)
+        denom = s.sum(0)[c] + s.sum(1)[r] - pairs.iou[e]
+        sim_iou[e] = np.where(denom > 0 + _EPS, pairs.iou[e] / np.maximum(denom, _EPS), 0.0)
+    potential = np.bincount(pair_of_entry, weights=sim_iou, minlength=n_pairs)
+    return potential / (g_count + t_count - potential)
 
-    # 2. per-frame Hungarian on alignment * similarity, thresholded per alpha
-    loc_sum = np.zeros(n_alpha)
-    match_key: list[np.ndarray] = []
-    match_sim: list[np.ndarray] = []
-    for gi, ti, s, start in frames:
+
+def match_frames(pairs: FramePairs, alignment: np.ndarray, pair_of_entry: np.ndarray,
+                 res: HotaCounts) -> tuple[np.ndarray, np.ndarray]:
+    """Step 2: per frame, the Hungarian assignment maximising ``alignment * similarity``;
+    adds TP, FN, FP and LocA's sums per alpha to ``res``.
+
+    Returns:
+        (K,) pair index and (K,) similarity of the matched boxes with similarity > 0.
+    """
+    loc_sum = np.zeros(len(ALPHAS))
+    match_pair, match_sim = [np.zeros(0, np.int64)], [np.zeros(0)]
+    for k in range(len(pairs)):
+        _, _, s = pairs.frame(k)
         n, m = s.shape
         if n == 0 or m == 0:
             res.fp += m
             res.fn += n
             continue
-        inv = pair_inv[start : start + n * m]
-        score = alignment[inv].reshape(n, m) * s
+        r, c, e = pairs.entries(k)
+        score = np.zeros((n, m))
+        score[r, c] = alignment[pair_of_entry[e]] * pairs.iou[e]
         rows, cols = linear_sum_assignment(-score)
         sims = s[rows, cols]
         matched = sims[None, :] >= ALPHAS[:, None] - _EPS  # (19, K)
@@ -171,26 +169,31 @@ def hota_counts(
         res.fn += n - n_match
         res.fp += m - n_match
         loc_sum += (matched * sims[None, :]).sum(1)
-        match_key.append(inv.reshape(n, m)[rows, cols])
-        match_sim.append(sims)
-
-    # 3. association scores from the per-pair match counts (sparse over pairs)
-    if match_key:
-        mk = np.concatenate(match_key)
-        ms = np.concatenate(match_sim)
-        used, mk_inv = np.unique(mk, return_inverse=True)
-        ug, ut = pg[used], pt[used]
-        ok = ms[None, :] >= ALPHAS[:, None] - _EPS  # (19, K_total)
-        counts = np.stack(
-            [np.bincount(mk_inv, weights=ok[a], minlength=len(used)) for a in range(n_alpha)]
-        )  # (19, P) matches per (g, t) pair and alpha
-        tp = np.maximum(1.0, res.tp)
-        g_c, t_c = gt_id_count[ug][None, :], tr_id_count[ut][None, :]
-        res.ass_a = (counts * counts / np.maximum(1.0, g_c + t_c - counts)).sum(1) / tp
-        res.ass_re = (counts * counts / np.maximum(1.0, g_c)).sum(1) / tp
-        res.ass_pr = (counts * counts / np.maximum(1.0, t_c)).sum(1) / tp
+        pair_index = np.full((n, m), -1)
+        pair_index[r, c] = pair_of_entry[e]
+        hit = sims > 0
+        match_pair.append(pair_index[rows[hit], cols[hit]])
+        match_sim.append(sims[hit])
     res.loc_a = np.maximum(1e-10, loc_sum) / np.maximum(1e-10, res.tp)
-    return res
+    return np.concatenate(match_pair), np.concatenate(match_sim)
+
+
+def association(res: HotaCounts, matched_pair: np.ndarray, matched_sim: np.ndarray,
+                g_count: np.ndarray, t_count: np.ndarray) -> None:
+    """Step 3: AssA, AssRe, AssPr per alpha from the matches of each id pair (sparse over
+    the pairs ever matched), written into ``res``."""
+    if len(matched_pair) == 0:
+        return
+    used, inv = np.unique(matched_pair, return_inverse=True)
+    ok = matched_sim[None, :] >= ALPHAS[:, None] - _EPS  # (19, K)
+    counts = np.stack(
+        [np.bincount(inv, weights=ok[a], minlength=len(used)) for a in range(len(ALPHAS))]
+    )  # (19, P) matches per (g, t) pair and alpha
+    tp = np.maximum(1.0, res.tp)
+    g_c, t_c = g_count[used][None, :], t_count[used][None, :]
+    res.ass_a = (counts * counts / np.maximum(1.0, g_c + t_c - counts)).sum(1) / tp
+    res.ass_re = (counts * counts / np.maximum(1.0, g_c)).sum(1) / tp
+    res.ass_pr = (counts * counts / np.maximum(1.0, t_c)).sum(1) / tp
 
 
 def combine_hota(parts: Sequence[HotaCounts]) -> HotaCounts:

@@ -8,12 +8,13 @@ import os
 import motmetrics
 import numpy as np
 import pytest
+from metric_references import reference_hota
 from mot_tables import table
-from scipy.optimize import linear_sum_assignment
 
 from harness.io.mot import MotTable, read_mot
 from harness.metrics import score_sequence
-from harness.metrics.hota import ALPHAS, HotaCounts, combine_hota, hota_counts
+from harness.metrics.frames import FramePairs
+from harness.metrics.hota import ALPHAS, combine_hota, hota_counts
 from trackers.geometry import iou_matrix
 
 MM_DATA = os.path.join(os.path.dirname(motmetrics.__file__), "data")
@@ -106,56 +107,6 @@ def test_trackeval_figures_for_tud(seq: str, expected: float):
     assert round(hota_of(gt, res)["HOTA"], 4) == expected
 
 
-def reference_hota(gt_ids, tr_ids, sims) -> HotaCounts:
-    """TrackEval's HOTA.eval_sequence transcribed loop by loop (dense, per alpha)."""
-    eps = np.finfo(float).eps
-    gu = np.unique(np.concatenate(gt_ids))
-    tu = np.unique(np.concatenate(tr_ids))
-    gmap = {int(v): k for k, v in enumerate(gu)}
-    tmap = {int(v): k for k, v in enumerate(tu)}
-    g_t = [np.array([gmap[int(v)] for v in g], dtype=int) for g in gt_ids]
-    t_t = [np.array([tmap[int(v)] for v in t], dtype=int) for t in tr_ids]
-    pot = np.zeros((len(gu), len(tu)))
-    gc = np.zeros((len(gu), 1))
-    tc = np.zeros((1, len(tu)))
-    for g, t, s in zip(g_t, t_t, sims):
-        den = s.sum(0)[np.newaxis, :] + s.sum(1)[:, np.newaxis] - s
-        si = np.zeros_like(s)
-        mask = den > 0 + eps
-        si[mask] = s[mask] / den[mask]
-        pot[g[:, np.newaxis], t[np.newaxis, :]] += si
-        gc[g] += 1
-        tc[0, t] += 1
-    gas = pot / (gc + tc - pot)
-    out = HotaCounts()
-    loc = np.zeros(19)
-    mcs = [np.zeros_like(pot) for _ in ALPHAS]
-    for g, t, s in zip(g_t, t_t, sims):
-        if len(g) == 0:
-            out.fp += len(t)
-            continue
-        if len(t) == 0:
-            out.fn += len(g)
-            continue
-        rows, cols = linear_sum_assignment(-(gas[g[:, np.newaxis], t[np.newaxis, :]] * s))
-        for a, alpha in enumerate(ALPHAS):
-            ok = s[rows, cols] >= alpha - eps
-            r, c = rows[ok], cols[ok]
-            out.tp[a] += len(r)
-            out.fn[a] += len(g) - len(r)
-            out.fp[a] += len(t) - len(r)
-            if len(r):
-                loc[a] += s[r, c].sum()
-                mcs[a][g[r], t[c]] += 1
-    for a in range(19):
-        mc = mcs[a]
-        out.ass_a[a] = np.sum(mc * mc / np.maximum(1, gc + tc - mc)) / max(1, out.tp[a])
-        out.ass_re[a] = np.sum(mc * mc / np.maximum(1, gc)) / max(1, out.tp[a])
-        out.ass_pr[a] = np.sum(mc * mc / np.maximum(1, tc)) / max(1, out.tp[a])
-    out.loc_a = np.maximum(1e-10, loc) / np.maximum(1e-10, out.tp)
-    return out
-
-
 def random_scene(rng: np.random.Generator, frames: int = 40, people: int = 6):
     """Per-frame gt ids, tracker ids and IoU matrices of a jittery, switching tracker."""
     gt_ids, tr_ids, sims = [], [], []
@@ -186,7 +137,7 @@ def random_scene(rng: np.random.Generator, frames: int = 40, people: int = 6):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_vectorised_equals_trackeval_loops(seed: int):
     gt_ids, tr_ids, sims = random_scene(np.random.default_rng(seed))
-    got = hota_counts(gt_ids, tr_ids, sims)
+    got = hota_counts(FramePairs.from_dense(gt_ids, tr_ids, sims))
     ref = reference_hota(gt_ids, tr_ids, sims)
     for name in ("tp", "fn", "fp", "ass_a", "ass_re", "ass_pr", "loc_a"):
         np.testing.assert_allclose(
@@ -201,8 +152,8 @@ def test_combined_equals_scoring_disjoint_sequences_together():
     a = random_scene(np.random.default_rng(10), frames=20)
     b = random_scene(np.random.default_rng(11), frames=25)
     b = ([g + 1000 for g in b[0]], [t + 1000 for t in b[1]], b[2])
-    ha, hb = hota_counts(*a), hota_counts(*b)
-    both = hota_counts(a[0] + b[0], a[1] + b[1], a[2] + b[2])
+    ha, hb = hota_counts(FramePairs.from_dense(*a)), hota_counts(FramePairs.from_dense(*b))
+    both = hota_counts(FramePairs.from_dense(a[0] + b[0], a[1] + b[1], a[2] + b[2]))
     comb = combine_hota([ha, hb])
     for name in ("tp", "fn", "fp", "ass_a", "ass_re", "ass_pr", "loc_a"):
         np.testing.assert_allclose(
@@ -217,4 +168,4 @@ def test_combined_equals_scoring_disjoint_sequences_together():
 
 def test_frame_count_mismatch_is_an_error():
     with pytest.raises(ValueError, match="one entry per frame"):
-        hota_counts([np.array([1])], [], [])
+        FramePairs.from_dense([np.array([1])], [], [])
