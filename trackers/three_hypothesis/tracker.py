@@ -59,6 +59,7 @@ from trackers.three_hypothesis.occlusion import (
     boxes_meet,
     covered_fraction,
     depth_order,
+    occlusion_pairs,
     region_overlaps,
 )
 from trackers.three_hypothesis.params import (
@@ -133,7 +134,7 @@ class _Frame:
     pred: np.ndarray = None  # (B, 4) predicted regions S^{t|t-1}
     delta: np.ndarray = None  # (B, D) region similarity (eq. 5) of predictions and V
     near: np.ndarray = None  # (B, B + D) pairs whose boxes meet (node pairs: i < j, two people)
-    pairs: tuple[np.ndarray, np.ndarray] = None  # O: node indices (a, b), a < b
+    pairs: np.ndarray = None  # O (eq. 2): (K, 2) node index rows (a, b), a < b
     matches: Matches = None
     matched: dict[int, tuple[int, int, int, float]] = None  # person -> (det, node, stage, rho)
     in_front: dict[int, list[int]] = field(default_factory=dict)  # node -> persons in front
@@ -269,9 +270,10 @@ class RetaTracker:
 
     def _occlusions(self, f: _Frame) -> None:
         """O (3.3.1, eq. 2): pairs of predicted regions of different people whose overlap
-        ratio |Si & Sj| / (|Si| + |Sj|) = delta / 2 exceeds lambda. The region similarity
-        delta (eq. 5) of the predictions against each other and against the measurements
-        comes from one integration per frame; ``f.delta`` keeps the latter for step 4."""
+        ratio |Si & Sj| / (|Si| + |Sj|) = delta / 2 exceeds lambda (``occlusion_pairs``).
+        The region similarity delta (eq. 5) of the predictions against each other and
+        against the measurements comes from one integration per frame
+        (``region_overlaps``); ``f.delta`` keeps the latter for step 4."""
         pred, owners = f.pred, f.owners
         nb = len(pred)
         regions = np.concatenate([pred, f.dets])
@@ -280,7 +282,7 @@ class RetaTracker:
         near[:, :nb] &= owners[:, None] < owners[None, :]
         delta = region_overlaps(pred, regions, self.occlusion.region_samples, near)
         f.near, f.delta = near, delta[:, nb:]
-        f.pairs = ((0.5 * delta[:, :nb] > self.occlusion.lam) & near[:, :nb]).nonzero()
+        f.pairs = occlusion_pairs(pred, owners, self.occlusion.lam, ratio=0.5 * delta[:, :nb])
 
     def _associate(self, f: _Frame) -> None:
         """MaxSimilarity (3.3.2): stage 1 over intersecting regions, cost (1 - rho) +
@@ -310,7 +312,7 @@ class RetaTracker:
         visible_node = {matched[pi][1] for pi in matched}
         own = f.owners.tolist()
         boxes = f.pred.tolist()  # (B,) [x, y, w, h] lists: scalar work below
-        for a, b in zip(f.pairs[0].tolist(), f.pairs[1].tolist()):
+        for a, b in f.pairs.tolist():
             i, j = own[a], own[b]
             ki, kj = persons[i].key, persons[j].key
             vi, vj = a in visible_node, b in visible_node

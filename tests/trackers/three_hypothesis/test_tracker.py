@@ -15,6 +15,7 @@ from scipy.optimize import linear_sum_assignment
 from trackers.baseline import BaselineTracker
 from trackers.common.assignment import assign
 from trackers.geometry import intersection_matrix, iou_matrix
+from trackers.histograms import bhattacharyya
 from trackers.records import Detections, TrackState
 from trackers.three_hypothesis import (
     Adaptations,
@@ -211,6 +212,26 @@ def test_association_stage2_gate_and_best_hypothesis():
     assert a.stages[0] == 2
     a = associate(node_boxes, np.array([0, 0]), np.sqrt(q), meas, np.sqrt(p), mu_rho=0.5, mu_g=30)
     assert len(a.matches) == 0  # outside the gate
+
+
+def test_associate_rho_is_the_bhattacharyya_coefficient():
+    """Eq. 4 as the tracker runs it: ``associate`` takes square-rooted histograms restricted
+    to the bins some measurement occupies (``RetaTracker._associate``); the rho of each
+    match equals ``bhattacharyya`` (the definition) of the whole histograms."""
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        n_p, n_d = rng.integers(1, 6, 2)
+        q = rng.random((n_p, 4096)) * (rng.random((n_p, 4096)) < 0.05)
+        p = rng.random((n_d, 4096)) * (rng.random((n_d, 4096)) < 0.05)
+        q /= q.sum(axis=1, keepdims=True)
+        p /= p.sum(axis=1, keepdims=True)
+        support = np.flatnonzero(p.any(axis=0))
+        boxes = np.tile([50.0, 50.0, 30.0, 80.0], (max(n_p, n_d), 1))  # everyone intersects
+        m = associate(boxes[:n_p], np.arange(n_p), np.sqrt(q[:, support]), boxes[:n_d],
+                      np.sqrt(p[:, support]), mu_rho=0.0, mu_g=50.0)
+        assert len(m.matches) == min(n_p, n_d)
+        want = bhattacharyya(q, p)[m.matches[:, 0], m.matches[:, 1]]
+        np.testing.assert_allclose(m.rho, want, rtol=1e-12, atol=1e-15)
 
 
 def test_association_keeps_one_good_pair_rather_than_two_poor_ones():
