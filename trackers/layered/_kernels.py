@@ -611,19 +611,39 @@ def survival_kernel(d: np.ndarray, theta: tuple, out: np.ndarray) -> None:
 
 
 @numba.njit(cache=True, inline="always")
-def _rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int) -> float:
-    """Bhattacharyya coefficient rho = sum_u sqrt(a[t, j, u] b[n, j, u]) of two histograms."""
+def _rho(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, idx: np.ndarray) -> float:
+    """Bhattacharyya coefficient rho = sum_u sqrt(a[t, j, u] b[n, j, u]) of two histograms
+    (eq. 11's colour terms), summed in u order over the bins listed in ``idx`` (scratch, at
+    least as long as the histograms): those where b is not 0 or a not finite. A bin where b
+    is 0 and a finite adds +-0, which leaves the sum as it was (it starts at +0), so the
+    sum has the bits of the sum over every bin (``rho_bins``, tested against it) at the
+    cost of the few bins a candidate's part occupies."""
+    cnt = 0
+    for u in range(b.shape[2]):  # the list, without branches
+        idx[cnt] = u
+        cnt += (b[n, j, u] != 0.0) | (not abs(a[t, j, u]) < math.inf)
     tot = 0.0
-    for u in range(a.shape[2]):
+    for q in range(cnt):
+        u = idx[q]
         tot += math.sqrt(a[t, j, u] * b[n, j, u])
     return tot
 
 
+@numba.njit(cache=True)
+def rho_bins(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """``_rho`` of every pair of rows a[t, j] and b[t, j] of two (T, J, U) arrays into
+    out (T, J), for its test against the plain sum over every bin."""
+    idx = np.empty(b.shape[2], np.int64)
+    for t in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            out[t, j] = _rho(a, b, t, t, j, idx)
+
+
 @numba.njit(cache=True, inline="always")
-def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray, k: int
-                      ) -> None:
+def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray, k: int,
+                      idx: np.ndarray) -> None:
     """Eq. 11, d_ij = |f_ij - F_ij| (``equations.differences``), of model t of ``m`` against
-    candidate n of ``c`` into d[k] (6, 5).
+    candidate n of ``c`` into d[k] (6, 5) (``idx``: ``_rho``'s scratch).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
     no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), the
@@ -639,8 +659,8 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarra
             d[k, 2, j] = 1.0
             d[k, 3, j] = 1.0
         else:
-            d[k, 2, j] = 1.0 - _rho(m_hsv, c_hsv, t, n, j)
-            d[k, 3, j] = 1.0 - _rho(m_xyz, c_xyz, t, n, j)
+            d[k, 2, j] = 1.0 - _rho(m_hsv, c_hsv, t, n, j, idx)
+            d[k, 3, j] = 1.0 - _rho(m_xyz, c_xyz, t, n, j, idx)
         dx = c_centroid[n, j, 0] - m_centroid[t, j, 0]
         dy = c_centroid[n, j, 1] - m_centroid[t, j, 1]
         d[k, 4, j] = math.sqrt(dx * dx + dy * dy) / hgt * g
@@ -665,8 +685,15 @@ def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misse
     for k in range(ti.shape[0]):
         if not (0 <= ti[k] < m[1].shape[0] and 0 <= n[k] < c[1].shape[0]):
             raise IndexError("selected pair index out of range")
+    idx = np.empty(max(m[3].shape[2], m[4].shape[2]), np.int64)
     for k in range(ti.shape[0]):
-        _pair_differences(m, c, ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), out, k)
+        _pair_differences(m, c, ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), out, k, idx)
+
+
+_MEMO_BITS = 7
+"""log2 of the slots of ``_scores_kernel``'s table of p(x | theta_ij) per (i, j)."""
+_HASH_MUL, _HASH_SHIFT, _SLOT_SHIFT = (np.uint64(0x9E3779B97F4A7C15), np.uint64(29),
+                                       np.uint64(64 - _MEMO_BITS))
 
 
 @numba.njit(cache=True)
@@ -674,16 +701,35 @@ def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.nd
                    theta: tuple, pj: np.ndarray, p: np.ndarray) -> None:
     """Eq. 12, p_j = sum_i omega_i p(d_ij / spread | theta_ij), into pj (K, 5) and eq. 13,
     p = sum_j gamma_j p_j, into p (K,), of (K, 6, 5) differences (``equations.part_scores``,
-    ``equations.global_score``); omega and gamma are normalised to sum 1 here."""
+    ``equations.global_score``); omega and gamma are normalised to sum 1 here.
+
+    p(x | theta_ij) (``_survival``) is a function of x alone for each (i, j), and x repeats
+    (area and perimeter take few values, an empty part's colour terms are 1): a value is
+    recalled from a small table per (i, j), keyed by the bits of x, instead of computed
+    again; the sums are those of ``_survival`` on every term, bit for bit."""
     w, mu, s = theta
     omega, gamma = omega / omega.sum(), gamma / gamma.sum()
+    n_i, n_j = d.shape[1], d.shape[2]
+    filled = np.zeros((n_i, n_j, 1 << _MEMO_BITS), np.bool_)
+    keys = np.empty((n_i, n_j, 1 << _MEMO_BITS), np.uint64)
+    values = np.empty((n_i, n_j, 1 << _MEMO_BITS))
+    buf = np.empty(1)
+    bits = buf.view(np.uint64)
     for k in range(d.shape[0]):
         total = 0.0
-        for j in range(d.shape[2]):
+        for j in range(n_j):
             acc = 0.0
-            for i in range(d.shape[1]):
+            for i in range(n_i):
                 x = d[k, i, j] / spread
-                acc += omega[i] * _survival(x if not x < 0.0 else 0.0, w, mu, s, i, j)  # eq. 12
+                buf[0] = x if not x < 0.0 else 0.0
+                key = bits[0]
+                slot = ((key ^ (key >> _HASH_SHIFT)) * _HASH_MUL) >> _SLOT_SHIFT
+                if filled[i, j, slot] and keys[i, j, slot] == key:
+                    sv = values[i, j, slot]
+                else:
+                    sv = _survival(buf[0], w, mu, s, i, j)
+                    filled[i, j, slot], keys[i, j, slot], values[i, j, slot] = True, key, sv
+                acc += omega[i] * sv                                                   # eq. 12
             pj[k, j] = acc
             total += gamma[j] * acc                                                    # eq. 13
         p[k] = total

@@ -4,21 +4,23 @@ The definition lives in ``trackers.three_hypothesis.features.ellipse_histograms`
 16x16x16 colour histogram over the pixels whose centres lie in the ellipse inscribed in a
 box, optionally restricted to foreground pixels. This module computes exactly the same
 histograms for boxes snapped to whole pixels (``tests/trackers/three_hypothesis/
-test_tracker.py`` checks equality) but with ``cv2.calcHist`` over each box crop and
-ellipse masks (and their pixel counts) cached by box size, so the tracker's per-frame
-feature cost is one pass over each box's pixels instead of binning the whole frame.
+test_tracker.py`` checks equality) in one compiled pass over each box's pixels
+(``_kernels.ellipse_histograms``) instead of binning the whole frame.
 ``measure`` also gives the bins any measurement occupies, over which the tracker sums rho
 (eq. 4). Boxes are (N, 4) float64 xywh, 0-based pixels.
 """
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
+from trackers.three_hypothesis._kernels import ellipse_histograms
 from trackers.three_hypothesis.features import bhattacharyya
 
 __all__ = ["EllipseHistogrammer", "bhattacharyya", "snap_boxes"]
+
+_NO_MASK = np.zeros((1, 1), dtype=bool)
+"""The kernel's placeholder foreground when there is none."""
 
 
 def snap_boxes(boxes: np.ndarray) -> np.ndarray:
@@ -52,8 +54,6 @@ class EllipseHistogrammer:
         self.min_foreground = min_foreground
         self.cache_size = cache_size
         self._masks: dict[tuple[int, int], tuple[np.ndarray, int]] = {}
-        self._sizes = [bins, bins, bins]
-        self._ranges = [0, 256, 0, 256, 0, 256]
 
     def _mask(self, h: int, w: int) -> tuple[np.ndarray, int]:
         """(h, w) uint8 mask (1 = pixel centre inside the ellipse inscribed in an h x w box)
@@ -125,40 +125,11 @@ class EllipseHistogrammer:
             p: list of N (bins**3,) float64 arrays (arguments as ``__call__``);
             support: (K,) int sorted bins where at least one p is nonzero.
         """
-        height, width = frame.shape[:2]
-        size = self.bins**3
-        out: list[np.ndarray] = []
-        occupied = np.zeros(size, dtype=bool)
-        for bx, by, bw, bh in np.asarray(boxes, dtype=np.float64).reshape(-1, 4).tolist():
-            # snap_boxes in scalars (round() rounds half to even, as np.round)
-            x, y = round(bx), round(by)
-            w, h = max(round(bx + bw) - x, 1), max(round(by + bh) - y, 1)
-            hist = np.zeros(size)
-            out.append(hist)
-            r0, r1 = max(y, 0), min(y + h, height)
-            c0, c1 = max(x, 0), min(x + w, width)
-            if r1 <= r0 or c1 <= c0:
-                continue
-            m, total = self._mask(h, w)  # total: |S|, the pixels counted
-            if r1 - r0 < h or c1 - c0 < w:  # cut by the image border
-                m = m[r0 - y : r1 - y, c0 - x : c1 - x]
-                total = np.count_nonzero(m)
-            if foreground is not None:
-                fm = m & (foreground[r0:r1, c0:c1] != 0)
-                kept = np.count_nonzero(fm)
-                if kept >= self.min_foreground * total:
-                    m, total = fm, kept
-            crop = frame[r0:r1, c0:c1]
-            if self.stride > 1:
-                crop = np.ascontiguousarray(crop[:: self.stride, :: self.stride])
-                m = np.ascontiguousarray(m[:: self.stride, :: self.stride])
-                total = np.count_nonzero(m)
-            if not total:
-                continue
-            # cv2.calcHist: same joint bin order as trackers.histograms.colour_histogram
-            counts = cv2.calcHist([crop], [0, 1, 2], m, self._sizes, self._ranges)
-            counts = counts.ravel()
-            nz = (counts > 0).nonzero()[0]
-            hist[nz] = np.divide(counts[nz], float(total), dtype=np.float64)  # eq. 1: / |S|
-            occupied[nz] = True
+        snapped = snap_boxes(boxes).astype(np.int64)
+        hists = np.zeros((len(snapped), self.bins**3))
+        occupied = np.zeros(self.bins**3, dtype=bool)
+        has_fg = foreground is not None
+        ellipse_histograms(frame, snapped, foreground if has_fg else _NO_MASK, has_fg,
+                           float(self.min_foreground), self.stride, self.bins, hists, occupied)
+        out = [h.copy() for h in hists]  # one array each: a person keeps its own q
         return out, occupied.nonzero()[0]

@@ -1,0 +1,74 @@
+"""The compiled eq. 1 (``_kernels.ellipse_histograms``, through
+``EllipseHistogrammer.measure``) against the plain-numpy reading of it, bit for bit: the
+ellipse of each snapped box, its foreground pixels when they are at least
+``min_foreground`` of it, every ``stride``-th row and column, counts / |S|."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
+from trackers.three_hypothesis.features import bin_image, ellipse_histograms
+
+
+def _reference(frame, boxes, fg, bins, min_foreground, stride):
+    """Eq. 1 per box in numpy (the histogrammer's rule for S), and the occupied bins."""
+    H, W = frame.shape[:2]
+    idx = bin_image(frame, bins)
+    out = np.zeros((len(boxes), bins**3))
+    for k, (x, y, w, h) in enumerate(snap_boxes(boxes).astype(int).tolist()):
+        r0, r1, c0, c1 = max(y, 0), min(y + h, H), max(x, 0), min(x + w, W)
+        if r1 <= r0 or c1 <= c0:
+            continue
+        rx, ry = max(w / 2, 0.5), max(h / 2, 0.5)
+        xs = (np.arange(w) + 0.5 - w / 2) / rx
+        ys = (np.arange(h) + 0.5 - h / 2) / ry
+        m = (ys[:, None] ** 2 + xs[None, :] ** 2 <= 1.0)[r0 - y:r1 - y, c0 - x:c1 - x]
+        if fg is not None:
+            fm = m & (fg[r0:r1, c0:c1] != 0)
+            if np.count_nonzero(fm) >= min_foreground * np.count_nonzero(m):
+                m = fm
+        m = m[::stride, ::stride]
+        total = np.count_nonzero(m)
+        if total:
+            counts = np.bincount(idx[r0:r1:stride, c0:c1:stride][m], minlength=bins**3)
+            nz = counts.nonzero()[0]
+            out[k, nz] = counts[nz] / float(total)
+    return out, (out > 0).any(axis=0).nonzero()[0]
+
+
+def _boxes(rng, n):
+    b = np.column_stack([rng.uniform(-30, 100, n), rng.uniform(-30, 80, n),
+                         rng.uniform(0.2, 60, n), rng.uniform(0.2, 70, n)])
+    b[0] = [10.5, 20.5, 7.5, 9.5]  # halves: rounding ties
+    b[1] = [200.0, 10.0, 5.0, 5.0]  # outside the image
+    b[2] = [-5.0, -5.0, 200.0, 200.0]  # holds the image
+    return b
+
+
+@pytest.mark.parametrize("stride", [1, 2, 3])
+@pytest.mark.parametrize("bins", [16, 4])
+def test_eq1_kernel_equals_the_numpy_reading(stride, bins):
+    rng = np.random.default_rng(stride * 10 + bins)
+    frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    boxes = _boxes(rng, 40)
+    labels = (rng.random((90, 120)) < 0.5) * rng.integers(1, 5, (90, 120))  # a label image
+    for fg in (None, labels != 0, labels.astype(np.int32), np.zeros((90, 120), bool)):
+        hist = EllipseHistogrammer(bins=bins, min_foreground=0.3, stride=stride)
+        p, support = hist.measure(frame, boxes, fg)
+        ref, ref_support = _reference(frame, boxes, fg, bins, 0.3, stride)
+        assert np.array(p).tobytes() == ref.tobytes()
+        assert support.tolist() == ref_support.tolist()
+        assert len({id(h) for h in p}) == len(p)  # one array each
+
+
+def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
+    rng = np.random.default_rng(5)
+    frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    boxes = snap_boxes(_boxes(rng, 20))
+    fg = rng.random((60, 80)) < 0.7
+    got = EllipseHistogrammer(min_foreground=0.0)(frame, boxes, fg)
+    np.testing.assert_array_equal(got, ellipse_histograms(frame, boxes, mask=fg))
+    p, support = EllipseHistogrammer().measure(frame, np.zeros((0, 4)))
+    assert p == [] and len(support) == 0

@@ -1,0 +1,114 @@
+"""The compiled kernel of the three-hypothesis tracker (numba, one core): eq. 1's colour
+histograms of the measurements' ellipses, one call per frame.
+
+It computes what ``EllipseHistogrammer.measure``'s numpy and ``cv2.calcHist`` path did
+(the definition: ``features.ellipse_histograms``), bit for bit: the ellipse of a snapped
+box is the set of pixel centres with ys^2 + xs^2 <= 1 (``EllipseHistogrammer._mask``'s
+arithmetic), a pixel's joint bin ``(c0 * bins + c1) * bins + c2`` with ``ck = channel_k >>
+shift`` (``features.bin_image``), a histogram the counts divided by |S| in float64
+(``tests/trackers/three_hypothesis/test_kernels.py``). Compiled on first use, cached on
+disk (``cache=True``).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def ellipse_histograms(frame: np.ndarray, snapped: np.ndarray, fg: np.ndarray, has_fg: bool,
+                       min_foreground: float, stride: int, bins: int, out: np.ndarray,
+                       occupied: np.ndarray) -> None:
+    """Eq. 1 of every box: p_u = |{pixels of S in bin u}| / |S|.
+
+    Args:
+        frame: (H, W, 3) uint8 image.
+        snapped: (N, 4) int64 boxes snapped to whole pixels (x, y, w, h; w, h >= 1).
+        fg: (H, W) foreground (nonzero = foreground; any (1, 1) array when not
+            ``has_fg``): with it, S is the ellipse's foreground pixels when they are at
+            least ``min_foreground`` of the ellipse's pixels inside the image, else the
+            whole ellipse (a person the background model missed keeps a model).
+        stride: count every stride-th row and column of the box's crop only.
+        bins: bins per channel (a power of 2 up to 256).
+        out: (N, bins**3) float64, zero on entry: the histograms, written.
+        occupied: (bins**3,) bool, False on entry: set where some histogram is nonzero.
+    """
+    H, W = frame.shape[0], frame.shape[1]
+    shift = 0
+    while (256 >> shift) > bins:
+        shift += 1
+    # channel k's bin is its value >> shift; the joint bin (c0 bins + c1) bins + c2 in bits
+    sh, sb, sb2 = np.uint64(shift), np.uint64(8 - shift), np.uint64(16 - 2 * shift)
+    counts = np.zeros(out.shape[1], np.int64)
+    span = np.empty((H, 2), np.int64)  # per image row of the box: its ellipse's columns [lo, hi)
+    for k in range(snapped.shape[0]):
+        x, y, w, h = snapped[k, 0], snapped[k, 1], snapped[k, 2], snapped[k, 3]
+        r0, r1 = max(y, 0), min(y + h, H)
+        c0, c1 = max(x, 0), min(x + w, W)
+        if r1 <= r0 or c1 <= c0:
+            continue
+        _ellipse_spans(x, y, w, h, r0, r1, c0, c1, span)
+        # |S| and its foreground pixels, on every pixel (the choice of S precedes the stride)
+        total, kept = 0, 0
+        for r in range(r0, r1):
+            total += span[r, 1] - span[r, 0]
+            if has_fg:
+                for c in range(span[r, 0], span[r, 1]):
+                    kept += fg[r, c] != 0
+        use_fg = has_fg and kept >= min_foreground * total
+        n = 0
+        for r in range(r0, r1, stride):
+            first = span[r, 0] + (c0 - span[r, 0]) % stride  # the crop's columns c0 + i stride
+            row = frame[r]
+            for c in range(first, span[r, 1], stride):
+                if not use_fg or fg[r, c] != 0:
+                    px = row[np.uint64(c)]  # unsigned: no negative-index test
+                    u = (((np.uint64(px[0]) >> sh) << sb2) | ((np.uint64(px[1]) >> sh) << sb)
+                         | (np.uint64(px[2]) >> sh))
+                    counts[u] += 1
+                    n += 1
+        if n == 0:
+            continue
+        for u in range(counts.shape[0]):
+            if counts[u]:
+                out[k, u] = counts[u] / float(n)  # eq. 1: / |S|
+                occupied[u] = True
+                counts[u] = 0
+
+
+@numba.njit(cache=True, inline="always")
+def _inside(c: int, w: int, rx: float, ys2: float) -> bool:
+    """Whether the centre of box column c lies in the ellipse on a row of ys^2 = ys2:
+    ys^2 + xs^2 <= 1 with xs = (c + 0.5 - w / 2) / rx (``EllipseHistogrammer._mask``)."""
+    v = (float(c) + 0.5 - w / 2) / rx
+    return ys2 + v * v <= 1.0
+
+
+@numba.njit(cache=True)
+def _ellipse_spans(x: int, y: int, w: int, h: int, r0: int, r1: int, c0: int, c1: int,
+                   span: np.ndarray) -> None:
+    """span[r] = image columns [lo, hi) of row r (r0 <= r < r1) whose pixel centres lie in
+    the ellipse inscribed in the box (x, y, w, h), cut to [c0, c1).
+
+    xs^2 is the same for box columns c and w - 1 - c (c + 0.5 - w / 2 is a half-integer,
+    negated exactly) and does not increase towards the centre, and adding ys^2 keeps that
+    order: each row's columns are one interval, symmetric in the box, whose left end is
+    found by bisection with the very test ``_inside`` applies to each pixel."""
+    rx, ry = max(w / 2, 0.5), max(h / 2, 0.5)
+    mid = (w - 1) // 2  # the centre-most column of the left half
+    for r in range(r0, r1):
+        v = (float(r - y) + 0.5 - h / 2) / ry
+        ys2 = v * v
+        if not _inside(mid, w, rx, ys2):
+            span[r, 0], span[r, 1] = c0, c0
+            continue
+        lo, hi = 0, mid  # the first inside column lies in [lo, hi]
+        while lo < hi:
+            m = (lo + hi) // 2
+            if _inside(m, w, rx, ys2):
+                hi = m
+            else:
+                lo = m + 1
+        a, b = max(x + lo, c0), min(x + w - lo, c1)
+        span[r, 0], span[r, 1] = a, max(a, b)
