@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from harness.datasets.mot import read_seqinfo, seqinfo_number
 from harness.io.mot import MotTable, read_mot
 from harness.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
 
@@ -86,25 +87,24 @@ def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
 
 
 def _sequence_length(gt_file: Path) -> int | None:
-    """``seqLength`` of the ``seqinfo.ini`` beside a ``<seq>/gt/gt.txt``, else None."""
-    import configparser
+    """``seqLength`` of the ``seqinfo.ini`` beside a ``<seq>/gt/gt.txt``, else None.
 
+    Raises:
+        SeqInfoError: a seqinfo.ini that cannot be read or whose seqLength is not a
+            positive integer (file and key named): rows past it would go unchecked.
+    """
     ini = gt_file.parent.parent / "seqinfo.ini"
     if gt_file.name != "gt.txt" or not ini.is_file():
         return None
-    parser = configparser.ConfigParser()
-    try:
-        parser.read(ini)
-        return int(parser["Sequence"]["seqLength"])
-    except (KeyError, ValueError, configparser.Error):
-        return None
+    return seqinfo_number(read_seqinfo(ini), "seqLength", ini, int)
 
 
 def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) -> pd.DataFrame:
     """Score all sequences; returns ``summarize`` of the scores (fractions, COMBINED row)."""
     scores: dict[str, SequenceScore] = {}
     for name, (g, r) in pair_files(Path(gt), Path(results)).items():
-        gt_table = read_mot(g, gt=True)
+        last_frame = _sequence_length(g)  # gt and result rows past it are errors
+        gt_table = read_mot(g, gt=True, last_frame=last_frame)
         if r is None:
             log.warning(
                 "%s: no result file %s; scored as an empty result",
@@ -113,7 +113,7 @@ def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) ->
             )
             res_table = MotTable.empty(str(Path(results) / f"{name}.txt"))
         else:
-            res_table = read_mot(r, kind="result", last_frame=_sequence_length(g))
+            res_table = read_mot(r, kind="result", last_frame=last_frame)
         scores[name] = score_sequence(gt_table, res_table, iou_threshold)
         log.debug(
             "%s: scored %d gt rows against %d result rows", name, len(gt_table), len(res_table)

@@ -45,32 +45,53 @@ class VideoSequence(Sequence):
         fps: frame rate; None = the container's (25 when it reports none, logged).
         exact: count frames by decoding and never seek by frame number (slower random
             access, always right); None = only for ``UNRELIABLE_SEEK`` containers (MPEG).
+        length: the sequence's frame count as stated elsewhere (seqinfo.ini's seqLength);
+            None = the video's frame count, or the ground truth's last frame where that is
+            further. Past the video's decodable frames (a video cut short) ``frame`` raises
+            ``FrameError``, as a missing image file does: the sequence fails, recorded.
     Raises:
         FileNotFoundError: no such video (or gt/det file).
-        FrameError: OpenCV cannot open or decode the video.
+        FrameError: OpenCV cannot open or decode the video, or PyAV cannot read its frame
+            sizes.
     """
 
     def __init__(self, path: str | Path, gt: GroundTruth | str | Path | None = None,
                  public_detections: MotTable | str | Path | None = None,
                  name: str | None = None, fps: float | None = None,
-                 exact: bool | None = None) -> None:
+                 exact: bool | None = None, length: int | None = None) -> None:
         self.path = Path(path).expanduser()
         if not self.path.is_file():
             raise FileNotFoundError(f"video file not found: {self.path}")
         if fps is not None and fps <= 0:
             raise ValueError(f"fps must be positive, got {fps}")
+        if isinstance(gt, (str, Path)):
+            gt = ground_truth_from_table(read_mot(gt, gt=True, last_frame=length))
+        self.gt = gt
+        if isinstance(public_detections, (str, Path)):
+            public_detections = read_mot(public_detections, kind="det")
+        self.public_detections = public_detections
         self._cap: cv2.VideoCapture | None = None
         self._next = 1  # frame the capture decodes on the next read()
         self._last: tuple[int, np.ndarray] | None = None
         self.exact = self.path.suffix.lower() in UNRELIABLE_SEEK if exact is None else bool(exact)
         cap = self._capture()
-        length = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
         width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH))
         height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
         rate = float(fps) if fps is not None else float(cap.get(cv2.CAP_PROP_FPS))
         if not np.isfinite(rate) or rate <= 0:
             log.warning("%s: the container reports no frame rate; assuming 25 fps", self.path)
             rate = 25.0
+        #: frames OpenCV decodes (counted when the container's count is unreliable)
+        self.decodable = self._frame_count(cap)
+        if self.decodable <= 0 or width <= 0 or height <= 0:
+            raise FrameError(f"{self.path}: video holds no decodable frames")
+        #: why every frame is refused (the frame size changes mid-stream), or None
+        self.refused = frame_size_change(self.path, width, height)
+        self.info = SequenceInfo(name=name or self.path.stem, width=width, height=height,
+                                 fps=rate, length=self._length(length))
+
+    def _frame_count(self, cap: cv2.VideoCapture) -> int:
+        length = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
         if self.exact:
             reported, length = length, self._count_frames()
             if reported != length:
@@ -79,16 +100,24 @@ class VideoSequence(Sequence):
             length = self._count_frames()
             log.warning("%s: the container reports no frame count; counted %d frames",
                         self.path, length)
-        if length <= 0 or width <= 0 or height <= 0:
-            raise FrameError(f"{self.path}: video holds no decodable frames")
-        self.info = SequenceInfo(name=name or self.path.stem, width=width, height=height,
-                                 fps=rate, length=length)
-        if isinstance(gt, (str, Path)):
-            gt = ground_truth_from_table(read_mot(gt, gt=True))
-        self.gt = gt
-        if isinstance(public_detections, (str, Path)):
-            public_detections = read_mot(public_detections, kind="det")
-        self.public_detections = public_detections
+        return length
+
+    def _length(self, length: int | None) -> int:
+        """The sequence's length: ``length`` (seqLength), else the furthest of the video's
+        frames and the ground truth's; a video shorter than that is logged as cut short."""
+        last_gt = int(self.gt.table.frames.max()) if self.gt is not None and len(
+            self.gt.table) else 0
+        what = "seqLength"
+        if length is None:
+            length, what = max(self.decodable, last_gt), "the ground truth's last frame"
+        if length > self.decodable:
+            log.warning("%s: %d decodable frames but the sequence has %d (%s): the video is cut "
+                        "short; reading frame %d raises FrameError and the sequence fails",
+                        self.path, self.decodable, length, what, self.decodable + 1)
+        elif length < self.decodable:
+            log.warning("%s: %d frames; the sequence is the first %d (seqLength)", self.path,
+                        self.decodable, length)
+        return int(length)
 
     def _capture(self) -> cv2.VideoCapture:
         if self._cap is None:
@@ -135,6 +164,12 @@ class VideoSequence(Sequence):
         k = int(index)
         if not 1 <= k <= self.info.length:
             raise IndexError(f"{self.info.name}: frame {index} outside 1..{self.info.length}")
+        if self.refused is not None:
+            raise FrameError(self.refused)
+        if k > self.decodable:
+            raise FrameError(f"{self.path}: no frame {k}: the video holds {self.decodable} "
+                             f"decodable frames but the sequence has {self.info.length}; is it "
+                             "cut short?")
         if self._last is not None and self._last[0] == k:
             return self._last[1].copy()
         cap = self._capture()
@@ -162,6 +197,42 @@ class VideoSequence(Sequence):
         return image.copy()
 
 
+def frame_size_change(path: Path, width: int, height: int) -> str | None:
+    """None when every keyframe of the video's first video stream is ``width`` x ``height``
+    (the size OpenCV reports), else why the video is refused, naming the file and sizes.
+
+    OpenCV's FFmpeg reader scales every frame to the first frame's size without a word (and
+    reports that size throughout), so the sizes are read by PyAV, from the keyframes only:
+    cheap, and MPEG-1/2, MPEG-4 and H.264/5 streams change size only at one.
+
+    Raises:
+        FrameError: PyAV cannot open the file or finds no video stream in it.
+    """
+    import av
+
+    try:
+        container = av.open(str(path))
+    except av.error.FFmpegError as err:
+        raise FrameError(f"{path}: cannot read the frame sizes (PyAV: {err})") from None
+    with container:
+        if not container.streams.video:
+            raise FrameError(f"{path}: cannot read the frame sizes: no video stream")
+        stream = container.streams.video[0]
+        stream.codec_context.skip_frame = "NONKEY"
+        j = 0
+        try:
+            for j, frame in enumerate(container.decode(stream), 1):
+                if (frame.width, frame.height) != (width, height):
+                    return (f"{path}: the frame size changes mid-stream: {width}x{height}, "
+                            f"then {frame.width}x{frame.height} from keyframe {j}; OpenCV "
+                            f"would rescale those frames to {width}x{height} without a word: "
+                            "re-encode the video at one size")
+        except av.error.FFmpegError as err:  # damage: decoding it fails in frame() too
+            log.warning("%s: frame sizes checked up to keyframe %d only (PyAV: %s)", path, j,
+                        err)
+    return None
+
+
 def load_video(path: str | Path, gt: str | Path | None = None, name: str | None = None,
                fps: float | None = None, det: str | Path | None = None,
                exact: bool | None = None, frames: list[int] | None = None) -> list[Sequence]:
@@ -181,7 +252,4 @@ def load_video(path: str | Path, gt: str | Path | None = None, name: str | None 
     if not path.exists():
         raise FileNotFoundError(f"video file not found: {path}")
     seq = VideoSequence(path, gt=gt, public_detections=det, name=name, fps=fps, exact=exact)
-    if seq.gt is not None and len(seq.gt.table) and seq.gt.table.frames.max() > seq.info.length:
-        log.warning("%s: gt reaches frame %d but the video has %d frames", gt,
-                    int(seq.gt.table.frames.max()), seq.info.length)
     return window([seq], frames)

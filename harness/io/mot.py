@@ -74,28 +74,51 @@ class MotTable:
 
 READ_KINDS = ("any", "gt", "det", "result")
 
+#: largest frame number, id or class accepted: a bigger one is a misprint (``1e20`` would
+#: wrap to -9223372036854775808 as int64); TrackEval reads these columns as 32-bit too
+MAX_INT = 2**31 - 1
+
+#: MOTChallenge gt classes (column 8 of MOT16+ gt): 1 is a pedestrian; MOT15-style gt has
+#: no class column and its rows get NO_CLASS (scored as pedestrians, as by TrackEval)
+PEDESTRIAN_CLASS = 1
+NO_CLASS = -1
+
+
+def scored_gt_mask(gt: MotTable) -> np.ndarray:
+    """(N,) bool: gt rows that are scored: conf != 0 and class pedestrian or no class (the
+    MOTChallenge rule; ``harness.metrics.frames`` applies it)."""
+    return (gt.conf != 0) & np.isin(gt.classes, (PEDESTRIAN_CLASS, NO_CLASS))
+
 
 def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
              last_frame: int | None = None) -> MotTable:
-    """Read a MOT gt, det or result file, validating every numeric column.
+    """Read a MOT gt, det or result file, validating every field of every row.
 
     Args:
-        path: text file with comma (or whitespace) separated rows of at least 6 fields.
+        path: UTF-8 text (a byte-order mark is allowed) with comma separated rows of 6 to 10
+            fields (whitespace separated when a row has no comma; one trailing comma is
+            allowed, as TrackEval allows it), every row with the same number of fields.
         gt: interpret columns 8 and 9 as class and visibility (MOT16+ gt with 9 columns);
             implies ``kind="gt"``.
         kind: what the file holds, for the identity column: ``gt`` and ``result`` need a
             positive integer id; ``det`` any integer (-1 by convention); ``any`` a positive
             integer or -1.
-        last_frame: the sequence's last frame number; a row beyond it is an error (a result
-            row there would silently count as a false positive).
+        last_frame: the sequence's last frame number (seqinfo.ini's ``seqLength``); a row
+            beyond it is an error, in a gt file as in TrackEval, and in a result file (it
+            would silently count as a false positive).
     Raises:
         FileNotFoundError: no such file.
-        MotFormatError: a malformed row, naming file and line: fewer than 6 fields, a field
-            that is not a number, a frame that is not a positive integer (or is beyond
-            ``last_frame``), an id that is not an integer as ``kind`` needs, a NaN or
-            infinite confidence/score, class, visibility or world coordinate.
+        MotFormatError: naming file and line and what was expected: text that is not
+            UTF-8; fewer than 6 or more than 10 fields, an empty field, or another number
+            of fields than the first row's; a field that is not a number; a frame that is
+            not an integer in 1..``last_frame`` (or ``MAX_INT``); an id that is not an
+            integer as ``kind`` needs; a NaN or infinite confidence/score, class,
+            visibility or world coordinate; in gt, a conf other than 0 or 1, a class
+            that is not a positive integer, a visibility outside [0, 1] (-1 = unknown),
+            or no row to score at all (every row conf 0 or of another class than
+            pedestrian: HOTA 0 without a word otherwise).
     Rows whose box has a NaN, infinite or non-positive width/height are skipped with a
-    warning naming file and line; an empty file gives an empty table.
+    warning naming file and line; an empty file gives an empty table (logged).
     """
     path = Path(path)
     if gt:
@@ -104,7 +127,7 @@ def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
         raise ValueError(f"kind must be one of {READ_KINDS}, got {kind!r}")
     if not path.is_file():
         raise FileNotFoundError(f"MOT file not found: {path}")
-    return _parse_text(path.read_text(), path, kind, last_frame)
+    return _parse_text(read_utf8(path, MotFormatError), path, kind, last_frame)
 
 
 def read_mot_text(text: str, path: str | Path, kind: str = "any",
@@ -113,21 +136,46 @@ def read_mot_text(text: str, path: str | Path, kind: str = "any",
     scores exactly the bytes it writes, even when writing them failed."""
     if kind not in READ_KINDS:
         raise ValueError(f"kind must be one of {READ_KINDS}, got {kind!r}")
-    return _parse_text(text, Path(path), kind, last_frame)
+    return _parse_text(text.removeprefix("\ufeff"), Path(path), kind, last_frame)
+
+
+def read_utf8(path: Path, error: type[ValueError]) -> str:
+    """The text of a UTF-8 file (a leading byte-order mark dropped); ``error`` naming file
+    and line where the bytes are not UTF-8."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = data[:err.start].count(b"\n") + 1
+        raise error(f"{path}:{line}: not UTF-8 text (byte {err.start}: "
+                    f"{data[err.start:err.start + 1]!r})") from None
+
+
+def text_lines(path: Path, error: type[ValueError]) -> list[str]:
+    """The lines of a UTF-8 text file (``read_utf8``)."""
+    return read_utf8(path, error).splitlines()
 
 
 def _parse_text(text: str, path: Path, kind: str, last_frame: int | None) -> MotTable:
-    """The rows of a MOT file's text: ``_parse_fast`` when it applies, else line by line."""
-    fast = _parse_fast(text, path, kind, last_frame)
-    return fast if fast is not None else _parse(text.splitlines(), path, kind, last_frame)
+    """The rows of a MOT file's text: ``_parse_fast`` when it applies, else line by line;
+    a gt with no row to score is an error either way."""
+    table = _parse_fast(text, path, kind, last_frame)
+    if table is None:
+        table = _parse(text.splitlines(), path, kind, last_frame)
+    if kind == "gt" and len(table) and not scored_gt_mask(table).any():
+        raise MotFormatError(
+            f"{path}: nothing to score: none of its {len(table)} rows has conf 1 and class "
+            f"{PEDESTRIAN_CLASS} (pedestrian) or no class; a MOT gt row with conf 0 is ignored")
+    return table
 
 
 def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> MotTable | None:
     """The common case in one vectorised pass (numpy's C reader, floats parsed as Python
-    parses them): comma-separated rows all of one width, no comment, every row valid. None
-    for anything else, which ``_parse`` then reads line by line with its exact warnings and
-    errors naming the line (tests/harness/test_faults.py: both give the same table)."""
-    if "#" in text or not text.strip():
+    parses them): comma-separated rows all of one width (6 to 10), no comment, every row
+    valid by ``_check_row``'s rules. None for anything else, which ``_parse`` then reads
+    line by line with its exact warnings and errors naming the line
+    (tests/harness/io/test_mot.py: both give the same table)."""
+    if "#" in text or "_" in text or not text.strip():
         return None
     try:
         with warnings.catch_warnings():
@@ -135,45 +183,52 @@ def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> Mot
             a = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2, dtype=np.float64)
     except (ValueError, UserWarning):
         return None
-    if a.shape[1] < 6:
+    ncols = a.shape[1]
+    if not 6 <= ncols <= 10 or not np.isfinite(a).all():
         return None
-    ncols = min(a.shape[1], 10)
-    a = np.hstack([a[:, :ncols], np.full((len(a), 10 - ncols), -1.0)])
+    a = np.hstack([a, np.full((len(a), 10 - ncols), -1.0)])
     frame, ident = a[:, 0], a[:, 1]
-    ok = np.isfinite(a).all() and (frame == np.floor(frame)).all() and (frame >= 1).all()
-    ok = ok and (ident == np.floor(ident)).all() and (a[:, 4] > 0).all() and (a[:, 5] > 0).all()
+    top = MAX_INT if last_frame is None else min(last_frame, MAX_INT)
+    ok = (frame == np.floor(frame)).all() and (frame >= 1).all() and (frame <= top).all()
+    ok = ok and (ident == np.floor(ident)).all() and (np.abs(ident) <= MAX_INT).all()
+    ok = ok and (a[:, 4] > 0).all() and (a[:, 5] > 0).all()
     if kind in ("gt", "result"):
         ok = ok and (ident >= 1).all()
     elif kind == "any":
         ok = ok and ((ident >= 1) | (ident == -1)).all()
-    if last_frame is not None:
-        ok = ok and (frame <= last_frame).all()
+    if kind == "gt" and ok:
+        ok = ncols < 7 or np.isin(a[:, 6], (0.0, 1.0)).all()
+        if ncols == 9:
+            cls, vis = a[:, 7], a[:, 8]
+            ok = ok and ((cls == np.floor(cls)) & (cls >= 1) & (cls <= MAX_INT)).all()
+            ok = ok and (((vis >= 0) & (vis <= 1)) | (vis == -1)).all()
     return _table(a, ncols, kind == "gt", path) if ok else None
 
 
 def _parse(lines: Iterable[str], path: Path, kind: str, last_frame: int | None) -> MotTable:
-    gt = kind == "gt"
     values: list[list[float]] = []
     skipped = 0
-    ncols = 0  # most fields on any row, before padding
+    first: tuple[int, int] | None = None  # (line, fields) of the first row
     for lineno, line in enumerate(lines, 1):
         text = line.strip()
         if not text or text.startswith("#"):
             continue
-        fields = text.replace(",", " ").split()
-        if len(fields) < 6:
+        where = f"{path}:{lineno}"
+        fields = _fields(text, where)
+        if first is None:
+            first = (lineno, len(fields))
+        elif len(fields) != first[1]:
             raise MotFormatError(
-                f"{path}:{lineno}: expected at least 6 fields, got {len(fields)}: {text!r}"
-            )
+                f"{where}: {len(fields)} fields but line {first[0]} has {first[1]}: every row "
+                f"of a MOT file has the same columns: {text!r}")
         try:
-            row = [float(v) for v in fields[:10]]
+            row = [_number(v) for v in fields]
         except ValueError as err:
-            raise MotFormatError(f"{path}:{lineno}: not a number ({err}): {text!r}") from None
-        ncols = max(ncols, len(row))
+            raise MotFormatError(f"{where}: not a number ({err}): {text!r}") from None
+        _check_row(row, kind, last_frame, where, text)
         row += [-1.0] * (10 - len(row))
-        _check_row(row, kind, last_frame, f"{path}:{lineno}", text)
         if not (np.isfinite(row[2:6]).all() and row[4] > 0 and row[5] > 0):
-            log.warning("%s:%d: skipped box with NaN or non-positive size: %r", path, lineno, text)
+            log.warning("%s: skipped box with NaN or non-positive size: %r", where, text)
             skipped += 1
             continue
         values.append(row)
@@ -182,20 +237,35 @@ def _parse(lines: Iterable[str], path: Path, kind: str, last_frame: int | None) 
     if not values:
         log.warning("%s: no rows", path)
         return MotTable.empty(str(path))
-    return _table(np.asarray(values, dtype=np.float64), ncols, gt, path)
+    return _table(np.asarray(values, dtype=np.float64), first[1], kind == "gt", path)
+
+
+def _fields(text: str, where: str) -> list[str]:
+    """The fields of one row: comma separated (stripped; one trailing comma allowed), else
+    whitespace separated; 6 to 10 of them, none empty."""
+    if "," in text:
+        fields = [f.strip() for f in text.split(",")]
+        if len(fields) > 1 and fields[-1] == "":
+            fields.pop()  # "1,2,...,-1," as some writers leave it (TrackEval drops it too)
+    else:
+        fields = text.split()
+    if "" in fields:
+        raise MotFormatError(f"{where}: field {fields.index('') + 1} is empty: {text!r}")
+    if not 6 <= len(fields) <= 10:
+        raise MotFormatError(f"{where}: expected 6 to 10 fields, got {len(fields)}: {text!r}")
+    return fields
 
 
 def _table(a: np.ndarray, ncols: int, gt: bool, path: Path) -> MotTable:
-    """The table of validated rows (R, 10), sorted by (frame, id); ``ncols`` the most
-    fields on a row before padding to 10."""
-    order = np.lexsort((a[:, 1], a[:, 0]))
-    a = a[order]
+    """The table of validated rows (R, 10), sorted by (frame, id); ``ncols`` the fields of
+    every row before padding to 10."""
+    a = a[np.lexsort((a[:, 1], a[:, 0]))]
+    mot16_gt = gt and ncols == 9
     boxes = a[:, 2:6].copy()
     boxes[:, :2] -= 1.0  # 1-based file -> 0-based memory
     # MOT16+ gt has exactly 9 columns (class, visibility); MOT15 gt has 10 whose columns
     # 8-10 are world coordinates x, y, z (or -1): no class, no visibility.
-    mot16_gt = gt and ncols == 9
-    classes = a[:, 7].astype(np.int64) if mot16_gt else np.full(len(a), -1, dtype=np.int64)
+    classes = a[:, 7].astype(np.int64) if mot16_gt else np.full(len(a), NO_CLASS, np.int64)
     visibility = a[:, 8].copy() if mot16_gt else np.full(len(a), np.nan)
     if mot16_gt:
         visibility[visibility < 0] = np.nan
@@ -205,28 +275,59 @@ def _table(a: np.ndarray, ncols: int, gt: bool, path: Path) -> MotTable:
 
 def _check_row(row: list[float], kind: str, last_frame: int | None, where: str,
                text: str) -> None:
-    """Raise ``MotFormatError`` (naming ``where``, i.e. file:line) for a row whose frame, id
-    or other non-box column is not what a MOT file allows."""
+    """Raise ``MotFormatError`` (naming ``where``, i.e. file:line, and what was expected) for
+    a row whose frame, id or other non-box field is not what a MOT file of ``kind`` allows."""
     frame, ident = row[0], row[1]
-    if not (math.isfinite(frame) and frame == int(frame) and frame >= 1):
-        raise MotFormatError(f"{where}: frame must be a positive integer, got "
+    top = MAX_INT if last_frame is None else last_frame
+    if not _is_int(frame, 1, MAX_INT):
+        raise MotFormatError(f"{where}: frame must be a positive integer up to {MAX_INT}, got "
                              f"{_shown(frame)}: {text!r}")
-    if last_frame is not None and frame > last_frame:
+    if frame > top:
         raise MotFormatError(f"{where}: frame {int(frame)} is beyond the sequence's last frame "
-                             f"{last_frame}: {text!r}")
-    if not (math.isfinite(ident) and ident == int(ident)):
-        raise MotFormatError(f"{where}: id must be an integer, got {_shown(ident)}: {text!r}")
+                             f"{last_frame} (seqLength): {text!r}")
+    if not _is_int(ident, -MAX_INT, MAX_INT):
+        raise MotFormatError(f"{where}: id must be an integer up to {MAX_INT} in size, got "
+                             f"{_shown(ident)}: {text!r}")
     if kind in ("gt", "result") and ident < 1:
         raise MotFormatError(f"{where}: id must be a positive integer in a {kind} file, got "
                              f"{int(ident)}: {text!r}")
     if kind == "any" and ident < 1 and ident != -1:
         raise MotFormatError(f"{where}: id must be a positive integer (or -1 for a detection), "
                              f"got {int(ident)}: {text!r}")
-    for col in range(6, 10):
+    for col in range(6, len(row)):
         if not math.isfinite(row[col]):
             name = "confidence/score" if col == 6 else f"column {col + 1}"
             raise MotFormatError(f"{where}: {name} must be a finite number, got "
                                  f"{_shown(row[col])}: {text!r}")
+    if kind == "gt":
+        _check_gt_fields(row, where, text)
+
+
+def _check_gt_fields(row: list[float], where: str, text: str) -> None:
+    """gt only: conf 0 or 1 (TrackEval reads it as an integer: 0.5 would be ignored there
+    and scored here); in 9-column (MOT16+) gt a positive integer class and a visibility in
+    [0, 1] or -1 (unknown)."""
+    if len(row) > 6 and row[6] not in (0.0, 1.0):
+        raise MotFormatError(f"{where}: gt conf must be 0 (ignore) or 1 (score), got "
+                             f"{_shown(row[6])}: {text!r}")
+    if len(row) == 9:
+        if not _is_int(row[7], 1, MAX_INT):
+            raise MotFormatError(f"{where}: gt class (column 8) must be a positive integer, "
+                                 f"got {_shown(row[7])}: {text!r}")
+        if not (0.0 <= row[8] <= 1.0 or row[8] == -1.0):
+            raise MotFormatError(f"{where}: gt visibility (column 9) must lie in [0, 1] (or be "
+                                 f"-1 = unknown), got {_shown(row[8])}: {text!r}")
+
+
+def _number(text: str) -> float:
+    """``float(text)``, without Python's digit grouping: ``1_000`` is a misprint here."""
+    if "_" in text:
+        raise ValueError(f"could not convert string to float: {text!r}")
+    return float(text)
+
+
+def _is_int(v: float, low: int, high: int) -> bool:
+    return math.isfinite(v) and v == int(v) and low <= v <= high
 
 
 def _shown(v: float) -> str:

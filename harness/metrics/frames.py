@@ -27,14 +27,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harness.io.mot import MotTable
+from harness.io.mot import MotTable, scored_gt_mask
 from harness.metrics.kernels import sparse_iou
 from trackers.geometry import iou_matrix
 
 log = logging.getLogger(__name__)
 
-PEDESTRIAN_CLASS = 1
-NO_CLASS = -1  # MOT15-style gt without a class column
 DISTRACTOR_CLASSES = (2, 7, 8, 12)
 DISTRACTOR_IOU = 0.5  # fixed by the devkit, independent of the scoring threshold
 _EPS = np.finfo(float).eps
@@ -140,11 +138,6 @@ def _check_unique_ids(table: MotTable, what: str) -> None:
         raise ValueError(
             f"{table.path}: {what} id {int(i[k])} occurs more than once in frame {int(f[k])}"
         )
-
-
-def scored_gt_mask(gt: MotTable) -> np.ndarray:
-    """(N,) bool: gt rows that are scored (conf != 0 and class pedestrian or no class)."""
-    return (gt.conf != 0) & np.isin(gt.classes, (PEDESTRIAN_CLASS, NO_CLASS))
 
 
 def pair_frames(gt: MotTable, res: MotTable) -> FramePairs:

@@ -67,7 +67,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from harness.io.mot import MotTable
+from harness.io.mot import MotTable, scored_gt_mask
 from harness.metrics.counts import combine_counts
 from trackers.common.assignment import assign
 from trackers.geometry import iou_matrix, overlap_ratio_matrix
@@ -88,7 +88,7 @@ COLUMNS = RETA_COLUMNS + PBM_COLUMNS + SEGMENTATION_COLUMNS
 def considered_mask(gt: MotTable) -> np.ndarray:
     """(N,) bool: GT rows that are scored, by the MOTChallenge rules of
     ``harness.metrics.frames``: ``conf != 0`` and class pedestrian (1) or none (-1)."""
-    return (gt.conf != 0) & np.isin(gt.classes, (-1, 1))
+    return scored_gt_mask(gt)
 
 
 def considered(gt: MotTable) -> MotTable:

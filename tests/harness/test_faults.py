@@ -150,14 +150,14 @@ def test_app_on_a_truncated_frame_exits_non_zero_naming_it(tmp_path):
 
 
 @pytest.mark.parametrize("row, kind, message", [
-    ("nan,1,1,1,5,5,1,1,1", "gt", "frame must be a positive integer, got nan"),
-    ("inf,1,1,1,5,5,1,1,1", "gt", "frame must be a positive integer, got inf"),
-    ("2.5,1,1,1,5,5,1,1,1", "gt", "frame must be a positive integer, got 2.5"),
-    ("0,1,1,1,5,5,1,1,1", "gt", "frame must be a positive integer, got 0"),
-    ("2,nan,1,1,5,5,1,1,1", "gt", "id must be an integer, got nan"),
-    ("2,3.7,1,1,5,5,1,1,1", "gt", "id must be an integer, got 3.7"),
+    ("nan,1,1,1,5,5,1,1,1", "gt", r"frame must be a positive integer up to \d+, got nan"),
+    ("inf,1,1,1,5,5,1,1,1", "gt", r"frame must be a positive integer up to \d+, got inf"),
+    ("2.5,1,1,1,5,5,1,1,1", "gt", r"frame must be a positive integer up to \d+, got 2.5"),
+    ("0,1,1,1,5,5,1,1,1", "gt", r"frame must be a positive integer up to \d+, got 0"),
+    ("2,nan,1,1,5,5,1,1,1", "gt", r"id must be an integer up to \d+ in size, got nan"),
+    ("2,3.7,1,1,5,5,1,1,1", "gt", r"id must be an integer up to \d+ in size, got 3\.7"),
     ("2,0,1,1,5,5,1,1,1", "gt", "id must be a positive integer in a gt file"),
-    ("2,1.2,1,1,5,5,1,-1,-1,-1", "result", "id must be an integer, got 1.2"),
+    ("2,1.2,1,1,5,5,1,-1,-1,-1", "result", r"id must be an integer up to \d+ in size, got 1\.2"),
     ("2,-1,1,1,5,5,1,-1,-1,-1", "result", "id must be a positive integer in a result file"),
     ("2,-1,1,1,5,5,nan,-1,-1,-1", "det", "confidence/score must be a finite number"),
     ("2,1,1,1,5,5,1,1,inf", "gt", "column 9 must be a finite number"),
@@ -183,7 +183,7 @@ def test_gt_with_nan_frame_or_id_is_rejected_before_the_run(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "harness.commands.evaluate", str(gt), str(res)],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
-    assert "gt.txt:2: id must be an integer, got nan" in proc.stderr
+    assert "gt.txt:2: id must be an integer up to 2147483647 in size, got nan" in proc.stderr
 
 
 def test_result_rows_beyond_the_last_frame_are_rejected(tmp_path):
@@ -196,6 +196,89 @@ def test_result_rows_beyond_the_last_frame_are_rejected(tmp_path):
     result = run(mot_cfg(data, f"+external.other={ext}"), out)
     (f,) = result.failures
     assert f.stage == "external" and f"a.txt:2: frame {N + 1} is beyond" in f.message
+
+
+def test_gt_past_seqlength_is_refused_before_the_run(tmp_path):
+    """gt rows after seqLength: refused, as by TrackEval (they were scored as misses of
+    frames never tracked, and written to the run's gt)."""
+    data = tmp_path / "data"
+    mot_folder(data, "a", frames=False, gt=gt_rows() + f"{N + 1},1,20,20,20,60,1,1,1\n")
+    out = tmp_path / "run"
+    with pytest.raises(RunError, match=rf"a/gt/gt\.txt:{2 * N + 1}: frame {N + 1} is beyond "
+                                       rf"the sequence's last frame {N} \(seqLength\)"):
+        run(mot_cfg(data), out)
+    assert not (out / "metrics.csv").exists() and not (out / "gt").exists()
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda g: g.replace("\n", ",-1\n", 1), r"gt\.txt:2: 9 fields but line 1 has 10"),
+    (lambda g: g.replace("2,1,", "1e20,1,", 1), r"gt\.txt:3: frame must be a positive integer"),
+    (lambda g: g.replace(",1,1,1\n", ",0,1,1\n"), r"gt\.txt: nothing to score"),
+    (lambda g: "\ufeff" + g, None),  # a UTF-8 byte-order mark: read as without it
+])
+def test_misread_gt_classes_stop_the_run_naming_the_line(tmp_path, change, message):
+    data = tmp_path / "data"
+    mot_folder(data, "a", frames=False, gt=change(gt_rows()))
+    if message is None:
+        assert run(mot_cfg(data), tmp_path / "run").ok
+        return
+    with pytest.raises(RunError, match=message):
+        run(mot_cfg(data), tmp_path / "run")
+
+
+def test_seqinfo_length_that_is_not_an_integer_names_the_key(tmp_path):
+    data = tmp_path / "data"
+    ini = mot_folder(data, "a", frames=False) / "seqinfo.ini"
+    ini.write_text(ini.read_text().replace(f"seqLength={N}", "seqLength=10.5"))
+    with pytest.raises(RunError, match=r"seqinfo\.ini: key 'seqLength' must be a positive integer"):
+        run(mot_cfg(data), tmp_path / "run")
+
+
+def mpeg(path: Path, n: int, size: tuple[int, int] = (W, H)) -> Path:
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"PIM1"), 25.0, size)
+    if not writer.isOpened():
+        pytest.skip("this OpenCV build cannot write MPEG-1")
+    for k in range(1, n + 1):
+        img = cv2.resize(cv2.imdecode(np.frombuffer(jpeg_bytes(k), np.uint8), 1), size)
+        writer.write(img)
+    writer.release()
+    return path
+
+
+def test_a_video_cut_short_fails_its_sequence_and_the_run(tmp_path):
+    """The first third of a video with the whole gt: the sequence fails (FrameError, in
+    errors.txt), metrics say complete=false, the app exits 1; it used to score the gt
+    against a third of the tracks and say complete=true."""
+    whole = mpeg(tmp_path / "whole.mpg", 3 * N).read_bytes()
+    cut = tmp_path / "cut.mpg"
+    cut.write_bytes(whole[: len(whole) // 3])
+    gt = tmp_path / "gt.txt"
+    gt.write_text(gt_rows(3 * N))
+    out = tmp_path / "run"
+    cfg = cfg_of("dataset=video", f"dataset.path={cut}", f"dataset.gt={gt}",
+                 "tracker=baseline", "progress=false")
+    result = run(cfg, out)
+    assert [(f.sequence, f.stage) for f in result.failures] == [("cut", "sequence")]
+    assert "is it cut short?" in (out / "errors.txt").read_text()
+    m = pd.read_csv(out / "metrics.csv")
+    assert not m["complete"].any() and "cut" not in set(m["sequence"])
+    proc = app("dataset=video", f"dataset.path={cut}", f"dataset.gt={gt}", "tracker=baseline",
+               "progress=false", f"hydra.run.dir={tmp_path / 'app'}")
+    assert proc.returncode == 1, proc.stderr[-2000:]
+
+
+def test_a_video_whose_frame_size_changes_fails_its_sequence(tmp_path):
+    joined = tmp_path / "joined.mpg"
+    joined.write_bytes(mpeg(tmp_path / "a.mpg", N).read_bytes()
+                       + mpeg(tmp_path / "b.mpg", N, size=(2 * W, 2 * H)).read_bytes())
+    gt = tmp_path / "gt.txt"
+    gt.write_text(gt_rows(N))
+    out = tmp_path / "run"
+    cfg = cfg_of("dataset=video", f"dataset.path={joined}", f"dataset.gt={gt}",
+                 "tracker=baseline", "progress=false")
+    result = run(cfg, out)
+    assert [(f.sequence, f.stage) for f in result.failures] == [("joined", "sequence")]
+    assert f"{W}x{H}, then {2 * W}x{2 * H}" in (out / "errors.txt").read_text()
 
 
 # ----------------------------------------------------------------------------- configs

@@ -233,13 +233,14 @@ def test_frame_of_wrong_size_is_an_error(tmp_path):
 
 @pytest.mark.parametrize("which", ["gt", "det"])
 def test_malformed_gt_or_det_line_propagates(tmp_path, which):
-    rows = {"gt": GT_ROWS, "det": DET_ROWS}[which] + ["4,1,abc,2,3,4,1,1,1"]
+    bad = "4,1,abc,2,3,4,1,1,1" + (",-1" if which == "det" else "")  # the file's 9 or 10 fields
+    rows = {"gt": GT_ROWS, "det": DET_ROWS}[which] + [bad]
     make_mot_seq(tmp_path / "S", **{which: rows})
     n = len(rows)
     with pytest.raises(MotFormatError, match=rf"{which}\.txt:{n}: not a number"):
         load_mot(tmp_path)
     make_mot_seq(tmp_path / "T", **{which: ["1,2,3"]})
-    with pytest.raises(MotFormatError, match=rf"{which}\.txt:1: expected at least 6 fields"):
+    with pytest.raises(MotFormatError, match=rf"{which}\.txt:1: expected 6 to 10 fields, got 3"):
         load_mot(tmp_path, sequences=["T"])
 
 
