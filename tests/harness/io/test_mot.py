@@ -9,13 +9,15 @@ import pytest
 from harness.io.mot import read_mot
 
 
-def _rows(rng: np.random.Generator, n: int, fields: int) -> str:
-    """n rows of ``fields`` comma-separated numbers with many decimals, shuffled."""
+def _rows(rng: np.random.Generator, n: int, fields: int, gt: bool = False) -> str:
+    """n rows of ``fields`` comma-separated numbers with many decimals, shuffled; in gt the
+    conf is a 0/1 flag (anything else is an error there)."""
     frame = rng.integers(1, 50, n)
     ident = rng.permutation(n) + 1
     box = rng.uniform(-5, 900, (n, 4))
     box[:, 2:] = np.abs(box[:, 2:]) + 0.001
-    rest = [rng.uniform(0, 1, n), rng.integers(1, 3, n), rng.uniform(0, 1, n), np.full(n, -1)]
+    conf = rng.integers(0, 2, n) if gt else rng.uniform(0, 1, n)
+    rest = [conf, rng.integers(1, 3, n), rng.uniform(0, 1, n), np.full(n, -1)]
     cols = [frame, ident, *box.T, *rest][:fields]
     return "".join(",".join(repr(float(c[i])) if c.dtype.kind == "f" else str(c[i])
                             for c in cols) + "\n" for i in range(n))
@@ -24,7 +26,7 @@ def _rows(rng: np.random.Generator, n: int, fields: int) -> str:
 @pytest.mark.parametrize("fields, kind", [(9, "gt"), (10, "result"), (6, "result"),
                                           (7, "any"), (10, "gt")])
 def test_vectorised_reading_equals_line_by_line(tmp_path, fields, kind):
-    text = _rows(np.random.default_rng(fields), 500, fields)
+    text = _rows(np.random.default_rng(fields), 500, fields, gt=kind == "gt")
     fast, slow = tmp_path / "fast.txt", tmp_path / "slow.txt"
     fast.write_text(text)
     slow.write_text("# forces the line-by-line reader\n" + text)
