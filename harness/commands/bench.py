@@ -269,7 +269,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
                       for n, node in configs.items()}, lambda text: print(text, file=sys.stderr))
         timings = bench_sequence(
-            seq, lambda: build_source(cfg.detector),
+            seq, lambda: build_source(cfg.detector, cache=False),  # the front end timed
             lambda: {n: build_tracker(n, node) for n, node in configs.items()},
             args.frames, args.repeats, str(cfg.get("foreground", "auto")),
             cfg.get("background") or {})

@@ -15,6 +15,7 @@ sweep      ``harness.sweeps.gather.main``      argparse: ``SWEEP_DIR``
 report     ``harness.commands.report.main``    argparse: ``RUN_DIR``
 bench      ``harness.commands.bench.main``     argparse + overrides
 fit        ``harness.commands.fit.main``       ``pbm | heads | silhouette | active_basis``
+cache      ``harness.commands.cache.main``     argparse: ``[list | clear] [filters]``
 =========  ==================================  =========================================
 """
 
@@ -42,6 +43,8 @@ COMMANDS: dict[str, tuple[str, str, str, bool]] = {
               "frames/s per stage: decode, front end, each tracker", False),
     "fit": ("harness.commands.fit", "main",
             "refit models: pbm | heads | silhouette | active_basis", False),
+    "cache": ("harness.commands.cache", "main",
+              "what the front-end cache holds (OCCBENCH_CACHE); clear it", False),
 }
 
 USAGE = f"""\

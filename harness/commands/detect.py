@@ -8,6 +8,9 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
 * ``detection_metrics.csv``: TP, FP, FN, precision, recall and F1 at IoU >= ``iou_threshold``
   per sequence and COMBINED (counts summed, ratios recomputed), from a one-to-one Hungarian
   matching of detections to ground truth per frame;
+* the front-end cache (``harness.sources.cache``, ``OCCBENCH_CACHE``): a front-end
+  detector's outputs of each sequence, so that later runs on the same frames with the same
+  detector config read them; ``detect`` always computes (its frames/s are the detector's);
 * with ``overlays.frames=[first,last]``: ``overlays/<sequence>/<frame>.png`` showing the
   foreground (tinted), blobs (blue), detections (green), ground truth (white) and heads
   (yellow ellipses: the detections' own, else with ``overlays.heads`` the PBM head
@@ -130,6 +133,7 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
 
     sequences = list(instantiate(cfg.dataset))
     source = instantiate(cfg.detector)
+    cache = _cache_of(source, cfg.detector)
     iou = cfg.get("iou_threshold", 0.5)
     if isinstance(iou, bool) or not isinstance(iou, int | float) or not 0 < iou <= 1:
         raise ValueError(f"iou_threshold={iou}: must be a number in (0, 1]")
@@ -151,7 +155,7 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
     for seq in sequences:
         try:
             _detect_sequence(seq, source, out_dir, iou, ov_frames, head_detector, progress,
-                             counts)
+                             counts, cache)
         except Exception as err:  # noqa: BLE001 - this sequence fails, the next goes on
             msg = f"sequence {seq.info.name}: {type(err).__name__}: {err}"
             log.error("%s", msg)
@@ -181,12 +185,28 @@ class DetectionFailed(RuntimeError):
         self.table = table
 
 
+def _cache_of(source, node: DictConfig) -> tuple | None:
+    """(store, resolved config) when ``source`` is a front-end one and the cache is on."""
+    from omegaconf import OmegaConf
+
+    from harness.sources.cache import Store, cache_root, worth_caching
+
+    root = cache_root()
+    if root is None or not worth_caching(source):
+        return None
+    return Store(root), OmegaConf.to_container(node, resolve=True)
+
+
 def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_detector,
-                     progress: bool, counts: dict[str, DetectionCounts]) -> None:
-    """Detect one sequence: its det file, overlays and counts (added to ``counts``)."""
+                     progress: bool, counts: dict[str, DetectionCounts],
+                     cache: tuple | None = None) -> None:
+    """Detect one sequence: its det file, overlays and counts (added to ``counts``); with
+    ``cache`` (store, detector config), its outputs into the front-end cache."""
+    from harness.sources.cache.source import EntryBuilder, store_outputs
     from trackers.frontend.blobs import blob_boxes, blobs_from_mask
 
     name = seq.info.name
+    built = EntryBuilder() if cache is not None else None
     source.start(seq)
     c = DetectionCounts()
     frames, boxes, scores = [], [], []
@@ -200,6 +220,8 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
         dets, fg = source.detect(k, frame)
         c.seconds += time.perf_counter() - t0
         c.frames += 1
+        if built is not None:
+            built.add(k, dets, fg)
         frames.append(np.full(len(dets), k))
         boxes.append(dets.boxes)
         scores.append(dets.scores)
@@ -227,6 +249,10 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
     if seq.gt is not None:
         counts[name] = c
     log.info("%s: %d frames, %d detections", name, c.frames, n)
+    if built is not None:
+        entry = store_outputs(cache[0], cache[1], seq, source, built)
+        log.info("front end of %s: %s", name, "not cached (its frames cannot be fingerprinted)"
+                 if entry is None else f"stored in the cache ({cache[0].path(entry.key)})")
 
 
 # absolute: a relative path resolves against the calling module (pkg://) under `occbench detect`

@@ -205,14 +205,21 @@ def load_sequences(node: Any) -> list[Sequence]:
     return seqs
 
 
-def build_source(node: Any) -> DetectionSource:
+def build_source(node: Any, cache: bool = True) -> DetectionSource:
+    """Instantiate the detector config; with ``cache``, a front-end source reads and fills
+    the front-end cache (``harness.sources.cache``: ``OCCBENCH_CACHE``)."""
     from hydra.utils import instantiate
 
     if node is None or "_target_" not in node:
         raise RunError("detector: no detection source selected (detector=<name>)")
     _check_located(node, "detector")
     try:
-        return instantiate(node, _convert_="all")
+        source = instantiate(node, _convert_="all")
     except Exception as err:
         cause = err.__cause__ or err
         raise RunError(f"detector ({node['_target_']}): {type(cause).__name__}: {cause}") from err
+    if not cache:
+        return source
+    from harness.sources.cache import cached
+
+    return cached(source, _container(node))

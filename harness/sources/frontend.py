@@ -30,6 +30,9 @@ class FrontendSource:
             nested ``detector`` config.
     """
 
+    #: its outputs are worth keeping in the front-end cache (``harness.sources.cache``)
+    cacheable = True
+
     def __init__(self, detector) -> None:
         if not (hasattr(detector, "detect") and hasattr(detector, "reset")):
             raise ValueError(f"detector must have reset() and detect(frame), got {detector!r}")
