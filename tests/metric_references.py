@@ -57,3 +57,76 @@ def reference_hota(gt_ids, tr_ids, sims) -> HotaCounts:
         out.ass_pr[a] = np.sum(mc * mc / np.maximum(1, tc)) / max(1, out.tp[a])
     out.loc_a = np.maximum(1e-10, loc) / np.maximum(1e-10, out.tp)
     return out
+
+
+def reference_match_rows(gt, res, iou_threshold: float = 0.5) -> np.ndarray:
+    """``paper.match_rows`` as a loop over frames and GT rows (dense IoU per frame)."""
+    from trackers.common.assignment import assign
+    from trackers.geometry import iou_matrix
+
+    out = np.full(len(gt), -1, dtype=np.int64)
+    if len(gt) == 0 or len(res) == 0:
+        return out
+    res_index = res.frame_index()
+    previous: dict[int, int] = {}
+    for frame, g_rows in gt.frame_index().items():
+        r_rows = res_index.get(frame)
+        if r_rows is None:
+            continue
+        iou = iou_matrix(gt.boxes[g_rows], res.boxes[r_rows])
+        iou = np.where(iou >= iou_threshold, iou, 0.0)
+        g_ids, r_ids = gt.ids[g_rows], res.ids[r_rows]
+        kept = np.zeros(len(g_rows), dtype=bool)
+        taken = np.zeros(len(r_rows), dtype=bool)
+        for i, gid in enumerate(g_ids):
+            rid = previous.get(int(gid))
+            if rid is None:
+                continue
+            j = np.flatnonzero((r_ids == rid) & ~taken)
+            if len(j) and iou[i, j[0]] > 0:
+                kept[i], taken[j[0]] = True, True
+                out[g_rows[i]] = r_rows[j[0]]
+        free_g, free_r = np.flatnonzero(~kept), np.flatnonzero(~taken)
+        if len(free_g) and len(free_r):
+            cost = 1.0 - iou[np.ix_(free_g, free_r)]
+            cost[iou[np.ix_(free_g, free_r)] <= 0] = np.inf
+            pairs, _, _ = assign(cost, 1.0 - iou_threshold + 1e-12)
+            out[g_rows[free_g[pairs[:, 0]]]] = r_rows[free_r[pairs[:, 1]]]
+        hit = out[g_rows] >= 0
+        previous.update(zip(g_ids[hit].tolist(), res.ids[out[g_rows[hit]]].tolist()))
+    return out
+
+
+def reference_responses(gt, res, match: np.ndarray, inside: float = 0.5):
+    """``paper.responses`` frame by frame on the dense cover matrix."""
+    from trackers.geometry import overlap_ratio_matrix
+
+    g_rows = [np.flatnonzero(match >= 0)]
+    r_rows = [match[g_rows[0]]]
+    used = np.zeros(len(res), dtype=bool)
+    used[r_rows[0]] = True
+    gt_index = gt.frame_index()
+    for frame, rr in res.frame_index().items():
+        rr = rr[~used[rr]]
+        gr = gt_index.get(frame)
+        if len(rr) == 0 or gr is None:
+            continue
+        cover = overlap_ratio_matrix(res.boxes[rr], gt.boxes[gr])
+        best = np.argmax(cover, axis=1)
+        ok = cover[np.arange(len(rr)), best] >= inside
+        g_rows.append(gr[best[ok]])
+        r_rows.append(rr[ok])
+    g, r = np.concatenate(g_rows), np.concatenate(r_rows)
+    order = np.lexsort((r, g))
+    return g[order], r[order]
+
+
+def reference_under(gt, res, match: np.ndarray) -> int:
+    """PBM's under-segmented trajectories, trajectory by trajectory."""
+    hit = match >= 0
+    m_g, m_f, m_r = gt.ids[hit], gt.frames[hit], res.ids[match[hit]]
+    under = 0
+    for g in np.unique(m_g):
+        first = np.flatnonzero(m_g == g)[np.argmin(m_f[m_g == g])]
+        under += bool(((m_r == m_r[first]) & (m_f < m_f[first]) & (m_g != g)).any())
+    return under

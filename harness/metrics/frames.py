@@ -60,6 +60,8 @@ class FramePairs:
         entry_start: (F + 1,) int64 offsets of each frame's entries in row, col, iou.
         ignored_gt: number of gt rows not scored (conf 0 or non-pedestrian class).
         removed_tracker: number of tracker rows removed for matching a distractor.
+        gt_rows, tracker_rows: (N,) and (M,) int64 rows of the gt and tracker tables the
+            boxes come from (``frame_pairs``; None from ``from_dense``).
     """
 
     frames: np.ndarray
@@ -73,6 +75,8 @@ class FramePairs:
     entry_start: np.ndarray
     ignored_gt: int = 0
     removed_tracker: int = 0
+    gt_rows: np.ndarray | None = None
+    tracker_rows: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -126,7 +130,7 @@ class FramePairs:
                    np.cumsum([0, *map(len, vals[1:])], dtype=np.int64))
 
 
-def _check_unique_ids(table: MotTable, what: str) -> None:
+def check_unique_ids(table: MotTable, what: str) -> None:
     """Raise ValueError naming file, frame and id when an id occurs twice in a frame."""
     if len(table) < 2:
         return
@@ -149,25 +153,29 @@ def pair_frames(gt: MotTable, res: MotTable) -> FramePairs:
     Raises:
         ValueError: an id occurs twice in one frame of gt or results (names the file).
     """
-    _check_unique_ids(gt, "gt")
-    _check_unique_ids(res, "tracker")
+    check_unique_ids(gt, "gt")
+    check_unique_ids(res, "tracker")
     scored = scored_gt_mask(gt)
+    kept = np.flatnonzero(~distractor_matches(gt, res))
+    out = frame_pairs(gt, np.flatnonzero(scored), res, kept)
+    out.ignored_gt, out.removed_tracker = int((~scored).sum()), len(res) - len(kept)
+    if out.removed_tracker:
+        log.info("%s: %d tracker boxes on distractors removed", res.path, out.removed_tracker)
+    return out
+
+
+def frame_pairs(gt: MotTable, gt_rows: np.ndarray, res: MotTable,
+                res_rows: np.ndarray) -> FramePairs:
+    """``FramePairs`` of some rows of ``gt`` against some rows of ``res`` (ascending (K,) int
+    index arrays), over every frame of either table, with the nonzero IoUs of each frame."""
     frames = np.union1d(gt.frames, res.frames).astype(np.int64)
-    g_order = np.argsort(gt.frames, kind="stable")  # rows grouped by frame, in file order
-    r_order = np.argsort(res.frames, kind="stable")
-    kept = r_order[~distractor_matches(gt, res)[r_order]]
-    scored_rows = g_order[scored[g_order]]
-    g_start = np.searchsorted(gt.frames[scored_rows], frames, side="left")
-    r_start = np.searchsorted(res.frames[kept], frames, side="left")
-    g_start = np.r_[g_start, len(scored_rows)].astype(np.int64)
-    r_start = np.r_[r_start, len(kept)].astype(np.int64)
-    row, col, iou, entry_start = sparse_iou(gt.boxes[scored_rows], g_start, res.boxes[kept],
-                                            r_start)
-    removed = len(res) - len(kept)
-    if removed:
-        log.info("%s: %d tracker boxes on distractors removed", res.path, removed)
-    return FramePairs(frames, gt.ids[scored_rows], res.ids[kept], g_start, r_start, row, col,
-                      iou, entry_start, ignored_gt=int((~scored).sum()), removed_tracker=removed)
+    g = gt_rows[np.argsort(gt.frames[gt_rows], kind="stable")]  # by frame, in table order
+    r = res_rows[np.argsort(res.frames[res_rows], kind="stable")]
+    g_start = np.r_[np.searchsorted(gt.frames[g], frames), len(g)].astype(np.int64)
+    r_start = np.r_[np.searchsorted(res.frames[r], frames), len(r)].astype(np.int64)
+    row, col, iou, entry_start = sparse_iou(gt.boxes[g], g_start, res.boxes[r], r_start)
+    return FramePairs(frames, gt.ids[g], res.ids[r], g_start, r_start, row, col, iou,
+                      entry_start, gt_rows=g, tracker_rows=r)
 
 
 def distractor_matches(gt: MotTable, res: MotTable) -> np.ndarray:

@@ -8,7 +8,7 @@ as visibility 0 and an unlabelled one as 1; rows with neither are left out of th
 
 Per visibility bin [0, .25), [.25, .5), [.5, .75), [.75, 1] (columns ``*_v0-25`` ...):
 
-* ``Recall``: matched GT rows / GT rows of the bin (CLEAR matching, ``paper.match_rows``).
+* ``Recall``: matched GT rows / GT rows of the bin (CLEAR matching, ``rows.match_rows``).
 * ``IDP`` (identity precision of the tracked rows): of the matched GT rows of the bin, the
   fraction whose result id is the one globally assigned to that person by the identity
   mapping of IDF1 (Ristani et al. 2016: the one-to-one GT id <-> result id mapping that
@@ -46,10 +46,12 @@ import pandas as pd
 from harness.datasets.base import GroundTruth
 from harness.io.mot import MotTable
 from harness.metrics.counts import combine_counts
+from harness.metrics.frames import FramePairs, frame_pairs
+from harness.metrics.identity import overlap_counts
 from harness.metrics.paper import COLUMNS as PAPER_COLUMNS
-from harness.metrics.paper import PaperCounts, considered_mask, match_rows, paper_counts
+from harness.metrics.paper import PaperCounts, paper_counts
+from harness.metrics.rows import RowMatching, considered_mask, row_matching
 from trackers.common.assignment import assign
-from trackers.geometry import iou_matrix
 
 log = logging.getLogger(__name__)
 
@@ -111,29 +113,30 @@ def row_visibility(gt: MotTable, occluded: np.ndarray | None = None) -> np.ndarr
     return vis
 
 
-def identity_mapping(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> dict[int, int]:
+def identity_mapping(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
+                     pairs: FramePairs | None = None) -> dict[int, int]:
     """GT id -> result id of the IDF1 mapping (Ristani et al. 2016): the one-to-one pairing
-    maximising the number of frames in which the pair overlaps with IoU >= threshold."""
+    maximising the number of frames in which the pair overlaps with IoU >= threshold.
+
+    The frame counts are gathered sparse (``harness.metrics.identity.overlap_counts`` of
+    ``pairs``, the ``frame_pairs`` of all rows when already computed); the assignment is
+    solved on the dense (GT ids, result ids) matrix, whose tie-breaking among equally good
+    mappings decides which rows count as matched with the mapped id."""
     if len(gt) == 0 or len(res) == 0:
         return {}
-    g_ids, g_inv = np.unique(gt.ids, return_inverse=True)
-    r_ids, r_inv = np.unique(res.ids, return_inverse=True)
-    together = np.zeros((len(g_ids), len(r_ids)), dtype=np.int64)
-    res_index = res.frame_index()
-    for frame, gr in gt.frame_index().items():
-        rr = res_index.get(frame)
-        if rr is None:
-            continue
-        gi, ri = np.nonzero(iou_matrix(gt.boxes[gr], res.boxes[rr]) >= iou_threshold)
-        np.add.at(together, (g_inv[gr[gi]], r_inv[rr[ri]]), 1)
-    cost = np.where(together > 0, -together.astype(np.float64), np.inf)
-    pairs, _, _ = assign(cost, 0.0)
-    return {int(g_ids[i]): int(r_ids[j]) for i, j in pairs}
+    if pairs is None:
+        pairs = frame_pairs(gt, np.arange(len(gt)), res, np.arange(len(res)))
+    g, t, count = overlap_counts(pairs, iou_threshold)
+    g_ids, r_ids = np.unique(gt.ids), np.unique(res.ids)
+    cost = np.full((len(g_ids), len(r_ids)), np.inf)
+    cost[np.searchsorted(g_ids, g), np.searchsorted(r_ids, t)] = -count.astype(np.float64)
+    matched, _, _ = assign(cost, 0.0)
+    return {int(g_ids[i]): int(r_ids[j]) for i, j in matched}
 
 
 def occlusion_counts(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: float = 0.5,
-                     hidden_below: float = 0.05,
-                     occluded: np.ndarray | None = None) -> OcclusionCounts:
+                     hidden_below: float = 0.05, occluded: np.ndarray | None = None,
+                     matching: RowMatching | None = None) -> OcclusionCounts:
     """Count the occlusion metrics of one sequence.
 
     Args:
@@ -142,19 +145,19 @@ def occlusion_counts(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: f
         iou_threshold: smallest IoU of a match.
         hidden_below: visibility under which a person counts as fully hidden.
         occluded: (len(gt),) bool labels when ``gt`` is a MotTable (overrides GroundTruth's).
+        matching: ``paper.row_matching(gt, res, iou_threshold)`` when already computed.
     """
     if isinstance(gt, GroundTruth):
         occluded = gt.occluded if occluded is None else occluded
         gt = gt.table
     if not 0.0 <= hidden_below <= 1.0:
         raise ValueError(f"hidden_below must be in [0, 1], got {hidden_below}")
-    vis_all = row_visibility(gt, occluded)
-    keep = considered_mask(gt)
-    gt, vis = gt.rows(keep), vis_all[keep]
+    vis = row_visibility(gt, occluded)[considered_mask(gt)]
+    m = matching if matching is not None else row_matching(gt, res, iou_threshold)
+    gt, match = m.gt, m.match
     out = OcclusionCounts()
     if len(gt) == 0:
         return out
-    match = match_rows(gt, res, iou_threshold)
     hit = match >= 0
     mid = np.full(len(gt), -1, dtype=np.int64)
     mid[hit] = res.ids[match[hit]]
@@ -162,7 +165,7 @@ def occlusion_counts(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: f
     b = np.clip(np.searchsorted(BIN_EDGES, np.where(known, vis, 0.0), side="right") - 1,
                 0, len(BIN_NAMES) - 1)
 
-    mapping = identity_mapping(gt, res, iou_threshold)
+    mapping = identity_mapping(gt, res, iou_threshold, m.pairs)
     mapped = np.array([mapping.get(int(g), -2) for g in gt.ids], dtype=np.int64)
 
     # CLEAR switches: per person, in time order over matched rows, id differs from the last
@@ -238,8 +241,9 @@ def extra_score(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: float 
                 hidden_below: float = 0.05) -> ExtraScore:
     """Paper metrics (``harness.metrics.paper``) and occlusion metrics of one sequence."""
     table = gt.table if isinstance(gt, GroundTruth) else gt
-    return ExtraScore(paper_counts(table, res, iou_threshold),
-                      occlusion_counts(gt, res, iou_threshold, hidden_below))
+    matching = row_matching(table, res, iou_threshold)  # one matching for both
+    return ExtraScore(paper_counts(table, res, iou_threshold, matching),
+                      occlusion_counts(gt, res, iou_threshold, hidden_below, matching=matching))
 
 
 def extra_rows(scores: Mapping[str, Mapping[str, ExtraScore]]) -> pd.DataFrame:

@@ -1,11 +1,10 @@
 """The trajectory-level metrics the two papers report, as pure functions of gt and result.
 
 Both papers score trajectories, not frames. Everything here starts from one frame-by-frame
-matching of ground-truth rows to result rows (``match_rows``), made the CLEAR MOT way
-(Bernardin & Stiefelhagen 2008): a pair matched in the previous frame is kept while its
-IoU stays >= the threshold, the remaining rows are matched by the Hungarian method on IoU
-(pairs below the threshold are forbidden). Ground-truth rows with ``conf == 0`` (MOT16
-"ignore") or a class other than pedestrian are left out (``considered_mask``).
+matching of ground-truth rows to result rows made the CLEAR MOT way
+(``harness.metrics.rows.match_rows``, re-exported here). Ground-truth rows with
+``conf == 0`` (MOT16 "ignore") or a class other than pedestrian are left out
+(``considered_mask``).
 
 Reta et al. 2015, Table 1 (metrics "obtained from Song et al. [22]", who took them from
 Li, Huang & Nevatia, CVPR 2009), implemented word for word:
@@ -67,10 +66,15 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from harness.io.mot import MotTable, scored_gt_mask
+from harness.io.mot import MotTable
 from harness.metrics.counts import combine_counts
-from trackers.common.assignment import assign
-from trackers.geometry import iou_matrix, overlap_ratio_matrix
+from harness.metrics.rows import (  # noqa: F401 - considered, match_rows: paper's API too
+    RowMatching,
+    considered,
+    considered_mask,
+    match_rows,
+    row_matching,
+)
 
 log = logging.getLogger(__name__)
 
@@ -83,63 +87,6 @@ PBM_COLUMNS = [
 ]
 SEGMENTATION_COLUMNS = ["PBM_dx%", "PBM_dy%", "PBM_dw%", "PBM_dh%"]
 COLUMNS = RETA_COLUMNS + PBM_COLUMNS + SEGMENTATION_COLUMNS
-
-
-def considered_mask(gt: MotTable) -> np.ndarray:
-    """(N,) bool: GT rows that are scored, by the MOTChallenge rules of
-    ``harness.metrics.frames``: ``conf != 0`` and class pedestrian (1) or none (-1)."""
-    return scored_gt_mask(gt)
-
-
-def considered(gt: MotTable) -> MotTable:
-    """The GT rows that are scored (see ``considered_mask``)."""
-    return gt.rows(considered_mask(gt))
-
-
-def match_rows(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> np.ndarray:
-    """Match GT rows to result rows frame by frame, keeping last frame's pairs (CLEAR MOT).
-
-    Args:
-        gt: ground-truth rows (all are matched; filter with ``considered`` first).
-        res: result rows.
-        iou_threshold: smallest IoU of a match.
-    Returns:
-        (len(gt),) int64 index of the matched row of ``res`` for each GT row, -1 where none.
-    """
-    if not 0.0 < iou_threshold <= 1.0:
-        raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold}")
-    out = np.full(len(gt), -1, dtype=np.int64)
-    if len(gt) == 0 or len(res) == 0:
-        return out
-    res_index = res.frame_index()
-    previous: dict[int, int] = {}  # gt id -> result id matched in the last frame it was matched
-    for frame, g_rows in gt.frame_index().items():
-        r_rows = res_index.get(frame)
-        if r_rows is None or len(r_rows) == 0:
-            continue
-        iou = iou_matrix(gt.boxes[g_rows], res.boxes[r_rows])
-        iou = np.where(iou >= iou_threshold, iou, 0.0)
-        g_ids, r_ids = gt.ids[g_rows], res.ids[r_rows]
-        # keep last frame's correspondences that are still valid
-        kept = np.zeros(len(g_rows), dtype=bool)
-        taken = np.zeros(len(r_rows), dtype=bool)
-        for i, gid in enumerate(g_ids):
-            rid = previous.get(int(gid))
-            if rid is None:
-                continue
-            j = np.flatnonzero((r_ids == rid) & ~taken)
-            if len(j) and iou[i, j[0]] > 0:
-                kept[i], taken[j[0]] = True, True
-                out[g_rows[i]] = r_rows[j[0]]
-        free_g, free_r = np.flatnonzero(~kept), np.flatnonzero(~taken)
-        if len(free_g) and len(free_r):
-            cost = 1.0 - iou[np.ix_(free_g, free_r)]
-            cost[iou[np.ix_(free_g, free_r)] <= 0] = np.inf
-            pairs, _, _ = assign(cost, 1.0 - iou_threshold + 1e-12)
-            out[g_rows[free_g[pairs[:, 0]]]] = r_rows[free_r[pairs[:, 1]]]
-        hit = out[g_rows] >= 0
-        previous.update(zip(g_ids[hit].tolist(), res.ids[out[g_rows[hit]]].tolist()))
-    return out
 
 
 def _changes(keys: np.ndarray, order_key: np.ndarray,
@@ -221,58 +168,61 @@ class PaperCounts:
         }
 
 
-def responses(gt: MotTable, res: MotTable, match: np.ndarray,
-              inside: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+def responses(m: RowMatching, inside: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
     """All (GT row, result row) response pairs: the matched pairs plus unmatched result
-    boxes lying at least ``inside`` within a GT box of the same frame (each such box answers
-    the GT box covering most of it).
+    boxes lying at least ``inside`` (> 0) within a GT box of the same frame (each such box
+    answers the GT box covering most of it, the first in table order on a tie).
 
     Returns:
         (K,) GT row indices and (K,) result row indices, sorted by GT row then result row.
     """
-    g_rows = [np.flatnonzero(match >= 0)]
-    r_rows = [match[g_rows[0]]]
-    used = np.zeros(len(res), dtype=bool)
-    used[r_rows[0]] = True
-    gt_index = gt.frame_index()
-    for frame, rr in res.frame_index().items():
-        rr = rr[~used[rr]]
-        gr = gt_index.get(frame)
-        if len(rr) == 0 or gr is None:
-            continue
-        cover = overlap_ratio_matrix(res.boxes[rr], gt.boxes[gr])  # |r & g| / |r|
-        best = np.argmax(cover, axis=1)
-        ok = cover[np.arange(len(rr)), best] >= inside
-        g_rows.append(gr[best[ok]])
-        r_rows.append(rr[ok])
-    g, r = np.concatenate(g_rows), np.concatenate(r_rows)
+    matched = np.flatnonzero(m.match >= 0)
+    used = np.zeros(len(m.res), dtype=bool)
+    used[m.match[matched]] = True
+    p = m.pairs  # a box covering part of another overlaps it: its IoU is nonzero
+    g, r = p.gt_rows[p.row], p.tracker_rows[p.col]
+    g, r = g[~used[r]], r[~used[r]]
+    cover = _intersection(m.res.boxes[r], m.gt.boxes[g])  # |r & g| / |r|, as
+    area = m.res.boxes[r, 2] * m.res.boxes[r, 3]  # trackers.geometry.overlap_ratio_matrix
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cover = np.where(area > 0, cover / area, 0.0)
+    order = np.lexsort((g, -cover, r))  # per result box the best cover, then the first gt
+    best = order[np.r_[True, r[order][1:] != r[order][:-1]]] if len(r) else order
+    best = best[cover[best] >= inside]
+    g, r = np.r_[matched, g[best]], np.r_[m.match[matched], r[best]]
     order = np.lexsort((r, g))
     return g[order], r[order]
 
 
-def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> PaperCounts:
+def _intersection(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(K,) intersection areas of the xywh box pairs a[k], b[k] (the entries of
+    ``trackers.geometry.intersection_matrix``, computed alike)."""
+    w = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2]) - np.maximum(a[:, 0], b[:, 0])
+    h = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3]) - np.maximum(a[:, 1], b[:, 1])
+    return np.clip(w, 0.0, None) * np.clip(h, 0.0, None)
+
+
+def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
+                 matching: RowMatching | None = None) -> PaperCounts:
     """Count everything the papers' trajectory tables need for one sequence.
 
     Args:
         gt: ground truth (rows with conf == 0 are ignored).
         res: tracker result rows.
         iou_threshold: smallest IoU of a match.
+        matching: ``row_matching(gt, res, iou_threshold)`` when already computed.
     """
-    gt = considered(gt)
+    m = matching if matching is not None else row_matching(gt, res, iou_threshold)
     out = PaperCounts()
-    if len(gt) == 0:
+    if len(m.gt) == 0:
         return out
-    match = match_rows(gt, res, iou_threshold)
-    hit = match >= 0
-    gids, gframes = gt.ids, gt.frames
-    mid = np.full(len(gt), -1, dtype=np.int64)
-    mid[hit] = res.ids[match[hit]]
-
-    uniq, inverse = np.unique(gids, return_inverse=True)
+    hit = m.match >= 0
+    mid = np.full(len(m.gt), -1, dtype=np.int64)
+    mid[hit] = m.res.ids[m.match[hit]]
+    uniq, inverse = np.unique(m.gt.ids, return_inverse=True)
     n = len(uniq)
-    length = np.bincount(inverse, minlength=n)
     covered = np.bincount(inverse, weights=hit, minlength=n)
-    coverage = covered / length
+    coverage = covered / np.bincount(inverse, minlength=n)
     out.gt = n
     out.mt80 = int((coverage > 0.8).sum())
     out.ml20 = int((coverage < 0.2).sum())
@@ -281,13 +231,12 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> Pap
     out.missed = int((covered == 0).sum())
 
     # matched rows only, as (gt index, frame, result id)
-    m_g, m_f, m_r = inverse[hit], gframes[hit], mid[hit]
+    m_g, m_f, m_r = inverse[hit], m.gt.frames[hit], mid[hit]
     # Frag: id changes along each GT trajectory (matched frames, in time order)
     order, change = _changes(m_g, m_f, m_r)
     out.frag = int(change.sum())
     # IDS: GT changes along each result trajectory
-    _, r_change = _changes(m_r, m_f, m_g)
-    out.ids = int(r_change.sum())
+    out.ids = int(_changes(m_r, m_f, m_g)[1].sum())
 
     # distinct ids per trajectory
     pairs = np.unique(np.column_stack([m_g, m_r]), axis=0) if len(m_g) else np.zeros((0, 2), int)
@@ -296,8 +245,16 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> Pap
     out.over = int((n_ids > 1).sum())
     out.ids_sum = int(n_ids.sum())
     out.matched_traj = int((n_ids > 0).sum())
+    out.swaps = _swaps(m_g, m_f, m_r, order, change)
+    out.under = _under(m_g, m_f, m_r, order)
+    _segmentation(out, m, *responses(m))
+    return out
 
-    # swaps: along a GT trajectory an id change p -> q where q's previous match was another GT
+
+def _swaps(m_g: np.ndarray, m_f: np.ndarray, m_r: np.ndarray, order: np.ndarray,
+           change: np.ndarray) -> int:
+    """PBM's swaps: along a GT trajectory an id change p -> q where q's previous match was
+    another GT (``order``, ``change``: ``_changes(m_g, m_f, m_r)``)."""
     r_order = np.lexsort((m_f, m_r))
     prev_gt = np.full(len(m_g), -1)
     same = np.zeros(len(m_g), dtype=bool)
@@ -306,32 +263,48 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> Pap
     prev_gt[r_order] = np.where(same, shifted, -1)
     changed = np.zeros(len(m_g), dtype=bool)
     changed[order] = change
-    out.swaps = int((changed & (prev_gt >= 0) & (prev_gt != m_g)).sum())
+    return int((changed & (prev_gt >= 0) & (prev_gt != m_g)).sum())
 
-    # under-segmented: first id of a trajectory matched earlier to another trajectory
-    if len(m_g):
-        first = order[np.r_[True, m_g[order][1:] != m_g[order][:-1]]]  # first match per GT
-        for row in first:
-            earlier = (m_r == m_r[row]) & (m_f < m_f[row]) & (m_g != m_g[row])
-            out.under += int(earlier.any())
 
-    # multiple responses and segmentation errors
-    rg, rr = responses(gt, res, match)
-    if len(rg):
-        distinct = np.unique(np.column_stack([rg, res.ids[rr]]), axis=0)
-        out.resp_ids_sum = len(distinct)
-        out.resp_rows = len(np.unique(rg))
-        gb, rb = gt.boxes[rg], res.boxes[rr]
-        dx = (rb[:, 0] + rb[:, 2] / 2 - gb[:, 0] - gb[:, 2] / 2) / gb[:, 2]
-        dy = (rb[:, 1] + rb[:, 3] / 2 - gb[:, 1] - gb[:, 3] / 2) / gb[:, 3]
-        dw = (rb[:, 2] - gb[:, 2]) / gb[:, 2]
-        dh = (rb[:, 3] - gb[:, 3]) / gb[:, 3]
-        out.n_pairs = len(rg)
-        out.abs_dx, out.abs_dy = float(np.abs(dx).sum()), float(np.abs(dy).sum())
-        out.abs_dw, out.abs_dh = float(np.abs(dw).sum()), float(np.abs(dh).sum())
-        out.min_dw, out.max_dw = float(dw.min()), float(dw.max())
-        out.min_dh, out.max_dh = float(dh.min()), float(dh.max())
-    return out
+def _under(m_g: np.ndarray, m_f: np.ndarray, m_r: np.ndarray, order: np.ndarray) -> int:
+    """PBM's under-segmented trajectories: the first id of a trajectory was matched, in an
+    earlier frame, to another trajectory (``order`` sorts the matches by GT, then frame).
+
+    Per result id: its earliest match (frame f1, GT g1) and its earliest match to a GT other
+    than g1 (frame f2); a trajectory g starting at frame f with that id is under-segmented
+    when f1 < f for g != g1, or f2 < f for g == g1."""
+    if len(m_g) == 0:
+        return 0
+    first = order[np.r_[True, m_g[order][1:] != m_g[order][:-1]]]  # first match per GT
+    ids, r = np.unique(m_r, return_inverse=True)
+    by_time = np.lexsort((m_f, r))
+    head = by_time[np.r_[True, r[by_time][1:] != r[by_time][:-1]]]  # earliest match per id
+    f1, g1 = np.empty(len(ids), m_f.dtype), np.empty(len(ids), m_g.dtype)
+    f1[r[head]], g1[r[head]] = m_f[head], m_g[head]
+    other = m_g != g1[r]
+    f2 = np.full(len(ids), np.iinfo(np.int64).max)
+    np.minimum.at(f2, r[other], m_f[other])
+    f, g, k = m_f[first], m_g[first], r[first]
+    return int(np.where(g != g1[k], f1[k] < f, f2[k] < f).sum())
+
+
+def _segmentation(out: PaperCounts, m: RowMatching, rg: np.ndarray, rr: np.ndarray) -> None:
+    """Multiple responses and PBM's segmentation errors from the response pairs."""
+    if len(rg) == 0:
+        return
+    distinct = np.unique(np.column_stack([rg, m.res.ids[rr]]), axis=0)
+    out.resp_ids_sum = len(distinct)
+    out.resp_rows = len(np.unique(rg))
+    gb, rb = m.gt.boxes[rg], m.res.boxes[rr]
+    dx = (rb[:, 0] + rb[:, 2] / 2 - gb[:, 0] - gb[:, 2] / 2) / gb[:, 2]
+    dy = (rb[:, 1] + rb[:, 3] / 2 - gb[:, 1] - gb[:, 3] / 2) / gb[:, 3]
+    dw = (rb[:, 2] - gb[:, 2]) / gb[:, 2]
+    dh = (rb[:, 3] - gb[:, 3]) / gb[:, 3]
+    out.n_pairs = len(rg)
+    out.abs_dx, out.abs_dy = float(np.abs(dx).sum()), float(np.abs(dy).sum())
+    out.abs_dw, out.abs_dh = float(np.abs(dw).sum()), float(np.abs(dh).sum())
+    out.min_dw, out.max_dw = float(dw.min()), float(dw.max())
+    out.min_dh, out.max_dh = float(dh.min()), float(dh.max())
 
 
 def paper_metrics(gt: MotTable, res: MotTable, iou_threshold: float = 0.5) -> dict[str, float]:

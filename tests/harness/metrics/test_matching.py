@@ -3,13 +3,19 @@ frames (no gt, no results, neither), equal IoUs (duplicated boxes on a pixel gri
 that appear and vanish: the sparse IoU of ``pair_frames`` (a compiled kernel) against
 ``trackers.geometry.iou_matrix`` frame by frame, CLEAR's matching against its per-frame loop
 (TrackEval's ``CLEAR.eval_sequence``), the identity counts against TrackEval's dense
-assignment, HOTA against TrackEval's loops (``test_hota.reference_hota``)."""
+assignment, HOTA against TrackEval's loops, and the paper metrics' matching, responses and
+under-segmentation against their loops (``tests/metric_references.py``)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from metric_references import reference_hota
+from metric_references import (
+    reference_hota,
+    reference_match_rows,
+    reference_responses,
+    reference_under,
+)
 from mot_tables import table
 from scipy.optimize import linear_sum_assignment
 
@@ -19,6 +25,8 @@ from harness.metrics.clear import ML_BELOW, MT_ABOVE, ClearCounts, clear_counts
 from harness.metrics.frames import FramePairs, pair_frames, scored_gt_mask
 from harness.metrics.hota import hota_counts
 from harness.metrics.identity import identity_counts, max_weight_matching
+from harness.metrics.paper import paper_counts, responses
+from harness.metrics.rows import row_matching
 from trackers.geometry import iou_matrix
 
 EPS = np.finfo(float).eps
@@ -189,3 +197,22 @@ def test_max_weight_matching_finds_the_optimum_across_components():
     g, t, w = np.array([1, 1, 2, 3]), np.array([1, 2, 1, 3]), np.array([3, 2, 2, 1])
     assert max_weight_matching(g, t, w).tolist() == [1, 2, 3]
     assert identity_counts(pair_frames(MotTable.empty(), MotTable.empty())) == (0, 0, 0)
+
+
+@pytest.mark.parametrize("seed", range(10))
+@pytest.mark.parametrize("threshold", [0.5, 0.3])
+def test_paper_matching_responses_and_under_equal_their_loops(seed, threshold):
+    gt, res = random_tables(np.random.default_rng(seed))
+    m = row_matching(gt, res, threshold)
+    assert np.array_equal(m.match, reference_match_rows(m.gt, res, threshold))
+    for got, ref in zip(responses(m), reference_responses(m.gt, res, m.match)):
+        assert np.array_equal(got, ref)
+    assert paper_counts(gt, res, threshold).under == reference_under(m.gt, res, m.match)
+
+
+def test_under_segmented_when_the_first_id_served_another_person_before():
+    # id 7 follows person 1 (frames 1-2), then person 2 starts with it (frame 3)
+    gt = table([(1, 1, 0, 0, 10, 10), (2, 1, 0, 0, 10, 10), (3, 2, 50, 0, 10, 10)])
+    res = table([(1, 7, 0, 0, 10, 10), (2, 7, 0, 0, 10, 10), (3, 7, 50, 0, 10, 10)])
+    assert paper_counts(gt, res).under == 1
+    assert paper_counts(gt, res.rows(np.array([2]))).under == 0
