@@ -10,7 +10,6 @@ rendered masks. When a MOTChallenge ``det/det.txt`` sits beside the gt, it is at
 
 from __future__ import annotations
 
-import configparser
 import logging
 import math
 import zlib
@@ -18,11 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.datasets.base import Sequence, window
+from harness.datasets.mot import read_seqinfo, seqinfo_number
 from harness.datasets.synthetic.people import random_appearance
 from harness.datasets.synthetic.scenarios import walking_poses
 from harness.datasets.synthetic.scene import Camera, render_background
 from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
-from harness.datasets.base import Sequence, window
 from harness.io.mot import read_mot
 
 log = logging.getLogger(__name__)
@@ -45,15 +45,10 @@ def _locate(gt_path: str | Path) -> tuple[Path, Path]:
     )
 
 
-def _seqinfo(root: Path) -> dict[str, str]:
+def _seqinfo(root: Path) -> tuple[dict[str, str], Path]:
+    """The ``[Sequence]`` keys of ``root/seqinfo.ini`` ({} without one) and its path."""
     ini = root / "seqinfo.ini"
-    if not ini.is_file():
-        return {}
-    cp = configparser.ConfigParser()
-    cp.read(ini)
-    if "Sequence" not in cp:
-        raise ValueError(f"{ini}: no [Sequence] section")
-    return dict(cp["Sequence"])
+    return (read_seqinfo(ini) if ini.is_file() else {}), ini
 
 
 def load_replay(
@@ -88,10 +83,13 @@ def load_replay(
         A one-element list (the dataset interface returns lists of sequences).
     Raises:
         FileNotFoundError: naming the missing path.
+        SeqInfoError: a malformed seqinfo.ini key; MotFormatError: a malformed gt row, or
+            one past seqLength (file and line named).
     """
     gt_file, root = _locate(gt_path)
-    info = _seqinfo(root)
-    table = read_mot(gt_file, gt=True)
+    info, ini = _seqinfo(root)
+    seq_length = seqinfo_number(info, "seqLength", ini, int)
+    table = read_mot(gt_file, gt=True, last_frame=seq_length)  # rows past it: an error
     if max_frames is not None:
         if max_frames < 1:
             raise ValueError(f"replay: max_frames must be >= 1, got {max_frames}")
@@ -102,11 +100,12 @@ def load_replay(
             + (f" in frames 1..{max_frames}" if max_frames else "")
         )
     b = table.boxes
-    W = int(width or info.get("imwidth") or math.ceil(np.max(b[:, 0] + b[:, 2]) / 16) * 16)
-    H = int(height or info.get("imheight") or math.ceil(np.max(b[:, 1] + b[:, 3]) / 16) * 16)
-    rate = float(fps or info.get("framerate") or 25.0)
-    length = int(info.get("seqlength") or table.frames.max())
-    length = int(max(length, table.frames.max()))
+    W = int(width or seqinfo_number(info, "imWidth", ini, int)
+            or math.ceil(np.max(b[:, 0] + b[:, 2]) / 16) * 16)
+    H = int(height or seqinfo_number(info, "imHeight", ini, int)
+            or math.ceil(np.max(b[:, 1] + b[:, 3]) / 16) * 16)
+    rate = float(fps or seqinfo_number(info, "frameRate", ini, float) or 25.0)
+    length = int(seq_length or table.frames.max())
     if max_frames is not None:
         length = min(length, int(max_frames))
     seq_name = name or info.get("name") or root.name

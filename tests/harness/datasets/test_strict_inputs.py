@@ -183,3 +183,18 @@ def test_a_video_whose_frame_size_changes_is_refused(tmp_path):
         seq.frame(1)
     (one,) = load_video(a)
     assert one.refused is None and one.frame(10).shape == (64, 96, 3)
+
+
+def test_replay_reads_seqinfo_and_gt_as_strictly(tmp_path):
+    from harness.datasets.synthetic import load_replay
+
+    seq = mot_seq(tmp_path, gt=GT + "11,1,21,20,10,30,1,1,1\n")
+    with pytest.raises(MotFormatError, match=rf"gt\.txt:{N + 1}: frame 11 is beyond"):
+        load_replay(seq)
+    ini = seq / "seqinfo.ini"
+    ini.write_text(INI.format(n=N).replace(f"seqLength={N}", "seqLength=10.5"))
+    with pytest.raises(SeqInfoError, match="key 'seqLength' must be a positive integer"):
+        load_replay(seq)
+    ini.write_text(INI.format(n=12))
+    (s,) = load_replay(seq, noise=0.0)
+    assert (s.info.length, s.info.width, s.info.height, s.info.fps) == (12, 64, 48, 10.0)
