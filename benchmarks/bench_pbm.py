@@ -36,7 +36,9 @@ from tracker_timing import StageClock, check_digests, cpu_seconds, reference_sec
 
 from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
 from harness.paths import data_path
-from harness.pipeline.experiment import run_sequence, score, summary_rows
+from harness.pipeline.loop import run_sequence
+from harness.pipeline.record import score
+from harness.pipeline.summary import summary_rows
 from harness.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[1]

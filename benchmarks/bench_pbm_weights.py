@@ -42,7 +42,9 @@ from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
 from harness.fit.pbm import load_feature_weights
 from harness.fit.pbm import main as fit_main
 from harness.paths import data_path
-from harness.pipeline.experiment import run_sequence, score, summary_rows
+from harness.pipeline.loop import run_sequence
+from harness.pipeline.record import score
+from harness.pipeline.summary import summary_rows
 from harness.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -131,7 +131,8 @@ def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
     """IDF1 / HOTA / MOTA / IDs of reta and baseline on the synthetic suite and CAVIAR."""
     from harness import metrics
     from harness.datasets.synthetic import load_suite
-    from harness.pipeline.experiment import run_sequence, score
+    from harness.pipeline.loop import run_sequence
+    from harness.pipeline.record import score
     from harness.sources.annotations import NoisyGroundTruth
 
     rows = []

@@ -212,19 +212,30 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
     out += staged
     if warm:  # once per sequence: one "frame" of this row is the whole warm-up
         out.append(StageTiming("warm-up (per sequence)", 1, warm))
-    names = list(make_trackers())
-    for name in names:
-        runs = []
-        for _ in range(repeats):
-            tracker = make_trackers()[name]
-
-            def track(tracker: Any = tracker) -> None:
-                for img, (dets, fg) in zip(images, inputs):
-                    tracker.update(img, dets, fg)
-
-            runs.append(_time(track))
-        out.append(StageTiming(f"tracker {name}", n, runs))
+    for name in list(make_trackers()):
+        out.append(StageTiming(f"tracker {name}", n, [
+            bench_tracker(name, make_trackers()[name], images, inputs)
+            for _ in range(repeats)]))
     return out
+
+
+def bench_tracker(name: str, tracker: Any, images: Sequence[Any],
+                  inputs: Sequence[tuple[Any, Any]]) -> float:
+    """Seconds ``tracker``'s ``update`` took (the bench's clock, summed by a
+    ``TrackerBank``) over ``images`` and their cached (detections, foreground).
+
+    Raises:
+        RuntimeError: the tracker failed (its error in the message).
+    """
+    from harness.pipeline.bank import TrackerBank
+
+    bank = TrackerBank({name: tracker}, clock=_clock)
+    for k, (img, (dets, fg)) in enumerate(zip(images, inputs), 1):
+        bank.step(k, img, dets, fg)
+    out = bank.outputs[name]
+    if out.error is not None:
+        raise RuntimeError(f"tracker {name} failed: {out.error}")
+    return out.seconds
 
 
 def main(argv: Sequence[str] | None = None) -> int:

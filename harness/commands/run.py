@@ -66,7 +66,8 @@ def run_app(cfg: DictConfig) -> float:
     """One run: the experiment, the printed table, the objective (raises AppError on failure)."""
     from tqdm.contrib.logging import logging_redirect_tqdm
 
-    from harness.pipeline.experiment import RunError, run_experiment
+    from harness.errors import RunError
+    from harness.pipeline.experiment import run_experiment
     from harness.progress import progress_factory
     from harness.report.tables import comparison, to_text
 

@@ -48,7 +48,8 @@ def tracker_choice(overrides: Seq[str]) -> str | None:
     return None
 
 
-def _cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
+def cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
+    """``cfg[key]`` of a config node, dict or object; ``default`` when missing or None."""
     try:
         value = cfg.get(key, default)
     except AttributeError:
@@ -56,7 +57,8 @@ def _cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
     return default if value is None else value
 
 
-def _container(node: Any) -> Any:
+def container(node: Any) -> Any:
+    """A config node as plain Python (resolved); any other value as it is."""
     from omegaconf import DictConfig, ListConfig, OmegaConf
 
     if isinstance(node, DictConfig | ListConfig):
@@ -86,7 +88,7 @@ def _locate_target(target: str) -> Any:
     raise first_error or ImportError(f"{target!r} is not a dotted path to an object")
 
 
-def _hydra_choice(group: str) -> str | None:
+def hydra_choice(group: str) -> str | None:
     """The config choice of ``group`` in a running Hydra app, else None."""
     from hydra.core.hydra_config import HydraConfig
 
@@ -108,7 +110,7 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
         raise RunError("no tracker selected: set tracker=<name> or tracker=all")
     if "_target_" in node:
         if name is None:
-            name = _hydra_choice("tracker")
+            name = hydra_choice("tracker")
         if name is None or name == "all":
             name = str(node["_target_"]).rsplit(".", 1)[-1]
         return {str(name): node}
@@ -120,7 +122,7 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
     return out
 
 
-def _missing_library(err: BaseException) -> bool:
+def missing_library(err: BaseException) -> bool:
     """Whether ``err`` (or an exception it was raised from) is an outside tracker's missing
     optional library (``trackers.outside._common.MissingLibrary``)."""
     from trackers.outside._common import MissingLibrary
@@ -141,7 +143,7 @@ def check_node(node: Any, key: str, target: Any) -> None:
     from harness.pipeline.config_check import check_target
 
     try:
-        check_target(dict(_container(node)), key, target)
+        check_target(dict(container(node)), key, target)
     except ConfigError as err:
         raise RunError(str(err)) from None
 

@@ -2,15 +2,18 @@
 
 Per frame k of a sequence: the frame is read once, the detection source runs once, bad
 detections are dropped (``clean_detections``) and the foreground is chosen once
-(``ForegroundProvider``); ``frames`` yields them in order (``LoopFrame``). Who consumes
-them (``harness.pipeline.experiment.run_sequence``, ``harness.report.video``, ``harness.commands.bench``) decides what
-each tracker gets.
+(``ForegroundProvider``); ``frames`` yields them in order (``LoopFrame``). The consumers
+(``run_sequence`` here, ``harness.report.video``, ``harness.commands.bench``) hand each step
+to a ``harness.pipeline.bank.TrackerBank``, which feeds the trackers.
+
+Frames are visited once, in order, and every tracker advances on the same frame before the
+next one is read: the detections are computed once per sequence, identical for every
+tracker, and no more than one frame is held in memory.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -20,9 +23,10 @@ import numpy as np
 from harness.datasets.base import Sequence
 from harness.errors import RunError
 from harness.io.mot import MotTable
+from harness.pipeline.bank import TrackerBank, TrackerOutput, start_trackers
 from harness.sources.base import DetectionSource
 from trackers.protocol import Tracker
-from trackers.records import Detections, Track
+from trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +50,7 @@ class _NoProgress:
         pass
 
 
-def _no_progress(total: int = 0, desc: str = "", unit: str = "frame") -> Progress:
+def no_progress(total: int = 0, desc: str = "", unit: str = "frame") -> Progress:
     return _NoProgress()
 
 
@@ -111,67 +115,6 @@ class ForegroundProvider:
 # --------------------------------------------------------------------------- one sequence
 
 
-@dataclass
-class TrackerOutput:
-    """What one tracker reported on one sequence.
-
-    Attributes:
-        table: reported tracks as a ``MotTable`` (0-based xywh boxes, ``conf`` = score).
-        frames: frames the tracker processed.
-        seconds: wall-clock time spent in the tracker's ``update`` (not detection).
-        dropped: reported boxes dropped because they were not finite or had no area.
-        error: the exception text when the tracker failed (``table`` then holds the frames
-            before the failure), else None.
-        trace: the traceback of the failure, else None.
-    """
-
-    table: MotTable
-    frames: int = 0
-    seconds: float = 0.0
-    dropped: int = 0
-    error: str | None = None
-    trace: str | None = None
-
-    @property
-    def fps(self) -> float:
-        return self.frames / self.seconds if self.seconds > 0 else math.inf
-
-
-class _Rows:
-    """Accumulates reported tracks frame by frame."""
-
-    def __init__(self) -> None:
-        self.frames: list[int] = []
-        self.ids: list[int] = []
-        self.boxes: list[np.ndarray] = []
-        self.scores: list[float] = []
-        self.dropped = 0
-
-    def add(self, k: int, tracks: Iterable[Track]) -> None:
-        for t in tracks:
-            if not t.state.reported:
-                continue
-            box = np.asarray(t.box, dtype=np.float64).reshape(4)
-            if not (np.isfinite(box).all() and box[2] > 0 and box[3] > 0):
-                self.dropped += 1
-                continue
-            self.frames.append(k)
-            self.ids.append(int(t.id))
-            self.boxes.append(box)
-            self.scores.append(float(t.score))
-
-    def table(self, path: str = "<memory>") -> MotTable:
-        n = len(self.frames)
-        if n == 0:
-            return MotTable.empty(path)
-        frames = np.asarray(self.frames, dtype=np.int64)
-        ids = np.asarray(self.ids, dtype=np.int64)
-        order = np.lexsort((ids, frames))
-        return MotTable(frames[order], ids[order], np.asarray(self.boxes)[order],
-                        np.asarray(self.scores)[order], np.full(n, -1, dtype=np.int64),
-                        np.full(n, np.nan), path)
-
-
 def clean_detections(dets: Detections) -> tuple[Detections, int]:
     """Drop detections with a non-finite box or score or a box without area.
 
@@ -182,27 +125,6 @@ def clean_detections(dets: Detections) -> tuple[Detections, int]:
     if ok.all():
         return dets, 0
     return dets.subset(ok), int((~ok).sum())
-
-
-def _copy_detections(d: Detections) -> Detections:
-    return Detections(d.boxes.copy(), d.scores.copy(),
-                      None if d.labels is None else d.labels.copy(),
-                      None if d.heads is None else d.heads.copy())
-
-
-def _copy(a: np.ndarray | None) -> np.ndarray | None:
-    return None if a is None else a.copy()
-
-
-def start_trackers(trackers: Mapping[str, Tracker], sequence: Sequence) -> None:
-    """Tell each tracker that has a ``start_sequence(info)`` method the sequence's
-    ``SequenceInfo`` (frame rate, size) before its first frame: trackers whose parameters
-    are in frames per second (e.g. BoxMOT's, ``trackers.outside.boxmot``) take the rate
-    from there rather than from a config value that would be wrong on another dataset."""
-    for tracker in trackers.values():
-        start = getattr(tracker, "start_sequence", None)
-        if callable(start):
-            start(sequence.info)
 
 
 @dataclass(frozen=True)
@@ -273,3 +195,75 @@ def _frames(sequence: Sequence, source: DetectionSource, fg_of: ForegroundProvid
 
 
 _END: Any = object()
+
+
+def run_sequence(
+    trackers: Mapping[str, Tracker],
+    sequence: Sequence,
+    source: DetectionSource,
+    foreground: str = "auto",
+    background: Mapping[str, Any] | None = None,
+    progress: ProgressFactory | None = None,
+    on_update: Callable[[str, int, Tracker], None] | None = None,
+) -> dict[str, TrackerOutput]:
+    """Run several trackers side by side on one sequence: the frame loop into a
+    ``TrackerBank`` (each tracker its own copy of the frame, the detections and the
+    foreground, so no tracker can disturb another's input).
+
+    Args:
+        trackers: name -> freshly built tracker.
+        sequence: the sequence; its ``frame_numbers()`` (1..length, or a window's
+            first..last) are visited in order, and tracks carry those numbers.
+        source: detection source; ``start(sequence)`` is called here.
+        foreground: foreground mode (see ``ForegroundProvider``).
+        background: keyword arguments of the background model for ``foreground="mog2"``.
+        progress: progress-bar factory ``(total=, desc=)``; None shows nothing.
+        on_update: called as ``on_update(name, k, tracker)`` after each successful update
+            of frame k, outside the timed section (e.g. ``GraphExport.record``).
+    Returns:
+        name -> ``TrackerOutput``. A tracker raising an exception is stopped there (its
+        ``error`` set, the exception logged) while the others go on.
+    Raises:
+        Whatever reading a frame, the detection source or the foreground raise: the sequence
+        cannot go on for any tracker.
+    """
+    name = sequence.info.name
+    loop = frames(sequence, source, foreground, background)
+    start_trackers(trackers, sequence)
+    bank = TrackerBank(trackers)
+    dropped_dets = 0
+    bar = (progress or no_progress)(total=sequence.info.length, desc=name)
+    try:
+        for step in loop if bank.active else ():
+            dropped_dets += step.dropped
+            fed = bank.step(step.index, step.image, step.detections, step.foreground)
+            if on_update is not None:
+                for t in fed:
+                    on_update(t, step.index, trackers[t])
+            bar.update(1)
+            if not bank.active:  # read no further frame
+                break
+    finally:
+        bar.close()
+    if dropped_dets:
+        log.warning("%s: %d detections with a NaN/infinite box or score or no area dropped",
+                    name, dropped_dets)
+    out = bank.finish()
+    for t, o in out.items():
+        if o.dropped:
+            log.warning("%s on %s: %d reported boxes not finite or without area dropped",
+                        t, name, o.dropped)
+    return out
+
+
+def run_tracker(tracker: Tracker, sequence: Sequence, source: DetectionSource,
+                foreground: str = "auto") -> MotTable:
+    """Run one tracker on one sequence; the reported tracks (0-based xywh) as a MotTable.
+
+    Raises:
+        RuntimeError: the tracker raised (the original exception is chained).
+    """
+    out = run_sequence({"tracker": tracker}, sequence, source, foreground)["tracker"]
+    if out.error is not None:
+        raise RuntimeError(f"tracker failed on {sequence.info.name}: {out.error}")
+    return out.table

@@ -20,28 +20,19 @@ Frames are read and detected once; every tracker and person gets its own copy.
 from __future__ import annotations
 
 import logging
-import time
-import traceback
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import numpy as np
 
 from harness.datasets.base import Sequence
+from harness.errors import RunError
 from harness.io.mot import MotTable
-from harness.pipeline.loop import (
-    ForegroundProvider,
-    RunError,
-    Tracker,
-    TrackerOutput,
-    _copy,
-    _copy_detections,
-    _no_progress,
-    _Rows,
-    clean_detections,
-)
+from harness.pipeline.bank import TrackerBank, TrackerOutput
+from harness.pipeline.loop import ForegroundProvider, clean_detections, no_progress
 from harness.sources.base import DetectionSource
 from trackers.geometry import iou_matrix
+from trackers.protocol import Tracker
 from trackers.records import Detections, Track, TrackState
 
 log = logging.getLogger(__name__)
@@ -80,7 +71,7 @@ def run_single_target(
         builders: tracker name -> a function building a fresh tracker.
         sequence: a sequence with ground truth.
         source: detection source for the frames after each person's first.
-        foreground, background: as for ``harness.pipeline.experiment.run_sequence``.
+        foreground, background: as for ``harness.pipeline.loop.run_sequence``.
         progress: progress-bar factory; None shows nothing.
         targets: ground-truth ids to follow; None = every person.
     Returns:
@@ -97,11 +88,10 @@ def run_single_target(
     spans = target_spans(gt, targets)
     source.start(sequence)
     fg_of = ForegroundProvider(foreground, sequence, background)
-    out = {t: TrackerOutput(MotTable.empty()) for t in builders}
-    rows = {t: _Rows() for t in builders}
+    bank = TrackerBank(dict.fromkeys(builders))  # one tracker per person, fed by hand
     # (tracker name, person) -> (tracker, [followed id, its last box, still tentative])
     live: dict[tuple[str, int], tuple[Tracker, list]] = {}
-    bar = (progress or _no_progress)(total=sequence.info.length, desc=name)
+    bar = (progress or no_progress)(total=sequence.info.length, desc=name)
     try:
         for k in range(1, sequence.info.length + 1):
             frame = sequence.frame(k)
@@ -112,49 +102,43 @@ def run_single_target(
             box_of = dict(zip(gt.ids[here].tolist(), gt.boxes[here]))
             for gid, (first, _) in spans.items():
                 if first == k:
-                    for t, build in builders.items():
-                        if out[t].error is None:
-                            live[(t, gid)] = (build(), [])
+                    live.update({(t, gid): (builders[t](), []) for t in bank.active})
             for (t, gid), (tracker, followed) in list(live.items()):
-                start = not followed
-                given = (Detections(box_of[gid][None], np.ones(1)) if start
-                         else _copy_detections(dets))
-                t0 = time.perf_counter()
-                try:
-                    tracks = tracker.update(_copy(frame), given, _copy(fg))
-                except Exception as err:  # noqa: BLE001 - this tracker stops, the others go on
-                    out[t].error = f"frame {k}, target {gid}: {type(err).__name__}: {err}"
-                    out[t].trace = traceback.format_exc()
-                    log.error("%s on %s failed at frame %d (target %d): %s: %s", t, name, k,
-                              gid, type(err).__name__, err)
-                    for key in [key for key in live if key[0] == t]:
-                        del live[key]
-                    continue
-                out[t].seconds += time.perf_counter() - t0
-                out[t].frames += 1
-                if start:
-                    followed.extend([_pick(tracks, box_of[gid]), box_of[gid], True])
-                    if followed[0] < 0:
-                        log.warning("%s on %s: target %d not started at frame %d (no output "
-                                    "box overlaps its ground truth)", t, name, gid, k)
-                elif followed[2] and followed[0] not in {tr.id for tr in tracks}:
-                    followed[0] = _pick(tracks, followed[1])  # confirmed under a new id
-                mine = _relabel(tracks, followed[0], gid)
-                if mine:
-                    followed[1] = mine[0].box
-                    followed[2] = mine[0].extra["tentative"]
-                rows[t].add(k, mine)
-            for gid, (_, last) in spans.items():
-                if last == k:
-                    for t in builders:
-                        live.pop((t, gid), None)
+                _follow(bank, t, gid, k, tracker, followed, box_of, (frame, dets, fg), name)
+            for key in [key for key in live if key[0] not in bank.active
+                        or spans[key[1]][1] == k]:  # failed, or the person's last frame
+                del live[key]
             bar.update(1)
     finally:
         bar.close()
-    for t in builders:
-        out[t].table = rows[t].table()
-        out[t].dropped = rows[t].dropped
-    return out
+    return bank.finish()
+
+
+def _follow(bank: TrackerBank, t: str, gid: int, k: int, tracker: Tracker, followed: list,
+            box_of: dict[int, np.ndarray], inputs: tuple, sequence: str) -> None:
+    """Frame ``k`` of tracker ``t`` following person ``gid``: on the person's first frame
+    its only detection is the person's ground-truth box and the followed id is picked; the
+    followed track's box is reported under ``gid``."""
+    if t not in bank.active:  # failed on another person of this frame
+        return
+    start = not followed
+    if start:
+        inputs = (inputs[0], Detections(box_of[gid][None], np.ones(1)), inputs[2])
+    tracks = bank.feed(t, k, inputs, tracker, where=f"frame {k}, target {gid}")
+    if tracks is None:
+        return
+    if start:
+        followed.extend([_pick(tracks, box_of[gid]), box_of[gid], True])
+        if followed[0] < 0:
+            log.warning("%s on %s: target %d not started at frame %d (no output box overlaps "
+                        "its ground truth)", t, sequence, gid, k)
+    elif followed[2] and followed[0] not in {tr.id for tr in tracks}:
+        followed[0] = _pick(tracks, followed[1])  # confirmed under a new id
+    mine = _relabel(tracks, followed[0], gid)
+    if mine:
+        followed[1] = mine[0].box
+        followed[2] = mine[0].extra["tentative"]
+    bank.report(t, k, mine)
 
 
 def _pick(tracks: list[Track], box: np.ndarray) -> int:

@@ -88,7 +88,7 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
     return "\n".join(lines)
 
 
-def _with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+def with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     """``metrics`` with the paper-table and occlusion columns appended (same rows)."""
     from harness.metrics.occlusion import extra_rows
 
@@ -98,7 +98,7 @@ def _with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]])
                          validate="one_to_one")
 
 
-def _hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+def hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     """``hota_alpha.csv``: ``tracker`` + ``harness.metrics.hota_alpha_table`` per tracker."""
     parts = []
     for name, s in scores.items():
@@ -109,7 +109,8 @@ def _hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
 
 
-def _metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+def metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+    """``summary_rows`` of every tracker with scores, one frame (empty when none)."""
     parts = [summary_rows(n, s) for n, s in scores.items() if s]
     if not parts:
         return pd.DataFrame()

@@ -23,6 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from harness.pipeline.bank import TrackerBank
 from trackers.protocol import Tracker
 from trackers.records import Detections
 
@@ -67,9 +68,11 @@ def warm_up(tracker: Tracker) -> None:
     for people in (PEOPLE, PEOPLE[:1]):
         for with_mask in (True, False):
             tracker.reset()
+            bank = TrackerBank({"warm-up": tracker})
             for k in range(FRAMES):
                 frame, mask, dets = scene(k, people)
-                tracker.update(frame, dets, mask if with_mask else None)
+                if not bank.step(k, frame, dets, mask if with_mask else None):
+                    raise RuntimeError(f"warm-up failed: {bank.outputs['warm-up'].error}")
     tracker.reset()
 
 
@@ -78,10 +81,9 @@ def needs_pixels(tracker: Tracker) -> str | None:
     on the scene's first detections), or None when it can. Use a fresh tracker: it is
     left in whatever state the attempt leaves it."""
     _, _, dets = scene(0)
-    try:
-        tracker.update(None, dets, None)
-    except Exception as err:  # noqa: BLE001 - any refusal means the tracker needs pixels
-        return f"{type(err).__name__}: {err}"
+    bank = TrackerBank({"probe": tracker})  # any refusal means the tracker needs pixels
+    if bank.feed("probe", 0, (None, dets, None), copy=False, where="") is None:
+        return bank.outputs["probe"].error
     return None
 
 

@@ -24,6 +24,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from harness.pipeline.bank import TrackerBank
+
 log = logging.getLogger(__name__)
 
 NODE_FIELDS = ["frame", "node", "id", "kind", "hypothesis", "xc", "yc", "phi", "rx", "ry", "vx",
@@ -246,6 +248,7 @@ def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str
         raise TypeError(f"{type(tracker).__name__} has no graph_snapshot(): it keeps no graph")
     tracker.reset()
     source.start(sequence)
+    bank = TrackerBank({"tracker": tracker})
     recorder = GraphRecorder(sequence.info.name)
     drawn: list[Path] = []
     if frames_dir is not None:
@@ -256,7 +259,8 @@ def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str
         frame = sequence.frame(k)
         dets, mask = source.detect(k, frame)
         fg = (mask if mask is not None else sequence.foreground(k)) if foreground else None
-        tracker.update(frame, dets, fg)
+        if not bank.step(k, frame, dets, fg):
+            raise RuntimeError(f"{sequence.info.name}: {bank.outputs['tracker'].error}")
         snap = tracker.graph_snapshot()
         recorder.add(snap, frame=k)
         if frames_dir is not None and frame is not None and (k - 1) % max(every, 1) == 0:

@@ -36,8 +36,9 @@ import cv2
 import numpy as np
 
 from harness.datasets.base import Sequence as DataSequence
+from harness.pipeline.bank import TrackerBank, start_trackers
 from harness.pipeline.build import compose_config, tracker_choice
-from harness.pipeline.loop import _copy, _copy_detections, frames, start_trackers
+from harness.pipeline.loop import frames
 from harness.report.draw import TRACKER_STYLES, draw_tracks, grid
 from harness.sources.base import DetectionSource
 from trackers.records import Track
@@ -95,17 +96,24 @@ def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: De
                  last: int | None = None) -> Iterable[tuple[int, np.ndarray | None,
                                                            dict[str, list[Track]]]]:
     """Yield ``(k, frame, {tracker: tracks})`` for frames up to ``last`` (default: all),
-    running every tracker on the frame loop of the runner (``harness.pipeline.loop.frames``), each on
-    its own copy of the frame, the detections and the foreground."""
+    running every tracker on the frame loop of the runner (``harness.pipeline.loop.frames``)
+    through a ``TrackerBank``, each on its own copy of the frame, the detections and the
+    foreground (a lone tracker on the inputs themselves).
+
+    Raises:
+        RuntimeError: a tracker failed (its error, with the frame, in the message).
+    """
     loop = frames(sequence, source, foreground, background, last)
     for t in trackers.values():
         t.reset()
     start_trackers(trackers, sequence)
+    bank = TrackerBank(trackers)
     for step in loop:
-        out = {}
-        for name, tracker in trackers.items():
-            out[name] = list(tracker.update(_copy(step.image), _copy_detections(step.detections),
-                                            _copy(step.foreground)))
+        out = bank.step(step.index, step.image, step.detections, step.foreground)
+        if len(out) < len(trackers):
+            failed = next(n for n, o in bank.outputs.items() if o.error is not None)
+            raise RuntimeError(f"tracker {failed} failed on {sequence.info.name}, "
+                               f"{bank.outputs[failed].error}")
         yield step.index, step.image, out
 
 

@@ -165,7 +165,8 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
     ``names`` None = ``TRACKERS`` plus every ``conf/tracker/*_tuned.yaml`` (after the
     tracker it tunes).
     """
-    from harness.pipeline.experiment import RunError, build_tracker
+    from harness.errors import RunError
+    from harness.pipeline.build import build_tracker
 
     if names is None:
         names = ordered_trackers()
@@ -193,7 +194,8 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
     mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too)."""
     from omegaconf import OmegaConf, open_dict
 
-    from harness.pipeline.experiment import COMBINED, run_experiment
+    from harness.metrics import COMBINED
+    from harness.pipeline.experiment import run_experiment
 
     rows = []
     for seed in s.seeds:

@@ -25,8 +25,9 @@ import yaml
 from hydra import compose, initialize_config_dir
 
 from harness.datasets.images import FrameError, read_image
+from harness.errors import RunError
 from harness.io.mot import MotFormatError, WriteError, read_mot, write_atomic
-from harness.pipeline.experiment import RunError, run_experiment
+from harness.pipeline.experiment import run_experiment
 
 ROOT = Path(__file__).resolve().parents[2]
 CONF = ROOT / "conf"

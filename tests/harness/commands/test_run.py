@@ -20,17 +20,13 @@ from hydra import compose, initialize_config_dir
 from omegaconf import open_dict
 
 from harness.datasets.base import GroundTruth, Sequence
+from harness.errors import RunError
 from harness.io.mot import MotTable, read_mot
 from harness.metrics import COLUMNS
 from harness.metrics.occlusion import EXTRA_COLUMNS
-from harness.pipeline.experiment import (
-    RunError,
-    clean_detections,
-    run_sequence,
-    run_tracker,
-    tracker_configs,
-)
+from harness.pipeline.build import tracker_configs
 from harness.pipeline.experiment import run_experiment as _run_experiment
+from harness.pipeline.loop import clean_detections, run_sequence, run_tracker
 from harness.report.tables import best_mask, comparison, to_latex, to_markdown, to_text
 from harness.sources.annotations import NoisyGroundTruth
 from trackers.baseline import BaselineTracker
@@ -386,7 +382,7 @@ def test_malformed_external_file_is_recorded_and_the_rest_written(tmp_path, mot_
 def test_failing_sequence_is_recorded_and_others_go_on(tmp_path, monkeypatch):
     seqs = [FailingSequence("broken", crossing_rows(10), 10),
             BoxSequence("fine", crossing_rows(10), 10)]
-    monkeypatch.setattr("harness.pipeline.experiment.load_sequences", lambda node: seqs)
+    monkeypatch.setattr("harness.pipeline.plan.load_sequences", lambda node: seqs)
     cfg = compose_cfg("dataset=mot", "dataset.root=unused", "tracker=baseline")
     result = run_experiment(cfg, tmp_path / "r")
     assert [(f.tracker, f.sequence, f.stage) for f in result.failures] == [

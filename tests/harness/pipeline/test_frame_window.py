@@ -14,7 +14,8 @@ from harness.datasets.base import FrameWindow, window
 from harness.datasets.mot import load_mot
 from harness.datasets.synthetic import load_suite
 from harness.io.mot import read_mot
-from harness.pipeline.experiment import run_experiment, run_sequence
+from harness.pipeline.experiment import run_experiment
+from harness.pipeline.loop import run_sequence
 from harness.sources.annotations import NoisyGroundTruth, PublicDetections
 from trackers.baseline import BaselineTracker
 

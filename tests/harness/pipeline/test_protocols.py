@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from harness.datasets.synthetic import load_suite
-from harness.pipeline.experiment import RunError
+from harness.errors import RunError
 from harness.pipeline.protocols import run_single_target, target_spans
 from harness.sources.annotations import NoisyGroundTruth
 from trackers.baseline import BaselineTracker

@@ -9,12 +9,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from harness.datasets.synthetic import load_scenario
-from harness.pipeline.experiment import run_sequence
+from harness.pipeline.loop import run_sequence
 from harness.pipeline.warmup import WarmUp, needs_pixels, warm_up
 from harness.sources.annotations import NoisyGroundTruth
 
@@ -30,7 +29,7 @@ from omegaconf import OmegaConf
 import trackers
 from harness.datasets.synthetic import load_scenario
 from harness.sources.annotations import NoisyGroundTruth
-from harness.pipeline.experiment import run_sequence
+from harness.pipeline.loop import run_sequence
 from harness.pipeline.warmup import warm_up_once
 
 warm_up_once({"pbm": lambda: instantiate(OmegaConf.load(sys.argv[1]))})

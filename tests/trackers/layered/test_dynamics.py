@@ -12,7 +12,7 @@ from omegaconf import OmegaConf
 
 from harness.datasets.synthetic import load_scenario
 from harness.metrics import score_sequence
-from harness.pipeline.experiment import run_sequence
+from harness.pipeline.loop import run_sequence
 from harness.sources.annotations import NoisyGroundTruth
 from trackers.layered.dynamics import Gate
 from trackers.layered.parts import PartFeatureExtractor

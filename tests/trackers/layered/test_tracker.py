@@ -320,7 +320,8 @@ def test_tentative_before_confirmation():
 
 def test_synthetic_uturn_behind_beats_baseline():
     synthetic = pytest.importorskip("harness.datasets.synthetic")
-    from harness.pipeline.experiment import run_sequence, score
+    from harness.pipeline.loop import run_sequence
+    from harness.pipeline.record import score
     from harness.sources.annotations import NoisyGroundTruth
 
     seq = synthetic.load_scenario("uturn_behind", seed=0, length=150)

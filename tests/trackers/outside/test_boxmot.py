@@ -9,7 +9,9 @@ import pytest
 from omegaconf import OmegaConf
 
 from harness.datasets.synthetic import load_suite
-from harness.pipeline.experiment import RunError, run_experiment, run_sequence
+from harness.errors import RunError
+from harness.pipeline.experiment import run_experiment
+from harness.pipeline.loop import run_sequence
 from harness.sources.annotations import NoisyGroundTruth
 from trackers.outside._common import require
 from trackers.records import Detections, SequenceInfo

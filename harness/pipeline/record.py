@@ -1,0 +1,216 @@
+"""A run's record: the tracks, timings, scores and failures written as results arrive.
+
+``RunRecord`` takes each sequence's ``TrackerOutput``s (and the external result folders),
+writes the track files, scores them from the bytes written, appends every failure to
+``errors.txt`` and republishes ``metrics.csv`` and ``summary.md`` after every sequence, so
+that a later failure or an interruption loses nothing; ``finish`` writes the end-of-run
+tables and plots. A failing piece is recorded (``Failure``) and the run goes on.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import traceback
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from harness.datasets.base import Sequence
+from harness.io.mot import MotTable, format_mot, read_mot, read_mot_text, write_atomic
+from harness.metrics import COLUMNS, SequenceScore, score_sequence
+from harness.metrics.occlusion import extra_score
+from harness.pipeline.bank import TrackerOutput
+from harness.pipeline.plan import RunPlan
+from harness.pipeline.summary import (
+    hota_alpha_frame,
+    mark_complete,
+    metrics_frame,
+    run_status,
+    summary_markdown,
+    with_extras,
+)
+from harness.pipeline.writer import Failure
+from harness.report.bars import metric_bars
+from harness.report.hota_alpha import hota_alpha_plot
+from harness.report.tables import comparison, to_latex
+
+log = logging.getLogger(__name__)
+
+
+def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScore:
+    """``harness.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth."""
+    return score_sequence(gt.table, result, iou_threshold=iou_threshold)
+
+
+class RunRecord:
+    """Everything a run has recorded so far, and the files that show it.
+
+    Attributes:
+        scores, extras: tracker -> sequence -> ``SequenceScore`` / paper-table and
+            occlusion metrics (``harness.metrics.occlusion.extra_score``).
+        failures: every ``Failure`` (also in ``errors.txt``).
+        timings: per tracker and sequence: frames, seconds, frames/s (``timings.csv``).
+        metrics: the last published ``metrics.csv`` rows.
+    """
+
+    def __init__(self, plan: RunPlan) -> None:
+        self.plan = plan
+        self.writer = plan.writer
+        self.scores: dict[str, dict[str, Any]] = {n: {} for n in plan.names}
+        self.extras: dict[str, dict[str, Any]] = {n: {} for n in plan.names}
+        self.failures: list[Failure] = []
+        self.timings: list[dict[str, Any]] = []
+        self.metrics = pd.DataFrame()
+        self.tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
+        self.expected = sum(1 for s in plan.sequences if s.gt is not None)  # can be scored
+
+    def fail(self, tracker: str, sequence: str, stage: str, err: BaseException | str,
+             trace: str = "") -> None:
+        """Record a failed piece of the run (``errors.txt`` and one log line)."""
+        msg = err if isinstance(err, str) else f"{type(err).__name__}: {err}"
+        f = Failure(tracker, sequence, stage, msg, trace)
+        self.failures.append(f)
+        self.writer.failure(f)
+        log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
+
+    def publish(self, state: str) -> pd.DataFrame:
+        """Write metrics.csv (with its ``complete`` column) and summary.md for ``state``:
+        ``running``, ``finished`` or ``interrupted``."""
+        frame = with_extras(metrics_frame(self.scores), self.extras)
+        frame = mark_complete(frame, self.expected, state == "finished")
+        done = len({s for p in self.scores.values() for s in p})
+        status = run_status(state, done, len(self.plan.sequences), self.failures)
+        if frame.empty:
+            frame = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
+        self.writer.metrics(frame)
+        self.writer.text("summary.md", summary_markdown(frame, self.failures,
+                                                        self.plan.table_columns,
+                                                        self.plan.title, status))
+        return frame
+
+    def sequence(self, seq: Sequence, outputs: dict[str, TrackerOutput]) -> None:
+        """Write, time and score every tracker's output on ``seq``, then the externals'."""
+        sname = seq.info.name
+        if seq.gt is not None and outputs:
+            self.tracked.append(sname)
+            try:
+                self.writer.seqmap(self.tracked)
+            except OSError as err:
+                self.fail("*", sname, "write", err)
+        for n, out in outputs.items():
+            self._tracker(n, seq, out)
+        for n, folder in self.plan.externals.items():
+            if seq.gt is None:
+                continue
+            try:
+                table = _in_window(read_external(n, folder, sname, _last_frame(seq)), seq)
+                self._score(n, seq, table)
+            except Exception as err:  # noqa: BLE001 - recorded, the run goes on
+                self.fail(n, sname, "external", err, traceback.format_exc())
+
+    def _tracker(self, n: str, seq: Sequence, out: TrackerOutput) -> None:
+        sname = seq.info.name
+        path = self.writer.track_path(n, sname)
+        text = format_mot(out.table.frames, out.table.ids, out.table.boxes, out.table.conf)
+        try:
+            write_atomic(path, text)
+        except OSError as err:  # scored all the same, from the bytes meant for it
+            self.fail(n, sname, "write", err)
+        self.timings.append({"tracker": n, "sequence": sname, "frames": out.frames,
+                             "seconds": round(out.seconds, 4),
+                             "fps": round(out.fps, 2) if math.isfinite(out.fps) else ""})
+        if out.error is not None:
+            self.fail(n, sname, "tracker", out.error, out.trace or "")
+            return
+        log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
+        if seq.gt is None:
+            log.warning("%s has no ground truth: %s not scored", sname, n)
+            return
+        try:
+            self._score(n, seq, read_mot_text(text, path, kind="result",
+                                              last_frame=_last_frame(seq)))
+        except Exception as err:  # noqa: BLE001 - recorded, the run goes on
+            self.fail(n, sname, "score", err, traceback.format_exc())
+
+    def _score(self, n: str, seq: Sequence, table: MotTable) -> None:
+        plan, sname = self.plan, seq.info.name
+        self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
+        self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
+                                            plan.hidden_below)
+
+    def sequence_done(self, sname: str) -> None:
+        """After each sequence: timings.csv, and metrics.csv and summary.md as running."""
+        try:
+            self.writer.timings(self.timings)
+            self.metrics = self.publish("running")
+        except Exception as err:  # noqa: BLE001 - recorded, the run goes on
+            self.fail("*", sname, "metrics", err, traceback.format_exc())
+
+    def interrupted(self, sname: str, err: BaseException) -> None:
+        """Ctrl-C, SIGTERM during ``sname``: say so in errors.txt, metrics and summary."""
+        self.fail("*", sname or "*", "interrupted",
+                  f"{type(err).__name__}: the run was stopped during sequence {sname!r}; "
+                  "metrics.csv and summary.md cover only the sequences before it")
+        try:
+            self.publish("interrupted")
+        except Exception:
+            log.exception("could not mark %s as interrupted", self.writer.out_dir)
+
+    def finish(self) -> None:
+        """The final metrics.csv and summary.md, summary.tex, the plots and hota_alpha.csv;
+        a failing one is recorded and the others are still written."""
+        plan, out_dir = self.plan, self.writer.out_dir
+        try:
+            self.metrics = self.publish("finished")
+        except Exception as err:  # noqa: BLE001 - recorded (disk full...), the run ends failed
+            self.fail("*", "*", "metrics", err, traceback.format_exc())
+        if self.metrics.empty:
+            log.warning("no sequence was scored: metrics.csv has no rows")
+        try:
+            if not self.metrics.empty:
+                self.writer.text("summary.tex", to_latex(
+                    comparison(self.metrics, plan.table_columns),
+                    caption=f"occbench: {plan.title} (COMBINED)"))
+        except Exception as err:  # noqa: BLE001 - recorded
+            self.fail("*", "*", "summary", err, traceback.format_exc())
+        try:
+            metric_bars(self.metrics, out_dir / "plots" / "metrics.png", plan.plot_metrics,
+                        plan.title)
+        except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
+            self.fail("*", "*", "plot", err, traceback.format_exc())
+        try:  # HOTA and its sub-metrics at each alpha, and plots/hota_alpha.png
+            alpha = hota_alpha_frame(self.scores)
+            if not alpha.empty:
+                self.writer.text("hota_alpha.csv", alpha.to_csv(
+                    index=False, float_format="%.6f", lineterminator="\n"))
+                hota_alpha_plot(alpha, out_dir / "plots" / "hota_alpha.png", plan.title)
+        except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
+            self.fail("*", "*", "hota_alpha", err, traceback.format_exc())
+
+
+def read_external(name: str, folder: Path, sequence: str,
+                  last_frame: int | None = None) -> MotTable:
+    """The external tracker's result for ``sequence``; empty (with a warning) when missing.
+
+    Raises:
+        MotFormatError: a malformed row, or a row beyond ``last_frame`` (file and line named).
+    """
+    path = folder / f"{sequence}.txt"
+    if not path.is_file():
+        log.warning("external %s: no result file %s: scored as an empty result", name, path)
+        return MotTable.empty(str(path))
+    return read_mot(path, kind="result", last_frame=last_frame)
+
+
+def _last_frame(seq: Sequence) -> int:
+    """The last frame number of the whole sequence (a ``FrameWindow``'s original's)."""
+    return getattr(seq, "inner", seq).frame_numbers()[-1]
+
+
+def _in_window(table: MotTable, seq: Sequence) -> MotTable:
+    """``table``'s rows on the frames of ``seq`` (a window scores only its own frames)."""
+    frames = seq.frame_numbers()
+    keep = (table.frames >= frames.start) & (table.frames < frames.stop)
+    return table if keep.all() else table.rows(keep)
