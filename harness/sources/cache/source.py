@@ -104,12 +104,13 @@ class EntryBuilder:
         return arrays
 
 
-def check(entry: Entry) -> None:
-    """CorruptEntry unless the arrays are consistent with each other."""
+def check(entry: Entry, numbers: range) -> None:
+    """CorruptEntry unless the arrays are consistent with each other and hold the frame
+    numbers ``numbers``."""
     a = entry.arrays
     try:
         n_frames, total = len(a["frames"]), int(a["counts"].sum())
-        ok = (a["boxes"].shape == (total, 4) and a["scores"].shape == (total,)
+        ok = (np.array_equal(a["frames"], np.asarray(numbers)) and a["boxes"].shape == (total, 4) and a["scores"].shape == (total,)
               and a["heads"].shape == (total, 4) and len(a["counts"]) == n_frames
               and len(a["has_heads"]) == n_frames and (a["counts"] >= 0).all())
         for name in IMAGES:
@@ -182,14 +183,11 @@ class CachedSource:
             log.info("front end of %s: computed, not cached (%s)", self._name, why)
             self.source.start(sequence)
             return
+        numbers = sequence.frame_numbers()
         entry, self.origin = self.store.get_or_compute(
-            key, lambda: self._compute(sequence), check)
+            key, lambda: self._compute(sequence), lambda e: check(e, numbers))
         self._arrays = entry.arrays
-        frames = entry.arrays["frames"]
-        if not np.array_equal(frames, np.asarray(sequence.frame_numbers())):
-            raise CorruptEntry(f"{self.store.path(key)}: frames {frames[:1]}.. are not the "
-                               f"sequence's {sequence.frame_numbers()}")
-        self._row = {int(k): i for i, k in enumerate(frames)}
+        self._row = {k: i for i, k in enumerate(numbers)}
         self._starts = np.concatenate([[0], np.cumsum(entry.arrays["counts"])])
         how = {"read": "read from the cache", "waited": "read from the cache (computed by "
                "another job meanwhile)", "computed": "computed and stored in the cache"}
