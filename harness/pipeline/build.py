@@ -224,4 +224,4 @@ def build_source(node: Any, cache: bool = True) -> DetectionSource:
         return source
     from harness.sources.cache import cached
 
-    return cached(source, _container(node))
+    return cached(source, container(node))
