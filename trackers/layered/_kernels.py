@@ -200,8 +200,8 @@ def grid_centroids(boxes: np.ndarray, grid: tuple, image: tuple, out: np.ndarray
 
 @numba.njit(cache=True)
 def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_centroids: bool,
-                  centres: np.ndarray, grid: tuple, image: tuple, luts: tuple, out: tuple
-                  ) -> None:
+                  centres: np.ndarray, grid: tuple, image: tuple, luts: tuple, out: tuple,
+                  pixel_bins: np.ndarray) -> None:
     """Part rectangles and features of the five parts of each box (PBM 2.1-2.2).
 
     Args:
@@ -216,6 +216,10 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
             the joint bin (``parts._channel_luts``).
         out: (parts (N, 5, 4) (``_part_rects``), area, perimeter (N, 5), hsv, xyz
             (N, 5, B), centroid (N, 5, 2)), written.
+        pixel_bins: (H * W,) int32, each pixel's joint bins ``hsv_bin << 16 | xyz_bin``
+            once a sample read it, -1 before: the boxes of a frame share most of their
+            pixels (the search's boxes around one head), whose colour conversion is then
+            done once per frame; the caller resets it for each frame.
 
     Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
     centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
@@ -231,13 +235,12 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
     ys, xs = np.empty(R), np.empty(C)
     yi, xi = np.empty(R, np.int64), np.empty(C, np.int64)
     on = np.empty((R, C), np.uint8)
-    sink = np.empty(1, np.int64)
     band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
     right = np.empty(C, np.int64)  # 1 if the column is right of the split
     count, edge = np.zeros(5, np.int64), np.zeros(5, np.int64)
-    coff = np.empty(C, np.uint64)  # byte offset of a sample column's pixel in its row
+    coff = np.empty(C, np.uint64)  # pixel offset of a sample column in its row
     pixels = frame.reshape(H * W * 3)
-    one, two = np.uint64(1), np.uint64(2)
+    one, two, three = np.uint64(1), np.uint64(2), np.uint64(3)
     sx, sy = np.zeros(5), np.zeros(5)
     count_hsv, count_xyz = np.zeros((5, nb), np.int64), np.zeros((5, nb), np.int64)
     for i in range(boxes.shape[0]):
@@ -252,17 +255,8 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
         # a sample's band and side: above the head's bottom, the torsos' bottom, left of
         # the left parts' right edge (ties go down and right)
         head_end, torso_end, split = p[0, 1] + p[0, 3], p[1, 1] + p[1, 3], p[1, 0] + p[1, 2]
-        # read every sample's pixel once in a loop without branches: the frame's cache
-        # misses then overlap instead of stalling the conversion below sample by sample;
-        # the sum only keeps the loads
         for c in range(C):
-            coff[c] = np.uint64(xi[c] * 3)
-        warm = 0
-        for r in range(R):
-            roff = np.uint64(yi[r] * (W * 3))
-            for c in range(C):
-                warm += pixels[roff + coff[c]]
-        sink[0] = warm
+            coff[c] = np.uint64(xi[c])
         rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
         for r in range(R):
             if ys[r] < head_end:
@@ -292,15 +286,21 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
             yr = ys[r]
             nl, el, sxl, syl = count[kl], edge[kl], sx[kl], sy[kl]
             nr, er, sxr, syr = count[kr], edge[kr], sx[kr], sy[kr]
-            roff = np.uint64(yi[r] * (W * 3))
+            roff = np.uint64(yi[r] * W)
             for c in range(C):
                 if not on[r, c]:
                     continue
-                o = roff + coff[c]  # unsigned: no negative-index test
-                ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
-                                                  np.int64(pixels[o + two]))
-                hsv_bin = hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)] + hsv_lut[2, np.uint64(cv)]
-                xyz_bin = xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
+                q = roff + coff[c]  # the pixel's index (unsigned: no negative-index test)
+                packed = pixel_bins[q]
+                if packed < 0:  # first read this frame: convert it
+                    o = q * three
+                    ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
+                                                      np.int64(pixels[o + two]))
+                    packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
+                               + hsv_lut[2, np.uint64(cv)]) << 16) | (
+                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)])
+                    pixel_bins[q] = packed
+                hsv_bin, xyz_bin = packed >> 16, packed & 0xFFFF
                 outline = (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
                            or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1])
                 if split_row and right[c]:

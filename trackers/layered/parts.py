@@ -229,11 +229,14 @@ class PartFeatureExtractor:
         self._fr = (np.arange(grid_rows) + 0.5) / grid_rows
         self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
         self._luts: tuple[np.ndarray, np.ndarray] | None = None  # made on first use
+        self._pixel_bins: np.ndarray | None = None  # the frame's converted pixels (``start``)
         self._frame: np.ndarray | None = None
         self._fg: np.ndarray | None = None  # (H, W) bool, C-contiguous
 
     def start(self, frame: np.ndarray, foreground: np.ndarray | None) -> None:
-        """Set the frame ((H, W, 3) uint8 BGR) and foreground ((H, W) bool or None = all)."""
+        """Set the frame ((H, W, 3) uint8 BGR) and foreground ((H, W) bool or None = all);
+        the frame's pixels are converted to bins at their first read until the next
+        ``start``, so the frame must not change in between."""
         if (frame is None or frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8
                 or frame.size == 0):
             raise ValueError("frame must be a non-empty (H, W, 3) uint8 BGR image")
@@ -242,6 +245,10 @@ class PartFeatureExtractor:
                 f"foreground shape {foreground.shape} differs from frame {frame.shape[:2]}")
         self._frame = np.ascontiguousarray(frame)
         self._fg = None if foreground is None else np.ascontiguousarray(foreground, dtype=bool)
+        size = frame.shape[0] * frame.shape[1]
+        if self._pixel_bins is None or len(self._pixel_bins) != size:
+            self._pixel_bins = np.empty(size, np.int32)  # bins <= 32: 16 bits each
+        self._pixel_bins.fill(-1)  # this frame's pixels not converted yet (``part_features``)
 
     def _colour_luts(self) -> tuple[np.ndarray, np.ndarray]:
         """The (3, 256) HSV and XYZ channel terms of the joint bins (``_channel_luts``)."""
@@ -323,5 +330,5 @@ class PartFeatureExtractor:
         at_centroids = centres is not None
         _kernels.part_features(b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
                                (self._fr, self._fc), self._image(), self._colour_luts(),
-                               (parts, area, perimeter, hsv, xyz, centroid))
+                               (parts, area, perimeter, hsv, xyz, centroid), self._pixel_bins)
         return PartFeatures(parts, area, perimeter, hsv, xyz, centroid, b[:, 3].copy())

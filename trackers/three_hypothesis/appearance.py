@@ -129,6 +129,8 @@ class EllipseHistogrammer:
         hists = np.zeros((len(snapped), self.bins**3))
         occupied = np.zeros(self.bins**3, dtype=bool)
         has_fg = foreground is not None
+        if has_fg and foreground.dtype != bool:  # a label image: one compiled kernel serves
+            foreground = foreground != 0
         ellipse_histograms(frame, snapped, foreground if has_fg else _NO_MASK, has_fg,
                            float(self.min_foreground), self.stride, self.bins, hists, occupied)
         out = [h.copy() for h in hists]  # one array each: a person keeps its own q

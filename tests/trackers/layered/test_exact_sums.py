@@ -78,3 +78,23 @@ def _sequential_sum(v: np.ndarray) -> float:
     for x in v.tolist():
         tot += x
     return tot
+
+
+def test_part_features_with_the_frames_pixels_converted_before_are_the_same():
+    from trackers.layered.parts import PartFeatureExtractor
+
+    rng = np.random.default_rng(6)
+    frames = [rng.integers(0, 256, (80, 100, 3), dtype=np.uint8) for _ in range(2)]
+    fg = rng.random((80, 100)) < 0.6
+    boxes = np.column_stack([rng.uniform(-10, 90, 12), rng.uniform(-10, 70, 12),
+                             rng.uniform(5, 40, 12), rng.uniform(10, 60, 12)])
+    warm = PartFeatureExtractor(4, 21, 9)
+    for frame in frames:  # the second frame must not see the first one's pixels
+        warm.start(frame, fg)
+        warm.extract(boxes[::-1] + 1.5)  # converts most of the pixels the boxes read
+        got = warm.extract(boxes, 0.4, 0.6)
+        fresh = PartFeatureExtractor(4, 21, 9)
+        fresh.start(frame, fg)
+        ref = fresh.extract(boxes, 0.4, 0.6)
+        for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid"):
+            assert getattr(got, name).tobytes() == getattr(ref, name).tobytes(), name
