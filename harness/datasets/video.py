@@ -86,7 +86,7 @@ class VideoSequence(Sequence):
         if self.decodable <= 0 or width <= 0 or height <= 0:
             raise FrameError(f"{self.path}: video holds no decodable frames")
         #: why every frame is refused (the frame size changes mid-stream), or None
-        self.refused = frame_size_change(self.path, width, height)
+        self.refused = frame_size_change(self.path, every_frame=self.exact)
         self.info = SequenceInfo(name=name or self.path.stem, width=width, height=height,
                                  fps=rate, length=self._length(length))
 
@@ -197,13 +197,17 @@ class VideoSequence(Sequence):
         return image.copy()
 
 
-def frame_size_change(path: Path, width: int, height: int) -> str | None:
-    """None when every keyframe of the video's first video stream is ``width`` x ``height``
-    (the size OpenCV reports), else why the video is refused, naming the file and sizes.
+def frame_size_change(path: Path, every_frame: bool = False) -> str | None:
+    """None when every decoded frame of the video's first video stream has the first one's
+    size, else why the video is refused, naming the file and both sizes.
 
     OpenCV's FFmpeg reader scales every frame to the first frame's size without a word (and
-    reports that size throughout), so the sizes are read by PyAV, from the keyframes only:
-    cheap, and MPEG-1/2, MPEG-4 and H.264/5 streams change size only at one.
+    reports that size throughout), so the sizes are read by PyAV: from every frame with
+    ``every_frame`` (MPEG program and transport streams, which join by concatenating files
+    and whose keyframe flags PyAV's keyframe-only decoding can miss; ``VideoSequence``
+    decodes those once anyway, to count them), else from the keyframes only (cheap; MPEG-4
+    and H.264/5 change size only at one). Sizes are compared with each other, not with
+    OpenCV's, which is turned for a video with rotation metadata (a phone's portrait clip).
 
     Raises:
         FrameError: PyAV cannot open the file or finds no video stream in it.
@@ -218,20 +222,22 @@ def frame_size_change(path: Path, width: int, height: int) -> str | None:
         if not container.streams.video:
             raise FrameError(f"{path}: cannot read the frame sizes: no video stream")
         stream = container.streams.video[0]
-        stream.codec_context.skip_frame = "NONKEY"
-        j = 0
+        if not every_frame:
+            stream.codec_context.skip_frame = "NONKEY"
+        j, first, unit = 0, None, "frame" if every_frame else "keyframe"
         try:
             for j, frame in enumerate(container.decode(stream), 1):
-                if (frame.width, frame.height) != (width, height):
-                    return (f"{path}: the frame size changes mid-stream: {width}x{height}, "
-                            f"then {frame.width}x{frame.height} from keyframe {j}; OpenCV "
-                            f"would rescale those frames to {width}x{height} without a word: "
-                            "re-encode the video at one size")
+                size = (frame.width, frame.height)
+                first = first or size
+                if size != first:
+                    return (f"{path}: the frame size changes mid-stream: {first[0]}x{first[1]}, "
+                            f"then {size[0]}x{size[1]} from decoded {unit} {j}; OpenCV would "
+                            "rescale those frames to the first size without a word: re-encode "
+                            "the video at one size")
         except av.error.FFmpegError as err:  # damage: decoding it fails in frame() too
-            log.warning("%s: frame sizes checked up to keyframe %d only (PyAV: %s)", path, j,
-                        err)
+            log.warning("%s: frame sizes checked up to decoded frame %d only (PyAV: %s)", path,
+                        j, err)
     return None
-
 
 def load_video(path: str | Path, gt: str | Path | None = None, name: str | None = None,
                fps: float | None = None, det: str | Path | None = None,

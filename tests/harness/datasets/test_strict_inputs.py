@@ -179,7 +179,7 @@ def test_a_video_whose_frame_size_changes_is_refused(tmp_path):
     (seq,) = load_video(joined)
     assert (seq.info.width, seq.info.height) == (96, 64)
     with pytest.raises(FrameError, match=r"joined\.mpg: the frame size changes mid-stream: "
-                                         r"96x64, then 160x96 from keyframe \d+"):
+                                         r"96x64, then 160x96 from decoded frame \d+"):
         seq.frame(1)
     (one,) = load_video(a)
     assert one.refused is None and one.frame(10).shape == (64, 96, 3)
@@ -198,3 +198,21 @@ def test_replay_reads_seqinfo_and_gt_as_strictly(tmp_path):
     ini.write_text(INI.format(n=12))
     (s,) = load_replay(seq, noise=0.0)
     assert (s.info.length, s.info.width, s.info.height, s.info.fps) == (12, 64, 48, 10.0)
+
+
+def test_a_video_with_rotation_metadata_is_not_a_size_change(tmp_path):
+    """A portrait phone clip: OpenCV turns it (reports 64x96), its stream is 96x64 throughout."""
+    import subprocess
+
+    import imageio_ffmpeg
+
+    plain = tmp_path / "plain.mp4"
+    writer = cv2.VideoWriter(str(plain), cv2.VideoWriter_fourcc(*"mp4v"), 25.0, (96, 64))
+    for k in range(6):
+        writer.write(np.full((64, 96, 3), 30 * k, dtype=np.uint8))
+    writer.release()
+    turned = tmp_path / "turned.mp4"
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-display_rotation", "90",
+                    "-i", str(plain), "-c", "copy", str(turned)], check=True, timeout=60)
+    (seq,) = load_video(turned)
+    assert seq.refused is None and seq.frame(6).shape[:2] == (seq.info.height, seq.info.width)
