@@ -9,8 +9,9 @@ case is written as MOTChallenge files (``<tmp>/gt/<seq>/gt/gt.txt``, ``seqinfo.i
 ``seqmap.txt``, ``<tmp>/tracks/bench/<seq>.txt``) and scored by whole processes, as a user
 runs them: ``occbench eval GT RESULTS --csv`` and TrackEval's ``Evaluator`` on
 ``MotChallenge2DBox`` with HOTA, CLEAR and Identity (when importable; said when not). Each is
-run ``--repeats`` times in turn; wall time and peak memory (the child's own maximum resident
-set) are given as medians, with the ratios TrackEval / occbench. The figures of both (every
+run ``--repeats`` times in turn; wall time, CPU time (user + system: steadier than wall time
+on a shared machine) and peak memory (the child's own maximum resident set) are given as
+medians, with the ratios TrackEval / occbench. The figures of both (every
 column of ``harness.metrics.COLUMNS`` on the COMBINED row) must agree to 1e-6.
 
 The run's own scoring (``run_experiment`` -> ``score_sequence`` and ``extra_score``, the
@@ -143,8 +144,9 @@ def write_case(root: Path, gt: np.ndarray, res: np.ndarray, frames: int) -> None
                fmt="%d,%d,%.2f,%.2f,%.2f,%.2f,1,-1,-1,-1")
 
 
-def timed(cmd: list[str], log: Path) -> tuple[float, float]:
-    """Run ``cmd`` as a child process; (wall seconds, peak resident MB of the child)."""
+def timed(cmd: list[str], log: Path) -> tuple[float, float, float]:
+    """Run ``cmd`` as a child process; (wall seconds, CPU seconds (user + system), peak
+    resident MB) of the child."""
     with log.open("ab") as fh:
         start = time.perf_counter()
         proc = subprocess.Popen(cmd, stdout=fh, stderr=fh, stdin=subprocess.DEVNULL)
@@ -153,7 +155,7 @@ def timed(cmd: list[str], log: Path) -> tuple[float, float]:
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed with exit status {proc.returncode}; see {log}")
-    return wall, usage.ru_maxrss / 1024.0
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0
 
 
 def occbench_figures(csv: Path) -> dict[str, float]:
@@ -203,6 +205,7 @@ def main() -> None:
               f"({len(gt) / args.frames:.1f} a frame), {len(res)} result boxes, "
               f"{len(np.unique(res[:, 1]))} result ids; load {os.getloadavg()[0]:.1f}")
         print(run_comparison(root, args.repeats, not args.no_trackeval))
+        print(f"load average after: {os.getloadavg()[0]:.1f}")
         times = run_scoring(root, args.repeats)
         print("run's own scoring, in process (median s): " + ", ".join(
             f"{k} {v:.2f}" for k, v in times.items()))
@@ -231,14 +234,15 @@ def run_comparison(root: Path, repeats: int, with_trackeval: bool) -> str:
         ours.append(timed(ours_cmd, root / "occbench.log"))
         if te_cmd:
             theirs.append(timed(te_cmd, root / "trackeval.log"))
-    wall, peak = statistics.median(w for w, _ in ours), statistics.median(m for _, m in ours)
-    lines = [f"occbench eval: {wall:.2f} s, {peak:.0f} MB (median of {repeats})"]
+    o = [statistics.median(x) for x in zip(*ours)]
+    lines = [f"occbench eval: {o[0]:.2f} s wall, {o[1]:.2f} s CPU, {o[2]:.0f} MB peak "
+             f"(medians of {repeats})"]
     if te_cmd:
-        te_wall = statistics.median(w for w, _ in theirs)
-        te_peak = statistics.median(m for _, m in theirs)
-        lines.append(f"TrackEval 1.3.0: {te_wall:.2f} s, {te_peak:.0f} MB (median of {repeats})")
-        lines.append(f"TrackEval / occbench: time {te_wall / wall:.2f}x, "
-                     f"peak memory {te_peak / peak:.2f}x")
+        t = [statistics.median(x) for x in zip(*theirs)]
+        lines.append(f"TrackEval 1.3.0: {t[0]:.2f} s wall, {t[1]:.2f} s CPU, {t[2]:.0f} MB peak "
+                     f"(medians of {repeats})")
+        lines.append(f"TrackEval / occbench: wall {t[0] / o[0]:.2f}x, CPU {t[1] / o[1]:.2f}x, "
+                     f"peak memory {t[2] / o[2]:.2f}x")
         theirs_fig = json.loads((root / "trackeval.json").read_text())
         differ = compare(occbench_figures(root / "ours.csv"), theirs_fig)
         lines.append(f"figures agree to {TOLERANCE:g}: {'yes' if not differ else 'NO'}")

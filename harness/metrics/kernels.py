@@ -18,7 +18,11 @@ import numpy as np
 
 @numba.njit(cache=True)
 def _iou(a: np.ndarray, b: np.ndarray) -> float:  # pragma: no cover (compiled)
-    """IoU of two xywh boxes, as ``trackers.geometry.iou_matrix`` computes one entry."""
+    """IoU of two xywh boxes, as ``trackers.geometry.iou_matrix`` computes one entry; 0
+    at once for boxes apart along x (most pairs of a crowded frame), where the intersection's
+    width is not positive and the IoU 0 exactly."""
+    if not (a[0] < b[0] + b[2] and b[0] < a[0] + a[2]):
+        return 0.0
     w = min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0])
     h = min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1])
     inter = max(w, 0.0) * max(h, 0.0)
