@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from trackers.three_hypothesis._kernels import region_overlap_pairs
+
 
 def region_overlaps(
     a: np.ndarray, b: np.ndarray, samples: int = 24, near: np.ndarray | None = None
@@ -22,10 +24,11 @@ def region_overlaps(
     definition; ``tests/trackers/three_hypothesis/test_tracker.py`` checks equality):
     |Sa & Sb| is the share of a ``samples`` x ``samples`` grid over a's box lying in both
     ellipses, times |Sa| = pi/4 w h.
-    Two things make it cheaper per frame: the grid is separable, so each ellipse test is
-    an outer sum of a row term and a column term, and a's own ellipse test is done once per
-    box instead of once per pair; and ``near`` restricts the integration to the pairs the
-    caller needs (pairs outside it get delta 0).
+    Three things make it cheaper per frame: the grid is separable, so each ellipse test is
+    a sum of a row term and a column term, and a's own ellipse test is done once per box
+    instead of once per pair; ``near`` restricts the integration to the pairs the caller
+    needs (pairs outside it get delta 0); and the loops are compiled
+    (``_kernels.region_overlap_pairs``).
 
     Args:
         a: (N, 4) xywh; b: (M, 4) xywh.
@@ -44,26 +47,7 @@ def region_overlaps(
     ia, ib = np.nonzero(near)
     if len(ia) == 0:
         return out
-    n, k = len(a), len(ia)
-    t = _grid(samples)
-    # one pass over N + K (grid, ellipse) couples: each a-ellipse on its own grid (rows
-    # 0..N-1, once per box), then each pair's b-ellipse on a's grid; [:, 0] is x, [:, 1] y
-    grid = a[np.concatenate([np.arange(n), ia])]
-    shape = np.concatenate([a, b[ib]])
-    g = grid[:, :2, None] + grid[:, 2:, None] * t  # (N + K, 2, S) grid coordinates
-    r = np.maximum(shape[:, 2:, None] / 2, 1e-9)  # (N + K, 2, 1) radii
-    u2 = ((g - shape[:, :2, None] - r) / r) ** 2  # squared normalised offsets from the centre
-    inside = (u2[:, 0, None, :] + u2[:, 1, :, None] <= 1.0).reshape(n + k, -1)  # [., row*S+col]
-    count_a = inside[:n].sum(axis=1)
-    both = (inside[ia] & inside[n:]).sum(axis=1)
-    # share of Sa's grid points inside Sb, times the exact |Sa| = pi/4 w h
-    frac = both / np.maximum(count_a[ia], 1)
-    wa, ha = a[ia, 2], a[ia, 3]
-    inter = frac * np.pi / 4 * wa * ha
-    total = np.pi / 4 * (wa * ha + b[ib, 2] * b[ib, 3])  # |Sa| + |Sb|
-    positive = total > 0
-    delta = np.where(positive, 2 * inter / np.where(positive, total, 1.0), 0.0)
-    out[ia, ib] = np.minimum(np.maximum(delta, 0.0), 1.0)  # clipped to [0, 1]
+    region_overlap_pairs(a, b, ia, ib, _grid(samples), out)
     return out
 
 

@@ -72,3 +72,20 @@ def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
     np.testing.assert_array_equal(got, ellipse_histograms(frame, boxes, mask=fg))
     p, support = EllipseHistogrammer().measure(frame, np.zeros((0, 4)))
     assert p == [] and len(support) == 0
+
+
+def test_eq5_kernel_has_the_bits_of_the_definition():
+    from trackers.three_hypothesis.features import region_similarity
+    from trackers.three_hypothesis.occlusion import region_overlaps
+
+    rng = np.random.default_rng(9)
+    for k in range(40):
+        n, m = rng.integers(0, 10, 2)
+        a = np.column_stack([rng.uniform(-20, 120, (n, 2)), rng.uniform(0.5, 70, (n, 2))])
+        b = np.column_stack([rng.uniform(-20, 120, (m, 2)), rng.uniform(0.5, 70, (m, 2))])
+        if n and m:
+            b[0] = a[0]  # a tie: the same region twice
+        if n > 1:
+            a[1, 2] = 0.0  # a degenerate region
+        got = region_overlaps(a, b, (12, 24)[k % 2])
+        assert got.tobytes() == region_similarity(a, b, samples=(12, 24)[k % 2]).tobytes()
