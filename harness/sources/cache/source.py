@@ -184,8 +184,27 @@ class CachedSource:
             self.source.start(sequence)
             return
         numbers = sequence.frame_numbers()
-        entry, self.origin = self.store.get_or_compute(
-            key, lambda: self._compute(sequence), lambda e: check(e, numbers))
+        failed: list[BaseException] = []
+
+        def compute() -> tuple[dict[str, Any], Arrays]:
+            try:
+                return self._compute(sequence)
+            except BaseException as err:  # the front end's own failure: raised as it is
+                failed.append(err)
+                raise
+
+        try:
+            entry, self.origin = self.store.get_or_compute(
+                key, compute, lambda e: check(e, numbers))
+        except OSError as err:
+            if failed:
+                raise
+            log.warning("front end of %s: the cache folder %s cannot be used (%s: %s); "
+                        "computed without it", self._name, self.store.root,
+                        type(err).__name__, err)
+            self._arrays, self.origin = None, "uncached"
+            self.source.start(sequence)
+            return
         self._arrays = entry.arrays
         self._row = {k: i for i, k in enumerate(numbers)}
         self._starts = np.concatenate([[0], np.cumsum(entry.arrays["counts"])])

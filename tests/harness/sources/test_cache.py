@@ -214,3 +214,30 @@ def test_detect_fills_the_cache_runs_read(scene, tmp_path, monkeypatch):
     source = build_source(cfg.detector)
     assert outputs(source, seq) == outputs(build_source(cfg.detector, cache=False), seq)
     assert source.origin == "read"
+
+
+def test_unusable_cache_folder_runs_without_it(scene, tmp_path, monkeypatch, caplog):
+    cfg, seq = scene
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("OCCBENCH_CACHE", str(blocker))
+    source = build_source(cfg.detector)
+    with caplog.at_level(logging.WARNING):
+        assert outputs(source, seq) == outputs(build_source(cfg.detector, cache=False), seq)
+    assert source.origin == "uncached"
+    assert any("cannot be used" in r.getMessage() for r in caplog.records)
+
+
+def test_front_end_failure_is_raised_not_hidden(scene, tmp_path):
+    _, seq = scene
+
+    class Broken:
+        cacheable = True
+
+        def start(self, sequence):
+            raise FileNotFoundError("frame 3 missing")
+
+    source = CachedSource(Broken(), {"_target_": "x"}, Store(tmp_path))
+    with pytest.raises(FileNotFoundError, match="frame 3"):
+        source.start(seq)
+    assert not list((tmp_path / "frontend").glob("*.lock"))
