@@ -7,3 +7,8 @@ class RunError(RuntimeError):
 
 class ConfigError(ValueError):
     """A config value of the wrong type or outside its range; the message names the key."""
+
+
+class Terminated(BaseException):  # a signal, named as KeyboardInterrupt
+    """SIGTERM received: raised in the main thread (``harness.__main__``) so that a run stops
+    as on Ctrl-C (its summary says interrupted, errors.txt says where) and exits 143."""

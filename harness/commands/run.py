@@ -13,19 +13,28 @@ config.yaml) and prints the COMBINED comparison table. Examples::
 
 The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
 ``objective.tracker`` (default IDF1 of the first tracker).
+
+Ctrl-C and SIGTERM (``harness.errors.Terminated``, raised by ``harness.__main__``'s handler)
+stop the run: it marks its metrics and summary interrupted and writes errors.txt on the way
+out (``harness.pipeline.experiment``), then one line on stderr names the run folder and the
+exit status is 130 (SIGINT) or 143 (SIGTERM), with no traceback.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 from pathlib import Path
+from typing import NoReturn
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
 from hydra.errors import CompactHydraException
 from hydra.types import RunMode
 from omegaconf import DictConfig
+
+from harness.errors import Terminated
 
 log = logging.getLogger("harness")
 
@@ -83,6 +92,8 @@ def run_app(cfg: DictConfig) -> float:
         value = result.objective(objective.get("tracker"), objective.get("metric") or "IDF1")
     except RunError as err:
         raise AppError(f"occbench: {err}") from None
+    except (KeyboardInterrupt, Terminated) as err:
+        _stopped(err, out_dir)
     if multirun:  # one line per job; the sweep's summary is printed when the multirun ends
         log.info("job %s [%s]: %s %s = %.4g", hc.job.num, " ".join(hc.overrides.task),
                  objective.get("tracker") or result.trackers[0],
@@ -96,4 +107,17 @@ def run_app(cfg: DictConfig) -> float:
             f"occbench: {len(result.failures)} part(s) of the run failed (the rest is written; "
             f"each is logged above, with its traceback in {out_dir / 'errors.txt'})")
     return value
+
+
+def _stopped(err: BaseException, out_dir: Path) -> NoReturn:
+    """One line for a run stopped by Ctrl-C or SIGTERM, then exit 130 or 143."""
+    from harness.__main__ import EXIT_SIGINT, EXIT_SIGTERM
+
+    how, status = (("terminated (SIGTERM)", EXIT_SIGTERM) if isinstance(err, Terminated)
+                   else ("interrupted (Ctrl-C)", EXIT_SIGINT))
+    kept = (f"what was scored before is in {out_dir} (summary.md says interrupted, "
+            "errors.txt where)" if (out_dir / "summary.md").is_file()
+            else f"nothing was scored ({out_dir})")
+    print(f"occbench: {how}: {kept}", file=sys.stderr)
+    raise SystemExit(status)
 

@@ -97,6 +97,7 @@ def run_experiment(
     """
     plan = plan_run(cfg, _out_dir(out_dir), tracker_name)
     record = RunRecord(plan)
+    plan.writer.reserve()  # room for metrics, summary and errors.txt on a full disk
     overall = (progress or no_progress)(total=len(plan.sequences), desc="sequences", unit="seq")
     sname = ""
     try:
@@ -113,12 +114,15 @@ def run_experiment(
             record.sequence_done(sname)
     except BaseException as err:  # Ctrl-C, SIGTERM: say so in errors.txt, metrics, summary
         if isinstance(err, Exception):
+            plan.writer.close()
             raise
         record.interrupted(sname, err)
+        plan.writer.close()
         raise
     finally:
         overall.close()
     record.finish()
+    plan.writer.close()
     return ExperimentResult(record.metrics, record.failures, pd.DataFrame(record.timings),
                             plan.writer.out_dir, plan.names)
 

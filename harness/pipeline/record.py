@@ -75,19 +75,31 @@ class RunRecord:
         self.writer.failure(f)
         log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
 
-    def publish(self, state: str) -> pd.DataFrame:
-        """Write metrics.csv (with its ``complete`` column) and summary.md for ``state``:
-        ``running``, ``finished`` or ``interrupted``."""
+    def current(self, state: str) -> pd.DataFrame:
+        """The rows of every sequence scored so far, with the ``complete`` column for
+        ``state`` (``running``, ``finished`` or ``interrupted``), whatever could be written."""
         frame = with_extras(metrics_frame(self.scores), self.extras)
         frame = mark_complete(frame, self.expected, state == "finished")
-        done = len({s for p in self.scores.values() for s in p})
-        status = run_status(state, done, len(self.plan.sequences), self.failures)
         if frame.empty:
             frame = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
-        self.writer.metrics(frame)
-        self.writer.text("summary.md", summary_markdown(frame, self.failures,
-                                                        self.plan.table_columns,
-                                                        self.plan.title, status))
+        return frame
+
+    def publish(self, state: str, sname: str = "*") -> pd.DataFrame:
+        """Write metrics.csv and summary.md for ``state``; a write that fails is recorded
+        (the other is still tried) and the rows are returned all the same."""
+        frame = self.current(state)
+        done = len({s for p in self.scores.values() for s in p})
+        try:
+            self.writer.metrics(frame)
+        except OSError as err:
+            self.fail("*", sname, "metrics", err)
+        status = run_status(state, done, len(self.plan.sequences), self.failures)
+        try:
+            self.writer.text("summary.md", summary_markdown(frame, self.failures,
+                                                            self.plan.table_columns,
+                                                            self.plan.title, status))
+        except OSError as err:
+            self.fail("*", sname, "summary", err)
         return frame
 
     def sequence(self, seq: Sequence, outputs: dict[str, TrackerOutput]) -> None:
@@ -144,7 +156,10 @@ class RunRecord:
         """After each sequence: timings.csv, and metrics.csv and summary.md as running."""
         try:
             self.writer.timings(self.timings)
-            self.metrics = self.publish("running")
+        except OSError as err:  # recorded, the run goes on
+            self.fail("*", sname, "timings", err)
+        try:
+            self.metrics = self.publish("running", sname)
         except Exception as err:  # noqa: BLE001 - recorded, the run goes on
             self.fail("*", sname, "metrics", err, traceback.format_exc())
 
@@ -154,18 +169,17 @@ class RunRecord:
                   f"{type(err).__name__}: the run was stopped during sequence {sname!r}; "
                   "metrics.csv and summary.md cover only the sequences before it")
         try:
-            self.publish("interrupted")
+            self.publish("interrupted", sname or "*")
         except Exception:
             log.exception("could not mark %s as interrupted", self.writer.out_dir)
 
     def finish(self) -> None:
-        """The final metrics.csv and summary.md, summary.tex, the plots and hota_alpha.csv;
-        a failing one is recorded and the others are still written."""
-        plan, out_dir = self.plan, self.writer.out_dir
-        try:
-            self.metrics = self.publish("finished")
-        except Exception as err:  # noqa: BLE001 - recorded (disk full...), the run ends failed
-            self.fail("*", "*", "metrics", err, traceback.format_exc())
+        """summary.tex, the plots and hota_alpha.csv, then the final metrics.csv and
+        summary.md (last, so that summary.md counts every failure the run reports); a failing
+        one is recorded and the others are still written. ``metrics`` keeps every scored
+        sequence whatever could be written (disk full...)."""
+        plan, writer = self.plan, self.writer
+        self.metrics = self.current("finished")
         if self.metrics.empty:
             log.warning("no sequence was scored: metrics.csv has no rows")
         try:
@@ -176,7 +190,7 @@ class RunRecord:
         except Exception as err:  # noqa: BLE001 - recorded
             self.fail("*", "*", "summary", err, traceback.format_exc())
         try:
-            metric_bars(self.metrics, out_dir / "plots" / "metrics.png", plan.plot_metrics,
+            metric_bars(self.metrics, writer.path("plots/metrics.png"), plan.plot_metrics,
                         plan.title)
         except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
             self.fail("*", "*", "plot", err, traceback.format_exc())
@@ -185,9 +199,13 @@ class RunRecord:
             if not alpha.empty:
                 self.writer.text("hota_alpha.csv", alpha.to_csv(
                     index=False, float_format="%.6f", lineterminator="\n"))
-                hota_alpha_plot(alpha, out_dir / "plots" / "hota_alpha.png", plan.title)
+                hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
             self.fail("*", "*", "hota_alpha", err, traceback.format_exc())
+        try:
+            self.publish("finished")
+        except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
+            self.fail("*", "*", "metrics", err, traceback.format_exc())
 
 
 def read_external(name: str, folder: Path, sequence: str,

@@ -4,6 +4,7 @@ it appends to ``errors.txt``."""
 from __future__ import annotations
 
 import csv
+import errno
 import io
 import logging
 import shutil
@@ -17,6 +18,7 @@ from harness.datasets.base import Sequence
 from harness.errors import RunError
 from harness.io.mot import (
     MotTable,
+    WriteError,
     write_atomic,
     write_mot,
     write_mot_gt,
@@ -25,6 +27,9 @@ from harness.io.mot import (
 )
 
 log = logging.getLogger(__name__)
+
+RESERVE_FILE = ".occbench-reserve"  # removed at the end of every run
+RESERVE_BYTES = 1 << 20  # freed on a full disk: room for metrics.csv, summary.md, errors.txt
 
 
 @dataclass
@@ -51,27 +56,80 @@ class RunWriter:
     each alpha) and ``plots/`` (``metrics.png``, ``hota_alpha.png``) at the end.
     """
 
-    #: outputs of an earlier run in the same folder, removed when a run starts there so that
-    #: nothing stale (a track file of a tracker or sequence not run again) is mistaken for
-    #: this run's; files of sweeps (status.json) and Hydra (.hydra/, the log) are kept
-    STALE = ("tracks", "metrics.csv", "summary.md", "summary.tex", "timings.csv", "errors.txt",
-             "plots/metrics.png", "config.yaml")
+    #: everything a run writes into its folder, by top-level name: the writer, the plots,
+    #: ``occbench report`` (report/, plots/) and the paper-table callback write nowhere
+    #: else (``path`` refuses any other name; a test checks a real run and report against
+    #: it). A run starting in a used folder removes all of it first, so nothing of an
+    #: earlier run (a track file, a gt/ sequence, a plot of a tracker not run again) is
+    #: mistaken for this run's; Hydra's files (.hydra/, the log), a sweep's status.json
+    #: and the run lock are not the writer's and stay.
+    OWNED = ("config.yaml", "tracks", "gt", "metrics.csv", "summary.md", "summary.tex",
+             "timings.csv", "errors.txt", "hota_alpha.csv", "plots", "report",
+             "paper_table.md", "paper_table.csv")
 
     def __init__(self, out_dir: str | Path) -> None:
+        from harness.pipeline.rundir import busy
+
         self.out_dir = Path(out_dir)
+        owner = busy(self.out_dir)
+        if owner is not None:
+            raise RunError(f"run folder {self.out_dir} is in use by a live run ({owner}): "
+                           "wait for it to end or choose another folder")
+        if self.out_dir.exists() and not self.out_dir.is_dir():
+            raise RunError(f"run folder {self.out_dir} is an existing file, not a folder")
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
-            for stale in self.STALE:
-                path = self.out_dir / stale
+            for name in self.OWNED:
+                path = self.out_dir / name
                 if path.is_dir() and not path.is_symlink():
                     shutil.rmtree(path)
                 else:
                     path.unlink(missing_ok=True)
-            for part in self.out_dir.rglob("*.part"):
+            for part in [*self.out_dir.rglob("*.part"), *self.out_dir.rglob("*.part.*")]:
                 part.unlink(missing_ok=True)
         except OSError as err:
             raise RunError(f"cannot prepare the run folder {self.out_dir}: "
                            f"{err.strerror or err} ({err.filename or self.out_dir})") from None
+
+        self.failures: list[Failure] = []
+        self._reserve = self.out_dir / RESERVE_FILE
+
+    def reserve(self) -> None:
+        """Set disk space aside for the run's own account (metrics.csv, summary.md,
+        errors.txt) when the disk fills up (see ``_write``); ``close`` gives it back."""
+        try:
+            self._reserve.write_bytes(b"\0" * RESERVE_BYTES)
+        except OSError:
+            self._reserve.unlink(missing_ok=True)
+
+    def close(self) -> None:
+        """Give back the reserved space (at the end of a run, however it ends)."""
+        self._reserve.unlink(missing_ok=True)
+
+    def _write(self, name: str, text: str) -> Path:
+        """``write_atomic`` of ``name``; on a full disk the reserve is given up and the write
+        tried once more, so that metrics.csv, summary.md and errors.txt of what was done are
+        written even when a track file or a plot before them filled the disk."""
+        try:
+            return write_atomic(self.out_dir / name, text)
+        except WriteError as err:
+            if err.errno != errno.ENOSPC or not self._reserve.exists():
+                raise
+            log.warning("disk full: the space reserved for the run's own account is used")
+            self._reserve.unlink(missing_ok=True)
+            return write_atomic(self.out_dir / name, text)
+
+    def path(self, name: str) -> Path:
+        """The path of output ``name`` (relative, e.g. ``plots/metrics.png``) in the folder.
+
+        Raises:
+            ValueError: ``name`` is not under one of ``OWNED`` (a new output must be declared
+                there, or a later run in the folder would keep a stale copy of it).
+        """
+        top = Path(name).parts[0] if name else ""
+        if top not in self.OWNED:
+            raise ValueError(f"{name}: not an output of RunWriter.OWNED {self.OWNED}")
+        return self.out_dir / name
 
     def track_path(self, tracker: str, sequence: str) -> Path:
         return self.out_dir / "tracks" / tracker / f"{sequence}.txt"
@@ -101,7 +159,7 @@ class RunWriter:
         return path
 
     def metrics(self, frame: pd.DataFrame) -> None:
-        write_atomic(self.out_dir / "metrics.csv", frame.to_csv(
+        self._write("metrics.csv", frame.to_csv(
             index=False, float_format="%.6f", lineterminator="\n"))
 
     def timings(self, rows: list[dict[str, Any]]) -> None:
@@ -110,19 +168,25 @@ class RunWriter:
                            lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
-        write_atomic(self.out_dir / "timings.csv", buf.getvalue())
+        self._write("timings.csv", buf.getvalue())
 
     def failure(self, f: Failure) -> None:
-        """Append ``f`` to errors.txt; a failure to write it is logged, never raised (the
-        failure is in the run's result and its log all the same)."""
-        text = f"[{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}\n"
-        if f.trace:
-            text += "    " + f.trace.rstrip().replace("\n", "\n    ") + "\n"
+        """Add ``f`` to errors.txt, rewritten whole (atomically) with every failure so far,
+        so it is never cut short; a failure to write it is logged, never raised (the failure
+        is in the run's result and its log all the same)."""
+        self.failures.append(f)
+        text = "".join(_entry(e) for e in self.failures)
         try:
-            with (self.out_dir / "errors.txt").open("a") as fh:
-                fh.write(text)
+            self._write("errors.txt", text)
         except OSError as err:
-            log.error("cannot write %s: %s", self.out_dir / "errors.txt", err.strerror or err)
+            log.error("%s", err)
 
     def text(self, name: str, text: str) -> Path:
-        return write_atomic(self.out_dir / name, text)
+        return self._write(name, text)
+
+
+def _entry(f: Failure) -> str:
+    text = f"[{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}\n"
+    if f.trace:
+        text += "    " + f.trace.rstrip().replace("\n", "\n    ") + "\n"
+    return text

@@ -12,6 +12,7 @@ import builtins
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -334,20 +335,153 @@ def test_a_taken_run_folder_gets_a_unique_suffix(tmp_path):
     assert not (taken / "metrics.csv").exists()
 
 
-def test_a_reused_run_folder_drops_stale_outputs(tmp_path):
+def _files(folder: Path) -> set[str]:
+    """The files of a run folder, Hydra's and the log aside."""
+    return {p.relative_to(folder).as_posix() for p in folder.rglob("*")
+            if p.is_file() and ".hydra" not in p.parts and p.suffix != ".log"}
+
+
+def test_a_reused_run_folder_keeps_nothing_of_the_previous_run(tmp_path):
+    """A second run with fewer sequences and trackers into a used folder leaves exactly the
+    files a fresh folder gets: no gt/<seq>/ of a sequence not run again, no plot, no
+    hota_alpha.csv, no report of the first run (RunWriter.OWNED)."""
+    data = tmp_path / "data"
+    for name in ("a", "b"):
+        mot_folder(data, name, frames=False)
+    out = tmp_path / "run"
+    run(mot_cfg(data), out)
+    assert {"gt/b/gt/gt.txt", "hota_alpha.csv", "plots/hota_alpha.png"} <= _files(out)
+    (out / "report").mkdir()
+    (out / "report" / "b.mp4").write_bytes(b"an earlier report")
+    (out / "metrics.csv.part").write_text("half")
+    (out / "status.json").write_text('{"status": "running"}')  # a sweep's: kept
+    second = mot_cfg(data, "dataset.sequences=[a]")
+    run(second, out)
+    fresh = tmp_path / "fresh"
+    run(second, fresh)
+    assert _files(out) == _files(fresh) | {"status.json"}
+    assert "gt/b/gt/gt.txt" not in _files(out)
+
+
+def test_every_file_a_run_writes_is_owned_by_the_writer(tmp_path):
+    """RunWriter.OWNED is what a reused folder is cleaned by: a new output outside it would
+    survive into the next run's folder, so a real run's files must all fall under it."""
+    from harness.pipeline.writer import RunWriter
+
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
     out = tmp_path / "run"
-    (out / "tracks" / "gone").mkdir(parents=True)
-    (out / "tracks" / "gone" / "a.txt").write_text("1,1,1,1,5,5,1,-1,-1,-1\n")
-    (out / "tracks" / "baseline").mkdir()
-    (out / "tracks" / "baseline" / "old_sequence.txt").write_text("1,1,1,1,5,5,1,-1,-1,-1\n")
-    (out / "metrics.csv.part").write_text("half")
-    (out / "status.json").write_text('{"status": "running"}')  # a sweep's: kept
-    run(mot_cfg(data), out)
-    assert sorted(p.name for p in (out / "tracks").rglob("*.txt")) == ["a.txt"]
-    assert not (out / "tracks" / "gone").exists() and not list(out.rglob("*.part"))
-    assert (out / "status.json").is_file()
+    run(mot_cfg(data, "graph.export=true"), out)
+    tops = {f.split("/")[0] for f in _files(out)}
+    assert tops and tops <= set(RunWriter.OWNED), tops - set(RunWriter.OWNED)
+    with pytest.raises(ValueError, match="not an output of RunWriter.OWNED"):
+        RunWriter(out).path("notes.txt")
+
+
+SLOW = '''
+import os, time
+from pathlib import Path
+from trackers.baseline import BaselineTracker
+
+class Slow(BaselineTracker):
+    """A tracker slow enough to be stopped mid-run (a sequence of 12 frames takes 6 s)."""
+    def update(self, *args):
+        time.sleep(0.5)
+        return super().update(*args)
+'''
+
+
+def _slow_run(tmp_path: Path, folder: Path, names: str = "abcdefghij") -> subprocess.Popen:
+    data = tmp_path / "data"
+    for name in names:
+        if not (data / name).exists():
+            mot_folder(data, name, frames=False)
+    (tmp_path / "helpers").mkdir(exist_ok=True)
+    (tmp_path / "helpers" / "slow_tracker.py").write_text(SLOW)
+    env = {**os.environ, "OMP_NUM_THREADS": "1",
+           "PYTHONPATH": f"{tmp_path / 'helpers'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    return subprocess.Popen(
+        [sys.executable, "-m", "harness", "dataset=mot", f"dataset.root={data}",
+         "tracker=baseline", "tracker._target_=slow_tracker.Slow", "progress=false",
+         f"hydra.run.dir={folder}"], cwd=ROOT, env=env, text=True, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE)
+
+
+def _wait_for(path: Path, proc: subprocess.Popen, timeout: float = 120) -> None:
+    deadline = time.monotonic() + timeout
+    while not path.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert path.exists(), proc.communicate()[1][-3000:] if proc.poll() is not None else ""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_second_run_is_refused_and_a_stopped_run_ends_in_one_line(tmp_path, sig):
+    """Two runs racing for one folder: the second is refused in one line naming the folder
+    and the live run's pid, and writes nothing there. The first, stopped by Ctrl-C or
+    SIGTERM, ends in one line (no traceback), exit 130 / 143, its summary interrupted and
+    errors.txt written."""
+    folder = tmp_path / "R"
+    first = _slow_run(tmp_path, folder)
+    try:
+        _wait_for(folder / "metrics.csv", first)  # sequence a is scored
+        config = (folder / "config.yaml").read_text()
+        second = app("dataset=mot", f"dataset.root={tmp_path / 'data'}", "tracker=baseline",
+                     "progress=false", f"hydra.run.dir={folder}")
+        assert second.returncode == 1
+        assert second.stderr.strip() == (f"occbench: run folder {folder} is in use by a live run "
+                                         f"(pid {first.pid} on {socket.gethostname()}): wait "
+                                         "for it to end or choose another hydra.run.dir")
+        assert (folder / "config.yaml").read_text() == config
+        first.send_signal(sig)
+        _, err = first.communicate(timeout=120)
+    finally:
+        if first.poll() is None:
+            first.kill()
+    assert first.returncode == 128 + sig, err[-3000:]
+    assert "Traceback" not in err
+    how = "interrupted (Ctrl-C)" if sig == signal.SIGINT else "terminated (SIGTERM)"
+    assert err.strip().splitlines()[-1].startswith(f"occbench: {how}: what was scored")
+    assert "**Incomplete run**: interrupted after" in (folder / "summary.md").read_text()
+    assert "[interrupted]" in (folder / "errors.txt").read_text()
+    assert not (folder / ".occbench.lock").exists()
+    metrics = pd.read_csv(folder / "metrics.csv")
+    assert "a" in set(metrics["sequence"]) and not metrics["complete"].all()
+
+
+@pytest.mark.parametrize("where", ["a file", "under a file"])
+def test_a_run_path_that_cannot_be_a_folder_is_one_line(tmp_path, where):
+    target = tmp_path / "taken"
+    target.write_text("not a folder\n")
+    folder = target if where == "a file" else target / "R"
+    proc = app("tracker=baseline", "progress=false", "dataset.length=5",
+               f"hydra.run.dir={folder}")
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    (line,) = proc.stderr.strip().splitlines()
+    assert str(folder) in line and line.startswith("occbench: ")
+    assert target.read_text() == "not a folder\n"
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only folder")
+def test_an_unwritable_results_folder_is_one_line(tmp_path):
+    results = tmp_path / "results"
+    results.mkdir()
+    results.chmod(0o555)
+    try:
+        proc = app("tracker=baseline", "progress=false", "dataset.length=5",
+                   f"hydra.run.dir={results / 'R'}")
+    finally:
+        results.chmod(0o755)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    (line,) = proc.stderr.strip().splitlines()
+    assert str(results / "R") in line
+
+
+def test_a_run_failing_before_any_result_leaves_no_folder(tmp_path):
+    folder = tmp_path / "R"
+    proc = app("tracker=baseline", "tracker.max_age=-1", "progress=false",
+               f"hydra.run.dir={folder}")
+    assert proc.returncode == 1 and "max_age" in proc.stderr
+    assert not folder.exists()
 
 
 # ----------------------------------------------------------------------------- partial runs
@@ -414,6 +548,65 @@ def test_disk_full_or_unwritable_tracks_are_named_in_one_line(tmp_path, monkeypa
     assert not list(out.rglob("*.part")) and not target.exists()
     m = pd.read_csv(out / "metrics.csv")
     assert set(m["sequence"]) == {"a", "COMBINED"} and m["IDF1"].notna().all()
+
+
+OWN_ACCOUNT = ("metrics.csv", "summary.md", "errors.txt", "timings.csv", "summary.tex",
+               "hota_alpha.csv")
+
+
+def test_a_disk_full_after_one_sequence_keeps_its_metrics_and_every_error(tmp_path,
+                                                                          monkeypatch):
+    """The disk fills up once sequence a is scored: b's and c's files and the plots cannot be
+    written; the run's own account (metrics, summary, errors.txt) fits in the space its
+    reserve frees. a's rows stay in metrics.csv and in the result (the printed table),
+    errors.txt holds every failure whole, summary.md counts as many as the run, and no
+    empty or partial file is left."""
+    import matplotlib.figure
+
+    import harness.io.mot as M
+
+    data = tmp_path / "data"
+    for name in "abc":
+        mot_folder(data, name, frames=False)
+    out = tmp_path / "run"
+    reserve = out / ".occbench-reserve"
+    full = []
+
+    def faulty_open(path, mode="r", *args, **kwargs):
+        name = Path(path).name
+        if full and "w" in mode and name.endswith(".part"):
+            own = name.removesuffix(".part") in OWN_ACCOUNT
+            if not (own and not reserve.exists()):
+                builtins.open(path, "w").close()
+                return builtins.open("/dev/full", mode, *args, **kwargs)
+        handle = builtins.open(path, mode, *args, **kwargs)
+        if name == "metrics.csv.part" and not full:
+            full.append(True)  # a's metrics are being written: then the disk is full
+        return handle
+
+    real_savefig = matplotlib.figure.Figure.savefig
+
+    def faulty_savefig(fig, fname, *args, **kwargs):
+        if full:
+            Path(fname).write_bytes(b"")
+            raise OSError(28, "No space left on device", str(fname))
+        return real_savefig(fig, fname, *args, **kwargs)
+
+    monkeypatch.setattr(M, "open", faulty_open, raising=False)
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", faulty_savefig)
+    result = run(mot_cfg(data), out)
+    assert {"a", "COMBINED"} <= set(result.metrics["sequence"])
+    on_disk = pd.read_csv(out / "metrics.csv")
+    assert "a" in set(on_disk["sequence"]) and on_disk["IDF1"].notna().all()
+    errors = (out / "errors.txt").read_text()
+    n = len(result.failures)
+    assert n >= 3 and sum(line.startswith("[") for line in errors.splitlines()) == n
+    summary = (out / "summary.md").read_text()
+    assert sum(line.startswith("- [") for line in summary.splitlines()) == n
+    assert f"{n} part(s) failed" in summary
+    files = [p for p in out.rglob("*") if p.is_file()]
+    assert not [p for p in files if p.stat().st_size == 0 or ".part" in p.name]
+    assert not reserve.exists() and not list(out.rglob("*.png"))
 
 
 def test_write_atomic_on_a_full_disk_leaves_nothing(tmp_path):
