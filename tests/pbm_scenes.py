@@ -243,3 +243,8 @@ def random_features(rng: np.random.Generator, n: int, bins: int = 4) -> PartFeat
     return PartFeatures(np.concatenate([xy, wh], axis=2), area, rng.uniform(0, 3, (n, N_PARTS)),
                         hists[0], hists[1], rng.uniform(0, 80, (n, N_PARTS, 2)),
                         rng.uniform(0.5, 100, n))
+
+
+def unit_models() -> FeatureModels:
+    """Half-normal models with sigma 1 for every feature and part."""
+    return FeatureModels({f: [FoldedMixture([1.0], [0.0], [1.0])] * N_PARTS for f in FEATURES})

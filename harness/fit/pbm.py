@@ -57,25 +57,16 @@ from __future__ import annotations
 
 import argparse
 import logging
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import yaml
 
-from trackers.layered.association import feature_differences
-from trackers.layered.feature_models import (
-    FeatureModels,
-    fit_difference_model,
-)
-from trackers.layered.parts import (
-    FEATURES,
-    N_PARTS,
-    PART_NAMES,
-    PartFeatureExtractor,
-    centroid_ratios,
-)
+from harness.fit.pbm_pairs import collect_pairs, positive_differences
+from harness.fit.pbm_weights import WeightFit, search_weights
+from trackers.layered.feature_models import FeatureModels, fit_difference_model
+from trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
 
 log = logging.getLogger(__name__)
 
@@ -88,175 +79,6 @@ MIN_SIGMA = {"area": 0.01, "perimeter": 0.01, "hsv": 0.01, "xyz": 0.01, "displac
 degenerate, over-confident models."""
 
 
-@dataclass
-class PairSamples:
-    """Pairs (a person in frame k-1, a person in frame k) of annotated sequences.
-
-    Attributes:
-        d: (M, 6, 5) float64 eq. 11 differences (``FEATURES`` order, ``PART_NAMES`` order).
-        positive: (M,) bool, True when both sides are the same person.
-        block: (M,) int64 id of the frame block of frame k (one sequence, ``block_frames``
-            consecutive frames); cross-validation folds are unions of whole blocks.
-    """
-
-    d: np.ndarray
-    positive: np.ndarray
-    block: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.positive)
-
-
-def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibility: float = 0.7,
-                  bins: int = 4, neighbours: int = 3, radius: float = 1.0,
-                  block_frames: int = 25, motion_compensation: bool = True) -> PairSamples:
-    """Positive and negative frame-to-frame pairs of annotated people (PBM 4.1 samples).
-
-    Args:
-        sequences: ``harness.datasets.base.Sequence`` objects with ground truth and frames.
-        max_frames: frames read per sequence (None = all).
-        min_visibility: people below this visibility (when known) or flagged occluded are
-            skipped: the models describe unoccluded matches.
-        bins: histogram bins per channel (must match the tracker's ``histogram_bins``).
-        neighbours: negatives per person and frame: the nearest other people (0 = none).
-        radius: a negative's box centre lies within ``radius`` x (w, h) of the person's
-            previous centre (w, h its previous box size), like the tracker's gate (PBM 3).
-        block_frames: frames per cross-validation block.
-        motion_compensation: as the tracker's ``motion_compensation``: the previous frame's
-            parts are moved by the person's previous step (its centroid in frame k-1 minus
-            in frame k-2; none when it was not kept in frame k-2) before the overlap and
-            displacement differences are taken, as the tracker moves a target's parts model
-            by KF1's constant-velocity prediction.
-    Returns:
-        ``PairSamples``; positives are exactly the pairs ``collect_differences`` returns.
-    """
-    if neighbours < 0 or radius < 0 or block_frames < 1:
-        raise ValueError(f"collect_pairs: neighbours ({neighbours}) and radius ({radius}) must "
-                         f"be >= 0 and block_frames ({block_frames}) >= 1")
-    ex = PartFeatureExtractor(bins)
-    ds: list[np.ndarray] = []
-    pos: list[np.ndarray] = []
-    blocks: list[np.ndarray] = []
-    block_base = 0
-    for seq in sequences:
-        if seq.gt is None:
-            log.warning("%s: no ground truth, skipped", seq.info.name)
-            continue
-        table = seq.gt.table
-        occluded = seq.gt.occluded
-        prev = None  # (ids, boxes, features, centroids) of the previous frame
-        before: dict[int, np.ndarray] = {}  # id -> centroid, the frame before that
-        warned = False
-        n = seq.info.length if max_frames is None else min(seq.info.length, max_frames)
-        for k in range(1, n + 1):
-            frame = seq.frame(k)
-            if frame is None:
-                log.warning("%s: no pixels, skipped", seq.info.name)
-                break
-            lab = seq.foreground(k)
-            if lab is None and not warned:
-                log.warning("%s: no foreground masks; the whole box counts as foreground",
-                            seq.info.name)
-                warned = True
-            fg = None if lab is None else lab != 0
-            rows = seq.gt.rows_of(k)
-            keep = np.ones(len(rows), dtype=bool)
-            if occluded is not None:
-                keep &= ~occluded[rows]
-            vis = table.visibility[rows] if hasattr(table, "visibility") else None
-            if vis is not None:
-                keep &= ~(np.isfinite(vis) & (vis < min_visibility))
-            rows = rows[keep]
-            ids = table.ids[rows].astype(np.int64)
-            boxes = np.asarray(table.boxes[rows], dtype=np.float64)
-            ex.start(frame, fg)
-            if len(rows) == 0:
-                prev, before = None, {}
-                continue
-            cents = np.array([_centroid(fg, b) for b in boxes])
-            al, be = centroid_ratios(boxes, cents)
-            feats = ex.extract(boxes, al, be)
-            if prev is not None:
-                ti, ci, is_pos = _pairs(prev[0], prev[1], ids, boxes, neighbours, radius)
-                if len(ti):
-                    model = prev[2]
-                    if motion_compensation:
-                        model = model.shifted(np.array([
-                            c - before[i] if i in before else np.zeros(2)
-                            for i, c in zip(prev[0].tolist(), prev[3])]).reshape(-1, 2))
-                    d = feature_differences(model, feats)[ti, ci]  # (K, 6, 5)
-                    ds.append(d)
-                    pos.append(is_pos)
-                    blocks.append(np.full(len(ti), block_base + (k - 1) // block_frames, np.int64))
-                before = dict(zip(prev[0].tolist(), prev[3]))
-            prev = (ids, boxes, feats, cents)
-        block_base += (n - 1) // block_frames + 1
-    if not ds:
-        return PairSamples(np.zeros((0, len(FEATURES), N_PARTS)), np.zeros(0, bool),
-                           np.zeros(0, np.int64))
-    return PairSamples(np.concatenate(ds), np.concatenate(pos), np.concatenate(blocks))
-
-
-def _pairs(prev_ids: np.ndarray, prev_boxes: np.ndarray, ids: np.ndarray, boxes: np.ndarray,
-           neighbours: int, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Index pairs (previous person, current person) and whether they are the same person.
-
-    Per previous person: itself when present, then its ``neighbours`` nearest other people
-    (centre distance) whose centre lies within ``radius`` x (w, h) of its previous centre.
-    Boxes are (N, 4) xywh.
-    """
-    pc = prev_boxes[:, :2] + prev_boxes[:, 2:] / 2
-    cc = boxes[:, :2] + boxes[:, 2:] / 2
-    off = np.abs(cc[None] - pc[:, None])  # (P, C, 2)
-    near = np.all(off <= radius * prev_boxes[:, None, 2:], axis=2)
-    dist = np.hypot(off[..., 0], off[..., 1])
-    same = prev_ids[:, None] == ids[None]
-    ti: list[int] = []
-    ci: list[int] = []
-    for t in range(len(prev_ids)):
-        hit = np.flatnonzero(same[t])
-        ti += [t] * len(hit)
-        ci += hit.tolist()
-        other = np.flatnonzero(near[t] & ~same[t])
-        other = other[np.argsort(dist[t, other], kind="stable")][:neighbours]
-        ti += [t] * len(other)
-        ci += other.tolist()
-    ti_a, ci_a = np.array(ti, np.intp), np.array(ci, np.intp)
-    return ti_a, ci_a, same[ti_a, ci_a]
-
-
-def collect_differences(sequences: Iterable, max_frames: int | None = None,
-                        min_visibility: float = 0.7, bins: int = 4,
-                        motion_compensation: bool = True) -> dict[str, np.ndarray]:
-    """Frame-to-frame part feature differences of annotated people (eq. 11).
-
-    Args:
-        sequences: ``harness.datasets.base.Sequence`` objects with ground truth and frames.
-        max_frames: frames read per sequence (None = all).
-        min_visibility: people below this visibility (when known) or flagged occluded are
-            skipped: the models describe unoccluded matches.
-        bins: histogram bins per channel (must match the tracker's ``histogram_bins``).
-        motion_compensation: see ``collect_pairs``.
-    Returns:
-        {feature: (K, 5) differences}.
-    """
-    return positive_differences(collect_pairs(sequences, max_frames, min_visibility, bins,
-                                              neighbours=0,
-                                              motion_compensation=motion_compensation))
-
-
-def positive_differences(samples: PairSamples) -> dict[str, np.ndarray]:
-    """{feature: (K, 5) differences} of the positive pairs (what the models are fitted on)."""
-    d = samples.d[samples.positive]
-    return {f: d[:, i] for i, f in enumerate(FEATURES)}
-
-
-def _centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
-    from trackers.layered.search import region_centroid
-
-    return region_centroid(fg, box)
-
-
 def fit_models(diffs: dict[str, np.ndarray], description: str = "") -> FeatureModels:
     """One model per feature and part (``fit_difference_model``)."""
     models = {}
@@ -266,176 +88,6 @@ def fit_models(diffs: dict[str, np.ndarray], description: str = "") -> FeatureMo
             raise ValueError("no differences collected: the sequences hold no person seen in two frames")
         models[f] = [fit_difference_model(d[:, j], min_sigma=MIN_SIGMA[f]) for j in range(N_PARTS)]
     return FeatureModels(models, description)
-
-
-# ---------------------------------------------------------------------------------------
-# feature weights omega (PBM 4.1, eq. 12)
-
-
-@dataclass
-class WeightFit:
-    """The learned omega of eq. 12 and how it was chosen (PBM 4.1).
-
-    Attributes:
-        weights: {feature: omega_i}, sum 1.
-        accuracy: mean validation accuracy of ``weights`` over the folds.
-        fold_accuracy: (k,) validation accuracy of ``weights`` per fold.
-        nested_accuracy: mean over folds of the validation accuracy of the omega chosen on
-            the other folds alone (an unbiased estimate of the whole procedure).
-        reference_accuracy: mean validation accuracy of ``reference`` weights, if given.
-        settings: grid step, grid points, folds, threshold, spread, gamma, sample counts.
-    """
-
-    weights: dict[str, float]
-    accuracy: float
-    fold_accuracy: np.ndarray
-    nested_accuracy: float
-    reference_accuracy: float | None = None
-    settings: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        out = {
-            "accuracy": round(float(self.accuracy), 6),
-            "fold_accuracy": [round(float(v), 6) for v in self.fold_accuracy],
-            "nested_accuracy": round(float(self.nested_accuracy), 6),
-        }
-        if self.reference_accuracy is not None:
-            out["reference_accuracy"] = round(float(self.reference_accuracy), 6)
-        out.update(self.settings)
-        return out
-
-
-def weight_grid(step: float) -> np.ndarray:
-    """omega on the grid {0, step, ..., 1}^6, normalised to sum 1 (PBM 4.1).
-
-    The all-zero point is skipped and points equal after normalising are kept once.
-    Returns:
-        (G, 6) float64 weights, rows in lexicographic order of their reduced integer form.
-    """
-    n = round(1.0 / step)
-    if n < 1 or abs(n * step - 1.0) > 1e-9:
-        raise ValueError(f"weight step must divide 1 (e.g. 0.1, 0.2, 0.25), got {step}")
-    axes = np.meshgrid(*[np.arange(n + 1)] * len(FEATURES), indexing="ij")
-    v = np.stack([a.reshape(-1) for a in axes], axis=1)[1:]  # skip all zero
-    g = np.gcd.reduce(v, axis=1)
-    v = np.unique(v // g[:, None], axis=0)
-    return v / v.sum(axis=1, keepdims=True)
-
-
-def feature_scores(models: FeatureModels, d: np.ndarray, gamma: np.ndarray, spread: float
-                   ) -> np.ndarray:
-    """q_i = sum_j gamma_j p(d_ij / spread | theta_ij), so that eq. 13 of eq. 12 is q @ omega.
-
-    Args:
-        d: (M, 6, 5) differences; gamma: (5,) part weights (normalised here).
-    Returns:
-        (M, 6) float64.
-    """
-    gamma = np.asarray(gamma, dtype=np.float64)
-    gamma = gamma / gamma.sum()
-    prob = models.match_probability(np.asarray(d, dtype=np.float64) / spread)  # (M, 6, 5)
-    return prob @ gamma
-
-
-def block_folds(block: np.ndarray, k: int) -> np.ndarray:
-    """Fold of every sample: whole blocks, round-robin over the sorted block ids.
-
-    Args:
-        block: (M,) block ids. k: folds.
-    Returns:
-        (M,) int fold in [0, k).
-    """
-    ids, inv = np.unique(np.asarray(block), return_inverse=True)
-    if len(ids) < k:
-        raise ValueError(f"{k}-fold cross-validation needs >= {k} blocks, got {len(ids)}")
-    return (np.arange(len(ids)) % k)[inv.reshape(-1)]
-
-
-def fold_accuracies(q: np.ndarray, positive: np.ndarray, folds: np.ndarray, k: int,
-                    grid: np.ndarray, threshold: float, chunk: int = 1024) -> np.ndarray:
-    """Balanced accuracy of the match decision p >= threshold per grid point and fold.
-
-    Args:
-        q: (M, 6) ``feature_scores``; positive: (M,) bool; folds: (M,) fold ids.
-        grid: (G, 6) omega (rows sum to 1); the global score is q @ omega (eqs. 12-13).
-    Returns:
-        (G, k) accuracy: within a fold, positives and negatives weigh half each (all of it
-        when the fold holds one class only).
-    """
-    positive = np.asarray(positive, dtype=bool)
-    wt = np.zeros((len(q), k))
-    for f in range(k):
-        classes = [positive & (folds == f), ~positive & (folds == f)]
-        present = [c for c in classes if c.any()]
-        for c in present:
-            wt[c, f] = 1.0 / (len(present) * c.sum())
-    out = np.empty((len(grid), k))
-    for s in range(0, len(grid), chunk):
-        p = grid[s:s + chunk] @ q.T  # (c, M) global scores, eq. 13
-        correct = (p >= threshold) == positive[None]
-        out[s:s + chunk] = correct.astype(np.float64) @ wt
-    return out
-
-
-def pick_best(mean_accuracy: np.ndarray, grid: np.ndarray, tol: float = 1e-12) -> int:
-    """Index of the best accuracy; ties: nearest the uniform weights, then first in order."""
-    best = np.flatnonzero(mean_accuracy >= mean_accuracy.max() - tol)
-    dist = np.linalg.norm(grid[best] - 1.0 / grid.shape[1], axis=1)
-    return int(best[np.argmin(dist)])
-
-
-def search_weights(samples: PairSamples, models: FeatureModels, gamma: np.ndarray,
-                   threshold: float, spread: float, step: float = 0.2, k: int = 5,
-                   reference: Mapping[str, float] | None = None) -> WeightFit:
-    """omega of eq. 12 with the best k-fold cross-validation accuracy (PBM 4.1).
-
-    Args:
-        samples: positive and negative pairs (``collect_pairs``).
-        models: the fitted difference models theta_ij.
-        gamma: (5,) part weights of eq. 13; threshold: the tracker's ``match_threshold``;
-            spread: its ``model_spread``.
-        step: grid step over [0, 1] per feature. k: folds (whole blocks).
-        reference: weights whose accuracy is reported beside (e.g. the hand-set ones).
-    Raises:
-        ValueError when the samples hold no positive or no negative pair or too few blocks.
-    """
-    n_pos = int(samples.positive.sum())
-    n_neg = len(samples) - n_pos
-    if n_pos == 0 or n_neg == 0:
-        raise ValueError(f"weight search needs positive and negative pairs, got {n_pos} and {n_neg}")
-    grid = weight_grid(step)
-    folds = block_folds(samples.block, k)
-    log.info("searching omega: %d grid points, %d positive and %d negative pairs, %d folds",
-             len(grid), n_pos, n_neg, k)
-    q = feature_scores(models, samples.d, gamma, spread)
-    acc = fold_accuracies(q, samples.positive, folds, k, grid, threshold)
-    mean = acc.mean(axis=1)
-    best = pick_best(mean, grid)
-    nested = []
-    for f in range(k):
-        train = np.delete(acc, f, axis=1).mean(axis=1)
-        nested.append(acc[pick_best(train, grid), f])
-    ref_acc = None
-    if reference is not None:
-        w = np.array([float(reference[f]) for f in FEATURES])
-        ref_acc = float(fold_accuracies(q, samples.positive, folds, k, w[None] / w.sum(),
-                                        threshold).mean())
-    settings = {
-        "grid_step": float(step),
-        "grid_points": len(grid),
-        "folds": int(k),
-        "blocks": len(np.unique(samples.block)),
-        "positives": n_pos,
-        "negatives": n_neg,
-        "match_threshold": float(threshold),
-        "model_spread": float(spread),
-        "part_weights": [float(g) for g in np.asarray(gamma, dtype=np.float64)],
-    }
-    weights = {f: round(float(v), 6) for f, v in zip(FEATURES, grid[best], strict=True)}
-    log.info("omega %s: mean cross-validation accuracy %.4f (nested %.4f) over %d grid points",
-             weights, mean[best], np.mean(nested), len(grid))
-    return WeightFit(weights, float(mean[best]), acc[best].copy(), float(np.mean(nested)),
-                     ref_acc, settings)
 
 
 # ---------------------------------------------------------------------------------------
@@ -531,7 +183,7 @@ def _tracker_settings(path: str | Path) -> dict:
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="occbench fit pbm", description=__doc__.split("\n")[0])
     ap.add_argument("--synthetic", nargs="*", metavar="NAME", default=None,
                     help="synthetic scenarios (no names = the default suite)")
@@ -553,8 +205,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tracker-config", default=str(TRACKER_CONFIG),
                     help="tracker YAML giving features.part_weights, matching.match_threshold, "
                          "adaptations.model_spread and adaptations.motion_compensation")
-    args = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    return ap
+
+
+def _sequences(args: argparse.Namespace) -> tuple[list, list[str]]:
+    """The sequences of ``--synthetic`` and ``--mot``, and a description of each source."""
     sequences = []
     sources = []
     if args.synthetic is not None:
@@ -568,6 +223,40 @@ def main(argv: list[str] | None = None) -> int:
 
         sequences += load_mot(root)
         sources.append(f"MOT folder {root}")
+    return sequences, sources
+
+
+def _header(args: argparse.Namespace, description: str, n: int, fit: WeightFit | None) -> str:
+    """The ``#`` header of the written YAML."""
+    header = (f"PBM feature-difference models (PBM 2.2), written by `python -m harness.fit pbm`.\n"
+              f"{description}; {n} frame-to-frame differences per part;\n"
+              f"histogram_bins {args.bins}, min visibility {args.min_visibility}.\n"
+              "Each entry: a folded Gaussian mixture over |difference| (half_normal = one "
+              "component with mean 0).")
+    if fit is not None:
+        header += ("\nfeature_weights: omega of eq. 12 with the best cross-validation accuracy "
+                   "(PBM 4.1); use with\n"
+                   f"  tracker.pbm.features.models.path={args.out} {weights_override(fit.weights)}")
+    return header
+
+
+def _print_fit(args: argparse.Namespace, fit: WeightFit) -> None:
+    """The learned omega, its accuracies and the override that uses it, on stdout."""
+    print("feature_weights (omega, PBM eq. 12): "
+          + ", ".join(f"{f} {w:.3f}" for f, w in fit.weights.items()))
+    ref = "" if fit.reference_accuracy is None else f"; hand-set weights {fit.reference_accuracy:.4f}"
+    print(f"{args.folds}-fold cross-validation accuracy {fit.accuracy:.4f} "
+          f"(nested {fit.nested_accuracy:.4f}{ref}) on {fit.settings['positives']} positive and "
+          f"{fit.settings['negatives']} negative pairs, {fit.settings['grid_points']} grid points")
+    print(f"use with: python -m harness tracker.pbm.features.models.path={args.out} "
+          f"{weights_override(fit.weights)}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = _parser()
+    args = ap.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    sequences, sources = _sequences(args)
     if not sequences:
         ap.error("give --synthetic and/or --mot")
     tracker = _tracker_settings(args.tracker_config)
@@ -591,28 +280,13 @@ def main(argv: list[str] | None = None) -> int:
         else:
             fit.settings.update(neighbours=args.neighbours, radius=args.radius,
                                 block_frames=args.block_frames)
-    header = (f"PBM feature-difference models (PBM 2.2), written by `python -m harness.fit pbm`.\n"
-              f"{description}; {len(diffs['area'])} frame-to-frame differences per part;\n"
-              f"histogram_bins {args.bins}, min visibility {args.min_visibility}.\n"
-              "Each entry: a folded Gaussian mixture over |difference| (half_normal = one "
-              "component with mean 0).")
-    if fit is not None:
-        header += ("\nfeature_weights: omega of eq. 12 with the best cross-validation accuracy "
-                   "(PBM 4.1); use with\n"
-                   f"  tracker.pbm.features.models.path={args.out} {weights_override(fit.weights)}")
+    header = _header(args, description, len(diffs["area"]), fit)
     save_fit(models, args.out, header, fit)
     log.info("wrote %s (%d differences per part)", args.out, len(diffs["area"]))
     for f in FEATURES:
         log.info("%-12s %s", f, " ".join(f"{m.kind[:4]}:{m.sigmas.max():.3f}" for m in models.models[f]))
     if fit is not None:
-        print("feature_weights (omega, PBM eq. 12): "
-              + ", ".join(f"{f} {w:.3f}" for f, w in fit.weights.items()))
-        ref = "" if fit.reference_accuracy is None else f"; hand-set weights {fit.reference_accuracy:.4f}"
-        print(f"{args.folds}-fold cross-validation accuracy {fit.accuracy:.4f} "
-              f"(nested {fit.nested_accuracy:.4f}{ref}) on {fit.settings['positives']} positive and "
-              f"{fit.settings['negatives']} negative pairs, {fit.settings['grid_points']} grid points")
-        print(f"use with: python -m harness tracker.pbm.features.models.path={args.out} "
-              f"{weights_override(fit.weights)}")
+        _print_fit(args, fit)
     if args.plot:
         plot_models(models, diffs, args.plot)
         log.info("wrote %s", args.plot)

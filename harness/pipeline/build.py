@@ -124,8 +124,8 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
 
 def missing_library(err: BaseException) -> bool:
     """Whether ``err`` (or an exception it was raised from) is an outside tracker's missing
-    optional library (``trackers.outside._common.MissingLibrary``)."""
-    from trackers.outside._common import MissingLibrary
+    optional library (``trackers.outside.MissingLibrary``)."""
+    from trackers.outside import MissingLibrary
 
     seen = set()
     while err is not None and id(err) not in seen:

@@ -156,6 +156,20 @@ def _blank(sequence: DataSequence) -> np.ndarray:
     return np.full((sequence.info.height, sequence.info.width, 3), 40, np.uint8)
 
 
+def _panel(name: str, k: int, base: np.ndarray, tracks: list[Track],
+           graph: _GraphDrawing | None, gt: tuple[np.ndarray, np.ndarray] | None,
+           scale: float) -> np.ndarray:
+    """Tracker ``name``'s panel of frame ``k``: its own graph drawing when it keeps one
+    (Reta Figs. 3-5), else its tracks drawn its way; resized by ``scale``."""
+    if graph is not None:
+        p = draw_tracks(graph.draw(base), [], "boxes", gt, f"{name}  frame {k}")
+    else:
+        p = draw_tracks(base, tracks, TRACKER_STYLES.get(name, "auto"), gt, f"{name}  frame {k}")
+    if scale != 1.0:
+        p = cv2.resize(p, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    return p
+
+
 def render(trackers: Mapping[str, Any], sequence: DataSequence, source: DetectionSource,
            video: str | Path | None = None, sheet: str | Path | None = None,
            sheet_frames: Sequence[int] | None = None, show_gt: bool = True,
@@ -206,17 +220,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
                 continue
             base = frame if frame is not None else _blank(sequence)
             gt = _gt_of(sequence, k) if show_gt else None
-            panels = []
-            for name, out in tracks.items():
-                if graphs[name] is not None:  # the tracker's own graph drawing (Reta Figs. 3-5)
-                    p = draw_tracks(graphs[name].draw(base), [], "boxes", gt,
-                                    f"{name}  frame {k}")
-                else:
-                    p = draw_tracks(base, out, TRACKER_STYLES.get(name, "auto"), gt,
-                                    f"{name}  frame {k}")
-                if scale != 1.0:
-                    p = cv2.resize(p, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-                panels.append(p)
+            panels = [_panel(name, k, base, out, graphs[name], gt, scale)
+                      for name, out in tracks.items()]
             if k in wanted:
                 rows[k] = panels
             if video is not None and first <= k <= last:

@@ -36,9 +36,10 @@ ByteTrack (``bytetrack`` in the configs) is our own re-implementation of BYTE an
 
 from __future__ import annotations
 
+from trackers.outside._common import MissingLibrary
 from trackers.outside.boxmot import BoxmotTracker
 from trackers.outside.motpy import MotpyTracker
 from trackers.outside.norfair import NorfairTracker
 from trackers.outside.ocsort import OCSortTracker
 
-__all__ = ["BoxmotTracker", "MotpyTracker", "NorfairTracker", "OCSortTracker"]
+__all__ = ["BoxmotTracker", "MissingLibrary", "MotpyTracker", "NorfairTracker", "OCSortTracker"]

@@ -24,7 +24,8 @@ from collections.abc import Sequence as Seq
 import numpy as np
 
 from harness.datasets.base import window
-from harness.datasets.synthetic.people import Appearance, draw_person, head_box, random_appearance
+from harness.datasets.synthetic.appearance import Appearance, random_appearance
+from harness.datasets.synthetic.people import draw_person, head_box
 from harness.datasets.synthetic.replay import load_replay
 from harness.datasets.synthetic.scenarios import SCENARIOS, illumination_gains, world_cast
 from harness.datasets.synthetic.scene import Camera, render_background

@@ -1,4 +1,4 @@
-"""Synthetic people: appearance and drawing.
+"""Synthetic people: drawing (the appearance is ``harness.datasets.synthetic.appearance``).
 
 A person is drawn inside its box (xywh, pixels, 0-based top-left) from parts, in the
 proportions of PBM 2.1 (head = 1/7 of the height): a head (skin-tone face and a hair cap,
@@ -19,117 +19,14 @@ Horizontal positions are in "body units": a box of width ``w`` spans body units
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
+from harness.datasets.synthetic.appearance import Appearance
+
 SHIFT = 3
 _S = 1 << SHIFT
-
-#: skin tones (BGR) of the head detector's categories (PBM 2.3): bright, standard, dark
-SKIN = {"bright": (190, 205, 238), "standard": (135, 165, 212), "dark": (55, 80, 118)}
-#: hair colours (BGR): black, brown, blond, red (PBM 2.3) and grey
-HAIR = {
-    "black": (22, 22, 28),
-    "brown": (30, 52, 88),
-    "blond": (105, 175, 212),
-    "red": (35, 70, 160),
-    "grey": (150, 150, 155),
-}
-#: trouser colours (BGR)
-TROUSERS = (
-    (130, 80, 40),
-    (35, 35, 38),
-    (105, 105, 110),
-    (110, 155, 175),
-    (40, 60, 90),
-    (85, 45, 30),
-    (60, 90, 70),
-)
-PATTERNS = ("plain", "stripes", "jacket", "logo")
-
-
-@dataclass(frozen=True)
-class Appearance:
-    """How one person looks. Colours are BGR floats in [0, 255].
-
-    Attributes:
-        skin, hair, shirt, trousers, shoes: part colours.
-        accent: second colour of the shirt pattern (stripes, inner shirt, logo).
-        pattern: one of ``PATTERNS``.
-        long_hair: hair falls to the shoulders.
-        short_sleeves: forearms in skin colour.
-        height_m: body height in metres (sets the image size in world scenarios).
-        build: box width / box height (0.36 slim .. 0.44 broad).
-        skin_kind, hair_kind: category names (for the head detector's fit command).
-    """
-
-    skin: tuple[float, float, float]
-    hair: tuple[float, float, float]
-    shirt: tuple[float, float, float]
-    accent: tuple[float, float, float]
-    trousers: tuple[float, float, float]
-    shoes: tuple[float, float, float]
-    pattern: str = "plain"
-    long_hair: bool = False
-    short_sleeves: bool = False
-    height_m: float = 1.75
-    build: float = 0.4
-    skin_kind: str = "standard"
-    hair_kind: str = "black"
-
-
-def _jitter(rng: np.random.Generator, colour, amount: float) -> tuple[float, float, float]:
-    c = np.clip(np.asarray(colour, float) + rng.uniform(-amount, amount, 3), 0, 255)
-    return (float(c[0]), float(c[1]), float(c[2]))
-
-
-def _hsv(h: float, s: float, v: float) -> tuple[float, float, float]:
-    px = np.array([[[h * 360.0, s, v]]], np.float32)  # float HSV: H in degrees, S, V in [0, 1]
-    b, g, r = cv2.cvtColor(px, cv2.COLOR_HSV2BGR)[0, 0] * 255.0
-    return (float(b), float(g), float(r))
-
-
-def random_appearance(rng: np.random.Generator) -> Appearance:
-    """A random person (every draw from ``rng``)."""
-    skin_kind = str(rng.choice(list(SKIN)))
-    hair_kind = str(rng.choice(list(HAIR), p=[0.35, 0.3, 0.17, 0.1, 0.08]))
-    shirt = _hsv(rng.random(), rng.uniform(0.25, 0.9), rng.uniform(0.35, 0.95))
-    accent_v = rng.uniform(0.15, 0.95)
-    accent = _hsv(rng.random(), rng.uniform(0.0, 0.8), accent_v)
-    return Appearance(
-        skin=_jitter(rng, SKIN[skin_kind], 12),
-        hair=_jitter(rng, HAIR[hair_kind], 10),
-        shirt=shirt,
-        accent=accent,
-        trousers=_jitter(rng, TROUSERS[int(rng.integers(len(TROUSERS)))], 12),
-        shoes=_jitter(rng, (30, 30, 35), 15),
-        pattern=str(rng.choice(PATTERNS, p=[0.4, 0.25, 0.2, 0.15])),
-        long_hair=bool(rng.random() < 0.3),
-        short_sleeves=bool(rng.random() < 0.35),
-        height_m=float(rng.uniform(1.62, 1.88)),
-        build=float(rng.uniform(0.37, 0.43)),
-        skin_kind=skin_kind,
-        hair_kind=hair_kind,
-    )
-
-
-def similar_appearance(
-    app: Appearance, rng: np.random.Generator, amount: float = 6.0
-) -> Appearance:
-    """A near-identical copy of ``app`` (every colour jittered by at most ``amount`` levels)."""
-    return replace(
-        app,
-        skin=_jitter(rng, app.skin, amount),
-        hair=_jitter(rng, app.hair, amount),
-        shirt=_jitter(rng, app.shirt, amount),
-        accent=_jitter(rng, app.accent, amount),
-        trousers=_jitter(rng, app.trousers, amount),
-        shoes=_jitter(rng, app.shoes, amount),
-        height_m=float(app.height_m + rng.uniform(-0.03, 0.03)),
-    )
-
 
 def _scaled(c, f: float) -> tuple[float, float, float]:
     return (min(c[0] * f, 255.0), min(c[1] * f, 255.0), min(c[2] * f, 255.0))
@@ -262,9 +159,34 @@ def draw_person(
     tw = 1.0 - 0.2 * side  # torso width factor (side view narrower)
     s = math.sin(phase) * swing
     c = math.cos(phase) * swing
-    shirt, trousers, skin, hair = app.shirt, app.trousers, app.skin, app.hair
+    _legs(pen, app, side, dirn, s, c)
+    # pelvis
+    pen.poly(
+        [(-0.092 * tw, 0.44), (0.092 * tw, 0.44), (0.088 * tw, 0.56), (-0.088 * tw, 0.56)],
+        app.trousers,
+    )
+    behind_first = side > 0.4  # the arm behind the torso in side views, drawn first
+    if behind_first:
+        _arm(pen, app, -dirn, 0.75, side, dirn, tw, s)
 
-    # --- legs: hip -> knee -> ankle, the leg behind drawn first and darker
+    # --- long hair behind the shoulders (front view)
+    if app.long_hair and not away:
+        pen.poly([(-0.06, 0.07), (0.06, 0.07), (0.065, 0.2), (-0.065, 0.2)], app.hair)
+    _torso(pen, app, tw, facing, away)
+    _head(pen, app, img is not None, facing, side, dirn, away)
+
+    # --- arms in front (both in front views, the near one in side views)
+    if behind_first:
+        _arm(pen, app, dirn, 1.0, side, dirn, tw, s)
+    else:
+        _arm(pen, app, -1.0, 0.95, side, dirn, tw, s)
+        _arm(pen, app, 1.0, 0.95, side, dirn, tw, s)
+    pen.flush()
+
+
+def _legs(pen: _Pen, app: Appearance, side: float, dirn: float, s: float, c: float) -> None:
+    """Both legs, hip -> knee -> ankle, the leg behind drawn first and darker."""
+    trousers = app.trousers
     stride = 0.11 * max(side, 0.25)
     legs = []
     for k in (-1.0, 1.0):
@@ -281,34 +203,28 @@ def draw_person(
         pen.limb(knee_a, 0.73, 0.035, foot_a, 0.95 - lift, 0.027, col)
         pen.ellipse(knee_a, 0.73, 0.035, 0.012, col)
         pen.ellipse(foot_a + 0.012 * dirn * side, 0.968 - lift, 0.036, 0.022, app.shoes)
-    # pelvis
-    pen.poly(
-        [(-0.092 * tw, 0.44), (0.092 * tw, 0.44), (0.088 * tw, 0.56), (-0.088 * tw, 0.56)], trousers
-    )
 
-    # --- arm behind the torso in side views
-    def arm(k: float, colour_scale: float) -> None:
-        sh_a = k * 0.11 * tw * (1.0 - 0.7 * side)  # shoulders overlap in a side view
-        swing_a = -k * dirn * 0.1 * s * max(side, 0.3) if side > 0.4 else 0.0
-        elbow_a = sh_a + k * 0.012 * (1 - side) + 0.5 * swing_a
-        hand_a = sh_a + k * 0.02 * (1 - side) + swing_a + dirn * 0.02 * side * abs(s)
-        hand_a = max(min(hand_a, 0.17), -0.17)
-        sleeve = _scaled(shirt, 0.88 * colour_scale)
-        pen.ellipse(sh_a, 0.2, 0.035, 0.03, sleeve)
-        pen.limb(sh_a, 0.19, 0.034, elbow_a, 0.33, 0.03, sleeve)
-        fore = _scaled(skin, colour_scale) if app.short_sleeves else sleeve
-        pen.limb(elbow_a, 0.33, 0.03, hand_a, 0.44, 0.024, fore)
-        pen.ellipse(hand_a, 0.455, 0.024, 0.02, _scaled(skin, colour_scale))
 
-    behind_first = side > 0.4
-    if behind_first:
-        arm(-dirn, 0.75)
+def _arm(pen: _Pen, app: Appearance, k: float, colour_scale: float, side: float, dirn: float,
+         tw: float, s: float) -> None:
+    """The arm on side ``k`` (-1 left, +1 right): sleeve, forearm, hand."""
+    shirt, skin = app.shirt, app.skin
+    sh_a = k * 0.11 * tw * (1.0 - 0.7 * side)  # shoulders overlap in a side view
+    swing_a = -k * dirn * 0.1 * s * max(side, 0.3) if side > 0.4 else 0.0
+    elbow_a = sh_a + k * 0.012 * (1 - side) + 0.5 * swing_a
+    hand_a = sh_a + k * 0.02 * (1 - side) + swing_a + dirn * 0.02 * side * abs(s)
+    hand_a = max(min(hand_a, 0.17), -0.17)
+    sleeve = _scaled(shirt, 0.88 * colour_scale)
+    pen.ellipse(sh_a, 0.2, 0.035, 0.03, sleeve)
+    pen.limb(sh_a, 0.19, 0.034, elbow_a, 0.33, 0.03, sleeve)
+    fore = _scaled(skin, colour_scale) if app.short_sleeves else sleeve
+    pen.limb(elbow_a, 0.33, 0.03, hand_a, 0.44, 0.024, fore)
+    pen.ellipse(hand_a, 0.455, 0.024, 0.02, _scaled(skin, colour_scale))
 
-    # --- long hair behind the shoulders (front view)
-    if app.long_hair and not away:
-        pen.poly([(-0.06, 0.07), (0.06, 0.07), (0.065, 0.2), (-0.065, 0.2)], hair)
 
-    # --- torso with shading and pattern
+def _torso(pen: _Pen, app: Appearance, tw: float, facing: float, away: bool) -> None:
+    """The torso with shading, its pattern and the belt."""
+    shirt, trousers = app.shirt, app.trousers
     pen.poly(
         [
             (-0.045, 0.15),
@@ -351,7 +267,12 @@ def draw_person(
         _scaled(trousers, 0.5),
     )  # belt
 
-    # --- neck and head
+
+def _head(pen: _Pen, app: Appearance, colour: bool, facing: float, side: float, dirn: float,
+          away: bool) -> None:
+    """Neck and head: hair cap, face, fringe and eyes (on large heads, in colour only), or
+    only hair seen from behind."""
+    skin, hair = app.skin, app.hair
     pen.poly([(-0.024, 0.12), (0.024, 0.12), (0.026, 0.165), (-0.026, 0.165)], _scaled(skin, 0.85))
     hx = 0.006 * facing
     pen.ellipse(hx, _HEAD_V, _HEAD_RA, _HEAD_RV, hair)
@@ -362,7 +283,7 @@ def draw_person(
         pen.ellipse(
             hx - 0.004 * facing, _HEAD_V - 0.018, _HEAD_RA * 0.92, _HEAD_RV * 0.5, hair, 180, 360
         )
-        if pen.h >= 120 and img is not None:  # eyes on large heads only
+        if pen.h >= 120 and colour:  # eyes on large heads only
             for e in (-0.018, 0.018) if side < 0.5 else (0.02 * dirn,):
                 pen.dot(
                     fx + e * (1 - 0.4 * side),
@@ -372,14 +293,6 @@ def draw_person(
                 )
     elif app.long_hair:
         pen.poly([(-0.055, 0.07), (0.055, 0.07), (0.06, 0.21), (-0.06, 0.21)], hair)
-
-    # --- arms in front (both in front views, the near one in side views)
-    if behind_first:
-        arm(dirn, 1.0)
-    else:
-        arm(-1.0, 0.95)
-        arm(1.0, 0.95)
-    pen.flush()
 
 
 def _shadow_kernel() -> np.ndarray:

@@ -19,11 +19,11 @@ import numpy as np
 
 from harness.datasets.base import Sequence, window
 from harness.datasets.mot import read_seqinfo, seqinfo_number
-from harness.datasets.synthetic.people import random_appearance
+from harness.datasets.synthetic.appearance import random_appearance
 from harness.datasets.synthetic.scenarios import walking_poses
 from harness.datasets.synthetic.scene import Camera, render_background
 from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
-from harness.io.mot import read_mot
+from harness.io.mot import MotTable, read_mot
 
 log = logging.getLogger(__name__)
 
@@ -89,16 +89,7 @@ def load_replay(
     gt_file, root = _locate(gt_path)
     info, ini = _seqinfo(root)
     seq_length = seqinfo_number(info, "seqLength", ini, int)
-    table = read_mot(gt_file, gt=True, last_frame=seq_length)  # rows past it: an error
-    if max_frames is not None:
-        if max_frames < 1:
-            raise ValueError(f"replay: max_frames must be >= 1, got {max_frames}")
-        table = table.rows(table.frames <= max_frames)
-    if len(table) == 0:
-        raise ValueError(
-            f"replay: {gt_file} has no boxes"
-            + (f" in frames 1..{max_frames}" if max_frames else "")
-        )
+    table = _read_gt(gt_file, max_frames, seq_length)
     b = table.boxes
     W = int(width or seqinfo_number(info, "imWidth", ini, int)
             or math.ceil(np.max(b[:, 0] + b[:, 2]) / 16) * 16)
@@ -111,26 +102,10 @@ def load_replay(
     seq_name = name or info.get("name") or root.name
     rng = np.random.default_rng([int(seed), zlib.crc32(seq_name.encode())])
 
-    ids = np.unique(table.ids)
+    ids, boxes, conf = _person_arrays(table, length)
     P = len(ids)
-    col = {int(i): p for p, i in enumerate(ids)}
-    boxes = np.full((P, length, 4), np.nan)
-    conf = np.ones((P, length))
-    rows_p = np.array([col[int(i)] for i in table.ids])
-    boxes[rows_p, table.frames - 1] = b
-    conf[rows_p, table.frames - 1] = table.conf
     foot_y = boxes[..., 1] + boxes[..., 3]
-    # motion in body heights: 1.75 m per box height
-    cx = boxes[..., 0] + boxes[..., 2] / 2
-    hgt = boxes[..., 3]
-    vx = np.zeros((P, length))
-    vz = np.zeros((P, length))
-    if length > 1:
-        vx[:, 1:] = np.diff(cx, axis=1) / hgt[:, 1:] * 1.75 * rate
-        vz[:, 1:] = -np.diff(foot_y, axis=1) / hgt[:, 1:] * 1.75 * rate * 3.0
-    vx = np.nan_to_num(vx)
-    vz = np.nan_to_num(vz)
-    speed = np.clip(np.hypot(vx, vz / 3.0), 0.0, 3.0)
+    vx, vz, speed = _velocities(boxes, foot_y, rate)
     phase, facing, away, swing = walking_poses(vx, vz, speed, rate, rng.uniform(0, 2 * math.pi, P))
     apps = [random_appearance(rng) for _ in range(P)]
     cast = Cast(ids, apps, boxes, -foot_y, phase, facing, away, swing, conf)
@@ -150,3 +125,55 @@ def load_replay(
         )
     log.info("%s: replaying %d people over %d frames from %s", seq_name, P, length, gt_file)
     return window([seq], frames)
+
+
+def _read_gt(gt_file: Path, max_frames: int | None, seq_length: int | None) -> MotTable:
+    """The ground truth of ``gt_file``, frames 1..max_frames (None: all).
+
+    Raises:
+        ValueError: ``max_frames`` below 1, or no box in the kept frames.
+        MotFormatError: a malformed row, or one past ``seq_length`` (file and line named).
+    """
+    table = read_mot(gt_file, gt=True, last_frame=seq_length)  # rows past it: an error
+    if max_frames is not None:
+        if max_frames < 1:
+            raise ValueError(f"replay: max_frames must be >= 1, got {max_frames}")
+        table = table.rows(table.frames <= max_frames)
+    if len(table) == 0:
+        raise ValueError(
+            f"replay: {gt_file} has no boxes"
+            + (f" in frames 1..{max_frames}" if max_frames else "")
+        )
+    return table
+
+
+def _person_arrays(table: MotTable, length: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Ground-truth ids (P,), boxes (P, length, 4) xywh (NaN where absent) and confidences
+    (P, length) per person and frame."""
+    ids = np.unique(table.ids)
+    P = len(ids)
+    col = {int(i): p for p, i in enumerate(ids)}
+    boxes = np.full((P, length, 4), np.nan)
+    conf = np.ones((P, length))
+    rows_p = np.array([col[int(i)] for i in table.ids])
+    boxes[rows_p, table.frames - 1] = table.boxes
+    conf[rows_p, table.frames - 1] = table.conf
+    return ids, boxes, conf
+
+
+def _velocities(boxes: np.ndarray, foot_y: np.ndarray, rate: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lateral and depth velocity and walking speed (P, L) in metres per second, motion in
+    body heights (1.75 m per box height; depth from the feet's image motion, x3)."""
+    P, length = foot_y.shape
+    cx = boxes[..., 0] + boxes[..., 2] / 2
+    hgt = boxes[..., 3]
+    vx = np.zeros((P, length))
+    vz = np.zeros((P, length))
+    if length > 1:
+        vx[:, 1:] = np.diff(cx, axis=1) / hgt[:, 1:] * 1.75 * rate
+        vz[:, 1:] = -np.diff(foot_y, axis=1) / hgt[:, 1:] * 1.75 * rate * 3.0
+    vx = np.nan_to_num(vx)
+    vz = np.nan_to_num(vz)
+    speed = np.clip(np.hypot(vx, vz / 3.0), 0.0, 3.0)
+    return vx, vz, speed

@@ -35,7 +35,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from harness.datasets.synthetic.people import Appearance, random_appearance, similar_appearance
+from harness.datasets.synthetic.appearance import (
+    Appearance,
+    random_appearance,
+    similar_appearance,
+)
 from harness.datasets.synthetic.scene import Camera
 from harness.datasets.synthetic.sequence import Cast
 

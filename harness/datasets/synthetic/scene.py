@@ -129,18 +129,37 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
     """
     W, H = cam.width, cam.height
     img = np.zeros((H, W, 3), np.uint8)
+    wall = _back_wall_colour(img, cam, rng)
+    _floor(img, cam, rng)
+    _back_wall(img, cam, rng, wall)
+    _left_wall(img, cam, rng, wall)
+    _objects(img, cam, rng)
+    return _texture(img, rng)
+
+
+def _extent(cam: Camera) -> tuple[float, float, float]:
+    """The scene's left wall X, right floor edge X (a metre beyond the view at the back
+    wall) and back wall Z, metres."""
+    return LEFT_WALL_X, cam.half_width_at(BACK_WALL_Z) + 1.0, BACK_WALL_Z
+
+
+def _back_wall_colour(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> np.ndarray:
+    """Fill ``img`` with the back wall's colour (everything above the far floor edge) and
+    the ceiling tint; the wall colour (3,) float."""
     zb = BACK_WALL_Z
-    # --- back wall (everything above the far floor edge) and ceiling tint
     wall = rng.uniform(150, 210, 3)
     wall[rng.integers(3)] *= 0.85
     img[:] = np.clip(wall, 0, 255).astype(np.uint8)
     top_y = cam.project(0, 6.0, zb)[1]
     img[: max(int(top_y), 0)] = np.clip(wall * 0.8, 0, 255).astype(np.uint8)
-    # --- floor tiles
+    return wall
+
+
+def _floor(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> None:
+    """Floor tiles (1 m, per-tile shade jitter) and grout lines."""
+    xl, xr, zb = _extent(cam)
     floor_a = rng.uniform(90, 150, 3)
     floor_b = floor_a * rng.uniform(0.78, 0.9)
-    xl = LEFT_WALL_X
-    xr = cam.half_width_at(zb) + 1.0
     zs = np.arange(max(np.floor(cam.near_depth * 0.5), 0.5), zb + 1.0, 1.0)
     xs = np.arange(np.floor(xl), np.ceil(xr) + 1.0, 1.0)
     for i, (z0, z1) in enumerate(itertools.pairwise(zs)):
@@ -173,7 +192,12 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
                 cv2.LINE_AA,
                 4,
             )
-    # --- back wall: skirting, windows, a door
+
+
+def _back_wall(img: np.ndarray, cam: Camera, rng: np.random.Generator,
+               wall: np.ndarray) -> None:
+    """The back wall's skirting, windows and doors."""
+    xl, xr, zb = _extent(cam)
     _fill(
         img, cam, [(xl, 0, zb), (xr + 50, 0, zb), (xr + 50, 0.15, zb), (xl, 0.15, zb)], wall * 0.5
     )
@@ -217,7 +241,12 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
                 wall * 0.6,
             )
         wx += rng.uniform(2.6, 3.6)
-    # --- left wall (plane X = LEFT_WALL_X), posters
+
+
+def _left_wall(img: np.ndarray, cam: Camera, rng: np.random.Generator,
+               wall: np.ndarray) -> None:
+    """The left wall (plane X = LEFT_WALL_X) and its posters."""
+    xl, _, zb = _extent(cam)
     side = wall * rng.uniform(0.7, 0.85)
     zn = 0.2
     _fill(img, cam, [(xl, 0, zn), (xl, 0, zb), (xl, 8.0, zb), (xl, 8.0, zn)], side)
@@ -233,7 +262,12 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
             255 - col,
         )
         z += rng.uniform(3.0, 5.0)
-    # --- static objects near the walls (people walk in front of them)
+
+
+def _objects(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> None:
+    """Static objects near the walls (crates, benches, planters): people walk in front of
+    them."""
+    xl, _, zb = _extent(cam)
     for _ in range(int(rng.integers(3, 6))):
         zc = rng.uniform(zb - 4.0, zb - 0.6)
         half = cam.half_width_at(zc)
@@ -274,7 +308,11 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
                 -1,
                 cv2.LINE_AA,
             )
-    # --- texture noise (smoothed) and vignette
+
+
+def _texture(img: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``img`` with smoothed texture noise and a mild vignette, as uint8."""
+    H, W = img.shape[:2]
     noise = rng.normal(0.0, 1.0, (H // 2 + 1, W // 2 + 1)).astype(np.float32)
     noise = cv2.GaussianBlur(noise, (0, 0), 0.8)
     noise = cv2.resize(noise, (W, H), interpolation=cv2.INTER_LINEAR)

@@ -31,7 +31,8 @@ import cv2
 import numpy as np
 
 from harness.datasets.base import GroundTruth, Sequence
-from harness.datasets.synthetic.people import Appearance, ShadowPainter, draw_person, head_box
+from harness.datasets.synthetic.appearance import Appearance
+from harness.datasets.synthetic.people import ShadowPainter, draw_person, head_box
 from harness.io.mot import MotTable
 from trackers.records import SequenceInfo
 
