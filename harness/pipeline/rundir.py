@@ -46,6 +46,10 @@ def unique_dir(path: str) -> str:
     if path in _CLAIMED:
         return _CLAIMED[path]
     base = Path(path)
+    for above in (base.parent, *base.parent.parents):
+        if above.exists() and not above.is_dir():
+            raise RunError(f"cannot create the run folder {base}: {above} is an existing file, "
+                           "not a folder")
     try:
         base.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
@@ -175,19 +179,26 @@ class RunFolder(Callback):
     def __init__(self) -> None:
         self.created = False
 
-    def _start(self, folder: Path) -> None:
-        self.created = created_here(folder) or not folder.exists()
+    def _start(self, config: DictConfig, key: str) -> None:
+        """Resolve ``key`` (creating a generated folder) and hold the folder; a folder that
+        cannot be made or held ends the run in one line (exit 1)."""
         try:
+            folder = Path(str(OmegaConf.select(config, key, throw_on_missing=True)))
+            self.created = created_here(folder) or not folder.exists()
             hold(folder)
-        except RunError as err:
-            print(f"occbench: {err}", file=sys.stderr)
+        except Exception as err:  # noqa: BLE001 - the resolver's RunError comes wrapped
+            cause = err
+            while not isinstance(cause, RunError) and (cause.__cause__ or cause.__context__):
+                cause = cause.__cause__ or cause.__context__
+            print(f"occbench: {cause if isinstance(cause, RunError) else f'{key}: {err}'}",
+                  file=sys.stderr)
             raise SystemExit(1) from None
 
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
-        self._start(Path(str(config.hydra.run.dir)))
+        self._start(config, "hydra.run.dir")
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        self._start(Path(str(config.hydra.sweep.dir)))
+        self._start(config, "hydra.sweep.dir")
 
     def on_run_end(self, config: DictConfig, job_return: Any = None, **kwargs: Any) -> None:
         folder = Path(str(config.hydra.run.dir))

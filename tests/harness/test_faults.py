@@ -448,13 +448,15 @@ def test_a_second_run_is_refused_and_a_stopped_run_ends_in_one_line(tmp_path, si
     assert "a" in set(metrics["sequence"]) and not metrics["complete"].all()
 
 
-@pytest.mark.parametrize("where", ["a file", "under a file"])
+@pytest.mark.parametrize("where", ["a file", "under a file", "generated under a file"])
 def test_a_run_path_that_cannot_be_a_folder_is_one_line(tmp_path, where):
     target = tmp_path / "taken"
     target.write_text("not a folder\n")
     folder = target if where == "a file" else target / "R"
+    run_dir = (f"${{occbench.unique_dir:{folder}}}" if where.startswith("generated")
+               else str(folder))
     proc = app("tracker=baseline", "progress=false", "dataset.length=5",
-               f"hydra.run.dir={folder}")
+               f"hydra.run.dir={run_dir}")
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
     (line,) = proc.stderr.strip().splitlines()
     assert str(folder) in line and line.startswith("occbench: ")
