@@ -111,12 +111,12 @@ def study_of(sweep_dir: str | Path, distributions: Mapping[str, Any],
     import optuna
     from optuna.trial import TrialState, create_trial
 
-    from harness.sweeps.jobs import DONE, job_dirs, parse_override, read_overrides, read_status
+    from harness.sweeps.jobs import DONE, members, parse_override, read_overrides, read_status
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
     study = optuna.create_study(direction=direction)
-    for d in job_dirs(sweep_dir):
+    for d in members(sweep_dir)[0]:  # not the folders an earlier sweep left
         status = read_status(d) or {}
         overrides = status.get("overrides") or read_overrides(d)
         given = dict(parse_override(o) for o in overrides)

@@ -581,7 +581,7 @@ def test_a_disk_full_after_one_sequence_keeps_its_metrics_and_every_error(tmp_pa
             if not (own and not reserve.exists()):
                 builtins.open(path, "w").close()
                 return builtins.open("/dev/full", mode, *args, **kwargs)
-        handle = builtins.open(path, mode, *args, **kwargs)
+        handle = builtins.open(path, mode, *args, **kwargs)  # noqa: SIM115 - returned
         if name == "metrics.csv.part" and not full:
             full.append(True)  # a's metrics are being written: then the disk is full
         return handle
