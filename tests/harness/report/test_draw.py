@@ -1,0 +1,51 @@
+"""Drawing styles (harness/report/draw.py): each tracker drawn its own way, frames never
+drawn on in place, the panel grid."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from harness.report.draw import draw_tracks, grid, infer_style
+from trackers.records import Track, TrackState
+
+
+def _frame() -> np.ndarray:
+    return np.full((120, 160, 3), 100, np.uint8)
+
+
+def test_each_tracker_is_drawn_its_own_way():
+    box = np.array([40.0, 20.0, 30.0, 60.0])
+    plain = Track(3, box)
+    ellipse = Track(4, box, extra={"ellipse": np.array([55.0, 50.0, 0.0, 15.0, 30.0])})
+    hyp = Track(4, box + [30, 0, 0, 0], TrackState.HYPOTHESIS,
+                extra={"ellipse": np.array([85.0, 50.0, 0.0, 15.0, 30.0]),
+                       "hypothesis": "still"})
+    parts = np.array([[40, 20, 30, 9], [40, 29, 15, 25], [55, 29, 15, 25], [40, 54, 15, 26],
+                      [55, 54, 15, 26]], float)
+    pbm = Track(5, box, extra={"parts": parts, "occluded_parts": np.array([0, 0, 0, 1, 1], bool)})
+    assert infer_style([plain]) == "boxes"
+    assert infer_style([ellipse]) == "ellipses" and infer_style([pbm]) == "parts"
+    a = draw_tracks(_frame(), [plain], "boxes")
+    b = draw_tracks(_frame(), [ellipse, hyp], "ellipses")
+    c = draw_tracks(_frame(), [pbm], "parts")
+    for img in (a, b, c):
+        assert img.shape == (120, 160, 3) and (img != 100).any()
+    # a box's corner is drawn, an ellipse leaves the box corner untouched
+    assert (a[20, 40] != 100).any() and (b[20, 40] == 100).all()
+    # the solid ellipse is closed, the dashed hypothesis leaves gaps along its outline
+    solid = cv2.ellipse2Poly((55, 50), (15, 30), 0, 0, 360, 2)
+    dashed = cv2.ellipse2Poly((85, 50), (15, 30), 0, 0, 360, 2)
+    on = lambda pts: np.mean([(b[y, x] != 100).any() for x, y in pts])
+    assert on(solid[10:40]) > 0.9 and on(dashed[10:40]) < 0.9
+    # the part rectangles split the box: the line between torso and legs is drawn
+    assert (c[54, 47] != 100).any() and (a[54, 47] == 100).all()
+    # frames are never drawn on in place
+    frame = _frame()
+    draw_tracks(frame, [plain], gt=(box[None], np.array([1])), title="baseline")
+    assert (frame == 100).all()
+    with pytest.raises(ValueError, match="style"):
+        draw_tracks(frame, [plain], "circles")
+    g = grid([a, b, c], columns=2)
+    assert g.shape == (240, 320, 3)
