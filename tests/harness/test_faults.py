@@ -11,6 +11,7 @@ from __future__ import annotations
 import builtins
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -234,6 +235,26 @@ def test_seqinfo_length_that_is_not_an_integer_names_the_key(tmp_path):
     ini.write_text(ini.read_text().replace(f"seqLength={N}", "seqLength=10.5"))
     with pytest.raises(RunError, match=r"seqinfo\.ini: key 'seqLength' must be a positive integer"):
         run(mot_cfg(data), tmp_path / "run")
+
+@pytest.mark.parametrize("ini_length, message", [
+    (N, rf"a/gt/gt\.txt:{2 * N + 1}: frame {N + 1} is beyond the sequence's last frame {N}"),
+    ("12.5", r"seqinfo\.ini: key 'seqLength' must be a positive integer"),
+])
+def test_eval_checks_gt_against_a_strict_seqlength(tmp_path, capsys, ini_length, message):
+    """occbench eval: gt past seqLength refused as in a run; a seqLength that is not an
+    integer names the key (it used to switch the check off without a word)."""
+    from harness.commands.evaluate import main
+
+    data = tmp_path / "data"
+    seq = mot_folder(data, "a", frames=False, gt=gt_rows() + f"{N + 1},1,20,20,20,60,1,1,1\n")
+    ini = seq / "seqinfo.ini"
+    ini.write_text(ini.read_text().replace(f"seqLength={N}", f"seqLength={ini_length}"))
+    res = tmp_path / "res"
+    res.mkdir()
+    (res / "a.txt").write_text("1,1,21,21,20,60,1,-1,-1,-1\n")
+    assert main([str(data), str(res)]) == 2
+    assert re.search(message, capsys.readouterr().err)
+
 
 
 def mpeg(path: Path, n: int, size: tuple[int, int] = (W, H)) -> Path:
