@@ -28,7 +28,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from harness.io.mot import MotTable, scored_gt_mask
-from harness.metrics.kernels import sparse_iou
+from harness.metrics.overlaps import sparse_iou
 from trackers.geometry import iou_matrix
 
 log = logging.getLogger(__name__)
