@@ -145,7 +145,8 @@ def check_unique_ids(table: MotTable, what: str) -> None:
 
 
 def pair_frames(gt: MotTable, res: MotTable) -> FramePairs:
-    """Apply the ignore rules and compute one IoU matrix per frame.
+    """Apply the ignore rules and compute one IoU matrix per frame, kept sparse
+    (``harness.metrics.overlaps.sparse_iou``), read by CLEAR, IDF1 and HOTA alike.
 
     Args:
         gt: ground truth read with ``read_mot(path, gt=True)`` (boxes xywh, 0-based).
