@@ -216,10 +216,11 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
             the joint bin (``parts._channel_luts``).
         out: (parts (N, 5, 4) (``_part_rects``), area, perimeter (N, 5), hsv, xyz
             (N, 5, B), centroid (N, 5, 2)), written.
-        pixel_bins: (H * W,) int32, each pixel's joint bins ``hsv_bin << 16 | xyz_bin``
-            once a sample read it, -1 before: the boxes of a frame share most of their
-            pixels (the search's boxes around one head), whose colour conversion is then
-            done once per frame; the caller resets it for each frame.
+        pixel_bins: ((H * W,) int64, stamp): each pixel's joint bins ``stamp << 32 |
+            hsv_bin << 16 | xyz_bin`` once a sample of this frame read it: the boxes of a
+            frame share most of their pixels (the search's boxes around one head), whose
+            colour conversion is then done once per frame; an entry of another stamp (the
+            caller's frame count, >= 1) is stale, so nothing is reset between frames.
 
     Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
     centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
@@ -229,6 +230,7 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
     frame, fg, has_fg = image
     hsv_lut, xyz_lut = luts
     parts, area, perimeter, hsv, xyz, centroid = out
+    table, stamp = pixel_bins
     H, W = frame.shape[0], frame.shape[1]
     R, C = fr.shape[0], fc.shape[0]
     nb = hsv.shape[2]
@@ -291,16 +293,17 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
                 if not on[r, c]:
                     continue
                 q = roff + coff[c]  # the pixel's index (unsigned: no negative-index test)
-                packed = pixel_bins[q]
-                if packed < 0:  # first read this frame: convert it
+                packed = table[q]
+                if (packed >> 32) != stamp:  # first read this frame: convert it
                     o = q * three
                     ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
                                                       np.int64(pixels[o + two]))
                     packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
                                + hsv_lut[2, np.uint64(cv)]) << 16) | (
-                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)])
-                    pixel_bins[q] = packed
-                hsv_bin, xyz_bin = packed >> 16, packed & 0xFFFF
+                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
+                    ) | (stamp << 32)
+                    table[q] = packed
+                hsv_bin, xyz_bin = (packed >> 16) & 0xFFFF, packed & 0xFFFF
                 outline = (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
                            or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1])
                 if split_row and right[c]:

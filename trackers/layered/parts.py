@@ -230,6 +230,7 @@ class PartFeatureExtractor:
         self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
         self._luts: tuple[np.ndarray, np.ndarray] | None = None  # made on first use
         self._pixel_bins: np.ndarray | None = None  # the frame's converted pixels (``start``)
+        self._stamp = 0  # frames started on this table
         self._frame: np.ndarray | None = None
         self._fg: np.ndarray | None = None  # (H, W) bool, C-contiguous
 
@@ -247,8 +248,9 @@ class PartFeatureExtractor:
         self._fg = None if foreground is None else np.ascontiguousarray(foreground, dtype=bool)
         size = frame.shape[0] * frame.shape[1]
         if self._pixel_bins is None or len(self._pixel_bins) != size:
-            self._pixel_bins = np.empty(size, np.int32)  # bins <= 32: 16 bits each
-        self._pixel_bins.fill(-1)  # this frame's pixels not converted yet (``part_features``)
+            self._pixel_bins = np.zeros(size, np.int64)  # stamp 0: nothing converted
+            self._stamp = 0
+        self._stamp += 1  # this frame's pixels not converted yet (``part_features``)
 
     def _colour_luts(self) -> tuple[np.ndarray, np.ndarray]:
         """The (3, 256) HSV and XYZ channel terms of the joint bins (``_channel_luts``)."""
@@ -330,5 +332,6 @@ class PartFeatureExtractor:
         at_centroids = centres is not None
         _kernels.part_features(b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
                                (self._fr, self._fc), self._image(), self._colour_luts(),
-                               (parts, area, perimeter, hsv, xyz, centroid), self._pixel_bins)
+                               (parts, area, perimeter, hsv, xyz, centroid),
+                               (self._pixel_bins, self._stamp))
         return PartFeatures(parts, area, perimeter, hsv, xyz, centroid, b[:, 3].copy())
