@@ -37,7 +37,7 @@ def calls(*names: str) -> dict[str, set[tuple[str, str]]]:
 def _trace(name: str) -> list[tuple[str, str]]:
     from harness.datasets.synthetic import load_suite
     from harness.pipeline.build import build_source, build_tracker, compose_config
-    from harness.pipeline.experiment import run_tracker
+    from harness.pipeline.loop import run_tracker
 
     cfg = compose_config([f"tracker={name}"])  # the default run's detector and foreground
     source = build_source(cfg.detector)
