@@ -78,7 +78,6 @@ def run_app(cfg: DictConfig) -> float:
     from harness.errors import RunError
     from harness.pipeline.experiment import run_experiment
     from harness.progress import progress_factory
-    from harness.report.tables import comparison, to_text
 
     hc = HydraConfig.get()
     out_dir = Path(hc.runtime.output_dir)
@@ -99,6 +98,8 @@ def run_app(cfg: DictConfig) -> float:
                  objective.get("tracker") or result.trackers[0],
                  objective.get("metric") or "IDF1", value)
     else:
+        from harness.report.tables import comparison, to_text
+
         if not result.metrics.empty:
             print(to_text(comparison(result.metrics, PRINTED)), end="")
         print(f"results: {out_dir}")

@@ -17,14 +17,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from harness.io.mot import MotTable
 from harness.metrics.clear import ClearCounts, clear_counts
 from harness.metrics.frames import pair_frames
 from harness.metrics.hota import HotaCounts, combine_hota, hota_counts
+
+if TYPE_CHECKING:  # pandas is imported where used (start-up time)
+    import pandas as pd
 
 __all__ = [
     "COLUMNS",
@@ -137,6 +140,8 @@ def summarize(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
         raise ValueError(f"a sequence may not be named {COMBINED!r}")
     rows = [{"sequence": name, **s.row()} for name, s in scores.items()]
     rows.append({"sequence": COMBINED, **combine(scores).row()})
+    import pandas as pd
+
     table = pd.DataFrame(rows, columns=["sequence", *COLUMNS])
     table[COUNT_COLUMNS] = table[COUNT_COLUMNS].astype("int64")
     return table
@@ -150,6 +155,8 @@ def hota_alpha_table(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
         sequence (in the mapping's order) and 19 for ``COMBINED`` (combined as TrackEval);
         fractions. Their means over alpha are the same columns of ``summarize``.
     """
+    import pandas as pd
+
     from harness.metrics.hota import ALPHAS
 
     parts = [*scores.items(), (COMBINED, combine(scores))]

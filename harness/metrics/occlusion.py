@@ -39,9 +39,9 @@ import itertools
 import logging
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from harness.datasets.base import GroundTruth
 from harness.io.mot import MotTable
@@ -52,6 +52,9 @@ from harness.metrics.paper import COLUMNS as PAPER_COLUMNS
 from harness.metrics.paper import PaperCounts, paper_counts
 from harness.metrics.rows import RowMatching, considered_mask, row_matching
 from trackers.common.assignment import assign
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 log = logging.getLogger(__name__)
 
@@ -258,4 +261,6 @@ def extra_rows(scores: Mapping[str, Mapping[str, ExtraScore]]) -> pd.DataFrame:
             rows.append({"tracker": tracker, "sequence": seq, **s.columns()})
             total = s if total is None else total + s
         rows.append({"tracker": tracker, "sequence": "COMBINED", **total.columns()})
+    import pandas as pd
+
     return pd.DataFrame(rows, columns=["tracker", "sequence", *EXTRA_COLUMNS])

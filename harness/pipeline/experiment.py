@@ -23,9 +23,7 @@ import math
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from harness.datasets.base import Sequence
 from harness.errors import RunError
@@ -36,6 +34,9 @@ from harness.pipeline.loop import ProgressFactory, no_progress, run_sequence
 from harness.pipeline.plan import RunPlan, plan_run
 from harness.pipeline.record import RunRecord
 from harness.pipeline.writer import Failure
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @dataclass
@@ -123,6 +124,8 @@ def run_experiment(
         overall.close()
     record.finish()
     plan.writer.close()
+    import pandas as pd
+
     return ExperimentResult(record.metrics, record.failures, pd.DataFrame(record.timings),
                             plan.writer.out_dir, plan.names)
 

@@ -13,14 +13,10 @@ import logging
 import math
 import traceback
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from harness.datasets.base import Sequence
 from harness.io.mot import MotTable, format_mot, read_mot, read_mot_text, write_atomic
-from harness.metrics import COLUMNS, SequenceScore, score_sequence
-from harness.metrics.occlusion import extra_score
 from harness.pipeline.bank import TrackerOutput
 from harness.pipeline.plan import RunPlan
 from harness.pipeline.summary import (
@@ -32,15 +28,19 @@ from harness.pipeline.summary import (
     with_extras,
 )
 from harness.pipeline.writer import Failure
-from harness.report.bars import metric_bars
-from harness.report.hota_alpha import hota_alpha_plot
-from harness.report.tables import comparison, to_latex
+
+if TYPE_CHECKING:  # pandas, the metrics and the reports are imported after the first frames
+    import pandas as pd
+
+    from harness.metrics import SequenceScore
 
 log = logging.getLogger(__name__)
 
 
 def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScore:
     """``harness.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth."""
+    from harness.metrics import score_sequence
+
     return score_sequence(gt.table, result, iou_threshold=iou_threshold)
 
 
@@ -62,7 +62,7 @@ class RunRecord:
         self.extras: dict[str, dict[str, Any]] = {n: {} for n in plan.names}
         self.failures: list[Failure] = []
         self.timings: list[dict[str, Any]] = []
-        self.metrics = pd.DataFrame()
+        self.metrics: pd.DataFrame | None = None  # pandas is imported after the first frames
         self.tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
         self.expected = sum(1 for s in plan.sequences if s.gt is not None)  # can be scored
 
@@ -81,6 +81,10 @@ class RunRecord:
         frame = with_extras(metrics_frame(self.scores), self.extras)
         frame = mark_complete(frame, self.expected, state == "finished")
         if frame.empty:
+            import pandas as pd
+
+            from harness.metrics import COLUMNS
+
             frame = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
         return frame
 
@@ -147,6 +151,8 @@ class RunRecord:
             self.fail(n, sname, "score", err, traceback.format_exc())
 
     def _score(self, n: str, seq: Sequence, table: MotTable) -> None:
+        from harness.metrics.occlusion import extra_score
+
         plan, sname = self.plan, seq.info.name
         self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
         self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
@@ -178,6 +184,10 @@ class RunRecord:
         summary.md (last, so that summary.md counts every failure the run reports); a failing
         one is recorded and the others are still written. ``metrics`` keeps every scored
         sequence whatever could be written (disk full...)."""
+        from harness.report.bars import metric_bars
+        from harness.report.hota_alpha import hota_alpha_plot
+        from harness.report.tables import comparison, to_latex
+
         plan, writer = self.plan, self.writer
         self.metrics = self.current("finished")
         if self.metrics.empty:

@@ -4,18 +4,20 @@ the status line of an incomplete run, and the Markdown summary."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from harness.errors import RunError
-from harness.metrics import COMBINED, hota_alpha_table, summarize
+from harness.metrics import COMBINED
 from harness.pipeline.writer import Failure
-from harness.report.tables import comparison, direction, per_sequence, to_markdown
+
+if TYPE_CHECKING:  # pandas and the tables are imported where used (start-up time)
+    import pandas as pd
 
 
 def summary_rows(tracker: str, scores: Mapping[str, Any]) -> pd.DataFrame:
     """``summarize(scores)`` with a leading ``tracker`` column."""
+    from harness.metrics import summarize
+
     frame = summarize(dict(scores)).reset_index(drop=True)
     if "sequence" not in frame.columns:
         raise RunError("harness.metrics.summarize returned no 'sequence' column")
@@ -57,6 +59,8 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                      status: str | None = None) -> str:
     """``summary.md``: the COMBINED comparison, per-sequence tables, and failures; opened by
     ``status`` (``run_status``) when the run is incomplete or partly failed."""
+    from harness.report.tables import comparison, direction, per_sequence, to_markdown
+
     lines = ["# occbench results", ""]
     if title:
         lines += [title, ""]
@@ -100,6 +104,10 @@ def with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) 
 
 def hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     """``hota_alpha.csv``: ``tracker`` + ``harness.metrics.hota_alpha_table`` per tracker."""
+    import pandas as pd
+
+    from harness.metrics import hota_alpha_table
+
     parts = []
     for name, s in scores.items():
         if s:
@@ -110,6 +118,8 @@ def hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
 
 
 def metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+    import pandas as pd
+
     """``summary_rows`` of every tracker with scores, one frame (empty when none)."""
     parts = [summary_rows(n, s) for n, s in scores.items() if s]
     if not parts:

@@ -14,12 +14,19 @@ always were, and are not touched.
 
 ``needs_pixels`` asks the same kind of question before a run on frameless data (ground
 truth and detections only): does the tracker's ``update`` accept ``frame=None``?
+
+``preload(spec)`` does all of this ahead of a sweep's jobs, in the launcher's fork server
+(``hydra_plugins.occbench_launcher``): it imports what a job imports (the app, the scoring,
+the plots, the config's ``_target_`` modules) and warms the job's trackers up, so that each
+job, forked from it, starts with both done.
 """
 
 from __future__ import annotations
 
+import importlib
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -118,6 +125,39 @@ class WarmUp:
                 log.debug("warm-up of %s stopped: %s: %s", name, type(err).__name__, err)
             self.done.add(_kind(tracker))
         return list(todo)
+
+
+# what every job imports besides its config's _target_s: the app, scoring, tables, plots
+JOB_MODULES = ("harness.commands.run", "harness.pipeline.experiment", "harness.pipeline.summary",
+               "harness.metrics", "harness.metrics.occlusion", "harness.report.tables",
+               "harness.report.hota_alpha", "harness.sweeps.gather", "harness.sweeps.fingerprint",
+               "motmetrics", "tqdm.contrib.logging")
+
+
+def preload(spec: Mapping[str, Any]) -> list[str]:
+    """Import ``JOB_MODULES`` and ``spec["modules"]`` and warm up the trackers of
+    ``spec["trackers"]`` (``{name: resolved _target_ config}``) once in this process (see
+    ``WarmUp``); returns the trackers warmed up. Nothing here may stop the caller: a module
+    that does not import or a tracker that does not build is left to the job, which reports
+    it as it always does (logged here at debug level)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)  # as harness.report's plots do
+    importlib.import_module("matplotlib.pyplot")
+    for name in (*JOB_MODULES, *spec.get("modules", ())):
+        try:
+            importlib.import_module(name)
+        except Exception as err:  # noqa: BLE001 - the job imports it again and says why
+            log.debug("preload: %s not imported: %s: %s", name, type(err).__name__, err)
+    from harness.pipeline.build import build_tracker
+
+    builders = {n: (lambda n=n, node=node: build_tracker(n, node))
+                for n, node in dict(spec.get("trackers", {})).items()}
+    try:
+        return warm_up_once(builders)
+    except Exception as err:  # noqa: BLE001 - the job warms its trackers up itself
+        log.debug("preload: warm-up stopped: %s: %s", type(err).__name__, err)
+        return []
 
 
 def _kind(tracker: Tracker) -> str:

@@ -10,9 +10,7 @@ import logging
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from harness.datasets.base import Sequence
 from harness.errors import RunError
@@ -25,6 +23,9 @@ from harness.io.mot import (
     write_seqinfo,
     write_seqmap,
 )
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 log = logging.getLogger(__name__)
 

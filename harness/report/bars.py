@@ -5,12 +5,14 @@ from __future__ import annotations
 import logging
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from harness.report.figures import save_figure
-from harness.report.tables import COMBINED
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 log = logging.getLogger(__name__)
 
@@ -28,6 +30,8 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
         The written path, or None when there is nothing to draw (no COMBINED row or none of
         ``names`` present).
     """
+    from harness.report.tables import COMBINED
+
     rows = metrics[metrics["sequence"] == COMBINED]
     names = [m for m in names if m in rows.columns]
     if rows.empty or not names:

@@ -18,14 +18,6 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
-from harness.sweeps.gather import (
-    DEFAULT_METRICS,
-    failed_summary,
-    not_done,
-    summary_text,
-    write_sweep,
-)
-
 log = logging.getLogger(__name__)
 
 
@@ -33,12 +25,16 @@ class GatherSweep(Callback):
     """Write the sweep table and plots when a multirun ends.
 
     Args:
-        metrics: metric columns shown in sweep.md and plotted (COMBINED rows).
+        metrics: metric columns shown in sweep.md and plotted (COMBINED rows); None =
+            ``harness.sweeps.gather.DEFAULT_METRICS``.
         plots: draw the metric-vs-parameter plots and heatmaps.
+
+    Hydra builds its callbacks at every start, a single run's too: the gathering code (and
+    its pandas) is imported when a multirun ends, not here (start-up time).
     """
 
-    def __init__(self, metrics: Sequence[str] = DEFAULT_METRICS, plots: bool = True) -> None:
-        self.metrics = list(metrics)
+    def __init__(self, metrics: Sequence[str] | None = None, plots: bool = True) -> None:
+        self.metrics = None if metrics is None else list(metrics)
         self.plots = bool(plots)
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
@@ -53,6 +49,15 @@ class GatherSweep(Callback):
             _exit_failed(f"occbench: cannot use the sweep folder {sweep_dir}: {err}")
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        from harness.sweeps.gather import (
+            DEFAULT_METRICS,
+            failed_summary,
+            not_done,
+            summary_text,
+            write_sweep,
+        )
+
+        metrics = list(DEFAULT_METRICS) if self.metrics is None else self.metrics
         sweep_dir = Path(str(config.hydra.sweep.dir))
         if not sweep_dir.is_dir():
             log.warning("sweep directory %s does not exist: nothing gathered", sweep_dir)
@@ -61,7 +66,7 @@ class GatherSweep(Callback):
 
         optuna = is_optuna(config)
         try:  # an Optuna study is drawn with Optuna's own views, not as parameter lines
-            frame = write_sweep(sweep_dir, self.metrics, self.plots and not optuna)
+            frame = write_sweep(sweep_dir, metrics, self.plots and not optuna)
         except Exception as err:
             log.exception("gathering the sweep in %s failed", sweep_dir)
             _exit_failed(f"occbench: gathering the sweep in {sweep_dir} failed: "
@@ -76,7 +81,7 @@ class GatherSweep(Callback):
             except Exception:  # a plot is not worth losing the table for
                 log.exception("optuna plots of %s failed", sweep_dir)
         if len(frame):  # the sweep's summary on stdout (jobs print no tables of their own)
-            print(summary_text(frame, self.metrics, str(sweep_dir)), end="")
+            print(summary_text(frame, metrics, str(sweep_dir)), end="")
         print(f"sweep: {sweep_dir / 'sweep.md'}")
         if not_done(frame):
             _exit_failed(f"occbench: {failed_summary(frame, sweep_dir)}")

@@ -11,11 +11,26 @@ Each job process asks the kernel to end it when the launcher ends
 (``PR_SET_PDEATHSIG``, Linux) and also watches its parent, so killing the launcher ends
 its jobs instead of leaving them running. A fresh process per job also means no state
 leaks from one job into the next (as with Ray's ``max_calls=1``). Processes are started
-with ``forkserver`` where available (a clean single-threaded parent), else ``spawn``.
+with ``forkserver`` where available, else ``spawn``.
+
+Jobs start warm (``preload: true``, the default): before the first job, the fork server
+(one process, started once per launcher process and kept for every batch of an Optuna
+study) imports what a job imports and warms the first job's trackers up
+(``harness.pipeline.warmup.preload``, through ``_preload``, which the server imports); each
+job is then forked from it with the imports, the loaded compiled kernels and the warm-up
+already done, so it goes straight to its data. The fork server never runs a job itself,
+and what a job changes dies with its process.
+
+Hydra's state travels to the job in two parts: ``Singleton.set_state`` re-runs Hydra's
+plugin scan, which re-executes every plugin module already imported (this package's
+``config`` too, making a new ``ProcessLauncherConf`` class); so the state is restored first
+and the job's configs are unpickled after it, against the classes the job's own pickling
+of its ``JobReturn`` will find.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import multiprocessing as mp
@@ -45,9 +60,17 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 log = logging.getLogger(__name__)
 
 
+PRELOAD_ENV = "OCCBENCH_PRELOAD"  # the fork server's preload spec (JSON), read by _preload
+# only this project's code is imported and built in the fork server: a tracker of someone
+# else's (a test's, a plugin's) might sleep or crash in its constructor
+OURS = ("harness.", "trackers.")
+
+
 class ProcessLauncher(Launcher):
-    def __init__(self, n_jobs: int = 2) -> None:
+    def __init__(self, n_jobs: int = 2, preload: bool = True) -> None:
         self.n_jobs = int(n_jobs) if int(n_jobs) > 0 else (os.cpu_count() or 1)
+        self.preload = bool(preload)
+        self._server_started = False
         self.config: DictConfig | None = None
         self.task_function: TaskFunction | None = None
         self.hydra_context: HydraContext | None = None
@@ -72,8 +95,11 @@ class ProcessLauncher(Launcher):
         import cloudpickle  # the task function is a closure of hydra.main
 
         ctx = _context()
-        payload = cloudpickle.dumps((self.hydra_context, self.config, self.task_function,
-                                     Singleton.get_state()))
+        if job_overrides and not self._server_started:
+            self._start_server(ctx, job_overrides[0])
+        # Hydra's state first, the configs after it: see the module docstring
+        payload = (cloudpickle.dumps(Singleton.get_state()),
+                   cloudpickle.dumps((self.hydra_context, self.config, self.task_function)))
         results: list[JobReturn | None] = [None] * len(job_overrides)
         pending = list(enumerate(job_overrides))
         running: dict[int, tuple[Any, Any]] = {}
@@ -81,13 +107,7 @@ class ProcessLauncher(Launcher):
             while pending or running:
                 while pending and len(running) < self.n_jobs:
                     i, overrides = pending.pop(0)
-                    recv, send = ctx.Pipe(duplex=False)
-                    proc = ctx.Process(
-                        target=_child, name=f"occbench-job-{initial_job_idx + i}",
-                        args=(send, os.getpid(), initial_job_idx + i, list(overrides), payload))
-                    proc.start()
-                    send.close()
-                    running[i] = (proc, recv)
+                    running[i] = self._start_job(ctx, initial_job_idx + i, overrides, payload)
                 wait([p.sentinel for p, _ in running.values()]
                      + [c for _, c in running.values()], timeout=1.0)
                 for i, (proc, conn) in list(running.items()):
@@ -112,6 +132,76 @@ class ProcessLauncher(Launcher):
                 if proc.is_alive():
                     proc.kill()
         return [r for r in results if r is not None]
+
+    def _start_job(self, ctx: Any, idx: int, overrides: Sequence[str],
+                   payload: tuple[bytes, bytes]) -> tuple[Any, Any]:
+        """Start job ``idx``'s process; (process, the pipe its JobReturn comes back on).
+        A fork server that died (e.g. a tracker's warm-up crashed it) is started again,
+        plain, once: the jobs then import and warm up by themselves."""
+        for attempt in (0, 1):
+            recv, send = ctx.Pipe(duplex=False)
+            proc = ctx.Process(target=_child, name=f"occbench-job-{idx}",
+                               args=(send, os.getpid(), idx, list(overrides), payload))
+            try:
+                proc.start()
+            except (EOFError, OSError) as err:
+                recv.close()
+                send.close()
+                if attempt or ctx.get_start_method() != "forkserver":
+                    raise
+                log.warning("the warm fork server died (%s: %s): jobs start from a plain "
+                            "one", type(err).__name__, err or "no answer")
+                ctx.set_forkserver_preload(["__main__"])
+                continue
+            send.close()
+            return proc, recv
+        raise AssertionError("unreachable")
+
+    def _start_server(self, ctx: Any, overrides: Sequence[str]) -> None:
+        """Start the fork server, warm (``preload``) or plain, before the first job."""
+        self._server_started = True
+        if ctx.get_start_method() != "forkserver":
+            return
+        if not self.preload:
+            ctx.set_forkserver_preload(["__main__"])
+            return
+        spec = self._preload_spec(overrides)
+        ctx.set_forkserver_preload(["__main__", "hydra_plugins.occbench_launcher._preload"])
+        saved = os.environ.get(PRELOAD_ENV)
+        os.environ[PRELOAD_ENV] = json.dumps(spec, default=str)
+        try:
+            from multiprocessing import forkserver
+
+            forkserver.ensure_running()  # the server reads the spec from its environment
+        finally:
+            if saved is None:
+                os.environ.pop(PRELOAD_ENV, None)
+            else:
+                os.environ[PRELOAD_ENV] = saved
+        log.info("jobs are forked from a warm process (imports done, trackers %s warmed up "
+                 "once; hydra.launcher.preload=false switches it off)",
+                 ", ".join(spec["trackers"]) or "none")
+
+    def _preload_spec(self, overrides: Sequence[str]) -> dict[str, Any]:
+        """What the fork server imports and warms up: the ``_target_`` modules and the
+        trackers (resolved configs) of the job with ``overrides``, this project's only."""
+        spec: dict[str, Any] = {"modules": [], "trackers": {}}
+        try:
+            from harness.pipeline.build import tracker_configs
+
+            cfg = self.hydra_context.config_loader.load_sweep_config(self.config, list(overrides))
+            choice = OmegaConf.select(cfg, "hydra.runtime.choices.tracker", default=None)
+            with open_dict(cfg):
+                del cfg["hydra"]
+            spec["modules"] = sorted({t.rsplit(".", 1)[0] for t in _targets(
+                OmegaConf.to_container(cfg, resolve=False)) if t.startswith(OURS)})
+            spec["trackers"] = {name: OmegaConf.to_container(node, resolve=True)
+                                for name, node in tracker_configs(cfg.tracker, choice).items()
+                                if str(node["_target_"]).startswith(OURS)}
+        except Exception as err:  # noqa: BLE001 - the jobs then import and warm up themselves
+            log.warning("the fork server is not warmed up (%s: %s): each job warms itself up",
+                        type(err).__name__, err)
+        return spec
 
     def _died(self, idx: int, overrides: Sequence[str], exitcode: int | None) -> JobReturn:
         """The JobReturn of a job whose process ended without one; its status.json says so."""
@@ -139,6 +229,16 @@ class ProcessLauncher(Launcher):
         ret.status = JobStatus.COMPLETED
         ret._return_value = math.nan
         return ret
+
+
+def _targets(node: Any) -> list[str]:
+    """Every ``_target_`` string in a nested container."""
+    if isinstance(node, dict):
+        own = [str(node["_target_"])] if "_target_" in node else []
+        return own + [t for v in node.values() for t in _targets(v)]
+    if isinstance(node, list):
+        return [t for v in node for t in _targets(v)]
+    return []
 
 
 def _context() -> Any:
@@ -178,17 +278,19 @@ def _die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="occbench-parent-watch").start()
 
 
-def _child(conn: Any, parent: int, idx: int, overrides: list[str], payload: bytes) -> None:
+def _child(conn: Any, parent: int, idx: int, overrides: list[str],
+           payload: tuple[bytes, bytes]) -> None:
     """One job in its own process: Hydra's run_job, its JobReturn sent back on ``conn``.
-    ``payload``: (hydra_context, config, task_function, Singleton state), cloudpickled."""
+    ``payload``: the Singleton state, then (hydra_context, config, task_function), each
+    cloudpickled; unpickled in that order (module docstring)."""
     import pickle
 
     _die_with_parent(parent)
-    hydra_context, config, task_function, state = pickle.loads(payload)
     # SIGTERM (the launcher ended or stopped us) as Ctrl-C: the run marks itself interrupted
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     setup_globals()
-    Singleton.set_state(state)
+    Singleton.set_state(pickle.loads(payload[0]))
+    hydra_context, config, task_function = pickle.loads(payload[1])
     sweep_config = hydra_context.config_loader.load_sweep_config(config, overrides)
     with open_dict(sweep_config):
         sweep_config.hydra.job.id = f"{sweep_config.hydra.job.name}_{idx}"
@@ -199,9 +301,26 @@ def _child(conn: Any, parent: int, idx: int, overrides: list[str], payload: byte
     try:
         conn.send(ret)
     except Exception as err:  # noqa: BLE001 - e.g. an unpicklable return value
-        fallback = JobReturn(overrides=overrides, working_dir=ret.working_dir)
-        fallback.status = ret.status
-        fallback._return_value = (RuntimeError(f"job #{idx}: {err}")
-                                  if ret.status == JobStatus.FAILED else math.nan)
-        conn.send(fallback)
+        log.warning("job #%d: its result cannot be sent back whole (%s: %s): sending its "
+                    "status and value only", idx, type(err).__name__, err)
+        conn.send(_bare(ret, overrides, idx))
     conn.close()
+
+
+def _bare(ret: JobReturn, overrides: list[str], idx: int) -> JobReturn:
+    """``ret`` without its configs: status, working dir and the return value where that
+    pickles (a failed job's exception as its text)."""
+    import pickle
+
+    bare = JobReturn(overrides=overrides, working_dir=ret.working_dir, task_name=ret.task_name)
+    bare.status = ret.status
+    value = ret._return_value
+    try:
+        pickle.dumps(value)
+    except Exception as err:  # noqa: BLE001 - said in place of the value
+        value = (RuntimeError(f"job #{idx}: {value!r}") if ret.status == JobStatus.FAILED
+                 else RuntimeError(f"job #{idx}: its return value does not pickle: {err}"))
+        if ret.status != JobStatus.FAILED:
+            bare.status = JobStatus.FAILED
+    bare._return_value = value
+    return bare

@@ -1,8 +1,8 @@
 """Motion model M = [x, P] (Reta 3.2): constant-velocity Kalman filter, batched.
 
 Each node carries its own state x (8,) = (xc, yc, w, h, vx, vy, vw, vh) and covariance
-P (8, 8). The matrices F, H, Q, R come from filterpy through
-``trackers.common.kalman.constant_velocity_box_filter`` (one set-up for the project); the
+P (8, 8). The matrices F, H, Q, R come from
+``trackers.common.kalman.constant_velocity_model`` (one set-up for the project); the
 predict and correct steps below are filterpy's equations applied to all nodes of a frame
 at once (``tests/trackers/three_hypothesis/test_tracker.py`` checks them against
 ``filterpy.kalman.KalmanFilter``).
@@ -15,13 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackers.common.checks import require
-from trackers.common.kalman import constant_velocity_box_filter
+from trackers.common.kalman import constant_velocity_model
 
 
 @dataclass(frozen=True)
 class MotionModel:
     """Noise set-up of M shared by all people of one tracker (standard deviations, scaled by
-    the person's height / 10 as in ``constant_velocity_box_filter``).
+    the person's height / 10 as in ``constant_velocity_model``).
 
     Args:
         position_noise: Kalman Q, position and size process noise std per 10 px of height.
@@ -43,14 +43,14 @@ class MotionModel:
 
     def init(self, box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """First state of a person from its (4,) xywh box: x (8,), P (8, 8), F, H, Q, R."""
-        kf = constant_velocity_box_filter(
+        m = constant_velocity_model(
             box,
             position_noise=self.position_noise,
             velocity_noise=self.velocity_noise,
             measurement_noise=self.measurement_noise,
             initial_velocity_variance=self.initial_velocity_variance,
         )
-        return kf.x[:, 0].copy(), kf.P.copy(), kf.F.copy(), kf.H.copy(), kf.Q.copy(), kf.R.copy()
+        return m.x[:, 0].copy(), m.P, m.F, m.H, m.Q, m.R
 
 
 def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,44 @@
+"""The default launcher's warm start: jobs forked from a fork server that has imported the
+harness and warmed the trackers up give the same results as jobs that do it themselves,
+and skip the warm-up. (Killed jobs, a killed launcher: tests/harness/test_faults.py.)"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+TINY = ["dataset.scenarios=[crossing]", "dataset.length=12", "dataset.width=160",
+        "dataset.height=120", "progress=false"]
+
+
+def _sweep(sweep_dir: Path, *extra: str) -> subprocess.CompletedProcess:
+    cmd = [sys.executable, "-m", "harness", "-m", "tracker=reta", "seed=0,1,2", *TINY,
+           f"hydra.sweep.dir={sweep_dir}", *extra]
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, env=env,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc
+
+
+def _job_logs(sweep_dir: Path) -> list[str]:
+    return [(sweep_dir / str(j) / "occbench.log").read_text() for j in range(3)]
+
+
+def test_warm_jobs_skip_the_warm_up_and_give_the_same_results(tmp_path):
+    warm = _sweep(tmp_path / "warm")
+    assert "jobs are forked from a warm process" in warm.stderr
+    assert "trackers reta warmed up once" in warm.stderr
+    assert not any("warming up" in log for log in _job_logs(tmp_path / "warm"))
+    cold = _sweep(tmp_path / "cold", "hydra.launcher.preload=false")
+    assert "warm process" not in cold.stderr
+    assert all("warming up reta" in log for log in _job_logs(tmp_path / "cold"))
+    assert ((tmp_path / "warm" / "sweep.csv").read_text()
+            == (tmp_path / "cold" / "sweep.csv").read_text())
+    for j in range(3):
+        for name in ("metrics.csv", "tracks/reta/crossing.txt"):
+            assert ((tmp_path / "warm" / str(j) / name).read_bytes()
+                    == (tmp_path / "cold" / str(j) / name).read_bytes())
