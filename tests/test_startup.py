@@ -47,3 +47,53 @@ def test_baseline_imports_filterpy_only_when_a_filter_is_built():
                            "constant_velocity_box_filter\n"
                            "constant_velocity_box_filter(np.array([0.0, 0.0, 10.0, 20.0]))")
     assert "filterpy" in loaded
+
+
+def test_every_numba_kernel_is_cached():
+    """Every ``numba.njit`` / ``numba.jit`` in trackers/ and harness/ has ``cache=True``: a
+    new process loads the kernels from ``__pycache__`` instead of compiling them."""
+    import ast
+
+    missing = []
+    for pkg in ("trackers", "harness"):
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if not isinstance(node, ast.FunctionDef):
+                    continue
+                for deco in node.decorator_list:
+                    call = deco if isinstance(deco, ast.Call) else None
+                    name = ast.unparse(call.func if call else deco)
+                    if name.split(".")[-1] not in ("njit", "jit"):
+                        continue
+                    cached = call is not None and any(
+                        k.arg == "cache" and ast.unparse(k.value) == "True" for k in call.keywords)
+                    if not cached:
+                        missing.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name}")
+    assert not missing, f"numba kernels compiled in every process: {missing}"
+
+
+KERNEL_STATS = """
+import json, sys
+import numba.core.registry
+from harness.pipeline.build import build_tracker, compose_config
+from harness.pipeline.warmup import warm_up
+warm_up(build_tracker('reta', compose_config(['tracker=reta']).tracker, 'tracker'))
+hits = misses = 0
+for module in [m for n, m in list(sys.modules.items()) if n.startswith('trackers.')]:
+    for obj in vars(module).values():
+        stats = getattr(obj, 'stats', None)
+        if hasattr(stats, 'cache_hits'):
+            hits += sum(stats.cache_hits.values())
+            misses += sum(stats.cache_misses.values())
+print(json.dumps([hits, misses]))
+"""
+
+
+def test_a_new_process_loads_the_kernels_from_the_cache():
+    """After one process has compiled (or loaded) reta's kernels, a new one loads every
+    kernel it runs from numba's cache: no miss."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    runs = [subprocess.run([sys.executable, "-c", KERNEL_STATS], capture_output=True, text=True,
+                           env=env, cwd=ROOT, check=True, timeout=900) for _ in range(2)]
+    hits, misses = json.loads(runs[1].stdout.strip().splitlines()[-1])
+    assert hits > 0 and misses == 0
