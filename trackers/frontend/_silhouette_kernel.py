@@ -2,7 +2,7 @@
 ``greedy_search`` and ``search_regions`` there, in one pass per fit over the candidates instead of (N, cells) numpy
 temporaries, and skipping candidates whose template box holds too little vacant foreground
 to pass the score test (a bound, so the fits are unchanged). Tested against the numpy
-version (tests/test_frontend_detectors.py): the same fits on synthetic masks.
+version (tests/trackers/frontend/test_detectors.py): the same fits on synthetic masks.
 """
 
 from __future__ import annotations

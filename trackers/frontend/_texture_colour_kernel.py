@@ -1,6 +1,6 @@
 """Compiled kernel of ``TextureColourMixture.apply`` (texture_colour.py): the same equations,
 one pass over the pixels instead of a dozen (K, N) numpy temporaries. Tested against the numpy
-version (tests/test_frontend_background.py) to a tolerance: labels equal on >= 99.9% of pixels.
+version (tests/trackers/frontend/test_background.py) to a tolerance: labels equal on >= 99.9% of pixels.
 """
 
 from __future__ import annotations

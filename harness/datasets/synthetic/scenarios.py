@@ -8,7 +8,7 @@ walking speeds; positions are linear between keyframes and extrapolated with the
 
 Occlusion presets put the hidden person three to four times farther from the camera than the
 occluder, shorter and slimmer, so that its whole silhouette fits inside the occluder's
-torso: visibility really drops to 0 (``tests/test_synthetic.py`` checks it).
+torso: visibility really drops to 0 (``tests/harness/datasets/test_synthetic.py`` checks it).
 
 Presets (``SCENARIOS``):
 

@@ -20,8 +20,8 @@ from trackers.layered.association import (
     pair_scores,
     selected_differences,
 )
-from trackers.layered.feature_models import FeatureModels, FoldedMixture
-from trackers.layered.parts import FEATURES, N_PARTS, PartFeatures
+from trackers.layered.feature_models import FeatureModels
+from trackers.layered.parts import FEATURES, N_PARTS
 
 NF = len(FEATURES)
 RTOL, ATOL = 1e-9, 1e-12  # rounding: the kernels' summation order and erfc against numpy's
