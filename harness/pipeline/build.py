@@ -3,7 +3,8 @@
 ``compose_config`` composes ``conf/`` (or loads a finished run's ``config.yaml``);
 ``tracker_configs`` names the tracker configs of ``cfg.tracker``; ``build_tracker``,
 ``build_source`` and ``load_sequences`` instantiate them, type-checked against the target's
-signature (``harness.pipeline.config_check``), with a ``RunError`` naming the key when they cannot be.
+signature (``harness.pipeline.config_check``), with a ``RunError`` naming the key when they
+cannot be.
 """
 
 from __future__ import annotations
@@ -152,8 +153,6 @@ def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
     """Instantiate one tracker config; RunError with a clear message when it cannot be.
 
     ``key`` is the config path of ``node`` for messages (default ``tracker.<name>``)."""
-    from hydra.utils import instantiate
-
     target = str(node["_target_"])
     try:
         cls = _locate_target(target)
@@ -163,11 +162,18 @@ def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
             f"({type(err).__name__}: {err}). conf/tracker/all.yaml lists the built trackers."
         ) from err
     check_node(node, key or f"tracker.{name}", cls)
+    return _instantiate(node, f"tracker {name!r}")
+
+
+def _instantiate(node: Any, label: str) -> Any:
+    """``instantiate(node)``; a RunError ``<label> (<target>): <error>`` when it fails."""
+    from hydra.utils import instantiate
+
     try:
         return instantiate(node, _convert_="all")
     except Exception as err:
         cause = err.__cause__ or err
-        raise RunError(f"tracker {name!r} ({target}): {type(cause).__name__}: {cause}") from err
+        raise RunError(f"{label} ({node['_target_']}): {type(cause).__name__}: {cause}") from err
 
 
 def _check_located(node: Any, key: str) -> None:
@@ -181,16 +187,10 @@ def _check_located(node: Any, key: str) -> None:
 
 def load_sequences(node: Any) -> list[Sequence]:
     """Instantiate the dataset config: a list of Sequence, RunError when it cannot be."""
-    from hydra.utils import instantiate
-
     if node is None or "_target_" not in node:
         raise RunError("dataset: no dataset selected (dataset=<name> with a _target_)")
     _check_located(node, "dataset")
-    try:
-        seqs = instantiate(node, _convert_="all")
-    except Exception as err:
-        cause = err.__cause__ or err
-        raise RunError(f"dataset ({node['_target_']}): {type(cause).__name__}: {cause}") from err
+    seqs = _instantiate(node, "dataset")
     if isinstance(seqs, Sequence):
         seqs = [seqs]
     seqs = list(seqs)
@@ -210,16 +210,10 @@ def load_sequences(node: Any) -> list[Sequence]:
 def build_source(node: Any, cache: bool = True) -> DetectionSource:
     """Instantiate the detector config; with ``cache``, a front-end source reads and fills
     the front-end cache (``harness.sources.cache``: ``OCCBENCH_CACHE``)."""
-    from hydra.utils import instantiate
-
     if node is None or "_target_" not in node:
         raise RunError("detector: no detection source selected (detector=<name>)")
     _check_located(node, "detector")
-    try:
-        source = instantiate(node, _convert_="all")
-    except Exception as err:
-        cause = err.__cause__ or err
-        raise RunError(f"detector ({node['_target_']}): {type(cause).__name__}: {cause}") from err
+    source = _instantiate(node, "detector")
     if not cache:
         return source
     from harness.sources.cache import cached
