@@ -18,9 +18,19 @@ stack that frame or the one before) at one-person frames of stacks and in duplic
 the two-person stacks that are found in turn and never together (what the boxes and the
 found states alone cannot tell from a duplicate); docs/adaptations.md, "stacked targets".
 
+Every run also counts issue 28's three failure modes (``mode_counts``, on the CLEAR matching):
+(a) *reused*: an id unmatched for more than ``--gap`` frames comes back on another person
+(``reused_new``: one first matched in the last ``--gap`` frames, a newcomer); (b) *phantom*:
+hidden-person reports (OCCLUDED) matched to nobody (``phantom_empty``: overlapping no person,
+IoU < 0.1), of ``hidden`` in all; (c) *handed*: CLEAR ID switches, each put down to the
+detections around it: ``merged`` (a detection covers the person and another, at the switch or
+the frame before), ``split`` (two detections lie mostly inside the person's box), ``misses``
+(the person had no detection at IoU >= 0.5 for >= 3 frames before), else ``other``.
+
 For choosing rules on tuning data only (docs/generalisation.md): the sets are those of
-``harness.sweeps.generalisation`` but the seeds are yours (default 0-5); seeds of a set's untouched
-list are refused unless ``--untouched`` is given.
+``harness.sweeps.generalisation``; the seeds are the set's own for a tuning set (default),
+else yours (``--seeds``); seeds of a set's untouched list are refused unless ``--untouched``
+is given (to measure, once, not to choose). Several ``--set`` are run one after the other.
 
     .venv/bin/python benchmarks/bench_reacquisition.py --set "crowd d0.8" --seeds 0 1 \\
         --trackers reta pbm "pbm_rm0=pbm:tracker.adaptations.relative_match=0"
@@ -61,6 +71,7 @@ class Tally:
     wrong: int = 0
     exchanges: int = 0
     stacks: Counter = field(default_factory=Counter)  # ``stack_counts`` summed
+    modes: Counter = field(default_factory=Counter)  # ``mode_counts`` summed
     events: list[dict] = field(default_factory=list)
     scores: list = field(default_factory=list)
 
@@ -69,6 +80,7 @@ class Tally:
         self.wrong += other.wrong
         self.exchanges += other.exchanges
         self.stacks.update(other.stacks)
+        self.modes.update(other.modes)
         self.events += other.events
         self.scores += other.scores
 
@@ -102,9 +114,11 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
         last = {label: {} for label in built}  # id -> (person, frame)
         holder = {label: {} for label in built}  # person -> (id, frame)
         rows = {label: ([], [], [], []) for label in built}
+        dets: dict[int, np.ndarray] = {}  # frame -> (N, 4) xywh detections
         gt = seq.gt.table
         for step in frames(seq, build_source(cfg.detector), str(cfg.get("foreground", "auto"))):
             k = step.index
+            dets[k] = np.asarray(step.detections.boxes, dtype=np.float64).reshape(-1, 4)
             r = seq.gt.rows_of(k)
             r = r[gt.conf[r] > 0]
             gtb, gti = gt.boxes[r], gt.ids[r]
@@ -148,6 +162,8 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
             table = MotTable(fr[order], ids[order], np.asarray(boxes).reshape(n, 4)[order],
                              np.ones(n), np.full(n, -1, dtype=np.int64), np.full(n, np.nan))
             tallies[label].scores.append(score_sequence(gt, table))
+            tallies[label].modes.update(mode_counts(gt, table, np.asarray(hidden, dtype=bool)
+                                                    [order], dets, gap))
             if stacks:
                 tallies[label].stacks.update(
                     stack_counts(gt, table, np.asarray(hidden, dtype=bool)[order]))
@@ -211,6 +227,73 @@ def stack_counts(gt: MotTable, res: MotTable, hidden: np.ndarray, frames: int = 
     return c
 
 
+def _inside(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(len(a), len(b)) share of each box of a (xywh) that lies inside each box of b."""
+    x0 = np.maximum(a[:, None, 0], b[None, :, 0])
+    y0 = np.maximum(a[:, None, 1], b[None, :, 1])
+    x1 = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
+    y1 = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
+    inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
+    return inter / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
+
+
+def _cause(f: int, g: int, gt: MotTable, rows_of: dict, dets: dict, run: int = 3) -> str:
+    """What the detections did to person g around a switch at frame f (module docstring)."""
+    for k in (f - 1, f):
+        d, r = dets.get(k, np.zeros((0, 4))), rows_of.get(k, np.zeros(0, dtype=np.int64))
+        mine = r[gt.ids[r] == g]
+        if not len(d) or not len(mine):
+            continue
+        covers = _inside(gt.boxes[r], d) >= 0.5  # (people, detections): person inside det
+        on_g = covers[gt.ids[r] == g][0]
+        if (covers[:, on_g].sum(axis=0) >= 2).any():
+            return "merged"
+        if (_inside(d, gt.boxes[mine])[:, 0] >= 0.6).sum() >= 2:
+            return "split"
+    missed = 0
+    for k in range(f - 1, f - 1 - run, -1):
+        r = rows_of.get(k, np.zeros(0, dtype=np.int64))
+        mine, d = r[gt.ids[r] == g], dets.get(k, np.zeros((0, 4)))
+        if not len(mine) or (len(d) and iou_matrix(gt.boxes[mine], d).max() >= 0.5):
+            break
+        missed += 1
+    return "misses" if missed >= run else "other"
+
+
+def mode_counts(gt: MotTable, res: MotTable, hidden: np.ndarray, dets: dict[int, np.ndarray],
+                gap: int) -> Counter:
+    """Issue 28's failure modes of a result table (module docstring). ``hidden`` (len(res),)
+    bool: OCCLUDED rows; ``dets``: frame -> (N, 4) xywh detections the tracker was given."""
+    gt = considered(gt)
+    m = match_rows(gt, res)
+    c: Counter = Counter(hidden=int(hidden.sum()))
+    matched = np.zeros(len(res), dtype=bool)
+    matched[m[m >= 0]] = True
+    rows_of = gt.frame_index()
+    for r in np.flatnonzero(hidden & ~matched):  # (b) hidden reports on nobody
+        c["phantom"] += 1
+        g = rows_of.get(int(res.frames[r]), np.zeros(0, dtype=np.int64))
+        c["phantom_empty"] += not len(g) or iou_matrix(res.boxes[r][None], gt.boxes[g]).max() < 0.1
+    last_id: dict[int, tuple[int, int]] = {}  # result id -> (person, frame) last matched
+    first: dict[int, int] = {}  # person -> first frame matched
+    last_of: dict[int, int] = {}  # person -> id matched last
+    for r in np.flatnonzero(m >= 0):  # gt rows in (frame, id) order
+        f, g, i = int(gt.frames[r]), int(gt.ids[r]), int(res.ids[m[r]])
+        first.setdefault(g, f)
+        if i in last_id and last_id[i][0] != g and f - last_id[i][1] - 1 > gap:
+            c["reused"] += 1  # (a)
+            c["reused_new"] += f - first[g] <= gap
+        if last_of.get(g, i) != i:  # (c) a CLEAR ID switch
+            c["handed"] += 1
+            c[_cause(f, g, gt, rows_of, dets)] += 1
+        last_id[i], last_of[g] = (g, f), i
+    return c
+
+
+MODES = ("reused", "reused_new", "phantom", "phantom_empty", "hidden", "handed", "merged",
+         "split", "misses", "other")
+
+
 def metrics(tally: Tally) -> np.ndarray:
     """COMBINED (IDF1, HOTA, MOTA, IDs) of a tally's sequences."""
     m = combine(tally.scores).row()
@@ -220,13 +303,16 @@ def metrics(tally: Tally) -> np.ndarray:
 def line(label: str, tally: Tally, m: np.ndarray) -> str:
     return (f"{label}: IDF1/HOTA/MOTA {m[0]:.3f}/{m[1]:.3f}/{m[2]:.3f} IDs {m[3]:.0f}; "
             f"re-acquisitions wrong {tally.wrong}/{tally.reacquired}; "
-            f"exchanges {tally.exchanges}")
+            f"exchanges {tally.exchanges}; modes "
+            + " ".join(f"{k} {tally.modes.get(k, 0)}" for k in MODES))
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--set", default="crowd d0.4", help="a set of harness.sweeps.generalisation")
-    ap.add_argument("--seeds", type=int, nargs="+", default=list(range(6)))
+    ap.add_argument("--set", nargs="+", default=["crowd d0.4"],
+                    help="sets of harness.sweeps.generalisation")
+    ap.add_argument("--seeds", type=int, nargs="+",
+                    help="default: a tuning set's own seeds, else 0-5")
     ap.add_argument("--trackers", nargs="+", default=["reta", "pbm"])
     ap.add_argument("--gap", type=int, default=5, help="frames unfound before a re-acquisition")
     ap.add_argument("--length", type=int, help="cut synthetic scenes / replays to N frames")
@@ -235,23 +321,32 @@ def main(argv=None) -> int:
     ap.add_argument("--stacks", action="store_true", help="count stacked targets (docstring)")
     args = ap.parse_args(argv)
     sets = {e.name: e for e in G.SETS}
-    if args.set not in sets:
-        ap.error(f"--set {args.set!r}: not one of {sorted(sets)}")
-    s = sets[args.set]
-    held = sorted(set(args.seeds) & set(s.seeds)) if s.role == G.UNTOUCHED else []
-    if held and not args.untouched:
-        ap.error(f"seeds {held} are {args.set}'s untouched seeds: choose tuning seeds "
-                 "(or --untouched to measure, not to choose)")
+    bad = [n for n in args.set if n not in sets]
+    if bad:
+        ap.error(f"--set {bad}: not in {sorted(sets)}")
     trackers = [parse_tracker(t) for t in args.trackers]
+    for name in args.set:
+        s = sets[name]
+        seeds = args.seeds or (list(s.seeds) if s.role == G.TUNING else list(range(6)))
+        held = sorted(set(seeds) & set(s.seeds)) if s.role == G.UNTOUCHED else []
+        if held and not args.untouched:
+            ap.error(f"seeds {held} are {name}'s untouched seeds: choose tuning seeds "
+                     "(or --untouched to measure, not to choose)")
+        run_set(name, seeds, trackers, args)
+    return 0
+
+
+def run_set(name: str, seeds: list[int], trackers: list, args) -> None:
+    """Print every tracker's line per seed and over the seeds of set ``name``."""
     total = {label: Tally() for label, _, _ in trackers}
     per_seed: dict[str, list[np.ndarray]] = {label: [] for label in total}
-    for seed in args.seeds:
-        tallies = run_seed(set_overrides(args.set, seed, args.length), trackers, args.gap,
+    for seed in seeds:
+        tallies = run_seed(set_overrides(name, seed, args.length), trackers, args.gap,
                            args.stacks)
         for label, tally in tallies.items():
             m = metrics(tally)
             per_seed[label].append(m)
-            print(f"{args.set} seed {seed} {line(label, tally, m)}", flush=True)
+            print(f"{name} seed {seed} {line(label, tally, m)}", flush=True)
             if args.events:
                 for e in tally.events:
                     print("    ", e)
@@ -259,10 +354,9 @@ def main(argv=None) -> int:
     for label, tally in total.items():
         m = np.mean(per_seed[label], axis=0)  # the generalisation table's mean over seeds
         m[3] = sum(x[3] for x in per_seed[label])  # IDs summed
-        print(f"{args.set} seeds {args.seeds} (mean; IDs summed) {line(label, tally, m)}")
+        print(f"{name} seeds {seeds} (mean; IDs summed) {line(label, tally, m)}", flush=True)
         if args.stacks:
-            print(f"{args.set} seeds {args.seeds} {label} stacks: {dict(tally.stacks)}")
-    return 0
+            print(f"{name} seeds {seeds} {label} stacks: {dict(tally.stacks)}")
 
 
 if __name__ == "__main__":

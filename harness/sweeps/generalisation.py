@@ -9,14 +9,20 @@ mean of its COMBINED IDF1 / HOTA / MOTA over the seeds.
 
 Which data is which (docs/generalisation.md says the same, with the latest table):
 
-* tuning: the ``tune_*`` experiments' data (synthetic suite, seed 100, 120 frames, exact
-  detections), CAVIAR OneLeaveShop1cor frames 1-150.
+* tuning (choosing, issue 28): real detections of the front end on CAVIAR OneLeaveShop1cor
+  frames 1-150 and EnterExitCrossingPaths1cor frames 1-180, noisy ground truth on the same
+  frames; the ``tune_*`` experiments' data (synthetic suite, seed 100, 120 frames, exact
+  detections), on which the outside trackers' ``*_tuned`` rows were chosen.
 * untouched: synthetic seeds >= 1000 (the project's defaults and adaptations were measured
-  on seeds 0-15 and tuned on seed 100), OneLeaveShop1cor frames 151-295, the replayed real
-  trajectories (CAVIAR OneLeaveShop2cor, PETS09-S2L1, TUD-Campus) at their real frame rates,
-  the synthetic crowd at three densities (seeds 2000-2009: ten seeds, because one late
-  identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds 1000-1009 decided a default,
-  ``adaptations.appearance_margin``, so they count as looked at).
+  on seeds 0-15 and tuned on seed 100), OneLeaveShop1cor frames 151-295,
+  EnterExitCrossingPaths1cor frames 181-383, the replayed real trajectories (CAVIAR
+  OneLeaveShop2cor, PETS09-S2L1, TUD-Campus) at their real frame rates, the CAVIAR lobby
+  clips with noisy ground truth, the synthetic crowd at three densities (seeds 2000-2009: ten
+  seeds, because one late identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds
+  1000-1009 decided a default, ``adaptations.appearance_margin``, so they count as looked at).
+
+The EnterExitCrossingPaths1cor and lobby sets read ``shared_root()`` (not shipped: skipped
+with a message where it is absent).
 
 Used by ``benchmarks/bench_generalisation.py`` (the command line); ``run_table`` is the
 library entry point.
@@ -27,6 +33,7 @@ from __future__ import annotations
 import datetime as _dt
 import logging
 import math
+import os
 import subprocess
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -63,8 +70,9 @@ class EvalSet:
         seeds: values of the top-level ``seed`` (rendering and detector noise), one run each.
         quick: part of the quick subset (``--quick``).
         description: one line for the legend of the table.
-        requires: folders under the trajectories folder (``trajectories_root()``) that must
-            exist; a set whose data is absent is skipped with a message.
+        requires: folders under the trajectories folder (``trajectories_root()``), or under
+            ``shared_root()`` when they start with ``shared:``, that must exist; a set whose
+            data is absent is skipped with a message.
     """
 
     name: str
@@ -85,6 +93,12 @@ def _replay(name: str, *extra: str) -> tuple[str, ...]:
     return ("dataset=replay", f"dataset.gt_path=${{trajectories:{name}}}", *extra)
 
 
+ECP = "CAVIAR-EnterExitCrossingPaths1cor"
+#: the second corridor sequence (not shipped): frames and gt in MOT layout under shared_root()
+ECP_SET = ("dataset=mot", f"dataset.root=${{shared:{ECP}}}")
+LOBBY = "CAVIAR-lobby"
+
+
 SETS: tuple[EvalSet, ...] = (
     EvalSet("synth-tune", TUNING, ("dataset=synthetic", "dataset.length=120"), (100,),
             description="the tune_* data: synthetic suite, seed 100, 120 frames, exact detections"),
@@ -101,6 +115,24 @@ SETS: tuple[EvalSet, ...] = (
     EvalSet("cav151-295 sil", UNTOUCHED, (*CAVIAR, "dataset.frames=[151,295]", *SILHOUETTE),
             (0,), quick=True,
             description="CAVIAR OneLeaveShop1cor frames 151-295, the silhouette detector"),
+    EvalSet("ecp1-180 sil", TUNING, (*ECP_SET, "dataset.frames=[1,180]", *SILHOUETTE), (0,),
+            quick=True, requires=(f"shared:{ECP}",),
+            description="CAVIAR EnterExitCrossingPaths1cor frames 1-180 (first crossing), "
+            "the silhouette detector"),
+    EvalSet("ecp181-383 sil", UNTOUCHED, (*ECP_SET, "dataset.frames=[181,383]", *SILHOUETTE),
+            (0,), quick=True, requires=(f"shared:{ECP}",),
+            description="CAVIAR EnterExitCrossingPaths1cor frames 181-383 (second crossing), "
+            "the silhouette detector"),
+    EvalSet("ecp1-180 gt", TUNING, (*ECP_SET, "dataset.frames=[1,180]", *GT03),
+            UNTOUCHED_SEEDS, requires=(f"shared:{ECP}",),
+            description="CAVIAR EnterExitCrossingPaths1cor frames 1-180, noisy gt miss 0.3"),
+    EvalSet("ecp181-383 gt", UNTOUCHED, (*ECP_SET, "dataset.frames=[181,383]", *GT03),
+            UNTOUCHED_SEEDS, requires=(f"shared:{ECP}",),
+            description="CAVIAR EnterExitCrossingPaths1cor frames 181-383, noisy gt miss 0.3"),
+    EvalSet("lobby gt", UNTOUCHED, ("dataset=mot", f"dataset.root=${{shared:{LOBBY}}}", *GT03),
+            (1000,), requires=(f"shared:{LOBBY}",),
+            description="the 14 CAVIAR lobby clips (a second camera, looking down), "
+            "noisy gt miss 0.3"),
     EvalSet("OLS2cor", UNTOUCHED, _replay("CAVIAR-OneLeaveShop2cor", *GT03), (1000,),
             description="CAVIAR OneLeaveShop2cor trajectories replayed (25 fps), noisy gt miss 0.3",
             requires=("CAVIAR-OneLeaveShop2cor",)),
@@ -138,15 +170,34 @@ def trajectories_root() -> Path:
     return Path(str(compose(["dataset=replay"]).dataset.gt_path)).parent
 
 
+def shared_root() -> Path:
+    """The folder of the data that is not shipped (``../shared/data`` beside the main
+    checkout): ``$OCCBENCH_SHARED`` if set, else the first of ``<repo>/../shared/data`` and
+    ``<repo>/../../shared/data`` (a worktree under ``wt/``) that exists."""
+    env = os.environ.get("OCCBENCH_SHARED", "").strip()
+    if env:
+        return Path(env).expanduser().resolve()
+    near = [p / "shared" / "data" for p in (ROOT.parent, ROOT.parent.parent)]
+    return next((p for p in near if p.is_dir()), near[0])
+
+
 def _resolve(overrides: Iterable[str], trajectories: Path) -> list[str]:
     out = []
     for o in overrides:
-        if "${trajectories:" in o:
-            key, rest = o.split("${trajectories:", 1)
-            name, tail = rest.split("}", 1)
-            o = f"{key}{trajectories / name}{tail}"
+        for tag, folder in (("${trajectories:", trajectories), ("${shared:", shared_root())):
+            if tag in o:
+                key, rest = o.split(tag, 1)
+                name, tail = rest.split("}", 1)
+                o = f"{key}{folder / name}{tail}"
         out.append(o)
     return out
+
+
+def missing_data(s: EvalSet, trajectories: Path) -> list[Path]:
+    """The folders ``s.requires`` names that do not exist."""
+    paths = [shared_root() / r.removeprefix("shared:") if r.startswith("shared:")
+             else trajectories / r for r in s.requires]
+    return [p for p in paths if not p.exists()]
 
 
 def ordered_trackers() -> list[str]:
@@ -235,9 +286,9 @@ def run_table(sets: Sequence[EvalSet], trackers: dict, out_dir: Path,
     trajectories = trajectories_root()
     parts = []
     for s in sets:
-        missing = [r for r in s.requires if not (trajectories / r).exists()]
+        missing = missing_data(s, trajectories)
         if missing:
-            print(f"[skip] {s.name}: {', '.join(str(trajectories / m) for m in missing)} absent")
+            print(f"[skip] {s.name}: {', '.join(map(str, missing))} absent")
             continue
         print(f"[run] {s.name} ({s.role}): {s.description}, seeds {list(s.seeds)}", flush=True)
         try:

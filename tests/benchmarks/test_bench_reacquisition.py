@@ -43,3 +43,39 @@ def test_short_stacks_do_not_count():
     c = bench.stack_counts(gt, res, np.array([False, True, True, False]))
     assert c["one_person"] == c["two_people"] == 0 and c["fp_one_person"] == 0
     assert c["false_positives"] == 2
+
+
+def test_failure_modes_counted_on_a_hand_made_table():
+    # person 1 at x 100 in frames 1-4, then gone; person 2 enters at x 300 in frame 10
+    gt = table([(f, 1, 100, 50, 40, 100) for f in range(1, 5)]
+               + [(f, 2, 300, 50, 40, 100) for f in range(10, 13)])
+    # id 1 on person 1, reported hidden beside it in frame 4 (IoU 0.33) and on empty floor
+    # in frame 5, then on person 2: a lost id re-used for a newcomer (a) and two hidden
+    # reports matched to nobody, one of them overlapping nobody (b)
+    rows = [(f, 1, 100, 50, 40, 100) for f in range(1, 4)]
+    rows += [(4, 1, 120, 50, 40, 100), (5, 1, 150, 50, 40, 100)]
+    rows += [(f, 1, 300, 50, 40, 100) for f in range(10, 13)]
+    hidden = np.array([False] * 3 + [True] * 2 + [False] * 3)
+    dets = {f: np.array([[100.0, 50, 40, 100]]) for f in range(1, 4)}
+    c = bench.mode_counts(gt, table(rows), hidden, dets, gap=5)
+    assert c["reused"] == 1 and c["reused_new"] == 1
+    assert c["hidden"] == 2 and c["phantom"] == 2 and c["phantom_empty"] == 1
+    assert c["handed"] == 0
+
+
+def test_a_switch_is_put_down_to_a_merged_box_or_a_run_of_misses():
+    # persons 1 and 2 side by side in frames 1-6; the tracker hands person 1 from id 1 to id 3
+    # at frame 4 (one detection covering both people there), and person 2 from id 2 to id 4
+    # at frame 6 (person 2 undetected in frames 3-5)
+    gt = table([(f, g, x, 50, 40, 100) for f in range(1, 7) for g, x in ((1, 100), (2, 300))])
+    rows = [(f, 1 if f < 4 else 3, 100, 50, 40, 100) for f in range(1, 7)]
+    rows += [(f, 2 if f < 6 else 4, 300, 50, 40, 100) for f in range(1, 7)]
+    rows.sort()
+    both = np.array([[95.0, 45, 250, 110]])
+    dets = {1: np.array([[100.0, 50, 40, 100], [300, 50, 40, 100]]),
+            2: np.array([[100.0, 50, 40, 100], [300, 50, 40, 100]]),
+            3: np.array([[100.0, 50, 40, 100]]), 4: both, 5: np.array([[100.0, 50, 40, 100]]),
+            6: np.array([[100.0, 50, 40, 100], [300, 50, 40, 100]])}
+    c = bench.mode_counts(gt, table(rows), np.zeros(len(rows), dtype=bool), dets, gap=5)
+    assert c["handed"] == 2 and c["merged"] == 1 and c["misses"] == 1
+    assert c["reused"] == c["phantom"] == 0

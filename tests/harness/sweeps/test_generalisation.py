@@ -13,6 +13,10 @@ def test_every_set_composes_and_is_marked():
     roles = {s.name: s.role for s in G.SETS}
     assert roles["cav1-150 gt"] == G.TUNING and roles["cav151-295 gt"] == G.UNTOUCHED
     assert roles["synth-tune"] == G.TUNING
+    # issue 28's split: choose on real detections of the first halves, report on the second
+    assert roles["cav1-150 sil"] == roles["ecp1-180 sil"] == roles["ecp1-180 gt"] == G.TUNING
+    assert roles["cav151-295 sil"] == roles["ecp181-383 sil"] == G.UNTOUCHED
+    assert roles["ecp181-383 gt"] == roles["lobby gt"] == G.UNTOUCHED
     for s in G.SETS:
         assert s.role in (G.TUNING, G.UNTOUCHED)
         if s.role == G.UNTOUCHED and "dataset=synthetic" in s.overrides:
@@ -20,6 +24,16 @@ def test_every_set_composes_and_is_marked():
             assert min(s.seeds) >= 1000
         cfg = G.compose(G._resolve(s.overrides, G.trajectories_root()))
         assert "_target_" in cfg.dataset and "_target_" in cfg.detector
+
+
+def test_shared_sets_name_their_missing_folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("OCCBENCH_SHARED", str(tmp_path))
+    ecp = {s.name: s for s in G.SETS}["ecp181-383 sil"]
+    assert G.missing_data(ecp, G.trajectories_root()) == [
+        tmp_path / "CAVIAR-EnterExitCrossingPaths1cor"]
+    assert any(str(tmp_path) in o for o in G._resolve(ecp.overrides, G.trajectories_root()))
+    (tmp_path / "CAVIAR-EnterExitCrossingPaths1cor").mkdir()
+    assert G.missing_data(ecp, G.trajectories_root()) == []
 
 
 def test_tiny_table_same_detections_for_every_tracker(tmp_path):
