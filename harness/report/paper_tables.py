@@ -14,6 +14,8 @@ An experiment config (``conf/experiment/reta_table2.yaml`` ...) holds a ``paper_
       columns: {Song_GT: GT, "Song_MT%": "MT (%)", ...}   # our column -> the paper's label
       scale: {Precision: 100}       # optional: multiply our column (fractions -> %)
       data_note: "..."              # what our data is (it is not the paper's)
+      differences: {data: "...", protocol: "...", annotation: "..."}  # every reason our
+                                    # figures can differ from the paper's, by aspect
       reported:
         citation: "..."             # where the figures come from
         rows: {"<method> (<data>)": [values in the order of `columns`], ...}
@@ -151,6 +153,10 @@ def to_markdown(table: pd.DataFrame, spec: Mapping[str, Any]) -> str:
         lines += [str(spec["caption"]).strip(), ""]
     if spec.get("data_note"):
         lines += [f"Our data: {str(spec['data_note']).strip()}", ""]
+    if spec.get("differences"):
+        lines += ["Why our figures can differ from the paper's:", ""]
+        lines += [f"- {aspect}: {str(why).strip()}" for aspect, why in spec["differences"].items()]
+        lines.append("")
     cite = (spec.get("reported") or {}).get("citation")
     if cite:
         lines += [(f"Reported figures (labelled `reported:`) are copied from {str(cite).strip()}; "

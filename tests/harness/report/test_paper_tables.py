@@ -34,6 +34,7 @@ def test_experiment_tables_have_reported_figures_matching_their_columns(name):
     rows = spec["reported"]["rows"]
     assert rows and all(len(v) == n for v in rows.values())
     assert spec["reported"]["citation"]
+    assert {"data", "protocol", "annotation"} <= set(spec["differences"])  # docs/reproduction.md
 
 
 def test_reported_figures_are_the_papers():
@@ -59,6 +60,8 @@ def test_paper_table_puts_ours_beside_reported(tmp_path):
     md = to_markdown(table, spec)
     assert "| reported: Reta et al. 2015 (three-hypothesis graph) | 72 | 88.9 |" in md
     assert "reference only" in md
+    assert "Why our figures can differ from the paper's:" in md
+    assert "- annotation: CAVIAR's hand-labelled boxes" in md
     metrics.to_csv(tmp_path / "metrics.csv", index=False)
     assert write_paper_table(tmp_path, spec).is_file()
     assert (tmp_path / "paper_table.csv").is_file()

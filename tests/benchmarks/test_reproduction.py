@@ -1,0 +1,57 @@
+"""benchmarks/reproduction.py: a multirun's paper tables merged into one, and a table's section
+of docs/reproduction.md replaced while the others stay as they are (no harness run here)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "reproduction.py"
+_spec = importlib.util.spec_from_file_location("reproduction", _PATH)
+repro = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(repro)
+
+TABLE = """## A title
+
+| method | P | R |
+|---|---|---|
+| reported: paper | 87 | 62 |
+| ours: {det} | {p} | {r} |
+
+Our data: one sequence.
+"""
+
+
+def test_a_multiruns_jobs_give_one_table_with_every_ours_row(tmp_path):
+    jobs = []
+    for i, (det, p, r) in enumerate([("silhouette", 94.8, 75), ("hog", 78.5, 27.7)]):
+        (tmp_path / str(i)).mkdir()
+        jobs.append(tmp_path / str(i) / "paper_table.md")
+        jobs[-1].write_text(TABLE.format(det=det, p=p, r=r))
+    merged = repro.merge(jobs)
+    rows = [line for line in merged.splitlines() if line.startswith("| ")]
+    assert rows[-2:] == ["| ours: silhouette | 94.8 | 75 |", "| ours: hog | 78.5 | 27.7 |"]
+    assert merged.count("reported: paper") == 1 and merged.rstrip().endswith("one sequence.")
+
+
+def test_writing_one_section_keeps_the_others(tmp_path):
+    doc = tmp_path / "reproduction.md"
+    repro.write({"reta_table2": repro.section("reta_table2", "## T2\n\nfirst\n", 1.0)}, doc)
+    text = doc.read_text()
+    assert text.startswith("# Reproducing the papers' tables")
+    assert all(repro.BEGIN.format(t) in text for t in repro.TABLES)
+    assert "Not generated yet: `python benchmarks/reproduction.py pbm_table1`" in text
+    assert "`occbench +experiment=reta_table2 progress=false`" in text
+    repro.write({"pbm_table1": repro.section("pbm_table1", "## T1\n\nsecond\n", 2.0)}, doc)
+    repro.write({"reta_table2": repro.section("reta_table2", "## T2\n\nthird\n", 3.0)}, doc)
+    text = doc.read_text()
+    assert "second" in text and "third" in text and "first" not in text
+    assert text.count(repro.BEGIN.format("reta_table2")) == 1
+
+
+def test_an_unknown_table_is_named(capsys):
+    with pytest.raises(SystemExit):
+        repro.main(["reta_tabel2"])
+    assert "unknown table 'reta_tabel2'" in capsys.readouterr().err
