@@ -1,0 +1,38 @@
+"""The detector follows the tracker choice in the Reta tables (harness/pipeline/choose.py)."""
+
+from __future__ import annotations
+
+import pytest
+from hydra.utils import instantiate
+
+from harness.pipeline.build import compose_config
+from harness.pipeline.choose import choose
+
+ACTIVE_BASIS = "trackers.frontend.shape_search.ActiveBasisDetector"
+SILHOUETTE = "trackers.frontend.detectors.SilhouetteDetector"
+
+
+def test_choose_picks_by_key_else_the_default():
+    assert choose("reta_paper", {"reta_paper": "active_basis"}, "silhouette") == "active_basis"
+    assert choose("papers", {"reta_paper": "active_basis"}, "silhouette") == "silhouette"
+    with pytest.raises(ValueError, match="mapping"):
+        choose("a", "not a table", "b")
+
+
+@pytest.mark.parametrize("overrides, target", [
+    (["tracker=reta_paper"], ACTIVE_BASIS),             # the paper, detector and all
+    ([], SILHOUETTE),                                   # tracker=papers: one shared source
+    (["tracker=reta"], SILHOUETTE),
+    (["tracker=reta_paper", "detector=hog"], "trackers.frontend.detectors.HogDetector"),
+])
+def test_reta_table2_detector_follows_the_tracker(overrides, target):
+    cfg = compose_config(["+experiment=reta_table2", *overrides])
+    assert cfg.detector.detector._target_ == target
+
+
+def test_reta_table2_with_reta_paper_builds_the_active_basis_search():
+    cfg = compose_config(["+experiment=reta_table2", "tracker=reta_paper"])
+    source = instantiate(cfg.detector)
+    det = source.detector
+    assert type(det).__name__ == "ActiveBasisDetector"
+    assert det.search.template.n == 30 and det.verifier is None
