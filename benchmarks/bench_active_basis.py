@@ -12,14 +12,14 @@ only shrink while the maps stay), so the detections at a threshold T are the fit
 of one run at a lower threshold: ``--thresholds`` scores several from one run (exact).
 
 Run: ``python benchmarks/bench_active_basis.py [--thresholds 8 10 12] [--report]
-[--set search.min_vacant=0.6 ...]``. Needs /work/shared/data (or $OCCBENCH_DATA) for
+[--set search.min_vacant=0.6 ...]``. Reads the not-shipped data (``shared_root()``,
+$OCCBENCH_SHARED) for
 EnterExitCrossingPaths1cor; exits with a message when a sequence is absent.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
@@ -29,12 +29,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from hydra.utils import instantiate  # noqa: E402
+from hydra.utils import instantiate
 
-from harness.commands.detect import match_count  # noqa: E402
-from harness.sources.frontend import compose_config, load_sequences  # noqa: E402
+from harness.commands.detect import match_count
+from harness.sources.frontend import compose_config, load_sequences
+from harness.sweeps.generalisation import shared_root
 
-SHARED = Path(os.environ.get("OCCBENCH_SHARED_DATA", "/work/shared/data"))
 #: (sequence folder, choosing range, reporting range)
 SETS = [("CAVIAR-OneLeaveShop1cor", (1, 150), (151, 295)),
         ("CAVIAR-EnterExitCrossingPaths1cor", (1, 180), (181, 383))]
@@ -42,9 +42,9 @@ SETS = [("CAVIAR-OneLeaveShop1cor", (1, 150), (151, 295)),
 
 def run(folder: str, detector: str, overrides: list[str]) -> tuple[dict, dict]:
     """Per frame: detections (boxes, scores) and gt boxes of one whole sequence."""
-    root = SHARED / folder
+    root = shared_root() / folder
     if not root.is_dir():
-        sys.exit(f"{root}: not found (set OCCBENCH_SHARED_DATA)")
+        sys.exit(f"{root}: not found (set OCCBENCH_SHARED)")
     # CAVIAR XML where the folder has it (OneLeaveShop1cor, as the README's table), else MOT gt
     xml = list(root.glob("*.xml")) + list((root / "gt").glob("*.xml"))
     ds = [f"dataset={'caviar' if xml else 'mot'}", f"dataset.root={root}"]

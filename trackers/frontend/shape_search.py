@@ -82,7 +82,7 @@ def shape_filter_map(grey: np.ndarray, template: ActiveBasis, kernels: np.ndarra
     if where is None:
         return _padded_map(img, t, kernels)
     S = np.full((ny, nx), -np.inf)
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(where.astype(np.uint8), connectivity=8)
+    _n, _lab, stats, _ = cv2.connectedComponentsWithStats(where.astype(np.uint8), connectivity=8)
     for x0, y0, w, h, _area in stats[1:]:
         sub = img[y0 : y0 + h + H - 1 + 2 * p, x0 : x0 + w + W - 1 + 2 * p]
         box = (slice(y0, y0 + h), slice(x0, x0 + w))
@@ -198,11 +198,11 @@ class ShapeSearch:
     def _top_band(self, h: float, rows: int, perspective: Perspective | None) -> tuple[int, int] | None:
         """Box-top rows [t0, t1) where a person ``h`` high fits the perspective (None: nowhere)."""
         if perspective is None:
-            return 0, max(rows - int(round(h)) + 1, 1)
+            return 0, max(rows - round(h) + 1, 1)
         a, b = perspective.a, perspective.b
         lo = (h / self.height_tolerance - b) / a - h  # foot row = top + h
         hi = (h * self.height_tolerance - b) / a - h
-        t0, t1 = max(int(np.floor(lo)), 0), min(int(np.ceil(hi)) + 1, rows - int(round(h)) + 1)
+        t0, t1 = max(int(np.floor(lo)), 0), min(int(np.ceil(hi)) + 1, rows - round(h) + 1)
         return (t0, t1) if t1 > t0 else None
 
     def _cover(self, vacant: np.ndarray, sc: _Scale) -> np.ndarray:
@@ -235,7 +235,7 @@ class ShapeSearch:
             if r1 - r0 < h or c1 - c0 < w:
                 continue
             f = Ht / h
-            size = (max(int(round((c1 - c0) * f)), Wt), max(int(round((r1 - r0) * f)), Ht))
+            size = (max(round((c1 - c0) * f), Wt), max(round((r1 - r0) * f), Ht))
             fy, fx = size[1] / (r1 - r0), size[0] / (c1 - c0)  # the exact factors of the resize
             sc = _Scale(r0, r1, c0, c1, fy, fx, (size[1], size[0]),
                         np.zeros((size[1] - Ht + 1, size[0] - Wt + 1)), np.zeros(0))
@@ -284,8 +284,8 @@ class ShapeSearch:
     def _occupy(self, vacant: np.ndarray, box: np.ndarray) -> None:
         """Mark the silhouette of a fit at the xywh ``box`` occupied (in place)."""
         x, y, w, h = box
-        c0, r0 = int(round(x)), int(round(y))
-        ww, hh = max(int(round(w)), 1), max(int(round(h)), 1)
+        c0, r0 = round(x), round(y)
+        ww, hh = max(round(w), 1), max(round(h), 1)
         m = cv2.resize(self.silhouette.astype(np.uint8), (ww, hh), interpolation=cv2.INTER_NEAREST) > 0
         R, C = vacant.shape
         rs, cs = slice(max(r0, 0), min(r0 + hh, R)), slice(max(c0, 0), min(c0 + ww, C))

@@ -27,7 +27,7 @@ def _scene(template, people, height=96, seed=0):
     rng = np.random.default_rng(seed)
     grey = np.full((288, 384), 170.0, np.float32)
     fg = np.zeros(grey.shape, bool)
-    w = int(round(height * template.size[1] / template.size[0]))
+    w = round(height * template.size[1] / template.size[0])
     mask = cv2.resize(sil, (w, height), interpolation=cv2.INTER_LINEAR) > 0.4
     for x, y in people:
         grey[y : y + height, x : x + w][mask] = 60.0
