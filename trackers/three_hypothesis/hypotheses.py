@@ -17,7 +17,7 @@ VELOCITY = "velocity"
 OCCLUDER = "occluder"
 STILL = "still"
 KINDS = (VELOCITY, OCCLUDER, STILL)
-# preference among equally plausible hypotheses when choosing the reported estimate
+# preference among equally plausible hypotheses (rules.LeastContradicted, FirstHypothesis)
 PRIORITY = {VELOCITY: 0, OCCLUDER: 1, STILL: 2}
 
 
@@ -62,19 +62,6 @@ def spawn(x_parent: np.ndarray, occluder_velocity: np.ndarray) -> dict[str, np.n
     still = x_parent.copy()
     still[4:] = 0.0
     return {OCCLUDER: follow, STILL: still}
-
-
-def best_hypothesis(kinds: list[str], exposed: list[int], covered: list[bool]) -> int:
-    """Index of the single best estimate of a hidden person (reported as OCCLUDED).
-
-    A hypothesis hidden behind a visible person explains the missing detection; one in
-    plain view without a detection is contradicted a little more every frame. So the
-    choice is: covered first, then fewest frames exposed, then velocity > occluder > still.
-    """
-    order = sorted(
-        range(len(kinds)), key=lambda i: (not covered[i], exposed[i], PRIORITY.get(kinds[i], 0))
-    )
-    return order[0]
 
 
 def outside_image(boxes: np.ndarray, width: int, height: int) -> np.ndarray:

@@ -6,6 +6,11 @@ P (8, 8). The matrices F, H, Q, R come from
 predict and correct steps below are filterpy's equations applied to all nodes of a frame
 at once (``tests/trackers/three_hypothesis/test_tracker.py`` checks them against
 ``filterpy.kalman.KalmanFilter``).
+
+Two states, picked by ``Adaptations.filter_size``: ``BoxState`` filters the whole box (ours);
+``CentreState`` is the paper's M (3.2, "position and velocity"): a 4-D filter over
+(xc, yc, vx, vy) with z = (xc, yc), the size carried as the shape's. Both keep the 8-slot
+layout above, so hypotheses, the graph and the reports read one kind of state.
 """
 
 from __future__ import annotations
@@ -54,7 +59,8 @@ class MotionModel:
 
 
 def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Kalman prediction of N states at once.
+    """Kalman prediction of N box states at once (``BoxState``): a size rate that would
+    shrink a size through zero is dropped first (as the baseline does).
 
     Args:
         x: (N, 8) states; P: (N, 8, 8); F: (8, 8); Q: (N, 8, 8).
@@ -62,9 +68,13 @@ def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray) -> tuple
         x = F x, P = F P F' + Q  (filterpy ``KalmanFilter.predict``).
     """
     x = x.copy()
-    # never let a size shrink through zero (as the baseline does)
     shrink = (x[:, 2] + x[:, 6] <= 1) | (x[:, 3] + x[:, 7] <= 1)
     x[shrink, 6:] = 0.0
+    return _predict(x, P, F, Q)
+
+
+def _predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """x = F x, P = F P F' + Q for (N, n) states, (N, n, n) P and Q, (n, n) F."""
     x = x @ F.T  # x = F x
     P = F @ P @ F.T + Q  # P = F P F' + Q
     return x, P
@@ -101,3 +111,100 @@ def box_measurements(boxes: np.ndarray) -> np.ndarray:
     """(N, 4) xywh -> (N, 4) measurements z = (xc, yc, w, h)."""
     b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     return np.concatenate([b[:, :2] + b[:, 2:] / 2, b[:, 2:]], axis=1)
+
+
+@dataclass(frozen=True)
+class BoxState:
+    """``filter_size``: M over the whole box, x = (xc, yc, w, h, vx, vy, vw, vh) and
+    z = (xc, yc, w, h): the size and its rate are filtered with the centre."""
+
+    model: MotionModel
+
+    def init(self, box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """x (8,), P (8, 8), Q (8, 8), R (4, 4) of a person first measured at (4,) xywh box."""
+        x, P, _, _, Q, R = self.model.init(box)
+        return x, P, Q, R
+
+    def predict(self, x: np.ndarray, P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 8) x, (N, 8, 8) P and Q -> predicted x, P."""
+        return predict(x, P, _F8, Q)
+
+    def correct(self, x: np.ndarray, P: np.ndarray, z: np.ndarray,
+                R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 8) x, (N, 8, 8) P, (N, 4) z = (xc, yc, w, h), (N, 4, 4) R -> corrected x, P."""
+        return correct(x, P, z, _H8, R)
+
+
+@dataclass(frozen=True)
+class CentreState:
+    """3.2 as written: M's state is the centre's position and velocity, x = (xc, yc, vx, vy)
+    in slots (0, 1, 4, 5) of the 8-slot layout, measured by z = (xc, yc); slots (2, 3) carry
+    the size of the shape S, taken from the measurement (3.2) and kept by the prediction
+    area (3.3.3), slots (6, 7) and every entry of P outside the 4-D block stay 0. Q and R
+    are the centre's terms of ``MotionModel``'s."""
+
+    model: MotionModel
+
+    def init(self, box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """x (8,), P (8, 8) and Q (8, 8) zero outside the 4-D block, R (4, 4)."""
+        x, P8, _, _, Q8, R = self.model.init(box)
+        P, Q = np.zeros((8, 8)), np.zeros((8, 8))
+        P[_M4] = P8[_M4]
+        Q[_M4] = Q8[_M4]
+        return x, P, Q, R
+
+    def predict(self, x: np.ndarray, P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 8) x, (N, 8, 8) P and Q -> predicted x, P; the size is kept."""
+        x4, P4 = _predict(x[:, _C4], P[:, _C4][:, :, _C4], _F4, Q[:, _C4][:, :, _C4])
+        return _put(x, P, x4, P4)
+
+    def correct(self, x: np.ndarray, P: np.ndarray, z: np.ndarray,
+                R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 8) x, (N, 8, 8) P, (N, 4) z = (xc, yc, w, h), (N, 4, 4) R -> corrected x, P:
+        the centre by the 4-D filter, the size replaced by the measured one (3.2)."""
+        x4, P4 = correct(x[:, _C4], P[:, _C4][:, :, _C4], z[:, :2], _H4, R[:, :2, :2])
+        x, P = _put(x, P, x4, P4)
+        x[:, 2:4] = z[:, 2:4]
+        return x, P
+
+
+@dataclass(frozen=True)
+class PredictedBehind:
+    """3.3.3 as written: M of a matched person being occluded is not updated from its
+    measurement ("given that the person is not being occluded"); it evolves by case 1,
+    keeping its velocity and direction: the prediction."""
+
+    def update(self, corrected: tuple[np.ndarray, np.ndarray], predicted: tuple[np.ndarray, np.ndarray],
+               behind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(x, P) per matched row: ``corrected`` and ``predicted`` ((K, 8), (K, 8, 8)),
+        ``behind`` (K,) bool rows behind others, which keep the prediction."""
+        (Xc, Pc), (Xp, Pp) = corrected, predicted
+        if not behind.any():
+            return Xc, Pc
+        return (np.where(behind[:, None], Xp, Xc), np.where(behind[:, None, None], Pp, Pc))
+
+
+@dataclass(frozen=True)
+class CorrectedBehind:
+    """``correct_behind``: M of a matched person behind others is corrected by its
+    (possibly partial) measurement, as anyone's."""
+
+    def update(self, corrected: tuple[np.ndarray, np.ndarray], predicted: tuple[np.ndarray, np.ndarray],
+               behind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return corrected
+
+
+_F8, _H8 = constant_velocity_model(np.array([0.0, 0.0, 10.0, 10.0]))[2:4]  # F, H (box)
+_C4 = np.array([0, 1, 4, 5])  # (xc, yc, vx, vy) in the 8-slot layout
+_M4 = np.ix_(_C4, _C4)
+_F4 = _F8[_M4]  # [[I, I], [0, I]] over (position, velocity)
+_H4 = np.eye(2, 4)  # z = (xc, yc)
+
+
+def _put(x: np.ndarray, P: np.ndarray, x4: np.ndarray,
+         P4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Copies of (N, 8) x and (N, 8, 8) P with the 4-D block replaced by x4 (N, 4), P4."""
+    x, P = x.copy(), P.copy()
+    x[:, _C4] = x4
+    P[:, _C4[:, None], _C4[None, :]] = P4
+    return x, P

@@ -88,16 +88,26 @@ class LifeCycle:
         cover: share of a hypothesis region hidden by a visible person's region above
             which the hypothesis counts as covered (explains its missing detection);
             below it the hypothesis is in plain view (the paper's "contradictory"), in (0, 1].
-        confirm_frames: matches that confirm a tentative track, >= 1.
+        confirm_frames: matches that confirm a tentative track, >= 1 (the paper: "confirmed
+            in subsequent frames", no number; a reading, ``docs/adaptations.md``).
+        reported_hypothesis: which hypothesis of a hidden person is reported as OCCLUDED
+            (the paper draws them all and gives no rule; a reading): 'least_contradicted'
+            (covered by a visible person first, then fewest frames in plain view, then
+            velocity > occluder > still) or 'first' (hypothesis 1, velocity, while it
+            lives, then occluder, then still).
     """
 
     m: int = 8
     cover: float = 0.5
     confirm_frames: int = 3
+    reported_hypothesis: str = "least_contradicted"
 
     def __post_init__(self) -> None:
         at_least("life_cycle", 1, m=self.m, confirm_frames=self.confirm_frames)
         require("life_cycle.cover", 0.0 < self.cover <= 1.0, "must lie in (0, 1]", self.cover)
+        require("life_cycle.reported_hypothesis",
+                self.reported_hypothesis in ("least_contradicted", "first"),
+                "must be 'least_contradicted' or 'first'", self.reported_hypothesis)
 
 
 @dataclass(frozen=True, slots=True)
@@ -147,6 +157,25 @@ class Adaptations:
             contradicted by the missing detection: its count of frames in plain view does not
             grow (the detector missed a person who is there; up to ``max_hidden``); False:
             every frame in plain view counts towards the m frames of pruning (the paper).
+        tentative_stage1_only: a tentative track is matched in association stage 1 only
+            (it has no velocity to justify a jump through the gate); False: every node of
+            t-1 left unassociated competes in stage 2 (the paper, Alg. 1's
+            MaxSimilarity(n_j, N^{t-1} \\ Assoc)).
+        inherit_hidden_id: a tentative track confirmed where a hidden confirmed person's
+            hypothesis stands (IoU >= 0.5) takes that person's id and ends its hypotheses;
+            False: it takes a new id, a hidden person comes back only by matching one of
+            its hypotheses (the paper: Alg. 1 has no such step; Fig. 3(d)).
+        merge_duplicates: of two hypotheses of a person at the same place (every box edge
+            within half a pixel) only the preferred kind is kept; False: both kept (the
+            paper's PruneHypothesis removes contradicted, false-positive and departed ones).
+        correct_behind: M of a matched person behind others is corrected by its
+            measurement; False: M evolves by its prediction (the paper, 3.3.3: "the motion
+            model is updated ... from his current measurement given that the person is not
+            being occluded").
+        filter_size: M's state is the box, x = (xc, yc, w, h, vx, vy, vw, vh), the size and
+            its rate filtered with the centre; False: the centre's position and velocity,
+            x = (xc, yc, vx, vy), the size the shape's (the paper, 3.2: "position and
+            velocity"; the shape from the measurement, the prediction area's when occluded).
     """
 
     gate_sigmas: float = 3.0
@@ -161,12 +190,19 @@ class Adaptations:
     appearance_margin: bool = True
     measured_velocity: bool = True
     foreground_presence: bool = True
+    tentative_stage1_only: bool = True
+    inherit_hidden_id: bool = True
+    merge_duplicates: bool = True
+    correct_behind: bool = True
+    filter_size: bool = True
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
-                      "measured_velocity": bool, "foreground_presence": bool})
+                      "measured_velocity": bool, "foreground_presence": bool,
+                      "tentative_stage1_only": bool, "inherit_hidden_id": bool,
+                      "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  tentative_misses=self.tentative_misses)
@@ -179,7 +215,9 @@ class Adaptations:
                    foreground_histograms=False, foreground_support=False,
                    report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
                    max_hidden=1_000_000, appearance_margin=False, measured_velocity=False,
-                   foreground_presence=False)
+                   foreground_presence=False, tentative_stage1_only=False,
+                   inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
+                   filter_size=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

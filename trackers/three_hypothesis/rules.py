@@ -14,8 +14,17 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
+from trackers.geometry import iou_matrix
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.params import Adaptations
+from trackers.three_hypothesis.hypotheses import PRIORITY
+from trackers.three_hypothesis.motion import (
+    BoxState,
+    CentreState,
+    CorrectedBehind,
+    MotionModel,
+    PredictedBehind,
+)
+from trackers.three_hypothesis.params import Adaptations, LifeCycle
 
 # --------------------------------------------------------------- eq. 1: which pixels count
 
@@ -64,6 +73,28 @@ class KalmanGate:
             return None
         var = np.maximum(P[:, 0, 0], P[:, 1, 1]) + R  # S = H P H' + R, centre terms
         return self.sigmas * np.sqrt(var)
+
+
+# --------------------------------------------------------------- 3.3.2 steps 5-8: who enters stage 2
+
+
+@dataclass(frozen=True)
+class EveryNodeInStage2:
+    """Alg. 1 as written: every node of t-1 left unassociated by stage 1, tentative tracks'
+    too, competes in stage 2 (MaxSimilarity(n_j, N^{t-1} \\ Assoc))."""
+
+    def entrants(self, confirmed: np.ndarray) -> None:
+        return None  # associate() lets every person in
+
+
+@dataclass(frozen=True)
+class ConfirmedInStage2:
+    """``tentative_stage1_only``: a tentative track is matched in stage 1 only (it has no
+    velocity to justify a jump through the gate)."""
+
+    def entrants(self, confirmed: np.ndarray) -> np.ndarray:
+        """(P,) bool: the persons that may take part in stage 2, from (P,) ``confirmed``."""
+        return confirmed
 
 
 # --------------------------------------------------------------- 3.3.2 step 2: appearance in stage 1
@@ -204,7 +235,82 @@ class ForegroundPresence:
         return ~empty
 
 
+# --------------------------------------------------------------- Alg. 1: two hypotheses at one place
+
+
+@dataclass(frozen=True)
+class KeepDuplicates:
+    """Alg. 1 as written: PruneHypothesis removes contradicted, false-positive and departed
+    hypotheses only; two at the same place both stay."""
+
+    def duplicate(self, corner: list[float], kept: list[list[float]]) -> bool:
+        return False
+
+
+@dataclass(frozen=True)
+class MergeDuplicates:
+    """``merge_duplicates``: a hypothesis at the place of one already kept for the same
+    person (every xywh value within half a pixel) is dropped; the kinds come in order of
+    preference, so the preferred kind stays."""
+
+    def duplicate(self, corner: list[float], kept: list[list[float]]) -> bool:
+        """``corner``: (4,) xywh of a hypothesis; ``kept``: those kept before it."""
+        return any(max(abs(u - v) for u, v in zip(corner, k)) < 0.5 for k in kept)
+
+
+# --------------------------------------------------------------- 3.3 / Fig. 3: a confirmed track's id
+
+
+@dataclass(frozen=True)
+class NewIdentity:
+    """Alg. 1 as written: a confirmed track takes a new id; a hidden person comes back only
+    by matching one of its hypotheses (Fig. 3(d))."""
+
+    def returning(self, box: np.ndarray, pred: np.ndarray, owners: np.ndarray,
+                  candidate: np.ndarray) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class HiddenIdentity:
+    """``inherit_hidden_id``: a track confirmed where a hidden confirmed person's hypothesis
+    stands (IoU >= 0.5) is that person come back (our reading of Fig. 3, ID -14)."""
+
+    def returning(self, box: np.ndarray, pred: np.ndarray, owners: np.ndarray,
+                  candidate: np.ndarray) -> int | None:
+        """Index of the person whose node overlaps (4,) xywh ``box`` most, at IoU >= 0.5,
+        among ``pred`` (B, 4) node regions of ``owners`` (B,) persons; only persons with
+        ``candidate`` (P,) True count. None when there is none."""
+        best, best_iou = None, 0.5
+        for i, iou in zip(owners.tolist(), iou_matrix(box[None], pred)[0].tolist()):
+            if candidate[i] and iou >= best_iou:
+                best, best_iou = i, iou
+        return best
+
+
 # --------------------------------------------------------------- output: which hypothesis is reported
+
+
+@dataclass(frozen=True)
+class LeastContradicted:
+    """Our reading (the paper draws every hypothesis, Figs. 3-5): the hypothesis least
+    contradicted by Alg. 1's own pruning criterion: covered by a visible person first (it
+    explains the missing detection), then fewest frames in plain view, then velocity >
+    occluder > still."""
+
+    def choose(self, kinds: list[str], exposed: list[int], covered: list[bool]) -> int:
+        """Index of the reported hypothesis among a hidden person's branches."""
+        return min(range(len(kinds)),
+                   key=lambda i: (not covered[i], exposed[i], PRIORITY.get(kinds[i], 0)))
+
+
+@dataclass(frozen=True)
+class FirstHypothesis:
+    """The other reading: hypothesis 1 (velocity, the one Alg. 1 makes for every missing
+    person) while it lives, then occluder, then still."""
+
+    def choose(self, kinds: list[str], exposed: list[int], covered: list[bool]) -> int:
+        return min(range(len(kinds)), key=lambda i: PRIORITY.get(kinds[i], 0))
 
 
 @dataclass(frozen=True)
@@ -228,30 +334,48 @@ class ReportRule:
 
 
 class Rules(NamedTuple):
-    """One rule per step an adaptation changes."""
+    """One rule per step an adaptation (or a reading) changes."""
 
     pixels: AllPixels | ForegroundPixels
     gate: FixedGate | KalmanGate
+    stage2: EveryNodeInStage2 | ConfirmedInStage2
     stage1_appearance: AbsoluteAppearance | AppearanceMargin
+    motion: CentreState | BoxState  # M's state (3.2)
+    motion_behind: PredictedBehind | CorrectedBehind
     appearance_behind: KeepAppearance | BlendVisible
     shape_behind: PredictionShape | EstimateShape
+    identity: NewIdentity | HiddenIdentity  # the id a confirmed track takes
     support: NoSupport | ForegroundSupport
     presence: NoPresence | ForegroundPresence  # what contradicts a hypothesis (Alg. 1)
+    duplicates: KeepDuplicates | MergeDuplicates
+    choice: LeastContradicted | FirstHypothesis  # which hypothesis is reported (a reading)
     report: ReportRule
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
 
 
-def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer) -> Rules:
-    """The rules ``adaptations`` selects (``Adaptations.paper()``: the paper's everywhere)."""
+def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
+                motion: MotionModel | None = None, life_cycle: LifeCycle | None = None) -> Rules:
+    """The rules ``adaptations`` selects (``Adaptations.paper()``: the paper's everywhere),
+    M's state over the ``motion`` noises, and ``life_cycle``'s reported hypothesis (the
+    groups' defaults when None)."""
     a = adaptations
+    motion = MotionModel() if motion is None else motion
+    life_cycle = LifeCycle() if life_cycle is None else life_cycle
+    first = life_cycle.reported_hypothesis == "first"
     return Rules(
         pixels=ForegroundPixels() if a.foreground_histograms else AllPixels(),
         gate=KalmanGate(a.gate_sigmas) if a.gate_sigmas > 0 else FixedGate(),
+        stage2=ConfirmedInStage2() if a.tentative_stage1_only else EveryNodeInStage2(),
         stage1_appearance=AppearanceMargin() if a.appearance_margin else AbsoluteAppearance(),
+        motion=BoxState(motion) if a.filter_size else CentreState(motion),
+        motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
+        identity=HiddenIdentity() if a.inherit_hidden_id else NewIdentity(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
         presence=ForegroundPresence(histograms) if a.foreground_presence else NoPresence(),
+        duplicates=MergeDuplicates() if a.merge_duplicates else KeepDuplicates(),
+        choice=FirstHypothesis() if first else LeastContradicted(),
         report=ReportRule(a.report_exposed, a.report_spread),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )

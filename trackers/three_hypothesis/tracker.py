@@ -19,17 +19,15 @@
 Readings of what the paper leaves open (not switchable): shapes are the axis-aligned
 ellipses inscribed in the detection boxes (phi = 0); pairs with rho < mu_rho are excluded
 before the Hungarian step, and leaving a person unmatched costs the largest acceptable pair
-cost (``association``); a tentative track is matched in stage 1 only (it has no velocity to
-justify a jump through the gate); "contradictory" hypotheses are those in plain view (less
-than ``LifeCycle.cover`` of the region hidden by a visible person) for m frames in a row; a
+cost (``association``); "contradictory" hypotheses are those in plain view (less than
+``LifeCycle.cover`` of the region hidden by a visible person) for m frames in a row; a
 hypothesis whose centre leaves the image ends; eq. 3 on a tie or unknown order puts the
-region with the lower bottom edge in front; a track confirmed where a hidden person's
-hypothesis stands (IoU >= 0.5) is that person come back (Fig. 3, ID -14). The rules the
-paper does not have are ``params.Adaptations``, applied through ``rules``.
+region with the lower bottom edge in front. Readings with a switch: ``LifeCycle``'s
+``confirm_frames`` and ``reported_hypothesis``. The rules the paper does not have are
+``params.Adaptations``, applied through ``rules``; ``docs/adaptations.md`` lists them all.
 
-Output per person per frame: CONFIRMED (matched), OCCLUDED (the best hypothesis of a hidden
-confirmed person: covered by a visible person first, then fewest frames in plain view, then
-velocity > occluder > still; ``rules.ReportRule`` decides whether it is reported),
+Output per person per frame: CONFIRMED (matched), OCCLUDED (one hypothesis of a hidden
+confirmed person, ``rules.choice``; ``rules.ReportRule`` decides whether it is reported),
 HYPOTHESIS (its other hypotheses), TENTATIVE. ``Track.extra`` holds {'ellipse',
 'hypothesis', 'occluder', 'depth', 'node'}. Boxes are (N, 4) float64 xywh, 0-based pixels.
 """
@@ -42,19 +40,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trackers.common.checks import parameter_group
-from trackers.geometry import iou_matrix, valid_boxes
+from trackers.geometry import valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.association import Matches, associate
 from trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE, Node, TrackingGraph
-from trackers.three_hypothesis.motion import (
-    MotionModel,
-    box_measurements,
-    correct,
-    predict,
-    state_boxes,
-)
+from trackers.three_hypothesis.motion import MotionModel, box_measurements, state_boxes
 from trackers.three_hypothesis.occlusion import (
     boxes_meet,
     covered_fraction,
@@ -177,8 +169,7 @@ class RetaTracker:
         self.histograms = EllipseHistogrammer(bins=self.appearance.bins,
                                               min_foreground=self.appearance.min_foreground,
                                               stride=self.appearance.pixel_stride)
-        self.rules = build_rules(self.adaptations, self.histograms)
-        _, _, self._F, self._H, _, _ = self.motion.init(np.array([0.0, 0.0, 10.0, 10.0]))
+        self.rules = build_rules(self.adaptations, self.histograms, self.motion, self.life_cycle)
         self.reset()
 
     def reset(self) -> None:
@@ -265,7 +256,7 @@ class RetaTracker:
                     occ_v[r] = velocity[b.occluder]
         x_set = hyp.set_motion(f.x_prev, kinds, occ_v)
         Qs = np.array([person.Q for person in persons for _ in person.branches])
-        f.Xp, f.Pp = predict(x_set, P_prev, self._F, Qs)
+        f.Xp, f.Pp = self.rules.motion.predict(x_set, P_prev, Qs)
         f.pred = state_boxes(f.Xp)
 
     def _occlusions(self, f: _Frame) -> None:
@@ -297,7 +288,8 @@ class RetaTracker:
         a = self.association
         f.matches = m = associate(
             f.pred, f.owners, sqrt_q, f.dets, sqrt_p, a.mu_rho, a.mu_g, delta=f.delta,
-            gated=np.array([person.confirmed for person in persons], dtype=bool),
+            gated=self.rules.stage2.entrants(
+                np.array([person.confirmed for person in persons], dtype=bool)),
             gate=self.rules.gate.radii(f.Pp, R),
             evidence=self.rules.stage1_appearance.evidence)
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
@@ -331,13 +323,12 @@ class RetaTracker:
     def _update_matched(self, f: _Frame) -> list[_Person]:
         """UpdateAttributes(N_o^t) (3.3.3) of every matched person, in person order.
 
-        M is corrected by the whole measurement (centre and size, so the size and its rate
-        stay tied to what is measured). A person absent from any occlusion takes the
-        measurement's q and S; one behind another keeps q and takes S from its prediction
-        area (``rules.appearance_behind`` and ``rules.shape_behind``). A person matched
-        through a hypothesis keeps its id and loses its other hypotheses; a tentative track
-        is confirmed after ``confirm_frames`` matches, as the hidden person whose
-        hypothesis it stands on if there is one (Fig. 3, ID -14)."""
+        M is corrected by the measurement (``rules.motion``; one behind others by
+        ``rules.motion_behind``). A person absent from any occlusion takes the measurement's
+        q and S; one behind another keeps q and takes S from its prediction area
+        (``rules.appearance_behind`` and ``rules.shape_behind``). A person matched through a
+        hypothesis keeps its id and loses its other hypotheses; a tentative track is
+        confirmed after ``confirm_frames`` matches, with the id ``rules.identity`` gives."""
         rows = sorted(f.matched.items())
         f.visible = np.zeros((0, 4))
         if not rows:
@@ -350,7 +341,9 @@ class RetaTracker:
         behind = np.array([n in in_front for _, (_, n, _, _) in rows])
         z = box_measurements(dbox)
         Rs = np.array([persons[i].R for i, _ in rows])
-        Xc, Pc = correct(f.Xp[idx], f.Pp[idx], z, self._H, Rs)  # x = x + K y, Joseph P
+        predicted = f.Xp[idx], f.Pp[idx]
+        Xc, Pc = rules.motion_behind.update(rules.motion.correct(*predicted, z, Rs), predicted,
+                                            behind)  # x = x + K y, Joseph P
         estimate = state_boxes(Xc).tolist()
         tent = [d for i, (d, _, _, _) in rows if not persons[i].confirmed]
         empty = rules.support.empty(f.foreground, dets[tent]) if tent else None
@@ -427,7 +420,7 @@ class RetaTracker:
         plain view (less than ``cover`` of it hidden by a person visible at t, or, with
         ``rules.support``, seen empty) for m frames in a row is contradicted by the missing
         detection and removed (with ``rules.presence``, frames it spends on foreground do not
-        count); of two at the same place the preferred kind stays; a
+        count); of two at the same place ``rules.duplicates`` may keep one; a
         tentative track missed more than ``tentative_misses`` frames is a false positive;
         a person hidden more than ``max_hidden`` frames, or with no hypothesis left, ends.
         Returns the persons kept, their hypotheses added to the graph."""
@@ -461,8 +454,8 @@ class RetaTracker:
                 b.exposed = 0 if c else b.exposed + (0 if held_k else 1)
                 if g or b.exposed >= m:
                     continue
-                if any(max(abs(u - v) for u, v in zip(corner, kc)) < 0.5 for kc in kept_corners):
-                    continue  # the same place twice: keep the preferred kind
+                if self.rules.duplicates.duplicate(corner, kept_corners):
+                    continue
                 kept.append(b)
                 kept_boxes.append(box)
                 kept_corners.append(corner)
@@ -484,7 +477,7 @@ class RetaTracker:
         frames (at once when ``confirm_frames`` is 1)."""
         out: list[_Person] = []
         for d in f.matches.unmatched_measurements:
-            x0, P0, _, _, Q0, R0 = self.motion.init(f.dets[d])
+            x0, P0, Q0, R0 = self.rules.motion.init(f.dets[d])
             person = _Person(self._next_key, f.p[d], Q0, R0, [_Branch(VISIBLE, x0, P0)],
                              shape=f.dets[d])
             self._next_key += 1
@@ -536,17 +529,13 @@ class RetaTracker:
         return fraction
 
     def _confirm(self, f: _Frame, person: _Person, shape: np.ndarray) -> None:
-        """A tentative track reaches ``confirm_frames``: it takes a new id, or the id of the
-        hidden confirmed person (unmatched this frame) one of whose hypotheses lies where
-        it stands (IoU >= 0.5), whose other hypotheses are then pruned (Fig. 3, ID -14)."""
-        best, best_iou = None, 0.5
-        ious = iou_matrix(shape[None], f.pred)[0].tolist()
+        """A tentative track reaches ``confirm_frames``: it takes a new id, or (by
+        ``rules.identity``) the id of a hidden confirmed person, unmatched this frame, one of
+        whose hypotheses lies where it stands; that person's hypotheses then end."""
         persons = f.persons
-        for i, iou in zip(f.owners.tolist(), ious):
-            if i in f.matched or i in f.absorbed or not persons[i].confirmed:
-                continue
-            if iou >= best_iou:
-                best, best_iou = i, iou
+        candidate = np.array([person.confirmed and i not in f.matched and i not in f.absorbed
+                              for i, person in enumerate(persons)], dtype=bool)
+        best = self.rules.identity.returning(shape, f.pred, f.owners, candidate)
         if best is not None:
             person.id = persons[best].id
             f.absorbed.add(best)
@@ -594,8 +583,9 @@ class RetaTracker:
             if not person.confirmed:
                 out.append(self._track(person, branches[0], None, TrackState.TENTATIVE))
                 continue
-            best = hyp.best_hypothesis([b.kind for b in branches], [b.exposed for b in branches],
-                                       [b.covered for b in branches])
+            best = self.rules.choice.choose([b.kind for b in branches],
+                                            [b.exposed for b in branches],
+                                            [b.covered for b in branches])
             if not report.reported(branches[best]):
                 best = -1  # drawn (HYPOTHESIS), not reported
             for k, b in enumerate(branches):
