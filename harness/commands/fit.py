@@ -1,4 +1,4 @@
-"""``python -m harness.fit <what> [options]``: fit a model from annotated sequences.
+"""``occbench fit <what> [options]``: fit a model from annotated sequences.
 
 Each subcommand lives in its own module ``harness.fit.<what>`` exposing ``main(argv)``.
 """

@@ -1,1 +1,1 @@
-"""Commands that learn model parameters from annotated data: ``python -m harness.fit <what>``."""
+"""Commands that learn model parameters from annotated data: ``occbench fit <what>``."""

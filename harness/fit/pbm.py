@@ -1,4 +1,4 @@
-"""``python -m harness.fit pbm``: fit the PBM feature-difference models (PBM 2.2, Fig. 3)
+"""``occbench fit pbm``: fit the PBM feature-difference models (PBM 2.2, Fig. 3)
 and learn the feature weights omega of eq. 12 (PBM 4.1).
 
 Models. For every annotated person visible in two consecutive frames, the five parts of
@@ -27,22 +27,38 @@ cross-validated over ``--folds`` folds of whole frame blocks (``--block-frames``
 one sequence), so neighbouring frames do not leak between training and validation. The
 omega with the best mean validation accuracy wins; ties go to the one nearest the uniform
 weights, then to the first in grid order. gamma, threshold and spread are read from
-``--tracker-config`` (default ``conf/tracker/pbm.yaml``).
+``--tracker-config`` (a file, or the name of a ``conf/tracker`` config composed by Hydra,
+e.g. ``pbm_paper``; default ``conf/tracker/pbm.yaml``).
 
 The YAML (for ``conf/tracker/pbm.yaml``'s ``features.models.path``) holds the models and, as
 extra top-level keys that the model loader ignores, ``feature_weights`` and
 ``feature_weights_fit`` (accuracies, grid, folds, sample counts). A PNG shows the fitted
 densities over the histograms of the differences (the paper's Fig. 3).
 
-Sources (any combination):
+Sources (any combination; a real source may name a frame window, ``ROOT@FIRST-LAST``,
+1-based inclusive, original frame numbers):
     --synthetic [NAME ...]   built-in synthetic scenarios (harness.datasets.synthetic)
-    --mot ROOT               MOTChallenge folder(s) with frames and gt (harness.datasets.mot)
+    --mot ROOT[@F-L] ...     MOTChallenge folder(s) with frames and gt (harness.datasets.mot)
+    --caviar ROOT[@F-L] ...  CAVIAR sequence folder(s): video or JPEGs and CVML gt with its
+                             occlusion labels (harness.datasets.caviar)
 
-The foreground is the sequence's exact label image when it has one (synthetic scenes),
-else the whole box (with a warning: area and perimeter then carry no information).
+The foreground (``--foreground``) is what the tracker would get: ``auto`` = the sequence's
+exact label image when it has one (synthetic scenes), else the whole box (with a warning:
+area and perimeter then carry no information); ``mog2`` = the front end's background
+subtraction (``trackers.frontend.BackgroundModel`` at its defaults, which are
+``detector=foreground``'s), for real frames.
+
+Real frames (the models ``tracker=pbm_paper`` ships, ``trackers/layered/data/
+real_uncompensated.yaml``; the frames are the fitting split of docs/generalisation.md)::
+
+    occbench fit pbm --caviar datasets/CAVIAR-OneLeaveShop1cor@1-150 \
+        --mot ../shared/data/CAVIAR-lobby/CAVIAR1-{Walk3-f1096-1378,Browse2-f0548-0749,\
+    Browse4-f0278-0364,Browse_WhileWaiting2-f1405-1894} \
+        --foreground mog2 --tracker-config pbm_paper --no-weights \
+        --out trackers/layered/data/real_uncompensated.yaml --plot models.png
 
 Example:
-    python -m harness.fit pbm --synthetic --seed 1 --out models.yaml --plot models.png
+    occbench fit pbm --synthetic --seed 1 --out models.yaml --plot models.png
 
 Using the learned weights (the command prints the exact line):
     python -m harness tracker.pbm.features.models.path=models.yaml \\
@@ -166,12 +182,17 @@ def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str |
 def _tracker_settings(path: str | Path) -> dict:
     """features.part_weights, matching.match_threshold, adaptations.model_spread and
     features.feature_weights of a tracker config (as ``part_weights``, ...), and its
-    adaptations.motion_compensation (the tracker's default, true, when the key is absent)."""
+    adaptations.motion_compensation (the tracker's default, true, when the key is absent).
+    ``path``: a YAML file, or the name of a ``conf/tracker`` config (its defaults list
+    composed by Hydra)."""
     p = Path(path)
-    try:
-        cfg = yaml.safe_load(p.read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise ValueError(f"cannot read tracker config {p}: {exc}") from exc
+    if p.suffix == "" and (ROOT / "conf" / "tracker" / f"{p}.yaml").is_file():
+        cfg, p = _composed_tracker(str(path)), ROOT / "conf" / "tracker" / f"{p}.yaml"
+    else:
+        try:
+            cfg = yaml.safe_load(p.read_text())
+        except (OSError, yaml.YAMLError) as exc:
+            raise ValueError(f"cannot read tracker config {p}: {exc}") from exc
     out = {}
     for group, key in (("features", "part_weights"), ("matching", "match_threshold"),
                        ("adaptations", "model_spread"), ("features", "feature_weights")):
@@ -183,13 +204,30 @@ def _tracker_settings(path: str | Path) -> dict:
     return out
 
 
+def _composed_tracker(name: str) -> dict:
+    """``conf/tracker/<name>.yaml`` composed by Hydra (its defaults list applied), as a dict."""
+    from hydra import compose, initialize_config_dir
+    from omegaconf import OmegaConf
+
+    import harness  # noqa: F401  (registers the config resolvers)
+
+    with initialize_config_dir(config_dir=str(ROOT / "conf"), version_base=None):
+        cfg = compose(config_name="config", overrides=[f"tracker={name}"])
+    return OmegaConf.to_container(cfg.tracker, resolve=True)
+
+
 def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="occbench fit pbm", description=__doc__.split("\n")[0])
     ap.add_argument("--synthetic", nargs="*", metavar="NAME", default=None,
                     help="synthetic scenarios (no names = the default suite)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the synthetic scenes")
     ap.add_argument("--length", type=int, default=150, help="frames per synthetic scene")
-    ap.add_argument("--mot", nargs="*", default=[], metavar="ROOT", help="MOTChallenge folders")
+    ap.add_argument("--mot", nargs="*", default=[], metavar="ROOT[@F-L]",
+                    help="MOTChallenge folders, optionally with a frame window")
+    ap.add_argument("--caviar", nargs="*", default=[], metavar="ROOT[@F-L]",
+                    help="CAVIAR sequence folders, optionally with a frame window")
+    ap.add_argument("--foreground", choices=("auto", "mog2", "none"), default="auto",
+                    help="foreground the parts are measured on (mog2 for real frames)")
     ap.add_argument("--max-frames", type=int, default=None, help="frames read per sequence")
     ap.add_argument("--min-visibility", type=float, default=0.7)
     ap.add_argument("--bins", type=int, default=4, help="histogram bins per channel")
@@ -218,17 +256,43 @@ def _sequences(args: argparse.Namespace) -> tuple[list, list[str]]:
         names = args.synthetic or list(DEFAULT_SCENARIOS)
         sequences += load_suite(names, seed=args.seed, length=args.length)
         sources.append(f"synthetic scenarios {', '.join(names)} (seed {args.seed}, {args.length} frames)")
-    for root in args.mot:
-        from harness.datasets.mot import load_mot
+    for kind, roots in (("MOT", args.mot), ("CAVIAR", args.caviar)):
+        for spec in roots:
+            root, frames = _window_spec(spec)
+            if kind == "MOT":
+                from harness.datasets.mot import load_mot as load
+            else:
+                from harness.datasets.caviar import load_caviar as load
+            from harness.datasets.base import window
 
-        sequences += load_mot(root)
-        sources.append(f"MOT folder {root}")
+            try:
+                sequences += window(load(root), frames)
+            except (OSError, ValueError) as exc:
+                raise SystemExit(f"occbench fit pbm: {kind} source {spec}: {exc}") from exc
+            where = "" if frames is None else f" frames {frames[0]}-{frames[1]}"
+            sources.append(f"{kind} {Path(root).name}{where}")
     return sequences, sources
+
+
+def _window_spec(spec: str) -> tuple[str, list[int] | None]:
+    """``ROOT`` or ``ROOT@FIRST-LAST`` -> (root, [first, last] or None).
+
+    Raises:
+        SystemExit naming the argument when the window is not two integers.
+    """
+    root, at, frames = spec.rpartition("@")
+    if not at:
+        return spec, None
+    try:
+        first, last = (int(v) for v in frames.split("-"))
+    except ValueError:
+        raise SystemExit(f"occbench fit pbm: {spec!r}: a frame window is ROOT@FIRST-LAST") from None
+    return root, [first, last]
 
 
 def _header(args: argparse.Namespace, description: str, n: int, fit: WeightFit | None) -> str:
     """The ``#`` header of the written YAML."""
-    header = (f"PBM feature-difference models (PBM 2.2), written by `python -m harness.fit pbm`.\n"
+    header = (f"PBM feature-difference models (PBM 2.2), written by `occbench fit pbm`.\n"
               f"{description}; {n} frame-to-frame differences per part;\n"
               f"histogram_bins {args.bins}, min visibility {args.min_visibility}.\n"
               "Each entry: a folded Gaussian mixture over |difference| (half_normal = one "
@@ -258,16 +322,19 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     sequences, sources = _sequences(args)
     if not sequences:
-        ap.error("give --synthetic and/or --mot")
+        ap.error("give --synthetic, --mot and/or --caviar")
     tracker = _tracker_settings(args.tracker_config)
     samples = collect_pairs(sequences, args.max_frames, args.min_visibility, args.bins,
                             neighbours=0 if args.no_weights else args.neighbours,
                             radius=args.radius, block_frames=args.block_frames,
-                            motion_compensation=tracker["motion_compensation"])
+                            motion_compensation=tracker["motion_compensation"],
+                            foreground=args.foreground)
     diffs = positive_differences(samples)
     description = "fitted on " + "; ".join(sources)
-    if tracker["motion_compensation"]:
-        description += "; overlap and displacement motion-compensated"
+    description += ("; overlap and displacement motion-compensated" if tracker["motion_compensation"]
+                    else "; uncompensated (eq. 11 against the last frame)")
+    if args.foreground != "auto":
+        description += f"; foreground {args.foreground}"
     models = fit_models(diffs, description)
     fit = None
     if not args.no_weights:

@@ -10,11 +10,13 @@ tracker's gate (what the weight search must tell apart). Used by ``harness.fit.p
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from harness.pipeline.loop import ForegroundProvider
 from trackers.layered.association import feature_differences
 from trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor, centroid_ratios
 
@@ -42,7 +44,9 @@ class PairSamples:
 
 def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibility: float = 0.7,
                   bins: int = 4, neighbours: int = 3, radius: float = 1.0,
-                  block_frames: int = 25, motion_compensation: bool = True) -> PairSamples:
+                  block_frames: int = 25, motion_compensation: bool = True,
+                  foreground: str = "auto", background: Mapping[str, Any] | None = None,
+                  ) -> PairSamples:
     """Positive and negative frame-to-frame pairs of annotated people (PBM 4.1 samples).
 
     Args:
@@ -60,6 +64,11 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
             in frame k-2; none when it was not kept in frame k-2) before the overlap and
             displacement differences are taken, as the tracker moves a target's parts model
             by KF1's constant-velocity prediction.
+        foreground, background: the foreground the parts are measured on, as the
+            tracker gets it (``harness.pipeline.loop.ForegroundProvider``): ``auto`` = the
+            sequence's exact person mask (synthetic scenes), else none (the whole box counts
+            as foreground: area and perimeter then carry no information); ``mog2`` = the
+            front end's background subtraction (real frames), ``background`` its arguments.
     Returns:
         ``PairSamples``; positives are exactly the pairs ``collect_differences`` returns.
     """
@@ -79,18 +88,18 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
         prev = None  # (ids, boxes, features, centroids) of the previous frame
         before: dict[int, np.ndarray] = {}  # id -> centroid, the frame before that
         warned = False
-        n = seq.info.length if max_frames is None else min(seq.info.length, max_frames)
-        for k in range(1, n + 1):
+        frames = seq.frame_numbers()[:max_frames]
+        fg_of = ForegroundProvider(foreground, seq, background)
+        for k in frames:
             frame = seq.frame(k)
             if frame is None:
                 log.warning("%s: no pixels, skipped", seq.info.name)
                 break
-            lab = seq.foreground(k)
-            if lab is None and not warned:
+            fg = fg_of(k, frame, None)
+            if fg is None and not warned:
                 log.warning("%s: no foreground masks; the whole box counts as foreground",
                             seq.info.name)
                 warned = True
-            fg = None if lab is None else lab != 0
             rows = _unoccluded_rows(seq, k, min_visibility)
             ids = table.ids[rows].astype(np.int64)
             boxes = np.asarray(table.boxes[rows], dtype=np.float64)
@@ -109,10 +118,11 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
                     d = feature_differences(model, feats)[ti, ci]  # (K, 6, 5)
                     ds.append(d)
                     pos.append(is_pos)
-                    blocks.append(np.full(len(ti), block_base + (k - 1) // block_frames, np.int64))
+                    blocks.append(np.full(len(ti), block_base + (k - frames[0]) // block_frames,
+                                          np.int64))
                 before = dict(zip(prev[0].tolist(), prev[3]))
             prev = (ids, boxes, feats, cents)
-        block_base += (n - 1) // block_frames + 1
+        block_base += (len(frames) - 1) // block_frames + 1
     if not ds:
         return PairSamples(np.zeros((0, len(FEATURES), N_PARTS)), np.zeros(0, bool),
                            np.zeros(0, np.int64))
@@ -170,7 +180,8 @@ def _pairs(prev_ids: np.ndarray, prev_boxes: np.ndarray, ids: np.ndarray, boxes:
 
 def collect_differences(sequences: Iterable, max_frames: int | None = None,
                         min_visibility: float = 0.7, bins: int = 4,
-                        motion_compensation: bool = True) -> dict[str, np.ndarray]:
+                        motion_compensation: bool = True, foreground: str = "auto",
+                        background: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
     """Frame-to-frame part feature differences of annotated people (eq. 11).
 
     Args:
@@ -179,13 +190,14 @@ def collect_differences(sequences: Iterable, max_frames: int | None = None,
         min_visibility: people below this visibility (when known) or flagged occluded are
             skipped: the models describe unoccluded matches.
         bins: histogram bins per channel (must match the tracker's ``histogram_bins``).
-        motion_compensation: see ``collect_pairs``.
+        motion_compensation, foreground, background: see ``collect_pairs``.
     Returns:
         {feature: (K, 5) differences}.
     """
     return positive_differences(collect_pairs(sequences, max_frames, min_visibility, bins,
                                               neighbours=0,
-                                              motion_compensation=motion_compensation))
+                                              motion_compensation=motion_compensation,
+                                              foreground=foreground, background=background))
 
 
 def positive_differences(samples: PairSamples) -> dict[str, np.ndarray]:

@@ -1,26 +1,39 @@
-"""PBM's evaluation protocol: each target started by hand from its ground-truth box, tracked alone.
+"""PBM's evaluation protocol: each person started by hand from its ground-truth box, then
+followed by the tracker alone, restarts and all.
 
-PBM (Section 3, Table 1) initialises every evaluated person by hand and follows it alone.
-``run_single_target`` does that for any tracker: for each chosen ground-truth person, a
-fresh tracker starts at the person's first ground-truth frame, where its only detection is
-that person's ground-truth box (a fresh tracker reports what it sees on its first frames,
-so the person is followed at once); from the next frame on it gets the detection source's
-detections like any run. The followed identity is the tracker's track that best overlaps
-(IoU >= 0.5) the ground-truth box on that first frame (while the tracker holds it
-tentative, a tracker that gives it a new id at confirmation is followed to that id by the
-same overlap with its last box); the tracker's other tracks (other
-people it starts from detections) are not reported. The person's run ends at its last
-ground-truth frame. Every person's followed boxes go into one result table under the
-person's ground-truth id, so the usual metrics read it: a tracker that drifts onto someone
-else shows up as a false positive or an identity switch of that person.
+PBM (Section 3, Table 1) initialises every evaluated person by hand ("the user just drew a
+bounding box around the chosen target") and follows it alone. ``run_single_target`` does
+that for any tracker: for each chosen ground-truth person, a fresh tracker (a *follower*)
+starts at the person's first ground-truth frame, where its only detection is that person's
+ground-truth box; from the next frame on it gets the detection source's detections like any
+run, and no ground truth. The followed track is the follower's track that best overlaps
+(IoU >= 0.5) the ground-truth box on that first frame (a tracker that gives a tentative
+track a new id at confirmation is followed to that id by the overlap with its last box).
 
-Frames are read and detected once; every tracker and person gets its own copy.
+After that initialisation, which happens once per person, the follower's own ids are
+reported as they are: when the followed track is gone from the follower's output and the
+follower starts a new track (a single-target tracker restarting after losing its person,
+e.g. ``max_targets: 1``), that new track is followed and reported under a new id. A
+follower that drifts onto someone else and restarts thus shows as over-segmentation, more
+IDs per trajectory and, where an id passes between people, ID switches (PBM Table 1's
+columns, ``harness.metrics.paper``). A follower's other tracks (people a multi-target
+tracker starts while its followed track lives) are not reported; PBM itself runs with
+``starts: GivenTargetOnly`` (``trackers.layered.starts``), so it follows its one target
+with no competing or replacing targets. Ids are made unique over the followers of one
+tracker (numbered 1, 2, ... in order of first report); the hand-started track is reported
+from its first frame, restarts as the tracker reports them. A person's follower ends at the
+person's last ground-truth frame.
+
+Frames are read and detected once; every tracker and person gets its own copy. The frames
+run are the sequence's own (``Sequence.frame_numbers``: a ``dataset.frames`` window keeps
+its original numbers).
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -56,6 +69,33 @@ def target_spans(gt: MotTable, targets: Iterable[int] | None = None) -> dict[int
             for i in chosen}
 
 
+@dataclass
+class Follower:
+    """One tracker following one person.
+
+    Attributes:
+        tracker: the follower's own tracker.
+        started: the hand initialisation (its first frame) is done.
+        followed: the tracker id followed now; -1 before the start is picked or after a
+            pick failed.
+        last_box: (4,) xywh of the followed track's last report.
+        tentative: the followed track was TENTATIVE at its last report.
+        hand_started: the followed track is the hand-started one (reported from its first
+            frame whatever its state).
+        seen: every tracker id the follower has output so far.
+        out_ids: tracker id -> reported id.
+    """
+
+    tracker: Tracker
+    started: bool = False
+    followed: int = -1
+    last_box: np.ndarray | None = None
+    tentative: bool = True
+    hand_started: bool = True
+    seen: set[int] = field(default_factory=set)
+    out_ids: dict[int, int] = field(default_factory=dict)
+
+
 def run_single_target(
     builders: Mapping[str, Callable[[], Tracker]],
     sequence: Sequence,
@@ -69,15 +109,16 @@ def run_single_target(
 
     Args:
         builders: tracker name -> a function building a fresh tracker.
-        sequence: a sequence with ground truth.
+        sequence: a sequence with ground truth (a frame window runs its own frames).
         source: detection source for the frames after each person's first.
         foreground, background: as for ``harness.pipeline.loop.run_sequence``.
         progress: progress-bar factory; None shows nothing.
         targets: ground-truth ids to follow; None = every person.
     Returns:
-        name -> ``TrackerOutput`` whose table holds each followed person's boxes under its
-        ground-truth id (0-based xywh). A tracker raising is stopped for every person (its
-        ``error`` set) while the other trackers go on.
+        name -> ``TrackerOutput`` whose table holds every follower's followed tracks (the
+        hand-started one and its restarts, module docstring) under ids unique within the
+        table (0-based xywh). A tracker raising is stopped for every person (its ``error``
+        set) while the other trackers go on.
     Raises:
         RunError: the sequence has no ground truth, or a chosen id is not in it.
     """
@@ -89,11 +130,11 @@ def run_single_target(
     source.start(sequence)
     fg_of = ForegroundProvider(foreground, sequence, background)
     bank = TrackerBank(dict.fromkeys(builders))  # one tracker per person, fed by hand
-    # (tracker name, person) -> (tracker, [followed id, its last box, still tentative])
-    live: dict[tuple[str, int], tuple[Tracker, list]] = {}
+    live: dict[tuple[str, int], Follower] = {}
+    next_id = dict.fromkeys(builders, 1)  # the next reported id of each tracker
     bar = (progress or no_progress)(total=sequence.info.length, desc=name)
     try:
-        for k in range(1, sequence.info.length + 1):
+        for k in sequence.frame_numbers():
             frame = sequence.frame(k)
             dets, mask = source.detect(k, frame)
             dets, _ = clean_detections(dets)
@@ -102,9 +143,26 @@ def run_single_target(
             box_of = dict(zip(gt.ids[here].tolist(), gt.boxes[here]))
             for gid, (first, _) in spans.items():
                 if first == k:
-                    live.update({(t, gid): (builders[t](), []) for t in bank.active})
-            for (t, gid), (tracker, followed) in list(live.items()):
-                _follow(bank, t, gid, k, tracker, followed, box_of, (frame, dets, fg), name)
+                    live.update({(t, gid): Follower(builders[t]()) for t in bank.active})
+            for (t, gid), follower in list(live.items()):
+                if t not in bank.active:  # failed on another person of this frame
+                    continue
+                start = None if follower.started else box_of[gid]
+                inputs = (frame, dets if start is None else Detections(start[None], np.ones(1)), fg)
+                tracks = bank.feed(t, k, inputs, follower.tracker, where=f"frame {k}, target {gid}")
+                if tracks is None:
+                    continue
+                mine = _follow(follower, tracks, start)
+                follower.started = True
+                if start is not None and follower.followed < 0:
+                    log.warning("%s on %s: target %d not started at frame %d (no output box "
+                                "overlaps its ground truth)", t, name, gid, k)
+                for tr in mine:
+                    if tr.id not in follower.out_ids:
+                        follower.out_ids[tr.id] = next_id[t]
+                        next_id[t] += 1
+                bank.report(t, k, [Track(follower.out_ids[tr.id], tr.box, tr.state, tr.score,
+                                         tr.extra) for tr in mine])
             for key in [key for key in live if key[0] not in bank.active
                         or spans[key[1]][1] == k]:  # failed, or the person's last frame
                 del live[key]
@@ -114,48 +172,43 @@ def run_single_target(
     return bank.finish()
 
 
-def _follow(bank: TrackerBank, t: str, gid: int, k: int, tracker: Tracker, followed: list,
-            box_of: dict[int, np.ndarray], inputs: tuple, sequence: str) -> None:
-    """Frame ``k`` of tracker ``t`` following person ``gid``: on the person's first frame
-    its only detection is the person's ground-truth box and the followed id is picked; the
-    followed track's box is reported under ``gid``."""
-    if t not in bank.active:  # failed on another person of this frame
-        return
-    start = not followed
-    if start:
-        inputs = (inputs[0], Detections(box_of[gid][None], np.ones(1)), inputs[2])
-    tracks = bank.feed(t, k, inputs, tracker, where=f"frame {k}, target {gid}")
-    if tracks is None:
-        return
-    if start:
-        followed.extend([_pick(tracks, box_of[gid]), box_of[gid], True])
-        if followed[0] < 0:
-            log.warning("%s on %s: target %d not started at frame %d (no output box overlaps "
-                        "its ground truth)", t, sequence, gid, k)
-    elif followed[2] and followed[0] not in {tr.id for tr in tracks}:
-        followed[0] = _pick(tracks, followed[1])  # confirmed under a new id
-    mine = _relabel(tracks, followed[0], gid)
-    if mine:
-        followed[1] = mine[0].box
-        followed[2] = mine[0].extra["tentative"]
-    bank.report(t, k, mine)
+def _follow(follower: Follower, tracks: list[Track], start: np.ndarray | None) -> list[Track]:
+    """The follower's tracks of one frame -> the followed one to report (at most one).
+
+    ``start``: the person's ground-truth box on its first frame (the hand initialisation:
+    the followed track is picked by overlap), else None. Later, when the followed id is
+    absent, a track the follower never output before is followed instead: the confirmed
+    form of a tentative followed track when one overlaps its last box, else the follower's
+    restart (the new track of lowest id).
+    """
+    now = [t for t in tracks if t.state in _FOLLOWED]
+    ids = {t.id for t in now}
+    if start is not None:
+        follower.followed = _pick(now, start)
+    elif follower.followed not in ids:
+        new = [t for t in now if t.id not in follower.seen]
+        same = _pick(new, follower.last_box) if follower.tentative and new else -1
+        if same >= 0:
+            follower.followed = same  # confirmed under a new id: still the hand-started track
+        elif new:
+            follower.followed = min(t.id for t in new)  # a restart
+            follower.hand_started = False
+    follower.seen |= {t.id for t in tracks}
+    for t in now:
+        if t.id == follower.followed:
+            follower.last_box = np.asarray(t.box, dtype=np.float64)
+            follower.tentative = t.state == TrackState.TENTATIVE
+            hand = follower.hand_started and follower.tentative
+            state = TrackState.CONFIRMED if hand else t.state
+            return [Track(t.id, follower.last_box, state, t.score,
+                          {"tentative": follower.tentative})]
+    return []
 
 
 def _pick(tracks: list[Track], box: np.ndarray) -> int:
-    """The id of the followed-state track best overlapping ``box`` (IoU >= 0.5), else -1."""
-    cands = [t for t in tracks if t.state in _FOLLOWED]
-    if not cands:
+    """The id of the track of ``tracks`` best overlapping ``box`` (IoU >= 0.5), else -1."""
+    if not tracks:
         return -1
-    iou = iou_matrix(np.array([t.box for t in cands]), box[None])[:, 0]
+    iou = iou_matrix(np.array([t.box for t in tracks]), box[None])[:, 0]
     best = int(np.argmax(iou))
-    return cands[best].id if iou[best] >= 0.5 else -1
-
-
-def _relabel(tracks: list[Track], followed: int, gid: int) -> list[Track]:
-    """The followed track's box (at most one) under the ground-truth id, as CONFIRMED
-    (``extra["tentative"]`` tells whether the tracker still held it tentative)."""
-    for t in tracks:
-        if t.id == followed and t.state in _FOLLOWED:
-            return [Track(gid, np.asarray(t.box, dtype=np.float64), TrackState.CONFIRMED,
-                          extra={"tentative": t.state == TrackState.TENTATIVE})]
-    return []
+    return tracks[best].id if iou[best] >= 0.5 else -1

@@ -15,8 +15,10 @@ from trackers.layered.params import (
     StaleParts,
     UpdateParams,
 )
+from trackers.layered.starts import AutoStarts, GivenTargetOnly
 from trackers.layered.tracker import PBMTracker
 
-__all__ = ["Adaptations", "CandidateParams", "FeatureModels", "FeatureParams", "GateParams",
-           "LifeCycleParams", "MatchParams", "NoiseParams", "PBMTracker", "PruneParams",
-           "ReportParams", "SearchParams", "StaleParts", "UpdateParams", "load_feature_models"]
+__all__ = ["Adaptations", "AutoStarts", "CandidateParams", "FeatureModels", "FeatureParams",
+           "GateParams", "GivenTargetOnly", "LifeCycleParams", "MatchParams", "NoiseParams",
+           "PBMTracker", "PruneParams", "ReportParams", "SearchParams", "StaleParts",
+           "UpdateParams", "load_feature_models"]

@@ -240,11 +240,15 @@ def load_feature_models(path: str | Path | None = None) -> FeatureModels:
     """Read models from a YAML file written by ``python -m harness.fit pbm``.
 
     Args:
-        path: YAML file; None = the shipped defaults.
+        path: YAML file; a bare file name that is no file here names one of the shipped
+            models in ``trackers/layered/data/`` (``real_uncompensated.yaml``: fitted on
+            real frames, ``tracker=pbm_paper``'s); None = the shipped defaults.
     Raises:
         ValueError naming the file and key when the content is malformed.
     """
     p = DEFAULT_MODELS_PATH if path is None else Path(path)
+    if path is not None and p.name == str(path) and not p.is_file():
+        p = DEFAULT_MODELS_PATH.with_name(p.name)
     try:
         text = p.read_text()
     except OSError as exc:

@@ -86,6 +86,7 @@ from trackers.layered.search import (
     search_boxes_many,
 )
 from trackers.layered.selection import FrameScores, MultipleResponsePruning
+from trackers.layered.starts import AutoStarts, GivenTargetOnly
 from trackers.layered.targets import (
     Targets,
     dof_from_box,
@@ -117,6 +118,8 @@ class PBMTracker:
             by hand).
         reporting: unfound targets in the output.
         adaptations: every rule the paper does not have (``tracker=pbm_paper``: all off).
+        starts: who may start a target (``trackers.layered.starts``): None = ``AutoStarts``
+            (every person in view); ``GivenTargetOnly`` for the single-target protocol.
     """
 
     def __init__(
@@ -132,6 +135,7 @@ class PBMTracker:
         life_cycle: LifeCycleParams | None = None,
         reporting: ReportParams | None = None,
         adaptations: Adaptations | None = None,
+        starts: AutoStarts | GivenTargetOnly | None = None,
     ) -> None:
         self.features = parameter_group("features", features, FeatureParams)
         self.candidates = parameter_group("candidates", candidates, CandidateParams)
@@ -153,6 +157,7 @@ class PBMTracker:
         self._finder = CandidateFinder(self.candidates)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
         self.rules = build_rules(self.adaptations)
+        self.starts = AutoStarts() if starts is None else starts
         self.reset()
 
     def reset(self) -> None:
@@ -367,15 +372,17 @@ class PBMTracker:
 
     def _start_targets(self, frame: np.ndarray, free: np.ndarray, cand: Candidates,
                        feats: PartFeatures, fg: np.ndarray | None, withheld: np.ndarray | None) -> None:
-        """A TENTATIVE target from each free candidate (new blobs, split heads) that is tall
-        enough (``life_cycle.min_height``), a detection or (``life_cycle.blob_births``) a
-        blob, not withheld (``rules.match``), supported by foreground (``rules.birth``)
-        and overlapping no live
-        target (``life_cycle.new_track_iou``). In the first ``min_hits`` frames targets are
+        """While ``starts`` allows, a TENTATIVE target from each free candidate (new blobs,
+        split heads) that is tall enough (``life_cycle.min_height``), a detection or
+        (``life_cycle.blob_births``) a blob, not withheld (``rules.match``), supported by
+        foreground (``rules.birth``) and overlapping no live target
+        (``life_cycle.new_track_iou``). In the first ``min_hits`` frames targets are
         confirmed at once (people present from the start)."""
         targets, lc = self.targets, self.life_cycle
         live_boxes = targets.boxes if len(free) else None
         for n in free.tolist():  # (the assignment leaves exactly the untaken candidates free)
+            if not self.starts.may_start(self._frame, self._next_id - 1):
+                break
             box = cand.box[n]
             if box[3] < lc.min_height:
                 continue

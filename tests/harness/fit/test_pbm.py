@@ -36,3 +36,21 @@ def test_yaml_round_trip_and_older_files(tmp_path):
         load_feature_weights(bad)
     assert weights_override(fit.weights) == (
         "'tracker.pbm.features.feature_weights={area:0.2,perimeter:0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0}'")
+
+
+def test_fit_command_on_a_synthetic_scene_with_a_composed_paper_tracker(tmp_path):
+    """``occbench fit pbm`` on a tiny synthetic scene, reading gamma, spread and the
+    compensation from ``conf/tracker/pbm_paper.yaml`` composed by Hydra (its defaults list
+    applied): paper mode compares uncompensated features, and the file says so."""
+    from harness.fit.pbm import _tracker_settings, _window_spec, main
+
+    assert _tracker_settings("pbm_paper")["motion_compensation"] is False
+    assert _tracker_settings("pbm_paper")["model_spread"] == 1.0
+    out = tmp_path / "m.yaml"
+    assert main(["--synthetic", "crossing", "--length", "12", "--tracker-config", "pbm_paper",
+                 "--no-weights", "--out", str(out)]) == 0
+    models = load_feature_models(out)
+    assert "uncompensated" in models.description
+    assert _window_spec("a/b@3-40") == ("a/b", [3, 40]) and _window_spec("a/b") == ("a/b", None)
+    with pytest.raises(SystemExit, match="'x@3': a frame window is ROOT@FIRST-LAST"):
+        _window_spec("x@3")

@@ -60,3 +60,32 @@ def test_motion_compensated_pairs_measure_overlap_after_the_previous_step():
     np.testing.assert_array_equal(moved.d[:, same], plain.d[:, same])
     n_first = len(collect_pairs([synthetic.load_scenario("crowd", seed=1, length=2)], neighbours=0))
     np.testing.assert_array_equal(moved.d[:n_first], plain.d[:n_first])
+
+
+def test_a_frame_window_collects_the_pairs_of_its_own_frames():
+    from harness.datasets.base import window
+    from harness.datasets.synthetic import load_scenario
+
+    seq = load_scenario("crowd", seed=1, length=12)
+    # uncompensated: a compensated window's first pair knows no earlier step
+    full = collect_pairs([seq], neighbours=0, motion_compensation=False)
+    head = collect_pairs(window([seq], [1, 8]), neighbours=0, motion_compensation=False)
+    np.testing.assert_array_equal(
+        head.d, collect_pairs([seq], max_frames=8, neighbours=0, motion_compensation=False).d)
+    tail = collect_pairs(window([seq], [5, 12]), neighbours=0, motion_compensation=False)
+    assert 0 < len(tail) < len(full)
+    np.testing.assert_array_equal(tail.d, full.d[-len(tail):])  # the pairs of frames 6-12
+
+
+def test_background_subtraction_foreground_measures_the_same_pairs_differently():
+    """``foreground="mog2"`` (real frames) measures the parts on the front end's background
+    subtraction instead of the exact masks: same pairs, other areas."""
+    from harness.datasets.synthetic import load_scenario
+
+    seq = load_scenario("crossing", seed=1, length=12)
+    exact = collect_pairs([seq], neighbours=0)
+    mog2 = collect_pairs([seq], neighbours=0, foreground="mog2")
+    assert len(mog2) == len(exact) > 0
+    area = FEATURES.index("area")
+    assert not np.array_equal(mog2.d[:, area], exact.d[:, area])
+    assert np.isfinite(mog2.d).all()
