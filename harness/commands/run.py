@@ -101,7 +101,10 @@ def run_app(cfg: DictConfig) -> float:
         from harness.report.tables import comparison, to_text
 
         if not result.metrics.empty:
+            from harness.report.paired import paired_footer
+
             print(to_text(comparison(result.metrics, PRINTED)), end="")
+            print(paired_footer(result.paired), end="")
         print(f"results: {out_dir}")
     if result.failures:
         raise AppError(  # each failure was logged once when it happened

@@ -113,21 +113,11 @@ def clear_matching(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearCounts
         fragmentations, mostly_tracked / partially_tracked / mostly_lost, unique_objects and
         iou_sum filled (identity counts and frames left 0).
     """
-    eps = np.finfo(float).eps
-    pairable = np.flatnonzero(pairs.iou >= iou_threshold - eps)  # entries a match may take
-    matched = pairable[matched_entries(pairs, pairable)]
+    m = clear_matches(pairs, iou_threshold)
+    matched, g, switch, next_frame = m.matched, m.person, m.switch, m.next_frame
     c = ClearCounts(objects=len(pairs.gt_ids), predictions=len(pairs.tracker_ids))
     ids, g_all = np.unique(pairs.gt_ids, return_inverse=True)  # gt person -> index
     n = len(ids)
-    g, t = g_all[pairs.row[matched]], pairs.tracker_ids[pairs.col[matched]]
-    active = np.cumsum((np.diff(pairs.gt_start) > 0) & (np.diff(pairs.tracker_start) > 0))
-    when = active[np.searchsorted(pairs.entry_start, matched, side="right") - 1]
-    order = np.argsort(g, kind="stable")  # each person's matches in time order
-    g, t, when = g[order], t[order], when[order]
-    same, switch, next_frame = (np.zeros(len(g), dtype=bool) for _ in range(3))
-    same[1:] = g[1:] == g[:-1]  # the person's previous match is the one before
-    switch[1:] = same[1:] & (t[1:] != t[:-1])
-    next_frame[1:] = same[1:] & (when[1:] - when[:-1] == 1)
     c.switches = int(switch.sum())
     c.matches = len(matched) - c.switches
     c.misses = c.objects - len(matched)
@@ -143,6 +133,47 @@ def clear_matching(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearCounts
     c.partially_tracked = int(np.sum(ratio >= ML_BELOW)) - c.mostly_tracked
     c.mostly_lost = n - c.mostly_tracked - c.partially_tracked
     return c
+
+
+@dataclass
+class ClearMatches:
+    """The matches of one sequence (``clear_matches``), each person's in time order.
+
+    Attributes:
+        matched: (E,) int64 indices into ``pairs.iou`` of the matched entries, ascending.
+        person: (E,) int64 gt person index (into the sorted unique gt ids) of each match,
+            the matches ordered by person, then time (``order`` maps back).
+        order: (E,) int64 ``matched[order]`` is the match at each position of ``person``.
+        switch: (E,) bool: the match is an identity switch (its tracker id differs from the
+            person's previous match's).
+        next_frame: (E,) bool: the person was matched in the previous scored frame too.
+    """
+
+    matched: np.ndarray
+    person: np.ndarray
+    order: np.ndarray
+    switch: np.ndarray
+    next_frame: np.ndarray
+
+
+def clear_matches(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearMatches:
+    """CLEAR's matching of one sequence (``matched_entries``) and its switches: the one
+    place both the counts (``clear_matching``) and the per-frame timeline
+    (``harness.metrics.timeline``) read."""
+    eps = np.finfo(float).eps
+    pairable = np.flatnonzero(pairs.iou >= iou_threshold - eps)  # entries a match may take
+    matched = pairable[matched_entries(pairs, pairable)]
+    _, g_all = np.unique(pairs.gt_ids, return_inverse=True)  # gt person -> index
+    g, t = g_all[pairs.row[matched]], pairs.tracker_ids[pairs.col[matched]]
+    active = np.cumsum((np.diff(pairs.gt_start) > 0) & (np.diff(pairs.tracker_start) > 0))
+    when = active[np.searchsorted(pairs.entry_start, matched, side="right") - 1]
+    order = np.argsort(g, kind="stable")  # each person's matches in time order
+    g, t, when = g[order], t[order], when[order]
+    same, switch, next_frame = (np.zeros(len(g), dtype=bool) for _ in range(3))
+    same[1:] = g[1:] == g[:-1]  # the person's previous match is the one before
+    switch[1:] = same[1:] & (t[1:] != t[:-1])
+    next_frame[1:] = same[1:] & (when[1:] - when[:-1] == 1)
+    return ClearMatches(matched, g, order, switch, next_frame)
 
 
 def matched_entries(pairs: FramePairs, pairable: np.ndarray) -> np.ndarray:

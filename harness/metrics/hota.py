@@ -106,6 +106,32 @@ def hota_counts(pairs: FramePairs) -> HotaCounts:
     if len(pairs.gt_ids) == 0:
         res.fp[:] = len(pairs.tracker_ids)
         return res
+    m = hota_matches(pairs, res)
+    association(res, m.pair, m.sim, m.g_count, m.t_count)
+    return res
+
+
+@dataclass
+class HotaMatches:
+    """Step 2's matches of one sequence (``hota_matches``).
+
+    Attributes:
+        pair, sim, frame: (K,) int64 id-pair index, float64 similarity and int64 frame index
+            (into ``FramePairs.frames``) of each matched box pair with similarity > 0.
+        g_count, t_count: (P,) float64 boxes of the gt id and of the tracker id of each pair.
+    """
+
+    pair: np.ndarray
+    sim: np.ndarray
+    frame: np.ndarray
+    g_count: np.ndarray
+    t_count: np.ndarray
+
+
+def hota_matches(pairs: FramePairs, res: HotaCounts) -> HotaMatches:
+    """Steps 1 and 2 on a sequence with gt and tracker boxes: the global alignment and the
+    per-frame matches; adds TP, FN, FP and LocA to ``res`` (``match_frames``). Read by
+    ``hota_counts`` and by the per-frame timeline (``harness.metrics.timeline``)."""
     # contiguous id indices (TrackEval relabels the same way)
     g_uniq, g_idx = np.unique(pairs.gt_ids, return_inverse=True)
     t_uniq, t_idx = np.unique(pairs.tracker_ids, return_inverse=True)
@@ -116,9 +142,8 @@ def hota_counts(pairs: FramePairs) -> HotaCounts:
     pair_codes, pair_of_entry = np.unique(codes, return_inverse=True)
     pg, pt = np.divmod(pair_codes, len(t_uniq))
     alignment = global_alignment(pairs, pair_of_entry, len(pair_codes), g_count[pg], t_count[pt])
-    matched_pair, matched_sim = match_frames(pairs, alignment, pair_of_entry, res)
-    association(res, matched_pair, matched_sim, g_count[pg], t_count[pt])
-    return res
+    pair, sim, frame = match_frames(pairs, alignment, pair_of_entry, res)
+    return HotaMatches(pair, sim, frame, g_count[pg], t_count[pt])
 
 
 def global_alignment(pairs: FramePairs, pair_of_entry: np.ndarray, n_pairs: int,
@@ -147,10 +172,12 @@ def match_frames(pairs: FramePairs, alignment: np.ndarray, pair_of_entry: np.nda
     adds TP, FN, FP and LocA's sums per alpha to ``res``.
 
     Returns:
-        (K,) pair index and (K,) similarity of the matched boxes with similarity > 0.
+        (K,) pair index, (K,) similarity and (K,) frame index of the matched boxes with
+        similarity > 0.
     """
     loc_sum = np.zeros(len(ALPHAS))
     match_pair, match_sim = [np.zeros(0, np.int64)], [np.zeros(0)]
+    match_frame = [np.zeros(0, np.int64)]
     for k in range(len(pairs)):
         _, _, s = pairs.frame(k)
         n, m = s.shape
@@ -174,8 +201,9 @@ def match_frames(pairs: FramePairs, alignment: np.ndarray, pair_of_entry: np.nda
         hit = sims > 0
         match_pair.append(pair_index[rows[hit], cols[hit]])
         match_sim.append(sims[hit])
+        match_frame.append(np.full(int(hit.sum()), k, np.int64))
     res.loc_a = np.maximum(1e-10, loc_sum) / np.maximum(1e-10, res.tp)
-    return np.concatenate(match_pair), np.concatenate(match_sim)
+    return np.concatenate(match_pair), np.concatenate(match_sim), np.concatenate(match_frame)
 
 
 def association(res: HotaCounts, matched_pair: np.ndarray, matched_sim: np.ndarray,
@@ -184,16 +212,24 @@ def association(res: HotaCounts, matched_pair: np.ndarray, matched_sim: np.ndarr
     the pairs ever matched), written into ``res``."""
     if len(matched_pair) == 0:
         return
-    used, inv = np.unique(matched_pair, return_inverse=True)
-    ok = matched_sim[None, :] >= ALPHAS[:, None] - _EPS  # (19, K)
-    counts = np.stack(
-        [np.bincount(inv, weights=ok[a], minlength=len(used)) for a in range(len(ALPHAS))]
-    )  # (19, P) matches per (g, t) pair and alpha
+    used, _, counts = pair_match_counts(matched_pair, matched_sim)
     tp = np.maximum(1.0, res.tp)
     g_c, t_c = g_count[used][None, :], t_count[used][None, :]
     res.ass_a = (counts * counts / np.maximum(1.0, g_c + t_c - counts)).sum(1) / tp
     res.ass_re = (counts * counts / np.maximum(1.0, g_c)).sum(1) / tp
     res.ass_pr = (counts * counts / np.maximum(1.0, t_c)).sum(1) / tp
+
+
+def pair_match_counts(matched_pair: np.ndarray, matched_sim: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The id pairs ever matched: (P,) pair indices, (K,) each match's position among them,
+    and (19, P) float64 matches per pair and alpha (|TPA| of step 3)."""
+    used, inv = np.unique(matched_pair, return_inverse=True)
+    ok = matched_sim[None, :] >= ALPHAS[:, None] - _EPS  # (19, K)
+    counts = np.stack(
+        [np.bincount(inv, weights=ok[a], minlength=len(used)) for a in range(len(ALPHAS))]
+    )  # (19, P) matches per (g, t) pair and alpha
+    return used, inv, counts
 
 
 def combine_hota(parts: Sequence[HotaCounts]) -> HotaCounts:

@@ -80,8 +80,16 @@ def max_weight_matching(g: np.ndarray, t: np.ndarray, w: np.ndarray) -> np.ndarr
     return np.sort(np.concatenate(chosen))
 
 
+def identity_pairs(pairs: FramePairs, iou_threshold: float = 0.5
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The identity mapping: (K,) int64 gt ids, (K,) tracker ids and (K,) int64 IDTP of each
+    pair the maximum-weight matching keeps (see the module docstring)."""
+    g, t, count = overlap_counts(pairs, iou_threshold)
+    kept = max_weight_matching(g, t, count)
+    return g[kept], t[kept], count[kept]
+
+
 def identity_counts(pairs: FramePairs, iou_threshold: float = 0.5) -> tuple[int, int, int]:
     """(IDTP, IDFP, IDFN) of one sequence (see the module docstring)."""
-    g, t, count = overlap_counts(pairs, iou_threshold)
-    idtp = int(count[max_weight_matching(g, t, count)].sum())
+    idtp = int(identity_pairs(pairs, iou_threshold)[2].sum())
     return idtp, len(pairs.tracker_ids) - idtp, len(pairs.gt_ids) - idtp

@@ -49,6 +49,7 @@ class ExperimentResult:
         timings: per tracker and sequence: frames, seconds, frames/s (``timings.csv``).
         out_dir: the run directory.
         trackers: names of the trackers run, in order (then the external names).
+        paired: ``harness.metrics.paired.PairedDifference`` of every pair of trackers.
     """
 
     metrics: pd.DataFrame
@@ -56,6 +57,7 @@ class ExperimentResult:
     timings: pd.DataFrame
     out_dir: Path
     trackers: list[str] = field(default_factory=list)
+    paired: list[Any] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -127,7 +129,7 @@ def run_experiment(
     import pandas as pd
 
     return ExperimentResult(record.metrics, record.failures, pd.DataFrame(record.timings),
-                            plan.writer.out_dir, plan.names)
+                            plan.writer.out_dir, plan.names, record.paired)
 
 
 def track_sequence(plan: RunPlan, seq: Sequence,

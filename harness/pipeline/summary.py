@@ -56,8 +56,9 @@ def run_status(state: str, done: int, total: int, failures: list[Failure]) -> st
 
 def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                      columns: list[str] | None = None, title: str = "",
-                     status: str | None = None) -> str:
-    """``summary.md``: the COMBINED comparison, per-sequence tables, and failures; opened by
+                     status: str | None = None, paired: str = "") -> str:
+    """``summary.md``: the COMBINED comparison, per-sequence tables, the ``paired``
+    differences section (``harness.report.paired.paired_markdown``) and failures; opened by
     ``status`` (``run_status``) when the run is incomplete or partly failed."""
     from harness.report.tables import comparison, direction, per_sequence, to_markdown
 
@@ -84,6 +85,8 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
         for metric in [m for m in ("IDF1", "HOTA", "MOTA") if m in metrics.columns]:
             lines += [f"## {metric} per sequence", "",
                       to_markdown(per_sequence(metrics, metric, seqs), sense=direction(metric))]
+        if paired:
+            lines += [paired]
     if failures:
         lines += ["## Failures", ""]
         lines += [f"- [{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}"
