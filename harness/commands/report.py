@@ -5,7 +5,9 @@ finished run, written into the run directory.
   drawn its own way, side by side (``harness.report.video``; the trackers are run again with
   the run's saved config, so the drawings show the run's tracks);
 * ``plots/trajectory_<sequence>_<person>.png``: the most occluded ground-truth person's path
-  beside the ids that followed it (``harness.report.trajectories``).
+  beside the ids that followed it (``harness.report.trajectories``);
+* ``report.html`` written again (``harness.report.html``), now with the video playing beside
+  the error timelines and the new plots.
 
 Each part can be skipped (``--no-video``, ``--no-trajectories``); ``--sequence`` picks the
 sequence (default: the run's first). For other outputs use the two modules directly.
@@ -49,7 +51,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         from harness.report import trajectories
 
         status = max(status, trajectories.main([str(args.run_dir), *common]))
+    if (args.run_dir / "metrics.csv").is_file():  # the page again, with the video and plots
+        from harness.report.html import write_run_report
+
+        seq = args.sequence or _first_sequence(args.run_dir)
+        first = {seq: args.frames[0]} if args.frames else None
+        try:
+            print(f"page: {write_run_report(args.run_dir, first=first)}")
+        except (OSError, ValueError) as err:
+            print(f"error: report.html: {err}", file=sys.stderr)
+            status = max(status, 2)
     return status
+
+
+def _first_sequence(run_dir: Path) -> str:
+    """The run's first sequence (``gt/seqmap.txt``: a header, then one name a line), the one
+    the video shows without ``--sequence``."""
+    path = run_dir / "gt" / "seqmap.txt"
+    names = path.read_text().split()[1:] if path.is_file() else []
+    return names[0] if names else ""
 
 
 if __name__ == "__main__":

@@ -63,6 +63,8 @@ class RunRecord:
         self.failures: list[Failure] = []
         self.timings: list[dict[str, Any]] = []
         self.metrics: pd.DataFrame | None = None  # pandas is imported after the first frames
+        self.frames: dict[str, dict[str, Any]] = {n: {} for n in plan.names}  # FrameCounts
+        self.paired: list[Any] = []  # PairedDifference of every pair of trackers
         self.tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
         self.expected = sum(1 for s in plan.sequences if s.gt is not None)  # can be scored
 
@@ -98,10 +100,21 @@ class RunRecord:
         except OSError as err:
             self.fail("*", sname, "metrics", err)
         status = run_status(state, done, len(self.plan.sequences), self.failures)
+        try:  # the paired differences (summary.md's section, the printed footer) once the
+            # run has ended: 1000 resamples per pair are not redone after every sequence
+            from harness.metrics.paired import all_pairs
+
+            self.paired = all_pairs(self.frames) if state != "running" else []
+        except Exception as err:  # noqa: BLE001 - recorded, the summary is written without
+            self.paired = []
+            self.fail("*", sname, "paired", err, traceback.format_exc())
         try:
+            from harness.report.paired import paired_markdown
+
             self.writer.text("summary.md", summary_markdown(frame, self.failures,
                                                             self.plan.table_columns,
-                                                            self.plan.title, status))
+                                                            self.plan.title, status,
+                                                            paired_markdown(self.paired)))
         except OSError as err:
             self.fail("*", sname, "summary", err)
         return frame
@@ -157,6 +170,12 @@ class RunRecord:
         self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
         self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
                                             plan.hidden_below)
+        from harness.metrics.timeline import frame_counts  # the report's timeline, paired
+
+        try:
+            self.frames[n][sname] = frame_counts(seq.gt.table, table, plan.iou_threshold)
+        except Exception as err:  # noqa: BLE001 - recorded, the scores stand
+            self.fail(n, sname, "timeline", err, traceback.format_exc())
 
     def sequence_done(self, sname: str) -> None:
         """After each sequence: timings.csv, and metrics.csv and summary.md as running."""
@@ -216,6 +235,12 @@ class RunRecord:
             self.publish("finished")
         except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
             self.fail("*", "*", "metrics", err, traceback.format_exc())
+        try:  # the page of the run, last: it shows every output above
+            from harness.report.html import write_run_report
+
+            write_run_report(writer.out_dir, self.frames, plan.title)
+        except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
+            self.fail("*", "*", "report.html", err, traceback.format_exc())
 
 
 def read_external(name: str, folder: Path, sequence: str,

@@ -54,7 +54,8 @@ class RunWriter:
     that TrackEval re-scores as it is; ``metrics.csv`` and ``summary.md`` (rewritten after
     each sequence), ``timings.csv``, ``errors.txt`` (only when something failed),
     ``summary.tex`` (COMBINED LaTeX table), ``hota_alpha.csv`` (HOTA and its sub-metrics at
-    each alpha) and ``plots/`` (``metrics.png``, ``hota_alpha.png``) at the end.
+    each alpha), ``plots/`` (``metrics.png``, ``hota_alpha.png``) and ``report.html``
+    (``harness.report.html``) at the end.
     """
 
     #: everything a run writes into its folder, by top-level name: the writer, the plots,
@@ -66,7 +67,7 @@ class RunWriter:
     #: and the run lock are not the writer's and stay.
     OWNED = ("config.yaml", "tracks", "gt", "metrics.csv", "summary.md", "summary.tex",
              "timings.csv", "errors.txt", "hota_alpha.csv", "plots", "report",
-             "paper_table.md", "paper_table.csv")
+             "paper_table.md", "paper_table.csv", "report.html")
 
     def __init__(self, out_dir: str | Path) -> None:
         from harness.pipeline.rundir import busy

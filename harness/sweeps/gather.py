@@ -14,8 +14,8 @@ failure recorded, its outputs fingerprinted).
   done but whose outputs are missing, cut short or changed since (a ``metrics.csv`` truncated
   at a line end included) is ``damaged``, named file by file. Rows are ordered by job number,
   tracker and sequence as the run wrote them, so the table does not depend on the launcher.
-* ``write_sweep(sweep_dir)`` writes ``sweep.csv``, ``sweep.md`` (``harness.sweeps.tables``)
-  and ``plots/`` (``harness.sweeps.plots``).
+* ``write_sweep(sweep_dir)`` writes ``sweep.csv``, ``sweep.md`` (``harness.sweeps.tables``),
+  ``plots/`` (``harness.sweeps.plots``) and ``report.html`` (``harness.report.html``).
 
 The Hydra callback ``harness.sweeps.callbacks.GatherSweep`` calls ``write_sweep`` at the end
 of a multirun; ``occbench sweep <sweep_dir>`` does the same by hand and exits 1 when any job
@@ -215,6 +215,12 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
             plot_sweep(frame, sweep_dir / "plots", metrics)
         except Exception:  # a plot is not worth losing the table for
             log.exception("sweep plots failed")
+    try:  # the sweep's page (harness.report.html); the tables above stand without it
+        from harness.report.html import write_sweep_report
+
+        write_sweep_report(sweep_dir, frame, metrics)
+    except Exception:
+        log.exception("report.html of the sweep failed")
     n_bad = int((frame.drop_duplicates("job")["status"] != DONE).sum()) if len(frame) else 0
     log.info("gathered %d jobs into %s (%d not done)", frame["job"].nunique(),
              sweep_dir / "sweep.csv", n_bad)

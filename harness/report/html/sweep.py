@@ -1,0 +1,154 @@
+"""``report.html`` of a sweep folder: each swept parameter against each metric (mean and 95%
+interval over seeds), the best settings, the paired difference of the best two, the jobs,
+the sweep's plots and the command.
+
+The best settings are ranked on the COMBINED ``objective`` metric of one tracker (the
+sweep's ``objective``: by default IDF1 of the first tracker). The best two are compared on
+the same frames: their jobs are paired by their other values (the seeds), each job's
+sequences are strata of the block bootstrap (``harness.metrics.paired``).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from harness.metrics.paired import Bootstrap, PairedDifference
+from harness.report.html import charts
+from harness.report.html.page import Page, esc, table_html
+from harness.report.paired import NOT_DISTINGUISHABLE, cell
+
+log = logging.getLogger(__name__)
+
+
+def objective_of(sweep_dir: Path, frame: pd.DataFrame) -> tuple[str, str]:
+    """(tracker, metric) the sweep optimises: its jobs' ``objective`` (config.yaml)."""
+    import yaml
+
+    tracker, metric = None, "IDF1"
+    for job in sorted(sweep_dir.glob("*/config.yaml")):
+        obj = (yaml.safe_load(job.read_text()) or {}).get("objective") or {}
+        tracker, metric = obj.get("tracker"), obj.get("metric") or "IDF1"
+        break
+    if tracker is None and "tracker" in frame.columns and frame["tracker"].notna().any():
+        tracker = str(frame["tracker"].dropna().iloc[0])
+    return str(tracker), str(metric)
+
+
+def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFrame:
+    """``aggregate`` of the swept settings of ``tracker``, best ``metric`` first."""
+    from harness.report.tables import direction
+    from harness.sweeps.tables import aggregate, swept
+
+    by = [p for p in swept(frame) if p != "tracker_choice" and not p.endswith("seed")]
+    agg = aggregate(frame, by, [metric])
+    if agg.empty or metric not in agg:
+        return agg
+    agg = agg[agg["tracker"] == tracker] if "tracker" in agg else agg
+    return agg.sort_values(metric, ascending=direction(metric) < 0, kind="stable")
+
+
+def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
+                tracker: str) -> list[PairedDifference]:
+    """The best setting minus the second best, on the frames of jobs paired by seed."""
+    from harness.report.html.run import read_frame_counts
+    from harness.sweeps.tables import COMBINED, DONE, parameters, swept
+
+    if len(best) < 2:
+        return []
+    params = [p for p in swept(frame) if p in best.columns]
+    rest = [p for p in parameters(frame) if p not in params]
+    jobs = frame[(frame["status"] == DONE) & (frame["sequence"] == COMBINED)
+                 & (frame["tracker"] == tracker)]
+    sides: list[dict[str, Any]] = [{}, {}]
+    names = []
+    for side, (_, setting) in zip(sides, best.head(2).iterrows()):
+        names.append(", ".join(f"{p}={setting[p]}" for p in params))
+        mine = jobs[(jobs[params].astype(str) == setting[params].astype(str)).all(axis=1)]
+        for job in mine.itertuples():
+            key = "/".join(str(getattr(job, p, "")) for p in rest)
+            counts = read_frame_counts(sweep_dir / str(job.job)).get(tracker, {})
+            side.update({f"{key}/{s}": c for s, c in counts.items()})
+    try:
+        return Bootstrap().compare(sides[0], sides[1], (f"best ({names[0]})",
+                                                        f"second ({names[1]})"))
+    except ValueError as err:  # no replicate in common
+        log.warning("paired comparison of the best two settings: %s", err)
+        return []
+
+
+def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame,
+                       metrics: Sequence[str]) -> Path:
+    """Write ``<sweep_dir>/report.html`` from the gathered ``frame`` (``gather``)."""
+    from harness.sweeps.tables import aggregate, plot_axes, setting_table
+
+    sweep_dir = Path(sweep_dir)
+    page = Page(f"occbench sweep {sweep_dir.name}")
+    jobs = frame.drop_duplicates("job") if "job" in frame else frame
+    page.text(f"Sweep folder: {sweep_dir.resolve()}; {len(jobs)} jobs.")
+    shown = [m for m in metrics if m in frame.columns]
+    tracker, objective = objective_of(sweep_dir, frame)
+    best = best_settings(frame, tracker, objective)
+    page.section("best", "Best settings")
+    if not best.empty:
+        page.text(f"Ranked on the COMBINED {objective} of {tracker} (the sweep's objective), "
+                  "mean ± 95% interval over seeds (n jobs each).")
+        page.add(table_html(best.head(10).reset_index(drop=True)))
+    diffs = paired_best(sweep_dir, frame, best, tracker)
+    if diffs:
+        page.add("<h3>Best minus second best, paired</h3>")
+        page.text(f"{Bootstrap().describe()}; the jobs' sequences (paired by seed) are the "
+                  f"strata. (n.d.): {NOT_DISTINGUISHABLE}.")
+        page.add(table_html(pd.DataFrame([{"A": d.a, "B": d.b, "metric": d.metric,
+                                           "A - B [95%]": cell(d)} for d in diffs])))
+        short = [replace(d, a="best", b="second") for d in diffs]
+        page.chart(charts.paired_forest(short))
+    page.section("parameters", "Each parameter against each metric")
+    for p in plot_axes(frame):
+        agg = aggregate(frame, [p], shown)
+        for m in shown:
+            if not agg.empty and m in agg:
+                page.chart(charts.metric_lines(agg, p, m))
+    page.section("settings", "Settings")
+    page.add(table_html(setting_table(frame, shown)))
+    page.section("jobs", "Jobs")
+    cols = [c for c in ["job", *[c for c in frame.columns if c not in ("job",)]]
+            if c in frame.columns and (c in ("job", "status", "tracker", "sequence", "error")
+                                       or c in shown or c in plot_axes(frame)
+                                       or c.endswith("seed"))]
+    rows = frame[frame["sequence"].isin(["COMBINED"]) | frame["sequence"].isna()] \
+        if "sequence" in frame else frame
+    page.add(table_html(rows[cols]))
+    pngs = sorted((sweep_dir / "plots").glob("*.png"))
+    if pngs:
+        page.section("plots", "Plots")
+        for path in pngs:
+            page.image(path, f"plots/{path.name}")
+    page.section("command", "Command")
+    page.pre(_command(sweep_dir))
+    page.add(f'<p class="note">Each job\'s own page: <code>{esc(sweep_dir.name)}/&lt;job&gt;/'
+             'report.html</code>.</p>')
+    return page.write(sweep_dir / "report.html")
+
+
+def _command(sweep_dir: Path) -> str:
+    """The multirun's command line (Hydra's ``multirun.yaml``), else a hint."""
+    import shlex
+
+    import yaml
+
+    path = sweep_dir / "multirun.yaml"
+    if not path.is_file():
+        return "occbench -m ... (multirun.yaml not found)"
+    h = (yaml.safe_load(path.read_text()) or {}).get("hydra") or {}
+    over = h.get("overrides") or {}
+    cwd = (h.get("runtime") or {}).get("cwd")
+    words = ["occbench", "-m", *(over.get("task") or []),
+             *[o for o in over.get("hydra") or [] if o.startswith("hydra.sweep.dir")]]
+    line = " ".join(shlex.quote(str(w)) for w in words)
+    return f"cd {shlex.quote(str(cwd))} && {line}" if cwd else line
