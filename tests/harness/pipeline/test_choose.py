@@ -36,3 +36,11 @@ def test_reta_table2_with_reta_paper_builds_the_active_basis_search():
     det = source.detector
     assert type(det).__name__ == "ActiveBasisDetector"
     assert det.search.template.n == 30 and det.verifier is None
+
+
+def test_reta_table2_runs_its_particle_filter_row_beside_the_papers_trackers():
+    cfg = compose_config(["+experiment=reta_table2"])
+    assert list(cfg.tracker) == ["baseline", "reta", "reta_paper", "pbm", "pbm_paper",
+                                 "particle_filter"]
+    assert cfg.tracker.particle_filter._target_ == "trackers.comparators.ColourParticleFilter"
+    assert "Basic particle filter [22]" in cfg.paper_table.reported.rows
