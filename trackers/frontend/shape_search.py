@@ -163,8 +163,8 @@ class ShapeSearch:
 
     def __init__(self, template: ActiveBasis, silhouette: str | None = None,
                  min_height: float = 0.1, max_height: float = 0.6, n_scales: int = 12,
-                 threshold: float = 10.0, min_vacant: float = 0.5, occupy_level: float = 0.2,
-                 height_tolerance: float = 1.2, max_people: int = 20, stride: int = 1) -> None:
+                 threshold: float = 10.0, min_vacant: float = 0.7, occupy_level: float = 0.2,
+                 height_tolerance: float = 1.1, max_people: int = 20, stride: int = 1) -> None:
         if not isinstance(template, ActiveBasis):
             raise TypeError(f"template must be an ActiveBasis, got {type(template).__name__}")
         if not 0 < min_height <= max_height <= 1:
