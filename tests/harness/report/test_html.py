@@ -32,6 +32,9 @@ def html_run(tmp_path_factory) -> Path:
     result = run_experiment(cfg, out, tracker_name="all")
     assert result.ok and result.trackers == ["baseline", "reta"]
     assert (out / "report.html").is_file()  # written by the run itself
+    summary = (out / "summary.md").read_text()
+    assert "## Paired differences of trackers" in summary and "| baseline | reta |" in summary
+    assert [d.metric for d in result.paired] == ["IDF1", "HOTA", "MOTA"]
     assert report_main([str(out), "--no-trajectories"]) == 0
     assert (out / "report" / "crossing.mp4").is_file()
     return out
@@ -137,8 +140,10 @@ def test_sweep_page_loads_with_no_error_and_no_network(browser, html_sweep) -> N
     for part in ("Best settings", "Best minus second best", "tracker.max_age",
                  "tracker.min_hits", "HOTA against tracker.min_hits", "occbench -m"):
         assert part in text, part
-    # each swept parameter against each metric: 2 parameters x 5 metrics, and the forest
-    assert page.locator(".chart svg").count() == 2 * 5 + 1
+    # each swept parameter against each metric (the sweep's default ones), and the forest
+    from harness.sweeps.tables import DEFAULT_METRICS
+
+    assert page.locator(".chart svg").count() == 2 * len(DEFAULT_METRICS) + 1
     page.close()
 
 
