@@ -184,10 +184,11 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
         sequence, source: the data and the detection source (as for the runner).
         video: MP4 path, or None for no video.
         sheet: PNG path of the contact sheet, or None.
-        sheet_frames: 1-based frames of the sheet's rows (default: 6 evenly spaced frames
+        sheet_frames: frame numbers of the sheet's rows (default: 6 evenly spaced frames
             of the rendered range).
         show_gt: draw the ground truth (thin white boxes) under each tracker's output.
-        frames: (first, last) 1-based range written to the video (default: all).
+        frames: (first, last) frame numbers written to the video (default: all of the
+            sequence's ``frame_numbers()``, e.g. 151..295 for a ``dataset.frames`` window).
         columns: panels per row in a video frame (default: all side by side).
         scale: resize factor of each panel.
     Returns:
@@ -195,16 +196,18 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
     """
     if not trackers:
         raise ValueError("render: no trackers")
-    n = sequence.info.length
-    first, last = frames or (1, n)
-    if not 1 <= first <= last <= n:
-        raise ValueError(f"frames must satisfy 1 <= first <= last <= {n}, got {(first, last)}")
+    numbers = sequence.frame_numbers()
+    lo, hi = numbers[0], numbers[-1]
+    first, last = frames or (lo, hi)
+    if not lo <= first <= last <= hi:
+        raise ValueError(f"frames must satisfy {lo} <= first <= last <= {hi} (the sequence's "
+                         f"frame numbers), got {(first, last)}")
     if sheet is not None and sheet_frames is None:
         sheet_frames = sorted({int(v) for v in np.linspace(first, last, 6).round()})
     wanted = set(sheet_frames or [])
-    bad = sorted(f for f in wanted if not 1 <= f <= n)
+    bad = sorted(f for f in wanted if not lo <= f <= hi)
     if bad:
-        raise ValueError(f"sheet_frames outside 1..{n}: {bad}")
+        raise ValueError(f"sheet_frames outside {lo}..{hi}: {bad}")
     end = max([last, *wanted])
     graphs = {name: _GraphDrawing.of(t) for name, t in trackers.items()}
     writer = None

@@ -34,6 +34,27 @@ def test_video_and_contact_sheet_side_by_side(tmp_path):
         render(trackers, seq, GtSource(), sheet=tmp_path / "x.png", sheet_frames=[99])
 
 
+def test_a_frame_window_is_rendered_by_its_own_frame_numbers(tmp_path):
+    # dataset.frames=[5,9]: the window's frames keep their numbers 5..9, and so do the video's
+    from harness.datasets.base import window
+    from harness.report.video import render
+    from trackers.baseline import BaselineTracker
+
+    (seq,) = window([Walk()], [5, 9])
+    out = render({"baseline": BaselineTracker(min_hits=1)}, seq, GtSource(), tmp_path / "w.mp4",
+                 tmp_path / "w.png")
+    cap = cv2.VideoCapture(str(out["video"]))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    assert n == 5
+    assert cv2.imread(str(out["sheet"])).shape[0] == 5 * 120  # frames 5, 6, 7, 8, 9
+    with pytest.raises(ValueError, match="5 <= first <= last <= 9"):
+        render({"baseline": BaselineTracker()}, seq, GtSource(), tmp_path / "x.mp4",
+               frames=(1, 4))
+
+
 def test_h264_writer_pads_odd_sizes_and_checks_frames(tmp_path):
     from harness.report.video import H264Writer
 
