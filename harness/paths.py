@@ -54,3 +54,35 @@ def register_resolver() -> None:
 
     if not OmegaConf.has_resolver(RESOLVER):
         OmegaConf.register_new_resolver(RESOLVER, _resolve)
+
+
+#: Keys of a dataset config that name files or folders, relative to the current directory.
+PATH_KEYS = ("root", "path", "gt", "det", "xml", "video", "gt_path")
+
+
+def absolute_paths(node) -> int:
+    """Make every relative file path of a dataset config node (``PATH_KEYS``, at any depth)
+    absolute against the current directory, in place, so that a run folder's config.yaml
+    names its data from anywhere (``occbench report RUN``). Interpolations (the
+    ``occbench.data`` resolver's paths are absolute) and absolute paths are left as they are.
+    Returns how many were changed."""
+    from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
+
+    changed = 0
+    if isinstance(node, DictConfig):
+        for key in list(node.keys()):
+            if OmegaConf.is_interpolation(node, key) or OmegaConf.is_missing(node, key):
+                continue
+            value = node[key]
+            if key in PATH_KEYS and isinstance(value, str) and value:
+                full = os.path.abspath(os.path.expanduser(value))
+                if full != value:
+                    with open_dict(node):
+                        node[key] = full
+                    changed += 1
+            elif isinstance(value, (DictConfig, ListConfig)):
+                changed += absolute_paths(value)
+    elif isinstance(node, ListConfig):
+        for item in node:
+            changed += absolute_paths(item)
+    return changed

@@ -62,7 +62,8 @@ def compose_cfg(*overrides: str):
 
 
 def mot_cfg(root: Path, *overrides: str):
-    return compose_cfg("dataset=mot", f"dataset.root={root}", "tracker=baseline", *overrides)
+    return compose_cfg("dataset=mot", "detector=noisy_gt",
+                       f"dataset.root={root}", "tracker=baseline", *overrides)
 
 
 class BoxSequence(Sequence):

@@ -48,8 +48,10 @@ COMMANDS: dict[str, tuple[str, str, str, bool]] = {
 }
 
 USAGE = f"""\
-usage: {PROG} [COMMAND] [ARGS...]
+usage: {PROG} [-v] [COMMAND] [ARGS...]
        {PROG} --version | --help
+
+-v (or OCCBENCH_VERBOSE=1): a mistake or failure shows its full traceback, not one line.
 
 commands (without one, the arguments go to `run`):
 {{commands}}
@@ -94,12 +96,23 @@ def _resolve(command: str) -> Callable:
     return getattr(importlib.import_module(module), attr)
 
 
-def _call_hydra(app: Callable, prog: str, args: Sequence[str]) -> int:
-    """Run a ``@hydra.main`` app with ``args`` as its command line (Hydra reads sys.argv)."""
+def _call_hydra(app: Callable, prog: str, args: Sequence[str], config_name: str,
+                verbose: bool = False) -> int:
+    """Run a ``@hydra.main`` app with ``args`` as its command line (Hydra reads sys.argv); a
+    config mistake or a refused run is one line on stderr and exit status 1, the traceback
+    only when ``verbose`` (``harness.commands.mistakes``)."""
+    from harness.commands.mistakes import explain, hydra_raises
+
     saved = sys.argv
     sys.argv = [prog, *args]
     try:
-        app()
+        with hydra_raises():
+            app()
+    except Exception as err:  # noqa: BLE001 - every error ends in one line (or a traceback)
+        if verbose:
+            raise
+        print(explain(err, config_name, args), file=sys.stderr)
+        return 1
     finally:
         sys.argv = saved
     return 0
@@ -118,7 +131,9 @@ def _check_checkout() -> str | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``occbench`` and ``python -m harness``; returns the exit status."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    from harness.commands.mistakes import verbose_requested
+
+    verbose, args = verbose_requested(list(sys.argv[1:] if argv is None else argv))
     if args and args[0] in ("-h", "--help", "help"):
         print(usage(), end="")
         return 0
@@ -140,7 +155,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         from harness.sweeps.plugins import check_plugins
 
         check_plugins(args)  # a missing launcher or sweeper names the extra to install
-        return _call_hydra(func, f"{PROG} {command}" if command != "run" else PROG, args)
+        return _call_hydra(func, f"{PROG} {command}" if command != "run" else PROG, args,
+                           "detect" if command == "detect" else "config", verbose)
     return int(func(args) or 0)
 
 

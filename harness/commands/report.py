@@ -5,7 +5,10 @@ finished run, written into the run directory.
   drawn its own way, side by side (``harness.report.video``; the trackers are run again with
   the run's saved config, so the drawings show the run's tracks);
 * ``plots/trajectory_<sequence>_<person>.png``: the most occluded ground-truth person's path
-  beside the ids that followed it (``harness.report.trajectories``);
+  beside the ids that followed it (``harness.report.trajectories``; none for a sequence
+  without ground truth);
+* printed: the tracks per tracker and sequence, their lengths and frames/s
+  (``harness.report.tracks``), with or without ground truth;
 * ``report.html`` written again (``harness.report.html``), now with the video playing beside
   the error timelines and the new plots.
 
@@ -34,6 +37,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-video", action="store_true", help="skip the video and contact sheet")
     p.add_argument("--no-trajectories", action="store_true", help="skip the trajectory plot")
     args = p.parse_args(argv)
+    from harness.report.tracks import tracks_text
+
     if not (args.run_dir / "config.yaml").is_file():
         print(f"error: {args.run_dir / 'config.yaml'} not found (a run directory of "
               "occbench run)", file=sys.stderr)
@@ -61,6 +66,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except (OSError, ValueError) as err:
             print(f"error: report.html: {err}", file=sys.stderr)
             status = max(status, 2)
+    print(tracks_text(counted(args.run_dir)), end="")
     return status
 
 
@@ -70,6 +76,23 @@ def _first_sequence(run_dir: Path) -> str:
     path = run_dir / "gt" / "seqmap.txt"
     names = path.read_text().split()[1:] if path.is_file() else []
     return names[0] if names else ""
+
+
+def counted(run_dir: Path):
+    """Tracks per tracker and sequence of a run, read from its track files and timings.csv
+    (``harness.report.tracks``): what a run without ground truth can say."""
+    import csv
+
+    from harness.io.mot import read_mot
+    from harness.report.tracks import track_rows, track_stats
+
+    stats: dict[str, dict] = {}
+    for folder in sorted(p for p in (run_dir / "tracks").iterdir() if p.is_dir()):
+        for path in sorted(folder.glob("*.txt")):
+            stats.setdefault(folder.name, {})[path.stem] = track_stats(read_mot(path).ids)
+    timings = run_dir / "timings.csv"
+    rows = list(csv.DictReader(timings.open())) if timings.is_file() else []
+    return track_rows(stats, rows)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ config.yaml) and prints the COMBINED comparison table. Examples::
     python -m harness tracker=baseline
     python -m harness dataset=synthetic dataset.scenarios=[stop_behind] dataset.seed=3
     python -m harness detector=noisy_gt detector.miss_rate=0.3
-    python -m harness dataset=mot dataset.root=datasets/trajectories/TUD-Campus dataset.image_size=[640,480] tracker=baseline
+    python -m harness dataset=mot dataset.root=datasets/trajectories/TUD-Campus dataset.image_size=[640,480] detector=noisy_gt tracker=baseline
     python -m harness +external.sort=path/to/results   # score another tracker's files too
 
 The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
@@ -103,8 +103,14 @@ def run_app(cfg: DictConfig) -> float:
         if not result.metrics.empty:
             from harness.report.paired import paired_footer
 
+            print(f"{result.title} (COMBINED)")
             print(to_text(comparison(result.metrics, PRINTED)), end="")
             print(paired_footer(result.paired), end="")
+        if result.tracks is not None:
+            from harness.report.tracks import tracks_text
+
+            print(f"{result.title}: tracks counted, not scored (no ground truth)")
+            print(tracks_text(result.tracks), end="")
         print(f"results: {out_dir}")
     if result.failures:
         raise AppError(  # each failure was logged once when it happened

@@ -50,6 +50,9 @@ class ExperimentResult:
         out_dir: the run directory.
         trackers: names of the trackers run, in order (then the external names).
         paired: ``harness.metrics.paired.PairedDifference`` of every pair of trackers.
+        title: what was run: dataset, sequences, detector (as summary.md opens).
+        tracks: tracks counted per tracker on the sequences without ground truth (None when
+            every sequence has it): ``harness.report.tracks.track_rows``.
     """
 
     metrics: pd.DataFrame
@@ -58,6 +61,8 @@ class ExperimentResult:
     out_dir: Path
     trackers: list[str] = field(default_factory=list)
     paired: list[Any] = field(default_factory=list)
+    title: str = ""
+    tracks: pd.DataFrame | None = None
 
     @property
     def ok(self) -> bool:
@@ -129,7 +134,8 @@ def run_experiment(
     import pandas as pd
 
     return ExperimentResult(record.metrics, record.failures, pd.DataFrame(record.timings),
-                            plan.writer.out_dir, plan.names, record.paired)
+                            plan.writer.out_dir, plan.names, record.paired, plan.title,
+                            record.track_rows())
 
 
 def track_sequence(plan: RunPlan, seq: Sequence,

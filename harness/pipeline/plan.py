@@ -18,6 +18,7 @@ from typing import Any
 from harness.datasets.base import Sequence
 from harness.errors import RunError
 from harness.metrics import COMBINED
+from harness.paths import absolute_paths
 from harness.pipeline.build import (
     build_source,
     build_tracker,
@@ -91,6 +92,7 @@ def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None) -> 
     check_config(cfg)
     writer = RunWriter(out_dir)
     if OmegaConf.is_config(cfg):
+        absolute_paths(cfg_get(cfg, "dataset"))  # resolved once: config.yaml works from anywhere
         try:
             writer.text("config.yaml", OmegaConf.to_yaml(cfg, resolve=True))
         except OSError as err:
@@ -110,15 +112,22 @@ def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None) -> 
         raise RunError(f"protocol.name must be multi or single_target, got {protocol!r}")
     configs, keys = buildable_trackers(cfg_get(cfg, "tracker"), tracker_name)
     externals = external_folders(cfg_get(cfg, "external", {}), configs)
-    build_source(cfg_get(cfg, "detector"))
+    source = build_source(cfg_get(cfg, "detector"), cache=False)
     sequences = load_sequences(cfg_get(cfg, "dataset"))
+    detector = detector_label(source, hydra_choice("detector"))
+    if getattr(source, "needs_pixels", False):
+        frameless = [s.info.name for s in sequences if not s.has_pixels]
+        if frameless:
+            raise RunError(
+                f"detector {detector} reads frames, but {', '.join(frameless)} has none: choose "
+                "detector=noisy_gt (ground truth + noise) or detector=public (det/det.txt)")
     prepare_trackers(configs, sequences)
     names = [*configs, *externals]
     wanted = cfg_get(cfg_get(cfg, "objective", {}), "tracker")
     if wanted is not None and str(wanted) not in names:
         raise RunError(f"objective.tracker={wanted}: not a tracker of this run ({names})")
-    log.info("%d sequence(s) x %d tracker(s) %s, foreground=%s", len(sequences), len(names),
-             names, foreground)
+    log.info("%d sequence(s) x %d tracker(s) %s, detector %s, foreground=%s", len(sequences),
+             len(names), names, detector, foreground)
     return RunPlan(
         writer, foreground, container(cfg_get(cfg, "background", {})),
         float(cfg_get(evaluation, "iou_threshold", 0.5)),
@@ -126,7 +135,8 @@ def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None) -> 
         list(container(cfg_get(evaluation, "table", [])) or []) or None,
         list(container(cfg_get(evaluation, "plot", DEFAULT_METRICS))), graphs, protocol,
         container(cfg_get(protocol_node, "targets", None)), configs, keys,
-        cfg_get(cfg, "detector"), externals, sequences, names, _title(cfg, sequences))
+        cfg_get(cfg, "detector"), externals, sequences, names,
+        _title(cfg, sequences, detector))
 
 
 def buildable_trackers(node: Any, name: str | None) -> tuple[dict[str, Any], dict[str, str]]:
@@ -209,13 +219,21 @@ def external_folders(node: Any, taken: Iterable[str]) -> dict[str, Path]:
     return out
 
 
-def _title(cfg: Any, sequences: list[Sequence]) -> str:
-    def target(key: str) -> str:
-        choice = hydra_choice(key)
-        if choice is not None:
-            return choice
-        node = cfg_get(cfg, key, {})
-        return str(cfg_get(node, "_target_", "?")).rsplit(".", 1)[-1]
+def detector_label(source: Any, choice: str | None) -> str:
+    """The detection source as results name it: its ``label`` (``ground truth + noise``,
+    ``silhouette front end``...) after the config choice that selected it, e.g.
+    ``noisy_gt (ground truth + noise)``; a dataset's default (``default_<dataset>``) by its
+    label alone."""
+    label = getattr(source, "label", None) or type(source).__name__
+    if choice is None or choice.startswith("default_") or str(label).startswith(choice):
+        return str(label)
+    return f"{choice} ({label})"
 
-    return (f"dataset {target('dataset')} ({len(sequences)} sequences), "
-            f"detector {target('detector')}")
+
+def _title(cfg: Any, sequences: list[Sequence], detector: str) -> str:
+    dataset = hydra_choice("dataset")
+    if dataset is None:
+        node = cfg_get(cfg, "dataset", {})
+        dataset = str(cfg_get(node, "_target_", "?")).rsplit(".", 1)[-1]
+    n = len(sequences)
+    return f"dataset {dataset} ({n} sequence{'' if n == 1 else 's'}), detector {detector}"

@@ -67,6 +67,8 @@ class RunRecord:
         self.paired: list[Any] = []  # PairedDifference of every pair of trackers
         self.tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
         self.expected = sum(1 for s in plan.sequences if s.gt is not None)  # can be scored
+        #: per tracker and sequence without ground truth: harness.report.tracks.track_stats
+        self.unscored: dict[str, dict[str, Any]] = {}
 
     def fail(self, tracker: str, sequence: str, stage: str, err: BaseException | str,
              trace: str = "") -> None:
@@ -111,13 +113,20 @@ class RunRecord:
         try:
             from harness.report.paired import paired_markdown
 
-            self.writer.text("summary.md", summary_markdown(frame, self.failures,
-                                                            self.plan.table_columns,
-                                                            self.plan.title, status,
-                                                            paired_markdown(self.paired)))
+            self.writer.text("summary.md", summary_markdown(
+                frame, self.failures, self.plan.table_columns, self.plan.title, status,
+                paired_markdown(self.paired), self.track_rows()))
         except OSError as err:
             self.fail("*", sname, "summary", err)
         return frame
+
+    def track_rows(self) -> pd.DataFrame | None:
+        """Tracks counted on the sequences without ground truth (None: every sequence has)."""
+        if not self.unscored:
+            return None
+        from harness.report.tracks import track_rows
+
+        return track_rows(self.unscored, self.timings)
 
     def sequence(self, seq: Sequence, outputs: dict[str, TrackerOutput]) -> None:
         """Write, time and score every tracker's output on ``seq``, then the externals'."""
@@ -155,7 +164,10 @@ class RunRecord:
             return
         log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
         if seq.gt is None:
-            log.warning("%s has no ground truth: %s not scored", sname, n)
+            from harness.report.tracks import track_stats
+
+            log.info("%s has no ground truth: %s's tracks counted, not scored", sname, n)
+            self.unscored.setdefault(n, {})[sname] = track_stats(out.table.ids)
             return
         try:
             self._score(n, seq, read_mot_text(text, path, kind="result",

@@ -56,10 +56,13 @@ def run_status(state: str, done: int, total: int, failures: list[Failure]) -> st
 
 def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                      columns: list[str] | None = None, title: str = "",
-                     status: str | None = None, paired: str = "") -> str:
+                     status: str | None = None, paired: str = "",
+                     tracks: pd.DataFrame | None = None) -> str:
     """``summary.md``: the COMBINED comparison, per-sequence tables, the ``paired``
     differences section (``harness.report.paired.paired_markdown``) and failures; opened by
-    ``status`` (``run_status``) when the run is incomplete or partly failed."""
+    ``status`` (``run_status``) when the run is incomplete or partly failed; ``tracks``
+    (``harness.report.tracks.track_rows``) counts the tracks of sequences without ground
+    truth."""
     from harness.report.tables import comparison, direction, per_sequence, to_markdown
 
     lines = ["# occbench results", ""]
@@ -67,8 +70,13 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
         lines += [title, ""]
     if status:
         lines += [status, ""]
+    if tracks is not None and not tracks.empty:
+        from harness.report.tracks import tracks_markdown
+
+        lines += tracks_markdown(tracks)
     if metrics.empty:
-        lines += ["No sequence was scored.", ""]
+        if tracks is None or tracks.empty:
+            lines += ["No sequence was scored.", ""]
     else:
         lines += ["## Combined (best per column in bold)", "",
                   to_markdown(comparison(metrics, columns))]

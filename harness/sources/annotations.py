@@ -55,6 +55,11 @@ class NoisyGroundTruth:
         min_visibility: visibility in [0, 1] below which a person is not detected.
     """
 
+    #: what the results name this source by (titles, log line, summary, report)
+    label = "ground truth + noise"
+    #: it reads the ground truth, not pixels
+    needs_pixels = False
+
     def __init__(self, miss_rate: float = 0.0, jitter: float = 0.0, fp_rate: float = 0.0,
                  seed: int = 0, min_visibility: float = 0.3) -> None:
         if not 0.0 <= miss_rate <= 1.0:
@@ -169,6 +174,9 @@ class PublicDetections:
     Args:
         min_score: detections scoring below it are dropped.
     """
+
+    label = "public detections (det/det.txt)"
+    needs_pixels = False
 
     def __init__(self, min_score: float = 0.0) -> None:
         if not np.isfinite(min_score):

@@ -32,6 +32,14 @@ class FrontendSource:
 
     #: its outputs are worth keeping in the front-end cache (``harness.sources.cache``)
     cacheable = True
+    #: it reads the frames: a sequence without pixels is refused before the run starts
+    needs_pixels = True
+
+    @property
+    def label(self) -> str:
+        """What the results name this source by: ``silhouette front end`` and the like."""
+        name = type(self.detector).__name__.removesuffix("Detector").lower()
+        return f"{name or type(self.detector).__name__} front end"
 
     def __init__(self, detector) -> None:
         if not (hasattr(detector, "detect") and hasattr(detector, "reset")):

@@ -87,7 +87,8 @@ def cfg_of(*overrides: str, config: str = "config"):
 
 
 def mot_cfg(root: Path, *overrides: str):
-    return cfg_of("dataset=mot", f"dataset.root={root}", "tracker=baseline", "progress=false",
+    return cfg_of("dataset=mot", "detector=noisy_gt",
+                  f"dataset.root={root}", "tracker=baseline", "progress=false",
                   *overrides)
 
 
@@ -142,7 +143,8 @@ def test_app_on_a_truncated_frame_exits_non_zero_naming_it(tmp_path):
     mot_folder(data, "a")
     broken = mot_folder(data, "b") / "img1" / "000003.jpg"
     broken.write_bytes(truncated(broken.read_bytes()))
-    proc = app("dataset=mot", f"dataset.root={data}", "tracker=baseline", "progress=false",
+    proc = app("dataset=mot", "detector=noisy_gt",
+               f"dataset.root={data}", "tracker=baseline", "progress=false",
                f"hydra.run.dir={tmp_path / 'run'}")
     assert proc.returncode == 1, proc.stderr[-2000:]
     assert str(broken) in (tmp_path / "run" / "errors.txt").read_text()
@@ -278,14 +280,15 @@ def test_a_video_cut_short_fails_its_sequence_and_the_run(tmp_path):
     gt = tmp_path / "gt.txt"
     gt.write_text(gt_rows(3 * N))
     out = tmp_path / "run"
-    cfg = cfg_of("dataset=video", f"dataset.path={cut}", f"dataset.gt={gt}",
+    cfg = cfg_of("dataset=video", "detector=noisy_gt", f"dataset.path={cut}", f"dataset.gt={gt}",
                  "tracker=baseline", "progress=false")
     result = run(cfg, out)
     assert [(f.sequence, f.stage) for f in result.failures] == [("cut", "sequence")]
     assert "is it cut short?" in (out / "errors.txt").read_text()
     m = pd.read_csv(out / "metrics.csv")
     assert not m["complete"].any() and "cut" not in set(m["sequence"])
-    proc = app("dataset=video", f"dataset.path={cut}", f"dataset.gt={gt}", "tracker=baseline",
+    proc = app("dataset=video", "detector=noisy_gt",
+               f"dataset.path={cut}", f"dataset.gt={gt}", "tracker=baseline",
                "progress=false", f"hydra.run.dir={tmp_path / 'app'}")
     assert proc.returncode == 1, proc.stderr[-2000:]
 
@@ -297,7 +300,7 @@ def test_a_video_whose_frame_size_changes_fails_its_sequence(tmp_path):
     gt = tmp_path / "gt.txt"
     gt.write_text(gt_rows(N))
     out = tmp_path / "run"
-    cfg = cfg_of("dataset=video", f"dataset.path={joined}", f"dataset.gt={gt}",
+    cfg = cfg_of("dataset=video", "detector=noisy_gt", f"dataset.path={joined}", f"dataset.gt={gt}",
                  "tracker=baseline", "progress=false")
     result = run(cfg, out)
     assert [(f.sequence, f.stage) for f in result.failures] == [("joined", "sequence")]
@@ -333,7 +336,8 @@ def test_config_errors_name_the_key_before_the_first_frame(tmp_path, override, m
 def test_tracker_all_names_the_nested_key(tmp_path):
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
-    cfg = cfg_of("dataset=mot", f"dataset.root={data}", "tracker.baseline.max_age=2.5")
+    cfg = cfg_of("dataset=mot", "detector=noisy_gt",
+                 f"dataset.root={data}", "tracker.baseline.max_age=2.5")
     with pytest.raises(RunError, match=r"tracker\.baseline\.max_age: expected int"):
         run_experiment(cfg, tmp_path / "run")
 
@@ -347,7 +351,8 @@ def test_a_taken_run_folder_gets_a_unique_suffix(tmp_path):
     (taken / "tracks" / "old" / "keep.txt").write_text("another run's file\n")
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
-    proc = app("dataset=mot", f"dataset.root={data}", "tracker=baseline", "progress=false",
+    proc = app("dataset=mot", "detector=noisy_gt",
+               f"dataset.root={data}", "tracker=baseline", "progress=false",
                f"hydra.run.dir=${{occbench.unique_dir:{taken}}}")
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert f"results: {tmp_path / 'run-2'}" in proc.stdout
@@ -422,7 +427,8 @@ def _slow_run(tmp_path: Path, folder: Path, names: str = "abcdefghij") -> subpro
     env = {**os.environ, "OMP_NUM_THREADS": "1",
            "PYTHONPATH": f"{tmp_path / 'helpers'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
     return subprocess.Popen(
-        [sys.executable, "-m", "harness", "dataset=mot", f"dataset.root={data}",
+        [sys.executable, "-m", "harness", "dataset=mot", "detector=noisy_gt",
+         f"dataset.root={data}",
          "tracker=baseline", "tracker._target_=slow_tracker.Slow", "progress=false",
          f"hydra.run.dir={folder}"], cwd=ROOT, env=env, text=True, stdout=subprocess.PIPE,
         stderr=subprocess.PIPE)
@@ -446,7 +452,8 @@ def test_a_second_run_is_refused_and_a_stopped_run_ends_in_one_line(tmp_path, si
     try:
         _wait_for(folder / "metrics.csv", first)  # sequence a is scored
         config = (folder / "config.yaml").read_text()
-        second = app("dataset=mot", f"dataset.root={tmp_path / 'data'}", "tracker=baseline",
+        second = app("dataset=mot", "detector=noisy_gt",
+                     f"dataset.root={tmp_path / 'data'}", "tracker=baseline",
                      "progress=false", f"hydra.run.dir={folder}")
         assert second.returncode == 1
         assert second.stderr.strip() == (f"occbench: run folder {folder} is in use by a live run "
@@ -770,7 +777,7 @@ def test_a_killed_worker_fails_its_job_and_the_sweep_goes_on(tmp_path):
     sweep = tmp_path / "sweep"
     proc = app("-m", "tracker=baseline", "tracker.max_age=1,3",
                "tracker._target_=faulty_trackers.SelfKill,trackers.baseline.BaselineTracker",
-               "dataset=mot", f"dataset.root={data}", "progress=false",
+               "dataset=mot", "detector=noisy_gt", f"dataset.root={data}", "progress=false",
                f"hydra.sweep.dir={sweep}", "hydra.launcher.n_jobs=2", env=sweep_env(tmp_path))
     assert proc.returncode == 1, proc.stderr[-3000:]
     assert "2 of 4 sweep jobs not done" in proc.stderr
@@ -785,6 +792,7 @@ def test_a_sweep_whose_jobs_all_fail_exits_non_zero(tmp_path):
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
     proc = app("-m", "tracker=baseline", "tracker.max_age=-1,-2", "dataset=mot",
+               "detector=noisy_gt",
                f"dataset.root={data}", "progress=false", f"hydra.sweep.dir={tmp_path / 's'}",
                "hydra/launcher=basic")
     assert proc.returncode == 1
@@ -809,6 +817,7 @@ def test_killing_the_launcher_ends_its_workers(tmp_path):
     launcher = subprocess.Popen(
         [sys.executable, "-m", "harness", "-m", "tracker=baseline",
          "tracker._target_=faulty_trackers.Sleeper", "tracker.max_age=1,2", "dataset=mot",
+         "detector=noisy_gt",
          f"dataset.root={data}", "progress=false", f"hydra.sweep.dir={tmp_path / 's'}"],
         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:

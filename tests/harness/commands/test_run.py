@@ -64,7 +64,7 @@ def test_cli_failure_exits_nonzero_and_keeps_outputs(tmp_path, mot_root):
     ext.mkdir()
     (ext / "cross-a.txt").write_text("1,1,10,10,40,100,1\n1,2,10\n")
     run = tmp_path / "run"
-    p = run_app("dataset=mot", f"dataset.root={mot_root}", "tracker=baseline",
+    p = run_app("dataset=mot", "detector=noisy_gt", f"dataset.root={mot_root}", "tracker=baseline",
                 f"+external.broken={ext}", f"hydra.run.dir={run}")
     assert p.returncode != 0
     assert "errors.txt" in p.stderr and "cross-a.txt:2" in p.stderr

@@ -24,7 +24,7 @@ RUNS = {  # small runs of each kind of ground truth: rendered, replayed real, re
     "synthetic": ["dataset=synthetic", "dataset.scenarios=[crossing,stop_behind]",
                   "dataset.length=30"],
     "replay": ["dataset=replay", "dataset.max_frames=30"],
-    "caviar": ["dataset=caviar", "detector.miss_rate=0.3"],
+    "caviar": ["dataset=caviar", "detector=noisy_gt", "detector.miss_rate=0.3"],
 }
 SAME = ("HOTA", "DetA", "AssA", "IDF1", "MOTA", "DetRe", "DetPr", "AssRe", "AssPr", "LocA")
 

@@ -111,7 +111,8 @@ def test_failing_sequence_is_recorded_and_others_go_on(tmp_path, monkeypatch):
     seqs = [FailingSequence("broken", crossing_rows(10), 10),
             BoxSequence("fine", crossing_rows(10), 10)]
     monkeypatch.setattr("harness.pipeline.plan.load_sequences", lambda node: seqs)
-    cfg = compose_cfg("dataset=mot", "dataset.root=unused", "tracker=baseline")
+    cfg = compose_cfg("dataset=mot", "detector=noisy_gt", "dataset.root=unused",
+                      "tracker=baseline")
     result = run_experiment(cfg, tmp_path / "r")
     assert [(f.tracker, f.sequence, f.stage) for f in result.failures] == [
         ("*", "broken", "sequence")]
@@ -121,7 +122,8 @@ def test_failing_sequence_is_recorded_and_others_go_on(tmp_path, monkeypatch):
 
 
 def test_failing_tracker_in_experiment(tmp_path, mot_root):
-    cfg = compose_cfg("dataset=mot", f"dataset.root={mot_root}", "tracker=all",
+    cfg = compose_cfg("dataset=mot", "detector=noisy_gt", f"dataset.root={mot_root}",
+                      "tracker=all",
                       "+tracker.bad._target_=run_scenes.FailingTracker",
                       "+tracker.bad.fail_at=3")
     with open_dict(cfg):  # keep baseline and bad: the others need pixels, this data has none
@@ -138,7 +140,8 @@ def test_failing_tracker_in_experiment(tmp_path, mot_root):
 
 
 def test_pixel_tracker_on_frameless_data_is_refused_before_the_run(tmp_path, mot_root):
-    cfg = compose_cfg("dataset=mot", f"dataset.root={mot_root}", "tracker=reta")
+    cfg = compose_cfg("dataset=mot", "detector=noisy_gt",
+                      f"dataset.root={mot_root}", "tracker=reta")
     with pytest.raises(RunError, match=r"tracker 'reta' needs frame pixels .* sequence\(s\) "
                                        r"have none"):
         run_experiment(cfg, tmp_path / "r", tracker_name="reta")
@@ -146,7 +149,8 @@ def test_pixel_tracker_on_frameless_data_is_refused_before_the_run(tmp_path, mot
 
 
 def test_unbuilt_tracker_fails_clearly(tmp_path, mot_root):
-    cfg = compose_cfg("dataset=mot", f"dataset.root={mot_root}", "tracker=baseline",
+    cfg = compose_cfg("dataset=mot", "detector=noisy_gt",
+                      f"dataset.root={mot_root}", "tracker=baseline",
                       "tracker._target_=trackers.not_built_yet.Tracker")
     with pytest.raises(RunError, match="tracker 'baseline': its code "
                        "trackers.not_built_yet.Tracker is not built"):

@@ -210,7 +210,8 @@ def tiny_mot(tmp_path_factory) -> Path:
 
 def _multirun(data: Path, sweep_dir: Path, *extra: str) -> subprocess.CompletedProcess:
     cmd = [sys.executable, "-m", "harness", "-m", "tracker=baseline", "tracker.max_age=1,3",
-           "seed=0,1,2", "dataset=mot", f"dataset.root={data}", "detector.miss_rate=0.25",
+           "seed=0,1,2", "dataset=mot", f"dataset.root={data}", "detector=noisy_gt",
+           "detector.miss_rate=0.25",
            "detector.jitter=0.05", "progress=false", f"hydra.sweep.dir={sweep_dir}", *extra]
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, env=env, timeout=300)
@@ -238,7 +239,7 @@ def test_joblib_sweep_equals_basic_launcher(tiny_mot, tmp_path):
 
 def test_failing_job_is_recorded_and_a_rerun_skips_finished_jobs(tiny_mot, tmp_path):
     cmd = [sys.executable, "-m", "harness", "-m", "tracker=baseline", "tracker.max_age=-1,2",
-           "dataset=mot", f"dataset.root={tiny_mot}", "progress=false",
+           "dataset=mot", "detector=noisy_gt", f"dataset.root={tiny_mot}", "progress=false",
            f"hydra.sweep.dir={tmp_path}", "hydra/launcher=basic"]
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 1, proc.stderr[-3000:]  # a sweep with a failed job fails

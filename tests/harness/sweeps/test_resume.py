@@ -157,7 +157,8 @@ def test_resumed_sweep_over_a_relative_root_and_other_settings(tmp_path):
     def sweep(ages: str) -> subprocess.CompletedProcess:
         return subprocess.run(
             [sys.executable, "-m", "harness", "-m", "tracker=baseline", f"tracker.max_age={ages}",
-             "dataset=mot", "dataset.root=rs2", "progress=false", "hydra.sweep.dir=S",
+             "dataset=mot", "detector=noisy_gt",
+ "dataset.root=rs2", "progress=false", "hydra.sweep.dir=S",
              "hydra/launcher=basic"], check=False, cwd=tmp_path, env=env, text=True,
             capture_output=True, timeout=300)
 
