@@ -4,12 +4,12 @@
     python benchmarks/reproduction.py --all                   # every table (tens of minutes)
     python benchmarks/reproduction.py --list                  # the tables and their commands
 
-For each table it runs the table's harness command (``TABLES`` below: the experiment config
+For each table it runs the table's harness commands (``TABLES`` below: the experiment config
 holds the paper's rows, our data note and every reason the figures can differ), reads the
-``paper_table.md`` the run writes (``harness.report.paper_tables``) and replaces that table's
-section of ``docs/reproduction.md`` with it, headed by the exact command, the commit and the
-date; the other sections are left as they are. Every number in the document therefore comes
-from the command printed above it. The run folders go under ``--runs`` (default
+``paper_table.md`` each run writes (``harness.report.paper_tables``) and replaces that table's
+section of ``docs/reproduction.md`` with them (one table: every run's ``ours:`` rows), headed by
+the exact commands, the commit and the date; the other sections are left as they are. Every
+number in the document therefore comes from a command printed above it. The run folders go under ``--runs`` (default
 ``results/reproduction/<table>``). A failed run leaves the document untouched and prints the
 end of its log.
 """
@@ -27,13 +27,17 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "reproduction.md"
 
-# table -> the arguments of `occbench` that rebuild it (a multirun writes one paper table per job)
-TABLES: dict[str, list[str]] = {
-    "reta_table2": ["+experiment=reta_table2"],
-    "reta_table3": ["+experiment=reta_table3"],
-    "reta_detection": ["detect", "-m", "+experiment=reta_detection", "detector=silhouette,hog"],
-    "pbm_table1": ["+experiment=pbm_table1"],
-    "pbm_segmentation": ["+experiment=pbm_segmentation"],
+# table -> the `occbench` commands that rebuild it, their `ours:` rows in one table (a multirun
+# writes one paper table per job). reta_paper alone detects with the paper's active-basis
+# detector (conf/experiment/reta_table2.yaml); in the shared run it tracks silhouette boxes.
+TABLES: dict[str, list[list[str]]] = {
+    "reta_table2": [["+experiment=reta_table2"],
+                    ["+experiment=reta_table2", "tracker=reta_paper"]],
+    "reta_table3": [["+experiment=reta_table3"]],
+    "reta_detection": [["detect", "-m", "+experiment=reta_detection",
+                        "detector=active_basis,silhouette,hog"]],
+    "pbm_table1": [["+experiment=pbm_table1"]],
+    "pbm_segmentation": [["+experiment=pbm_segmentation"]],
 }
 
 HEAD = """# Reproducing the papers' tables
@@ -52,25 +56,32 @@ printed in the section and copies the run's `paper_table.md` here: no number is 
 BEGIN, END = "<!-- begin {} -->", "<!-- end {} -->"
 
 
-def command(table: str) -> list[str]:
-    return ["occbench", *TABLES[table], "progress=false"]
+def commands(table: str) -> list[str]:
+    return [" ".join(["occbench", *args, "progress=false"]) for args in TABLES[table]]
 
 
 def run_table(table: str, runs: Path) -> tuple[list[Path], float]:
-    """Run the table's command into ``runs/<table>``; return its paper_table.md files."""
-    out = runs / table
-    args = TABLES[table]
+    """Run the table's commands into ``runs/<table>/<i>``; return their paper_table.md files."""
+    found, seconds = [], 0.0
+    for i, args in enumerate(TABLES[table]):
+        tables, took = _run(table, args, runs / table / str(i))
+        found += tables
+        seconds += took
+    return found, seconds
+
+
+def _run(table: str, args: list[str], out: Path) -> tuple[list[Path], float]:
     folder_key = "hydra.sweep.dir" if "-m" in args else "hydra.run.dir"
     argv = [sys.executable, "-m", "harness", *args, "progress=false", f"{folder_key}={out}"]
-    log = runs / f"{table}.log"
+    log = out.with_suffix(".log")
     log.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     with log.open("w") as fh:
-        done = subprocess.run(argv, stdout=fh, stderr=subprocess.STDOUT, cwd=runs,
+        done = subprocess.run(argv, stdout=fh, stderr=subprocess.STDOUT, cwd=log.parent,
                               check=False)
     if done.returncode != 0:
         tail = "".join(log.read_text().splitlines(keepends=True)[-20:])
-        raise RuntimeError(f"{table}: `{' '.join(command(table))}` exited with "
+        raise RuntimeError(f"{table}: `occbench {' '.join(args)}` exited with "
                            f"{done.returncode}; end of {log}:\n{tail}")
     tables = sorted(out.glob("paper_table.md")) or sorted(out.glob("*/paper_table.md"))
     if not tables:
@@ -79,7 +90,7 @@ def run_table(table: str, runs: Path) -> tuple[list[Path], float]:
 
 
 def merge(tables: list[Path]) -> str:
-    """One table: the first job's, with the `ours:` rows of the other jobs of a multirun."""
+    """One table: the first run's, with the `ours:` rows of the other runs (or jobs)."""
     first = tables[0].read_text().splitlines()
     ours = [line for path in tables[1:] for line in path.read_text().splitlines()
             if line.startswith("| ours:")]
@@ -92,8 +103,8 @@ def section(table: str, body: str, seconds: float) -> str:
                             capture_output=True, text=True, check=False).stdout.strip() or "unknown"
     title, _, rest = body.partition("\n")
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    made = (f"`{' '.join(command(table))}` (commit {commit}, {stamp}, {seconds:.0f} s; "
-            f"regenerate: `python benchmarks/reproduction.py {table}`)")
+    made = (f"{' and '.join(f'`{c}`' for c in commands(table))} (commit {commit}, {stamp}, "
+            f"{seconds:.0f} s; regenerate: `python benchmarks/reproduction.py {table}`)")
     return "\n".join([BEGIN.format(table), title, "", made, rest.rstrip(), END.format(table)])
 
 
@@ -128,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.list:
         for table in TABLES:
-            print(f"{table:18s} {' '.join(command(table))}")
+            print(f"{table:18s} {' ; '.join(commands(table))}")
         return 0
     chosen = list(TABLES) if args.all else args.tables
     if not chosen:
@@ -138,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"unknown table {unknown[0]!r}; the tables: {', '.join(TABLES)}")
     sections, failed = {}, 0
     for table in chosen:
-        print(f"{table}: {' '.join(command(table))} ...", flush=True)
+        print(f"{table}: {' ; '.join(commands(table))} ...", flush=True)
         try:
             tables, seconds = run_table(table, args.runs.resolve())
         except RuntimeError as err:

@@ -43,7 +43,7 @@ def test_writing_one_section_keeps_the_others(tmp_path):
     assert text.startswith("# Reproducing the papers' tables")
     assert all(repro.BEGIN.format(t) in text for t in repro.TABLES)
     assert "Not generated yet: `python benchmarks/reproduction.py pbm_table1`" in text
-    assert "`occbench +experiment=reta_table2 progress=false`" in text
+    assert "`occbench +experiment=reta_table2 progress=false` and `occbench +experiment=reta_table2 tracker=reta_paper progress=false`" in text
     repro.write({"pbm_table1": repro.section("pbm_table1", "## T1\n\nsecond\n", 2.0)}, doc)
     repro.write({"reta_table2": repro.section("reta_table2", "## T2\n\nthird\n", 3.0)}, doc)
     text = doc.read_text()
