@@ -81,7 +81,7 @@ import yaml
 
 from harness.fit.pbm_pairs import collect_pairs, positive_differences
 from harness.fit.pbm_weights import WeightFit, search_weights
-from trackers.layered.feature_models import FeatureModels, fit_difference_model
+from trackers.layered.feature_models import FeatureModels, fit_difference_model, load_feature_models
 from trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
 
 log = logging.getLogger(__name__)
@@ -154,8 +154,20 @@ def weights_override(weights: Mapping[str, float], prefix: str = "tracker.pbm") 
     return f"'{prefix}.features.feature_weights={{{body}}}'"
 
 
-def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str | Path) -> None:
-    """Histograms of the differences with the fitted densities (Fig. 3), 6 x 5 panels."""
+def spread(model) -> float:
+    """Root mean square of a fitted difference model, sqrt(E[d^2]) = sqrt(sum_k w_k (mu_k^2 +
+    sigma_k^2)) (a folded component has the same second moment as its Gaussian): one number
+    for how large a true match's difference is expected to be."""
+    return float(np.sqrt(np.sum(model.weights * (model.means ** 2 + model.sigmas ** 2))))
+
+
+def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str | Path,
+                reference: FeatureModels | None = None, labels: tuple[str, str] = ("fitted",
+                                                                                   "reference")
+                ) -> None:
+    """Histograms of the differences with the fitted densities (Fig. 3), 6 x 5 panels; with
+    ``reference``, its densities dashed beside them, a legend and each model's spread
+    (``spread``) in the panel titles."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -170,11 +182,21 @@ def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str |
             hi = max(float(np.quantile(d, 0.995)) if len(d) else 1.0, 4 * float(m.sigmas.max()) * 0.5, 1e-3)
             ax.hist(d, bins=40, range=(0, hi), density=True, color="0.75")
             x = np.linspace(0, hi, 200)
-            ax.plot(x, m.pdf(x), color="C3", lw=1.5)
-            ax.set_title(f"{f} / {part} ({m.kind}, n={len(d)})", fontsize=7)
+            ax.plot(x, m.pdf(x), color="C3", lw=1.5, label=labels[0])
+            title = f"{f} / {part} ({m.kind}, n={len(d)})"
+            if reference is not None:
+                r = reference.models[f][j]
+                ax.plot(x, r.pdf(x), color="C0", lw=1.2, ls="--", label=labels[1])
+                title = f"{f} / {part}: rms {spread(m):.3f} vs {spread(r):.3f}"
+            ax.set_title(title, fontsize=7)
             ax.tick_params(labelsize=6)
-    fig.suptitle("PBM feature differences between consecutive frames and fitted densities")
-    fig.tight_layout()
+    if reference is not None:
+        handles, names = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles + [plt.Rectangle((0, 0), 1, 1, color="0.75")],
+                   names + ["histogram of the fitted differences"], loc="upper right", fontsize=8)
+    fig.suptitle("PBM feature differences between consecutive frames and fitted densities"
+                 + ("" if reference is None else f" (solid: {labels[0]}; dashed: {labels[1]})"))
+    fig.tight_layout(rect=(0, 0, 1, 0.97 if reference is None else 0.95))
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
@@ -233,6 +255,9 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--bins", type=int, default=4, help="histogram bins per channel")
     ap.add_argument("--out", required=True, help="output YAML")
     ap.add_argument("--plot", default=None, help="output PNG of the fitted densities (Fig. 3)")
+    ap.add_argument("--compare", default=None, metavar="MODELS",
+                    help="models YAML drawn beside the fitted ones in --plot (and rms spreads logged)")
+    ap.add_argument("--compare-label", default=None, help="legend label of --compare")
     ap.add_argument("--no-weights", action="store_true", help="fit the models only, no omega")
     ap.add_argument("--weight-step", type=float, default=0.2, help="omega grid step over [0, 1]")
     ap.add_argument("--folds", type=int, default=5, help="cross-validation folds")
@@ -355,6 +380,14 @@ def main(argv: list[str] | None = None) -> int:
     if fit is not None:
         _print_fit(args, fit)
     if args.plot:
-        plot_models(models, diffs, args.plot)
+        reference = None if args.compare is None else load_feature_models(args.compare)
+        plot_models(models, diffs, args.plot, reference,
+                    (f"fitted ({Path(args.out).name})", args.compare_label or str(args.compare)))
         log.info("wrote %s", args.plot)
+    if args.compare:
+        reference = load_feature_models(args.compare)
+        for f in FEATURES:
+            log.info("rms %-12s %s", f, " ".join(
+                f"{spread(m):.3f}/{spread(r):.3f}"
+                for m, r in zip(models.models[f], reference.models[f], strict=True)))
     return 0
