@@ -178,8 +178,8 @@ def _follow(follower: Follower, tracks: list[Track], start: np.ndarray | None) -
     ``start``: the person's ground-truth box on its first frame (the hand initialisation:
     the followed track is picked by overlap), else None. Later, when the followed id is
     absent, a track the follower never output before is followed instead: the confirmed
-    form of a tentative followed track when one overlaps its last box, else the follower's
-    restart (the new track of lowest id).
+    form of a tentative followed track when one overlaps its last box (reported under the
+    same id), else the follower's restart (the new track of lowest id).
     """
     now = [t for t in tracks if t.state in _FOLLOWED]
     ids = {t.id for t in now}
@@ -188,8 +188,10 @@ def _follow(follower: Follower, tracks: list[Track], start: np.ndarray | None) -
     elif follower.followed not in ids:
         new = [t for t in now if t.id not in follower.seen]
         same = _pick(new, follower.last_box) if follower.tentative and new else -1
-        if same >= 0:
-            follower.followed = same  # confirmed under a new id: still the hand-started track
+        if same >= 0:  # confirmed under a new id: still the hand-started track, same report id
+            if follower.followed in follower.out_ids:
+                follower.out_ids[same] = follower.out_ids[follower.followed]
+            follower.followed = same
         elif new:
             follower.followed = min(t.id for t in new)  # a restart
             follower.hand_started = False

@@ -14,7 +14,7 @@ from harness.pipeline.protocols import run_single_target, target_spans
 from harness.sources.annotations import NoisyGroundTruth
 from trackers.baseline import BaselineTracker
 from trackers.geometry import iou_matrix
-from trackers.records import Detections, Track
+from trackers.records import Detections, Track, TrackState
 
 
 def _crossing():
@@ -89,6 +89,36 @@ def test_a_follower_that_loses_its_person_restarts_under_a_new_id():
     assert m["PBM_Over"] == len(spans)  # each person: two ids
     assert m["PBM_IDs/traj"] == 2.0
     assert m["PBM_MT1"] == 0
+
+
+class _ConfirmsUnderANewId:
+    """Holds its first detection's box TENTATIVE as id 1 for 2 frames, then CONFIRMED as id
+    7 (a tracker numbering tracks at confirmation)."""
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        self.k, self.box = 0, None
+
+    def update(self, frame, detections: Detections, foreground=None) -> list[Track]:
+        self.k += 1
+        if self.box is None:
+            self.box = detections.boxes[0]
+        if self.k <= 2:
+            return [Track(1, self.box.copy(), TrackState.TENTATIVE)]
+        return [Track(7, self.box.copy(), TrackState.CONFIRMED)]
+
+
+def test_a_track_confirmed_under_a_new_id_keeps_its_reported_id():
+    seq = _crossing()
+    first_id = int(seq.gt.table.ids[0])
+    out = run_single_target({"x": _ConfirmsUnderANewId}, seq, NoisyGroundTruth(miss_rate=0.0),
+                            targets=[first_id])
+    table = out["x"].table
+    first, last = target_spans(seq.gt.table)[first_id]
+    assert np.unique(table.ids).tolist() == [1]
+    assert table.frames.tolist() == list(range(first, last + 1))  # tentative frames too
 
 
 def test_a_frame_window_runs_its_own_frames():
