@@ -190,13 +190,15 @@ def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str |
                 title = f"{f} / {part}: rms {spread(m):.3f} vs {spread(r):.3f}"
             ax.set_title(title, fontsize=7)
             ax.tick_params(labelsize=6)
+    bottom = 0.0
     if reference is not None:
         handles, names = axes[0, 0].get_legend_handles_labels()
         fig.legend(handles + [plt.Rectangle((0, 0), 1, 1, color="0.75")],
-                   names + ["histogram of the fitted differences"], loc="upper right", fontsize=8)
-    fig.suptitle("PBM feature differences between consecutive frames and fitted densities"
-                 + ("" if reference is None else f" (solid: {labels[0]}; dashed: {labels[1]})"))
-    fig.tight_layout(rect=(0, 0, 1, 0.97 if reference is None else 0.95))
+                   names + ["histogram of the fitted differences"], loc="lower center", ncol=3,
+                   fontsize=9)
+        bottom = 0.03
+    fig.suptitle("PBM feature differences between consecutive frames and fitted densities")
+    fig.tight_layout(rect=(0, bottom, 1, 0.98))
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
