@@ -20,9 +20,8 @@ pair is scored as the tracker scores it: eq. 11 differences divided by
 ``adaptations.model_spread``, match probabilities p(d_ij | theta_ij) of the fitted models,
 eq. 12 with omega, eq. 13 with the configured gamma (``features.part_weights``), and
 classified as a match when the global score reaches ``matching.match_threshold``. omega runs
-over a grid of [0, 1]^6 with step
-``--weight-step`` (normalised to sum 1, all-zero skipped, duplicates after normalising
-merged); the accuracy (balanced: positives and negatives weigh half each) is
+over a grid of [0, 1]^6 with step ``--weight-step`` (normalised to sum 1, all-zero skipped,
+duplicates after normalising merged); the accuracy (balanced: positives and negatives weigh half each) is
 cross-validated over ``--folds`` folds of whole frame blocks (``--block-frames`` frames of
 one sequence), so neighbouring frames do not leak between training and validation. The
 omega with the best mean validation accuracy wins; ties go to the one nearest the uniform
@@ -52,11 +51,14 @@ Real frames (the models ``tracker=pbm_paper`` ships, ``trackers/layered/data/
 real_uncompensated.yaml``; the frames are the fitting split of docs/generalisation.md)::
 
     occbench fit pbm --caviar datasets/CAVIAR-OneLeaveShop1cor@1-150 \
-        --mot ../shared/data/CAVIAR-lobby/CAVIAR1-{Walk3-f1096-1378,Browse2-f0548-0749,\
-    Browse4-f0278-0364,Browse_WhileWaiting2-f1405-1894} \
-        --foreground mog2 --tracker-config pbm_paper --no-weights \
-        --out trackers/layered/data/real_uncompensated.yaml --plot models.png
+        --mot ../shared/data/CAVIAR-EnterExitCrossingPaths1cor@1-180 \
+        --foreground mog2 --tracker-config pbm_paper \
+        --out trackers/layered/data/real_uncompensated.yaml \
+        --plot docs/img/pbm_models_real_vs_synthetic.png \
+        --compare trackers/layered/data/default_models.yaml \
+        --compare-label "synthetic, compensated (default_models.yaml)"
 
+(The omega it also learns, written in the file, is not used: pbm_paper keeps pbm.yaml's.)
 Example:
     occbench fit pbm --synthetic --seed 1 --out models.yaml --plot models.png
 
@@ -81,7 +83,12 @@ import yaml
 
 from harness.fit.pbm_pairs import collect_pairs, positive_differences
 from harness.fit.pbm_weights import WeightFit, search_weights
-from trackers.layered.feature_models import FeatureModels, fit_difference_model, load_feature_models
+from trackers.layered.feature_models import (
+    FeatureModels,
+    FoldedMixture,
+    fit_difference_model,
+    load_feature_models,
+)
 from trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
 
 log = logging.getLogger(__name__)
@@ -154,7 +161,7 @@ def weights_override(weights: Mapping[str, float], prefix: str = "tracker.pbm") 
     return f"'{prefix}.features.feature_weights={{{body}}}'"
 
 
-def spread(model) -> float:
+def spread(model: FoldedMixture) -> float:
     """Root mean square of a fitted difference model, sqrt(E[d^2]) = sqrt(sum_k w_k (mu_k^2 +
     sigma_k^2)) (a folded component has the same second moment as its Gaussian): one number
     for how large a true match's difference is expected to be."""
@@ -162,9 +169,8 @@ def spread(model) -> float:
 
 
 def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str | Path,
-                reference: FeatureModels | None = None, labels: tuple[str, str] = ("fitted",
-                                                                                   "reference")
-                ) -> None:
+                reference: FeatureModels | None = None,
+                labels: tuple[str, str] = ("fitted", "reference")) -> None:
     """Histograms of the differences with the fitted densities (Fig. 3), 6 x 5 panels; with
     ``reference``, its densities dashed beside them, a legend and each model's spread
     (``spread``) in the panel titles."""
@@ -381,13 +387,12 @@ def main(argv: list[str] | None = None) -> int:
         log.info("%-12s %s", f, " ".join(f"{m.kind[:4]}:{m.sigmas.max():.3f}" for m in models.models[f]))
     if fit is not None:
         _print_fit(args, fit)
+    reference = None if args.compare is None else load_feature_models(args.compare)
     if args.plot:
-        reference = None if args.compare is None else load_feature_models(args.compare)
         plot_models(models, diffs, args.plot, reference,
                     (f"fitted ({Path(args.out).name})", args.compare_label or str(args.compare)))
         log.info("wrote %s", args.plot)
-    if args.compare:
-        reference = load_feature_models(args.compare)
+    if reference is not None:
         for f in FEATURES:
             log.info("rms %-12s %s", f, " ".join(
                 f"{spread(m):.3f}/{spread(r):.3f}"
