@@ -48,7 +48,7 @@ def _config_keys(config_name: str, overrides: Sequence[str]) -> list[str]:
     for text in overrides:
         try:
             (o,) = OverridesParser.create().parse_overrides([text])
-        except Exception:  # noqa: BLE001 - the bad override itself
+        except Exception:  # noqa: BLE001, S112 - the bad override itself: left out
             continue
         group = o.key_or_group.lstrip("+~")
         if not (o.is_sweep_override() or "." in group or group.startswith("hydra")):

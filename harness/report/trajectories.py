@@ -76,6 +76,16 @@ def person_paths(gt: MotTable, results: Mapping[str, MotTable], person: int,
     return out
 
 
+def gaps_broken(frames: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` (N, k) in frame order with a row of NaN wherever ``frames`` (N,) skips a
+    frame, so that a plotted line stops at a gap instead of bridging it with a straight
+    line (a missed or hidden stretch is not a walk)."""
+    frames = np.asarray(frames)
+    values = np.asarray(values, dtype=float).reshape(len(frames), -1)
+    cut = np.flatnonzero(np.diff(frames) > 1) + 1
+    return np.insert(values, cut, np.nan, axis=0)
+
+
 def plot_person(gt: GroundTruth | MotTable, results: Mapping[str, MotTable], person: int,
                 path: str | Path, iou_threshold: float = 0.5, hidden_below: float = 0.05,
                 title: str = "") -> Path:
@@ -98,17 +108,20 @@ def plot_person(gt: GroundTruth | MotTable, results: Mapping[str, MotTable], per
     fig, axes = plt.subplots(2, len(names), figsize=(4.6 * len(names), 7.4), squeeze=False,
                              sharex=True, sharey="row", height_ratios=[3, 2])
     cmap = plt.get_cmap("tab10")
+    g_line = gaps_broken(g_frames, np.column_stack([g_xy, g_frames]))
     for ax, tax, name in zip(axes[0], axes[1], names):
+        for a, y in ((ax, g_line[:, 1]), (tax, g_line[:, 2])):
+            a.plot(g_line[:, 0], y, "k--", lw=2.2, label=f"GT {person}", zorder=3)
         for a, y in ((ax, g_xy[:, 1]), (tax, g_frames)):
-            a.plot(g_xy[:, 0], y, "k--", lw=2.2, label=f"GT {person}", zorder=3)
             if g_hidden.any():
                 a.plot(g_xy[g_hidden, 0], y[g_hidden], "o", ms=5, mfc="none", mec="k",
                        label="GT hidden", zorder=3)
         for k, (rid, pth) in enumerate(paths.get(name, {}).items()):
             colour = cmap(k % 10)
-            ax.plot(pth[:, 1], pth[:, 2], "-", color=colour, lw=1.6, label=f"{name}-{rid}")
+            line = gaps_broken(pth[:, 0], pth)  # no line across the frames the id missed
+            ax.plot(line[:, 1], line[:, 2], "-", color=colour, lw=1.6, label=f"{name}-{rid}")
             ax.plot(pth[:1, 1], pth[:1, 2], "^", color=colour, ms=6)
-            tax.plot(pth[:, 1], pth[:, 0], "-", color=colour, lw=1.6)
+            tax.plot(line[:, 1], line[:, 0], "-", color=colour, lw=1.6)
         ax.set_title(f"{name}: {len(paths.get(name, {}))} id(s)")
         tax.set_xlabel("x (pixels)")
         for a in (ax, tax):
@@ -126,7 +139,8 @@ def plot_person(gt: GroundTruth | MotTable, results: Mapping[str, MotTable], per
     axes[1][0].set_ylabel("frame")
     axes[1][0].invert_yaxis()
     fig.suptitle(title or f"Centroid path of GT person {person} and the tracker ids matched "
-                 "to it (triangles: where an id starts); below: x against time", fontsize=9)
+                 "to it (triangles: where an id starts; a line stops where its frames "
+                 "stop); below: x against time", fontsize=9)
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -22,10 +22,10 @@ def _one_line(capsys, *args: str) -> str:
     (["tracker.max_age=abc"],  # tracker=all: the key is per tracker
      "occbench: unknown key 'tracker.max_age': did you mean 'tracker.baseline.max_age'?"),
     (["tracker=reta", "tracker.association.mu_gg=3"],
-     "occbench: unknown key 'tracker.association.mu_gg': did you mean "
-     "'tracker.association.mu_g'?"),
-    (["dataset.lenght=30"], "occbench: unknown key 'dataset.lenght': did you mean "
-                            "'dataset.length'?"),
+     ("occbench: unknown key 'tracker.association.mu_gg': did you mean "
+      "'tracker.association.mu_g'?")),
+    (["dataset.lenght=30"], ("occbench: unknown key 'dataset.lenght': did you mean "
+                             "'dataset.length'?")),
 ])
 def test_a_typo_is_one_line_with_did_you_mean(capsys, args, line):
     assert _one_line(capsys, *args) == line

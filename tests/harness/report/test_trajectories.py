@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import cv2
+import numpy as np
 import pytest
 from report_scenes import Walk, mot
 
@@ -24,3 +25,13 @@ def test_trajectory_plot_follows_the_matched_ids(tmp_path):
     assert cv2.imread(str(path)) is not None
     with pytest.raises(ValueError, match="no ground-truth person"):
         person_paths(t, res, 9)
+
+
+def test_a_path_is_not_drawn_across_missed_frames():
+    from harness.report.trajectories import gaps_broken
+
+    frames = np.array([1, 2, 5, 6])
+    out = gaps_broken(frames, np.array([[0.0], [1.0], [4.0], [5.0]]))
+    assert out.shape == (5, 1) and np.isnan(out[2, 0])
+    assert np.array_equal(out[[0, 1, 3, 4], 0], [0.0, 1.0, 4.0, 5.0])
+    assert gaps_broken(np.array([1, 2, 3]), np.ones((3, 2))).shape == (3, 2)  # no gap
