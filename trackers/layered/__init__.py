@@ -1,8 +1,8 @@
 """PBM: five-part model with layered data association (see ``trackers.layered.tracker``)."""
 
+from trackers.layered.adaptations import Adaptations, StaleParts
 from trackers.layered.feature_models import FeatureModels, load_feature_models
 from trackers.layered.params import (
-    Adaptations,
     CandidateParams,
     FeatureParams,
     GateParams,
@@ -12,7 +12,6 @@ from trackers.layered.params import (
     PruneParams,
     ReportParams,
     SearchParams,
-    StaleParts,
     UpdateParams,
 )
 from trackers.layered.starts import AutoStarts, GivenTargetOnly

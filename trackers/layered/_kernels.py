@@ -818,13 +818,15 @@ def _lone_growth(kinds: np.ndarray, regions: np.ndarray, heads_in_region: np.nda
 def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
                 heads_in_region: np.ndarray, gates: np.ndarray, pred_wh: np.ndarray,
                 kinds: np.ndarray, dof: np.ndarray, misses: np.ndarray,
-                search_overlap: float, present: np.ndarray) -> tuple:  # pragma: no cover (compiled)
+                search_overlap: float, present: np.ndarray,
+                several_heads_merge: bool) -> tuple:  # pragma: no cover (compiled)
     """Gating (PBM 3) and the occlusion test's pairs (PBM 3.1) of T targets and N candidates.
 
     A candidate is in target t's gate (xywh ``gates[t]``) when its box centre
     ``box[:2] + 0.5 box[2:]`` lies in it (borders included). ``kinds`` (T, N) (0, +1
     larger, -1 smaller; ``search.occlusion_kinds``) is set to +1 in place where it is 0
-    and the candidate's region holds several heads (a merge). The occluded pairs keep only
+    and the candidate's region holds several heads (a merge) when ``several_heads_merge``
+    (an adaptation; the paper's occlusion test is by size alone, PBM 3.1). The occluded pairs keep only
     those whose carved candidate lies in the gate too (head x, head y + 0.5 KF2 height)
     and, when ``search_overlap`` > 0, whose larger region holds the target: a smaller
     region, a target missed last frame, or ``geometry.overlap_ratio_matrix(boxes of dof,
@@ -854,7 +856,7 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
         gx0, gy0 = gates[t, 0], gates[t, 1]
         gx1, gy1 = gx0 + gates[t, 2], gates[t, 3] + gy0
         for n in range(N):
-            if kinds[t, n] == 0 and heads_in_region[n] > 1:
+            if several_heads_merge and kinds[t, n] == 0 and heads_in_region[n] > 1:
                 kinds[t, n] = 1
             cx = boxes[n, 0] + 0.5 * boxes[n, 2]
             cy = boxes[n, 1] + 0.5 * boxes[n, 3]

@@ -7,9 +7,12 @@ detection box; on blobs, the peaks of the top profile. With ``foreground=None`` 
 detection boxes are the candidate blobs and every box pixel counts as foreground. Boxes
 are xywh float64 in pixels.
 
-Detection boxes and blob spans differ systematically (box margins, swinging limbs):
-blob-born boxes are rescaled by a ratio learned online from isolated person/detection
-pairs (``CandidateFinder``'s only state).
+Two adaptations (``adaptations.Adaptations``; the paper's forms in brackets): a blob's
+heads are the peaks of its top profile, ``ProfileHeads`` (the PBM 2.3 head detector run
+in the blob, ``DetectorHeads``); detection boxes and blob spans differ systematically (box
+margins, swinging limbs), so blob-born boxes are rescaled by a ratio learned online from
+isolated person/detection pairs, ``CandidateFinder``'s only state (``blob_box_ratio``;
+the paper: the blob's span, PBM 2.1).
 """
 
 from __future__ import annotations
@@ -29,15 +32,63 @@ from trackers.layered.search import (
 from trackers.records import Detections
 
 
+class ProfileHeads:
+    """``profile_heads``: a blob's heads are the peaks of its top profile
+    (``search.top_profile_heads``), at least ``head_separation`` x its height apart."""
+
+    def __init__(self, params: CandidateParams) -> None:
+        self.separation = params.head_separation
+
+    def heads(self, mask: np.ndarray, sbox: np.ndarray, s: int, frame: np.ndarray | None,
+              fg: np.ndarray | None) -> np.ndarray:
+        """(K, 2) float64 heads (column centre, top row) in the coordinates of ``mask``, the
+        (h, w) bool crop of one blob at ``sbox`` (xywh) of the mask subsampled by ``s``."""
+        h = mask.shape[0]
+        return top_profile_heads(mask, max(self.separation * h, 3.0 / s), max(0.06 * h, 2.0 / s))
+
+
+class DetectorHeads:
+    """PBM 2.3 as written: a blob's heads are those the hair and skin head detector
+    (``candidates.head_detector``, its ``heads_in(frame, foreground, box, max_heads)``)
+    finds in the blob's box, greedily, at most ``max_heads`` (a reading: the paper gives
+    no number); none found, the blob has no candidate."""
+
+    def __init__(self, params: CandidateParams, max_heads: int = 4) -> None:
+        detector = params.head_detector
+        if detector is None or not callable(getattr(detector, "heads_in", None)):
+            raise ValueError("adaptations.profile_heads=false needs candidates.head_detector "
+                             "with a heads_in(frame, foreground, box, max_heads) method (PBM 2.3)")
+        self.detector, self.max_heads = detector, int(max_heads)
+
+    def heads(self, mask: np.ndarray, sbox: np.ndarray, s: int, frame: np.ndarray | None,
+              fg: np.ndarray | None) -> np.ndarray:
+        """As ``ProfileHeads.heads``: (K, 2) (column centre, top row) in ``mask``'s
+        coordinates, from the detector's (K, 4) xywh full-resolution head boxes."""
+        if frame is None:
+            return np.zeros((0, 2))
+        found = self.detector.heads_in(frame, fg, np.asarray(sbox, dtype=np.float64) * s,
+                                       self.max_heads)
+        found = np.asarray(found, dtype=np.float64).reshape(-1, 4)
+        return np.column_stack([(found[:, 0] + 0.5 * found[:, 2]) / s - sbox[0] - 0.5,
+                                found[:, 1] / s - sbox[1]])
+
+
 class CandidateFinder:
     """Candidates of each frame (``find``), learning the blob-to-detection box ratio.
 
     Args:
         params: blob size, head separation, downsampling and the head detector.
+        blob_heads: how a blob's heads are found (``ProfileHeads``, ``DetectorHeads``);
+            None: ``ProfileHeads``.
+        blob_box_ratio: rescale blob-born boxes by the learnt ratio (an adaptation; off,
+            a blob's box is its span, PBM 2.1).
     """
 
-    def __init__(self, params: CandidateParams) -> None:
+    def __init__(self, params: CandidateParams, blob_heads: ProfileHeads | DetectorHeads | None = None,
+                 blob_box_ratio: bool = True) -> None:
         self.params = params
+        self.blob_heads = ProfileHeads(params) if blob_heads is None else blob_heads
+        self.blob_box_ratio = bool(blob_box_ratio)
         self.reset()
 
     def reset(self) -> None:
@@ -86,8 +137,7 @@ class CandidateFinder:
         for i, (sbox, lab) in enumerate(zip(bboxes, numbers)):
             x, y, w, h = (int(v) for v in sbox)
             mask = labels[y:y + h, x:x + w] == lab
-            peaks = top_profile_heads(mask, max(self.params.head_separation * h, 3.0 / s),
-                                      max(0.06 * h, 2.0 / s))
+            peaks = self.blob_heads.heads(mask, sbox, s, frame, fg)
             bbox = sbox * s
             hx = (peaks[:, 0] + x + 0.5) * s
             hy = (peaks[:, 1] + y) * s
@@ -96,7 +146,7 @@ class CandidateFinder:
                 explained = ((hx >= zx0) & (hx <= zx1) & (hy >= zy0) & (hy <= zy1)).any(axis=0)
             else:
                 explained = np.zeros(len(peaks), dtype=bool)
-            if len(peaks) == 1 and explained[0]:
+            if len(peaks) == 1 and explained[0] and self.blob_box_ratio:
                 self._calibrate(bbox, blob_iou[i], det_boxes)
             if explained.all():
                 continue
@@ -141,3 +191,24 @@ class CandidateFinder:
         c = box[:2] + 0.5 * box[2:]
         wh = box[2:] * self._blob_to_box
         return np.array([c[0] - 0.5 * wh[0], box[1], wh[0], wh[1]])
+
+
+def checked_inputs(frame: np.ndarray, detections: Detections | None,
+                   foreground: np.ndarray | None) -> tuple:
+    """``PBMTracker.update``'s inputs checked (ValueError naming the argument): (frame,
+    detections, fg (H, W) C-contiguous bool or None)."""
+    if frame is None:
+        raise ValueError("PBMTracker.update: frame is None; PBM needs pixels (colour histograms of the parts)")
+    frame = np.asarray(frame)
+    if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
+        raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
+    if detections is None:
+        detections = Detections.empty()
+    fg = None
+    if foreground is not None:
+        foreground = np.asarray(foreground)
+        if foreground.shape != frame.shape[:2]:
+            raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
+                             f"differs from frame {frame.shape[:2]}")
+        fg = np.ascontiguousarray(foreground if foreground.dtype == bool else foreground != 0)
+    return frame, detections, fg

@@ -1,10 +1,11 @@
 """The steps an adaptation changes, as small strategy objects: the paper's rule and ours.
 
-``build_rules`` picks one of each from ``params.Adaptations`` once, in the tracker's
+``build_rules`` picks one of each from ``adaptations.Adaptations`` once, in the tracker's
 constructor, so ``PBMTracker.update`` calls a rule instead of testing a flag. Each pair
 names the step of PBM it replaces; ``docs/adaptations.md`` gives the evidence. (Stale
-parts are ``params.StaleParts`` or None; the pruning adaptations live in
-``selection.MultipleResponsePruning``.) Boxes are (N, 4) float64 xywh pixels.
+parts are ``adaptations.StaleParts`` or None; the pruning adaptations live in
+``selection.MultipleResponsePruning``, the blob-head ones in ``candidates``.) Boxes are
+(N, 4) float64 xywh pixels.
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trackers.layered.params import Adaptations
+from trackers.common.assignment import assign
+from trackers.layered.adaptations import Adaptations
 from trackers.layered.parts import PartFeatures
 from trackers.layered.targets import Targets
 
@@ -34,6 +36,42 @@ class PredictedModels:
 
     def models(self, targets: Targets) -> PartFeatures:
         return targets.parts.shifted(targets.predicted_shift())
+
+
+class AsMeasured:
+    """Eq. 11 as written after a gap too: d_ij = |f_ij - F_ij| whatever the frames between."""
+
+    def misses(self, targets: Targets) -> None:
+        return None
+
+
+class PerFrame:
+    """``gap_division``: after m frames unfound, eq. 11's displacement and overlap are
+    divided by 1 + m (per-frame differences, as the models were fitted on)."""
+
+    def misses(self, targets: Targets) -> np.ndarray:
+        """(T,) frames since each target was last found (``association.pair_scores``)."""
+        return targets.misses
+
+
+# --------------------------------------------------------------- PBM 3, eq. 8: KF2 unfound
+
+
+class PredictedSize:
+    """Eq. 8 as written: KF2 keeps predicting an unfound target's size with its rates."""
+
+    def missed(self, targets: Targets, rows: np.ndarray) -> None:
+        targets.mark_missed(rows)
+
+
+class HeldSize:
+    """``hold_size``: KF2's size rates are zeroed while a target is unfound, so the
+    predicted size of a hidden person is held, not extrapolated (its search boxes, eqs.
+    9-10, and occlusion test, PBM 3.1, use that size)."""
+
+    def missed(self, targets: Targets, rows: np.ndarray) -> None:
+        targets.mark_missed(rows)
+        targets.kf2.x[rows, 2:] = 0.0
 
 
 # --------------------------------------------------------------- PBM 4 step 4: a match
@@ -63,6 +101,36 @@ class RelativeMatch:
         weak = (S < self.fraction * ref[:, None]) & (S >= match_threshold)
         S[weak] = -np.inf
         return weak.any(axis=0)
+
+
+# --------------------------------------------------------------- PBM 4 step 4: who takes what
+
+
+class Alone:
+    """PBM 3, 4 step 4 as the paper runs them, one target at a time: each target takes its
+    best candidate with p >= ``match_threshold`` whatever the other targets take (two
+    targets may take one candidate)."""
+
+    def assign(self, cost: np.ndarray, max_cost: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(T, N) costs 1 - p (inf outside the gates) -> matches (K, 2) (target,
+        candidate), unmatched targets, candidates no target takes (as ``assign``)."""
+        T, N = cost.shape
+        if T == 0 or N == 0:
+            return np.zeros((0, 2), dtype=int), np.arange(T), np.arange(N)
+        best = np.argmin(cost, axis=1)
+        ok = cost[np.arange(T), best] <= max_cost
+        matches = np.column_stack([ok.nonzero()[0], best[ok]]).astype(int)
+        taken = np.zeros(N, dtype=bool)
+        taken[best[ok]] = True
+        return matches, (~ok).nonzero()[0], (~taken).nonzero()[0]
+
+
+class OneToOne:
+    """``one_to_one``: targets share candidates one-to-one, the Hungarian method on 1 - p
+    keeping as many pairs as possible, then the cheapest (``common.assignment.assign``)."""
+
+    def assign(self, cost: np.ndarray, max_cost: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return assign(cost, max_cost)
 
 
 # --------------------------------------------------------------- PBM 2: who may start a target
@@ -113,6 +181,9 @@ class Rules(NamedTuple):
     match: AnyAboveThreshold | RelativeMatch
     birth: AnyCandidate | ForegroundSupport
     report_box: LastBox | PredictedBox
+    gap: AsMeasured | PerFrame
+    unfound_size: PredictedSize | HeldSize
+    sharing: Alone | OneToOne
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -122,4 +193,7 @@ def build_rules(a: Adaptations) -> Rules:
         match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
         birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
         report_box=PredictedBox() if a.report_predicted else LastBox(),
+        gap=PerFrame() if a.gap_division else AsMeasured(),
+        unfound_size=HeldSize() if a.hold_size else PredictedSize(),
+        sharing=OneToOne() if a.one_to_one else Alone(),
     )

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackers.layered.adaptations import Adaptations
 from trackers.layered.association import ambiguous_rows
-from trackers.layered.params import Adaptations, MatchParams, PruneParams
+from trackers.layered.params import MatchParams, PruneParams
 from trackers.layered.parts import N_PARTS, PartFeatures
 from trackers.layered.search import Candidates, match_head_template
 from trackers.layered.targets import Targets, dof_from_head

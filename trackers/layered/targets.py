@@ -168,13 +168,10 @@ class Targets:
         return self.kf1.x[:, :2] - self.dof[:, 2:4]
 
     def mark_missed(self, rows: np.ndarray) -> None:
-        """The targets at ``rows`` were not found: every part counts as occluded, and KF2's
-        size rates are zeroed so that the predicted size of a hidden person is held, not
-        extrapolated for as long as it stays hidden (its search boxes, eqs. 9-10, and
-        occlusion test, PBM 3.1, use that size)."""
+        """The targets at ``rows`` were not found: every part counts as occluded (KF2 and
+        its rates: ``rules.unfound_size``)."""
         self.misses[rows] += 1
         self.occluded_parts[rows] = True
-        self.kf2.x[rows, 2:] = 0.0  # KF2 holds the size while unfound (no extrapolation)
 
     def update(self, rows: np.ndarray, dof: np.ndarray, centroid_measured: np.ndarray,
                occluded: np.ndarray, part_scores: np.ndarray, part_match_threshold: float

@@ -14,8 +14,7 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
 4. ``selection.MultipleResponsePruning`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
    ambiguous or weak choice is settled by the target's head template (``rules.match`` may
-   withhold poor matches). Targets then share candidates one-to-one (Hungarian on 1 - p:
-   the paper tracks one target at a time), keeping as many pairs as possible.
+   withhold poor matches); then each target takes its best candidate (``rules.sharing``).
 5. ``_update_models`` (PBM 4.2): global models, KF1, KF2 and the parts of every matched
    target at once.
 6. ``_end_targets`` and ``_start_targets`` (ours: PBM 3 starts each target by hand): a
@@ -25,15 +24,12 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
 7. ``_report``: found targets, and confirmed unfound ones for ``reporting.max_misses``
    frames (OCCLUDED).
 
-Every rule the paper does not have is a field of ``params.Adaptations`` (one row each in
-docs/adaptations.md; ``tracker=pbm_paper`` turns them off); a step such a rule changes calls
-a strategy of ``rules.py`` (the paper's or ours, chosen once in the constructor). Readings
-of the paper that are not switchable: features are measured on a fixed grid of samples per
-box (``PartFeatureExtractor``); p(d | theta) of eq. 12 is the model's survival function
-P(D >= d) (``feature_models``); delta of eqs. 9-10 is relative (w (1 + delta i)) and eq. 2
-is used sign-corrected; after a gap of m frames eq. 11's displacement and overlap are divided by
-1 + m; KF2 holds an unfound target's size; a blob with several heads counts as merged
-(searched) whatever its size.
+Every rule the paper does not have is a field of ``adaptations.Adaptations`` (one row each
+in docs/adaptations.md; ``tracker=pbm_paper`` turns them off); a step such a rule changes
+calls a strategy of ``rules.py`` (the paper's or ours, chosen once in the constructor).
+Readings of the paper where it is silent (paper mode keeps them) are listed there too; also
+features measured on a fixed grid of samples per box (``PartFeatureExtractor``), delta of
+eqs. 9-10 relative (w (1 + delta i)) and eq. 2 used sign-corrected.
 
 Output ``Track.extra``: ``parts`` (5, 4) xywh part boxes, ``occluded_parts`` (5,) bool
 (frozen parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates
@@ -46,20 +42,14 @@ import logging
 
 import numpy as np
 
-from trackers.common.assignment import assign
 from trackers.common.checks import parameter_group
 from trackers.geometry import iou_matrix
-from trackers.layered._kernels import (
-    alive_rows,
-    carved_rows,
-    gated_pairs,
-    matched_rows,
-)
+from trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
+from trackers.layered.adaptations import Adaptations
 from trackers.layered.association import pair_scores
-from trackers.layered.candidates import CandidateFinder
+from trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads, checked_inputs
 from trackers.layered.dynamics import Gate
 from trackers.layered.params import (
-    Adaptations,
     CandidateParams,
     FeatureParams,
     GateParams,
@@ -71,11 +61,7 @@ from trackers.layered.params import (
     SearchParams,
     UpdateParams,
 )
-from trackers.layered.parts import (
-    PartFeatureExtractor,
-    PartFeatures,
-    centroid_ratios,
-)
+from trackers.layered.parts import PartFeatureExtractor, PartFeatures, centroid_ratios
 from trackers.layered.rules import build_rules
 from trackers.layered.search import (
     Candidates,
@@ -87,11 +73,7 @@ from trackers.layered.search import (
 )
 from trackers.layered.selection import FrameScores, MultipleResponsePruning
 from trackers.layered.starts import AutoStarts, GivenTargetOnly
-from trackers.layered.targets import (
-    Targets,
-    dof_from_box,
-    update_parts,
-)
+from trackers.layered.targets import Targets, dof_from_box, update_parts
 from trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
@@ -154,7 +136,9 @@ class PBMTracker:
         f = self.features
         self._extractor = PartFeatureExtractor(f.histogram_bins, *f.grid)
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
-        self._finder = CandidateFinder(self.candidates)
+        a = self.adaptations
+        blob_heads = ProfileHeads(self.candidates) if a.profile_heads else DetectorHeads(self.candidates)
+        self._finder = CandidateFinder(self.candidates, blob_heads, a.blob_box_ratio)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
         self.rules = build_rules(self.adaptations)
         self.starts = AutoStarts() if starts is None else starts
@@ -182,7 +166,7 @@ class PBMTracker:
             One Track per reported target: CONFIRMED when found, OCCLUDED while unfound,
             TENTATIVE before confirmation.
         """
-        frame, detections, fg = self._inputs(frame, detections, foreground)
+        frame, detections, fg = checked_inputs(frame, detections, foreground)
         self._frame += 1
         H, W = frame.shape[:2]
         cand, feats = self._find_candidates(frame, detections, fg)  # PBM 2
@@ -193,33 +177,14 @@ class PBMTracker:
             self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
         withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
-        matches, lost, free = assign(cost, 1.0 - self.matching.match_threshold)
+        matches, lost, free = self.rules.sharing.assign(cost, 1.0 - self.matching.match_threshold)
         if len(matches):
             self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
         if len(lost):
-            self.targets.mark_missed(lost)
+            self.rules.unfound_size.missed(self.targets, lost)
         self._end_targets(W, H)
         self._start_targets(frame, free, cand, feats, fg, withheld)
         return self._report()
-
-    def _inputs(self, frame: np.ndarray, detections: Detections | None,
-                foreground: np.ndarray | None) -> tuple:
-        """Checked inputs: (frame, detections, fg (H, W) C-contiguous bool or None)."""
-        if frame is None:
-            raise ValueError("PBMTracker.update: frame is None; PBM needs pixels (colour histograms of the parts)")
-        frame = np.asarray(frame)
-        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
-            raise ValueError(f"PBMTracker.update: frame must be (H, W, 3) uint8 BGR, got {frame.shape} {frame.dtype}")
-        if detections is None:
-            detections = Detections.empty()
-        fg = None
-        if foreground is not None:
-            foreground = np.asarray(foreground)
-            if foreground.shape != frame.shape[:2]:
-                raise ValueError(f"PBMTracker.update: foreground shape {foreground.shape} "
-                                 f"differs from frame {frame.shape[:2]}")
-            fg = np.ascontiguousarray(foreground if foreground.dtype == bool else foreground != 0)
-        return frame, detections, fg
 
     def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None
                          ) -> tuple[Candidates, PartFeatures]:
@@ -241,7 +206,8 @@ class PBMTracker:
         height below the head) and, for a larger region, that holds the target ("the target
         needs to be located within the blob": a found target's last box lies at least
         ``search.overlap`` inside it) are searched (``_search_occluded``). A blob holding
-        several heads is a merge: searched. With ``adaptations.lone_growth``, a larger
+        several heads is a merge, searched (``adaptations.several_heads_merge``). With
+        ``adaptations.lone_growth``, a larger
         region holding only this target is the target grown: unoccluded.
         """
         targets = self.targets
@@ -252,7 +218,8 @@ class PBMTracker:
         present = (targets.misses <= self.reporting.max_misses) & self.adaptations.lone_growth
         ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
             cand.box, cand.region, cand.head, cand.heads_in_region, gates,
-            pred_wh, kinds, targets.dof, targets.misses, self.search.overlap, present)
+            pred_wh, kinds, targets.dof, targets.misses, self.search.overlap, present,
+            self.adaptations.several_heads_merge)
         pj_in, p_in = self._scores(model, feats, ti_in, n_in)
         scores.pj[ti_in, n_in] = pj_in
         scores.S[ti_in, n_in] = p_in
@@ -311,7 +278,8 @@ class PBMTracker:
     def _scores(self, model: PartFeatures, feats: PartFeatures, ti: np.ndarray,
                 n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eqs. 11-13 of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
-        return pair_scores(self.features.models, model, feats, ti, n, self.targets.misses,
+        return pair_scores(self.features.models, model, feats, ti, n,
+                           self.rules.gap.misses(self.targets),
                            self.features.omega, self.features.gamma, self.adaptations.model_spread)
 
     # ------------------------------------------------------------------ model update (PBM 4.2)

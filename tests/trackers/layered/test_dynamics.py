@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
@@ -14,8 +15,10 @@ from harness.datasets.synthetic import load_scenario
 from harness.metrics import score_sequence
 from harness.pipeline.loop import run_sequence
 from harness.sources.annotations import NoisyGroundTruth
+from trackers.layered.adaptations import Adaptations
 from trackers.layered.dynamics import Gate
 from trackers.layered.parts import PartFeatureExtractor
+from trackers.layered.rules import build_rules
 from trackers.layered.targets import Targets
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -82,9 +85,11 @@ def test_motion_compensation_helps_in_a_crowd():
     assert on[1] > off[1] + 0.02
 
 
-def test_size_is_held_while_unfound():
-    """KF2 stops extrapolating the size of a target that is not found: a shrinking person
-    who disappears keeps the last predicted size instead of shrinking for ever."""
+@pytest.mark.parametrize("hold", [True, False])
+def test_size_is_held_while_unfound(hold):
+    """``hold_size``: KF2 stops extrapolating the size of a target that is not found: a
+    shrinking person who disappears keeps the last predicted size instead of shrinking for
+    ever. The paper's KF2 (eq. 8) keeps predicting with its rates."""
     tg = _targets()
     ex = PartFeatureExtractor(4, 14, 6)
     ex.start(np.full((240, 320, 3), 90, np.uint8), None)
@@ -96,13 +101,19 @@ def test_size_is_held_while_unfound():
         tg.update(np.array([0]), np.array([[100.0, 50.0, 115.0, 50.0 + h / 2, h / 3, h]]),
                   np.ones(1, bool), np.zeros(1, bool), np.ones((1, 5)), 0.4)
     assert tg.kf2.x[0, 2] < -0.3  # KF2 has learnt the shrinking
+    rule = build_rules(Adaptations(hold_size=hold)).unfound_size
     sizes = []
     for _ in range(20):
         sizes.append(tg.predict()[0].copy())
-        tg.mark_missed(np.array([0]))
-    assert np.array_equal(tg.kf2.x[0, 2:], [0.0, 0.0])
-    assert np.array_equal(sizes[1], sizes[-1])  # held from the first miss on
-    assert sizes[-1][1] > 75.0
+        rule.missed(tg, np.array([0]))
+    assert tg.misses[0] == 20 and tg.occluded_parts[0].all()
+    if hold:
+        assert np.array_equal(tg.kf2.x[0, 2:], [0.0, 0.0])
+        assert np.array_equal(sizes[1], sizes[-1])  # held from the first miss on
+        assert sizes[-1][1] > 75.0
+    else:  # still shrinking, by KF2's rate
+        assert tg.kf2.x[0, 2] < -0.3
+        assert sizes[-1][1] < sizes[1][1] - 5.0
 
 
 def test_a_person_who_walks_on_behind_an_occluder_keeps_the_id():

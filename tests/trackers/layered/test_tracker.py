@@ -561,8 +561,9 @@ def test_gated_pairs_equal_the_numpy_gating():
         kinds = occlusion_kinds(regions[:, 2:], pred, 0.5)
         dof = np.column_stack([tboxes[:, :2], tboxes[:, :2] + 0.5 * tboxes[:, 2:], tboxes[:, 2:]])
         present = rng.random(T) < (0.0 if trial % 4 == 0 else 0.8)
+        merge_heads = trial % 3 != 1  # adaptations.several_heads_merge
         got = gated_pairs(boxes, regions, heads, nh, gates, pred, kinds.copy(), dof, misses, so,
-                          present)
+                          present, merge_heads)
         # the numpy reference
         if so > 0:  # lone growth: the one present target holding a one-head larger region
             holds = (overlap_ratio_matrix(tboxes, regions) >= so) & present[:, None]
@@ -573,7 +574,7 @@ def test_gated_pairs_equal_the_numpy_gating():
         g = gates[:, None]
         inside = ((c[:, 0] >= g[..., 0]) & (c[:, 0] <= g[..., 0] + g[..., 2])
                   & (c[:, 1] >= g[..., 1]) & (c[:, 1] <= g[..., 3] + g[..., 1]))
-        merged = nh > 1
+        merged = (nh > 1) & merge_heads
         kinds[:, merged] = np.where(kinds[:, merged] == 0, 1, kinds[:, merged])
         ti_in, n_in = np.nonzero(inside & (kinds == 0))
         hx, hy = heads[:, 0], heads[:, 1] + 0.5 * pred[:, 1, None]
@@ -789,7 +790,10 @@ def test_paper_mode_turns_every_adaptation_off():
     assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
     assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
     assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
-    assert ours.adaptations != a
+    assert a == Adaptations.paper() and a.changed() == []
+    assert not (a.gap_division or a.hold_size or a.blob_box_ratio or a.several_heads_merge
+                or a.profile_heads or a.one_to_one)
+    assert ours.adaptations == Adaptations() and ours.adaptations != a
     # what the paper leaves open: ours
     for group in ("gate", "noise", "search", "matching", "pruning", "model_update", "life_cycle",
                   "reporting"):
@@ -804,9 +808,9 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     ours = R.build_rules(Adaptations())
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
-                                       R.PredictedBox]
+                                       R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne]
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
-                                        R.LastBox]
+                                        R.LastBox, R.AsMeasured, R.PredictedSize, R.Alone]
     # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
     tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])

@@ -1,0 +1,155 @@
+"""Every rule of ours the PBM paper does not have, and the paper's value of each.
+
+``Adaptations`` holds one field per rule (``docs/adaptations.md``, PBM part: one row each,
+with the paper's section, its value and the evidence); ``Adaptations.paper()`` is the paper
+as written (``conf/tracker/pbm_paper.yaml`` sets every field to it, so
+``Adaptations.changed()`` is empty there). ``rules.build_rules`` turns the fields into the
+strategy objects the tracker calls. Readings of the paper where it is silent (not
+adaptations: paper mode keeps them) are listed in ``docs/adaptations.md`` too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from trackers.common.checks import at_least, coerce, require, unit
+from trackers.layered.parts import PartFeatures
+from trackers.layered.targets import Targets, stale_parts
+
+UNBOUNDED = 1_000_000
+"""The paper's "until found or lost" / "never" for a count or a size."""
+
+
+@dataclass(frozen=True)
+class StaleParts:
+    """Stale parts (an adaptation beyond PBM 4.2, ``model.stale_parts``): a visible part
+    that fails to match ``frames`` times is re-learned; the paper keeps it frozen until it
+    matches.
+
+    Args:
+        frames: failures in a row of a visible part before it is re-learned (>= 1).
+        cover: a part is visible when at most this fraction of its rectangle lies under
+            another target's box (found, or reported unfound) or outside the image.
+        fill: ... and its foreground area is at least this fraction of its model's (a part
+            behind a wall loses its foreground).
+        relearn_rate: running-average step of a re-learned part (1 = replaced).
+    """
+
+    frames: int = 3
+    cover: float = 0.1
+    fill: float = 0.75
+    relearn_rate: float = 1.0
+
+    def __post_init__(self) -> None:
+        at_least("adaptations.stale", 1, frames=self.frames)
+        unit("adaptations.stale", cover=self.cover, fill=self.fill, relearn_rate=self.relearn_rate)
+        coerce(self, {"frames": int, "cover": float, "fill": float, "relearn_rate": float})
+
+    def relearn(self, targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
+                part_scores: np.ndarray, part_threshold: float, occluder_misses: int,
+                image_size: tuple[int, int]) -> np.ndarray:
+        """The (M, 5) parts of the targets at ``rows``, matched unoccluded to the candidates
+        at ``ks`` of ``cand``, to re-learn (``model.stale_parts``, which counts
+        ``targets.stale``)."""
+        return stale_parts(targets, rows, cand, ks, part_scores, part_threshold, occluder_misses,
+                           image_size, self.cover, self.fill, self.frames)
+
+
+@dataclass(frozen=True)
+class Adaptations:
+    """Every rule of ours that the paper does not have (``docs/adaptations.md``: one row
+    each, with the paper's value and the evidence); ``paper()`` holds the paper's values
+    (``tracker=pbm_paper``).
+
+    Args:
+        model_spread: p(d | theta) applied to d / model_spread (paper: 1, as fitted).
+        motion_compensation: eq. 11's displacement and overlap against the parts model
+            moved by KF1's constant-velocity prediction (paper: the last frame as it is).
+        lone_growth: a larger region with one head that holds the target and no other found
+            or reported target is the target grown, not a merge (paper: searched).
+        min_support: with foreground, a candidate starts a target only when one of its parts
+            has this foreground fraction (paper: 0, any detection).
+        relative_match: a target found last frame takes no candidate scoring below this x
+            its last match's score, and a candidate so withheld starts no target (paper: 0).
+        duplicate_radius: ambiguous candidates whose heads all lie within this many head
+            widths of the best's are one response: best kept, no template match (paper:
+            negative, always match).
+        prune_max_misses: a target unfound for more frames is not pruned by its stale head
+            template (paper: unbounded).
+        stale: re-learning of stale parts (``StaleParts``); None: frozen until they match
+            (the paper).
+        gate_max_fraction: the gate stops growing at this many target sizes (paper:
+            unbounded).
+        exit_margin, exit_misses: an unfound target whose box, moved by KF1's prediction,
+            crossed the image border by more than exit_margin pixels is dropped after
+            exit_misses frames (paper: never, only after ``life_cycle.max_misses``).
+        report_predicted: an unfound target is reported at its last box moved by KF1's
+            prediction (paper: reporting is ours; at its last validated box).
+        gap_division: after m frames unfound, eq. 11's displacement and overlap are divided
+            by 1 + m (per-frame differences; paper: as measured, eq. 11).
+        hold_size: KF2's size rates are zeroed while a target is unfound, so its predicted
+            size is held (paper: KF2 predicts, eq. 8).
+        blob_box_ratio: a blob-born candidate's box is rescaled by the detection/blob size
+            ratio learnt online from isolated people (paper: the blob's span, PBM 2.1).
+        several_heads_merge: a blob holding several heads is a merge (searched) whatever
+            its size (paper: the 50% size test of PBM 3.1 alone).
+        profile_heads: a blob's heads are the peaks of its top profile (paper: the head
+            detector of PBM 2.3, ``candidates.head_detector``).
+        one_to_one: targets share candidates one-to-one (Hungarian on 1 - p, as many
+            pairs as possible); off, each target takes its best candidate as if tracked
+            alone, as the paper tracks each target (PBM 3, 4 step 4).
+    """
+
+    model_spread: float = 4.5
+    motion_compensation: bool = True
+    lone_growth: bool = True
+    min_support: float = 0.3
+    relative_match: float = 0.5
+    duplicate_radius: float = 0.25
+    prune_max_misses: int = 5
+    stale: StaleParts | None = field(default_factory=StaleParts)
+    gate_max_fraction: float = 6.0
+    exit_margin: float = 8.0
+    exit_misses: int = 3
+    report_predicted: bool = True
+    gap_division: bool = True
+    hold_size: bool = True
+    blob_box_ratio: bool = True
+    several_heads_merge: bool = True
+    profile_heads: bool = True
+    one_to_one: bool = True
+
+    def __post_init__(self) -> None:
+        require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
+                self.model_spread)
+        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match)
+        require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
+                self.gate_max_fraction)
+        at_least("adaptations", 0, exit_misses=self.exit_misses)
+        if self.stale is not None and not isinstance(self.stale, StaleParts):
+            raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
+        coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
+                                       "duplicate_radius", "gate_max_fraction", "exit_margin"),
+                                      float),
+                      **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
+                                       "gap_division", "hold_size", "blob_box_ratio",
+                                       "several_heads_merge", "profile_heads", "one_to_one"),
+                                      bool),
+                      "prune_max_misses": int, "exit_misses": int})
+
+    @classmethod
+    def paper(cls) -> Adaptations:
+        """Every adaptation off: the paper as written (``conf/tracker/pbm_paper.yaml``)."""
+        return cls(model_spread=1.0, motion_compensation=False, lone_growth=False,
+                   min_support=0.0, relative_match=0.0, duplicate_radius=-1.0,
+                   prune_max_misses=UNBOUNDED, stale=None, gate_max_fraction=float(UNBOUNDED),
+                   exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
+                   hold_size=False, blob_box_ratio=False, several_heads_merge=False,
+                   profile_heads=False, one_to_one=False)
+
+    def changed(self) -> list[str]:
+        """Names of the fields that differ from the paper's values."""
+        paper = self.paper()
+        return [f.name for f in fields(self) if getattr(self, f.name) != getattr(paper, f.name)]
