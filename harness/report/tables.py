@@ -90,7 +90,8 @@ def _rounded(df: pd.DataFrame, digits: int) -> pd.DataFrame:
 
 
 def best_mask(df: pd.DataFrame, digits: int = 3, sense: int | None = None) -> pd.DataFrame:
-    """Boolean frame, True where a cell holds its column's best value (ties all True).
+    """Boolean frame, True where a cell holds its column's best value (ties all True, but a
+    column where every value ties is not marked).
 
     Values are compared as displayed (rounded to ``digits``, counts to whole numbers); a
     column with fewer than two finite values or no direction is never marked. ``sense``
@@ -106,6 +107,8 @@ def best_mask(df: pd.DataFrame, digits: int = 3, sense: int | None = None) -> pd
         if d == 0 or finite.sum() < 2:
             continue
         best = np.max(d * v[finite])
+        if np.all(d * v[finite] == best):  # every value ties (all zero...): nothing is best
+            continue
         mask[c] = finite & (d * np.where(finite, v, 0.0) == best)
     return mask
 

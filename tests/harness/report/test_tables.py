@@ -12,16 +12,18 @@ from harness.report.tables import best_mask, comparison, to_latex, to_markdown, 
 
 
 def test_best_values_are_marked_by_direction():
-    df = pd.DataFrame({"IDF1": [0.5, 0.7], "FP": [10, 3], "IDs": [2, 2], "PT": [1, 5],
-                       "MOTA": [np.nan, -0.2]}, index=pd.Index(["a", "b"], name="tracker"))
+    df = pd.DataFrame({"IDF1": [0.5, 0.7, 0.6], "FP": [10, 3, 4], "IDs": [2, 2, 3],
+                       "PT": [1, 5, 5], "MOTA": [np.nan, -0.2, np.nan], "ML": [0, 0, 0]},
+                      index=pd.Index(["a", "b", "c"], name="tracker"))
     best = best_mask(df)
-    assert list(best["IDF1"]) == [False, True]
-    assert list(best["FP"]) == [False, True]  # lower is better
-    assert list(best["IDs"]) == [True, True]  # a tie marks both
-    assert list(best["PT"]) == [False, False]  # neither better nor worse
-    assert list(best["MOTA"]) == [False, False]  # one finite value: nothing to compare
+    assert list(best["IDF1"]) == [False, True, False]
+    assert list(best["FP"]) == [False, True, False]  # lower is better
+    assert list(best["IDs"]) == [True, True, False]  # a tie for best marks both
+    assert list(best["PT"]) == [False, False, False]  # neither better nor worse
+    assert list(best["MOTA"]) == [False, False, False]  # one finite value: nothing to compare
+    assert list(best["ML"]) == [False, False, False]  # every value ties: none is best
     md = to_markdown(df)
-    assert "| b | **0.700** | **3** | **2** | 5 | -0.200 |" in md
+    assert "| b | **0.700** | **3** | **2** | 5 | -0.200 | 0 |" in md
     tex = to_latex(df.rename(index={"b": "my_tracker"}))
     assert r"my\_tracker & \textbf{0.700} & \textbf{3}" in tex
     assert "0.700*" in to_text(df)
