@@ -5,6 +5,8 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
 
 * ``det/<sequence>.txt``: MOTChallenge detection rows ``frame,-1,left,top,w,h,score,-1,-1,-1``
   (written by ``harness.io.mot.write_mot``, the one place converting to 1-based boxes);
+* ``front_end.txt``: one line per sequence on which the front end fell back to another
+  detector (which, and why; also printed);
 * ``detection_metrics.csv``: TP, FP, FN, precision, recall and F1 at IoU >= ``iou_threshold``
   per sequence and COMBINED (counts summed, ratios recomputed), from a one-to-one Hungarian
   matching of detections to ground truth per frame;
@@ -150,12 +152,17 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
 
         head_detector = HeadDetector()
     counts: dict[str, DetectionCounts] = {}
+    front_end_notes: dict[str, str] = {}
     failures: list[str] = []
     (out_dir / "errors.txt").unlink(missing_ok=True)
+    (out_dir / "front_end.txt").unlink(missing_ok=True)
     for seq in sequences:
         try:
             _detect_sequence(seq, source, out_dir, iou, ov_frames, head_detector, progress,
                              counts, cache)
+            note = fallback_note(source)
+            if note is not None:
+                front_end_notes[seq.info.name] = note
         except Exception as err:  # noqa: BLE001 - this sequence fails, the next goes on
             msg = f"sequence {seq.info.name}: {type(err).__name__}: {err}"
             log.error("%s", msg)
@@ -164,11 +171,24 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
                 fh.write(msg + "\n    " + traceback.format_exc().rstrip().replace(
                     "\n", "\n    ") + "\n")
     table = metrics_table(counts)
+    notes = [f"{name}: {note}" for name, note in front_end_notes.items()]
+    if notes:
+        write_atomic(out_dir / "front_end.txt", "\n".join(notes) + "\n")
     write_atomic(out_dir / "detection_metrics.csv",
                  table.to_csv(index=False, float_format="%.4f", lineterminator="\n"))
     if failures:
         raise DetectionFailed(failures, table)
     return table
+
+
+def fallback_note(source) -> str | None:
+    """One line when the source's detector fell back on the last sequence (which detector
+    and why: ``SilhouetteDetector.fallback_reason``), else None."""
+    detector = getattr(source, "detector", source)
+    reason = getattr(detector, "fallback_reason", None)
+    if reason is None:
+        return None
+    return f"detected with {detector.fallback.name}: {reason}"
 
 
 class DetectionFailed(RuntimeError):
@@ -270,6 +290,9 @@ def app(cfg: DictConfig) -> None:
         raise SystemExit(f"harness.commands.detect: {err}") from None
     with pd.option_context("display.width", 160, "display.float_format", "{:.3f}".format):
         print(table.to_string(index=False))
+    if (out_dir / "front_end.txt").is_file():
+        print("front end fell back on:\n  " + (out_dir / "front_end.txt").read_text().rstrip()
+              .replace("\n", "\n  "))
     print(f"results: {out_dir}")
     if failed is not None:
         raise SystemExit(f"harness.commands.detect: {len(failed.failures)} sequence(s) failed (the "

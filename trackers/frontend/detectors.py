@@ -21,6 +21,7 @@ from trackers.frontend.active_basis import ShapeVerifier
 from trackers.frontend.background import BackgroundModel
 from trackers.frontend.blobs import Blob, blobs_from_mask
 from trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
+from trackers.frontend.fallback import CameraFitCheck, FitEvidence, RegionDetector
 from trackers.frontend.heads import HeadDetector
 from trackers.frontend.silhouette import SilhouetteMatcher
 from trackers.geometry import iou_matrix
@@ -212,6 +213,12 @@ class SilhouetteDetector(_ForegroundPipeline):
         verifier: optional shape verifier (``active_basis.ShapeVerifier``: Reta 3.1's
             active-basis template of Gabor elements on the frame's grey levels) that keeps,
             drops or splits the matcher's boxes.
+        fit_check: the ``fallback.CameraFitCheck`` judging, after the calibration, whether
+            the person model fits the camera, on the "fits" evidence (None, or "blobs"
+            evidence: never judged).
+        fallback: the detector used instead when it does not (``fallback.RegionDetector``;
+            None: keep the silhouette search). ``fallback_reason`` says why, in one line,
+            and the warm-up logs it with the fallback's name.
     """
 
     def __init__(
@@ -223,8 +230,11 @@ class SilhouetteDetector(_ForegroundPipeline):
         calibration_frames: int = 100,
         calibration_evidence: str = "fits",
         verifier: ShapeVerifier | None = None,
+        fit_check: CameraFitCheck | None = None,
+        fallback: RegionDetector | None = None,
     ) -> None:
         super().__init__(background)
+        self.fit_check, self.fallback = fit_check, fallback
         self.matcher = matcher if matcher is not None else SilhouetteMatcher()
         self.verifier = verifier
         self.heads = heads
@@ -241,6 +251,10 @@ class SilhouetteDetector(_ForegroundPipeline):
         super().reset()
         self.perspective: Perspective | None = None
         self.area: tuple[int, int, int, int] | None = None  # live picture, see active_area
+        self.evidence = FitEvidence()
+        self.fallback_reason: str | None = None  # why the fallback detects, None: it does not
+        if self.fallback is not None:
+            self.fallback.reset()
         if self.calibration is not None:
             self.calibration.reset()
         self.matcher.set_height_model(None)
@@ -259,12 +273,35 @@ class SilhouetteDetector(_ForegroundPipeline):
             if f is not None:
                 self._collect(self.background.peek(f))
         self.perspective = self.calibration.fit()
+        if self._fall_back(length, frame):
+            return
         if self.perspective is None:
             log.warning("scene calibration: too little evidence (%d samples from %d frames); "
                         "searching every person height", len(self.calibration.samples), len(ks))
             return
         log.info("scene calibration: %s, from %d frames", self.perspective.describe(), len(ks))
         self.matcher.set_height_model((self.perspective.a, self.perspective.b))
+
+    def _fall_back(self, length: int, frame: Callable[[int], np.ndarray | None]) -> bool:
+        """Switch to ``fallback`` when ``fit_check`` finds the person model misfits (one
+        warning naming the fallback and why); True when it did."""
+        if self.fit_check is None or self.fallback is None:
+            return False
+        reason = self.fit_check.misfit(self.perspective is not None, self.evidence)
+        log.info("camera fit: the template fits explain %.0f%% of the foreground of %d of %d "
+                 "calibration frames", 100 * self.evidence.explained_share,
+                 self.evidence.busy_frames, self.evidence.frames)
+        if reason is None:
+            return False
+        self.fallback_reason = reason
+        log.warning("front end: %s; detecting with %s instead", reason, self.fallback.name)
+        self.fallback.warm_up_sequence(length, frame)
+        return True
+
+    def detect(self, frame: np.ndarray) -> tuple[Detections, np.ndarray]:
+        if self.fallback_reason is not None:
+            return self.fallback.detect(frame)
+        return super().detect(frame)
 
     def _live(self, fg: np.ndarray) -> tuple[np.ndarray, int, int]:
         """The live picture's part of ``fg`` and its (row, column) offset."""
@@ -283,6 +320,7 @@ class SilhouetteDetector(_ForegroundPipeline):
             return
         self.calibration.frame_height = live.shape[0]
         boxes, _, _ = self.matcher.fit_all(live, group=False)
+        self.evidence.add(live, boxes)
         blobs = blobs_from_mask(live, 1, perimeter=False)
         if not len(boxes) or not blobs:
             return

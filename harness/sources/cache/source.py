@@ -126,16 +126,20 @@ def check(entry: Entry, numbers: range) -> None:
 def entry_meta(sequence: Sequence, config: dict[str, Any], source: Any) -> dict[str, Any]:
     """What an entry says of itself (``occbench cache`` lists it): the sequence, its frames,
     the source and detector classes, where and when it was computed, and the detector's
-    learnt scene calibration (its ``perspective``) when it has one."""
+    learnt scene calibration (its ``perspective``) when it has one, and the detector it fell
+    back to and why (``fallback``; None when it did not)."""
     numbers = sequence.frame_numbers()
     inner = config.get("detector")
-    perspective = getattr(getattr(source, "detector", source), "perspective", None)
+    detector = getattr(source, "detector", source)
+    perspective = getattr(detector, "perspective", None)
+    reason = getattr(detector, "fallback_reason", None)
     return {"sequence": sequence.info.name, "frames": [numbers[0], numbers[-1]],
             "source": str(config.get("_target_", "?")),
             "detector": str(inner.get("_target_", "")) if isinstance(inner, dict) else "",
             "host": socket.gethostname(), "created": time.time(),
             "calibration": dataclasses.asdict(perspective)
-            if dataclasses.is_dataclass(perspective) else None}
+            if dataclasses.is_dataclass(perspective) else None,
+            "fallback": None if reason is None else f"{detector.fallback.name}: {reason}"}
 
 
 def store_outputs(store: Store, config: dict[str, Any], sequence: Sequence, source: Any,
@@ -212,6 +216,8 @@ class CachedSource:
                "another job meanwhile)", "computed": "computed and stored in the cache"}
         log.info("front end of %s: %s (%s, %.1f s)", self._name, how[self.origin],
                  self.store.path(key), time.perf_counter() - t0)
+        if self.origin != "computed" and entry.meta.get("fallback"):
+            log.warning("front end of %s: detected with %s", self._name, entry.meta["fallback"])
 
     def _compute(self, sequence: Sequence) -> tuple[dict[str, Any], Arrays]:
         """Run the wrapped source over the whole sequence: the entry's meta and arrays."""

@@ -1,0 +1,357 @@
+"""When the person model does not fit the camera: notice it, say so, detect regions instead.
+
+The silhouette detector assumes upright people whose height grows with the foot row (a
+camera above a floor, ``calibration.Perspective``). A wide-angle camera looking down (the
+CAVIAR lobby) breaks both: people are seen from above, often wider than tall. Two pieces:
+
+``CameraFitCheck`` decides, from the warm-up's evidence (``FitEvidence``), whether the person
+model fits: it does not when the template fits made on the calibration frames explain too
+little of the foreground (share of foreground pixels inside a fitted template box), whether
+or not the calibration found a line. Its verdict is one line naming what is wrong and what the
+front end does instead.
+
+``RegionDetector`` is what it falls back to: foreground regions, with no person shape, on a
+background model that can start with people in view (``MedianBackground``), grouped into
+person-sized boxes whose size is learnt from the scene as it runs (no ground truth):
+
+* background (``MedianBackground``): the per-pixel median of the first ``init_frames``
+  frames (the only frames read ahead: a live camera would start reporting ``init_frames``
+  frames late; nothing after them is read before its turn), then a running average updated
+  every frame, fast where the frame is background and slow where it is foreground (a person
+  standing in the first frames leaves a ghost that fades in about 1 / ``slow_rate`` frames;
+  glare pixels are not learnt);
+  the threshold is ``k_sigma`` times each pixel's noise (robust spread of the first frames),
+  at least ``min_difference`` grey levels;
+* glare: a pixel saturated (any channel >= ``saturation``) in the frame or the background, or
+  within the blur's reach of one, is never foreground, nor is a pixel that only got brighter with its colour unchanged
+  (chromaticity within ``chroma_tolerance``): sun and window glare;
+* regions: connected components after an opening and a closing; fragments whose boxes lie
+  within ``merge_gap`` person sizes of each other are merged; optionally a region more than
+  ``split_ratio`` times the typical person area is split into round(area / typical) boxes
+  (k-means on its pixel coordinates, seeded); the typical person area is the running median of
+  the areas of the regions reported so far (starting at ``initial_area``).
+
+It finds people who move; people who stay where they are in the first frames are part of any
+background learnt from the clip itself and are not found.
+
+Plain numpy and OpenCV. Measurement history lives in docs/generalisation.md ("lobby").
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from trackers.records import Detections
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class FitEvidence:
+    """How well the person model's fits explain the foreground of the calibration frames.
+
+    Attributes:
+        frames: calibration frames seen.
+        busy_frames: frames with at least ``min_area`` foreground pixels in regions.
+        foreground: foreground pixels in regions of at least ``min_area`` pixels, summed.
+        explained: those inside a fitted template box, summed.
+        min_area: smallest region counted, pixels.
+    """
+
+    frames: int = 0
+    busy_frames: int = 0
+    foreground: int = 0
+    explained: int = 0
+    min_area: int = 40
+
+    def add(self, fg: np.ndarray, boxes: np.ndarray) -> None:
+        """One frame: ``fg`` (H, W) bool foreground, ``boxes`` (N, 4) xywh fitted template
+        boxes in the same pixel frame."""
+        self.frames += 1
+        m = np.asarray(fg).astype(np.uint8)
+        _, lab, stats, _ = cv2.connectedComponentsWithStats(m, 8)
+        big = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= self.min_area) + 1
+        if not len(big):
+            return
+        regions = np.isin(lab, big)
+        count = int(regions.sum())
+        self.busy_frames += 1
+        self.foreground += count
+        inside = np.zeros_like(regions)
+        H, W = regions.shape
+        for x, y, w, h in np.asarray(boxes, dtype=np.float64).reshape(-1, 4):
+            r0, r1 = max(int(y), 0), min(int(np.ceil(y + h)), H)
+            c0, c1 = max(int(x), 0), min(int(np.ceil(x + w)), W)
+            if r1 > r0 and c1 > c0:
+                inside[r0:r1, c0:c1] = True
+        self.explained += int((regions & inside).sum())
+
+    @property
+    def explained_share(self) -> float:
+        """Share of the counted foreground inside fitted boxes (nan without foreground)."""
+        return self.explained / self.foreground if self.foreground else float("nan")
+
+
+class CameraFitCheck:
+    """Does the person model fit this camera? (see the module docstring)
+
+    Args:
+        min_explained: smallest share of the foreground the fits must explain.
+        min_busy_frames: fewest calibration frames with foreground for a verdict (with fewer,
+            the scene is too empty to judge and the model is kept).
+    """
+
+    def __init__(self, min_explained: float = 0.5, min_busy_frames: int = 10) -> None:
+        if not 0.0 < min_explained <= 1.0:
+            raise ValueError(f"min_explained must be in (0, 1], got {min_explained}")
+        if min_busy_frames < 1:
+            raise ValueError(f"min_busy_frames must be >= 1, got {min_busy_frames}")
+        self.min_explained = float(min_explained)
+        self.min_busy_frames = int(min_busy_frames)
+
+    def misfit(self, calibrated: bool, evidence: FitEvidence) -> str | None:
+        """Why the person model does not fit (one line), or None when it fits or the
+        evidence is too thin to say."""
+        if evidence.busy_frames < self.min_busy_frames:
+            return None
+        share = evidence.explained_share
+        if share >= self.min_explained:
+            return None
+        calib = ("found a ground-plane line" if calibrated
+                 else "found no consistent upright people")
+        return (f"the upright-person model does not fit this camera: calibration {calib}, and "
+                f"the template fits explain {100 * share:.0f}% of the foreground of "
+                f"{evidence.busy_frames} calibration frames (< {100 * self.min_explained:.0f}%)")
+
+
+class MedianBackground:
+    """Background from the median of the first frames, then a selective running average;
+    glare-blind difference (see the module docstring). Frames (H, W, 3) uint8 BGR.
+
+    Args:
+        init_frames: frames whose per-pixel median starts the background.
+        fast_rate, slow_rate: update rates where the frame is background / foreground.
+        k_sigma: threshold in units of each pixel's noise (1.4826 MAD of the first frames).
+        min_difference: smallest threshold, grey levels (max over the channels).
+        saturation: a channel value at or above which a pixel is glare.
+        chroma_tolerance: largest chromaticity change of a brightening counted as glare
+            (0: off).
+        blur: Gaussian kernel (odd) applied to every frame before differencing (0/1: none).
+        open_kernel, close_kernel: elliptic opening and closing of the mask (0/1: none).
+    """
+
+    def __init__(self, init_frames: int = 100, fast_rate: float = 0.02, slow_rate: float = 0.002,
+                 k_sigma: float = 4.0, min_difference: float = 20.0, saturation: int = 245,
+                 chroma_tolerance: float = 0.0, blur: int = 3, open_kernel: int = 3,
+                 close_kernel: int = 7) -> None:
+        if init_frames < 1:
+            raise ValueError(f"init_frames must be >= 1, got {init_frames}")
+        if not 0.0 <= slow_rate <= fast_rate <= 1.0:
+            raise ValueError(f"need 0 <= slow_rate <= fast_rate <= 1, got {slow_rate}, {fast_rate}")
+        if k_sigma <= 0 or min_difference < 0:
+            raise ValueError(f"k_sigma must be > 0 and min_difference >= 0, got {k_sigma}, {min_difference}")
+        if blur > 1 and blur % 2 == 0:
+            raise ValueError(f"blur must be odd, got {blur}")
+        self.init_frames, self.fast_rate, self.slow_rate = int(init_frames), float(fast_rate), float(slow_rate)
+        self.k_sigma, self.min_difference = float(k_sigma), float(min_difference)
+        self.saturation, self.chroma_tolerance = int(saturation), float(chroma_tolerance)
+        self.blur = int(blur)
+        self._open = _ellipse(open_kernel)
+        self._close = _ellipse(close_kernel)
+        self.reset()
+
+    def reset(self) -> None:
+        self.background: np.ndarray | None = None  # (H, W, 3) float32
+        self.noise: np.ndarray | None = None  # (H, W) float32
+
+    def _smooth(self, frame: np.ndarray) -> np.ndarray:
+        f = cv2.GaussianBlur(frame, (self.blur, self.blur), 0) if self.blur > 1 else frame
+        return f.astype(np.float32)
+
+    def start(self, frames: list[np.ndarray]) -> None:
+        """The median of ``frames`` (the first ``init_frames`` of the sequence) and each
+        pixel's noise."""
+        if not frames:
+            raise ValueError("MedianBackground.start: no frames")
+        stack = np.stack([self._smooth(f) for f in frames])
+        self.background = np.median(stack, axis=0)
+        grey = stack.mean(axis=3)
+        mad = np.median(np.abs(grey - np.median(grey, axis=0)), axis=0)
+        self.noise = np.maximum(1.4826 * mad, 1.0).astype(np.float32)
+
+    def apply(self, frame: np.ndarray) -> np.ndarray:
+        """(H, W) bool foreground of ``frame``; then the background learns from it."""
+        if self.background is None:
+            self.start([frame])
+        img = self._smooth(frame)
+        B = self.background
+        diff = np.abs(img - B).max(axis=2)
+        fg = diff > np.maximum(self.k_sigma * self.noise, self.min_difference)
+        glare = (frame.max(axis=2) >= self.saturation) | (B.max(axis=2) >= self.saturation)
+        if self.chroma_tolerance > 0:
+            s_img, s_bg = img.sum(axis=2) + 1.0, B.sum(axis=2) + 1.0
+            chroma = np.abs(img / s_img[..., None] - B / s_bg[..., None]).max(axis=2)
+            glare |= (s_img > s_bg) & (chroma <= self.chroma_tolerance)
+        if self.blur > 1:  # the blur spreads glare onto its neighbours
+            glare = cv2.dilate(glare.view(np.uint8), _ellipse(self.blur)).view(bool)
+        mask = (fg & ~glare).astype(np.uint8)
+        if self._open is not None:
+            mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open)
+        if self._close is not None:
+            mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)
+        fgm = mask.astype(bool) & ~glare  # the closing must not bridge into glare
+        rate = np.where(fgm, self.slow_rate, self.fast_rate).astype(np.float32)
+        rate[glare] = 0.0  # glare teaches the background nothing
+        rate = rate[..., None]
+        B += rate * (img - B)
+        return fgm
+
+
+def _ellipse(size: int) -> np.ndarray | None:
+    if size < 0:
+        raise ValueError(f"kernel size must be >= 0, got {size}")
+    return None if size <= 1 else cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
+
+
+@dataclass
+class RegionSizes:
+    """Running median of the areas of reported regions: the scene's typical person area.
+
+    Attributes:
+        initial_area: typical area before any region is seen, pixels.
+        window: most recent areas kept.
+    """
+
+    initial_area: float = 600.0
+    window: int = 500
+    areas: list[float] = field(default_factory=list)
+
+    def typical(self) -> float:
+        return float(np.median(self.areas)) if self.areas else self.initial_area
+
+    def add(self, area: float) -> None:
+        self.areas.append(float(area))
+        if len(self.areas) > self.window:
+            del self.areas[0]
+
+
+class RegionDetector:
+    """Foreground regions as person-sized boxes (the fallback; see the module docstring).
+
+    Args:
+        background: the ``MedianBackground`` (None: its defaults).
+        min_area: smallest region, pixels (smaller components are dropped first).
+        min_share: smallest region, as a share of the typical person area.
+        merge_gap: fragments whose boxes are closer than this times the typical person's
+            side (square root of its area) are merged.
+        split_ratio: a region larger than this times the typical area is split (None: never).
+        initial_area: typical person area before the scene has shown any, pixels.
+        seed: k-means seed of the splits.
+    """
+
+    name = "foreground regions (trackers.frontend.fallback.RegionDetector)"
+
+    def __init__(self, background: MedianBackground | None = None, min_area: int = 40,
+                 min_share: float = 0.0, merge_gap: float = 0.3, split_ratio: float | None = None,
+                 initial_area: float = 600.0, seed: int = 0) -> None:
+        if min_area < 1 or not 0 <= min_share < 1:
+            raise ValueError(f"need min_area >= 1 and 0 <= min_share < 1, got {min_area}, {min_share}")
+        if merge_gap < 0 or (split_ratio is not None and split_ratio <= 1) or initial_area <= 0:
+            raise ValueError(f"need merge_gap >= 0, split_ratio > 1, initial_area > 0, got "
+                             f"{merge_gap}, {split_ratio}, {initial_area}")
+        self.background = background if background is not None else MedianBackground()
+        self.min_area, self.min_share = int(min_area), float(min_share)
+        self.merge_gap = float(merge_gap)
+        self.split_ratio = None if split_ratio is None else float(split_ratio)
+        self.initial_area, self.seed = float(initial_area), int(seed)
+        self.reset()
+
+    def reset(self) -> None:
+        self.background.reset()
+        self.sizes = RegionSizes(self.initial_area)
+
+    def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
+        """Start the background from frames 1..min(init_frames, length) (1-based)."""
+        first = [frame(k) for k in range(1, min(self.background.init_frames, length) + 1)]
+        first = [f for f in first if f is not None]
+        if first:
+            self.background.start(first)
+
+    def detect(self, frame: np.ndarray) -> tuple[Detections, np.ndarray]:
+        fg = self.background.apply(frame)
+        return self.detect_on(frame, fg), fg
+
+    def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), 8)
+        typical = self.sizes.typical()
+        floor = max(self.min_area, self.min_share * typical)
+        keep = [i for i in range(1, n) if stats[i, cv2.CC_STAT_AREA] >= self.min_area]
+        groups = _merge(stats, keep, self.merge_gap * np.sqrt(typical))
+        boxes: list[np.ndarray] = []
+        labels = np.zeros(fg.shape, dtype=np.int32)
+        for g in groups:
+            area = float(stats[g, cv2.CC_STAT_AREA].sum())
+            if area < floor:
+                continue
+            mask = np.isin(lab, g)
+            big = self.split_ratio is not None and area > self.split_ratio * typical
+            parts = max(round(area / typical), 1) if big else 1
+            for part in _split(mask, parts, self.seed):
+                rows, cols = np.nonzero(part)
+                boxes.append(np.array([cols.min(), rows.min(), np.ptp(cols) + 1, np.ptp(rows) + 1],
+                                      dtype=np.float64))
+                labels[part] = len(boxes)
+            self.sizes.add(area / parts)
+        if not boxes:
+            return Detections.empty()
+        return Detections(np.stack(boxes), np.ones(len(boxes)), labels)
+
+
+def _merge(stats: np.ndarray, keep: list[int], gap: float) -> list[list[int]]:
+    """Components (indices into ``stats``) grouped when their boxes lie within ``gap``
+    pixels of each other (transitively)."""
+    parent = {i: i for i in keep}
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    box = {i: stats[i, :4].astype(np.float64) for i in keep}
+    for a_i, a in enumerate(keep):
+        for b in keep[a_i + 1:]:
+            xa, ya, wa, ha = box[a]
+            xb, yb, wb, hb = box[b]
+            dx = max(xb - (xa + wa), xa - (xb + wb), 0.0)
+            dy = max(yb - (ya + ha), ya - (yb + hb), 0.0)
+            if max(dx, dy) <= gap:
+                parent[root(a)] = root(b)
+    groups: dict[int, list[int]] = {}
+    for i in keep:
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
+
+
+def _split(mask: np.ndarray, parts: int, seed: int) -> list[np.ndarray]:
+    """``mask`` as ``parts`` masks by k-means on its pixel coordinates (one when parts = 1)."""
+    if parts <= 1:
+        return [mask]
+    rows, cols = np.nonzero(mask)
+    pts = np.column_stack([cols, rows]).astype(np.float32)
+    cv2.setRNGSeed(seed)
+    crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 20, 0.5)
+    _, assign, _ = cv2.kmeans(pts, parts, None, crit, 1, cv2.KMEANS_PP_CENTERS)
+    out = []
+    for k in range(parts):
+        sel = assign.ravel() == k
+        if sel.any():
+            m = np.zeros_like(mask)
+            m[rows[sel], cols[sel]] = True
+            out.append(m)
+    return out
