@@ -30,7 +30,7 @@ the frame before), ``split`` (two detections lie mostly inside the person's box)
 For choosing rules on tuning data only (docs/generalisation.md): the sets are those of
 ``harness.sweeps.generalisation``; the seeds are the set's own for a tuning set (default),
 else yours (``--seeds``); seeds of a set's untouched list are refused unless ``--untouched``
-is given (to measure, once, not to choose). Several ``--set`` are run one after the other.
+is given (to measure, once, not to choose: then the set's own seeds are the default). Several ``--set`` are run one after the other.
 
     .venv/bin/python benchmarks/bench_reacquisition.py --set "crowd d0.8" --seeds 0 1 \\
         --trackers reta pbm "pbm_rm0=pbm:tracker.adaptations.relative_match=0"
@@ -327,7 +327,8 @@ def main(argv=None) -> int:
     trackers = [parse_tracker(t) for t in args.trackers]
     for name in args.set:
         s = sets[name]
-        seeds = args.seeds or (list(s.seeds) if s.role == G.TUNING else list(range(6)))
+        own = s.role == G.TUNING or args.untouched  # measuring an untouched set: its seeds
+        seeds = args.seeds or (list(s.seeds) if own else list(range(6)))
         held = sorted(set(seeds) & set(s.seeds)) if s.role == G.UNTOUCHED else []
         if held and not args.untouched:
             ap.error(f"seeds {held} are {name}'s untouched seeds: choose tuning seeds "

@@ -100,6 +100,9 @@ class Adaptations:
         one_to_one: targets share candidates one-to-one (Hungarian on 1 - p, as many
             pairs as possible); off, each target takes its best candidate as if tracked
             alone, as the paper tracks each target (PBM 3, 4 step 4).
+        report_support: with foreground, an unfound target is reported only while its box
+            holds this foreground fraction (paper: 0, reported regardless; off by default:
+            docs/adaptations.md).
     """
 
     model_spread: float = 4.5
@@ -120,18 +123,21 @@ class Adaptations:
     several_heads_merge: bool = True
     profile_heads: bool = True
     one_to_one: bool = True
+    report_support: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
                 self.model_spread)
-        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match)
+        unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
+             report_support=self.report_support)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
-                                       "duplicate_radius", "gate_max_fraction", "exit_margin"),
+                                       "duplicate_radius", "gate_max_fraction", "exit_margin",
+                                       "report_support"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -147,7 +153,7 @@ class Adaptations:
                    prune_max_misses=UNBOUNDED, stale=None, gate_max_fraction=float(UNBOUNDED),
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
-                   profile_heads=False, one_to_one=False)
+                   profile_heads=False, one_to_one=False, report_support=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

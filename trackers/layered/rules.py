@@ -174,6 +174,39 @@ class PredictedBox:
         boxes[:, :2] += np.where(found[rows, None], 0.0, targets.predicted_shift()[rows])
 
 
+# --------------------------------------------------------------- reporting: is the unfound target there
+
+
+class ReportUnfound:
+    """A confirmed unfound target is reported for ``reporting.max_misses`` frames."""
+
+    def shown(self, boxes: np.ndarray, fg: np.ndarray | None) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class ReportOnForeground:
+    """``report_support``: with a foreground mask, an unfound target is reported only while
+    its reported box holds at least ``fraction`` foreground: a hidden person is behind
+    someone (whose pixels are foreground) or undetected in view (its own are); a box on bare
+    floor holds nobody."""
+
+    fraction: float
+
+    def shown(self, boxes: np.ndarray, fg: np.ndarray | None) -> np.ndarray | None:
+        """(R,) bool per (R, 4) xywh box, None without a mask."""
+        if fg is None:
+            return None
+        H, W = fg.shape
+        out = np.zeros(len(boxes), dtype=bool)
+        for k, (x, y, w, h) in enumerate(boxes.tolist()):
+            x0, y0 = max(int(round(x)), 0), max(int(round(y)), 0)
+            x1, y1 = min(int(round(x + w)), W), min(int(round(y + h)), H)
+            if x1 > x0 and y1 > y0:
+                out[k] = np.count_nonzero(fg[y0:y1, x0:x1]) >= self.fraction * (x1 - x0) * (y1 - y0)
+        return out
+
+
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -184,6 +217,7 @@ class Rules(NamedTuple):
     gap: AsMeasured | PerFrame
     unfound_size: PredictedSize | HeldSize
     sharing: Alone | OneToOne
+    report_shown: ReportUnfound | ReportOnForeground
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -196,4 +230,6 @@ def build_rules(a: Adaptations) -> Rules:
         gap=PerFrame() if a.gap_division else AsMeasured(),
         unfound_size=HeldSize() if a.hold_size else PredictedSize(),
         sharing=OneToOne() if a.one_to_one else Alone(),
+        report_shown=ReportOnForeground(a.report_support) if a.report_support > 0
+        else ReportUnfound(),
     )

@@ -184,7 +184,7 @@ class PBMTracker:
             self.rules.unfound_size.missed(self.targets, lost)
         self._end_targets(W, H)
         self._start_targets(frame, free, cand, feats, fg, withheld)
-        return self._report()
+        return self._report(fg)
 
     def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None
                          ) -> tuple[Candidates, PartFeatures]:
@@ -373,10 +373,11 @@ class PBMTracker:
             live_boxes = np.vstack([live_boxes, box[None]])
 
     # ------------------------------------------------------------------ report
-    def _report(self) -> list[Track]:
+    def _report(self, fg: np.ndarray | None) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
-        last box or where KF1 predicts it (``rules.report_box``)."""
+        last box or where KF1 predicts it (``rules.report_box``), while ``rules.report_shown``
+        finds it there."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -386,6 +387,10 @@ class PBMTracker:
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
+        there = self.rules.report_shown.shown(boxes, fg)
+        if there is not None:
+            keep = found[rows] | there
+            rows, boxes = rows[keep], boxes[keep]
         rects = tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]
         found = found[rows]

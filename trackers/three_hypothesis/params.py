@@ -136,6 +136,9 @@ class Adaptations:
         report_exposed: frames a hidden person's best hypothesis may stand in plain view
             and still be reported as OCCLUDED (then it is only drawn, as a HYPOTHESIS);
             the paper reports it until pruned (1000000).
+        report_support: with a foreground mask, a hidden person's best hypothesis is
+            reported only while its ellipse holds at least this foreground share; 0 reports
+            it on any (the paper).
         report_spread: a hidden person's best hypothesis is reported only while the
             standard deviation of its centre (Kalman P) is at most this many person
             widths; 0 reports it however uncertain (the paper).
@@ -184,6 +187,7 @@ class Adaptations:
     foreground_histograms: bool = True
     foreground_support: bool = True
     report_exposed: int = 4
+    report_support: float = 0.0
     report_spread: float = 3.0
     tentative_misses: int = 2
     max_hidden: int = 150
@@ -197,7 +201,8 @@ class Adaptations:
     filter_size: bool = True
 
     def __post_init__(self) -> None:
-        coerce(self, {"gate_sigmas": float, "report_spread": float, "blend_visible": bool,
+        coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
+                      "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool, "foreground_presence": bool,
@@ -205,15 +210,18 @@ class Adaptations:
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
+                 report_support=self.report_support,
                  tentative_misses=self.tentative_misses)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
+        unit("adaptations", report_support=self.report_support)
 
     @classmethod
     def paper(cls) -> Adaptations:
         """Every adaptation off: the paper as written (``conf/tracker/reta_paper.yaml``)."""
         return cls(gate_sigmas=0.0, blend_visible=False, shape_estimate=False,
                    foreground_histograms=False, foreground_support=False,
-                   report_exposed=1_000_000, report_spread=0.0, tentative_misses=0,
+                   report_exposed=1_000_000, report_support=0.0, report_spread=0.0,
+                   tentative_misses=0,
                    max_hidden=1_000_000, appearance_margin=False, measured_velocity=False,
                    foreground_presence=False, tentative_stage1_only=False,
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,

@@ -318,16 +318,30 @@ class ReportRule:
     """Whether a hidden person's best hypothesis is reported as OCCLUDED (else only drawn).
 
     ``exposed``: frames it may stand in plain view (the paper: until pruned); ``spread``:
-    largest standard deviation of its centre, in person widths (0: any, the paper)."""
+    largest standard deviation of its centre, in person widths (0: any, the paper);
+    ``support`` (``report_support``): with a foreground mask, smallest foreground share of
+    its ellipse (0: any, the paper): a hidden person is behind someone, whose pixels are
+    foreground, or undetected in view on its own; an ellipse mostly on bare floor holds
+    nobody."""
 
     exposed: int
     spread: float
+    support: float = 0.0
+
+    def shares(self, histograms: EllipseHistogrammer, foreground: np.ndarray | None,
+               boxes: np.ndarray) -> np.ndarray | None:
+        """(N,) foreground share of each (N, 4) xywh hypothesis box's ellipse when
+        ``support`` needs it, else None."""
+        if self.support <= 0 or foreground is None:
+            return None
+        return histograms.foreground_share(foreground, boxes)
 
     def reported(self, hypothesis) -> bool:
-        """``hypothesis``: a hypothesis branch (``covered``, ``exposed``, ``unseen``, Kalman
-        ``x`` (8,) and ``P`` (8, 8)). A region seen empty is never reported."""
+        """``hypothesis``: a hypothesis branch (``covered``, ``exposed``, ``unseen``,
+        ``share``, Kalman ``x`` (8,) and ``P`` (8, 8)). A region seen empty is never
+        reported."""
         h = hypothesis
-        if h.unseen or (not h.covered and h.exposed > self.exposed):
+        if h.unseen or (not h.covered and h.exposed > self.exposed) or h.share < self.support:
             return False
         P = h.P
         return not (self.spread > 0 and max(P[0, 0], P[1, 1]) > (self.spread * h.x[2]) ** 2)
@@ -376,6 +390,6 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         presence=ForegroundPresence(histograms) if a.foreground_presence else NoPresence(),
         duplicates=MergeDuplicates() if a.merge_duplicates else KeepDuplicates(),
         choice=FirstHypothesis() if first else LeastContradicted(),
-        report=ReportRule(a.report_exposed, a.report_spread),
+        report=ReportRule(a.report_exposed, a.report_spread, a.report_support),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )

@@ -78,6 +78,7 @@ class _Branch:
     exposed: int = 0  # consecutive frames in plain view without a detection
     covered: bool = False  # hidden behind a visible person this frame
     unseen: bool = False  # its region holds (almost) no foreground this frame
+    share: float = 1.0  # foreground share of its ellipse (measured when ``rules.report`` asks)
     depth: int = 0  # people in front of this node (eq. 3)
     graph_node: Node | None = None  # this frame's graph node
 
@@ -432,6 +433,7 @@ class RetaTracker:
                  >= self.life_cycle.cover)
         empty = self.rules.support.empty(f.foreground, hyp_boxes)
         held = self.rules.presence.held(f.foreground, hyp_boxes, empty)
+        share = self.rules.report.shares(self.histograms, f.foreground, hyp_boxes)
         held = [False] * len(cover) if held is None else held.tolist()
         if empty is None:
             unseen = np.zeros(len(cover), dtype=bool)
@@ -449,6 +451,7 @@ class RetaTracker:
             for b in new:
                 box, corner, g, c, held_k = hyp_boxes[k], corners[k], gone[k], cover[k], held[k]
                 b.unseen = unseen[k]
+                b.share = 1.0 if share is None else float(share[k])
                 k += 1
                 b.covered = c
                 b.exposed = 0 if c else b.exposed + (0 if held_k else 1)

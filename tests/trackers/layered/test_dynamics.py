@@ -126,13 +126,18 @@ def test_a_person_who_walks_on_behind_an_occluder_keeps_the_id():
     assert score_sequence(seq.gt.table, res["pbm"].table).row()["IDF1"] > 0.85
 
 
-def _walk_then_vanish(report_predicted: bool) -> list[np.ndarray]:
+def _walk_then_vanish(report_predicted: bool, fg_after: bool | None = None
+                      ) -> list[np.ndarray]:
     """A person walking right 3 px per frame, detected for 12 frames, then not detected:
-    the boxes pbm reports for it in the 4 frames after."""
+    the boxes pbm reports for it in the 4 frames after. ``fg_after``: None = no foreground
+    mask; else the mask holds the person's box while detected, and after that the box
+    (True: the person stands there undetected) or nothing (False: nobody is there)."""
     from trackers.records import Detections, TrackState
 
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
     cfg.adaptations.report_predicted = report_predicted
+    if fg_after is not None:
+        cfg.adaptations.report_support = 0.6  # (off by default: docs/adaptations.md)
     tracker = instantiate(cfg)
     rng = np.random.default_rng(0)
     background = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)
@@ -144,10 +149,18 @@ def _walk_then_vanish(report_predicted: bool) -> list[np.ndarray]:
         frame[y:y + h // 7, x:x + w] = (40, 80, 200)
         frame[y + h // 7:y + h, x:x + w] = (200, 60, 40)
         dets = Detections(box[None], np.ones(1)) if k < 12 else Detections.empty()
-        tracks = tracker.update(frame, dets)
+        fg = None
+        if fg_after is not None:
+            fg = np.zeros((240, 320), dtype=bool)
+            if k < 12 or fg_after:
+                fg[y:y + h, x:x + w] = True
+        tracks = tracker.update(frame, dets, fg)
+        if k >= 12 and fg_after is False:
+            assert tracks == []  # report_support: nobody on bare floor
+            continue
         if k >= 12:
             (t,) = tracks
-            assert t.state == TrackState.OCCLUDED
+            assert t.state == TrackState.OCCLUDED or fg_after  # on foreground: may be found
             out.append(t.box.copy())
     return out
 
@@ -159,6 +172,14 @@ def test_an_unfound_target_is_reported_where_kf1_predicts_it():
     assert np.all(np.abs(steps - 3.0) < 1.0)  # KF1's velocity, about 3 px per frame
     assert moved[0][0] > still[0][0] + 2.0
     np.testing.assert_array_equal([b[2:] for b in moved], [b[2:] for b in still])
+
+
+def test_an_unfound_target_is_reported_only_on_foreground():
+    """``adaptations.report_support``: the walker undetected but on foreground is reported
+    in each of the 4 frames (found on its blob, or OCCLUDED); with the foreground gone from
+    where it walked, nothing is (without it: OCCLUDED, the test above)."""
+    assert len(_walk_then_vanish(True, fg_after=True)) == 4
+    assert _walk_then_vanish(True, fg_after=False) == []
 
 
 def test_someone_missed_at_the_border_is_kept_and_someone_who_walked_out_is_dropped():

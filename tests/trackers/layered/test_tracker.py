@@ -787,6 +787,7 @@ def test_paper_mode_turns_every_adaptation_off():
     assert ours.candidates.head_detector is None
     a = paper.adaptations
     assert (a.model_spread, a.stale, a.min_support, a.relative_match) == (1.0, None, 0.0, 0.0)
+    assert a.report_support == 0.0
     assert not (a.motion_compensation or a.report_predicted or a.lone_growth)
     assert a.prune_max_misses >= 10**6 and a.duplicate_radius < 0
     assert a.gate_max_fraction >= 10**6 and a.exit_margin >= 10**6
@@ -808,9 +809,11 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     ours = R.build_rules(Adaptations())
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
-                                       R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne]
+                                       R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne,
+                                       R.ReportUnfound]  # report_support off
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
-                                        R.LastBox, R.AsMeasured, R.PredictedSize, R.Alone]
+                                        R.LastBox, R.AsMeasured, R.PredictedSize, R.Alone,
+                                        R.ReportUnfound]
     # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
     tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])
@@ -819,6 +822,14 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     assert S[0, 0] == -np.inf and S[0, 1] == 0.7 and S[1, 0] == 0.3  # target 1 was unfound
     assert withheld.tolist() == [True, False]
     assert paper.match.withhold(S, tg, 0.25) is None
+    # report support: a box 60% foreground is reported, 50% not; without a mask, any
+    fg = np.zeros((20, 20), dtype=bool)
+    fg[:, :6] = True  # columns 0-5
+    boxes = np.array([[0.0, 0, 10, 10], [1.0, 0, 10, 10], [30.0, 30, 5, 5]])
+    shown = R.build_rules(Adaptations(report_support=0.6)).report_shown
+    assert shown.shown(boxes, fg).tolist() == [True, False, False]
+    assert shown.shown(boxes, None) is None
+    assert paper.report_shown.shown(boxes, fg) is None and ours.report_shown.shown(boxes, fg) is None
     # birth support: a part with 0.3 foreground or more
     assert not ours.birth.supported(np.full(5, 0.1), True)
     assert ours.birth.supported(np.full(5, 0.1), False)

@@ -123,8 +123,9 @@ def test_report_rule_bounds_time_in_plain_view_and_spread():
     P = np.diag([4.0, 4.0] + [1.0] * 6)  # centre std 2 px
     x = np.array([0, 0, 1.0, 2.0, 0, 0, 0, 0])  # 1 px wide: std = 2 widths
 
-    def hyp(covered=True, exposed=0, unseen=False):
-        return SimpleNamespace(covered=covered, exposed=exposed, unseen=unseen, x=x, P=P)
+    def hyp(covered=True, exposed=0, unseen=False, share=1.0):
+        return SimpleNamespace(covered=covered, exposed=exposed, unseen=unseen, share=share,
+                               x=x, P=P)
 
     rule = ReportRule(exposed=4, spread=3.0)
     assert rule.reported(hyp()) and rule.reported(hyp(covered=False, exposed=4))
@@ -132,6 +133,10 @@ def test_report_rule_bounds_time_in_plain_view_and_spread():
     assert not rule.reported(hyp(unseen=True))
     assert not ReportRule(exposed=4, spread=1.5).reported(hyp())  # 2 widths > 1.5
     assert ReportRule(exposed=4, spread=0.0).reported(hyp())  # 0: however uncertain
+    # report_support: the ellipse's foreground share, measured only when asked for
+    assert not ReportRule(4, 3.0, 0.4).reported(hyp(share=0.3))
+    assert ReportRule(4, 3.0, 0.4).reported(hyp(share=0.4)) and rule.reported(hyp(share=0.0))
+    assert rule.shares(None, np.ones((4, 4), bool), np.zeros((1, 4))) is None
 
 
 @pytest.mark.parametrize("group,kwargs,name", [

@@ -478,6 +478,33 @@ def test_hypothesis_in_plain_view_is_reported_briefly_then_only_drawn_and_keeps_
         Adaptations(report_exposed=-1)
 
 
+def test_a_hidden_person_is_reported_only_on_enough_foreground():
+    # the same walker undetected in frames 20-23, its mask kept at half its height there
+    # (the legs only): report_support 0.4 reports its hypothesis (ellipse about half
+    # foreground), 0.7 does not; both keep the id (1) when it is found again
+    frames = _scene([_line((40, 150), (2, 0), 30)], [RED])
+
+    def hidden_reports(support: float) -> list[bool]:
+        tracker = RetaTracker(adaptations=Adaptations(report_support=support))
+        out_states = []
+        for t, (img, label, dets, gt) in enumerate(frames):
+            fg = label > 0
+            if 20 <= t < 24:
+                dets = Detections(np.zeros((0, 4)), np.zeros(0))
+                rows = np.flatnonzero(fg.any(axis=1))
+                fg[rows[: len(rows) // 2]] = False  # the upper half gone
+            out = tracker.update(img, dets, fg)
+            assert {x.id for x in out} == {1} or t < 2
+            if 20 <= t < 24:
+                out_states.append(any(x.state == TrackState.OCCLUDED for x in out))
+        return out_states
+
+    assert hidden_reports(0.4) == [True] * 4
+    assert hidden_reports(0.7) == [False] * 4
+    with pytest.raises(ValueError, match="report_support"):
+        Adaptations(report_support=1.5)
+
+
 # --------------------------------------------------------------------------- synthetic suite
 
 
