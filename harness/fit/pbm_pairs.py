@@ -84,7 +84,6 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
         if seq.gt is None:
             log.warning("%s: no ground truth, skipped", seq.info.name)
             continue
-        table = seq.gt.table
         prev = None  # (ids, boxes, features, centroids) of the previous frame
         before: dict[int, np.ndarray] = {}  # id -> centroid, the frame before that
         warned = False
@@ -100,33 +99,42 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
                 log.warning("%s: no foreground masks; the whole box counts as foreground",
                             seq.info.name)
                 warned = True
-            rows = _unoccluded_rows(seq, k, min_visibility)
-            ids = table.ids[rows].astype(np.int64)
-            boxes = np.asarray(table.boxes[rows], dtype=np.float64)
-            ex.start(frame, fg)
-            if len(rows) == 0:
+            cur = _measure(seq, k, frame, fg, ex, min_visibility)
+            if cur is None:
                 prev, before = None, {}
                 continue
-            cents = np.array([_centroid(fg, b) for b in boxes])
-            al, be = centroid_ratios(boxes, cents)
-            feats = ex.extract(boxes, al, be)
             if prev is not None:
-                ti, ci, is_pos = _pairs(prev[0], prev[1], ids, boxes, neighbours, radius)
+                ti, ci, is_pos = _pairs(prev[0], prev[1], cur[0], cur[1], neighbours, radius)
                 if len(ti):
                     model = _moved(prev[2], prev[0], prev[3], before) if motion_compensation \
                         else prev[2]
-                    d = feature_differences(model, feats)[ti, ci]  # (K, 6, 5)
-                    ds.append(d)
+                    ds.append(feature_differences(model, cur[2])[ti, ci])  # (K, 6, 5)
                     pos.append(is_pos)
                     blocks.append(np.full(len(ti), block_base + (k - frames[0]) // block_frames,
                                           np.int64))
                 before = dict(zip(prev[0].tolist(), prev[3]))
-            prev = (ids, boxes, feats, cents)
+            prev = cur
         block_base += (len(frames) - 1) // block_frames + 1
     if not ds:
         return PairSamples(np.zeros((0, len(FEATURES), N_PARTS)), np.zeros(0, bool),
                            np.zeros(0, np.int64))
     return PairSamples(np.concatenate(ds), np.concatenate(pos), np.concatenate(blocks))
+
+
+def _measure(seq, k: int, frame: np.ndarray, fg: np.ndarray | None, ex: PartFeatureExtractor,
+             min_visibility: float) -> tuple | None:
+    """(ids, boxes, part features, centroids) of frame ``k``'s unoccluded annotated people,
+    measured as the tracker measures them; None when there is nobody (the extractor is
+    started on the frame either way)."""
+    rows = _unoccluded_rows(seq, k, min_visibility)
+    ids = seq.gt.table.ids[rows].astype(np.int64)
+    boxes = np.asarray(seq.gt.table.boxes[rows], dtype=np.float64)
+    ex.start(frame, fg)
+    if len(rows) == 0:
+        return None
+    cents = np.array([_centroid(fg, b) for b in boxes])
+    al, be = centroid_ratios(boxes, cents)
+    return ids, boxes, ex.extract(boxes, al, be), cents
 
 
 def _unoccluded_rows(seq, k: int, min_visibility: float) -> np.ndarray:
