@@ -13,7 +13,7 @@ from __future__ import annotations
 import signal
 import sys
 
-EXIT_SIGINT, EXIT_SIGTERM = 128 + signal.SIGINT, 128 + signal.SIGTERM
+from harness.errors import EXIT_SIGINT, EXIT_SIGTERM
 
 
 def _terminate(signum: int, frame: object) -> None:

@@ -1,5 +1,9 @@
 """The errors the harness's rooms share: raised in one room, caught or reported in another."""
 
+import signal
+
+EXIT_SIGINT, EXIT_SIGTERM = 128 + signal.SIGINT, 128 + signal.SIGTERM  # a stopped run's status
+
 
 class RunError(RuntimeError):
     """A run that cannot start or go on: bad config, unbuilt tracker, unreadable dataset."""

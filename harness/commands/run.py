@@ -121,7 +121,7 @@ def run_app(cfg: DictConfig) -> float:
 
 def _stopped(err: BaseException, out_dir: Path) -> NoReturn:
     """One line for a run stopped by Ctrl-C or SIGTERM, then exit 130 or 143."""
-    from harness.__main__ import EXIT_SIGINT, EXIT_SIGTERM
+    from harness.errors import EXIT_SIGINT, EXIT_SIGTERM
 
     how, status = (("terminated (SIGTERM)", EXIT_SIGTERM) if isinstance(err, Terminated)
                    else ("interrupted (Ctrl-C)", EXIT_SIGINT))

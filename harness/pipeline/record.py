@@ -212,7 +212,8 @@ class RunRecord:
 
     def finish(self) -> None:
         """summary.tex, the plots and hota_alpha.csv, then the final metrics.csv and
-        summary.md (last, so that summary.md counts every failure the run reports); a failing
+        summary.md (so that summary.md counts every failure the run reports), then
+        report.html (summary.md written again if the page fails); a failing
         one is recorded and the others are still written. ``metrics`` keeps every scored
         sequence whatever could be written (disk full...)."""
         from harness.report.bars import metric_bars
@@ -253,6 +254,7 @@ class RunRecord:
             write_run_report(writer.out_dir, self.frames, plan.title)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
             self.fail("*", "*", "report.html", err, traceback.format_exc())
+            self.publish("finished")  # summary.md counts this failure too
 
 
 def read_external(name: str, folder: Path, sequence: str,
