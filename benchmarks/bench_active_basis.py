@@ -30,10 +30,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from hydra.utils import instantiate
+from shared_data import use_shared_data
 
 from harness.commands.detect import match_count
 from harness.sources.frontend import compose_config, load_sequences
 from harness.sweeps.generalisation import shared_root
+
+use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
 #: (sequence folder, choosing range, reporting range)
 SETS = [("CAVIAR-OneLeaveShop1cor", (1, 150), (151, 295)),

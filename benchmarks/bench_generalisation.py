@@ -32,7 +32,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from shared_data import use_shared_data  # noqa: E402
+
 from harness.sweeps import generalisation as G  # noqa: E402
+
+use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
 DOCS_HEAD = """# Generalisation: every tracker on data nobody chose anything on
 

@@ -54,6 +54,8 @@ from scipy.optimize import linear_sum_assignment
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from shared_data import use_shared_data  # noqa: E402
+
 from harness.io.mot import MotTable  # noqa: E402
 from harness.metrics import combine, score_sequence  # noqa: E402
 from harness.metrics.paper import considered, match_rows  # noqa: E402
@@ -61,6 +63,8 @@ from harness.pipeline.build import build_source, build_tracker, load_sequences  
 from harness.pipeline.loop import frames  # noqa: E402
 from harness.sweeps import generalisation as G  # noqa: E402
 from trackers.geometry import iou_matrix  # noqa: E402
+
+use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
 
 @dataclass

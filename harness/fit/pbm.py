@@ -48,10 +48,11 @@ subtraction (``trackers.frontend.BackgroundModel`` at its defaults, which are
 ``detector=foreground``'s), for real frames.
 
 Real frames (the models ``tracker=pbm_paper`` ships, ``trackers/layered/data/
-real_uncompensated.yaml``; the frames are the fitting split of docs/generalisation.md)::
+real_uncompensated.yaml``; the frames are the fitting split of docs/generalisation.md; the
+second corridor sequence is not shipped: ``$OCCBENCH_SHARED`` is the folder that holds it)::
 
     occbench fit pbm --caviar datasets/CAVIAR-OneLeaveShop1cor@1-150 \
-        --mot ../shared/data/CAVIAR-EnterExitCrossingPaths1cor@1-180 \
+        --mot $OCCBENCH_SHARED/CAVIAR-EnterExitCrossingPaths1cor@1-180 \
         --foreground mog2 --tracker-config pbm_paper \
         --out trackers/layered/data/real_uncompensated.yaml \
         --plot docs/img/pbm_models_real_vs_synthetic.png \

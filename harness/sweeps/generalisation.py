@@ -21,8 +21,8 @@ Which data is which (docs/generalisation.md says the same, with the latest table
   seeds, because one late identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds
   1000-1009 decided a default, ``adaptations.appearance_margin``, so they count as looked at).
 
-The EnterExitCrossingPaths1cor and lobby sets read ``shared_root()`` (not shipped: skipped
-with a message where it is absent).
+The EnterExitCrossingPaths1cor and lobby sets read ``shared_root()`` (``$OCCBENCH_SHARED``; not
+shipped: skipped with a message where it is absent).
 
 Used by ``benchmarks/bench_generalisation.py`` (the command line); ``run_table`` is the
 library entry point.
@@ -177,14 +177,12 @@ def trajectories_root() -> Path:
 
 
 def shared_root() -> Path:
-    """The folder of the data that is not shipped (``../shared/data`` beside the main
-    checkout): ``$OCCBENCH_SHARED`` if set, else the first of ``<repo>/../shared/data`` and
-    ``<repo>/../../shared/data`` (a worktree under ``wt/``) that exists."""
+    """The folder of the data that is not shipped: ``$OCCBENCH_SHARED``. Unset, the
+    placeholder path ``$OCCBENCH_SHARED``, which never exists, so that the sets needing it
+    are skipped naming the variable (the benchmark scripts set it to the developers'
+    ``../shared/data``: ``benchmarks/shared_data.py``)."""
     env = os.environ.get("OCCBENCH_SHARED", "").strip()
-    if env:
-        return Path(env).expanduser().resolve()
-    near = [p / "shared" / "data" for p in (ROOT.parent, ROOT.parent.parent)]
-    return next((p for p in near if p.is_dir()), near[0])
+    return Path(env).expanduser().resolve() if env else Path("$OCCBENCH_SHARED")
 
 
 def _resolve(overrides: Iterable[str], trajectories: Path) -> list[str]:
