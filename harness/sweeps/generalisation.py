@@ -179,8 +179,8 @@ def trajectories_root() -> Path:
 def shared_root() -> Path:
     """The folder of the data that is not shipped: ``$OCCBENCH_SHARED``. Unset, the
     placeholder path ``$OCCBENCH_SHARED``, which never exists, so that the sets needing it
-    are skipped naming the variable (the benchmark scripts set it to the developers'
-    ``../shared/data``: ``benchmarks/shared_data.py``)."""
+    are skipped naming the variable (the benchmark scripts set it to the developers' data
+    folder: ``benchmarks/shared_data.py``)."""
     env = os.environ.get("OCCBENCH_SHARED", "").strip()
     return Path(env).expanduser().resolve() if env else Path("$OCCBENCH_SHARED")
 
