@@ -58,9 +58,9 @@ def test_other_people_the_tracker_starts_are_not_reported():
         assert iou_matrix(box[None], truth)[0, 0] > 0.5
 
 
-class _LosesAndRestarts:
-    """A single-target tracker that holds its first detection's box as id 1 for 5 frames,
-    then loses it and restarts as id 2 on the detection nearest its last box."""
+class _HoldsItsFirstBox:
+    """A stand-in single-target tracker holding its first detection's box (``_follow`` may
+    move it on later frames); ``_tracks`` says what it reports on frame ``k``."""
 
     def __init__(self) -> None:
         self.reset()
@@ -72,9 +72,24 @@ class _LosesAndRestarts:
         self.k += 1
         if self.box is None:
             self.box = detections.boxes[0]
-        elif len(detections):
+        else:
+            self._follow(detections)
+        return self._tracks()
+
+    def _follow(self, detections: Detections) -> None:
+        pass
+
+
+class _LosesAndRestarts(_HoldsItsFirstBox):
+    """Holds its box as id 1 for 5 frames, then loses it and restarts as id 2, following
+    the detection nearest its last box."""
+
+    def _follow(self, detections: Detections) -> None:
+        if len(detections):
             near = np.argmin(np.abs(detections.boxes[:, :2] - self.box[:2]).sum(axis=1))
             self.box = detections.boxes[near]
+
+    def _tracks(self) -> list[Track]:
         return [Track(1 if self.k <= 5 else 2, self.box.copy())]
 
 
@@ -91,20 +106,11 @@ def test_a_follower_that_loses_its_person_restarts_under_a_new_id():
     assert m["PBM_MT1"] == 0
 
 
-class _ConfirmsUnderANewId:
+class _ConfirmsUnderANewId(_HoldsItsFirstBox):
     """Holds its first detection's box TENTATIVE as id 1 for 2 frames, then CONFIRMED as id
     7 (a tracker numbering tracks at confirmation)."""
 
-    def __init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        self.k, self.box = 0, None
-
-    def update(self, frame, detections: Detections, foreground=None) -> list[Track]:
-        self.k += 1
-        if self.box is None:
-            self.box = detections.boxes[0]
+    def _tracks(self) -> list[Track]:
         if self.k <= 2:
             return [Track(1, self.box.copy(), TrackState.TENTATIVE)]
         return [Track(7, self.box.copy(), TrackState.CONFIRMED)]
