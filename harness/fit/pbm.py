@@ -47,9 +47,8 @@ area and perimeter then carry no information); ``mog2`` = the front end's backgr
 subtraction (``trackers.frontend.BackgroundModel`` at its defaults, which are
 ``detector=foreground``'s), for real frames.
 
-Real frames (the models ``tracker=pbm_paper`` ships, ``trackers/layered/data/
-real_uncompensated.yaml``; the frames are the fitting split of docs/generalisation.md; the
-second corridor sequence is not shipped: ``$OCCBENCH_SHARED`` is the folder that holds it)::
+Real frames (``tracker=pbm_paper``'s models, ``trackers/layered/data/real_uncompensated.yaml``;
+the fitting split of docs/generalisation.md; ``$OCCBENCH_SHARED``: the not-shipped data)::
 
     occbench fit pbm --caviar datasets/CAVIAR-OneLeaveShop1cor@1-150 \
         --mot $OCCBENCH_SHARED/CAVIAR-EnterExitCrossingPaths1cor@1-180 \
