@@ -1,6 +1,6 @@
 """PBM with the hand-set feature weights omega against the learned ones (PBM 4.1, eq. 12).
 
-Fit: ``python -m harness.fit pbm`` on the synthetic suite at ``--fit-seed`` (1, as the shipped
+Fit: ``occbench fit pbm`` on the synthetic suite at ``--fit-seed`` (1, as the shipped
 models were) writes the models and the learned omega (``--models``). Evaluation on held-out
 data, each variant with those same models (only omega differs): ``hand`` = omega of
 ``conf/tracker/pbm.yaml``, ``learned`` = omega of the fit. Data: the synthetic suite at

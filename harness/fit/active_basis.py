@@ -1,4 +1,4 @@
-"""``python -m harness.fit active_basis``: learn the active-basis person template (Reta 3.1).
+"""``occbench fit active_basis``: learn the active-basis person template (Reta 3.1).
 
 Training people (aligned grey patches, ``trackers.frontend.active_basis.crop_patch``) come
 from two sources, each optional:
@@ -17,7 +17,7 @@ same frames. The template is learnt by the shared sketch (``active_basis.learn``
 as ``.npz`` (``ActiveBasis.to_arrays``). The same options give the same bytes.
 
 The shipped ``trackers/frontend/data/active_basis.npz`` was made by
-``python -m harness.fit active_basis`` (the defaults).
+``occbench fit active_basis`` (the defaults).
 
 ``load(path)`` is how configs get a template: the harness reads the file, the detector is
 handed the ``ActiveBasis``.
@@ -47,7 +47,7 @@ def load(path: str | Path | None = None) -> ActiveBasis:
     path = Path(path) if path is not None else DEFAULT_OUT
     if not path.is_file():
         raise FileNotFoundError(f"active-basis template not found: {path} "
-                                f"(make one with: python -m harness.fit active_basis --out {path})")
+                                f"(make one with: occbench fit active_basis --out {path})")
     with np.load(path, allow_pickle=False) as a:
         try:
             return ActiveBasis.from_arrays(a)

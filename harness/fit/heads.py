@@ -1,4 +1,4 @@
-"""``python -m harness.fit heads``: fit the head detector's hair and skin mixtures (PBM 2.3).
+"""``occbench fit heads``: fit the head detector's hair and skin mixtures (PBM 2.3).
 
 Two sources of pixels:
 
@@ -13,7 +13,7 @@ Two sources of pixels:
   (``--init``, default: the shipped mixtures) and every category with at least
   ``--min-pixels`` pixels is refitted by EM; the others keep their current parameters.
 
-Example: ``python -m harness.fit heads dataset=synthetic --out heads.npz``
+Example: ``occbench fit heads dataset=synthetic --out heads.npz``
 """
 
 from __future__ import annotations
@@ -94,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
             provenance=(
                 f"EM fit (k={args.components}) to seeded samples (seed {args.seed}) around "
                 "reference hair and skin colours (trackers.frontend.heads.REFERENCE_RGB), by "
-                "`python -m harness.fit heads --references`"
+                "`occbench fit heads --references`"
             ),
         )
     else:

@@ -1,4 +1,4 @@
-"""``python -m harness.fit silhouette``: learn the mean person mask of the silhouette detector.
+"""``occbench fit silhouette``: learn the mean person mask of the silhouette detector.
 
 For every ``--step``-th frame of the sequences named by the Hydra overrides, each gt person
 that is (nearly) fully visible and does not touch another person's box gives one mask,
@@ -8,10 +8,10 @@ dataset has one (synthetic scenes), else the front end's foreground mask (the
 template is the mean of the masks resized to a common size (``silhouette.fit_template``).
 
 The shipped ``trackers/frontend/data/silhouette.npy`` was made by
-``python -m harness.fit silhouette dataset=synthetic`` (exact masks of rendered walkers;
+``occbench fit silhouette dataset=synthetic`` (exact masks of rendered walkers;
 no frame of a benchmark sequence is used).
 
-Example: ``python -m harness.fit silhouette dataset=synthetic --out my_template.npy``
+Example: ``occbench fit silhouette dataset=synthetic --out my_template.npy``
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Reta et al. fit an active-basis silhouette template at several scales over the m
 foreground: the best fit marks its silhouette occupied and the search repeats on the
 vacant foreground. We keep the greedy occupancy loop and replace the active basis (Gabor
 sketch learnt from their training images, which we do not have) with a mean person mask
-``T`` (values in [0, 1], learnt by ``python -m harness.fit silhouette`` from exact person
+``T`` (values in [0, 1], learnt by ``occbench fit silhouette`` from exact person
 masks, or the shipped default).
 
 Fit of the template (scaled to one of ``n_scales`` heights) centred at a pixel, over the

@@ -237,7 +237,7 @@ class FeatureModels:
 
 
 def load_feature_models(path: str | Path | None = None) -> FeatureModels:
-    """Read models from a YAML file written by ``python -m harness.fit pbm``.
+    """Read models from a YAML file written by ``occbench fit pbm``.
 
     Args:
         path: YAML file; a bare file name that is no file here names one of the shipped

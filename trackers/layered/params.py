@@ -38,7 +38,7 @@ class FeatureParams:
 
     Args:
         models: theta_ij, the feature-difference models p(d | theta) (``FeatureModels``, a
-            mapping as written by ``python -m harness.fit pbm``, or None for the shipped
+            mapping as written by ``occbench fit pbm``, or None for the shipped
             defaults).
         feature_weights: omega_i of eq. 12, feature name -> weight (normalised to sum 1).
         part_weights: gamma_j of eq. 13, five weights (head, left/right torso-arm,
