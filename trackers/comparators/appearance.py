@@ -4,11 +4,11 @@ PBM (Section 5) compares with mean shift (MS) and a connected-component mean-shi
 particle filter (CCMSPF); both follow one target by its colour alone. Each keeps Perez et
 al.'s colour model of the target's box (a hue-saturation histogram of the pixels with a hue
 and a value histogram of the dark or grey ones) and moves a box of fixed aspect to where
-that colour is. Neither uses detections once a target is started: a
-detection starts a target where no target stands (the harness's single-target protocol
-hands it exactly one, the person's ground-truth box), and a target ends when its colour
-is gone (similarity below ``min_similarity`` for ``max_misses`` frames in a row) or its
-centre leaves the image.
+that colour is. Neither uses detections while a target lives: a detection starts a target
+where no target stands (the harness's single-target protocol hands it exactly one, the
+person's ground-truth box), a target ends when its ``loss`` rule declares it lost or its
+centre leaves the image, and a tracker that lost a target starts again from the detection
+its ``restart`` rule accepts (``trackers.comparators.loss``: our reading, PBM states none).
 
 Boxes are xywh float64 pixels, 0-based top-left, as everywhere in ``trackers``.
 """
@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from trackers.comparators.loss import AnyDetection, MostSimilar, NeverLost, SimilarityBelow
 from trackers.geometry import iou_matrix
 from trackers.records import Detections, Track, TrackState
 
@@ -75,39 +76,42 @@ class ColourTarget:
     misses: int = 0
 
 
+Loss = NeverLost | SimilarityBelow
+Restart = AnyDetection | MostSimilar
+
+
 class ColourTrackerBase:
     """Life cycle shared by the colour-only comparators; subclasses implement ``_follow``.
 
     Args:
         birth_iou: a detection starts a target when its IoU with every target's box is
             below this.
-        min_similarity: Bhattacharyya coefficient of the followed box's colour with the
-            model below which the frame counts as a miss.
-        max_misses: misses in a row after which a target ends.
+        loss: when a target is lost (``trackers.comparators.loss``); None =
+            ``SimilarityBelow(0.5, 11)``.
+        restart: which detections a tracker that lost a target starts again from; None =
+            ``AnyDetection()``.
         max_targets: targets followed at once (None = no bound); 1 makes it the
-            single-target tracker the papers compare with (later detections start nothing).
+            single-target tracker the papers compare with (later detections start nothing
+            while its target lives).
     """
 
-    def __init__(self, birth_iou: float = 0.3, min_similarity: float = 0.5,
-                 max_misses: int = 10, max_targets: int | None = None) -> None:
+    def __init__(self, birth_iou: float = 0.3, loss: Loss | None = None,
+                 restart: Restart | None = None, max_targets: int | None = None) -> None:
         if not 0.0 <= birth_iou <= 1.0:
             raise ValueError(f"birth_iou must lie in [0, 1], got {birth_iou}")
-        if not 0.0 <= min_similarity <= 1.0:
-            raise ValueError(f"min_similarity must lie in [0, 1], got {min_similarity}")
-        if max_misses < 0:
-            raise ValueError(f"max_misses must be >= 0, got {max_misses}")
         if max_targets is not None and max_targets < 1:
             raise ValueError(f"max_targets must be >= 1 or None, got {max_targets}")
         self.max_targets = max_targets
         self.birth_iou = birth_iou
-        self.min_similarity = min_similarity
-        self.max_misses = max_misses
+        self.loss = SimilarityBelow() if loss is None else loss
+        self.restart = AnyDetection() if restart is None else restart
         self.reset()
 
     def reset(self) -> None:
-        """Forget every target and restart ids at 1."""
+        """Forget every target (and any loss) and restart ids at 1."""
         self._targets: list[ColourTarget] = []
         self._next_id = 1
+        self._lost: np.ndarray | None = None  # the last lost target's q, until a restart
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         """Move ``target.box`` to where its colour is; return the similarity there."""
@@ -131,25 +135,30 @@ class ColourTrackerBase:
         kept = []
         for t in self._targets:  # 1. follow each target by its colour
             rho = self._follow(t, bins)
-            t.misses = t.misses + 1 if rho < self.min_similarity else 0
+            t.misses = t.misses + 1 if self.loss.missed(rho) else 0
             cx, cy = t.box[0] + t.box[2] / 2, t.box[1] + t.box[3] / 2
             inside = 0 <= cx < width and 0 <= cy < height
-            if inside and t.misses <= self.max_misses:  # 2. end the lost
+            if inside and not self.loss.lost(t.misses):  # 2. end the lost
                 kept.append(t)
+            else:
+                self._lost = t.q
         self._targets = kept
         self._births(detections, bins)  # 3. start targets where none stands
         return [Track(t.id, t.box.copy(), TrackState.CONFIRMED) for t in self._targets]
 
     def _births(self, detections: Detections, bins: np.ndarray) -> None:
+        """Start targets from free detections, in the order ``restart`` accepts them."""
         taken = np.array([t.box for t in self._targets]).reshape(-1, 4)
-        for box in detections.boxes:
+        models = np.array([colour_model(bins, b) for b in detections.boxes]).reshape(-1, MODEL_BINS)
+        for i in self.restart.order(models, self._lost):
+            box, q = detections.boxes[i], models[i]
             if self.max_targets is not None and len(self._targets) >= self.max_targets:
                 return
             if len(taken) and iou_matrix(box[None], taken).max() >= self.birth_iou:
                 continue  # a target stands there already
-            q = colour_model(bins, box)
             if q.sum() == 0:
                 continue  # the box lies outside the image
             self._targets.append(ColourTarget(self._next_id, box.astype(np.float64), q))
             self._next_id += 1
+            self._lost = None  # the loss is answered
             taken = np.vstack([taken, box])

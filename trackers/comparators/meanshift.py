@@ -16,6 +16,8 @@ import numpy as np
 from trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
+    Loss,
+    Restart,
     clip_box,
     colour_model,
 )
@@ -27,11 +29,12 @@ class MeanShiftTracker(ColourTrackerBase):
     Args:
         max_iterations: mean-shift iterations per frame (OpenCV's term criteria).
         search: half-width of the region searched around the last box, in box sizes.
-        birth_iou, min_similarity, max_misses, max_targets: life cycle (``ColourTrackerBase``).
+        birth_iou, loss, restart, max_targets: life cycle (``ColourTrackerBase``); the
+            evidence ``loss`` judges is rho at convergence (Comaniciu et al.'s eq. 17).
     """
 
     def __init__(self, max_iterations: int = 10, search: float = 1.0, birth_iou: float = 0.3,
-                 min_similarity: float = 0.5, max_misses: int = 10,
+                 loss: Loss | None = None, restart: Restart | None = None,
                  max_targets: int | None = None) -> None:
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -39,7 +42,7 @@ class MeanShiftTracker(ColourTrackerBase):
             raise ValueError(f"search must be > 0, got {search}")
         self.max_iterations = max_iterations
         self.search = search
-        super().__init__(birth_iou, min_similarity, max_misses, max_targets)
+        super().__init__(birth_iou, loss, restart, max_targets)
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         height, width = bins.shape

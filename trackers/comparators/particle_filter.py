@@ -13,7 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.comparators.appearance import ColourTarget, ColourTrackerBase, colour_model
+from trackers.comparators.appearance import (
+    ColourTarget,
+    ColourTrackerBase,
+    Loss,
+    Restart,
+    colour_model,
+)
 from trackers.records import Detections, Track
 
 
@@ -28,13 +34,14 @@ class ColourParticleFilter(ColourTrackerBase):
             mean shift keeps: colour alone favours boxes shrunk inside the person).
         likelihood_lambda: lambda of exp(-lambda (1 - rho)).
         seed: seed of the random walk and the resampling (restarted by ``reset``).
-        birth_iou, min_similarity, max_misses, max_targets: life cycle (``ColourTrackerBase``).
+        birth_iou, loss, restart, max_targets: life cycle (``ColourTrackerBase``); the
+            evidence ``loss`` judges is rho at the posterior-mean box.
     """
 
     def __init__(self, particles: int = 100, position_noise: float = 0.1,
                  scale_noise: float = 0.0, likelihood_lambda: float = 20.0, seed: int = 0,
-                 birth_iou: float = 0.3, min_similarity: float = 0.5,
-                 max_misses: int = 10, max_targets: int | None = None) -> None:
+                 birth_iou: float = 0.3, loss: Loss | None = None,
+                 restart: Restart | None = None, max_targets: int | None = None) -> None:
         if particles < 1:
             raise ValueError(f"particles must be >= 1, got {particles}")
         for name, v in (("position_noise", position_noise), ("scale_noise", scale_noise),
@@ -47,7 +54,7 @@ class ColourParticleFilter(ColourTrackerBase):
         self.likelihood_lambda = likelihood_lambda
         self.seed = seed
         self._sets: dict[int, np.ndarray] = {}
-        super().__init__(birth_iou, min_similarity, max_misses, max_targets)
+        super().__init__(birth_iou, loss, restart, max_targets)
 
     def reset(self) -> None:
         super().reset()

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from trackers.comparators import ColourParticleFilter, MeanShiftTracker
+from trackers.comparators import ColourParticleFilter, MeanShiftTracker, SimilarityBelow
 from trackers.geometry import iou_matrix
 from trackers.records import Detections
 
@@ -42,7 +42,7 @@ def test_follows_a_coloured_person_from_its_first_box(make):
 def test_target_ends_when_its_colour_is_gone(make):
     frames, boxes = _scene(10)
     grey = [np.full((H, W, 3), 100, np.uint8)] * 15
-    out = _follow(make(max_misses=3), frames + grey, boxes + boxes[-1:] * 15)
+    out = _follow(make(loss=SimilarityBelow(0.5, 4)), frames + grey, boxes + boxes[-1:] * 15)
     assert len(out[9]) == 1 and out[-1] == []
 
 
@@ -79,5 +79,5 @@ def test_frames_are_required_and_arguments_named():
         MeanShiftTracker().update(None, Detections.empty())
     with pytest.raises(ValueError, match="particles"):
         ColourParticleFilter(particles=0)
-    with pytest.raises(ValueError, match="min_similarity"):
-        MeanShiftTracker(min_similarity=2)
+    with pytest.raises(ValueError, match="threshold"):
+        SimilarityBelow(threshold=2)

@@ -1,0 +1,65 @@
+"""PBM's single-target protocol with the colour comparators' loss rule: a person hidden
+behind an occluder is lost by its follower, which restarts on the person's return under a
+new reported id, and PBM Table 1's columns count it (over-segmentation, IDs per track)."""
+
+import numpy as np
+import pytest
+
+from harness.datasets.base import GroundTruth, Sequence
+from harness.io.mot import MotTable
+from harness.metrics.paper import paper_metrics
+from harness.pipeline.protocols import run_single_target
+from trackers.comparators import ColourParticleFilter, MeanShiftTracker, NeverLost, SimilarityBelow
+from trackers.records import Detections, SequenceInfo
+
+W, H, N = 200, 120, 30
+HIDDEN = range(11, 21)  # 1-based frames on which the red person is behind a grey occluder
+
+
+def _box(k: int) -> np.ndarray:
+    return np.array([20 + 3 * k, 40, 16, 32], dtype=np.float64)
+
+
+class _Hidden(Sequence):
+    """One red person walking right on grey noise, hidden on HIDDEN (labelled throughout)."""
+
+    def __init__(self) -> None:
+        self.info = SequenceInfo("hidden", W, H, 25.0, N)
+        ks = np.arange(1, N + 1)
+        self.gt = GroundTruth(MotTable(ks, np.ones(N, np.int64), np.array([_box(k) for k in ks]),
+                                       np.ones(N), np.full(N, -1), np.full(N, np.nan)))
+
+    def frame(self, index: int) -> np.ndarray:
+        img = np.random.default_rng(index).integers(90, 110, (H, W, 3), dtype=np.uint8)
+        if index not in HIDDEN:
+            x, y, w, h = _box(index).astype(int)
+            img[y:y + h, x:x + w] = (30, 30, 200)
+        return img
+
+
+class _Visible:
+    """Detections: the person's box when it is not hidden."""
+
+    def start(self, sequence) -> None:
+        pass
+
+    def detect(self, index, frame):
+        if index in HIDDEN:
+            return Detections.empty(), None
+        return Detections(_box(index)[None], np.ones(1)), None
+
+
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+def test_a_lost_follower_restarts_under_a_new_id(make):
+    builders = {"lost": lambda: make(max_targets=1, loss=SimilarityBelow(0.8, 3)),
+                "never": lambda: make(max_targets=1, loss=NeverLost())}
+    out = run_single_target(builders, _Hidden(), _Visible(), foreground="none")
+    lost, never = out["lost"].table, out["never"].table
+    assert set(never.ids.tolist()) == {1} and len(never.frames) == N
+    first = lost.frames[lost.ids == 1]
+    assert first.min() == 1 and first.max() == HIDDEN.start + 1  # lost on its 3rd miss
+    restart = lost.frames[lost.ids == 2]
+    assert restart.min() == HIDDEN.stop and restart.max() == N  # back on its return
+    assert set(lost.ids.tolist()) == {1, 2}
+    m = paper_metrics(_Hidden().gt.table, lost)
+    assert m["PBM_Over"] == 1 and m["PBM_IDs/traj"] == 2
