@@ -15,6 +15,7 @@ import numpy as np
 
 from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from trackers.geometry import iou_matrix
+from trackers.three_hypothesis._kernels import blend
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.hypotheses import PRIORITY
 from trackers.three_hypothesis.motion import (
@@ -155,7 +156,7 @@ class BlendVisible:
 
     def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
         if visible > 0:
-            return (1.0 - visible) * q + visible * p
+            return blend(q, p, visible)  # (1 - v) q + v p, compiled
         return q
 
 

@@ -43,6 +43,7 @@ from trackers.common.checks import parameter_group
 from trackers.geometry import valid_boxes
 from trackers.records import Detections, Track, TrackState
 from trackers.three_hypothesis import hypotheses as hyp
+from trackers.three_hypothesis._kernels import depth_orders
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.association import Matches, associate
 from trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE, Node, TrackingGraph
@@ -50,7 +51,6 @@ from trackers.three_hypothesis.motion import MotionModel, box_measurements, stat
 from trackers.three_hypothesis.occlusion import (
     boxes_meet,
     covered_fraction,
-    depth_order,
     occlusion_pairs,
     region_overlaps,
 )
@@ -301,21 +301,28 @@ class RetaTracker:
         front; both visible, the areas of j's region above and below i's centre decide;
         neither, pi^{t-1} is inherited (unknown: the lower region is in front). Fills
         ``f.in_front``: node -> persons in front of it."""
-        persons, matched, dets, in_front = f.persons, f.matched, f.dets, f.in_front
-        visible_node = {matched[pi][1] for pi in matched}
+        persons, matched, in_front, pi = f.persons, f.matched, f.in_front, self._pi
+        if not len(f.pairs):
+            return
+        # eq. 3 as far as frame t decides it, every pair in one compiled pass
+        nodes = [n for _, n, _, _ in matched.values()]
+        visible = np.zeros(len(f.pred), dtype=bool)
+        visible[nodes] = True
+        shapes = f.pred.copy()  # each node's current region: its measurement when visible
+        shapes[nodes] = f.dets[[d for d, _, _, _ in matched.values()]]
+        orders = np.empty(len(f.pairs), dtype=np.int64)
+        depth_orders(f.pairs, visible, shapes, f.pred, orders)
         own = f.owners.tolist()
         boxes = f.pred.tolist()  # (B,) [x, y, w, h] lists: scalar work below
-        for a, b in f.pairs.tolist():
+        for (a, b), order in zip(f.pairs.tolist(), orders.tolist()):
             i, j = own[a], own[b]
             ki, kj = persons[i].key, persons[j].key
-            vi, vj = a in visible_node, b in visible_node
-            shape_i = dets[matched[i][0]] if vi else boxes[a]
-            prev = self._pi.get((ki, kj), 0)
-            order = depth_order(vi, vj, shape_i, boxes[b], prev)
+            if order == 0:  # undecided at t: pi^{t-1} is inherited
+                order = pi.get((ki, kj), 0)
             if order == 0:  # unknown and neither visible: the lower region is in front
                 order = 1 if boxes[a][1] + boxes[a][3] >= boxes[b][1] + boxes[b][3] else -1
-            self._pi[(ki, kj)] = order
-            self._pi[(kj, ki)] = -order
+            pi[(ki, kj)] = order
+            pi[(kj, ki)] = -order
             if order > 0:
                 in_front.setdefault(b, []).append(i)
             else:

@@ -89,3 +89,43 @@ def test_eq5_kernel_has_the_bits_of_the_definition():
             a[1, 2] = 0.0  # a degenerate region
         got = region_overlaps(a, b, (12, 24)[k % 2])
         assert got.tobytes() == region_similarity(a, b, samples=(12, 24)[k % 2]).tobytes()
+
+
+def test_blend_kernel_has_the_bits_of_the_numpy_expression():
+    from trackers.three_hypothesis._kernels import blend
+
+    rng = np.random.default_rng(11)
+    for n in (0, 1, 7, 4096):
+        q, p = rng.random(n), rng.random(n)
+        q[: n // 3] = 0.0  # bins empty in q, in p, in both
+        p[n // 4 : n // 2] = 0.0
+        for v in (1e-9, 0.3, 0.5, 1.0, float(rng.random())):
+            got = blend(q, p, v)
+            assert got is not q and got.tobytes() == ((1.0 - v) * q + v * p).tobytes()
+
+
+def test_eq3_kernel_gives_the_verdicts_of_depth_order():
+    from trackers.three_hypothesis._kernels import depth_orders
+    from trackers.three_hypothesis.occlusion import depth_order
+
+    rng = np.random.default_rng(3)
+    for n in (0, 1, 2, 9):
+        pred = np.column_stack([rng.uniform(0, 100, (n, 2)), rng.uniform(0, 60, (n, 2))])
+        shapes = pred + rng.normal(0, 5, pred.shape) * (rng.random((n, 1)) < 0.7)
+        if n > 2:
+            pred[2, 3] = 0.0  # a flat region: ry = 0
+            shapes[0, 1::2] = [10.0, 20.0]  # a tie: i's centre row 20 halves j's ellipse
+            pred[1] = [30.0, 16.0, 8.0, 8.0]  # exactly (up = down = 8 pi)
+        visible = rng.random(n) < 0.6
+        if n > 1:
+            visible[:2] = True
+        pairs = np.array([(a, b) for a in range(n) for b in range(n) if a != b],
+                         dtype=np.int64).reshape(-1, 2)
+        got = np.full(len(pairs), 7, dtype=np.int64)
+        depth_orders(pairs, visible, shapes, pred, got)
+        want = [depth_order(bool(visible[a]), bool(visible[b]),
+                            shapes[a] if visible[a] else pred[a], pred[b], 0)
+                for a, b in pairs.tolist()]
+        assert got.tolist() == want
+        if n > 2:
+            assert 0 in want[:1]  # the tie is undecided
