@@ -1,7 +1,8 @@
 """Start-up of occbench: how long before a run's (or a sweep job's) first frame.
 
-Each figure is the median of ``--runs`` fresh processes, printed with its ratio to
-``python -c pass`` (the interpreter's own start, timed in the same loop). Targets (issue 23):
+Each figure is the median of ``--runs`` fresh processes: wall time with its ratio to
+``python -c pass`` (the interpreter's own start, timed in the same loop), and the process's
+CPU time, which the other work on a shared machine disturbs less. Targets (issue 23):
 ``occbench --version`` and a one-job run's start-up before its first frame at most 1 s on a
 warm machine (numba's cache filled by an earlier run).
 
@@ -14,7 +15,14 @@ warm machine (numba's cache filled by an earlier run).
 - first frame: ``occbench tracker=T progress=false`` from the start of the process to the
   frame loop (``run_sequence`` entered: config, checks, trackers built and warmed up; the
   data's own warm-up, e.g. a detector's background, is what the loop does first and is
-  left out), on the synthetic ``crossing`` scene.
+  left out), on the synthetic ``crossing`` scene, split into (wall, the same process):
+  interpreter + imports (to the Hydra app's start: ``harness.commands.cli.main`` called),
+  Hydra compose (both of Hydra's compositions: the mode's, ``Hydra.get_mode``, then the
+  run's), build (the run's plan: checks, config.yaml, trackers built with their imports,
+  detection source, sequences loaded) and warm-up (``plan.prepare_trackers``); what is left
+  (the run's own trackers built, the ground truth written) is the total's remainder.
+- first frame, default suite: the same for ``occbench tracker=reta`` on the default dataset
+  (the eight synthetic scenes).
 - sweep job: a 4-job sweep (``hydra.launcher.n_jobs=1``, one job at a time) on the default
   launcher, warm (forked from the preloaded fork server) and cold (``preload=false``):
   the median time from a job's last log line to the next job's frame loop (its log line
@@ -28,7 +36,9 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import math
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -42,49 +52,84 @@ ENV = {**os.environ, "OMP_NUM_THREADS": "1",
        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
 SCENE = ["dataset.scenarios=[crossing]", "dataset.length=20", "progress=false"]
 
-# a one-job run stopped where its frame loop starts: prints the seconds since T0 (wall)
+# a one-job run stopped where its frame loop starts: prints each stage's [wall, CPU] seconds
 FIRST_FRAME = """
-import os, sys, time
+import json, os, sys, time
+T0 = float(os.environ["BENCH_T0"])
 import harness.pipeline.experiment as experiment
+import harness.pipeline.plan as plan
+from hydra._internal.hydra import Hydra
+from harness.commands.cli import main
+def now():
+    return time.time() - T0, time.process_time()
+spent, ended = {"interpreter + imports": now(), "Hydra compose": (0.0, 0.0)}, {}
+def timed(fn, key):
+    def wrapper(*args, **kwargs):
+        t = now()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            ended[key] = now()
+            spent[key] = tuple(s + e - b for s, b, e in zip(spent.get(key, (0, 0)), t, ended[key]))
+    return wrapper
+Hydra.compose_config = timed(Hydra.compose_config, "Hydra compose")
+plan.prepare_trackers = timed(plan.prepare_trackers, "warm-up")
 def stop(*args, **kwargs):
-    print(time.time() - float(os.environ["BENCH_T0"]), flush=True)
+    total = now()
+    out = {k: spent[k] for k in ("interpreter + imports", "Hydra compose")}
+    out["build"] = [w - s - c for w, s, c in zip(ended["warm-up"], spent["warm-up"],
+                                                  ended["Hydra compose"])]
+    out["warm-up"] = spent["warm-up"]
+    out["rest"] = [t - sum(v[i] for v in out.values()) for i, t in enumerate(total)]
+    out["total"] = total
+    print(json.dumps(out), flush=True)
     os._exit(0)
 experiment.run_sequence = stop
-from harness.commands.cli import main
 main(sys.argv[1:])
 """
 
 BUILD = """
 import json, sys, time
-t = time.perf_counter()
+def now():
+    return time.perf_counter(), time.process_time()
+def since(t):
+    return [b - a for a, b in zip(t, now())]
+t = now()
 import harness.commands.run, harness.pipeline.experiment
-t_import = time.perf_counter() - t
+out = {"import": since(t)}
 from harness.pipeline.build import build_tracker, compose_config
 from harness.pipeline.warmup import warm_up
-out = {"import": t_import}
 for name in sys.argv[1:]:
-    t = time.perf_counter()
+    t = now()
     tracker = build_tracker(name, compose_config([f"tracker={name}"]).tracker, "tracker")
-    out[f"build {name}"] = time.perf_counter() - t
-    t = time.perf_counter()
+    out[f"build {name}"] = since(t)
+    t = now()
     warm_up(tracker)
-    out[f"warm-up {name}"] = time.perf_counter() - t
+    out[f"warm-up {name}"] = since(t)
 print(json.dumps(out))
 """
 
 
-def wall(cmd: list[str]) -> float:
-    t = time.perf_counter()
-    subprocess.run(cmd, check=True, cwd=ROOT, env=ENV, capture_output=True, timeout=600)
-    return time.perf_counter() - t
+def _child_cpu() -> float:
+    use = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return use.ru_utime + use.ru_stime
 
 
-def first_frame(tracker: str, out: Path) -> float:
+def run(cmd: list[str], env: dict[str, str] | None = None) -> tuple[list[float], str]:
+    """[wall, CPU] seconds of the command (a fresh process) and its stdout."""
+    t, c = time.perf_counter(), _child_cpu()
+    proc = subprocess.run(cmd, check=True, cwd=ROOT, env=env or ENV, capture_output=True,
+                          text=True, timeout=600)
+    return [time.perf_counter() - t, _child_cpu() - c], proc.stdout
+
+
+def first_frame(tracker: str, out: Path, scene: list[str] = SCENE) -> dict[str, list[float]]:
+    """[wall, CPU] seconds from the process's start to the frame loop of
+    ``occbench tracker=T *scene``, by stage (``FIRST_FRAME``), ``total`` among them."""
     env = {**ENV, "BENCH_T0": repr(time.time())}
-    proc = subprocess.run([sys.executable, "-c", FIRST_FRAME, f"tracker={tracker}", *SCENE,
-                           f"hydra.run.dir={out}"], check=True, cwd=ROOT, env=env,
-                          capture_output=True, text=True, timeout=600)
-    return float(proc.stdout.strip().splitlines()[-1])
+    _, stdout = run([sys.executable, "-c", FIRST_FRAME, f"tracker={tracker}", *scene,
+                     f"hydra.run.dir={out}"], env)
+    return json.loads(stdout.strip().splitlines()[-1])
 
 
 def _stamp(line: str) -> float:
@@ -114,29 +159,37 @@ def main(argv: list[str] | None = None) -> int:
     occbench = [sys.executable, "-m", "harness"]
     print(f"load average {os.getloadavg()[0]:.2f} / {os.cpu_count()} cores; median of "
           f"{args.runs} runs", flush=True)
-    wall([sys.executable, "-c", BUILD, *trackers])  # numba's cache filled, files in the page cache
-    times: dict[str, list[float]] = {}
+    run([sys.executable, "-c", BUILD, *trackers])  # numba's cache filled, files in the page cache
+    times: dict[str, list[list[float]]] = {}
+
+    def add(key: str, value: list[float]) -> None:
+        times.setdefault(key, []).append(value)
+
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.runs):
-            times.setdefault("python -c pass", []).append(wall([sys.executable, "-c", "pass"]))
-            times.setdefault("occbench --version", []).append(wall([*occbench, "--version"]))
-            for key, value in json.loads(subprocess.run(
-                    [sys.executable, "-c", BUILD, *trackers], check=True, cwd=ROOT, env=ENV,
-                    capture_output=True, text=True, timeout=600).stdout).items():
-                times.setdefault(key, []).append(value)
+            add("python -c pass", run([sys.executable, "-c", "pass"])[0])
+            add("occbench --version", run([*occbench, "--version"])[0])
+            for key, value in json.loads(run([sys.executable, "-c", BUILD, *trackers])[1]).items():
+                add(key, value)
             for name in trackers:
-                times.setdefault(f"first frame, one-job run, {name}", []).append(
-                    first_frame(name, Path(tmp) / f"{name}-{i}"))
+                stages = first_frame(name, Path(tmp) / f"{name}-{i}")
+                add(f"first frame, one-job run, {name}", stages.pop("total"))
+                for stage, value in stages.items():
+                    add(f"  {name}: {stage}", value)
+            add(f"first frame, default suite, {trackers[0]}",
+                first_frame(trackers[0], Path(tmp) / f"suite-{i}", ["progress=false"])["total"])
         if not args.no_sweep:
-            times["sweep job start, warm (default)"] = job_gaps(Path(tmp) / "warm")
-            times["sweep job start, cold (preload=false)"] = job_gaps(
-                Path(tmp) / "cold", "hydra.launcher.preload=false")
-    ref = statistics.median(times["python -c pass"])
+            for key, folder, extra in (
+                    ("sweep job start, warm (default)", "warm", ()),
+                    ("sweep job start, cold (preload=false)", "cold",
+                     ("hydra.launcher.preload=false",))):
+                times[key] = [[gap, math.nan] for gap in job_gaps(Path(tmp) / folder, *extra)]
+    ref = statistics.median(v[0] for v in times["python -c pass"])
     width = max(map(len, times))
-    print(f"{'':<{width}}  median s  x python")
+    print(f"{'':<{width}}  wall s  x python   CPU s  (medians)")
     for key, values in times.items():
-        med = statistics.median(values)
-        print(f"{key:<{width}}  {med:8.3f}  {med / ref:8.1f}")
+        wall, cpu = (statistics.median(v[i] for v in values) for i in (0, 1))
+        print(f"{key:<{width}}  {wall:6.3f}  {wall / ref:8.1f}  {cpu:6.3f}")
     return 0
 
 

@@ -36,7 +36,8 @@ from trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
-FRAMES = 36
+FRAMES = 26  # the first two people meet (frame 17), overlap and part (frame 23)
+ALONE_FRAMES = 6  # the first person alone: one match or none a frame
 SIZE = (240, 320)
 # (x at frame 0, x step per frame, y, w, h, head colour, body colour)
 PEOPLE = (
@@ -72,11 +73,11 @@ def warm_up(tracker: Tracker) -> None:
     first person alone (one match or none a frame: numba
     compiles a separate kernel for the contiguous one-element index arrays that gives), then
     ``reset`` it: its state afterwards is as built."""
-    for people in (PEOPLE, PEOPLE[:1]):
+    for people, frames in ((PEOPLE, FRAMES), (PEOPLE[:1], ALONE_FRAMES)):
         for with_mask in (True, False):
             tracker.reset()
             bank = TrackerBank({"warm-up": tracker})
-            for k in range(FRAMES):
+            for k in range(frames):
                 frame, mask, dets = scene(k, people)
                 if not bank.step(k, frame, dets, mask if with_mask else None):
                     raise RuntimeError(f"warm-up failed: {bank.outputs['warm-up'].error}")

@@ -1,5 +1,5 @@
-"""The harness's warm-up before timing (harness/pipeline/warmup.py): it loads every kernel a PBM run
-uses, it leaves a tracker exactly as built, it runs once per tracker class and process, and a
+"""The harness's warm-up before timing (harness/pipeline/warmup.py): it loads every kernel a PBM or
+reta run uses, it leaves a tracker exactly as built, it runs once per tracker class and process, and a
 tracker that needs frames is refused before a run on frameless data."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
@@ -51,11 +52,13 @@ print(sum(before.values()))
 """
 
 
-def test_a_warmed_up_process_has_loaded_every_kernel_a_run_uses():
-    out = subprocess.run([sys.executable, "-c", _FRESH, str(ROOT / "conf" / "tracker" / "pbm.yaml")],
+@pytest.mark.parametrize(("tracker", "kernels"), [("pbm", 20), ("reta", 5)])
+def test_a_warmed_up_process_has_loaded_every_kernel_a_run_uses(tracker, kernels):
+    config = ROOT / "conf" / "tracker" / f"{tracker}.yaml"
+    out = subprocess.run([sys.executable, "-c", _FRESH.replace('"pbm"', repr(tracker)), str(config)],
                          capture_output=True, text=True, cwd=ROOT, check=True).stdout.splitlines()
     assert out[-2] == "[]"  # no kernel compiled or loaded during the run
-    assert int(out[-1]) >= 20  # and the warm-up did load the kernels
+    assert int(out[-1]) >= kernels  # and the warm-up did load the kernels
 
 
 def test_warm_up_leaves_the_tracker_as_built():
