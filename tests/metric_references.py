@@ -48,7 +48,7 @@ def reference_hota(gt_ids, tr_ids, sims) -> HotaCounts:
             out.fn[a] += len(g) - len(r)
             out.fp[a] += len(t) - len(r)
             if len(r):
-                loc[a] += s[r, c].sum()
+                loc[a] += sum(s[r, c])  # Python's sum, in TrackEval's order
                 mcs[a][g[r], t[c]] += 1
     for a in range(19):
         mc = mcs[a]

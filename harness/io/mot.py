@@ -8,16 +8,16 @@ from left and top, writing adds it back.
 
 from __future__ import annotations
 
-import io
 import logging
 import math
 import os
-import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from harness.io.columns import read_columns
 
 log = logging.getLogger(__name__)
 
@@ -170,18 +170,15 @@ def _parse_text(text: str, path: Path, kind: str, last_frame: int | None) -> Mot
 
 
 def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> MotTable | None:
-    """The common case in one vectorised pass (numpy's C reader, floats parsed as Python
-    parses them): comma-separated rows all of one width (6 to 10), no comment, every row
-    valid by ``_check_row``'s rules. None for anything else, which ``_parse`` then reads
-    line by line with its exact warnings and errors naming the line
+    """The common case in one vectorised pass (a C reader, floats parsed as Python parses
+    them: ``harness.io.columns``): comma-separated rows all of one width (6 to 10), no
+    comment, every row valid by ``_check_row``'s rules. None for anything else, which
+    ``_parse`` then reads line by line with its exact warnings and errors naming the line
     (tests/harness/io/test_mot.py: both give the same table)."""
     if "#" in text or "_" in text or not text.strip():
         return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            a = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2, dtype=np.float64)
-    except (ValueError, UserWarning):
+    a = read_columns(text)
+    if a is None:
         return None
     ncols = a.shape[1]
     if not 6 <= ncols <= 10 or not np.isfinite(a).all():
@@ -259,7 +256,9 @@ def _fields(text: str, where: str) -> list[str]:
 def _table(a: np.ndarray, ncols: int, gt: bool, path: Path) -> MotTable:
     """The table of validated rows (R, 10), sorted by (frame, id); ``ncols`` the fields of
     every row before padding to 10."""
-    a = a[np.lexsort((a[:, 1], a[:, 0]))]
+    step, id_step = np.diff(a[:, 0]), np.diff(a[:, 1])
+    if not ((step > 0) | ((step == 0) & (id_step >= 0))).all():  # else sorted already
+        a = a[np.lexsort((a[:, 1], a[:, 0]))]
     mot16_gt = gt and ncols == 9
     boxes = a[:, 2:6].copy()
     boxes[:, :2] -= 1.0  # 1-based file -> 0-based memory

@@ -194,16 +194,21 @@ def matched_entries(pairs: FramePairs, pairable: np.ndarray) -> np.ndarray:
     shared = (np.bincount(row)[row] > 1) | (np.bincount(col)[col] > 1)
     both = np.flatnonzero((np.diff(pairs.gt_start) > 0) & (np.diff(pairs.tracker_start) > 0))
     starts = np.searchsorted(frame, np.arange(len(pairs) + 1))
+    _, person = np.unique(pairs.gt_ids, return_inverse=True)
+    person, tracker = person[row], pairs.tracker_ids[col]  # of each pairable entry
+    none = np.iinfo(np.int64).min  # no tracker id
+    last = np.full(int(person.max()) + 1, none)  # person -> tracker id matched the frame before
     for k in np.unique(frame[shared]).tolist():
-        g, t = pairs.ids(k)
         before = both[np.searchsorted(both, k) - 1] if k > both[0] else -1
-        e = slice(starts[before], starts[before + 1]) if before >= 0 else slice(0, 0)
-        last = dict(zip(pairs.gt_ids[row[e][take[e]]].tolist(),
-                        pairs.tracker_ids[col[e][take[e]]].tolist()))
+        e = np.arange(starts[before], starts[before + 1]) if before >= 0 else np.zeros(0, int)
+        e = e[take[e]]
+        last[person[e]] = tracker[e]
         here = slice(starts[k], starts[k + 1])
+        kept = last[person[here]] == tracker[here]
+        last[person[e]] = none
         r, cc = row[here] - pairs.gt_start[k], col[here] - pairs.tracker_start[k]
-        kept = np.array([last.get(gi) == ti for gi, ti in zip(g[r].tolist(), t[cc].tolist())])
-        score = np.zeros((len(g), len(t)))
+        score = np.zeros((int(pairs.gt_start[k + 1] - pairs.gt_start[k]),
+                          int(pairs.tracker_start[k + 1] - pairs.tracker_start[k])))
         score[r, cc] = 1000.0 * kept + pairs.iou[pairable[here]]
         index = np.full(score.shape, -1)
         index[r, cc] = np.arange(here.start, here.stop)

@@ -21,7 +21,8 @@ scores, match counts per alpha), so memory does not grow with ``#gt ids * #track
 (TrackEval holds a dense matrix of each, 19 of them for the match counts). The only Python
 loops are over frames: a frame's dense similarity for its row and column sums, and one
 Hungarian assignment per frame on the same dense score matrix as TrackEval (ties broken
-alike).
+alike); the counts are then taken from the matched entries at once, LocA's similarities
+summed in TrackEval's order.
 """
 
 from __future__ import annotations
@@ -167,43 +168,50 @@ def global_alignment(pairs: FramePairs, pair_of_entry: np.ndarray, n_pairs: int,
 
 
 def match_frames(pairs: FramePairs, alignment: np.ndarray, pair_of_entry: np.ndarray,
-                 res: HotaCounts) -> tuple[np.ndarray, np.ndarray]:
-    """Step 2: per frame, the Hungarian assignment maximising ``alignment * similarity``;
-    adds TP, FN, FP and LocA's sums per alpha to ``res``.
+                 res: HotaCounts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Step 2: per frame, the Hungarian assignment maximising ``alignment * similarity``
+    (``frame_assignments``); adds TP, FN, FP and LocA's sums per alpha to ``res``.
 
     Returns:
         (K,) pair index, (K,) similarity and (K,) frame index of the matched boxes with
-        similarity > 0.
+        similarity > 0, by frame, then gt box.
     """
-    loc_sum = np.zeros(len(ALPHAS))
-    match_pair, match_sim = [np.zeros(0, np.int64)], [np.zeros(0)]
-    match_frame = [np.zeros(0, np.int64)]
-    for k in range(len(pairs)):
-        _, _, s = pairs.frame(k)
-        n, m = s.shape
-        if n == 0 or m == 0:
-            res.fp += m
-            res.fn += n
-            continue
-        r, c, e = pairs.entries(k)
-        score = np.zeros((n, m))
-        score[r, c] = alignment[pair_of_entry[e]] * pairs.iou[e]
-        rows, cols = linear_sum_assignment(-score)
-        sims = s[rows, cols]
-        matched = sims[None, :] >= ALPHAS[:, None] - _EPS  # (19, K)
-        n_match = matched.sum(1)
-        res.tp += n_match
-        res.fn += n - n_match
-        res.fp += m - n_match
-        loc_sum += (matched * sims[None, :]).sum(1)
-        pair_index = np.full((n, m), -1)
-        pair_index[r, c] = pair_of_entry[e]
-        hit = sims > 0
-        match_pair.append(pair_index[rows[hit], cols[hit]])
-        match_sim.append(sims[hit])
-        match_frame.append(np.full(int(hit.sum()), k, np.int64))
+    score = alignment[pair_of_entry] * pairs.iou
+    taken = np.flatnonzero(frame_assignments(pairs, score))
+    sim = pairs.iou[taken]
+    frame = np.searchsorted(pairs.entry_start, taken, side="right") - 1
+    matched = sim[None, :] >= ALPHAS[:, None] - _EPS  # (19, K)
+    n_match = matched.sum(1)
+    res.tp += n_match
+    res.fn += len(pairs.gt_ids) - n_match
+    res.fp += len(pairs.tracker_ids) - n_match
+    # LocA's sums added as TrackEval adds them: a frame's similarities in turn, then frames
+    per_frame = np.stack([np.bincount(frame, weights=np.where(ok, sim, 0.0),
+                                      minlength=len(pairs)) for ok in matched])
+    loc_sum = np.cumsum(per_frame, axis=1)[:, -1] if len(pairs) else np.zeros(len(ALPHAS))
     res.loc_a = np.maximum(1e-10, loc_sum) / np.maximum(1e-10, res.tp)
-    return np.concatenate(match_pair), np.concatenate(match_sim), np.concatenate(match_frame)
+    return pair_of_entry[taken], sim, frame.astype(np.int64)
+
+
+def frame_assignments(pairs: FramePairs, score: np.ndarray) -> np.ndarray:
+    """(E,) bool: the entries taken by one maximising Hungarian assignment on each frame's
+    dense (N_k, M_k) matrix of ``score`` ((E,) float64, one per entry; 0 where a box pair
+    has none), as TrackEval's ``linear_sum_assignment(-score)``."""
+    taken = np.zeros(len(score), dtype=bool)
+    for k in range(len(pairs)):
+        r, c, e = pairs.entries(k)
+        if e.start == e.stop:
+            continue  # nothing to take
+        n, m = (int(pairs.gt_start[k + 1] - pairs.gt_start[k]),
+                int(pairs.tracker_start[k + 1] - pairs.tracker_start[k]))
+        dense = np.zeros((n, m))
+        dense[r, c] = score[e]
+        index = np.full((n, m), -1)
+        index[r, c] = np.arange(e.start, e.stop)
+        rows, cols = linear_sum_assignment(-dense)
+        hit = index[rows, cols]
+        taken[hit[hit >= 0]] = True
+    return taken
 
 
 def association(res: HotaCounts, matched_pair: np.ndarray, matched_sim: np.ndarray,
