@@ -116,10 +116,11 @@ def _staged_detector(source: Any) -> Any | None:
 
 def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images: Sequence[Any],
                           repeats: int = 3, foreground: str = "auto",
-                          background: Mapping[str, Any] | None = None,
+                          background: Mapping[str, Any] | None = None, bar: Any = None,
                           ) -> tuple[list[StageTiming], list[float]]:
     """Stage-by-stage timings of a front-end detector on ``images`` (frames 1..n), and the
-    warm-up seconds of each run (empty lists when the source has no timed stages)."""
+    warm-up seconds of each run (empty lists when the source has no timed stages); ``bar``
+    (a progress bar) advances by one after each run, outside the timed code."""
     from harness.pipeline.loop import ForegroundProvider, clean_detections
     from trackers.frontend.blobs import blobs_from_mask
 
@@ -156,6 +157,7 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
             runs[name].append(acc[name])
         if isinstance(getattr(det, "verifier", None), _Timed):
             verifier_runs.append(det.verifier.seconds)
+        _advance(bar)
     n = len(images)
     total = [sum(runs[k][r] for k in names[:4]) for r in range(repeats)]
     fg_only = [runs["background"][r] + runs["cleaning"][r] + runs["blobs"][r]
@@ -171,11 +173,14 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
 def bench_sequence(sequence: Any, make_source: Callable[[], Any],
                    make_trackers: Callable[[], Mapping[str, Any]], frames: int | None = None,
                    repeats: int = 3, foreground: str = "auto",
-                   background: Mapping[str, Any] | None = None) -> list[StageTiming]:
+                   background: Mapping[str, Any] | None = None,
+                   progress: Callable[..., Any] | None = None) -> list[StageTiming]:
     """Time decode, front end and every tracker on the first ``frames`` frames of
-    ``sequence`` (``repeats`` runs each; fresh source and trackers for every run)."""
-    from harness.pipeline.loop import frames as frame_loop
+    ``sequence`` (``repeats`` runs each; fresh source and trackers for every run).
 
+    ``progress``: a progress-bar factory (``harness.progress.progress_factory``); its bar
+    counts the runs of every stage and advances between runs, never inside a timed one.
+    """
     if repeats < 1:
         raise ValueError(f"repeats must be >= 1, got {repeats}")
     n = sequence.info.length if frames is None else min(int(frames), sequence.info.length)
@@ -187,10 +192,38 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
         images.clear()
         images.extend(sequence.frame(k) for k in range(1, n + 1))
 
+    names = list(make_trackers())
+    staged = _staged_detector(make_source()) is not None
+    bar = None if progress is None else progress(
+        total=repeats * (2 + staged + len(names)), desc="bench", unit="run")
+    try:
+        return _bench_stages(sequence, make_source, make_trackers, names, n, decode, images,
+                             repeats, foreground, background, bar)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _advance(bar: Any) -> None:
+    if bar is not None:
+        bar.update(1)
+
+
+def _bench_stages(sequence: Any, make_source: Callable[[], Any],
+                  make_trackers: Callable[[], Mapping[str, Any]], names: list[str], n: int,
+                  decode: Callable[[], None], images: list[Any], repeats: int,
+                  foreground: str, background: Mapping[str, Any] | None,
+                  bar: Any) -> list[StageTiming]:
+    """``bench_sequence``'s stages in order, ``bar`` advanced after each run."""
+    from harness.pipeline.loop import frames as frame_loop
+
     global _clock
     clock, _clock = _clock, (time.process_time if _clock is time.thread_time else _clock)
+    decode_s = []
     try:  # decoding may run in a prefetch thread: its CPU time is the process's
-        decode_s = [_time(decode) for _ in range(repeats)]
+        for _ in range(repeats):
+            decode_s.append(_time(decode))
+            _advance(bar)
     finally:
         _clock = clock
     inputs: list[tuple[Any, Any]] = []
@@ -206,16 +239,19 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
         source = make_source()
         source.start(sequence)  # the per-sequence warm-up: timed by bench_frontend_stages
         front_s.append(_time(lambda source=source: front(source)))
+        _advance(bar)
     out = [StageTiming("decode", n, decode_s), StageTiming("front end", n, front_s)]
     staged, warm = bench_frontend_stages(sequence, make_source, images, repeats, foreground,
-                                         background)
+                                         background, bar)
     out += staged
     if warm:  # once per sequence: one "frame" of this row is the whole warm-up
         out.append(StageTiming("warm-up (per sequence)", 1, warm))
-    for name in list(make_trackers()):
-        out.append(StageTiming(f"tracker {name}", n, [
-            bench_tracker(name, make_trackers()[name], images, inputs)
-            for _ in range(repeats)]))
+    for name in names:
+        seconds = []
+        for _ in range(repeats):
+            seconds.append(bench_tracker(name, make_trackers()[name], images, inputs))
+            _advance(bar)
+        out.append(StageTiming(f"tracker {name}", n, seconds))
     return out
 
 
@@ -276,14 +312,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         seq = by_name[args.sequence] if args.sequence else sequences[0]
         configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
         from harness.pipeline.warmup import warm_up_once  # compile kernels before timing
+        from harness.progress import progress_factory
 
+        progress = progress_factory()  # on stderr when it is a terminal, else nothing
         warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
-                      for n, node in configs.items()}, lambda text: print(text, file=sys.stderr))
+                      for n, node in configs.items()}, lambda text: print(text, file=sys.stderr),
+                     progress)
         timings = bench_sequence(
             seq, lambda: build_source(cfg.detector, cache=False),  # the front end timed
             lambda: {n: build_tracker(n, node) for n, node in configs.items()},
             args.frames, args.repeats, str(cfg.get("foreground", "auto")),
-            cfg.get("background") or {})
+            cfg.get("background") or {}, progress)
     except (OSError, ValueError, RuntimeError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

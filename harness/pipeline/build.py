@@ -123,18 +123,18 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
     return out
 
 
-def missing_library(err: BaseException) -> bool:
-    """Whether ``err`` (or an exception it was raised from) is an outside tracker's missing
-    optional library (``trackers.outside.MissingLibrary``)."""
+def missing_library(err: BaseException):
+    """The outside tracker's missing optional library behind ``err``
+    (``trackers.outside.MissingLibrary``, found along its causes), else None."""
     from trackers.outside import MissingLibrary
 
     seen = set()
     while err is not None and id(err) not in seen:
         if isinstance(err, MissingLibrary):
-            return True
+            return err
         seen.add(id(err))
         err = err.__cause__ or err.__context__
-    return False
+    return None
 
 
 def check_node(node: Any, key: str, target: Any) -> None:

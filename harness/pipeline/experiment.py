@@ -103,7 +103,7 @@ def run_experiment(
     Raises:
         RunError: the run cannot start (no such dataset, tracker not built, bad config).
     """
-    plan = plan_run(cfg, _out_dir(out_dir), tracker_name)
+    plan = plan_run(cfg, _out_dir(out_dir), tracker_name, progress)
     record = RunRecord(plan)
     plan.writer.reserve()  # room for metrics, summary and errors.txt on a full disk
     overall = (progress or no_progress)(total=len(plan.sequences), desc="sequences", unit="seq")

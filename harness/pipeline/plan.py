@@ -29,7 +29,7 @@ from harness.pipeline.build import (
     missing_library,
     tracker_configs,
 )
-from harness.pipeline.loop import FOREGROUND_MODES
+from harness.pipeline.loop import FOREGROUND_MODES, ProgressFactory
 from harness.pipeline.writer import RunWriter
 from harness.report.bars import DEFAULT_METRICS
 from harness.report.graph import GraphExport
@@ -81,8 +81,10 @@ class RunPlan:
         return build_tracker(name, self.configs[name], self.keys[name])
 
 
-def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None) -> RunPlan:
-    """Check and build everything of ``cfg`` that can be before the first frame.
+def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None,
+             progress: ProgressFactory | None = None) -> RunPlan:
+    """Check and build everything of ``cfg`` that can be before the first frame (the
+    trackers' warm-up with a ``progress`` bar).
 
     Raises:
         RunError: the run cannot start (no such dataset, tracker not built, bad config).
@@ -121,7 +123,7 @@ def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None) -> 
             raise RunError(
                 f"detector {detector} reads frames, but {', '.join(frameless)} has none: choose "
                 "detector=noisy_gt (ground truth + noise) or detector=public (det/det.txt)")
-    prepare_trackers(configs, sequences)
+    prepare_trackers(configs, sequences, progress)
     names = [*configs, *externals]
     wanted = cfg_get(cfg_get(cfg, "objective", {}), "tracker")
     if wanted is not None and str(wanted) not in names:
@@ -150,17 +152,30 @@ def buildable_trackers(node: Any, name: str | None) -> tuple[dict[str, Any], dic
     configs = tracker_configs(node, name)
     group = "_target_" not in node
     keys = {n: f"tracker.{n}" if group else "tracker" for n in configs}
+    missing: dict[str, Any] = {}
     for n, tracker_node in list(configs.items()):
         try:
             build_tracker(n, tracker_node, keys[n])
         except RunError as err:
-            if not (group and missing_library(err)):
+            missing[n] = missing_library(err) if group else None
+            if missing[n] is None:
                 raise
-            log.warning("tracker %s left out: %s", n, err.__cause__)
             del configs[n]
+    if missing:
+        log.warning("%s", left_out_line(missing))
     if not configs:
-        raise RunError("no tracker of the selected group can be built (see the warnings)")
+        raise RunError("no tracker of the selected group can be built (see the warning)")
     return configs, keys
+
+
+def left_out_line(missing: Mapping[str, Any]) -> str:
+    """One line for the trackers of a group left out for a missing outside library
+    (``{tracker: MissingLibrary}``): which trackers, which libraries, the install commands."""
+    libraries = sorted({err.module for err in missing.values()})
+    commands = " ; ".join(dict.fromkeys(err.command for err in missing.values() if err.command))
+    return (f"{len(missing)} outside tracker(s) left out, their libraries "
+            f"({', '.join(libraries)}) not installed: {', '.join(missing)}; to run them: "
+            f"{commands}")
 
 
 def check_config(cfg: Any) -> None:
@@ -183,9 +198,11 @@ def check_config(cfg: Any) -> None:
         raise RunError(str(err)) from None
 
 
-def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence]) -> None:
+def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence],
+                     progress: ProgressFactory | None = None) -> None:
     """Before anything is timed (``harness.pipeline.warmup``): reject a tracker that needs
-    frames when a sequence has none, then warm every tracker class up once per process."""
+    frames when a sequence has none, then warm every tracker class up once per process
+    (a ``progress`` bar over the warm-up's passes)."""
     from harness.pipeline.warmup import needs_pixels, warm_up_once
 
     frameless = [s.info.name for s in sequences if not s.has_pixels]
@@ -200,7 +217,7 @@ def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence]) 
                     "run it on a dataset with frames, or choose a tracker that reads boxes "
                     "only (tracker=baseline)")
     warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
-                  for n, node in configs.items()}, log.info)
+                  for n, node in configs.items()}, log.info, progress)
 
 
 def external_folders(node: Any, taken: Iterable[str]) -> dict[str, Path]:

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from harness.pipeline.bank import TrackerBank
+from harness.pipeline.loop import Progress, ProgressFactory, no_progress
 from trackers.protocol import Tracker
 from trackers.records import Detections
 
@@ -68,19 +69,27 @@ def scene(k: int, people: tuple = PEOPLE) -> tuple[np.ndarray, np.ndarray, Detec
     return frame, mask, dets
 
 
-def warm_up(tracker: Tracker) -> None:
+PASSES = 4  # warm_up's passes over the scene: (all, first person) x (mask, none)
+
+
+def warm_up(tracker: Tracker, bar: Progress | None = None) -> None:
     """Run ``tracker`` over the scene with and without a foreground mask, then with the
     first person alone (one match or none a frame: numba
     compiles a separate kernel for the contiguous one-element index arrays that gives), then
-    ``reset`` it: its state afterwards is as built."""
+    ``reset`` it: its state afterwards is as built. ``bar`` (a progress bar) advances by one
+    per pass (``PASSES`` in all)."""
     for people, frames in ((PEOPLE, FRAMES), (PEOPLE[:1], ALONE_FRAMES)):
         for with_mask in (True, False):
+            if bar is not None and (people, with_mask) != (PEOPLE, True):
+                bar.update(1)
             tracker.reset()
             bank = TrackerBank({"warm-up": tracker})
             for k in range(frames):
                 frame, mask, dets = scene(k, people)
                 if not bank.step(k, frame, dets, mask if with_mask else None):
                     raise RuntimeError(f"warm-up failed: {bank.outputs['warm-up'].error}")
+    if bar is not None:
+        bar.update(1)
     tracker.reset()
 
 
@@ -106,7 +115,8 @@ class WarmUp:
         self.done: set[str] = set()
 
     def __call__(self, builders: dict[str, Callable[[], Tracker]],
-                 announce: Callable[[str], None] | None = None) -> list[str]:
+                 announce: Callable[[str], None] | None = None,
+                 progress: ProgressFactory | None = None) -> list[str]:
         todo: dict[str, Tracker] = {}
         for name, build in builders.items():
             tracker = build()
@@ -119,12 +129,16 @@ class WarmUp:
             announce(f"warming up {', '.join(todo)} before timing (the first run after an "
                      "install compiles their kernels: half a minute to a few minutes; later "
                      "runs load them in about a second)")
-        for name, tracker in todo.items():
-            try:
-                warm_up(tracker)
-            except Exception as err:  # noqa: BLE001 - the run itself reports a failing tracker
-                log.debug("warm-up of %s stopped: %s: %s", name, type(err).__name__, err)
-            self.done.add(_kind(tracker))
+        bar = (progress or no_progress)(total=PASSES * len(todo), desc="warm-up", unit="pass")
+        try:
+            for name, tracker in todo.items():
+                try:
+                    warm_up(tracker, bar)
+                except Exception as err:  # noqa: BLE001 - the run reports a failing tracker
+                    log.debug("warm-up of %s stopped: %s: %s", name, type(err).__name__, err)
+                self.done.add(_kind(tracker))
+        finally:
+            bar.close()
         return list(todo)
 
 

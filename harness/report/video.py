@@ -28,7 +28,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +38,7 @@ import numpy as np
 from harness.datasets.base import Sequence as DataSequence
 from harness.pipeline.bank import TrackerBank, start_trackers
 from harness.pipeline.build import compose_config, tracker_choice
-from harness.pipeline.loop import frames
+from harness.pipeline.loop import frames, no_progress
 from harness.report.draw import TRACKER_STYLES, draw_tracks, grid
 from harness.sources.base import DetectionSource
 from trackers.records import Track
@@ -175,7 +175,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
            sheet_frames: Sequence[int] | None = None, show_gt: bool = True,
            frames: tuple[int, int] | None = None, columns: int | None = None,
            scale: float = 1.0, foreground: str = "auto",
-           background: Mapping[str, Any] | None = None) -> dict[str, Path]:
+           background: Mapping[str, Any] | None = None,
+           progress: Callable[..., Any] | None = None) -> dict[str, Path]:
     """Run the trackers on ``sequence`` and write the annotated video and/or contact sheet.
 
     Args:
@@ -191,6 +192,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
             sequence's ``frame_numbers()``, e.g. 151..295 for a ``dataset.frames`` window).
         columns: panels per row in a video frame (default: all side by side).
         scale: resize factor of each panel.
+        progress: progress-bar factory (``harness.progress.progress_factory``): a bar over
+            the frames tracked; None shows nothing.
     Returns:
         {"video": path, "sheet": path} for what was written.
     """
@@ -213,9 +216,12 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
     writer = None
     rows: dict[int, list[np.ndarray]] = {}
     written: dict[str, Path] = {}
+    bar = (progress or no_progress)(total=end - lo + 1,
+                                    desc=f"drawing {sequence.info.name}")
     try:
         for k, frame, tracks in track_frames(trackers, sequence, source, foreground, background,
                                              end):
+            bar.update(1)
             for g in graphs.values():
                 if g is not None:
                     g.step()
@@ -235,6 +241,7 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
                     writer = H264Writer(video, fps, (image.shape[1], image.shape[0]))
                 writer.write(image)
     finally:
+        bar.close()
         if writer is not None:
             writer.release()
             written["video"] = Path(video)
@@ -281,6 +288,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
     from harness.pipeline.build import build_source, build_tracker, load_sequences, tracker_configs
+    from harness.progress import progress_factory
 
     try:
         cfg = compose_config(args.overrides, args.run)
@@ -304,7 +312,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         written = render(trackers, seq, build_source(cfg.detector), out, sheet,
                          args.sheet_frames, not args.no_gt, tuple(args.frames) if args.frames
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
-                         cfg.get("background") or {})
+                         cfg.get("background") or {}, progress_factory())
     except (OSError, ValueError, RuntimeError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

@@ -16,25 +16,40 @@ NO_DEPS = "norfair==2.3.0 ocsort==0.0.2"
 
 class MissingLibrary(ImportError):
     """An outside tracker's optional library is not installed (the message says how to
-    install it). A run of a tracker group (``tracker=everyone``) skips such a tracker."""
+    install it). A run of a tracker group (``tracker=everyone``) skips such a tracker.
+
+    Attributes:
+        module: the import name that failed, e.g. ``"norfair"``.
+        command: the shell command that installs the set the library belongs to (the
+            outside extra, or BoxMOT's), for a one-line summary of several missing ones.
+    """
+
+    def __init__(self, message: str, module: str = "", command: str = "") -> None:
+        super().__init__(message)
+        self.module, self.command = module, command
 
 
-def require(module: str, install: str, tracker: str) -> ModuleType:
+OUTSIDE_COMMAND = f'pip install -e ".[{EXTRA}]" && pip install --no-deps {NO_DEPS}'
+
+
+def require(module: str, install: str, tracker: str,
+            command: str = OUTSIDE_COMMAND) -> ModuleType:
     """Import ``module`` or raise an ImportError saying how to install it.
 
     Args:
         module: import name, e.g. ``"norfair"``.
         install: pip arguments that install it, e.g. ``"--no-deps norfair==2.3.0"``.
         tracker: adapter class name, for the message.
+        command: the command installing the set ``module`` belongs to
+            (``MissingLibrary.command``; default: the outside extra).
     """
     try:
         return importlib.import_module(module)
     except ImportError as err:
         raise MissingLibrary(
             f"{tracker} needs the outside library '{module}', which is not installed. "
-            f'Install the outside trackers: pip install -e ".[{EXTRA}]" && pip install '
-            f"--no-deps {NO_DEPS}; or this one alone: pip install {install} "
-            f"(import failed with: {err})"
+            f"Install the outside trackers: {OUTSIDE_COMMAND}; or this one alone: pip "
+            f"install {install} (import failed with: {err})", module, command
         ) from err
 
 

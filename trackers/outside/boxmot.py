@@ -79,7 +79,7 @@ class BoxmotTracker:
 
     def __init__(self, tracker: str, params: Mapping[str, Any] | None = None,
                  frame_rate: float | None = None, min_score: float = 0.0) -> None:
-        require("boxmot", INSTALL, type(self).__name__)
+        require("boxmot", INSTALL, type(self).__name__, f"pip install {INSTALL}")
         if tracker not in CLASSES:
             raise ValueError(f"tracker must be one of {sorted(CLASSES)}, got {tracker!r}")
         params = dict(params or {})

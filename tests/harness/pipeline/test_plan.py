@@ -38,3 +38,27 @@ def test_a_bad_plan_fails_before_anything_runs(tmp_path, mot_root):
         plan_run(mot_cfg(mot_root, "objective.tracker=nobody"), tmp_path / "o", "baseline")
     with pytest.raises(RunError, match="foreground"):
         plan_run(mot_cfg(mot_root, "foreground=sideways"), tmp_path / "f", "baseline")
+
+
+def test_a_group_leaves_out_trackers_without_their_library_in_one_line(monkeypatch, caplog):
+    """tracker=everyone without the extras: one warning naming every tracker left out, the
+    missing libraries and the install commands (not one warning per tracker)."""
+    import sys
+
+    for module in ("norfair", "motpy"):
+        monkeypatch.setitem(sys.modules, module, None)  # import fails as if not installed
+    node = OmegaConf.create({
+        "baseline": {"_target_": "trackers.baseline.BaselineTracker"},
+        "norfair": {"_target_": "trackers.outside.norfair.NorfairTracker"},
+        "norfair_tuned": {"_target_": "trackers.outside.norfair.NorfairTracker"},
+        "motpy": {"_target_": "trackers.outside.motpy.MotpyTracker"}})
+    with caplog.at_level("WARNING", logger="harness.pipeline.plan"):
+        configs, _ = buildable_trackers(node, None)
+    assert list(configs) == ["baseline"]
+    warnings = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert len(warnings) == 1 and "\n" not in warnings[0]
+    assert "3 outside tracker(s) left out" in warnings[0]
+    assert "(motpy, norfair)" in warnings[0] and "norfair, norfair_tuned, motpy;" in warnings[0]
+    assert warnings[0].count('pip install -e ".[outside]"') == 1  # one command, not three
+    with pytest.raises(RunError, match="norfair"):  # chosen alone, it stops the run
+        buildable_trackers(node.norfair, "norfair")

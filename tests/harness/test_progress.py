@@ -1,0 +1,65 @@
+"""Progress on the long waits (harness/progress.py): ``occbench bench``, the report's
+drawing, the trackers' warm-up. On a terminal a bar appears on stderr; on anything else
+(a log file, a pipe) nothing is printed."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+from report_scenes import GtSource, Walk
+
+from harness.progress import progress_factory
+from trackers.baseline import BaselineTracker
+
+
+class FakeTerminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def _bench(progress) -> None:
+    from harness.commands.bench import bench_sequence
+
+    bench_sequence(Walk(), GtSource, lambda: {"baseline": BaselineTracker()}, frames=4,
+                   repeats=2, progress=progress)
+
+
+def _render(progress, tmp_path) -> None:
+    from harness.report.video import render
+
+    render({"baseline": BaselineTracker()}, Walk(), GtSource(), sheet=tmp_path / "s.png",
+           progress=progress)
+
+
+def _warm_up(progress) -> None:
+    from harness.pipeline.warmup import WarmUp
+
+    WarmUp()({"baseline": BaselineTracker}, progress=progress)  # a fresh one: not yet warm
+
+
+CASES = {"bench": (_bench, "bench", "/6"),  # 2 runs x (decode, front end, baseline)
+         "render": (_render, "drawing walk", "/12"),  # the 12 frames tracked
+         "warm-up": (_warm_up, "warm-up", "/4")}  # the scene's 4 passes
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_a_bar_on_a_terminal_nothing_elsewhere(case, tmp_path, monkeypatch):
+    run, desc, total = CASES[case]
+    args = (tmp_path,) if case == "render" else ()
+    terminal = FakeTerminal()
+    run(progress_factory(stream=terminal), *args)
+    shown = terminal.getvalue()
+    assert desc in shown and total in shown and "\r" in shown
+
+    log = io.StringIO()  # a log file or a pipe: no factory, and nothing on the stream
+    monkeypatch.setattr("sys.stderr", log)
+    factory = progress_factory()
+    assert factory is None
+    run(factory, *args)
+    assert log.getvalue() == ""
+
+
+def test_no_bar_when_switched_off_or_in_a_multirun_job():
+    assert progress_factory(enabled=False, stream=FakeTerminal()) is None
+    assert progress_factory(multirun=True, stream=FakeTerminal()) is None
