@@ -7,9 +7,13 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
   (written by ``harness.io.mot.write_mot``, the one place converting to 1-based boxes);
 * ``front_end.txt``: one line per sequence on which the front end fell back to another
   detector (which, and why; also printed);
-* ``detection_metrics.csv``: TP, FP, FN, precision, recall and F1 at IoU >= ``iou_threshold``
-  per sequence and COMBINED (counts summed, ratios recomputed), from a one-to-one Hungarian
-  matching of detections to ground truth per frame;
+* ``detection_metrics.csv``: detections (and per frame), TP, FP, FN, precision, recall and
+  F1 at IoU >= ``iou_threshold`` per sequence and COMBINED (counts summed, ratios
+  recomputed), from a one-to-one Hungarian matching of detections to ground truth per frame;
+  a sequence without ground truth is counted, its scores blank, and COMBINED then scores
+  the labelled sequences only (``ground_truth``: "2 of 3"; printed below the table);
+* a multirun (``-m``) prints one table of every job's COMBINED row when it ends
+  (``GatherDetections``), each job one log line;
 * the front-end cache (``harness.sources.cache``, ``OCCBENCH_CACHE``): a front-end
   detector's outputs of each sequence, so that later runs on the same frames with the same
   detector config read them; ``detect`` always computes (its frames/s are the detector's);
@@ -38,6 +42,7 @@ import hydra
 import numpy as np
 import pandas as pd
 from hydra.core.hydra_config import HydraConfig
+from hydra.experimental.callback import Callback
 from hydra.types import RunMode
 from omegaconf import DictConfig
 
@@ -48,19 +53,22 @@ from trackers.geometry import iou_matrix
 
 log = logging.getLogger("harness.commands.detect")
 
-METRIC_COLUMNS = ("frames", "gt", "detections", "TP", "FP", "FN", "precision", "recall", "F1",
-                  "frames_per_second")
+METRIC_COLUMNS = ("ground_truth", "frames", "detections", "per_frame", "gt", "TP", "FP", "FN",
+                  "precision", "recall", "F1", "frames_per_second")
+SCORE_COLUMNS = ("gt", "TP", "FP", "FN", "precision", "recall", "F1")  # blank without gt
 
 
 @dataclass
 class DetectionCounts:
-    """Matching counts of one sequence (sum them to combine sequences)."""
+    """Matching counts of one sequence (sum them to combine sequences); ``labelled``:
+    the sequence has ground truth (else only frames and detections are counted)."""
 
     frames: int = 0
     gt: int = 0
     detections: int = 0
     tp: int = 0
     seconds: float = 0.0
+    labelled: bool = True
 
     def add(self, other: DetectionCounts) -> None:
         self.frames += other.frames
@@ -70,13 +78,21 @@ class DetectionCounts:
         self.seconds += other.seconds
 
     def row(self) -> dict:
+        """The row of ``detection_metrics.csv``; without ground truth the score columns are
+        None (blank), never zeros or NaN standing for a score."""
+        fps = self.frames / self.seconds if self.seconds > 0 else float("nan")
+        out = {"ground_truth": "yes" if self.labelled else "no", "frames": self.frames,
+               "detections": self.detections,
+               "per_frame": self.detections / self.frames if self.frames else float("nan"),
+               "frames_per_second": fps}
+        if not self.labelled:
+            return {**out, **dict.fromkeys(SCORE_COLUMNS)}
         fp, fn = self.detections - self.tp, self.gt - self.tp
         p = self.tp / self.detections if self.detections else float("nan")
         r = self.tp / self.gt if self.gt else float("nan")
         f1 = 2 * self.tp / (self.detections + self.gt) if self.detections + self.gt else float("nan")
-        fps = self.frames / self.seconds if self.seconds > 0 else float("nan")
-        return {"frames": self.frames, "gt": self.gt, "detections": self.detections, "TP": self.tp,
-                "FP": fp, "FN": fn, "precision": p, "recall": r, "F1": f1, "frames_per_second": fps}
+        return {**out, "gt": self.gt, "TP": self.tp, "FP": fp, "FN": fn, "precision": p,
+                "recall": r, "F1": f1}
 
 
 def match_count(gt: np.ndarray, det: np.ndarray, iou_threshold: float = 0.5) -> int:
@@ -90,14 +106,55 @@ def match_count(gt: np.ndarray, det: np.ndarray, iou_threshold: float = 0.5) -> 
 
 
 def metrics_table(counts: dict[str, DetectionCounts]) -> pd.DataFrame:
-    """One row per sequence plus COMBINED (counts summed, ratios recomputed)."""
-    total = DetectionCounts()
-    rows = []
-    for name, c in counts.items():
-        rows.append({"sequence": name, **c.row()})
+    """One row per sequence plus COMBINED (counts summed, ratios recomputed). COMBINED sums
+    the labelled sequences only when there are any (its ``ground_truth``: "2 of 3"), never
+    mixing their scores with unlabelled detections; with none labelled it counts them all."""
+    labelled = [c for c in counts.values() if c.labelled]
+    total = DetectionCounts(labelled=bool(labelled))
+    for c in labelled or counts.values():
         total.add(c)
-    rows.append({"sequence": "COMBINED", **total.row()})
-    return pd.DataFrame(rows, columns=["sequence", *METRIC_COLUMNS])
+    rows = [{"sequence": name, **c.row()} for name, c in counts.items()]
+    combined = total.row()
+    if labelled and len(labelled) < len(counts):
+        combined["ground_truth"] = f"{len(labelled)} of {len(counts)}"
+    rows.append({"sequence": "COMBINED", **combined})
+    table = pd.DataFrame(rows, columns=["sequence", *METRIC_COLUMNS])
+    return typed(table)
+
+
+def typed(table: pd.DataFrame) -> pd.DataFrame:
+    """``table`` with whole counts as nullable integers and scores as floats, so that a
+    sequence without ground truth is blank (CSV) or "-" (printed) and no count turns into a
+    float."""
+    for col in ("gt", "TP", "FP", "FN"):
+        table[col] = table[col].astype("Int64")
+    for col in ("precision", "recall", "F1"):
+        table[col] = table[col].astype(float)
+    return table
+
+
+def table_notes(table: pd.DataFrame) -> list[str]:
+    """What the printed table cannot say itself: which sequences have no ground truth, and
+    what COMBINED covers then."""
+    rows = table[table["sequence"] != "COMBINED"]
+    missing = rows.loc[rows["ground_truth"] == "no", "sequence"].tolist()
+    if not missing:
+        return []
+    if len(missing) == len(rows):
+        return ["no ground truth: detections counted (boxes, per frame), not scored"]
+    return [(f"no ground truth: {', '.join(missing)} (detections counted, not scored); "
+             f"COMBINED scores the {len(rows) - len(missing)} labelled sequence(s) only")]
+
+
+def table_text(table: pd.DataFrame, notes: list[str] | None = None) -> str:
+    """The printed table, "-" for scores without ground truth, then ``notes`` (default:
+    ``table_notes``), one a line."""
+    shown = table.astype(object).where(table.notna(), "-")
+    for col in table.select_dtypes("float").columns:
+        shown[col] = [v if v == "-" else f"{v:.3f}" for v in shown[col]]
+    with pd.option_context("display.width", 160):
+        text = shown.to_string(index=False)
+    return "\n".join([text, *(table_notes(table) if notes is None else notes)]) + "\n"
 
 
 def draw_overlay(frame: np.ndarray, fg: np.ndarray | None, dets, gt: np.ndarray | None,
@@ -228,7 +285,7 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
     name = seq.info.name
     built = EntryBuilder() if cache is not None else None
     source.start(seq)
-    c = DetectionCounts()
+    c = DetectionCounts(labelled=seq.gt is not None)
     frames, boxes, scores = [], [], []
     it = seq.frames()
     if progress:
@@ -246,12 +303,12 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
         boxes.append(dets.boxes)
         scores.append(dets.scores)
         gt = None
+        c.detections += len(dets)
         if seq.gt is not None:
             rows = seq.gt.rows_of(k)
             rows = rows[seq.gt.table.conf[rows] > 0]
             gt = seq.gt.table.boxes[rows]
             c.gt += len(gt)
-            c.detections += len(dets)
             c.tp += match_count(gt, dets.boxes, iou)
         if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
             bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
@@ -266,8 +323,7 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
               np.concatenate(frames) if n else np.zeros(0),
               np.full(n, -1), np.concatenate(boxes) if n else np.zeros((0, 4)),
               np.concatenate(scores) if n else np.zeros(0))
-    if seq.gt is not None:
-        counts[name] = c
+    counts[name] = c
     log.info("%s: %d frames, %d detections", name, c.frames, n)
     if built is not None:
         entry = store_outputs(cache[0], cache[1], seq, source, built)
@@ -288,8 +344,11 @@ def app(cfg: DictConfig) -> None:
         table, failed = err.table, err
     except (ValueError, OSError) as err:
         raise SystemExit(f"harness.commands.detect: {err}") from None
-    with pd.option_context("display.width", 160, "display.float_format", "{:.3f}".format):
-        print(table.to_string(index=False))
+    if HydraConfig.get().mode == RunMode.MULTIRUN:  # one table when the multirun ends
+        log.info("job %s [%s]: %s", HydraConfig.get().job.num,
+                 " ".join(HydraConfig.get().overrides.task), combined_line(table))
+    else:
+        print(table_text(table), end="")
     if (out_dir / "front_end.txt").is_file():
         print("front end fell back on:\n  " + (out_dir / "front_end.txt").read_text().rstrip()
               .replace("\n", "\n  "))
@@ -298,6 +357,50 @@ def app(cfg: DictConfig) -> None:
         raise SystemExit(f"harness.commands.detect: {len(failed.failures)} sequence(s) failed (the "
                          f"others are written; see {out_dir / 'errors.txt'}):\n  "
                          + "\n  ".join(failed.failures))
+
+
+def combined_line(table: pd.DataFrame) -> str:
+    """A multirun job's one log line: its COMBINED precision, recall, F1 or, without
+    ground truth, its detections per frame."""
+    row = table.iloc[-1]
+    if pd.isna(row["precision"]) and row["ground_truth"] == "no":
+        return f"{row['detections']} detections, {row['per_frame']:.2f} per frame (no ground truth)"
+    return (f"precision {row['precision']:.3f}, recall {row['recall']:.3f}, F1 {row['F1']:.3f}"
+            f" (COMBINED, ground truth: {row['ground_truth']})")
+
+
+class GatherDetections(Callback):
+    """At the end of ``occbench detect -m``: one table of every job's COMBINED row (the
+    jobs print none of their own), the job's overrides first; per-sequence rows stay in
+    each job's ``detection_metrics.csv``. Only jobs of this multirun are read: job folders
+    written before it started (a reused sweep folder) are left out."""
+
+    def on_multirun_start(self, config: DictConfig, **kwargs) -> None:
+        self.started = time.time()
+
+    def on_multirun_end(self, config: DictConfig, **kwargs) -> None:
+        import yaml
+
+        sweep_dir = Path(str(config.hydra.sweep.dir))
+        rows = []
+        for job in sorted((p for p in sweep_dir.glob("*") if p.name.isdigit()),
+                          key=lambda p: int(p.name)):
+            path, overrides = job / "detection_metrics.csv", job / ".hydra" / "overrides.yaml"
+            if not path.is_file() or path.stat().st_mtime < getattr(self, "started", 0.0):
+                continue
+            table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+            told = yaml.safe_load(overrides.read_text()) if overrides.is_file() else []
+            rows.append({"job": int(job.name), "overrides": " ".join(told or []),
+                         **table.iloc[-1].drop("sequence").to_dict()})
+        if not rows:
+            print(f"no job of {sweep_dir} wrote detection_metrics.csv")
+            return
+        table = typed(pd.DataFrame(rows))
+        mixed = ["ground_truth 'k of n': COMBINED scores the k labelled sequences only"
+                 ] if (~table["ground_truth"].isin(["yes", "no"])).any() else []
+        print("COMBINED of each job (per sequence: <job>/detection_metrics.csv)")
+        print(table_text(table, mixed), end="")
+        print(f"sweep: {sweep_dir}")
 
 
 if __name__ == "__main__":

@@ -114,4 +114,7 @@ class PaperTable(Callback):
         except Exception:  # the job's own results stay valid without the table
             log.exception("paper table for %s failed", out_dir)
             return
-        log.info("paper table written to %s\n%s", path, path.read_text())
+        if str(config.hydra.mode) == "RunMode.MULTIRUN":  # the sweep prints its own table
+            log.info("paper table written to %s", path)
+        else:
+            log.info("paper table written to %s\n%s", path, path.read_text())
