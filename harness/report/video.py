@@ -170,6 +170,25 @@ def _panel(name: str, k: int, base: np.ndarray, tracks: list[Track],
     return p
 
 
+def _window(sequence: DataSequence, frames: tuple[int, int] | None, sheet: bool,
+            sheet_frames: Sequence[int] | None) -> tuple[int, int, set[int]]:
+    """(first, last) of the video and the sheet's frames (default: 6 evenly spaced over
+    the video's when there is a sheet), checked against the sequence's frame numbers."""
+    numbers = sequence.frame_numbers()
+    lo, hi = numbers[0], numbers[-1]
+    first, last = frames or (lo, hi)
+    if not lo <= first <= last <= hi:
+        raise ValueError(f"frames must satisfy {lo} <= first <= last <= {hi} (the sequence's "
+                         f"frame numbers), got {(first, last)}")
+    if sheet and sheet_frames is None:
+        sheet_frames = sorted({int(v) for v in np.linspace(first, last, 6).round()})
+    wanted = set(sheet_frames or [])
+    bad = sorted(f for f in wanted if not lo <= f <= hi)
+    if bad:
+        raise ValueError(f"sheet_frames outside {lo}..{hi}: {bad}")
+    return first, last, wanted
+
+
 def render(trackers: Mapping[str, Any], sequence: DataSequence, source: DetectionSource,
            video: str | Path | None = None, sheet: str | Path | None = None,
            sheet_frames: Sequence[int] | None = None, show_gt: bool = True,
@@ -199,18 +218,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
     """
     if not trackers:
         raise ValueError("render: no trackers")
-    numbers = sequence.frame_numbers()
-    lo, hi = numbers[0], numbers[-1]
-    first, last = frames or (lo, hi)
-    if not lo <= first <= last <= hi:
-        raise ValueError(f"frames must satisfy {lo} <= first <= last <= {hi} (the sequence's "
-                         f"frame numbers), got {(first, last)}")
-    if sheet is not None and sheet_frames is None:
-        sheet_frames = sorted({int(v) for v in np.linspace(first, last, 6).round()})
-    wanted = set(sheet_frames or [])
-    bad = sorted(f for f in wanted if not lo <= f <= hi)
-    if bad:
-        raise ValueError(f"sheet_frames outside {lo}..{hi}: {bad}")
+    lo = sequence.frame_numbers()[0]
+    first, last, wanted = _window(sequence, frames, sheet is not None, sheet_frames)
     end = max([last, *wanted])
     graphs = {name: _GraphDrawing.of(t) for name, t in trackers.items()}
     writer = None
