@@ -32,6 +32,7 @@ import math
 
 import numba
 import numpy as np
+from numba.cpython.unsafe.numbers import trailing_zeros
 
 from trackers.layered.equations import HEAD_FRACTION
 
@@ -198,11 +199,172 @@ def grid_centroids(boxes: np.ndarray, grid: tuple, image: tuple, out: np.ndarray
                                               boxes[i, 3], on)
 
 
+@numba.njit(cache=True, inline="always")
+def _box_scratch(R: int, C: int, nb: int) -> tuple:
+    """The scratch of ``_box_counts`` for an R x C sample grid and nb-bin histograms: the
+    grid (ys, xs, yi, xi, on, band, right, coff), the per-part sums (count, edge, sx,
+    sy), the joint-bin counts hist (2, 5, nb) int64 (HSV, XYZ; zero between boxes) and
+    the occupied bins of each count row as a bit mask (2, 5) uint64 (bin u: bit u; kept
+    when nb <= 64)."""
+    return (np.empty(R), np.empty(C), np.empty(R, np.int64), np.empty(C, np.int64),
+            np.empty((R, C), np.uint8), np.empty(R, np.int64), np.empty(C, np.int64),
+            np.empty(C, np.uint64), np.zeros(5, np.int64), np.zeros(5, np.int64), np.zeros(5),
+            np.zeros(5), np.zeros((2, 5, nb), np.int64), np.zeros((2, 5), np.uint64))
+
+
+@numba.njit(cache=True, inline="always")
+def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
+                at_centroids: bool, centres: np.ndarray, grid: tuple, image: tuple, luts: tuple,
+                pixel_bins: tuple, s: tuple, p: np.ndarray) -> tuple[int, int, int, int]:
+    """The samples of box i (``part_features``' arguments) counted into the scratch ``s``
+    (``_box_scratch``) and its part rectangles (eqs. 1-2) into p (5, 4); returns the
+    sample rows of the head, torso and leg bands and the sample columns right of the split.
+
+    Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
+    centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
+    sample is on the outline when a 4-neighbour is background or off the grid.
+    """
+    fr, fc = grid
+    frame, fg, has_fg = image
+    hsv_lut, xyz_lut = luts
+    table, stamp = pixel_bins
+    ys, xs, yi, xi, on, band, right, coff, count, edge, sx, sy, hist, occupied = s
+    H, W = frame.shape[0], frame.shape[1]
+    R, C = fr.shape[0], fc.shape[0]
+    pixels = frame.reshape(H * W * 3)
+    one, two, three, low = np.uint64(1), np.uint64(2), np.uint64(3), np.uint64(63)
+    x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
+    _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
+    if at_centroids:
+        cx, cy = _grid_centroid(x, y, w, h, on)
+        centres[i, 0], centres[i, 1] = cx, cy
+        alpha[i], beta[i] = _centroid_ratios(x, y, w, h, cx, cy)            # eqs. 1-2
+    _part_rects(x, y, w, h, alpha[i], beta[i], p)                         # eqs. 1-2
+    # a sample's band and side: above the head's bottom, the torsos' bottom, left of
+    # the left parts' right edge (ties go down and right)
+    head_end, torso_end, split = p[0, 1] + p[0, 3], p[1, 1] + p[1, 3], p[1, 0] + p[1, 2]
+    for c in range(C):
+        coff[c] = np.uint64(xi[c])
+    rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
+    for r in range(R):
+        if ys[r] < head_end:
+            band[r] = 0
+            rows_head += 1
+        elif ys[r] < torso_end:
+            band[r] = 1
+            rows_torso += 1
+        else:
+            band[r] = 3
+            rows_legs += 1
+    for c in range(C):
+        right[c] = 1 if xs[c] >= split else 0
+        cols_right += right[c]
+    count[:] = 0
+    edge[:] = 0
+    sx[:] = 0.0
+    sy[:] = 0.0
+    occupied[:] = 0
+    for r in range(R):
+        # the row's left and right parts (the same part in the head band); their
+        # sums are carried in registers through the row, each in sample order
+        kl = band[r]
+        kr = kl + 1 if kl > 0 else 0
+        split_row = kr != kl
+        yr = ys[r]
+        nl, el, sxl, syl = count[kl], edge[kl], sx[kl], sy[kl]
+        nr, er, sxr, syr = count[kr], edge[kr], sx[kr], sy[kr]
+        hl, xl, hr, xr = occupied[0, kl], occupied[1, kl], occupied[0, kr], occupied[1, kr]
+        roff = np.uint64(yi[r] * W)
+        for c in range(C):
+            if not on[r, c]:
+                continue
+            q = roff + coff[c]  # the pixel's index (unsigned: no negative-index test)
+            packed = table[q]
+            if (packed >> 32) != stamp:  # first read this frame: convert it
+                o = q * three
+                ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
+                                                  np.int64(pixels[o + two]))
+                packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
+                           + hsv_lut[2, np.uint64(cv)]) << 16) | (
+                    xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
+                ) | (stamp << 32)
+                table[q] = packed
+            hsv_bin, xyz_bin = np.uint64((packed >> 16) & 0xFFFF), np.uint64(packed & 0xFFFF)
+            outline = (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
+                       or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1])
+            if split_row and right[c]:
+                k = kr
+                nr += 1
+                er += outline
+                sxr += xs[c]  # in sample order, as np.bincount(weights=...)
+                syr += yr
+                hr |= one << (hsv_bin & low)
+                xr |= one << (xyz_bin & low)
+            else:
+                k = kl
+                nl += 1
+                el += outline
+                sxl += xs[c]
+                syl += yr
+                hl |= one << (hsv_bin & low)
+                xl |= one << (xyz_bin & low)
+            hist[0, k, hsv_bin] += 1
+            hist[1, k, xyz_bin] += 1
+        count[kl], edge[kl], sx[kl], sy[kl] = nl, el, sxl, syl
+        occupied[0, kl], occupied[1, kl] = hl, xl
+        if split_row:
+            count[kr], edge[kr], sx[kr], sy[kr] = nr, er, sxr, syr
+            occupied[0, kr], occupied[1, kr] = hr, xr
+    return rows_head, rows_torso, rows_legs, cols_right
+
+
+@numba.njit(cache=True, inline="always")
+def _box_features(s: tuple, bands: tuple, p: np.ndarray, i: int, out: tuple) -> None:
+    """Row i of the features ``out`` (area, perimeter (N, 5), hsv, xyz (N, 5, B),
+    centroid (N, 5, 2)) of a box from its counts ``s`` (``_box_counts``, ``bands`` its
+    return; the counts are emptied) and part rectangles p (5, 4): per part, the foreground
+    fraction of its samples (its band's rows x its side's columns), the outline samples
+    over its half perimeter in samples (rows + columns), the histograms normalised by the
+    count (an unoccupied bin 0, as 0 / count; with nb <= 64 only the occupied bins are
+    divided), and the samples' mean position (the rectangle centre when there are none)."""
+    area, perimeter, hsv, xyz, centroid = out
+    count, edge, sx, sy, hist, occupied = s[8], s[9], s[10], s[11], s[12], s[13]
+    rows_head, rows_torso, rows_legs, cols_right = bands
+    C, nb = s[1].shape[0], hist.shape[2]
+    for j in range(5):
+        rows = rows_head if j == 0 else (rows_torso if j < 3 else rows_legs)
+        cols = C if j == 0 else (C - cols_right if j % 2 == 1 else cols_right)
+        n = float(count[j])
+        area[i, j] = n / max(float(rows * cols), 1.0)
+        perimeter[i, j] = edge[j] / max(float(rows + cols), 1.0)
+        norm = max(n, 1.0)
+        for space, hists in ((0, hsv), (1, xyz)):
+            if nb <= 64:
+                hists[i, j, :] = 0.0
+                bits = occupied[space, j]
+                while bits != 0:
+                    u = trailing_zeros(bits)
+                    hists[i, j, u] = hist[space, j, u] / norm
+                    hist[space, j, u] = 0
+                    bits &= bits - np.uint64(1)
+            else:
+                for u in range(nb):
+                    hists[i, j, u] = hist[space, j, u] / norm
+                    hist[space, j, u] = 0
+        if n > 0:
+            centroid[i, j, 0] = sx[j] / n
+            centroid[i, j, 1] = sy[j] / n
+        else:
+            centroid[i, j, 0] = p[j, 0] + 0.5 * p[j, 2]
+            centroid[i, j, 1] = p[j, 1] + 0.5 * p[j, 3]
+
+
 @numba.njit(cache=True)
 def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_centroids: bool,
                   centres: np.ndarray, grid: tuple, image: tuple, luts: tuple, out: tuple,
-                  pixel_bins: np.ndarray) -> None:
-    """Part rectangles and features of the five parts of each box (PBM 2.1-2.2).
+                  pixel_bins: tuple) -> None:
+    """Part rectangles and features of the five parts of each box (PBM 2.1-2.2):
+    ``_box_counts`` then ``_box_features`` per box.
 
     Args:
         boxes: (N, 4) xywh. alpha, beta: (N,) centroid ratios (eqs. 1-2); out when
@@ -221,126 +383,14 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
             frame share most of their pixels (the search's boxes around one head), whose
             colour conversion is then done once per frame; an entry of another stamp (the
             caller's frame count, >= 1) is stale, so nothing is reset between frames.
-
-    Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
-    centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
-    sample is on the outline when a 4-neighbour is background or off the grid.
     """
-    fr, fc = grid
-    frame, fg, has_fg = image
-    hsv_lut, xyz_lut = luts
-    parts, area, perimeter, hsv, xyz, centroid = out
-    table, stamp = pixel_bins
-    H, W = frame.shape[0], frame.shape[1]
-    R, C = fr.shape[0], fc.shape[0]
-    nb = hsv.shape[2]
-    ys, xs = np.empty(R), np.empty(C)
-    yi, xi = np.empty(R, np.int64), np.empty(C, np.int64)
-    on = np.empty((R, C), np.uint8)
-    band = np.empty(R, np.int64)  # part of a sample of the row: 0 head, 1 torso, 3 legs (+1 right)
-    right = np.empty(C, np.int64)  # 1 if the column is right of the split
-    count, edge = np.zeros(5, np.int64), np.zeros(5, np.int64)
-    coff = np.empty(C, np.uint64)  # pixel offset of a sample column in its row
-    pixels = frame.reshape(H * W * 3)
-    one, two, three = np.uint64(1), np.uint64(2), np.uint64(3)
-    sx, sy = np.zeros(5), np.zeros(5)
-    count_hsv, count_xyz = np.zeros((5, nb), np.int64), np.zeros((5, nb), np.int64)
+    parts = out[0]
+    s = _box_scratch(grid[0].shape[0], grid[1].shape[0], out[3].shape[2])
     for i in range(boxes.shape[0]):
-        x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
-        _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
-        if at_centroids:
-            cx, cy = _grid_centroid(x, y, w, h, on)
-            centres[i, 0], centres[i, 1] = cx, cy
-            alpha[i], beta[i] = _centroid_ratios(x, y, w, h, cx, cy)            # eqs. 1-2
-        p = parts[i]
-        _part_rects(x, y, w, h, alpha[i], beta[i], p)                         # eqs. 1-2
-        # a sample's band and side: above the head's bottom, the torsos' bottom, left of
-        # the left parts' right edge (ties go down and right)
-        head_end, torso_end, split = p[0, 1] + p[0, 3], p[1, 1] + p[1, 3], p[1, 0] + p[1, 2]
-        for c in range(C):
-            coff[c] = np.uint64(xi[c])
-        rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
-        for r in range(R):
-            if ys[r] < head_end:
-                band[r] = 0
-                rows_head += 1
-            elif ys[r] < torso_end:
-                band[r] = 1
-                rows_torso += 1
-            else:
-                band[r] = 3
-                rows_legs += 1
-        for c in range(C):
-            right[c] = 1 if xs[c] >= split else 0
-            cols_right += right[c]
-        count[:] = 0
-        edge[:] = 0
-        count_hsv[:] = 0
-        count_xyz[:] = 0
-        sx[:] = 0.0
-        sy[:] = 0.0
-        for r in range(R):
-            # the row's left and right parts (the same part in the head band); their
-            # sums are carried in registers through the row, each in sample order
-            kl = band[r]
-            kr = kl + 1 if kl > 0 else 0
-            split_row = kr != kl
-            yr = ys[r]
-            nl, el, sxl, syl = count[kl], edge[kl], sx[kl], sy[kl]
-            nr, er, sxr, syr = count[kr], edge[kr], sx[kr], sy[kr]
-            roff = np.uint64(yi[r] * W)
-            for c in range(C):
-                if not on[r, c]:
-                    continue
-                q = roff + coff[c]  # the pixel's index (unsigned: no negative-index test)
-                packed = table[q]
-                if (packed >> 32) != stamp:  # first read this frame: convert it
-                    o = q * three
-                    ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
-                                                      np.int64(pixels[o + two]))
-                    packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
-                               + hsv_lut[2, np.uint64(cv)]) << 16) | (
-                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
-                    ) | (stamp << 32)
-                    table[q] = packed
-                hsv_bin, xyz_bin = (packed >> 16) & 0xFFFF, packed & 0xFFFF
-                outline = (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
-                           or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1])
-                if split_row and right[c]:
-                    k = kr
-                    nr += 1
-                    er += outline
-                    sxr += xs[c]  # in sample order, as np.bincount(weights=...)
-                    syr += yr
-                else:
-                    k = kl
-                    nl += 1
-                    el += outline
-                    sxl += xs[c]
-                    syl += yr
-                count_hsv[k, np.uint64(hsv_bin)] += 1
-                count_xyz[k, np.uint64(xyz_bin)] += 1
-            count[kl], edge[kl], sx[kl], sy[kl] = nl, el, sxl, syl
-            if split_row:
-                count[kr], edge[kr], sx[kr], sy[kr] = nr, er, sxr, syr
-        # samples of each part (rows of its band x columns of its side) and its half
-        # perimeter in samples (rows + columns); histograms normalised by the count
-        for j in range(5):
-            rows = rows_head if j == 0 else (rows_torso if j < 3 else rows_legs)
-            cols = C if j == 0 else (C - cols_right if j % 2 == 1 else cols_right)
-            n = float(count[j])
-            area[i, j] = n / max(float(rows * cols), 1.0)
-            perimeter[i, j] = edge[j] / max(float(rows + cols), 1.0)
-            norm = max(n, 1.0)
-            for b in range(nb):
-                hsv[i, j, b] = count_hsv[j, b] / norm
-                xyz[i, j, b] = count_xyz[j, b] / norm
-            if n > 0:
-                centroid[i, j, 0] = sx[j] / n
-                centroid[i, j, 1] = sy[j] / n
-            else:
-                centroid[i, j, 0] = p[j, 0] + 0.5 * p[j, 2]
-                centroid[i, j, 1] = p[j, 1] + 0.5 * p[j, 3]
+        bands = _box_counts(boxes, i, alpha, beta, at_centroids, centres, grid, image, luts,
+                            pixel_bins, s, parts[i])
+        _box_features(s, bands, parts[i], i, out[1:])
+
 
 
 # ----------------------------------------------------------------------------- PBM 3, eqs. 7-8
@@ -643,17 +693,34 @@ def rho_bins(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
 
 
 @numba.njit(cache=True, inline="always")
+def _rho_listed(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, bits: np.uint64) -> float:
+    """``_rho`` when a[t, j] is finite and the bins where b[n, j] is not 0 are the set bits
+    of ``bits`` (bin u: bit u): the same terms in the same (u) order, without the scan."""
+    tot = 0.0
+    while bits != 0:
+        u = trailing_zeros(bits)
+        tot += math.sqrt(a[t, j, u] * b[n, j, u])
+        bits &= bits - np.uint64(1)
+    return tot
+
+
+@numba.njit(cache=True, inline="always")
 def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray, k: int,
-                      idx: np.ndarray) -> None:
+                      idx: np.ndarray, listed: tuple) -> None:
     """Eq. 11, d_ij = |f_ij - F_ij| (``equations.differences``), of model t of ``m`` against
     candidate n of ``c`` into d[k] (6, 5) (``idx``: ``_rho``'s scratch).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
     no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), the
     last two times g = 1 / (1 + misses); all clipped at 0.
+
+    ``listed``: (use, occupied (2, 5) uint64, finite (T, 2, 5) bool): when ``use``, rho of a
+    model histogram that is finite (``finite[t]``) is summed over the candidate's occupied
+    bins (``_rho_listed``; ``occupied`` as ``_box_scratch``'s) instead of ``_rho``'s scan.
     """
     m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height = m
     c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid, _ = c
+    use_lists, occupied, finite = listed
     hgt = max(m_height[t], 1.0)
     for j in range(m_area.shape[1]):
         d[k, 0, j] = abs(m_area[t, j] - c_area[n, j])
@@ -661,6 +728,9 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarra
         if c_area[n, j] <= 0:  # an empty histogram (part without foreground) never matches
             d[k, 2, j] = 1.0
             d[k, 3, j] = 1.0
+        elif use_lists and finite[t, 0, j] and finite[t, 1, j]:
+            d[k, 2, j] = 1.0 - _rho_listed(m_hsv, c_hsv, t, n, j, occupied[0, j])
+            d[k, 3, j] = 1.0 - _rho_listed(m_xyz, c_xyz, t, n, j, occupied[1, j])
         else:
             d[k, 2, j] = 1.0 - _rho(m_hsv, c_hsv, t, n, j, idx)
             d[k, 3, j] = 1.0 - _rho(m_xyz, c_xyz, t, n, j, idx)
@@ -680,6 +750,10 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarra
                 d[k, i, j] = 0.0
 
 
+_NO_LISTS = (False, np.zeros((2, 5), np.uint64), np.zeros((1, 2, 5), np.bool_))
+"""``_pair_differences``' ``listed`` when the candidates' occupied bins are not known."""
+
+
 @numba.njit(cache=True)
 def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
                         out: np.ndarray) -> None:
@@ -690,13 +764,51 @@ def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misse
             raise IndexError("selected pair index out of range")
     idx = np.empty(max(m[3].shape[2], m[4].shape[2]), np.int64)
     for k in range(ti.shape[0]):
-        _pair_differences(m, c, ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), out, k, idx)
+        _pair_differences(m, c, ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), out, k, idx, _NO_LISTS)
 
 
 _MEMO_BITS = 7
-"""log2 of the slots of ``_scores_kernel``'s table of p(x | theta_ij) per (i, j)."""
+"""log2 of the slots of ``_score_row``'s table of p(x | theta_ij) per (i, j)."""
 _HASH_MUL, _HASH_SHIFT, _SLOT_SHIFT = (np.uint64(0x9E3779B97F4A7C15), np.uint64(29),
                                        np.uint64(64 - _MEMO_BITS))
+
+
+@numba.njit(cache=True, inline="always")
+def _memo(n_i: int, n_j: int) -> tuple:
+    """An empty table of p(x | theta_ij) per (i, j) for ``_score_row``: (filled, keys,
+    values) (n_i, n_j, slots) and the (buffer, its bits) a key is read through."""
+    buf = np.empty(1)
+    return (np.zeros((n_i, n_j, 1 << _MEMO_BITS), np.bool_),
+            np.empty((n_i, n_j, 1 << _MEMO_BITS), np.uint64),
+            np.empty((n_i, n_j, 1 << _MEMO_BITS)), buf, buf.view(np.uint64))
+
+
+@numba.njit(cache=True, inline="always")
+def _score_row(d: np.ndarray, k: int, spread: float, weights: tuple, theta: tuple, memo: tuple,
+               pj: np.ndarray, p: np.ndarray, row: int) -> None:
+    """Eqs. 12-13 of differences d[k] (6, 5) into pj[row] (5,) and p[row], with the
+    normalised weights (omega, gamma) (``_scores_kernel``); ``memo`` (``_memo``) recalls
+    p(x | theta_ij) of an x seen before, bit for bit as ``_survival`` computes it."""
+    w, mu, s = theta
+    omega, gamma = weights
+    filled, keys, values, buf, bits = memo
+    total = 0.0
+    for j in range(d.shape[2]):
+        acc = 0.0
+        for i in range(d.shape[1]):
+            x = d[k, i, j] / spread
+            buf[0] = x if not x < 0.0 else 0.0
+            key = bits[0]
+            slot = ((key ^ (key >> _HASH_SHIFT)) * _HASH_MUL) >> _SLOT_SHIFT
+            if filled[i, j, slot] and keys[i, j, slot] == key:
+                sv = values[i, j, slot]
+            else:
+                sv = _survival(buf[0], w, mu, s, i, j)
+                filled[i, j, slot], keys[i, j, slot], values[i, j, slot] = True, key, sv
+            acc += omega[i] * sv                                                       # eq. 12
+        pj[row, j] = acc
+        total += gamma[j] * acc                                                        # eq. 13
+    p[row] = total
 
 
 @numba.njit(cache=True)
@@ -709,33 +821,11 @@ def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.nd
     p(x | theta_ij) (``_survival``) is a function of x alone for each (i, j), and x repeats
     (area and perimeter take few values, an empty part's colour terms are 1): a value is
     recalled from a small table per (i, j), keyed by the bits of x, instead of computed
-    again; the sums are those of ``_survival`` on every term, bit for bit."""
-    w, mu, s = theta
-    omega, gamma = omega / omega.sum(), gamma / gamma.sum()
-    n_i, n_j = d.shape[1], d.shape[2]
-    filled = np.zeros((n_i, n_j, 1 << _MEMO_BITS), np.bool_)
-    keys = np.empty((n_i, n_j, 1 << _MEMO_BITS), np.uint64)
-    values = np.empty((n_i, n_j, 1 << _MEMO_BITS))
-    buf = np.empty(1)
-    bits = buf.view(np.uint64)
+    again (``_score_row``); the sums are those of ``_survival`` on every term, bit for bit."""
+    weights = (omega / omega.sum(), gamma / gamma.sum())
+    memo = _memo(d.shape[1], d.shape[2])
     for k in range(d.shape[0]):
-        total = 0.0
-        for j in range(n_j):
-            acc = 0.0
-            for i in range(n_i):
-                x = d[k, i, j] / spread
-                buf[0] = x if not x < 0.0 else 0.0
-                key = bits[0]
-                slot = ((key ^ (key >> _HASH_SHIFT)) * _HASH_MUL) >> _SLOT_SHIFT
-                if filled[i, j, slot] and keys[i, j, slot] == key:
-                    sv = values[i, j, slot]
-                else:
-                    sv = _survival(buf[0], w, mu, s, i, j)
-                    filled[i, j, slot], keys[i, j, slot], values[i, j, slot] = True, key, sv
-                acc += omega[i] * sv                                                   # eq. 12
-            pj[k, j] = acc
-            total += gamma[j] * acc                                                    # eq. 13
-        p[k] = total
+        _score_row(d, k, spread, weights, theta, memo, pj, p, k)
 
 
 @numba.njit(cache=True)
@@ -750,6 +840,60 @@ def _pair_scores_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misse
     pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
     _scores_kernel(d, spread, omega, gamma, theta, pj, p)
     return pj, p
+
+
+_NO_CENTRES = np.zeros((0, 2))
+"""``_box_counts``' centroid output when it is given the ratios (never written)."""
+
+
+@numba.njit(cache=True)
+def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple, m: tuple,
+               misses: np.ndarray, rule: tuple, theta: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 11-13 of K boxes of the frame, each measured as ``part_features`` measures it
+    (PBM 2.1-2.2), against the model of target ti[k]: p_j (K, 5) and p (K,), bit for bit
+    ``part_features`` then ``_pair_scores_kernel(m, features, ti, arange(K), ...)``, with
+    no (K, 5, B) histograms: each box's features are made in a one-row scratch, compared
+    and dropped, and rho sums the occupied bins only (``_rho_listed``) where the model's
+    histogram is finite. The search's boxes (PBM 3.1, eqs. 9-10): 25 per searched pair, of
+    which the tracker keeps one.
+
+    Args:
+        boxes: (K, 4) xywh. ti: (K,) target rows (IndexError when out of range).
+        ratios: (alpha, beta), each (K,), of the boxes' split (eqs. 1-2).
+        sampling: (grid, image, luts, pixel_bins) as ``part_features``'.
+        m: the targets' models (a feature set). misses: (T,) float64, g = 1 / (1 + misses).
+        rule: (spread, omega (6,), gamma (5,)) as ``_pair_scores_kernel``'s.
+    """
+    grid, image, luts, pixel_bins = sampling
+    spread, omega, gamma = rule
+    K, T, nb = boxes.shape[0], m[1].shape[0], m[3].shape[2]
+    for k in range(K):
+        if not 0 <= ti[k] < T:
+            raise IndexError("selected pair index out of range")
+    finite = np.empty((T, 2, 5), np.bool_)
+    for t in range(T):
+        for j in range(5):
+            finite[t, 0, j] = np.isfinite(m[3][t, j]).all()
+            finite[t, 1, j] = np.isfinite(m[4][t, j]).all()
+    s = _box_scratch(grid[0].shape[0], grid[1].shape[0], nb)
+    one = (np.empty((1, 5, 4)), np.empty((1, 5)), np.empty((1, 5)), np.empty((1, 5, nb)),
+           np.empty((1, 5, nb)), np.empty((1, 5, 2)), np.empty(1))
+    listed = (nb <= 64, s[13], finite)
+    weights = (omega / omega.sum(), gamma / gamma.sum())
+    memo = _memo(theta[0].shape[0], m[1].shape[1])
+    d = np.empty((1, theta[0].shape[0], m[1].shape[1]))
+    idx = np.empty(max(nb, m[4].shape[2]), np.int64)
+    pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
+    for k in range(K):
+        bands = _box_counts(boxes, k, ratios[0], ratios[1], False, _NO_CENTRES, grid, image,
+                            luts, pixel_bins, s, one[0][0])
+        _box_features(s, bands, one[0][0], 0, one[1:6])
+        one[6][0] = boxes[k, 3]
+        t = ti[k]
+        _pair_differences(m, one, t, 0, 1.0 / (1.0 + misses[t]), d, 0, idx, listed)  # eq. 11
+        _score_row(d, 0, spread, weights, theta, memo, pj, p, k)                      # eqs. 12-13
+    return pj, p
+
 
 
 @numba.njit(cache=True)

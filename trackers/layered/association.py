@@ -27,8 +27,9 @@ from trackers.layered._kernels import (
     _differences_kernel,
     _pair_scores_kernel,
     _scores_kernel,
+    box_scores_kernel,
 )
-from trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatures
+from trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
 
 if TYPE_CHECKING:  # annotations only
     from trackers.layered.feature_models import FeatureModels
@@ -153,6 +154,32 @@ def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, 
     return _pair_scores_kernel(_arrays(model), _arrays(cand), ti, n, _misses(misses, len(model)),
                                float(spread), _weights(omega, N_FEATURES, "omega"),
                                _weights(gamma, N_PARTS, "gamma"), _theta(models))
+
+
+def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatureExtractor,
+               boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray,
+               misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
+               spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 11-13 of (K, 4) xywh boxes of the extractor's frame (split at alpha, beta (K,)),
+    each against the model of its target ti[k]: equal bit for bit to ``pair_scores(models,
+    model, extractor.extract(boxes, alpha, beta), ti, arange(K), ...)``, without making the
+    boxes' (K, 5, B) histograms (``_kernels.box_scores_kernel``). For the search's boxes
+    (PBM 3.1: 25 per searched pair, one kept), whose features are then extracted for the
+    kept ones only.
+
+    Returns:
+        part scores p_j (K, 5) and global scores p (K,).
+    """
+    b, ratios, sampling = extractor.sampling(boxes, alpha, beta)
+    ti = np.asarray(ti, dtype=np.intp)
+    if ti.shape != (len(b),):
+        raise ValueError(f"target indices ti {ti.shape} must be ({len(b)},): one per box")
+    if model.hsv.shape[2] != extractor.bins**3 or model.xyz.shape[2] != extractor.bins**3:
+        raise ValueError(f"histogram bins differ: model {model.hsv.shape[2]}, "
+                         f"extractor {extractor.bins**3}")
+    return box_scores_kernel(b, ti, ratios, sampling, _arrays(model), _misses(misses, len(model)),
+                             (float(spread), _weights(omega, N_FEATURES, "omega"),
+                              _weights(gamma, N_PARTS, "gamma")), _theta(models))
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:

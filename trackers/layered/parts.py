@@ -319,6 +319,17 @@ class PartFeatureExtractor:
         a[:], be[:] = alpha, beta  # (N,) or scalar, as part_boxes broadcasts them
         return self._extract(b, a, be, None)
 
+    def sampling(self, boxes: np.ndarray, alpha: np.ndarray | float = DEFAULT_ALPHA,
+                 beta: np.ndarray | float = DEFAULT_BETA) -> tuple[np.ndarray, tuple, tuple]:
+        """What ``extract(boxes, alpha, beta)`` hands its kernel, for a kernel that measures
+        the boxes as it does (``association.box_scores``): the (N, 4) float64 boxes, the
+        (alpha, beta) (N,) arrays and (grid, image, colour tables, pixel bins)."""
+        b = self._boxes(boxes)
+        a, be = np.empty(len(b)), np.empty(len(b))
+        a[:], be[:] = alpha, beta
+        return b, (a, be), ((self._fr, self._fc), self._image(), self._colour_luts(),
+                            (self._pixel_bins, self._stamp))
+
     def _extract(self, b: np.ndarray, alpha: np.ndarray, beta: np.ndarray,
                  centres: np.ndarray | None) -> PartFeatures:
         """One ``part_features`` kernel call on (N, 4) boxes and (N,) ratios; with

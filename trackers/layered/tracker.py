@@ -46,7 +46,7 @@ from trackers.common.checks import parameter_group
 from trackers.geometry import iou_matrix
 from trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
 from trackers.layered.adaptations import Adaptations
-from trackers.layered.association import pair_scores
+from trackers.layered.association import box_scores, pair_scores
 from trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads, checked_inputs
 from trackers.layered.dynamics import Gate
 from trackers.layered.params import (
@@ -234,17 +234,17 @@ class PBMTracker:
                              cand: Candidates, fg: np.ndarray | None, pred_wh: np.ndarray,
                              model: PartFeatures) -> tuple:
         """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for the P
-        (target ti, candidate n, kind) pairs of the frame, with one feature extraction for
-        all: the (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the aligned
-        box of every smaller candidate whose head is supported by foreground.
+        (target ti, candidate n, kind) pairs of the frame, all boxes scored in one call
+        (``box_scores``): the (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the
+        aligned box of every smaller candidate whose head is supported by foreground.
 
         Args:
             ti, n, kind: (P,) the pairs (kind +1 larger, -1 smaller region).
             model: the parts models of all targets (``PartFeatures``, target order).
         Returns:
-            (kept (P,) bool (False: dismissed), score p (P,), part scores p_j (P, 5),
-            features, index k (P,) of each pair's best box in them, dof (P, 6)), or None
-            when every pair is dismissed.
+            (kept (P,) bool (False: dismissed), score p (P,), part scores p_j (P, 5), the
+            features of each pair's best box (row q: pair q's), their rows arange(P), dof
+            (P, 6)), or None when every pair is dismissed.
         """
         targets = self.targets
         alpha_t, beta_t = targets.alpha, targets.beta
@@ -263,17 +263,17 @@ class PBMTracker:
                 align_q, align_boxes = align_q[supported], align_boxes[supported]
         if not len(search_q) and not len(align_q):
             return None
-        m = (2 * self.search.range + 1) ** 2
-        sti = ti[search_q]
+        m, sti = (2 * self.search.range + 1) ** 2, ti[search_q]  # boxes per searched pair
         B = np.concatenate([search_boxes_many(heads[search_q], pred_wh[sti], alpha_t[sti],
                                               self.search.step, self.search.range).reshape(-1, 4),
                             align_boxes if len(align_q) else np.zeros((0, 4))])
         tis = np.concatenate([sti.repeat(m), ti[align_q]])
-        feats = self._search_extractor.extract(B, alpha_t[tis], beta_t[tis])
-        # eqs. 11-13 of every carved box k against the model of its target tis[k]
-        pj, p = self._scores(model, feats, tis, np.arange(len(tis)))
+        f, ex = self.features, self._search_extractor  # eqs. 11-13 of box k against target tis[k]
+        pj, p = box_scores(f.models, model, ex, B, alpha_t[tis], beta_t[tis], tis,
+                           self.rules.gap.misses(targets), f.omega, f.gamma, self.adaptations.model_spread)
         kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q, align_q, m)
-        return kept, p_h, pj_h, feats, k, dof
+        feats = ex.extract(B[k], alpha_t[tis[k]], beta_t[tis[k]])
+        return kept, p_h, pj_h, feats, np.arange(len(k)), dof
 
     def _scores(self, model: PartFeatures, feats: PartFeatures, ti: np.ndarray,
                 n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,10 +1,12 @@
 """The shortcuts of the eq. 11-12 kernels give the bits of the plain sums, not only values
-within a tolerance: rho summed over the occupied bins only (``_kernels.rho_bins``) and eq. 12
-with p(x | theta) recalled for a repeated x (``layered_scores``)."""
+within a tolerance: rho summed over the occupied bins only (``_kernels.rho_bins``), eq. 12
+with p(x | theta) recalled for a repeated x (``layered_scores``), and the search's boxes
+scored as they are measured (``association.box_scores``)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from pbm_scenes import random_models
 
 from trackers.layered._kernels import rho_bins
@@ -98,3 +100,54 @@ def test_part_features_with_the_frames_pixels_converted_before_are_the_same():
         ref = fresh.extract(boxes, 0.4, 0.6)
         for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid"):
             assert getattr(got, name).tobytes() == getattr(ref, name).tobytes(), name
+
+
+@pytest.mark.parametrize("bins, with_fg", [(4, True), (4, False), (5, True)])
+def test_box_scores_have_the_bits_of_extract_then_pair_scores(bins, with_fg):
+    """``box_scores`` (features made and scored box by box, rho over the occupied bins)
+    equals extracting the boxes' features and scoring them as pairs, bit for bit: boxes
+    partly or wholly outside the image, repeated boxes (ties), parts without foreground,
+    models with non-finite histograms; 5 bins (125 > 64) take the scan."""
+    from trackers.layered.association import box_scores, pair_scores
+    from trackers.layered.parts import PartFeatureExtractor
+
+    rng = np.random.default_rng(bins * 10 + with_fg)
+    frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    frame[20:60, 30:70] = (40, 90, 200)  # a flat patch: few occupied bins, repeated values
+    fg = (rng.random((90, 120)) < 0.5) if with_fg else None
+    if with_fg:
+        fg[:, 100:] = False  # boxes there have parts without foreground
+    K, T = 60, 7
+    boxes = np.column_stack([rng.uniform(-30, 110, K), rng.uniform(-30, 80, K),
+                             rng.uniform(4, 50, K), rng.uniform(8, 70, K)])
+    boxes[10:14] = boxes[9]  # ties: one box scored four times
+    boxes[20] = (130.0, 100.0, 10.0, 20.0)  # wholly outside the image
+    boxes[21] = (105.0, 10.0, 12.0, 40.0)  # in the band without foreground
+    ex = PartFeatureExtractor(bins, 21, 9)
+    ex.start(frame, fg)
+    model = ex.extract(boxes[rng.integers(0, K, T)] + rng.normal(0, 3, (T, 4)), 0.45, 0.55)
+    model.hsv[2, 1, 7] = np.nan  # a non-finite model bin: scanned as _rho does
+    model.xyz[3, 4, 0] = np.inf
+    ti = rng.integers(0, T, K)
+    alpha, beta = rng.uniform(0.2, 0.8, K), rng.uniform(0.2, 0.8, K)
+    ti[10:14], alpha[10:14], beta[10:14] = ti[9], alpha[9], beta[9]
+    misses = rng.integers(0, 4, T).astype(float)
+    models = random_models(rng)
+    omega, gamma = rng.uniform(0.1, 1, N_FEATURES), rng.uniform(0.1, 1, N_PARTS)
+    for fresh in (True, False):  # the frame's pixels converted by box_scores, or before it
+        ex.start(frame, fg)
+        if not fresh:
+            ex.extract(boxes[::-1], 0.5, 0.5)
+        pj, p = box_scores(models, model, ex, boxes, alpha, beta, ti, misses, omega, gamma, 2.5)
+        ref_pj, ref_p = pair_scores(models, model, ex.extract(boxes, alpha, beta), ti,
+                                    np.arange(K), misses, omega, gamma, 2.5)
+        assert pj.tobytes() == ref_pj.tobytes() and p.tobytes() == ref_p.tobytes()
+    assert (p[10:14] == p[9]).all() and (pj[10:14] == pj[9]).all()
+    pj0, p0 = box_scores(models, model, ex, np.zeros((0, 4)), np.zeros(0), np.zeros(0),
+                         np.zeros(0, int), misses, omega, gamma, 2.5)
+    assert pj0.shape == (0, N_PARTS) and p0.shape == (0,)
+    with pytest.raises(IndexError):
+        box_scores(models, model, ex, boxes[:1], alpha[:1], beta[:1], np.array([T]), misses,
+                   omega, gamma, 2.5)
+    with pytest.raises(ValueError, match="one per box"):
+        box_scores(models, model, ex, boxes, alpha, beta, ti[:-1], misses, omega, gamma, 2.5)
