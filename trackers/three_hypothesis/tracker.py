@@ -256,7 +256,7 @@ class RetaTracker:
                 if b.kind == hyp.OCCLUDER and b.occluder in velocity:
                     occ_v[r] = velocity[b.occluder]
         x_set = hyp.set_motion(f.x_prev, kinds, occ_v)
-        Qs = np.array([person.Q for person in persons for _ in person.branches])
+        Qs = np.array([person.Q for person in persons])[f.owners]
         f.Xp, f.Pp = self.rules.motion.predict(x_set, P_prev, Qs)
         f.pred = state_boxes(f.Xp)
 
@@ -394,12 +394,14 @@ class RetaTracker:
         persons, matched, in_front = f.persons, f.matched, f.in_front
         pending: list[tuple[_Person, list[_Branch]]] = []
         sources: list[int] = []
+        # owners is sorted: person i owns nodes bounds[i]:bounds[i + 1]
+        bounds = np.searchsorted(f.owners, np.arange(len(persons) + 1)).tolist()
         for i, person in enumerate(persons):
             if i in matched or i in f.absorbed:
                 continue
             person.misses += 1
             new: list[_Branch] = []
-            for n in (f.owners == i).nonzero()[0]:
+            for n in range(bounds[i], bounds[i + 1]):
                 old = f.branches[n]
                 kind = hyp.VELOCITY if old.kind == VISIBLE else old.kind
                 fronts = in_front.get(n, [])
@@ -407,7 +409,7 @@ class RetaTracker:
                     persons[fronts[0]].key if fronts else None)
                 new.append(_Branch(kind, f.Xp[n], f.Pp[n], node=old.node, occluder=occluder,
                                    exposed=old.exposed, depth=len(fronts)))
-                sources.append(int(n))
+                sources.append(n)
                 seen = [j for j in fronts if j in matched]
                 if person.confirmed and not person.spawned and seen:
                     occ = persons[seen[0]]
@@ -464,7 +466,7 @@ class RetaTracker:
                 b.exposed = 0 if c else b.exposed + (0 if held_k else 1)
                 if g or b.exposed >= m:
                     continue
-                if self.rules.duplicates.duplicate(corner, kept_corners):
+                if kept_corners and self.rules.duplicates.duplicate(corner, kept_corners):
                     continue
                 kept.append(b)
                 kept_boxes.append(box)
