@@ -28,7 +28,7 @@ from harness.datasets.synthetic.appearance import Appearance, random_appearance
 from harness.datasets.synthetic.people import draw_person, head_box
 from harness.datasets.synthetic.replay import load_replay
 from harness.datasets.synthetic.scenarios import SCENARIOS, illumination_gains, world_cast
-from harness.datasets.synthetic.scene import Camera, render_background
+from harness.datasets.synthetic.scene import Camera, defer_background, render_background
 from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
 
 log = logging.getLogger(__name__)
@@ -97,7 +97,7 @@ def load_scenario(
         raise ValueError(f"need camera_height > 0 and 0 <= horizon < 1, got {camera_height}, {horizon}")
     cam = Camera.for_size(width, height, camera_height=camera_height, horizon=horizon)
     rng = np.random.default_rng([int(seed), zlib.crc32(scenario.encode())])
-    background = render_background(cam, rng)
+    background = defer_background(cam, rng)  # painted when the sequence first needs it
     flip = bool(rng.random() < 0.5) if mirror is None else bool(mirror)
     sign = -1.0 if flip else 1.0
     walkers = SCENARIOS[scenario](cam, rng, fps, length, int(people), float(density), sign)

@@ -13,6 +13,9 @@ nearer person can hide a farther one completely, head included: with the camera 
 heads, a farther person's head always shows above the nearer one's.
 
 Image coordinates are pixels with (0, 0) the top-left pixel, x right, y down.
+
+``defer_background`` draws a background's choices without painting it, so that a suite's
+scenes load at once and each is painted when its sequence first needs it.
 """
 
 from __future__ import annotations
@@ -92,12 +95,14 @@ def _poly(cam: Camera, pts: list[tuple[float, float, float]]) -> np.ndarray:
     return np.round(np.stack([x, y], 1) * 16).astype(np.int32)
 
 
-def _fill(img: np.ndarray, cam: Camera, pts: list[tuple[float, float, float]], colour) -> None:
-    cv2.fillPoly(img, [_poly(cam, pts)], tuple(float(c) for c in colour), cv2.LINE_AA, 4)
+def _fill(img: np.ndarray | None, cam: Camera, pts: list[tuple[float, float, float]],
+          colour) -> None:
+    if img is not None:  # None: the choices are drawn, nothing painted (``defer_background``)
+        cv2.fillPoly(img, [_poly(cam, pts)], tuple(float(c) for c in colour), cv2.LINE_AA, 4)
 
 
 def _cuboid(
-    img: np.ndarray,
+    img: np.ndarray | None,
     cam: Camera,
     x0: float,
     x1: float,
@@ -127,14 +132,48 @@ def render_background(cam: Camera, rng: np.random.Generator) -> np.ndarray:
     a few static objects (crates, a bench, planters) near the walls so that walkers pass in
     front of them, fine texture noise and a mild vignette. Every choice comes from ``rng``.
     """
-    W, H = cam.width, cam.height
-    img = np.zeros((H, W, 3), np.uint8)
+    img = _background(np.zeros((cam.height, cam.width, 3), np.uint8), cam, rng)
+    assert img is not None
+    return img
+
+
+@dataclass(frozen=True)
+class DeferredBackground:
+    """``render_background(cam, rng)`` painted when called, from ``state``, the generator's
+    state before it (``defer_background``). ``shape``: (H, W, 3) of the image it paints."""
+
+    cam: Camera
+    state: dict
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return self.cam.height, self.cam.width, 3
+
+    def __call__(self) -> np.ndarray:
+        bit_generator = getattr(np.random, self.state["bit_generator"])()
+        bit_generator.state = self.state
+        return render_background(self.cam, np.random.Generator(bit_generator))
+
+
+def defer_background(cam: Camera, rng: np.random.Generator) -> DeferredBackground:
+    """``render_background(cam, rng)`` left for later: ``rng`` advances exactly as the render
+    would advance it (every choice drawn, nothing painted: what follows from ``rng`` is the
+    same), and the returned ``DeferredBackground`` paints the same image when called."""
+    deferred = DeferredBackground(cam, rng.bit_generator.state)
+    _background(None, cam, rng)
+    return deferred
+
+
+def _background(img: np.ndarray | None, cam: Camera,
+                rng: np.random.Generator) -> np.ndarray | None:
+    """``render_background``'s steps on ``img`` ((H, W, 3) uint8 zeros), or, with None, the
+    same draws from ``rng`` without painting."""
     wall = _back_wall_colour(img, cam, rng)
     _floor(img, cam, rng)
     _back_wall(img, cam, rng, wall)
     _left_wall(img, cam, rng, wall)
     _objects(img, cam, rng)
-    return _texture(img, rng)
+    return _texture(img, cam, rng)
 
 
 def _extent(cam: Camera) -> tuple[float, float, float]:
@@ -143,32 +182,38 @@ def _extent(cam: Camera) -> tuple[float, float, float]:
     return LEFT_WALL_X, cam.half_width_at(BACK_WALL_Z) + 1.0, BACK_WALL_Z
 
 
-def _back_wall_colour(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> np.ndarray:
+def _back_wall_colour(img: np.ndarray | None, cam: Camera,
+                      rng: np.random.Generator) -> np.ndarray:
     """Fill ``img`` with the back wall's colour (everything above the far floor edge) and
     the ceiling tint; the wall colour (3,) float."""
     zb = BACK_WALL_Z
     wall = rng.uniform(150, 210, 3)
     wall[rng.integers(3)] *= 0.85
+    if img is None:
+        return wall
     img[:] = np.clip(wall, 0, 255).astype(np.uint8)
     top_y = cam.project(0, 6.0, zb)[1]
     img[: max(int(top_y), 0)] = np.clip(wall * 0.8, 0, 255).astype(np.uint8)
     return wall
 
 
-def _floor(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> None:
+def _floor(img: np.ndarray | None, cam: Camera, rng: np.random.Generator) -> None:
     """Floor tiles (1 m, per-tile shade jitter) and grout lines."""
     xl, xr, zb = _extent(cam)
     floor_a = rng.uniform(90, 150, 3)
     floor_b = floor_a * rng.uniform(0.78, 0.9)
     zs = np.arange(max(np.floor(cam.near_depth * 0.5), 0.5), zb + 1.0, 1.0)
     xs = np.arange(np.floor(xl), np.ceil(xr) + 1.0, 1.0)
-    for i, (z0, z1) in enumerate(itertools.pairwise(zs)):
-        z1 = min(z1, zb)
-        if z0 >= z1:
-            continue
-        for j, (x0, x1) in enumerate(itertools.pairwise(xs)):
+    rows = [(i, z0, min(z1, zb)) for i, (z0, z1) in enumerate(itertools.pairwise(zs))
+            if z0 < min(z1, zb)]
+    cols = list(enumerate(itertools.pairwise(xs)))
+    shades = rng.uniform(0.94, 1.06, (len(rows), len(cols)))  # one per tile, row by row
+    if img is None:
+        return
+    for (i, z0, z1), row_shades in zip(rows, shades, strict=True):
+        for (j, (x0, x1)), shade in zip(cols, row_shades, strict=True):
             base = floor_a if (i + j) % 2 == 0 else floor_b
-            col = np.clip(base * rng.uniform(0.94, 1.06), 0, 255)
+            col = np.clip(base * shade, 0, 255)
             _fill(img, cam, [(x0, 0, z0), (x1, 0, z0), (x1, 0, z1), (x0, 0, z1)], col)
     grout = tuple(float(v) for v in floor_b * 0.7)
     for x in xs:
@@ -194,7 +239,7 @@ def _floor(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> None:
             )
 
 
-def _back_wall(img: np.ndarray, cam: Camera, rng: np.random.Generator,
+def _back_wall(img: np.ndarray | None, cam: Camera, rng: np.random.Generator,
                wall: np.ndarray) -> None:
     """The back wall's skirting, windows and doors."""
     xl, xr, zb = _extent(cam)
@@ -243,7 +288,7 @@ def _back_wall(img: np.ndarray, cam: Camera, rng: np.random.Generator,
         wx += rng.uniform(2.6, 3.6)
 
 
-def _left_wall(img: np.ndarray, cam: Camera, rng: np.random.Generator,
+def _left_wall(img: np.ndarray | None, cam: Camera, rng: np.random.Generator,
                wall: np.ndarray) -> None:
     """The left wall (plane X = LEFT_WALL_X) and its posters."""
     xl, _, zb = _extent(cam)
@@ -264,7 +309,7 @@ def _left_wall(img: np.ndarray, cam: Camera, rng: np.random.Generator,
         z += rng.uniform(3.0, 5.0)
 
 
-def _objects(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> None:
+def _objects(img: np.ndarray | None, cam: Camera, rng: np.random.Generator) -> None:
     """Static objects near the walls (crates, benches, planters): people walk in front of
     them."""
     xl, _, zb = _extent(cam)
@@ -293,27 +338,19 @@ def _objects(img: np.ndarray, cam: Camera, rng: np.random.Generator) -> None:
             _cuboid(img, cam, xc - 0.3, xc + 0.3, zc, zc + 0.6, 0.5, rng.uniform(60, 120, 3))
             cxy = cam.project(xc, 0.95, zc + 0.3)
             r = cam.scale(zc) * 0.45
-            cv2.ellipse(
-                img,
-                (int(cxy[0]), int(cxy[1])),
-                (int(r), int(r * 1.1)),
-                0,
-                0,
-                360,
-                (
-                    float(rng.uniform(30, 70)),
-                    float(rng.uniform(90, 150)),
-                    float(rng.uniform(30, 70)),
-                ),
-                -1,
-                cv2.LINE_AA,
-            )
+            shrub = (float(rng.uniform(30, 70)), float(rng.uniform(90, 150)),
+                     float(rng.uniform(30, 70)))
+            if img is not None:
+                cv2.ellipse(img, (int(cxy[0]), int(cxy[1])), (int(r), int(r * 1.1)), 0, 0, 360,
+                            shrub, -1, cv2.LINE_AA)
 
 
-def _texture(img: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def _texture(img: np.ndarray | None, cam: Camera, rng: np.random.Generator) -> np.ndarray | None:
     """``img`` with smoothed texture noise and a mild vignette, as uint8."""
-    H, W = img.shape[:2]
+    H, W = cam.height, cam.width
     noise = rng.normal(0.0, 1.0, (H // 2 + 1, W // 2 + 1)).astype(np.float32)
+    if img is None:
+        return None
     noise = cv2.GaussianBlur(noise, (0, 0), 0.8)
     noise = cv2.resize(noise, (W, H), interpolation=cv2.INTER_LINEAR)
     yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cv2
@@ -88,7 +89,9 @@ class SyntheticSequence(Sequence):
     Args:
         name: sequence name.
         cast: the people and their per-frame boxes and poses.
-        background: (H, W, 3) uint8 BGR static background.
+        background: (H, W, 3) uint8 BGR static background, or a callable painting it with a
+            ``shape`` (H, W, 3) (``scene.DeferredBackground``): painted when first needed, so
+            that a suite's later scenes do not delay the first frame of the first.
         fps: frame rate.
         seed: seed of the per-frame randomness (sensor noise).
         noise: standard deviation of the additive Gaussian sensor noise, grey levels (0 = off).
@@ -108,7 +111,7 @@ class SyntheticSequence(Sequence):
         self,
         name: str,
         cast: Cast,
-        background: np.ndarray,
+        background: np.ndarray | Callable[[], np.ndarray],
         fps: float = 25.0,
         seed: int = 0,
         noise: float = 2.0,
@@ -118,11 +121,11 @@ class SyntheticSequence(Sequence):
         cache_frames: int = 4,
         reflection: float = 0.0,
     ) -> None:
-        if background.ndim != 3 or background.shape[2] != 3 or background.dtype != np.uint8:
-            raise ValueError(
-                f"SyntheticSequence: background must be (H, W, 3) uint8, got "
-                f"{background.shape} {background.dtype}"
-            )
+        if isinstance(background, np.ndarray):
+            _check_background(background)
+            self._background, self._paint = background, None
+        else:
+            self._background, self._paint = None, background
         if noise < 0:
             raise ValueError(f"SyntheticSequence: noise must be >= 0, got {noise}")
         if fps <= 0:
@@ -139,7 +142,6 @@ class SyntheticSequence(Sequence):
                 raise ValueError(f"SyntheticSequence: gains must be ({L}, 3), got {gains.shape}")
         self.info = SequenceInfo(name=name, width=W, height=H, fps=float(fps), length=L)
         self.cast = cast
-        self.background = background
         self.seed = int(seed)
         self.noise = float(noise)
         self.gains = gains
@@ -154,6 +156,15 @@ class SyntheticSequence(Sequence):
         self._heads: np.ndarray | None = None
 
     # ------------------------------------------------------------------ public API
+    @property
+    def background(self) -> np.ndarray:
+        """(H, W, 3) uint8 BGR static background (painted on the first use when deferred)."""
+        if self._background is None:
+            shape = (self.info.height, self.info.width, 3)
+            self._background = _check_background(self._paint(), shape)
+            self._paint = None
+        return self._background
+
     @property
     def gt(self) -> GroundTruth:  # type: ignore[override]
         if self._gt is None:
@@ -371,3 +382,11 @@ class SyntheticSequence(Sequence):
         gt = GroundTruth(table, occluded=table.visibility < self.occluded_below)
         log.debug("%s: %d gt rows, %d occluded", self.info.name, n, int(gt.occluded.sum()))
         return gt, heads_a
+
+
+def _check_background(image: np.ndarray, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    if (image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8
+            or (shape is not None and image.shape != shape)):
+        raise ValueError(f"SyntheticSequence: background must be {shape or '(H, W, 3)'} uint8, "
+                         f"got {image.shape} {image.dtype}")
+    return image
