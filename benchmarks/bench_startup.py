@@ -28,7 +28,12 @@ warm machine (numba's cache filled by an earlier run).
   the median time from a job's last log line to the next job's frame loop (its log line
   "N sequence(s) x ...").
 
-Usage: ``python benchmarks/bench_startup.py [--runs 5] [--tracker reta] [--no-sweep]``.
+``--vs CHECKOUT`` times another checkout's code the same way, round by round in turn with this
+one (e.g. ``git worktree add /tmp/before <commit>`` for a before/after on the same machine at
+the same time), and prints its figures beside these with the CPU ratio.
+
+Usage: ``python benchmarks/bench_startup.py [--runs 5] [--tracker reta] [--no-sweep]
+[--vs CHECKOUT]``.
 """
 
 from __future__ import annotations
@@ -44,12 +49,11 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-ENV = {**os.environ, "OMP_NUM_THREADS": "1",
-       "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
 SCENE = ["dataset.scenarios=[crossing]", "dataset.length=20", "progress=false"]
 
 # a one-job run stopped where its frame loop starts: prints each stage's [wall, CPU] seconds
@@ -115,20 +119,28 @@ def _child_cpu() -> float:
     return use.ru_utime + use.ru_stime
 
 
-def run(cmd: list[str], env: dict[str, str] | None = None) -> tuple[list[float], str]:
-    """[wall, CPU] seconds of the command (a fresh process) and its stdout."""
+def tree_env(root: Path) -> dict[str, str]:
+    """The environment of a process running the code of the checkout ``root``."""
+    return {**os.environ, "OMP_NUM_THREADS": "1",
+            "PYTHONPATH": os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")])}
+
+
+def run(cmd: list[str], root: Path = ROOT,
+        env: dict[str, str] | None = None) -> tuple[list[float], str]:
+    """[wall, CPU] seconds of the command (a fresh process in ``root``) and its stdout."""
     t, c = time.perf_counter(), _child_cpu()
-    proc = subprocess.run(cmd, check=True, cwd=ROOT, env=env or ENV, capture_output=True,
-                          text=True, timeout=600)
+    proc = subprocess.run(cmd, check=True, cwd=root, env=env or tree_env(root),
+                          capture_output=True, text=True, timeout=600)
     return [time.perf_counter() - t, _child_cpu() - c], proc.stdout
 
 
-def first_frame(tracker: str, out: Path, scene: list[str] = SCENE) -> dict[str, list[float]]:
+def first_frame(tracker: str, out: Path, scene: list[str] = SCENE,
+                root: Path = ROOT) -> dict[str, list[float]]:
     """[wall, CPU] seconds from the process's start to the frame loop of
     ``occbench tracker=T *scene``, by stage (``FIRST_FRAME``), ``total`` among them."""
-    env = {**ENV, "BENCH_T0": repr(time.time())}
+    env = {**tree_env(root), "BENCH_T0": repr(time.time())}
     _, stdout = run([sys.executable, "-c", FIRST_FRAME, f"tracker={tracker}", *scene,
-                     f"hydra.run.dir={out}"], env)
+                     f"hydra.run.dir={out}"], root, env)
     return json.loads(stdout.strip().splitlines()[-1])
 
 
@@ -140,7 +152,7 @@ def job_gaps(sweep_dir: Path, *extra: str) -> list[float]:
     """Seconds from each job's last log line to the next job's frame loop."""
     subprocess.run([sys.executable, "-m", "harness", "-m", "tracker=reta", "seed=0,1,2,3",
                     *SCENE, "hydra.launcher.n_jobs=1", f"hydra.sweep.dir={sweep_dir}", *extra],
-                   check=True, cwd=ROOT, env=ENV, capture_output=True, timeout=1800)
+                   check=True, cwd=ROOT, env=tree_env(ROOT), capture_output=True, timeout=1800)
     logs = [(sweep_dir / str(j) / "occbench.log").read_text().splitlines() for j in range(4)]
     gaps = []
     for before, after in itertools.pairwise(logs):
@@ -149,48 +161,65 @@ def job_gaps(sweep_dir: Path, *extra: str) -> list[float]:
     return gaps
 
 
+def one_round(root: Path, trackers: list[str], tmp: Path,
+              add: Callable[[str, list[float]], None]) -> None:
+    """Every per-process figure once, for the code of ``root``."""
+    add("python -c pass", run([sys.executable, "-c", "pass"], root)[0])
+    add("occbench --version", run([sys.executable, "-m", "harness", "--version"], root)[0])
+    for key, value in json.loads(run([sys.executable, "-c", BUILD, *trackers], root)[1]).items():
+        add(key, value)
+    for name in trackers:
+        stages = first_frame(name, tmp / name, root=root)
+        add(f"first frame, one-job run, {name}", stages.pop("total"))
+        for stage, value in stages.items():
+            add(f"  {name}: {stage}", value)
+    add(f"first frame, default suite, {trackers[0]}",
+        first_frame(trackers[0], tmp / "suite", ["progress=false"], root)["total"])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=5, help="processes per figure (median)")
     parser.add_argument("--tracker", action="append", help="trackers (default reta and pbm)")
     parser.add_argument("--no-sweep", action="store_true", help="skip the sweep-job figure")
+    parser.add_argument("--vs", type=Path, metavar="CHECKOUT",
+                        help="also time another checkout's code (e.g. a worktree of main before "
+                             "a change), round by round in turn with this one; CPU ratios")
     args = parser.parse_args(argv)
     trackers = args.tracker or ["reta", "pbm"]
-    occbench = [sys.executable, "-m", "harness"]
+    roots = [ROOT, *([args.vs.resolve()] if args.vs else [])]
     print(f"load average {os.getloadavg()[0]:.2f} / {os.cpu_count()} cores; median of "
-          f"{args.runs} runs", flush=True)
-    run([sys.executable, "-c", BUILD, *trackers])  # numba's cache filled, files in the page cache
-    times: dict[str, list[list[float]]] = {}
-
-    def add(key: str, value: list[float]) -> None:
-        times.setdefault(key, []).append(value)
-
+          f"{args.runs} runs; {' vs '.join(map(str, roots))}", flush=True)
+    for root in roots:  # numba's cache filled, files in the page cache
+        run([sys.executable, "-c", BUILD, *trackers], root)
+    times: list[dict[str, list[list[float]]]] = [{} for _ in roots]
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.runs):
-            add("python -c pass", run([sys.executable, "-c", "pass"])[0])
-            add("occbench --version", run([*occbench, "--version"])[0])
-            for key, value in json.loads(run([sys.executable, "-c", BUILD, *trackers])[1]).items():
-                add(key, value)
-            for name in trackers:
-                stages = first_frame(name, Path(tmp) / f"{name}-{i}")
-                add(f"first frame, one-job run, {name}", stages.pop("total"))
-                for stage, value in stages.items():
-                    add(f"  {name}: {stage}", value)
-            add(f"first frame, default suite, {trackers[0]}",
-                first_frame(trackers[0], Path(tmp) / f"suite-{i}", ["progress=false"])["total"])
+            for r, root in enumerate(roots):
+                one_round(root, trackers, Path(tmp) / f"{r}-{i}",
+                          lambda key, value, r=r: times[r].setdefault(key, []).append(value))
         if not args.no_sweep:
             for key, folder, extra in (
                     ("sweep job start, warm (default)", "warm", ()),
                     ("sweep job start, cold (preload=false)", "cold",
                      ("hydra.launcher.preload=false",))):
-                times[key] = [[gap, math.nan] for gap in job_gaps(Path(tmp) / folder, *extra)]
-    ref = statistics.median(v[0] for v in times["python -c pass"])
-    width = max(map(len, times))
-    print(f"{'':<{width}}  wall s  x python   CPU s  (medians)")
-    for key, values in times.items():
-        wall, cpu = (statistics.median(v[i] for v in values) for i in (0, 1))
-        print(f"{key:<{width}}  {wall:6.3f}  {wall / ref:8.1f}  {cpu:6.3f}")
+                times[0][key] = [[gap, math.nan] for gap in job_gaps(Path(tmp) / folder, *extra)]
+    _print(times)
     return 0
+
+
+def _print(times: list[dict[str, list[list[float]]]]) -> None:
+    ref = statistics.median(v[0] for v in times[0]["python -c pass"])
+    width = max(map(len, times[0]))
+    other = " | vs: wall s   CPU s  CPU vs/this" if len(times) > 1 else ""
+    print(f"{'':<{width}}  wall s  x python   CPU s  (medians){other}")
+    for key, values in times[0].items():
+        wall, cpu = (statistics.median(v[i] for v in values) for i in (0, 1))
+        line = f"{key:<{width}}  {wall:6.3f}  {wall / ref:8.1f}  {cpu:6.3f}"
+        if len(times) > 1 and key in times[1]:
+            w2, c2 = (statistics.median(v[i] for v in times[1][key]) for i in (0, 1))
+            line += f"           |     {w2:6.3f}  {c2:6.3f}  {c2 / cpu:8.2f}"
+        print(line)
 
 
 if __name__ == "__main__":
