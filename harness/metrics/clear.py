@@ -31,6 +31,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from harness.metrics.arrays import distinct
 from harness.metrics.frames import FramePairs
 from harness.metrics.identity import identity_counts
 
@@ -126,7 +127,7 @@ def clear_matching(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearCounts
     bounds = np.searchsorted(matched, pairs.entry_start[1:-1])
     c.iou_sum = sum(float(x.sum()) for x in np.split(pairs.iou[matched], bounds))
     # a tracked stretch starts at a match whose person was not matched the frame before
-    c.fragmentations = int((~next_frame).sum()) - len(np.unique(g))
+    c.fragmentations = int((~next_frame).sum()) - len(distinct(g))
     ratio = np.bincount(g, minlength=n) / np.maximum(1.0, np.bincount(g_all, minlength=n))
     c.unique_objects = n
     c.mostly_tracked = int(np.sum(ratio > MT_ABOVE))
@@ -198,7 +199,7 @@ def matched_entries(pairs: FramePairs, pairable: np.ndarray) -> np.ndarray:
     person, tracker = person[row], pairs.tracker_ids[col]  # of each pairable entry
     none = np.iinfo(np.int64).min  # no tracker id
     last = np.full(int(person.max()) + 1, none)  # person -> tracker id matched the frame before
-    for k in np.unique(frame[shared]).tolist():
+    for k in distinct(frame[shared]).tolist():
         before = both[np.searchsorted(both, k) - 1] if k > both[0] else -1
         e = np.arange(starts[before], starts[before + 1]) if before >= 0 else np.zeros(0, int)
         e = e[take[e]]

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from harness.io.mot import MotTable, scored_gt_mask
+from harness.metrics.arrays import distinct
 from harness.metrics.overlaps import sparse_iou
 from trackers.geometry import iou_matrix
 
@@ -169,7 +170,7 @@ def frame_pairs(gt: MotTable, gt_rows: np.ndarray, res: MotTable,
                 res_rows: np.ndarray) -> FramePairs:
     """``FramePairs`` of some rows of ``gt`` against some rows of ``res`` (ascending (K,) int
     index arrays), over every frame of either table, with the nonzero IoUs of each frame."""
-    frames = np.union1d(gt.frames, res.frames).astype(np.int64)
+    frames = distinct(gt.frames, res.frames).astype(np.int64)
     g = gt_rows[np.argsort(gt.frames[gt_rows], kind="stable")]  # by frame, in table order
     r = res_rows[np.argsort(res.frames[res_rows], kind="stable")]
     g_start = np.r_[np.searchsorted(gt.frames[g], frames), len(g)].astype(np.int64)
@@ -190,7 +191,7 @@ def distractor_matches(gt: MotTable, res: MotTable) -> np.ndarray:
     if not distractor.any() or len(res) == 0:
         return hit_rows
     g_index, r_index = gt.frame_index(), res.frame_index()
-    for f in np.unique(gt.frames[distractor]).tolist():
+    for f in distinct(gt.frames[distractor]).tolist():
         g, r = g_index[f], r_index.get(f)
         if r is None:
             continue

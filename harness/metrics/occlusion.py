@@ -45,6 +45,7 @@ import numpy as np
 
 from harness.datasets.base import GroundTruth
 from harness.io.mot import MotTable
+from harness.metrics.arrays import distinct
 from harness.metrics.counts import combine_counts
 from harness.metrics.frames import FramePairs, frame_pairs
 from harness.metrics.identity import overlap_counts
@@ -130,7 +131,7 @@ def identity_mapping(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
     if pairs is None:
         pairs = frame_pairs(gt, np.arange(len(gt)), res, np.arange(len(res)))
     g, t, count = overlap_counts(pairs, iou_threshold)
-    g_ids, r_ids = np.unique(gt.ids), np.unique(res.ids)
+    g_ids, r_ids = distinct(gt.ids), distinct(res.ids)
     cost = np.full((len(g_ids), len(r_ids)), np.inf)
     cost[np.searchsorted(g_ids, g), np.searchsorted(r_ids, t)] = -count.astype(np.float64)
     matched, _, _ = assign(cost, 0.0)
@@ -169,7 +170,13 @@ def occlusion_counts(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: f
                 0, len(BIN_NAMES) - 1)
 
     mapping = identity_mapping(gt, res, iou_threshold, m.pairs)
-    mapped = np.array([mapping.get(int(g), -2) for g in gt.ids], dtype=np.int64)
+    keys = np.fromiter(mapping, np.int64, len(mapping))
+    mapped = np.full(len(gt), -2, dtype=np.int64)  # each row's mapped result id, -2: none
+    if len(keys):
+        by_key = np.argsort(keys)
+        at = by_key[np.minimum(np.searchsorted(keys, gt.ids, sorter=by_key), len(keys) - 1)]
+        found = keys[at] == gt.ids
+        mapped[found] = np.fromiter(mapping.values(), np.int64, len(mapping))[at[found]]
 
     # CLEAR switches: per person, in time order over matched rows, id differs from the last
     order = np.lexsort((gt.frames, gt.ids))

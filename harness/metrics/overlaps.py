@@ -46,7 +46,7 @@ def sparse_iou(gt: np.ndarray, gt_start: np.ndarray, res: np.ndarray, res_start:
         iou = np.where(union > 0, inter / union, 0.0)
     keep = iou != 0
     g, j, iou = g[keep], j[keep], iou[keep]
-    order = np.argsort(g * len(res) + j)  # row-major; gt rows are grouped by frame already
+    order = np.argsort(g * len(res) + j, kind="stable")  # row-major (gt rows by frame already)
     g, j, iou = g[order], j[order], iou[order]
     frame = np.searchsorted(gt_start, g, side="right") - 1
     entry_start = np.searchsorted(frame, np.arange(n_frames + 1)).astype(np.int64)

@@ -24,6 +24,7 @@ from itertools import combinations
 
 import numpy as np
 
+from harness.metrics.arrays import distinct
 from harness.metrics.timeline import FrameCounts, scores
 
 METRICS = ("IDF1", "HOTA", "MOTA")
@@ -140,7 +141,7 @@ class Bootstrap:
 def aligned(a: FrameCounts, b: FrameCounts) -> tuple[np.ndarray, np.ndarray]:
     """(F, D) count matrices of ``a`` and ``b`` on the union of their frames (a frame one
     side lacks had no box of it and no gt: zero counts), in frame order."""
-    frames = np.union1d(a.frames, b.frames)
+    frames = distinct(a.frames, b.frames)
     out = []
     for c in (a, b):
         m = np.zeros((len(frames), c.matrix().shape[1]))

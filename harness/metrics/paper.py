@@ -67,7 +67,9 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from harness.io.mot import MotTable
+from harness.metrics.arrays import distinct
 from harness.metrics.counts import combine_counts
+from harness.metrics.identity import count_pairs
 from harness.metrics.rows import (  # noqa: F401 - considered, match_rows: paper's API too
     RowMatching,
     considered,
@@ -239,8 +241,7 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
     out.ids = int(_changes(m_r, m_f, m_g)[1].sum())
 
     # distinct ids per trajectory
-    pairs = np.unique(np.column_stack([m_g, m_r]), axis=0) if len(m_g) else np.zeros((0, 2), int)
-    n_ids = np.bincount(pairs[:, 0], minlength=n)
+    n_ids = np.bincount(count_pairs(m_g, m_r)[0], minlength=n)
     out.mt1 = int(((coverage > 0.8) & (n_ids == 1)).sum())
     out.over = int((n_ids > 1).sum())
     out.ids_sum = int(n_ids.sum())
@@ -292,9 +293,8 @@ def _segmentation(out: PaperCounts, m: RowMatching, rg: np.ndarray, rr: np.ndarr
     """Multiple responses and PBM's segmentation errors from the response pairs."""
     if len(rg) == 0:
         return
-    distinct = np.unique(np.column_stack([rg, m.res.ids[rr]]), axis=0)
-    out.resp_ids_sum = len(distinct)
-    out.resp_rows = len(np.unique(rg))
+    out.resp_ids_sum = len(count_pairs(rg, m.res.ids[rr])[0])  # distinct (row, id) pairs
+    out.resp_rows = len(distinct(rg))
     gb, rb = m.gt.boxes[rg], m.res.boxes[rr]
     dx = (rb[:, 0] + rb[:, 2] / 2 - gb[:, 0] - gb[:, 2] / 2) / gb[:, 2]
     dy = (rb[:, 1] + rb[:, 3] / 2 - gb[:, 1] - gb[:, 3] / 2) / gb[:, 3]

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.io.mot import MotTable, scored_gt_mask
+from harness.metrics.arrays import distinct
 from harness.metrics.frames import FramePairs, check_unique_ids, frame_pairs
 from trackers.common.assignment import assign
 
@@ -86,13 +87,17 @@ def match_rows(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
     person = np.unique(gt.ids, return_inverse=True)[1]
     last = np.zeros(len(person), dtype=np.int64)  # person -> result id matched last ...
     seen = np.zeros(len(person), dtype=bool)  # ... if any
-    for k in np.unique(frame).tolist():
+    t_start = pairs.tracker_start
+    by_id = np.lexsort((res.ids[pairs.tracker_rows],  # each frame's result boxes by id
+                        np.repeat(np.arange(len(pairs)), np.diff(t_start))))
+    for k in distinct(frame).tolist():
         e = ok[starts[k] : starts[k + 1]]
         g = pairs.gt_rows[pairs.gt_start[k] : pairs.gt_start[k + 1]]
-        r = pairs.tracker_rows[pairs.tracker_start[k] : pairs.tracker_start[k + 1]]
+        r = pairs.tracker_rows[t_start[k] : t_start[k + 1]]
         iou = np.zeros((len(g), len(r)))  # IoU where >= the threshold, else 0
-        iou[pairs.row[e] - pairs.gt_start[k], pairs.col[e] - pairs.tracker_start[k]] = pairs.iou[e]
-        j = _match_frame(iou, last[person[g]], seen[person[g]], res.ids[r], iou_threshold)
+        iou[pairs.row[e] - pairs.gt_start[k], pairs.col[e] - t_start[k]] = pairs.iou[e]
+        j = _match_frame(iou, last[person[g]], seen[person[g]], res.ids[r], iou_threshold,
+                         by_id[t_start[k] : t_start[k + 1]] - t_start[k])
         hit = j >= 0
         out[g[hit]] = r[j[hit]]
         last[person[g[hit]]], seen[person[g[hit]]] = res.ids[r[j[hit]]], True
@@ -100,7 +105,7 @@ def match_rows(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
 
 
 def _match_frame(iou: np.ndarray, before: np.ndarray, known: np.ndarray, ids: np.ndarray,
-                 iou_threshold: float) -> np.ndarray:
+                 iou_threshold: float, by_id: np.ndarray) -> np.ndarray:
     """One frame of ``match_rows``: (N,) result box (column) of each GT box, -1 where none.
 
     Args:
@@ -108,6 +113,7 @@ def _match_frame(iou: np.ndarray, before: np.ndarray, known: np.ndarray, ids: np
         before: (N,) int64 each GT person's last matched result id, where ``known``.
         known: (N,) bool the person was matched before.
         ids: (M,) int64 result ids (unique).
+        by_id: (M,) int64 ``argsort(ids)``.
     A person whose last matched result id is in the frame keeps it while their IoU passes
     (in GT row order, a box taken once); the rest by the Hungarian method on 1 - IoU.
     """
@@ -115,14 +121,16 @@ def _match_frame(iou: np.ndarray, before: np.ndarray, known: np.ndarray, ids: np
     out = np.full(n, -1, dtype=np.int64)
     wanted = np.flatnonzero(known)
     want = before[wanted]
-    by_id = np.argsort(ids)
     j = by_id[np.minimum(np.searchsorted(ids[by_id], want), m - 1)]
     keep = (ids[j] == want) & (iou[wanted, j] > 0)
     i, j = wanted[keep], j[keep]
-    j, first = np.unique(j, return_index=True)  # a box is taken by the first row wanting it
-    out[i[first]] = j
-    free_g, free_r = np.flatnonzero(out < 0), np.setdiff1d(np.arange(m), j)
-    sub = iou[np.ix_(free_g, free_r)]
+    order = np.argsort(j, kind="stable")  # a box is taken by the first row wanting it
+    first = order[np.concatenate(([True], j[order][1:] != j[order][:-1]))] if len(j) else order
+    out[i[first]] = j[first]
+    free = np.ones(m, dtype=bool)
+    free[j] = False
+    free_g, free_r = np.flatnonzero(out < 0), np.flatnonzero(free)
+    sub = iou[free_g][:, free_r]
     if (sub > 0).any():
         cost = 1.0 - sub
         cost[sub <= 0] = np.inf
