@@ -171,19 +171,18 @@ def compare(ours: dict[str, float], theirs: dict[str, float]) -> list[str]:
             if not abs(ours[k] - theirs[k]) <= TOLERANCE]
 
 
-def run_scoring(root: Path, repeats: int) -> dict[str, float]:
-    """Median seconds of the run's own scoring on the case, in this process."""
+def run_scoring(root: Path, repeats: int) -> dict[str, tuple[float, float]]:
+    """Median (wall, CPU) seconds of the run's own scoring on the case, in this process."""
     gt = read_mot(root / "gt" / SEQ / "gt" / "gt.txt", gt=True)
     res = read_mot(root / "tracks" / "bench" / f"{SEQ}.txt", kind="result")
-    out: dict[str, list[float]] = {"score_sequence": [], "extra_score": []}
+    out: dict[str, list[tuple[float, float]]] = {"score_sequence": [], "extra_score": []}
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        score_sequence(gt, res)
-        t1 = time.perf_counter()
-        extra_score(gt, res)
-        out["score_sequence"].append(t1 - t0)
-        out["extra_score"].append(time.perf_counter() - t1)
-    return {k: statistics.median(v) for k, v in out.items()}
+        for name, score in (("score_sequence", score_sequence), ("extra_score", extra_score)):
+            wall, cpu = time.perf_counter(), time.process_time()
+            score(gt, res)
+            out[name].append((time.perf_counter() - wall, time.process_time() - cpu))
+    return {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v))
+            for k, v in out.items()}
 
 
 def main() -> None:
@@ -207,8 +206,8 @@ def main() -> None:
         print(run_comparison(root, args.repeats, not args.no_trackeval))
         print(f"load average after: {os.getloadavg()[0]:.1f}")
         times = run_scoring(root, args.repeats)
-        print("run's own scoring, in process (median s): " + ", ".join(
-            f"{k} {v:.2f}" for k, v in times.items()))
+        print("run's own scoring, in process (median s, wall / CPU): " + ", ".join(
+            f"{k} {w:.2f} / {c:.2f}" for k, (w, c) in times.items()))
 
 
 def run_comparison(root: Path, repeats: int, with_trackeval: bool) -> str:

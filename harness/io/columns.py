@@ -5,10 +5,9 @@ None. Both readers give every number exactly as Python's ``float`` parses it (co
 rounded), so they give the same table (``tests/harness/io/test_mot.py``):
 
 * numpy's ``loadtxt`` (its C reader calls Python's own conversion), for small texts;
-* pandas' C parser, about 5x faster, for large ones (a MOT20 gt file: 0.1 s against 0.5 s);
-  from pandas 3.1 its floats are parsed by fast_float, which rounds correctly (before, its
-  own parser could be a unit in the last place off: loadtxt is used then). Small texts
-  never import pandas (start-up time).
+* pandas' C parser, several times faster, for large ones; from pandas 3.1 its floats are
+  parsed by fast_float, which rounds correctly (before, its own parser could be a unit in
+  the last place off: loadtxt is used then). Small texts never import pandas (start-up).
 """
 
 from __future__ import annotations
