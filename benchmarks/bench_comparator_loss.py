@@ -30,6 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench_reacquisition import parse_tracker  # noqa: E402
 from shared_data import use_shared_data  # noqa: E402
 
 from harness.metrics import combine, score_sequence  # noqa: E402
@@ -52,14 +53,6 @@ SETS: dict[str, dict[str, tuple[str, ...]]] = {
 }
 PAPER = ("PBM_MT", "PBM_ML", "PBM_Over", "PBM_IDsw/traj", "PBM_IDs/traj", "PBM_IDs/frame",
          "PBM_dx%", "PBM_dy%", "PBM_dw%", "PBM_dh%")
-
-
-def parse(spec: str) -> tuple[str, str, list[str]]:
-    """'label=config:o1,o2' | 'config' -> (label, config, overrides)."""
-    head = spec.split(":", 1)[0]
-    label, _, rest = spec.partition("=") if "=" in head else (head, "", spec)
-    config, _, overrides = rest.partition(":")
-    return label, config, [o for o in overrides.split(",") if o]
 
 
 def run_set(overrides: list[str], candidates: list[tuple[str, str, list[str]]]) -> dict:
@@ -87,7 +80,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("candidates", nargs="+", help="<label>=<config>[:<override>,...]")
     ap.add_argument("--sets", choices=sorted(SETS), default="tuning")
     args = ap.parse_args(argv)
-    candidates = [parse(c) for c in args.candidates]
+    candidates = [parse_tracker(c) for c in args.candidates]
     shared = str(G.shared_root())
     per_set = {name: run_set([o.format(shared=shared) for o in ov], candidates)
                for name, ov in SETS[args.sets].items()}
