@@ -234,8 +234,8 @@ def run_comparison(root: Path, repeats: int, with_trackeval: bool) -> str:
         if te_cmd:
             theirs.append(timed(te_cmd, root / "trackeval.log"))
     o = [statistics.median(x) for x in zip(*ours)]
-    lines = [f"occbench eval: {o[0]:.2f} s wall, {o[1]:.2f} s CPU, {o[2]:.0f} MB peak "
-             f"(medians of {repeats})"]
+    lines = [(f"occbench eval: {o[0]:.2f} s wall, {o[1]:.2f} s CPU, {o[2]:.0f} MB peak "
+              f"(medians of {repeats})")]
     if te_cmd:
         t = [statistics.median(x) for x in zip(*theirs)]
         lines.append(f"TrackEval 1.3.0: {t[0]:.2f} s wall, {t[1]:.2f} s CPU, {t[2]:.0f} MB peak "
