@@ -63,3 +63,16 @@ def test_a_lost_follower_restarts_under_a_new_id(make):
     assert set(lost.ids.tolist()) == {1, 2}
     m = paper_metrics(_Hidden().gt.table, lost)
     assert m["PBM_Over"] == 1 and m["PBM_IDs/traj"] == 2
+
+
+@pytest.mark.parametrize("experiment", ["pbm_table1", "pbm_segmentation"])
+def test_the_tables_build_mean_shift_with_its_loss_rule_and_the_filter_with_the_old_one(
+        experiment):
+    from harness.pipeline.build import build_tracker, compose_config
+    from trackers.comparators import AnyDetection, MostSimilar
+
+    cfg = compose_config([f"+experiment={experiment}"])
+    ms = build_tracker("meanshift", cfg.tracker.meanshift)
+    pf = build_tracker("particle_filter", cfg.tracker.particle_filter)
+    assert (ms.max_targets, ms.loss, ms.restart) == (1, SimilarityBelow(0.8, 5), MostSimilar(0.8))
+    assert (pf.max_targets, pf.loss, pf.restart) == (1, SimilarityBelow(0.5, 11), AnyDetection())
