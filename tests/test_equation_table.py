@@ -127,6 +127,12 @@ NOT_RUN = {  # named in the doc, run by no tracker: the test that runs it instea
     "trackers/frontend/shape_search.py": (
         "frontend/test_shape_search.py",
         "test_greedy_search_finds_each_person_once_and_stops_when_the_foreground_is_explained"),
+    # the comparators' loss and restart rules (tracker=meanshift, particle_filter)
+    "trackers/comparators/loss.py": (
+        "comparators/test_loss.py",
+        "test_a_hidden_person_is_lost_after_k_frames_and_restarted_under_a_new_id"),
+    "NeverLost": ("comparators/test_loss.py",
+                  "test_never_lost_keeps_one_track_and_loss_changes_nothing_before_it"),
 }
 
 

@@ -32,7 +32,16 @@ import math
 
 import numba
 import numpy as np
-from numba.cpython.unsafe.numbers import trailing_zeros
+
+if numba.config.DISABLE_JIT:  # plain Python (tests/traced_run.py): numba's intrinsic cannot run
+
+    def trailing_zeros(bits: np.uint64) -> int:
+        """Index of the lowest set bit of ``bits`` (> 0), as numba's intrinsic."""
+        b = int(bits)
+        return (b & -b).bit_length() - 1
+
+else:
+    from numba.cpython.unsafe.numbers import trailing_zeros
 
 from trackers.layered.equations import HEAD_FRACTION
 
