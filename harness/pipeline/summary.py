@@ -78,23 +78,28 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
         if tracks is None or tracks.empty:
             lines += ["No sequence was scored.", ""]
     else:
-        lines += ["## Combined (best per column in bold)", "",
-                  to_markdown(comparison(metrics, columns))]
+        shown = [comparison(metrics, columns)]
+        lines += ["## Combined (best per column in bold)", "", to_markdown(shown[-1])]
         occlusion = [c for c in metrics.columns if c.startswith(("Recall_v", "IDs_v", "ReID"))]
         if occlusion:
+            shown.append(comparison(metrics, occlusion))
             lines += [("## Occlusion (COMBINED): recall and identity switches by gt "
                        "visibility, re-identification after total occlusion"), "",
-                      to_markdown(comparison(metrics, occlusion))]
+                      to_markdown(shown[-1])]
         paper = [c for c in metrics.columns if c.startswith(("Song_", "PBM_"))]
         if paper:
+            shown.append(comparison(metrics, paper))
             lines += ["## Paper-table metrics (COMBINED): Song et al. (Reta), PBM", "",
-                      to_markdown(comparison(metrics, paper))]
+                      to_markdown(shown[-1])]
         seqs = [s for s in dict.fromkeys(metrics["sequence"]) if s != COMBINED]
         for metric in [m for m in ("IDF1", "HOTA", "MOTA") if m in metrics.columns]:
             lines += [f"## {metric} per sequence", "",
                       to_markdown(per_sequence(metrics, metric, seqs), sense=direction(metric))]
         if paired:
             lines += [paired]
+        from harness.report.legend import column_legend
+
+        lines += column_legend(c for table in shown for c in table.columns)
     if failures:
         lines += ["## Failures", ""]
         lines += [f"- [{f.stage}] tracker={f.tracker} sequence={f.sequence}: {f.message}"
