@@ -23,12 +23,22 @@ import numpy as np
 
 from harness.report.graph import id_colour
 from harness.report.parts import draw_parts as pbm_draw_parts
-from harness.report.primitives import GREY, WHITE, _label, _pt, dashed_polyline, dashed_rectangle
+from harness.report.primitives import (
+    GREY,
+    WHITE,
+    _label,
+    _pt,
+    dashed_polyline,
+    dashed_rectangle,
+    legend_block,
+    title_band,
+)
 from trackers.records import Track, TrackState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["STYLES", "TRACKER_STYLES", "draw_tracks", "grid", "id_colour", "infer_style"]
+__all__ = ["STYLES", "TRACKER_STYLES", "draw_tracks", "grid", "id_colour", "infer_style",
+           "legend"]
 STYLES = ("auto", "boxes", "ellipses", "parts")
 # the style of each known tracker (by config name); others are inferred from Track.extra
 TRACKER_STYLES = {"baseline": "boxes", "reta": "ellipses", "pbm": "parts"}
@@ -38,7 +48,13 @@ def _colour(t: Track):
     return GREY if t.state == TrackState.TENTATIVE else id_colour(t.id)
 
 
-def draw_boxes(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) -> None:
+def _text(t: Track) -> str:
+    """A track's label: its id, "-id" while tentative."""
+    return str(t.id) if t.state != TrackState.TENTATIVE else f"-{t.id}"
+
+
+def draw_boxes(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2,
+               taken: list | None = None) -> None:
     for t in tracks:
         c = _colour(t)
         if t.state in (TrackState.OCCLUDED, TrackState.HYPOTHESIS):
@@ -46,14 +62,15 @@ def draw_boxes(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) -> 
         else:
             x, y, w, h = t.box
             cv2.rectangle(img, _pt(x, y), _pt(x + w, y + h), c, thickness, cv2.LINE_AA)
-        _label(img, str(t.id), _pt(t.box[0], t.box[1] - 3), c)
+        _label(img, _text(t), _pt(t.box[0], t.box[1] - 3), c, taken=taken)
 
 
-def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) -> None:
+def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2,
+                  taken: list | None = None) -> None:
     for t in tracks:
         e = t.extra.get("ellipse")
         if e is None:
-            draw_boxes(img, [t], thickness)
+            draw_boxes(img, [t], thickness, taken)
             continue
         xc, yc, phi, rx, ry = (float(v) for v in e)
         c = _colour(t)
@@ -64,16 +81,17 @@ def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2) 
         else:
             cv2.ellipse(img, ((xc, yc), (2 * rx, 2 * ry), float(np.degrees(phi))), c, thickness,
                         cv2.LINE_AA)
-        text = str(t.id) if t.state != TrackState.TENTATIVE else f"-{t.id}"
+        text = _text(t)
         kind = t.extra.get("hypothesis")
         if kind:
             text += {"velocity": "v", "occluder": "o", "still": "s"}.get(str(kind), "")
-        _label(img, text, _pt(xc - rx, yc - ry - 4), c)
+        _label(img, text, _pt(xc - rx, yc - ry - 4), c, taken=taken)
 
 
-def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1) -> None:
+def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1,
+               taken: list | None = None) -> None:
     try:  # PBM's own drawing (harness.report.parts)
-        out = pbm_draw_parts(img, tracks)
+        out = pbm_draw_parts(img, tracks, taken=taken)
         if isinstance(out, np.ndarray) and out.shape == img.shape:
             img[...] = out
         return
@@ -82,7 +100,7 @@ def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1) -> 
     for t in tracks:
         parts = t.extra.get("parts")
         if parts is None:
-            draw_boxes(img, [t], 2)
+            draw_boxes(img, [t], 2, taken)
             continue
         c = _colour(t)
         hidden = np.asarray(t.extra.get("occluded_parts", np.zeros(len(parts), bool)), bool)
@@ -93,7 +111,7 @@ def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1) -> 
             else:
                 x, y, w, h = box
                 cv2.rectangle(img, _pt(x, y), _pt(x + w, y + h), c, thickness, cv2.LINE_AA)
-        _label(img, str(t.id), _pt(t.box[0], t.box[1] - 3), c)
+        _label(img, _text(t), _pt(t.box[0], t.box[1] - 3), c, taken=taken)
 
 
 def infer_style(tracks: Sequence[Track]) -> str:
@@ -116,23 +134,48 @@ def draw_tracks(frame: np.ndarray, tracks: Sequence[Track], style: str = "auto",
         tracks: one frame's tracker output (every state: tentative and hypotheses too).
         style: auto, boxes, ellipses or parts.
         gt: optional ((N, 4) xywh boxes, (N,) ids) ground truth, drawn thin white underneath.
-        title: text at the top-left corner (the tracker's name).
+        title: the panel's title (the tracker's name), in a band of ``TITLE_BAND`` pixels
+            above the picture (the returned image is that much taller), never over it.
+
+    Labels are placed greedily so that they do not cover each other (``_label``).
     """
     if style not in STYLES:
         raise ValueError(f"style must be one of {STYLES}, got {style!r}")
     img = np.ascontiguousarray(frame).copy()
-    if gt is not None:
+    taken: list = []
+    style = infer_style(tracks) if style == "auto" else style
+    {"boxes": draw_boxes, "ellipses": draw_ellipses, "parts": draw_parts}[style](
+        img, tracks, taken=taken)
+    if gt is not None:  # boxes under the tracks' marks, labels placed after theirs
         for box, gid in zip(*gt):
             x, y, w, h = box
             cv2.rectangle(img, _pt(x, y), _pt(x + w, y + h), WHITE, 1, cv2.LINE_AA)
-            _label(img, f"gt{int(gid)}", _pt(x, y + h + 11), WHITE, 0.35)
-    style = infer_style(tracks) if style == "auto" else style
-    {"boxes": draw_boxes, "ellipses": draw_ellipses, "parts": draw_parts}[style](img, tracks)
-    if title:
-        (tw, _), _ = cv2.getTextSize(title, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)
-        cv2.rectangle(img, (0, 0), (tw + 10, 20), (0, 0, 0), -1)
-        cv2.putText(img, title, (5, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.5, WHITE, 1, cv2.LINE_AA)
-    return img
+            _label(img, f"gt{int(gid)}", _pt(x, y + h + 11), WHITE, 0.35, taken)
+    return title_band(img, title) if title else img
+
+
+def legend(styles: Sequence[str], gt: bool, graph: bool = False) -> list[tuple]:
+    """The legend of panels drawn in ``styles`` (``legend_block``'s items): what a colour,
+    a dashed line, a grey mark and a label suffix mean."""
+    c = id_colour(1)
+    items: list[tuple] = [("ground truth, gtN", WHITE, "thin")] if gt else []
+    items += [("track: one colour per id", c, "box"),
+              ("dashed: hypothesis / occluded (not seen)", c, "dashed"),
+              ("grey, -id: tentative (not reported yet)", GREY, "box")]
+    if "ellipses" in styles or graph:
+        items.append(("ellipse: Reta node; id+v/o/s: velocity/occluder/still hypothesis", c,
+                      "ellipse"))
+    if graph:
+        items.append(("thin line: edge from the previous frame's node", c, "text"))
+    if "parts" in styles:
+        items.append(("PBM: 5 part boxes, dashed part frozen (occluded); id?: reported unseen",
+                      c, "box"))
+    return items
+
+
+def with_legend(image: np.ndarray, items: list[tuple]) -> np.ndarray:
+    """``image`` with ``legend_block(items)`` below it."""
+    return np.vstack([image, legend_block(items, image.shape[1])])
 
 
 def grid(panels: Sequence[np.ndarray], columns: int | None = None,

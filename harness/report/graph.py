@@ -193,14 +193,18 @@ def _dashed_ellipse(img: np.ndarray, centre, axes, angle: float, colour, thickne
 
 
 def draw_graph(frame: np.ndarray, snapshot: dict, previous: dict | None = None,
-               thickness: int = 2) -> np.ndarray:
+               thickness: int = 2, taken: list | None = None) -> np.ndarray:
     """Draw one frame's graph on a copy of the (H, W, 3) uint8 BGR ``frame``.
 
     Visible nodes: solid ellipse in the id's colour; hypothesis nodes: dashed ellipse with
     the hypothesis kind; tentative nodes: light grey; labels are ids (negative while
     tentative). When ``previous`` (the snapshot of frame t-1) is given, each edge is drawn
-    as a thin line from the predecessor's centre to the node's centre.
+    as a thin line from the predecessor's centre to the node's centre. Labels are moved
+    off each other (``taken``: rectangles of labels already drawn; ``primitives._label``).
     """
+    from harness.report.primitives import _label
+
+    taken = [] if taken is None else taken
     img = frame.copy()
     before = {n["node"]: n for n in (previous or {}).get("nodes", [])}
     for n in snapshot.get("nodes", []):
@@ -222,8 +226,7 @@ def draw_graph(frame: np.ndarray, snapshot: dict, previous: dict | None = None,
         if n.get("hypothesis"):
             label += {"velocity": "v", "occluder": "o", "still": "s"}.get(n["hypothesis"], "")
         org = (int(centre[0] - axes[0]), max(int(centre[1] - axes[1]) - 4, 10))
-        cv2.putText(img, label, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(img, label, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
+        _label(img, label, org, colour, taken=taken)
     return img
 
 

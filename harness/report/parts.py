@@ -34,10 +34,12 @@ def _tint(img: np.ndarray, box: np.ndarray, colour, alpha: float) -> None:
 
 
 def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1,
-               tint: float = 0.18, show_gate: bool = False) -> np.ndarray:
+               tint: float = 0.18, show_gate: bool = False,
+               taken: list | None = None) -> np.ndarray:
     """Draw the five parts of every track onto ``img`` in place; returns ``img``.
 
-    Tracks without ``extra['parts']`` are drawn as a plain rectangle.
+    Tracks without ``extra['parts']`` are drawn as a plain rectangle. ``taken``: the label
+    rectangles already on ``img`` (``primitives._label`` moves a label off them).
     """
     for t in tracks:
         colour = GREY if t.state == TrackState.TENTATIVE else id_colour(t.id)
@@ -63,5 +65,5 @@ def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1,
         text = str(t.id) if t.state != TrackState.TENTATIVE else f"-{t.id}"
         if t.state == TrackState.OCCLUDED:
             text += "?"
-        _label(img, text, _pt(t.box[0], t.box[1] - 3), colour)
+        _label(img, text, _pt(t.box[0], t.box[1] - 3), colour, taken=taken)
     return img

@@ -11,7 +11,9 @@ underneath when asked.
 
 Outputs: an H.264 MP4 (``H264Writer``: the ffmpeg that imageio-ffmpeg ships, libx264,
 yuv420p, avc1 in the container, so browsers play it) of the panels, and a contact sheet: a
-PNG grid with one row per chosen frame and one column per tracker.
+PNG grid with one row per chosen frame and one column per tracker. Each panel's title is in
+a band above its picture; both outputs end with a legend of the marks
+(``harness.report.draw.legend``).
 
 Command line (config overrides as for ``python -m harness``, or the config of a finished run)::
 
@@ -39,7 +41,7 @@ from harness.datasets.base import Sequence as DataSequence
 from harness.pipeline.bank import TrackerBank, start_trackers
 from harness.pipeline.build import compose_config, tracker_choice
 from harness.pipeline.loop import frames, no_progress
-from harness.report.draw import TRACKER_STYLES, draw_tracks, grid
+from harness.report.draw import TRACKER_STYLES, draw_tracks, grid, legend, with_legend
 from harness.sources.base import DetectionSource
 from trackers.records import Track
 
@@ -222,6 +224,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
     first, last, wanted = _window(sequence, frames, sheet is not None, sheet_frames)
     end = max([last, *wanted])
     graphs = {name: _GraphDrawing.of(t) for name, t in trackers.items()}
+    items = legend([TRACKER_STYLES.get(n, "auto") for n in trackers], show_gt,
+                   any(g is not None for g in graphs.values()))
     writer = None
     rows: dict[int, list[np.ndarray]] = {}
     written: dict[str, Path] = {}
@@ -243,7 +247,7 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
             if k in wanted:
                 rows[k] = panels
             if video is not None and first <= k <= last:
-                image = grid(panels, columns)
+                image = with_legend(grid(panels, columns), items)
                 if writer is None:
                     Path(video).parent.mkdir(parents=True, exist_ok=True)
                     fps = sequence.info.fps or 25.0
@@ -255,7 +259,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
             writer.release()
             written["video"] = Path(video)
     if sheet is not None:
-        sheet_img = grid([p for k in sorted(rows) for p in rows[k]], len(trackers))
+        sheet_img = with_legend(grid([p for k in sorted(rows) for p in rows[k]], len(trackers)),
+                                items)
         Path(sheet).parent.mkdir(parents=True, exist_ok=True)
         if not cv2.imwrite(str(sheet), sheet_img):
             raise OSError(f"cannot write {sheet}")

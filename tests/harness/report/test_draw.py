@@ -49,3 +49,42 @@ def test_each_tracker_is_drawn_its_own_way():
         draw_tracks(frame, [plain], "circles")
     g = grid([a, b, c], columns=2)
     assert g.shape == (240, 320, 3)
+
+
+def test_titles_sit_above_the_picture_and_labels_do_not_overlap():
+    from harness.report.primitives import TITLE_BAND, _label
+
+    frame = _frame()
+    frame[:12] = 255  # the video's own timestamp, top rows
+    titled = draw_tracks(frame, [], title="baseline  frame 7")
+    assert titled.shape == (120 + TITLE_BAND, 160, 3)
+    assert (titled[TITLE_BAND:] == frame).all()  # the picture whole, under the band
+    # three people side by side, boxes touching: labels at the same place without placement
+    tracks = [Track(i, np.array([40.0 + 2 * i, 40.0, 30.0, 60.0])) for i in (11, 12, 13)]
+    taken: list = []
+    img = _frame()
+    for t in tracks:
+        _label(img, str(t.id), (int(t.box[0]), int(t.box[1]) - 3), (255, 255, 255), taken=taken)
+    assert len(taken) == 3
+    for a in range(3):
+        for b in range(a + 1, 3):
+            p, q = taken[a], taken[b]
+            assert not (p[0] < q[2] and q[0] < p[2] and p[1] < q[3] and q[1] < p[3])
+
+
+def test_the_legends_name_every_mark():
+    from harness.report.draw import legend
+    from harness.report.overlays import LEGEND, draw_overlay
+    from harness.report.primitives import legend_block
+    from trackers.records import Detections
+
+    texts = " ".join(t for t, _, _ in legend(["ellipses", "parts"], gt=True, graph=True))
+    for word in ("ground truth", "dashed", "tentative", "ellipse", "v/o/s", "PBM", "edge"):
+        assert word in texts
+    assert "ground truth" not in " ".join(t for t, _, _ in legend(["boxes"], gt=False))
+    dets = Detections(np.array([[40.0, 30, 20, 50], [42.0, 31, 20, 50]]), np.array([0.9, 0.8]))
+    out = draw_overlay(_frame(), np.zeros((120, 160), bool), dets, None, None)
+    band = legend_block(LEGEND, 160)
+    assert out.shape == (120 + band.shape[0], 160, 3) and (out[120:] == band).all()
+    assert {t for t, _, _ in LEGEND} >= {"foreground (tint)", "blob", "detection, score",
+                                         "ground truth", "head"}

@@ -8,6 +8,13 @@ import pytest
 from report_scenes import GtSource, Walk
 
 
+def _legend_height(width: int) -> int:
+    from harness.report.draw import legend
+    from harness.report.primitives import legend_block
+
+    return legend_block(legend(["boxes"], gt=True), width).shape[0]
+
+
 def test_video_and_contact_sheet_side_by_side(tmp_path):
     from harness.report.video import render
     from trackers.baseline import BaselineTracker
@@ -25,11 +32,12 @@ def test_video_and_contact_sheet_side_by_side(tmp_path):
             break
         n, size = n + 1, img.shape
     cap.release()
-    assert n == 12 and size == (120, 320, 3)  # two panels side by side
+    legend = _legend_height(320)  # the legend's rows under the panels
+    assert n == 12 and size == (22 + 120 + legend, 320, 3)  # two panels side by side, titled
     data = out["video"].read_bytes()
     assert b"ftyp" in data[:32] and b"avc1" in data  # H.264 (browsers do not play mp4v)
     sheet = cv2.imread(str(out["sheet"]))
-    assert sheet.shape == (360, 320, 3)  # 3 frames x 2 trackers
+    assert sheet.shape == (3 * (22 + 120) + legend, 320, 3)  # 3 frames x 2 trackers
     with pytest.raises(ValueError, match="sheet_frames"):
         render(trackers, seq, GtSource(), sheet=tmp_path / "x.png", sheet_frames=[99])
 
@@ -49,7 +57,8 @@ def test_a_frame_window_is_rendered_by_its_own_frame_numbers(tmp_path):
         n += 1
     cap.release()
     assert n == 5
-    assert cv2.imread(str(out["sheet"])).shape[0] == 5 * 120  # frames 5, 6, 7, 8, 9
+    # frames 5, 6, 7, 8, 9, each under its title band, then the legend
+    assert cv2.imread(str(out["sheet"])).shape[0] == 5 * (22 + 120) + _legend_height(160)
     with pytest.raises(ValueError, match="5 <= first <= last <= 9"):
         render({"baseline": BaselineTracker()}, seq, GtSource(), tmp_path / "x.mp4",
                frames=(1, 4))
