@@ -43,15 +43,33 @@ def paired_markdown(diffs: Sequence[PairedDifference], bootstrap: Bootstrap | No
     return "\n".join(lines)
 
 
-def paired_footer(diffs: Sequence[PairedDifference], bootstrap: Bootstrap | None = None) -> str:
-    """Lines under the printed table: one per pair, then how the interval was made."""
+def paired_footer(diffs: Sequence[PairedDifference], bootstrap: Bootstrap | None = None,
+                  most: int = 6) -> str:
+    """Lines under the printed table: one per pair, then how the interval was made.
+
+    With more than ``most`` pairs (``tracker=everyone`` has 190), only the pairs of the
+    leader (the highest value of the first metric, IDF1) are printed, and a line says where
+    the others are.
+    """
     if not diffs:
         return ""
     boot = bootstrap or Bootstrap()
+    pairs = by_pair(diffs)
+    shown = pairs
+    if len(pairs) > most:
+        values = {}
+        for d in diffs:
+            if d.metric == diffs[0].metric:
+                values.update({d.a: d.value_a, d.b: d.value_b})
+        leader = max(values, key=lambda name: values[name])  # first of equals, in order
+        shown = {ab: group for ab, group in pairs.items() if leader in ab}
     lines = ["paired differences A - B [95% interval]:"]
-    for (a, b), group in by_pair(diffs).items():
+    for (a, b), group in shown.items():
         parts = [f"{d.metric} {d.difference:+.3f} [{d.low:+.3f}, {d.high:+.3f}]"
                  + ("" if d.distinguishable else f" {NOT_DISTINGUISHABLE}") for d in group]
         lines.append(f"  {a} - {b}: " + "; ".join(parts))
+    if len(shown) < len(pairs):
+        lines.append(f"  ({len(pairs) - len(shown)} more pairs without the leader by "
+                     f"{diffs[0].metric}: summary.md and report.html give all {len(pairs)})")
     lines.append(f"  ({boot.describe()})")
     return "\n".join(lines) + "\n"

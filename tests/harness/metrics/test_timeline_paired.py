@@ -124,3 +124,20 @@ def test_summary_section_and_footer_say_what_is_not_distinguishable() -> None:
     foot = paired_footer([real, tie])
     assert "IDF1 +0.100 [+0.050, +0.150]; MOTA +0.010 [-0.020, +0.040] not distinguishable" in foot
     assert paired_markdown([]) == "" and paired_footer([]) == ""
+
+
+def test_footer_of_many_trackers_prints_the_leaders_pairs_and_says_where_the_rest_are() -> None:
+    from itertools import combinations
+
+    from harness.metrics.paired import PairedDifference
+    from harness.report.paired import paired_footer, paired_markdown
+
+    idf1 = {"a": 0.6, "b": 0.9, "c": 0.7, "d": 0.5, "e": 0.4}  # 10 pairs; leader b
+    diffs = [PairedDifference(x, y, "IDF1", idf1[x], idf1[y], -1.0, 1.0, 1, 100)
+             for x, y in combinations(idf1, 2)]
+    foot = paired_footer(diffs)
+    printed = [line for line in foot.splitlines() if line.startswith("  ") and ": IDF1" in line]
+    assert len(printed) == 4 and all("b" in line.split(":")[0].strip().split(" - ") for line in printed)
+    assert "6 more pairs without the leader by IDF1" in foot and "give all 10" in foot
+    assert paired_markdown(diffs).count("\n| ") == 11  # the header and every pair, in summary.md
+    assert "more pairs" not in paired_footer(diffs, most=10)
