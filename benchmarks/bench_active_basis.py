@@ -12,7 +12,7 @@ only shrink while the maps stay), so the detections at a threshold T are the fit
 of one run at a lower threshold: ``--thresholds`` scores several from one run (exact).
 
 Run: ``python benchmarks/bench_active_basis.py [--thresholds 8 10 12] [--report]
-[--set search.min_vacant=0.6 ...]``. Reads the not-shipped data (``shared_root()``,
+[--set search.min_vacant=0.6 ...]``. Reads the not-shipped data (``shared_data.use_shared_data()``,
 $OCCBENCH_SHARED) for
 EnterExitCrossingPaths1cor; exits with a message when a sequence is absent.
 """
@@ -34,9 +34,8 @@ from shared_data import use_shared_data
 
 from harness.commands.detect import match_count
 from harness.sources.frontend import compose_config, load_sequences
-from harness.sweeps.generalisation import shared_root
 
-use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
+DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
 #: (sequence folder, choosing range, reporting range)
 SETS = [("CAVIAR-OneLeaveShop1cor", (1, 150), (151, 295)),
@@ -45,7 +44,7 @@ SETS = [("CAVIAR-OneLeaveShop1cor", (1, 150), (151, 295)),
 
 def run(folder: str, detector: str, overrides: list[str]) -> tuple[dict, dict]:
     """Per frame: detections (boxes, scores) and gt boxes of one whole sequence."""
-    root = shared_root() / folder
+    root = DATA / folder
     if not root.is_dir():
         sys.exit(f"{root}: not found (set OCCBENCH_SHARED)")
     # CAVIAR XML where the folder has it (OneLeaveShop1cor, as the README's table), else MOT gt

@@ -40,7 +40,7 @@ from harness.pipeline.build import build_source, build_tracker, load_sequences  
 from harness.pipeline.protocols import run_single_target  # noqa: E402
 from harness.sweeps import generalisation as G  # noqa: E402
 
-use_shared_data()  # $OCCBENCH_SHARED: EnterExitCrossingPaths1cor is not shipped
+DATA = use_shared_data()  # $OCCBENCH_SHARED: EnterExitCrossingPaths1cor is not shipped
 
 ECP = ("dataset=mot", "dataset.root={shared}/CAVIAR-EnterExitCrossingPaths1cor")
 SETS: dict[str, dict[str, tuple[str, ...]]] = {
@@ -81,7 +81,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--sets", choices=sorted(SETS), default="tuning")
     args = ap.parse_args(argv)
     candidates = [parse_tracker(c) for c in args.candidates]
-    shared = str(G.shared_root())
+    shared = str(DATA)
     per_set = {name: run_set([o.format(shared=shared) for o in ov], candidates)
                for name, ov in SETS[args.sets].items()}
     print(f"sets: {args.sets} ({', '.join(per_set)}); IDF1 per set, then pooled")

@@ -36,7 +36,7 @@ from shared_data import use_shared_data  # noqa: E402
 
 from harness.sweeps import generalisation as G  # noqa: E402
 
-use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
+DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
 DOCS_HEAD = """# Generalisation: every tracker on data nobody chose anything on
 
@@ -139,7 +139,7 @@ def main(argv=None) -> int:
         return 1
     out = args.out or ROOT / "results" / "generalisation" / dt.datetime.now().strftime(
         "%Y-%m-%d_%H-%M-%S")
-    table = G.run_table(sets, trackers, out, args.length)
+    table = G.run_table(sets, trackers, out, args.length, data_root=DATA)
     if table.empty:
         print("no set was run")
         return 1

@@ -64,7 +64,7 @@ from harness.pipeline.loop import frames  # noqa: E402
 from harness.sweeps import generalisation as G  # noqa: E402
 from trackers.geometry import iou_matrix  # noqa: E402
 
-use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
+DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
 
 @dataclass
@@ -99,7 +99,7 @@ def parse_tracker(spec: str) -> tuple[str, str, list[str]]:
 
 def set_overrides(name: str, seed: int, length: int | None) -> list[str]:
     s = {e.name: e for e in G.SETS}[name]
-    out = G._resolve(s.overrides, G.trajectories_root()) + [f"seed={seed}", "progress=false"]
+    out = G._resolve(s.overrides, G.trajectories_root(), DATA) + [f"seed={seed}", "progress=false"]
     if length:
         key = {"dataset=synthetic": "length", "dataset=replay": "max_frames"}
         out += [f"dataset.{key[o]}={length}" for o in out if o in key]

@@ -1,7 +1,8 @@
 """The developers' data that the project does not ship (``../shared/data`` beside the
 checkout, or beside the main checkout from a worktree under ``wt/``): the benchmark scripts
-that read it call ``use_shared_data()`` first, which sets ``$OCCBENCH_SHARED``
-(``harness.sweeps.generalisation.shared_root``) unless the user already did."""
+that read it call ``use_shared_data()`` first, which sets ``$OCCBENCH_SHARED`` unless the
+user already did and returns the folder (the library takes it as an argument, e.g.
+``harness.sweeps.generalisation.run_table``'s ``data_root``)."""
 
 from __future__ import annotations
 

@@ -48,10 +48,10 @@ subtraction (``trackers.frontend.BackgroundModel`` at its defaults, which are
 ``detector=foreground``'s), for real frames.
 
 Real frames (``tracker=pbm_paper``'s models, ``trackers/layered/data/real_uncompensated.yaml``;
-the fitting split of docs/generalisation.md; ``$OCCBENCH_SHARED``: the not-shipped data)::
+the fitting split of docs/generalisation.md; ``DATA``: the folder of the not-shipped data)::
 
     occbench fit pbm --caviar datasets/CAVIAR-OneLeaveShop1cor@1-150 \
-        --mot $OCCBENCH_SHARED/CAVIAR-EnterExitCrossingPaths1cor@1-180 \
+        --mot DATA/CAVIAR-EnterExitCrossingPaths1cor@1-180 \
         --foreground mog2 --tracker-config pbm_paper \
         --out trackers/layered/data/real_uncompensated.yaml \
         --plot docs/img/pbm_models_real_vs_synthetic.png \

@@ -21,8 +21,9 @@ Which data is which (docs/generalisation.md says the same, with the latest table
   seeds, because one late identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds
   1000-1009 decided a default, ``adaptations.appearance_margin``, so they count as looked at).
 
-The EnterExitCrossingPaths1cor and lobby sets read ``shared_root()`` (``$OCCBENCH_SHARED``; not
-shipped: skipped with a message where it is absent).
+The EnterExitCrossingPaths1cor and lobby sets read the folder given as ``data_root`` (not
+shipped with the project: the caller says where it is; without it they are skipped with a
+message).
 
 Used by ``benchmarks/bench_generalisation.py`` (the command line); ``run_table`` is the
 library entry point.
@@ -33,7 +34,6 @@ from __future__ import annotations
 import datetime as _dt
 import logging
 import math
-import os
 import subprocess
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -71,8 +71,8 @@ class EvalSet:
         quick: part of the quick subset (``--quick``).
         description: one line for the legend of the table.
         requires: folders under the trajectories folder (``trajectories_root()``), or under
-            ``shared_root()`` when they start with ``shared:``, that must exist; a set whose
-            data is absent is skipped with a message.
+            the caller's ``data_root`` when they start with ``data:``, that must exist; a set
+            whose data is absent is skipped with a message.
     """
 
     name: str
@@ -94,8 +94,8 @@ def _replay(name: str, *extra: str) -> tuple[str, ...]:
 
 
 ECP = "CAVIAR-EnterExitCrossingPaths1cor"
-#: the second corridor sequence (not shipped): frames and gt in MOT layout under shared_root()
-ECP_SET = ("dataset=mot", f"dataset.root=${{shared:{ECP}}}")
+#: the second corridor sequence (not shipped): frames and gt in MOT layout under data_root
+ECP_SET = ("dataset=mot", f"dataset.root=${{data:{ECP}}}")
 LOBBY = "CAVIAR-lobby"
 #: the lobby's multi-person reporting clips (docs/generalisation.md, "Lobby": nothing is chosen
 #: or fitted on them)
@@ -121,22 +121,22 @@ SETS: tuple[EvalSet, ...] = (
             (0,), quick=True,
             description="CAVIAR OneLeaveShop1cor frames 151-295, the silhouette detector"),
     EvalSet("ecp1-180 sil", TUNING, (*ECP_SET, "dataset.frames=[1,180]", *SILHOUETTE), (0,),
-            quick=True, requires=(f"shared:{ECP}",),
+            quick=True, requires=(f"data:{ECP}",),
             description="CAVIAR EnterExitCrossingPaths1cor frames 1-180 (first crossing), "
             "the silhouette detector"),
     EvalSet("ecp181-383 sil", UNTOUCHED, (*ECP_SET, "dataset.frames=[181,383]", *SILHOUETTE),
-            (0,), quick=True, requires=(f"shared:{ECP}",),
+            (0,), quick=True, requires=(f"data:{ECP}",),
             description="CAVIAR EnterExitCrossingPaths1cor frames 181-383 (second crossing), "
             "the silhouette detector"),
     EvalSet("ecp1-180 gt", TUNING, (*ECP_SET, "dataset.frames=[1,180]", *GT03),
-            UNTOUCHED_SEEDS, requires=(f"shared:{ECP}",),
+            UNTOUCHED_SEEDS, requires=(f"data:{ECP}",),
             description="CAVIAR EnterExitCrossingPaths1cor frames 1-180, noisy gt miss 0.3"),
     EvalSet("ecp181-383 gt", UNTOUCHED, (*ECP_SET, "dataset.frames=[181,383]", *GT03),
-            UNTOUCHED_SEEDS, requires=(f"shared:{ECP}",),
+            UNTOUCHED_SEEDS, requires=(f"data:{ECP}",),
             description="CAVIAR EnterExitCrossingPaths1cor frames 181-383, noisy gt miss 0.3"),
-    EvalSet("lobby gt", UNTOUCHED, ("dataset=mot", f"dataset.root=${{shared:{LOBBY}}}",
+    EvalSet("lobby gt", UNTOUCHED, ("dataset=mot", f"dataset.root=${{data:{LOBBY}}}",
                                     f"dataset.sequences=[{','.join(LOBBY_REPORTED)}]", *GT03),
-            (1000,), requires=(f"shared:{LOBBY}",),
+            (1000,), requires=(f"data:{LOBBY}",),
             description="the five multi-person CAVIAR lobby clips nobody chooses on (a second "
             "camera, looking down), noisy gt miss 0.3"),
     EvalSet("OLS2cor", UNTOUCHED, _replay("CAVIAR-OneLeaveShop2cor", *GT03), (1000,),
@@ -176,19 +176,16 @@ def trajectories_root() -> Path:
     return Path(str(compose(["dataset=replay"]).dataset.gt_path)).parent
 
 
-def shared_root() -> Path:
-    """The folder of the data that is not shipped: ``$OCCBENCH_SHARED``. Unset, the
-    placeholder path ``$OCCBENCH_SHARED``, which never exists, so that the sets needing it
-    are skipped naming the variable (the benchmark scripts set it to the developers' data
-    folder: ``benchmarks/shared_data.py``)."""
-    env = os.environ.get("OCCBENCH_SHARED", "").strip()
-    return Path(env).expanduser().resolve() if env else Path("$OCCBENCH_SHARED")
+#: where ``data:`` folders are looked for when no ``data_root`` is given (never exists)
+NO_DATA_ROOT = Path("data_root_not_given")
 
 
-def _resolve(overrides: Iterable[str], trajectories: Path) -> list[str]:
+def _resolve(overrides: Iterable[str], trajectories: Path,
+             data_root: Path | None = None) -> list[str]:
     out = []
     for o in overrides:
-        for tag, folder in (("${trajectories:", trajectories), ("${shared:", shared_root())):
+        for tag, folder in (("${trajectories:", trajectories),
+                            ("${data:", data_root or NO_DATA_ROOT)):
             if tag in o:
                 key, rest = o.split(tag, 1)
                 name, tail = rest.split("}", 1)
@@ -197,9 +194,9 @@ def _resolve(overrides: Iterable[str], trajectories: Path) -> list[str]:
     return out
 
 
-def missing_data(s: EvalSet, trajectories: Path) -> list[Path]:
+def missing_data(s: EvalSet, trajectories: Path, data_root: Path | None = None) -> list[Path]:
     """The folders ``s.requires`` names that do not exist."""
-    paths = [shared_root() / r.removeprefix("shared:") if r.startswith("shared:")
+    paths = [(data_root or NO_DATA_ROOT) / r.removeprefix("data:") if r.startswith("data:")
              else trajectories / r for r in s.requires]
     return [p for p in paths if not p.exists()]
 
@@ -244,7 +241,7 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
 
 
 def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
-            length: int | None = None) -> pd.DataFrame:
+            length: int | None = None, data_root: Path | None = None) -> pd.DataFrame:
     """Run every tracker on set ``s`` at each of its seeds; one row per tracker with the
     mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too)."""
     from omegaconf import OmegaConf, open_dict
@@ -254,7 +251,8 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
 
     rows = []
     for seed in s.seeds:
-        overrides = _resolve(s.overrides, trajectories) + [f"seed={seed}", "progress=false"]
+        overrides = _resolve(s.overrides, trajectories, data_root) + [f"seed={seed}",
+                                                                     "progress=false"]
         if length is not None:  # exploring: shorter synthetic scenes and replays
             key = {"dataset=synthetic": "length", "dataset=replay": "max_frames"}
             overrides += [f"dataset.{key[o]}={length}" for o in overrides if o in key]
@@ -280,8 +278,9 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
 
 
 def run_table(sets: Sequence[EvalSet], trackers: dict, out_dir: Path,
-              length: int | None = None) -> pd.DataFrame:
-    """Every tracker on every set (skipping sets whose data is absent, with a message);
+              length: int | None = None, data_root: Path | None = None) -> pd.DataFrame:
+    """Every tracker on every set (skipping sets whose data is absent, with a message;
+    ``data_root``: the folder of the sets' ``data:`` folders, not shipped);
     writes ``generalisation.csv`` and ``generalisation.md`` into ``out_dir`` after each set
     (a later failure loses nothing) and returns the long table (set, role, tracker,
     IDF1, HOTA, MOTA, n_seeds, failures)."""
@@ -290,14 +289,14 @@ def run_table(sets: Sequence[EvalSet], trackers: dict, out_dir: Path,
     trajectories = trajectories_root()
     parts = []
     for s in sets:
-        missing = missing_data(s, trajectories)
+        missing = missing_data(s, trajectories, data_root)
         if missing:
             print(f"[skip] {s.name}: {', '.join(map(str, missing))} absent")
             continue
         print(f"[run] {s.name} ({s.role}): {s.description}, seeds {list(s.seeds)}", flush=True)
         try:
             parts.append(run_set(s, trackers, out_dir / "runs" / s.name.replace(" ", "_"),
-                                 trajectories, length))
+                                 trajectories, length, data_root))
         except Exception as err:  # noqa: BLE001 - one set's failure must not lose the others
             print(f"[fail] {s.name}: {type(err).__name__}: {err}")
             continue

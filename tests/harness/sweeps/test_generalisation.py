@@ -26,14 +26,16 @@ def test_every_set_composes_and_is_marked():
         assert "_target_" in cfg.dataset and "_target_" in cfg.detector
 
 
-def test_shared_sets_name_their_missing_folder(tmp_path, monkeypatch):
-    monkeypatch.setenv("OCCBENCH_SHARED", str(tmp_path))
+def test_not_shipped_sets_name_their_missing_folder(tmp_path):
     ecp = {s.name: s for s in G.SETS}["ecp181-383 sil"]
-    assert G.missing_data(ecp, G.trajectories_root()) == [
+    trajectories = G.trajectories_root()
+    assert G.missing_data(ecp, trajectories) == [
+        G.NO_DATA_ROOT / "CAVIAR-EnterExitCrossingPaths1cor"]
+    assert G.missing_data(ecp, trajectories, tmp_path) == [
         tmp_path / "CAVIAR-EnterExitCrossingPaths1cor"]
-    assert any(str(tmp_path) in o for o in G._resolve(ecp.overrides, G.trajectories_root()))
+    assert any(str(tmp_path) in o for o in G._resolve(ecp.overrides, trajectories, tmp_path))
     (tmp_path / "CAVIAR-EnterExitCrossingPaths1cor").mkdir()
-    assert G.missing_data(ecp, G.trajectories_root()) == []
+    assert G.missing_data(ecp, trajectories, tmp_path) == []
 
 
 def test_tiny_table_same_detections_for_every_tracker(tmp_path):
