@@ -5,7 +5,9 @@ Modules: ``graph`` (G = <N, E>, nodes and edges, snapshot), ``occlusion`` (eq. 2
 ``features`` (eqs. 1, 4, 5 on ellipse regions: the definitions), ``appearance`` (eq. 1
 histograms, fast path), ``motion`` (Kalman M), ``params`` (the constructor's parameter
 groups), ``rules`` (the paper's rule and ours for each step an adaptation changes),
-``tracker`` (``RetaTracker``: Alg. 1).
+``tracker`` (``RetaTracker``: Alg. 1), its steps by the paper's parts in ``steps_predict``
+(1-2), ``steps_occlusion`` (3-5), ``steps_update`` (6, 9), ``steps_hypotheses`` (7-8) and
+``steps_output`` (graph nodes, tracks), over the records of ``state``.
 """
 
 from trackers.three_hypothesis.motion import MotionModel

@@ -1,0 +1,124 @@
+"""Alg. 1, steps 6 and 9 (Reta 3.3, 3.3.3): UpdateAttributes of the matched people, their
+confirmation, and the tentative tracks the unmatched measurements start.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from trackers.three_hypothesis.graph import VISIBLE
+from trackers.three_hypothesis.motion import box_measurements, state_boxes
+from trackers.three_hypothesis.occlusion import covered_fraction
+from trackers.three_hypothesis.state import Branch, Frame, Person
+
+log = logging.getLogger(__name__)
+
+
+class UpdateSteps:
+    """``RetaTracker``'s steps 6 and 9 (a mixin: ``self`` is the tracker)."""
+
+    def _update_matched(self, f: Frame) -> list[Person]:
+        """UpdateAttributes(N_o^t) (3.3.3) of every matched person, in person order.
+
+        M is corrected by the measurement (``rules.motion``; one behind others by
+        ``rules.motion_behind``). A person absent from any occlusion takes the measurement's
+        q and S; one behind another keeps q and takes S from its prediction area
+        (``rules.appearance_behind`` and ``rules.shape_behind``). A person matched through a
+        hypothesis keeps its id and loses its other hypotheses; a tentative track is
+        confirmed after ``confirm_frames`` matches, with the id ``rules.identity`` gives."""
+        rows = sorted(f.matched.items())
+        f.visible = np.zeros((0, 4))
+        if not rows:
+            return []
+        persons, dets, p, pred, in_front = f.persons, f.dets, f.p, f.pred, f.in_front
+        rules = self.rules
+        idx = np.array([n for _, (_, n, _, _) in rows])
+        f.visible_dets = [d for _, (d, _, _, _) in rows]
+        f.visible = dbox = dets[f.visible_dets]
+        behind = np.array([n in in_front for _, (_, n, _, _) in rows])
+        z = box_measurements(dbox)
+        Rs = np.array([persons[i].R for i, _ in rows])
+        predicted = f.Xp[idx], f.Pp[idx]
+        Xc, Pc = rules.motion_behind.update(rules.motion.correct(*predicted, z, Rs), predicted,
+                                            behind)  # x = x + K y, Joseph P
+        estimate = state_boxes(Xc).tolist()
+        tent = [d for i, (d, _, _, _) in rows if not persons[i].confirmed]
+        empty = rules.support.empty(f.foreground, dets[tent]) if tent else None
+        # a detection on no foreground does not confirm a tentative track
+        empty_dets = set() if empty is None else {d for d, e in zip(tent, empty.tolist()) if e}
+        visible_share = self._visible_share(f, rows, behind)
+        for r, (i, (d, n, stage, rho)) in enumerate(rows):
+            person = persons[i]
+            if not behind[r]:
+                person.q = p[d]
+                shape = dbox[r]
+            else:
+                shape = rules.shape_behind.region(estimate[r], pred[n])
+                person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
+            if person.confirmed or d not in empty_dets:
+                person.hits += 1
+            person.misses = 0
+            person.spawned = False
+            if not person.confirmed and person.hits >= self.life_cycle.confirm_frames:
+                self._confirm(f, person, shape)
+            fronts = in_front.get(n, [])
+            branch = Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
+                             occluder=persons[fronts[0]].key if fronts else None)
+            branch.node = self._add_node(person, branch, shape, f.branches[n].node, stage, rho)
+            person.shape = shape
+            person.branches = [branch]
+        return [persons[i] for i in sorted(f.matched)]
+
+    def _start_tracks(self, f: Frame) -> list[Person]:
+        """Each unmatched measurement starts a tentative track (3.3), confirmed in later
+        frames (at once when ``confirm_frames`` is 1)."""
+        out: list[Person] = []
+        for d in f.matches.unmatched_measurements:
+            x0, P0, Q0, R0 = self.rules.motion.init(f.dets[d])
+            person = Person(self._next_key, f.p[d], Q0, R0, [Branch(VISIBLE, x0, P0)],
+                             shape=f.dets[d])
+            self._next_key += 1
+            if self.life_cycle.confirm_frames <= 1:
+                person.id = self._next_id
+                self._next_id += 1
+            person.branches[0].node = self._add_node(person, person.branches[0], f.dets[d],
+                                                     None, 0, float("nan"))
+            out.append(person)
+        return out
+
+    def _visible_share(self, f: Frame, rows: list, behind: np.ndarray) -> list[float]:
+        """Per matched row, the share v of its measured region left visible by the matched
+        people in front of it (1 - the largest share one of them covers; 1 for rows not
+        behind anyone), all pairs integrated in one ``region_overlaps`` call. Only
+        computed for a rule that reads it."""
+        share = [1.0] * len(rows)
+        if not self.rules.appearance_behind.uses_visible_share or not behind.any():
+            return share
+        k = behind.nonzero()[0]
+        near = np.zeros((len(k), len(f.dets)), dtype=bool)
+        for a, r in enumerate(k.tolist()):
+            n = rows[r][1][1]
+            near[a, [f.matched[j][0] for j in f.in_front[n] if j in f.matched]] = True
+        covered = covered_fraction(f.visible[k], f.dets, self.occlusion.region_samples, near)
+        for a, r in enumerate(k.tolist()):
+            share[r] = 1.0 - float(covered[a])
+        return share
+
+    def _confirm(self, f: Frame, person: Person, shape: np.ndarray) -> None:
+        """A tentative track reaches ``confirm_frames``: it takes a new id, or (by
+        ``rules.identity``) the id of a hidden confirmed person, unmatched this frame, one of
+        whose hypotheses lies where it stands; that person's hypotheses then end."""
+        persons = f.persons
+        candidate = np.array([person.confirmed and i not in f.matched and i not in f.absorbed
+                              for i, person in enumerate(persons)], dtype=bool)
+        best = self.rules.identity.returning(shape, f.pred, f.owners, candidate)
+        if best is not None:
+            person.id = persons[best].id
+            f.absorbed.add(best)
+            log.debug("tentative %d confirms hidden person %d", person.key, person.id)
+        else:
+            person.id = self._next_id
+            self._next_id += 1
+        self._public[person.key] = person.id
