@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from trackers.common.checks import at_least, coerce, require, unit
+from trackers.layered.evidence import HiddenEvidence
 from trackers.layered.parts import PartFeatures
 from trackers.layered.targets import Targets, stale_parts
 
@@ -103,6 +104,11 @@ class Adaptations:
         report_support: with foreground, an unfound target is reported only while its box
             holds this foreground fraction (paper: 0, reported regardless; off by default:
             docs/adaptations.md).
+        hidden_evidence: an unfound target is reported only while evidence of a person at
+            its box holds (``evidence.HiddenEvidence``: foreground, a nearer found target
+            over it, or memory growing with its matches); None: reported for
+            ``reporting.max_misses`` frames (paper: reporting is ours; None). Replaces
+            ``report_support`` (one rule per step: set one of the two).
     """
 
     model_spread: float = 4.5
@@ -124,6 +130,7 @@ class Adaptations:
     profile_heads: bool = True
     one_to_one: bool = True
     report_support: float = 0.0
+    hidden_evidence: HiddenEvidence | None = None
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -135,6 +142,12 @@ class Adaptations:
         at_least("adaptations", 0, exit_misses=self.exit_misses)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
+        if self.hidden_evidence is not None and not isinstance(self.hidden_evidence, HiddenEvidence):
+            raise ValueError(f"adaptations.hidden_evidence must be HiddenEvidence or None, "
+                             f"got {self.hidden_evidence!r}")
+        if self.hidden_evidence is not None and self.report_support > 0:
+            raise ValueError("adaptations.report_support and adaptations.hidden_evidence are two "
+                             f"rules for one step: set one (report_support {self.report_support})")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support"),
@@ -153,7 +166,8 @@ class Adaptations:
                    prune_max_misses=UNBOUNDED, stale=None, gate_max_fraction=float(UNBOUNDED),
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
-                   profile_heads=False, one_to_one=False, report_support=0.0)
+                   profile_heads=False, one_to_one=False, report_support=0.0,
+                   hidden_evidence=None)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -17,6 +17,7 @@ import numpy as np
 
 from trackers.common.assignment import assign
 from trackers.layered.adaptations import Adaptations
+from trackers.layered.evidence import HiddenEvidence, box_foreground
 from trackers.layered.parts import PartFeatures
 from trackers.layered.targets import Targets
 
@@ -180,7 +181,8 @@ class PredictedBox:
 class ReportUnfound:
     """A confirmed unfound target is reported for ``reporting.max_misses`` frames."""
 
-    def shown(self, boxes: np.ndarray, fg: np.ndarray | None) -> None:
+    def shown(self, boxes: np.ndarray, fg: np.ndarray | None, hits: np.ndarray,
+              misses: np.ndarray) -> None:
         return None
 
 
@@ -193,18 +195,12 @@ class ReportOnForeground:
 
     fraction: float
 
-    def shown(self, boxes: np.ndarray, fg: np.ndarray | None) -> np.ndarray | None:
-        """(R,) bool per (R, 4) xywh box, None without a mask."""
+    def shown(self, boxes: np.ndarray, fg: np.ndarray | None, hits: np.ndarray,
+              misses: np.ndarray) -> np.ndarray | None:
+        """(R,) bool per (R, 4) xywh box, None without a mask (``misses`` 0: found)."""
         if fg is None:
             return None
-        H, W = fg.shape
-        out = np.zeros(len(boxes), dtype=bool)
-        for k, (x, y, w, h) in enumerate(boxes.tolist()):
-            x0, y0 = max(int(round(x)), 0), max(int(round(y)), 0)
-            x1, y1 = min(int(round(x + w)), W), min(int(round(y + h)), H)
-            if x1 > x0 and y1 > y0:
-                out[k] = np.count_nonzero(fg[y0:y1, x0:x1]) >= self.fraction * (x1 - x0) * (y1 - y0)
-        return out
+        return (misses == 0) | (box_foreground(boxes, fg) >= self.fraction)
 
 
 class Rules(NamedTuple):
@@ -217,7 +213,7 @@ class Rules(NamedTuple):
     gap: AsMeasured | PerFrame
     unfound_size: PredictedSize | HeldSize
     sharing: Alone | OneToOne
-    report_shown: ReportUnfound | ReportOnForeground
+    report_shown: ReportUnfound | ReportOnForeground | HiddenEvidence
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -230,6 +226,6 @@ def build_rules(a: Adaptations) -> Rules:
         gap=PerFrame() if a.gap_division else AsMeasured(),
         unfound_size=HeldSize() if a.hold_size else PredictedSize(),
         sharing=OneToOne() if a.one_to_one else Alone(),
-        report_shown=ReportOnForeground(a.report_support) if a.report_support > 0
-        else ReportUnfound(),
+        report_shown=a.hidden_evidence or (ReportOnForeground(a.report_support)
+                                           if a.report_support > 0 else ReportUnfound()),
     )

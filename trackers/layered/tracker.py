@@ -377,7 +377,7 @@ class PBMTracker:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
         last box or where KF1 predicts it (``rules.report_box``), while ``rules.report_shown``
-        finds it there."""
+        finds evidence of it there."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -387,9 +387,8 @@ class PBMTracker:
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
-        there = self.rules.report_shown.shown(boxes, fg)
-        if there is not None:
-            keep = found[rows] | there
+        keep = self.rules.report_shown.shown(boxes, fg, tg.hits[rows], tg.misses[rows])
+        if keep is not None:
             rows, boxes = rows[keep], boxes[keep]
         rects = tg.parts.parts[rows]
         occluded_parts, part_scores, gates = tg.occluded_parts[rows], tg.part_scores[rows], tg.last_gate[rows]

@@ -827,9 +827,11 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     fg[:, :6] = True  # columns 0-5
     boxes = np.array([[0.0, 0, 10, 10], [1.0, 0, 10, 10], [30.0, 30, 5, 5]])
     shown = R.build_rules(Adaptations(report_support=0.6)).report_shown
-    assert shown.shown(boxes, fg).tolist() == [True, False, False]
-    assert shown.shown(boxes, None) is None
-    assert paper.report_shown.shown(boxes, fg) is None and ours.report_shown.shown(boxes, fg) is None
+    hits, misses = np.full(3, 20), np.ones(3, dtype=int)
+    assert shown.shown(boxes, fg, hits, misses).tolist() == [True, False, False]
+    assert shown.shown(boxes, None, hits, misses) is None
+    assert paper.report_shown.shown(boxes, fg, hits, misses) is None
+    assert ours.report_shown.shown(boxes, fg, hits, misses) is None
     # birth support: a part with 0.3 foreground or more
     assert not ours.birth.supported(np.full(5, 0.1), True)
     assert ours.birth.supported(np.full(5, 0.1), False)
