@@ -71,7 +71,8 @@ def run_set(overrides: list[str], candidates: list[tuple[str, str, list[str]]]) 
             if res.error:
                 raise SystemExit(f"{label} failed on {seq.info.name}: {res.error}")
             out[label][0].append(score_sequence(seq.gt.table, res.table))
-            out[label][1][seq.info.name] = paper_counts(seq.gt.table, res.table)
+            out[label][1][seq.info.name] = paper_counts(seq.gt.table, res.table,
+                                                        followers=res.followers)
     return out
 
 

@@ -248,11 +248,13 @@ class ExtraScore:
 
 
 def extra_score(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: float = 0.5,
-                hidden_below: float = 0.05) -> ExtraScore:
-    """Paper metrics (``harness.metrics.paper``) and occlusion metrics of one sequence."""
+                hidden_below: float = 0.05,
+                followers: Mapping[int, int] | None = None) -> ExtraScore:
+    """Paper metrics (``harness.metrics.paper``; ``followers`` as there) and occlusion
+    metrics of one sequence."""
     table = gt.table if isinstance(gt, GroundTruth) else gt
     matching = row_matching(table, res, iou_threshold)  # one matching for both
-    return ExtraScore(paper_counts(table, res, iou_threshold, matching),
+    return ExtraScore(paper_counts(table, res, iou_threshold, matching, followers),
                       occlusion_counts(gt, res, iou_threshold, hidden_below, matching=matching))
 
 

@@ -36,7 +36,10 @@ PBM (Section 5.2), with each criterion made precise (the paper gives one line ea
 * ``IDsw/traj`` ("ID swapping between two trajectories during their intersection"): along a
   GT trajectory, a change of matched id from p to q counts as a swap when q's most recent
   earlier match was a different GT trajectory (the id came from another person); total
-  swaps / GT.
+  swaps / GT. Under PBM's single-target protocol an id's history is its *follower's*
+  (``followers``: a restart under a new id belongs to the follower started for another
+  person, as the paper's tracker keeps its one id when it drifts onto someone else), here and
+  in ``Under``.
 * ``IDs/traj``: mean number of distinct matched ids per GT trajectory, over the
   trajectories matched at least once (a missed trajectory has none; should be one).
 * ``IDs/frame`` (multiple responses, "should be one"): the responses to a GT box in a frame
@@ -62,6 +65,7 @@ recomputes the ratios, so a COMBINED row is never an average of per-sequence rat
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -205,7 +209,8 @@ def _intersection(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
-                 matching: RowMatching | None = None) -> PaperCounts:
+                 matching: RowMatching | None = None,
+                 followers: Mapping[int, int] | None = None) -> PaperCounts:
     """Count everything the papers' trajectory tables need for one sequence.
 
     Args:
@@ -213,6 +218,11 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
         res: tracker result rows.
         iou_threshold: smallest IoU of a match.
         matching: ``row_matching(gt, res, iou_threshold)`` when already computed.
+        followers: result id -> the id its follower started under (PBM's single-target
+            protocol, ``harness.pipeline.protocols``); None: every id is its own.
+
+    Raises:
+        ValueError: a result id has no follower in ``followers``.
     """
     m = matching if matching is not None else row_matching(gt, res, iou_threshold)
     out = PaperCounts()
@@ -246,20 +256,33 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
     out.over = int((n_ids > 1).sum())
     out.ids_sum = int(n_ids.sum())
     out.matched_traj = int((n_ids > 0).sum())
-    out.swaps = _swaps(m_g, m_f, m_r, order, change)
-    out.under = _under(m_g, m_f, m_r, order)
+    m_u = m_r if followers is None else _follower_of(m_r, followers)
+    out.swaps = _swaps(m_g, m_f, m_u, order, change)
+    out.under = _under(m_g, m_f, m_u, order)
     _segmentation(out, m, *responses(m))
     return out
 
 
-def _swaps(m_g: np.ndarray, m_f: np.ndarray, m_r: np.ndarray, order: np.ndarray,
+def _follower_of(ids: np.ndarray, followers: Mapping[int, int]) -> np.ndarray:
+    """Each id's follower (``followers[id]``)."""
+    keys, values = np.array(sorted(followers.items()), dtype=np.int64).reshape(-1, 2).T
+    pos = np.searchsorted(keys, ids)
+    found = pos < len(keys)
+    found[found] = keys[pos[found]] == ids[found]
+    if not found.all():
+        raise ValueError(f"result ids {sorted(set(ids[~found].tolist()))[:5]} have no follower")
+    return values[pos]
+
+
+def _swaps(m_g: np.ndarray, m_f: np.ndarray, m_u: np.ndarray, order: np.ndarray,
            change: np.ndarray) -> int:
     """PBM's swaps: along a GT trajectory an id change p -> q where q's previous match was
-    another GT (``order``, ``change``: ``_changes(m_g, m_f, m_r)``)."""
-    r_order = np.lexsort((m_f, m_r))
+    another GT (``order``, ``change``: ``_changes(m_g, m_f, m_r)``; ``m_u``: the matched ids,
+    or their followers, whose previous match counts)."""
+    r_order = np.lexsort((m_f, m_u))
     prev_gt = np.full(len(m_g), -1)
     same = np.zeros(len(m_g), dtype=bool)
-    same[1:] = m_r[r_order][1:] == m_r[r_order][:-1]
+    same[1:] = m_u[r_order][1:] == m_u[r_order][:-1]
     shifted = np.r_[-1, m_g[r_order][:-1]]
     prev_gt[r_order] = np.where(same, shifted, -1)
     changed = np.zeros(len(m_g), dtype=bool)
@@ -269,7 +292,8 @@ def _swaps(m_g: np.ndarray, m_f: np.ndarray, m_r: np.ndarray, order: np.ndarray,
 
 def _under(m_g: np.ndarray, m_f: np.ndarray, m_r: np.ndarray, order: np.ndarray) -> int:
     """PBM's under-segmented trajectories: the first id of a trajectory was matched, in an
-    earlier frame, to another trajectory (``order`` sorts the matches by GT, then frame).
+    earlier frame, to another trajectory (``order`` sorts the matches by GT, then frame;
+    ``m_r``: the matched ids, or their followers).
 
     Per result id: its earliest match (frame f1, GT g1) and its earliest match to a GT other
     than g1 (frame f2); a trajectory g starting at frame f with that id is under-segmented

@@ -42,6 +42,9 @@ class TrackerOutput:
         error: the exception text when the tracker failed (``table`` then holds the frames
             before the failure), else None.
         trace: the traceback of the failure, else None.
+        followers: the single-target protocol's reported id -> the reported id its follower
+            started under (a restart belongs to the follower of the person it was started
+            for: ``harness.pipeline.protocols``); None when every id is its own track.
     """
 
     table: MotTable
@@ -50,6 +53,7 @@ class TrackerOutput:
     dropped: int = 0
     error: str | None = None
     trace: str | None = None
+    followers: dict[int, int] | None = None
 
     @property
     def fps(self) -> float:

@@ -14,9 +14,11 @@ After that initialisation, which happens once per person, the follower's own ids
 reported as they are: when the followed track is gone from the follower's output and the
 follower starts a new track (a single-target tracker restarting after losing its person,
 e.g. ``max_targets: 1``), that new track is followed and reported under a new id. A
-follower that drifts onto someone else and restarts thus shows as over-segmentation, more
-IDs per trajectory and, where an id passes between people, ID switches (PBM Table 1's
-columns, ``harness.metrics.paper``). A follower's other tracks (people a multi-target
+follower that drifts onto someone else and restarts thus shows as over-segmentation and
+more IDs per trajectory; a restart keeps its follower's past (``TrackerOutput.followers``:
+reported id -> the id its follower started under, written beside the tracks), so one that
+lands on another person is an ID switch, as when PBM's tracker drifts onto someone under its
+one id (PBM Table 1's columns, ``harness.metrics.paper``). A follower's other tracks (people a multi-target
 tracker starts while its followed track lives) are not reported; PBM itself runs with
 ``starts: GivenTargetOnly`` (``trackers.layered.starts``), so it follows its one target
 with no competing or replacing targets. Ids are made unique over the followers of one
@@ -84,6 +86,8 @@ class Follower:
             frame whatever its state).
         seen: every tracker id the follower has output so far.
         out_ids: tracker id -> reported id.
+        first_id: the reported id of the follower's first report (its hand-started track);
+            -1 before it.
     """
 
     tracker: Tracker
@@ -94,6 +98,7 @@ class Follower:
     hand_started: bool = True
     seen: set[int] = field(default_factory=set)
     out_ids: dict[int, int] = field(default_factory=dict)
+    first_id: int = -1
 
 
 def run_single_target(
@@ -132,6 +137,7 @@ def run_single_target(
     bank = TrackerBank(dict.fromkeys(builders))  # one tracker per person, fed by hand
     live: dict[tuple[str, int], Follower] = {}
     next_id = dict.fromkeys(builders, 1)  # the next reported id of each tracker
+    lineage: dict[str, dict[int, int]] = {t: {} for t in builders}  # reported id -> follower's first
     bar = (progress or no_progress)(total=sequence.info.length, desc=name)
     try:
         for k in sequence.frame_numbers():
@@ -160,6 +166,9 @@ def run_single_target(
                 for tr in mine:
                     if tr.id not in follower.out_ids:
                         follower.out_ids[tr.id] = next_id[t]
+                        if follower.first_id < 0:
+                            follower.first_id = next_id[t]
+                        lineage[t][next_id[t]] = follower.first_id
                         next_id[t] += 1
                 bank.report(t, k, [Track(follower.out_ids[tr.id], tr.box, tr.state, tr.score,
                                          tr.extra) for tr in mine])
@@ -169,7 +178,10 @@ def run_single_target(
             bar.update(1)
     finally:
         bar.close()
-    return bank.finish()
+    outputs = bank.finish()
+    for t, out in outputs.items():
+        out.followers = lineage[t]
+    return outputs
 
 
 def _follow(follower: Follower, tracks: list[Track], start: np.ndarray | None) -> list[Track]:

@@ -154,6 +154,8 @@ class RunRecord:
         text = format_mot(out.table.frames, out.table.ids, out.table.boxes, out.table.conf)
         try:
             write_atomic(path, text)
+            if out.followers is not None:
+                self.writer.followers(n, sname, out.followers)
         except OSError as err:  # scored all the same, from the bytes meant for it
             self.fail(n, sname, "write", err)
         self.timings.append({"tracker": n, "sequence": sname, "frames": out.frames,
@@ -171,17 +173,18 @@ class RunRecord:
             return
         try:
             self._score(n, seq, read_mot_text(text, path, kind="result",
-                                              last_frame=_last_frame(seq)))
+                                              last_frame=_last_frame(seq)), out.followers)
         except Exception as err:  # noqa: BLE001 - recorded, the run goes on
             self.fail(n, sname, "score", err, traceback.format_exc())
 
-    def _score(self, n: str, seq: Sequence, table: MotTable) -> None:
+    def _score(self, n: str, seq: Sequence, table: MotTable,
+               followers: dict[int, int] | None = None) -> None:
         from harness.metrics.occlusion import extra_score
 
         plan, sname = self.plan, seq.info.name
         self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
         self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
-                                            plan.hidden_below)
+                                            plan.hidden_below, followers)
         from harness.metrics.timeline import frame_counts  # the report's timeline, paired
 
         try:

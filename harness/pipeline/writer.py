@@ -48,7 +48,8 @@ class RunWriter:
     """Writes a run directory as results arrive, so that a later failure loses nothing.
 
     Layout: ``config.yaml`` (resolved config), ``tracks/<tracker>/<sequence>.txt`` (MOT
-    results, written as each tracker finishes a sequence), ``gt/<sequence>/gt/gt.txt`` and
+    results, written as each tracker finishes a sequence; under the single-target protocol
+    with ``<sequence>.followers.csv`` beside it), ``gt/<sequence>/gt/gt.txt`` and
     ``gt/<sequence>/seqinfo.ini`` (the ground truth scored against, before the trackers run)
     with ``gt/seqmap.txt`` (the sequences tracked so far): a MOTChallenge benchmark folder
     that TrackEval re-scores as it is; ``metrics.csv`` and ``summary.md`` (rewritten after
@@ -135,6 +136,14 @@ class RunWriter:
 
     def track_path(self, tracker: str, sequence: str) -> Path:
         return self.out_dir / "tracks" / tracker / f"{sequence}.txt"
+
+    def followers(self, tracker: str, sequence: str, followers: dict[int, int]) -> Path:
+        """Write ``tracks/<tracker>/<sequence>.followers.csv`` (``id,follower``: the
+        single-target protocol's reported id -> the id its follower started under)."""
+        path = self.track_path(tracker, sequence).with_suffix(".followers.csv")
+        rows = "".join(f"{i},{f}\n" for i, f in sorted(followers.items()))
+        write_atomic(path, "id,follower\n" + rows)
+        return path
 
     def tracks(self, tracker: str, sequence: str, table: MotTable) -> Path:
         """Write a tracker's result file (raises ``WriteError`` naming it)."""

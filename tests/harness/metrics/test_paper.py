@@ -88,6 +88,22 @@ def test_identity_swap_counts_in_ids_frag_and_pbm_swaps():
     assert m["Song_MT%"] == 100
 
 
+def test_a_restart_onto_another_person_is_a_swap_of_its_follower():
+    # PBM's single-target protocol: follower 1 (id 1) follows person 1, loses them and
+    # restarts as id 3 on person 2, whose own follower (id 2) has lost them.
+    gt = table(person(1, range(1, 11), 0) + person(2, range(1, 11), 40))
+    res = table(person(1, range(1, 6), 0) + person(2, range(1, 6), 40)
+                + person(3, range(6, 11), 40))
+    assert paper_counts(gt, res).swaps == 0  # id 3 alone has no past
+    c = paper_counts(gt, res, followers={1: 1, 2: 2, 3: 1})
+    assert c.swaps == 1 and c.under == 0 and c.over == 1
+    # a restart back onto its own person is no swap
+    back = table(person(1, range(1, 6), 0) + person(3, range(7, 11), 0))
+    assert paper_counts(gt, back, followers={1: 1, 3: 1}).swaps == 0
+    with pytest.raises(ValueError, match=r"result ids \[3\] have no follower"):
+        paper_counts(gt, res, followers={1: 1, 2: 2})
+
+
 def test_under_segmented_new_person_inherits_existing_id():
     # person 1 leaves at frame 5; person 2 enters at frame 6 and gets person 1's id 3
     gt = table(person(1, range(1, 6), 0) + person(2, range(6, 11), 40))

@@ -47,6 +47,19 @@ def test_experiment_writes_run_directory(tmp_path, mot_root):
     assert "| baseline |" in summary and "COMBINED" in summary
 
 
+def test_single_target_runs_write_each_ids_follower_beside_the_tracks(tmp_path, mot_root):
+    out = tmp_path / "run"
+    assert run_experiment(mot_cfg(mot_root, "protocol.name=single_target",
+                                  "evaluation.plot=[]"), out).ok
+    tracks = read_mot(out / "tracks/baseline/cross-a.txt", kind="result")
+    followers = pd.read_csv(out / "tracks/baseline/cross-a.followers.csv")
+    assert list(followers.columns) == ["id", "follower"]
+    assert set(tracks.ids.tolist()) <= set(followers["id"])
+    assert set(followers["follower"]) <= set(followers["id"])
+    run_experiment(mot_cfg(mot_root, "evaluation.plot=[]"), tmp_path / "multi")
+    assert not list((tmp_path / "multi/tracks").rglob("*.followers.csv"))
+
+
 def test_results_are_reproducible_byte_for_byte(tmp_path, mot_root):
     cfg = mot_cfg(mot_root, "detector.miss_rate=0.2", "detector.jitter=0.05",
                   "detector.fp_rate=0.5", "seed=7", "evaluation.plot=[]")

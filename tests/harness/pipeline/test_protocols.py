@@ -100,6 +100,10 @@ def test_a_follower_that_loses_its_person_restarts_under_a_new_id():
     table = out["x"].table
     spans = target_spans(gt)
     assert len(np.unique(table.ids)) == 2 * len(spans)  # one restart per person
+    followers = out["x"].followers  # id -> its follower's first id: a restart shares it
+    firsts = set(followers.values())
+    assert len(firsts) == len(spans) and all(followers[f] == f for f in firsts)
+    assert all(list(followers.values()).count(f) == 2 for f in firsts)
     m = paper_metrics(gt, table)
     assert m["PBM_Over"] == len(spans)  # each person: two ids
     assert m["PBM_IDs/traj"] == 2.0
