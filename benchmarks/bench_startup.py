@@ -23,6 +23,10 @@ warm machine (numba's cache filled by an earlier run).
   (the run's own trackers built, the ground truth written) is the total's remainder.
 - first frame, default suite: the same for ``occbench tracker=reta`` on the default dataset
   (the eight synthetic scenes).
+- first frame, served: the one-job run handed by the console script's fast path
+  (``harness.__main__.main``, ``OCCBENCH_SERVER=on``) to a warm server (``harness.server``,
+  started once by the bench in a temporary folder with the real preload; its children apply
+  the same stage timers), from the client's start to the served child's frame loop.
 - sweep job: a 4-job sweep (``hydra.launcher.n_jobs=1``, one job at a time) on the default
   launcher, warm (forked from the preloaded fork server) and cold (``preload=false``):
   the median time from a job's last log line to the next job's frame loop (its log line
@@ -114,6 +118,22 @@ print(json.dumps(out))
 """
 
 
+# the bench's own server: the real preload; each child times its stages as FIRST_FRAME does
+SERVED_SERVER = """
+import sys
+from harness.commands.server import preload
+from harness.server.serve import Server
+def run(args):
+    sys.argv = ["occbench", *args]
+    exec(compile(FIRST_FRAME, "first_frame", "exec"), {"__name__": "first_frame"})
+    return 0
+FIRST_FRAME = sys.argv[2]
+sys.exit(Server(sys.argv[1], run, preload).serve())
+"""
+# the console script's fast path, in a ``python -c`` process as the server is (same sys.path)
+CLIENT = "import sys; from harness.__main__ import main; sys.argv[0] = 'occbench'; main()"
+
+
 def _child_cpu() -> float:
     use = resource.getrusage(resource.RUSAGE_CHILDREN)
     return use.ru_utime + use.ru_stime
@@ -144,6 +164,42 @@ def first_frame(tracker: str, out: Path, scene: list[str] = SCENE,
     return json.loads(stdout.strip().splitlines()[-1])
 
 
+class ServedRuns:
+    """A warm server of the code of ``root`` in ``folder`` (``SERVED_SERVER``), for
+    ``first_frame``'s served figure; ``close()`` stops it."""
+
+    def __init__(self, root: Path, folder: Path) -> None:
+        self.root = root
+        self.env = {**tree_env(root), "XDG_RUNTIME_DIR": str(folder), "OCCBENCH_SERVER": "on"}
+        code = ("from harness.server.client import identity, socket_path; "
+                "print(socket_path(identity()))")
+        self.path = Path(run([sys.executable, "-c", code], root, self.env)[1].strip())
+        self.proc = subprocess.Popen([sys.executable, "-c", SERVED_SERVER, str(self.path),
+                                      FIRST_FRAME],
+                                     cwd=root, env=self.env, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.PIPE, text=True)
+        end = time.monotonic() + 600
+        while not self.path.exists():
+            if self.proc.poll() is not None or time.monotonic() > end:
+                raise RuntimeError(f"the bench's server did not start: {self.proc.stderr.read()}")
+            time.sleep(0.2)
+
+    def first_frame(self, tracker: str, out: Path) -> dict[str, list[float]]:
+        """As ``first_frame``, served: wall from the client's start; CPU of the client and
+        of the served child (its own process_time, from its fork)."""
+        env = {**self.env, "BENCH_T0": repr(time.time())}
+        cmd = [sys.executable, "-c", CLIENT, f"tracker={tracker}", *SCENE,
+               f"hydra.run.dir={out}"]
+        wall, stdout = run(cmd, self.root, env)
+        stages = json.loads(stdout.strip().splitlines()[-1])
+        stages["total"] = [stages["total"][0], stages["total"][1] + wall[1]]
+        return stages
+
+    def close(self) -> None:
+        self.proc.terminate()
+        self.proc.wait(timeout=60)
+
+
 def _stamp(line: str) -> float:
     return datetime.strptime(line[1:24], "%Y-%m-%d %H:%M:%S,%f").timestamp()
 
@@ -162,8 +218,8 @@ def job_gaps(sweep_dir: Path, *extra: str) -> list[float]:
 
 
 def one_round(root: Path, trackers: list[str], tmp: Path,
-              add: Callable[[str, list[float]], None]) -> None:
-    """Every per-process figure once, for the code of ``root``."""
+              add: Callable[[str, list[float]], None], served: ServedRuns | None = None) -> None:
+    """Every per-process figure once, for the code of ``root`` (``served``: its server)."""
     add("python -c pass", run([sys.executable, "-c", "pass"], root)[0])
     add("occbench --version", run([sys.executable, "-m", "harness", "--version"], root)[0])
     for key, value in json.loads(run([sys.executable, "-c", BUILD, *trackers], root)[1]).items():
@@ -175,6 +231,11 @@ def one_round(root: Path, trackers: list[str], tmp: Path,
             add(f"  {name}: {stage}", value)
     add(f"first frame, default suite, {trackers[0]}",
         first_frame(trackers[0], tmp / "suite", ["progress=false"], root)["total"])
+    for name in trackers if served is not None else ():
+        stages = served.first_frame(name, tmp / f"served-{name}")
+        add(f"first frame, served, {name}", stages.pop("total"))
+        for stage, value in stages.items():
+            add(f"  served {name}: {stage}", value)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -182,6 +243,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=5, help="processes per figure (median)")
     parser.add_argument("--tracker", action="append", help="trackers (default reta and pbm)")
     parser.add_argument("--no-sweep", action="store_true", help="skip the sweep-job figure")
+    parser.add_argument("--no-served", action="store_true",
+                        help="skip the served first frame (a warm server of this checkout)")
     parser.add_argument("--vs", type=Path, metavar="CHECKOUT",
                         help="also time another checkout's code (e.g. a worktree of main before "
                              "a change), round by round in turn with this one; CPU ratios")
@@ -193,11 +256,17 @@ def main(argv: list[str] | None = None) -> int:
     for root in roots:  # numba's cache filled, files in the page cache
         run([sys.executable, "-c", BUILD, *trackers], root)
     times: list[dict[str, list[list[float]]]] = [{} for _ in roots]
-    with tempfile.TemporaryDirectory() as tmp:
-        for i in range(args.runs):
-            for r, root in enumerate(roots):
-                one_round(root, trackers, Path(tmp) / f"{r}-{i}",
-                          lambda key, value, r=r: times[r].setdefault(key, []).append(value))
+    with tempfile.TemporaryDirectory(prefix="obb", dir="/tmp") as tmp:
+        served = None if args.no_served else ServedRuns(ROOT, Path(tmp) / "server")
+        try:
+            for i in range(args.runs):
+                for r, root in enumerate(roots):
+                    one_round(root, trackers, Path(tmp) / f"{r}-{i}",
+                              lambda key, value, r=r: times[r].setdefault(key, []).append(value),
+                              served if r == 0 else None)
+        finally:
+            if served is not None:
+                served.close()
         if not args.no_sweep:
             for key, folder, extra in (
                     ("sweep job start, warm (default)", "warm", ()),

@@ -1,7 +1,8 @@
-"""occbench harness: datasets, detection sources, runs, evaluation and reports."""
+"""occbench harness: datasets, detection sources, runs, evaluation and reports.
 
-from harness.paths import register_resolver as _register_resolver
-from harness.pipeline import choose as _choose  # noqa: F401 - the ${occbench.choose:...} resolver
-from harness.pipeline import rundir as _rundir  # noqa: F401 - the ${occbench.unique_dir:...} resolver
-
-_register_resolver()  # configs name data files as ${occbench.data:...} (harness.paths)
+Importing the package imports nothing else: the console script's fast path
+(``harness.server.client``) must know whether a warm server answers before any library
+loads. The project's OmegaConf resolvers are registered by ``harness.pipeline`` (every run,
+build and sweep imports it) and by Hydra's plugin scan (``hydra_plugins.occbench_launcher``),
+which runs before Hydra composes any config.
+"""

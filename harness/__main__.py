@@ -1,42 +1,27 @@
 """``python -m harness`` and the console script ``occbench``: the commands of
-``harness.commands.cli`` (without one, ``occbench run``, the Hydra app of
-``harness.commands.run``).
+``harness.commands.cli``.
 
-Ctrl-C (SIGINT) and SIGTERM end the process with one line on stderr and exit status 130 or
-143, never a traceback: SIGTERM raises ``harness.errors.Terminated`` in the main thread, as
-SIGINT raises KeyboardInterrupt, so a run marks itself interrupted on the way out
-(``harness.commands.run`` prints the line naming the run folder).
+The fast path first: with ``OCCBENCH_SERVER=on`` the command goes to this installation's warm
+server (``harness.server``) when one answers, and this process only waits for its exit
+status, forwarding Ctrl-C; otherwise (no server, another code, ``OCCBENCH_SERVER=off``) it
+runs here, cold (``harness.commands.cli.run``). Nothing but the standard library is imported
+before that choice.
 """
 
 from __future__ import annotations
 
-import signal
 import sys
-
-from harness.errors import EXIT_SIGINT, EXIT_SIGTERM
-
-
-def _terminate(signum: int, frame: object) -> None:
-    from harness.errors import Terminated
-
-    raise Terminated
 
 
 def main() -> None:
     """Console-script entry point ``occbench`` (same as ``python -m harness``)."""
-    from harness.errors import Terminated
+    from harness.server.client import served
 
-    signal.signal(signal.SIGTERM, _terminate)
-    try:
-        from harness.commands.cli import main as cli
+    status = served(sys.argv[1:])
+    if status is None:
+        from harness.commands.cli import run
 
-        status = cli()
-    except KeyboardInterrupt:
-        print("occbench: interrupted (Ctrl-C)", file=sys.stderr)
-        status = EXIT_SIGINT
-    except Terminated:
-        print("occbench: terminated (SIGTERM)", file=sys.stderr)
-        status = EXIT_SIGTERM
+        status = run(sys.argv[1:])
     raise SystemExit(status)
 
 

@@ -14,5 +14,6 @@ class ConfigError(ValueError):
 
 
 class Terminated(BaseException):  # a signal, named as KeyboardInterrupt
-    """SIGTERM received: raised in the main thread (``harness.__main__``) so that a run stops
-    as on Ctrl-C (its summary says interrupted, errors.txt says where) and exits 143."""
+    """SIGTERM received: raised in the main thread (``harness.commands.cli.run``) so that a
+    run stops as on Ctrl-C (its summary says interrupted, errors.txt says where) and exits
+    143."""

@@ -150,7 +150,8 @@ def test_report_imports_nothing_from_the_run() -> None:
 
 
 # harness/'s rooms: the commands apart from the library rooms they call
-ROOMS = {"commands", "pipeline", "sources", "sweeps", "metrics", "datasets", "report", "fit", "io"}
+ROOMS = {"commands", "pipeline", "sources", "sweeps", "metrics", "datasets", "report", "fit", "io",
+         "server"}
 MAX_TOP_MODULES = 8
 
 

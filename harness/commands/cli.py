@@ -16,12 +16,14 @@ report     ``harness.commands.report.main``    argparse: ``RUN_DIR``
 bench      ``harness.commands.bench.main``     argparse + overrides
 fit        ``harness.commands.fit.main``       ``pbm | heads | silhouette | active_basis``
 cache      ``harness.commands.cache.main``     argparse: ``[list | clear] [filters]``
+server     ``harness.commands.server.main``    argparse: ``status | stop | start``
 =========  ==================================  =========================================
 """
 
 from __future__ import annotations
 
 import importlib
+import signal
 import sys
 from collections.abc import Callable, Sequence
 
@@ -45,6 +47,8 @@ COMMANDS: dict[str, tuple[str, str, str, bool]] = {
             "refit models: pbm | heads | silhouette | active_basis", False),
     "cache": ("harness.commands.cache", "main",
               "what the front-end cache holds (OCCBENCH_CACHE); clear it", False),
+    "server": ("harness.commands.server", "main",
+               "the warm server for single runs (OCCBENCH_SERVER): status, stop, start", False),
 }
 
 USAGE = f"""\
@@ -129,8 +133,33 @@ def _check_checkout() -> str | None:
             "its checkout; install it with `pip install -e <checkout>` as the README says")
 
 
+def _terminate(signum: int, frame: object) -> None:
+    from harness.errors import Terminated
+
+    raise Terminated
+
+
+def run(argv: Sequence[str]) -> int:
+    """``main(argv)`` as a process runs it (``harness.__main__``, cold, or a served child):
+    Ctrl-C (SIGINT) and SIGTERM end it with one line on stderr and exit status 130 or 143,
+    never a traceback: SIGTERM raises ``harness.errors.Terminated`` in the main thread, as
+    SIGINT raises KeyboardInterrupt, so a run marks itself interrupted on the way out
+    (``harness.commands.run`` prints the line naming the run folder)."""
+    from harness.errors import EXIT_SIGINT, EXIT_SIGTERM, Terminated
+
+    signal.signal(signal.SIGTERM, _terminate)
+    try:
+        return main(argv)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted (Ctrl-C)", file=sys.stderr)
+        return EXIT_SIGINT
+    except Terminated:
+        print(f"{PROG}: terminated (SIGTERM)", file=sys.stderr)
+        return EXIT_SIGTERM
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``occbench`` and ``python -m harness``; returns the exit status."""
+    """The command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     from harness.commands.mistakes import verbose_requested
 
     verbose, args = verbose_requested(list(sys.argv[1:] if argv is None else argv))

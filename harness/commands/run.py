@@ -14,8 +14,8 @@ config.yaml) and prints the COMBINED comparison table. Examples::
 The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
 ``objective.tracker`` (default IDF1 of the first tracker).
 
-Ctrl-C and SIGTERM (``harness.errors.Terminated``, raised by ``harness.__main__``'s handler)
-stop the run: it marks its metrics and summary interrupted and writes errors.txt on the way
+Ctrl-C and SIGTERM (``harness.errors.Terminated``, raised by ``harness.commands.cli.run``'s
+handler) stop the run: it marks its metrics and summary interrupted and writes errors.txt on the way
 out (``harness.pipeline.experiment``), then one line on stderr names the run folder and the
 exit status is 130 (SIGINT) or 143 (SIGTERM), with no traceback.
 """

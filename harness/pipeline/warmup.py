@@ -149,6 +149,36 @@ JOB_MODULES = ("harness.commands.run", "harness.pipeline.experiment", "harness.p
                "motmetrics", "tqdm.contrib.logging")
 
 
+# only this project's code is imported and built ahead of a job: a tracker of someone else's
+# (a test's, a plugin's) might sleep or crash in its constructor
+OURS = ("harness.", "trackers.")
+
+
+def preload_spec(cfg: Any, choice: str | None = None) -> dict[str, Any]:
+    """What ``preload`` imports and warms up ahead of a run of ``cfg`` (composed, its
+    ``hydra`` node removed; ``choice``: its ``tracker`` choice): the modules of the project's
+    ``_target_``s and the resolved configs of the project's trackers."""
+    from omegaconf import OmegaConf
+
+    from harness.pipeline.build import tracker_configs
+
+    targets = _targets(OmegaConf.to_container(cfg, resolve=False))
+    return {"modules": sorted({t.rsplit(".", 1)[0] for t in targets if t.startswith(OURS)}),
+            "trackers": {name: OmegaConf.to_container(node, resolve=True)
+                         for name, node in tracker_configs(cfg.tracker, choice).items()
+                         if str(node["_target_"]).startswith(OURS)}}
+
+
+def _targets(node: Any) -> list[str]:
+    """Every ``_target_`` string in a nested container."""
+    if isinstance(node, dict):
+        own = [str(node["_target_"])] if "_target_" in node else []
+        return own + [t for v in node.values() for t in _targets(v)]
+    if isinstance(node, list):
+        return [t for v in node for t in _targets(v)]
+    return []
+
+
 def preload(spec: Mapping[str, Any]) -> list[str]:
     """Import ``JOB_MODULES`` and ``spec["modules"]`` and warm up the trackers of
     ``spec["trackers"]`` (``{name: resolved _target_ config}``) once in this process (see

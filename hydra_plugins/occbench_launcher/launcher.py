@@ -61,9 +61,6 @@ log = logging.getLogger(__name__)
 
 
 PRELOAD_ENV = "OCCBENCH_PRELOAD"  # the fork server's preload spec (JSON), read by _preload
-# only this project's code is imported and built in the fork server: a tracker of someone
-# else's (a test's, a plugin's) might sleep or crash in its constructor
-OURS = ("harness.", "trackers.")
 
 
 class ProcessLauncher(Launcher):
@@ -187,17 +184,13 @@ class ProcessLauncher(Launcher):
         trackers (resolved configs) of the job with ``overrides``, this project's only."""
         spec: dict[str, Any] = {"modules": [], "trackers": {}}
         try:
-            from harness.pipeline.build import tracker_configs
+            from harness.pipeline.warmup import preload_spec
 
             cfg = self.hydra_context.config_loader.load_sweep_config(self.config, list(overrides))
             choice = OmegaConf.select(cfg, "hydra.runtime.choices.tracker", default=None)
             with open_dict(cfg):
                 del cfg["hydra"]
-            spec["modules"] = sorted({t.rsplit(".", 1)[0] for t in _targets(
-                OmegaConf.to_container(cfg, resolve=False)) if t.startswith(OURS)})
-            spec["trackers"] = {name: OmegaConf.to_container(node, resolve=True)
-                                for name, node in tracker_configs(cfg.tracker, choice).items()
-                                if str(node["_target_"]).startswith(OURS)}
+            spec = preload_spec(cfg, choice)
         except Exception as err:  # noqa: BLE001 - the jobs then import and warm up themselves
             log.warning("the fork server is not warmed up (%s: %s): each job warms itself up",
                         type(err).__name__, err)
@@ -229,16 +222,6 @@ class ProcessLauncher(Launcher):
         ret.status = JobStatus.COMPLETED
         ret._return_value = math.nan
         return ret
-
-
-def _targets(node: Any) -> list[str]:
-    """Every ``_target_`` string in a nested container."""
-    if isinstance(node, dict):
-        own = [str(node["_target_"])] if "_target_" in node else []
-        return own + [t for v in node.values() for t in _targets(v)]
-    if isinstance(node, list):
-        return [t for v in node for t in _targets(v)]
-    return []
 
 
 def _context() -> Any:

@@ -1,0 +1,192 @@
+"""The warm server (``harness.server``), each test with its own server in its own temporary
+folder (``XDG_RUNTIME_DIR``), stopped at the end: a served command gets the client's
+arguments, folder, environment, umask and stdio; the exit status comes back; Ctrl-C in the
+client reaches the job; a crashing job fails alone; a changed source file makes the server
+refuse (the client runs cold) and exit; a real run is byte-identical served and cold."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[3]
+
+# a server whose "command" is this function and whose code is the folder argv[2]
+SERVER = """
+import os, sys, time
+from harness.server.serve import Server
+def run(args):
+    if args[0] == "crash":
+        os.kill(os.getpid(), 11)
+    if args[0] == "sleep":
+        try:
+            print("sleeping", flush=True)
+            time.sleep(60)
+        except KeyboardInterrupt:
+            print("interrupted", file=sys.stderr, flush=True)
+            return 130
+    line = input() if args[0] == "echo" else ""
+    print(f"served {os.getpid()} {os.getcwd()} {oct(os.umask(0))} {os.environ.get('PROBE')} "
+          f"{sys.stdout.isatty()} {line} {args}", flush=True)
+    return int(args[1]) if len(args) > 1 else 0
+sys.exit(Server(sys.argv[1], run, lambda: None, watch=[sys.argv[2]]).serve())
+"""
+CLIENT = """
+import sys
+from harness.server.client import served
+status = served(sys.argv[1:])
+print("cold" if status is None else f"status {status}", flush=True)
+sys.exit(0 if status is None else status)
+"""
+
+
+def _run(cmd: list[str], **kwargs) -> subprocess.CompletedProcess:
+    """A command whose exit status the test reads."""
+    return subprocess.run(cmd, check=False, **kwargs)
+
+
+def _env(folder: Path, **extra: str) -> dict[str, str]:
+    return {**os.environ, "XDG_RUNTIME_DIR": str(folder), "OCCBENCH_SERVER": "on",
+            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+            **extra}
+
+
+def _socket(env: dict[str, str], cwd: Path) -> Path:
+    """The socket of the identity a ``python -c`` process in ``cwd`` with ``env`` has."""
+    code = "from harness.server.client import identity, socket_path; print(socket_path(identity()))"
+    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=cwd, capture_output=True,
+                         text=True, check=True, timeout=60)
+    return Path(out.stdout.strip())
+
+
+def _wait_for(path: Path, proc: subprocess.Popen, timeout: float = 300) -> None:
+    end = time.monotonic() + timeout
+    while not path.exists():
+        assert proc.poll() is None, proc.stderr.read()
+        assert time.monotonic() < end, f"no server at {path}"
+        time.sleep(0.1)
+
+
+@pytest.fixture
+def toy(tmp_path):
+    """A toy server (``SERVER``) watching a folder with one source file; yields
+    (client command prefix, env, cwd, watched file, server process)."""
+    folder = Path(tempfile.mkdtemp(prefix="obs", dir="/tmp"))  # a socket path is short
+    code = tmp_path / "code"
+    code.mkdir()
+    (code / "model.py").write_text("X = 1\n")
+    env = _env(folder, PROBE="probe-value")
+    path = _socket(env, tmp_path)
+    proc = subprocess.Popen([sys.executable, "-c", SERVER, str(path), str(code)], env=env,
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        _wait_for(path, proc)
+        yield [sys.executable, "-c", CLIENT], env, tmp_path, code / "model.py", proc
+    finally:
+        proc.kill()
+        proc.wait()
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def test_a_served_command_runs_in_the_clients_folder_with_its_env_umask_and_stdio(toy):
+    client, env, cwd, _, proc = toy
+    sub = cwd / "sub"
+    sub.mkdir()
+    out = _run([*client, "echo", "3"], env={**env, "PROBE": "mine"}, cwd=sub,
+                         input="typed\n", capture_output=True, text=True, timeout=60,
+                         preexec_fn=lambda: os.umask(0o027))
+    served, status = out.stdout.strip().splitlines()
+    pid = int(served.split()[1])
+    assert served == f"served {pid} {sub} 0o27 mine False typed ['echo', '3']"
+    assert status == "status 3" and out.returncode == 3
+    assert pid not in (proc.pid, os.getpid())
+
+
+def test_ctrl_c_in_the_client_reaches_the_job(toy):
+    client, env, cwd, _, _ = toy
+    job = subprocess.Popen([*client, "sleep"], env=env, cwd=cwd, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    assert job.stdout.readline().strip() == "sleeping"
+    job.send_signal(signal.SIGINT)
+    out, err = job.communicate(timeout=30)
+    assert (job.returncode, out.strip(), err.strip()) == (130, "status 130", "interrupted")
+
+
+def test_a_crashing_job_fails_alone_and_the_server_goes_on(toy):
+    client, env, cwd, _, proc = toy
+    crash = _run([*client, "crash"], env=env, cwd=cwd, capture_output=True,
+                           timeout=60)
+    assert crash.returncode == -signal.SIGSEGV  # the client ends as the job did
+    assert proc.poll() is None
+    again = _run([*client, "again"], env=env, cwd=cwd, capture_output=True,
+                           text=True, timeout=60)
+    assert again.stdout.startswith("served") and again.returncode == 0
+
+
+def test_a_changed_source_file_is_never_served_by_the_old_server(toy):
+    client, env, cwd, source, proc = toy
+    first = _run([*client, "x"], env=env, cwd=cwd, capture_output=True, text=True,
+                           timeout=60)
+    assert first.stdout.startswith("served")
+    source.write_text("X = 2\n")  # same size, most likely the same time stamp
+    second = _run([*client, "x"], env=env, cwd=cwd, capture_output=True,
+                            text=True, timeout=60)
+    assert second.stdout.strip() == "cold"
+    assert proc.wait(timeout=60) == 0  # the stale server exits
+
+
+def _files(run_dir: Path) -> dict[str, bytes]:
+    """Every file of a run folder, its own path replaced by RUN (config.yaml names it; the
+    report's title names the folder: both are called ``run``)."""
+    skip = ("timings.csv", ".log")
+    return {str(p.relative_to(run_dir)): p.read_bytes().replace(bytes(run_dir), b"RUN")
+            for p in sorted(run_dir.rglob("*"))
+            if p.is_file() and ".hydra" not in p.parts and not p.name.endswith(skip)}
+
+
+@pytest.mark.slow
+def test_a_run_is_byte_identical_served_and_cold(tmp_path):
+    """``occbench tracker=reta`` on one short scene through the project's own server and
+    cold: every file of the run folder equal (times excepted: timings.csv, the log)."""
+    folder = Path(tempfile.mkdtemp(prefix="obs", dir="/tmp"))
+    env = _env(folder)
+    occbench = [sys.executable, "-m", "harness"]
+    server = subprocess.Popen([*occbench, "server", "start", "--foreground"], env=env,
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True)
+    args = ["tracker=reta", "dataset.scenarios=[crossing]", "dataset.length=20",
+            "progress=false"]
+    runs = {}
+    try:
+        end = time.monotonic() + 300
+        while _run([*occbench, "server", "status"], env=env, cwd=tmp_path,
+                             capture_output=True, timeout=60).returncode != 0:
+            assert server.poll() is None and time.monotonic() < end, server.stderr.read()
+            time.sleep(0.5)
+        for how, mode in (("served", "on"), ("cold", "off")):
+            out = tmp_path / how / "run"
+            runs[how] = _run([*occbench, *args, f"hydra.run.dir={out}"],
+                                       env={**env, "OCCBENCH_SERVER": mode}, cwd=tmp_path,
+                                       capture_output=True, timeout=600)
+        status = _run([*occbench, "server", "status"], env=env, cwd=tmp_path,
+                                capture_output=True, text=True, timeout=60)
+    finally:
+        _run([*occbench, "server", "stop"], env=env, cwd=tmp_path, timeout=60)
+        server.wait(timeout=60)
+        shutil.rmtree(folder, ignore_errors=True)
+    assert [r.returncode for r in runs.values()] == [0, 0], [r.stderr for r in runs.values()]
+    assert "1 job(s) served" in status.stdout
+    outs = [r.stdout.replace(bytes(tmp_path / how / "run"), b"RUN") for how, r in runs.items()]
+    assert outs[0] == outs[1]
+    served, cold = _files(tmp_path / "served" / "run"), _files(tmp_path / "cold" / "run")
+    assert sorted(served) == sorted(cold) and len(served) > 5
+    assert [name for name in served if served[name] != cold[name]] == []
