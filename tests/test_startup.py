@@ -97,3 +97,15 @@ def test_a_new_process_loads_the_kernels_from_the_cache():
                            env=env, cwd=ROOT, check=True, timeout=900) for _ in range(2)]
     hits, misses = json.loads(runs[1].stdout.strip().splitlines()[-1])
     assert hits > 0 and misses == 0
+
+
+def test_the_console_scripts_fast_path_imports_no_library():
+    """Before it knows whether a warm server answers (``harness.server.client.served``),
+    ``occbench`` has imported the standard library only: ``harness`` itself imports nothing."""
+    code = ("import json, sys\nimport harness.__main__, harness.server.client\n"
+            "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules} & "
+            "{'omegaconf', 'hydra', 'numpy', 'yaml', 'trackers', 'scipy', 'cv2'})))")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         cwd=ROOT, check=True, timeout=300)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == []

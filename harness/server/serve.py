@@ -1,12 +1,14 @@
 """The warm server: one process, preloaded once, that forks a child per command.
 
 Life cycle: ``Server.serve()`` takes the identity's lock file (a second server of the same
-identity exits at once), takes the code's fingerprint (``harness.server.trust``), runs
-``preload`` (imports, compiled kernels, a config composed once), then listens on its Unix
-socket (mode 0600, in a 0700 folder) until ``idle`` seconds pass without a request and
-without a running job, or ``stop`` is asked, or a request finds the code changed: then it
-stops listening, answers the jobs still running, and exits. Its own lines go to stderr
-(the log file its starter opened); it configures no logging, so its children start fresh.
+identity exits, once it sees the first one listening or after waiting a minute for one that
+is stopping), takes the code's fingerprint (``harness.server.trust``), runs ``preload``
+(imports, compiled kernels, a config composed once), then listens on its Unix socket (mode
+0600, in a 0700 folder) until ``idle`` seconds pass without a request and without a running
+job, ``stop`` is asked, a request finds the code changed, or its socket file is removed
+(its folder deleted): then it stops listening, answers the jobs still running, and exits.
+Its own lines go to stderr (the log file its starter opened); it configures no logging, so
+its children start fresh.
 
 A request (``client.send``): ``run`` with the client's stdin, stdout and stderr attached,
 ``status`` or ``stop``. ``run`` is checked (identity equal, code unchanged), then forked
@@ -132,9 +134,17 @@ class Server:
                 if conn in ready:  # the client went away (or spoke out of turn)
                     self._client_gone(pid, conn)
             self._reap()
+            if self.listener is not None and not self._still_ours():
+                self._stop_listening("its socket was removed or replaced")
             if (self.listener is not None and not self.jobs
                     and time.time() - self.last > self.idle):
                 self._stop_listening(f"idle for {self.idle:.0f} s")
+
+    def _still_ours(self) -> bool:
+        try:
+            return os.stat(self.path).st_ino == self.inode
+        except OSError:
+            return False
 
     def _handle(self, conn: socket.socket) -> None:
         conn.settimeout(10.0)
