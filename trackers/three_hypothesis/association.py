@@ -84,6 +84,7 @@ def associate(
     gated: np.ndarray | None = None,
     gate: np.ndarray | None = None,
     evidence: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+    admissible: np.ndarray | None = None,
 ) -> Matches:
     """Match measurements to persons in two stages.
 
@@ -117,6 +118,8 @@ def associate(
         evidence: optional map (rho (P, D), admissible (P, D) bool) -> (P, D) appearance
             term a of stage 1, whose cost becomes (1 - a) + (1 - delta); default a = rho
             (e.g. ``rules.AppearanceMargin().evidence``).
+        admissible: optional (B, D) bool: node-measurement pairs either stage may match
+            (default all; e.g. ``shape_gate.ShapeGate``'s).
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(sqrt_q), len(measurement_boxes)
@@ -133,6 +136,8 @@ def associate(
     one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
     rho_nodes = rho if one_node else rho[owners]  # (B, D)
     appearance_ok = rho_nodes >= mu_rho
+    if admissible is not None:
+        appearance_ok &= admissible
     starts = np.arange(n_persons) if one_node else np.searchsorted(owners, np.arange(n_persons))
 
     # stage 1: intersecting regions, cost (1 - rho) + (1 - delta)

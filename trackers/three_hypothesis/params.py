@@ -179,6 +179,10 @@ class Adaptations:
             its rate filtered with the centre; False: the centre's position and velocity,
             x = (xc, yc, vx, vy), the size the shape's (the paper, 3.2: "position and
             velocity"; the shape from the measurement, the prediction area's when occluded).
+        shape_gate: a node may not take a measurement whose size disagrees with its own
+            (BoostTrack's shape similarity exp(-(|dw| / max w + |dh| / max h)) below this)
+            while another person's node meets the measurement with a size that agrees, in
+            [0, 1); 0: any size (the paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -199,10 +203,11 @@ class Adaptations:
     merge_duplicates: bool = True
     correct_behind: bool = True
     filter_size: bool = True
+    shape_gate: float = 0.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
-                      "blend_visible": bool,
+                      "shape_gate": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool, "foreground_presence": bool,
@@ -214,6 +219,8 @@ class Adaptations:
                  tentative_misses=self.tentative_misses)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support)
+        require("adaptations.shape_gate", 0.0 <= self.shape_gate < 1.0, "must lie in [0, 1)",
+                self.shape_gate)
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -225,7 +232,7 @@ class Adaptations:
                    max_hidden=1_000_000, appearance_margin=False, measured_velocity=False,
                    foreground_presence=False, tentative_stage1_only=False,
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
-                   filter_size=False)
+                   filter_size=False, shape_gate=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -26,6 +26,7 @@ from trackers.three_hypothesis.motion import (
     PredictedBehind,
 )
 from trackers.three_hypothesis.params import Adaptations, LifeCycle
+from trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
 
 # --------------------------------------------------------------- eq. 1: which pixels count
 
@@ -366,6 +367,7 @@ class Rules(NamedTuple):
     choice: LeastContradicted | FirstHypothesis  # which hypothesis is reported (a reading)
     report: ReportRule
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
+    shape: AnyShape | ShapeGate  # which sizes may continue a node (3.3.2)
 
 
 def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
@@ -393,4 +395,5 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         choice=FirstHypothesis() if first else LeastContradicted(),
         report=ReportRule(a.report_exposed, a.report_spread, a.report_support),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
+        shape=ShapeGate(a.shape_gate) if a.shape_gate > 0 else AnyShape(),
     )

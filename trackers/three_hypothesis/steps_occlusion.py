@@ -8,6 +8,7 @@ import numpy as np
 
 from trackers.three_hypothesis._kernels import depth_orders
 from trackers.three_hypothesis.association import associate
+from trackers.three_hypothesis.graph import VISIBLE
 from trackers.three_hypothesis.occlusion import boxes_meet, occlusion_pairs, region_overlaps
 from trackers.three_hypothesis.state import Frame
 
@@ -47,7 +48,10 @@ class OcclusionSteps:
             gated=self.rules.stage2.entrants(
                 np.array([person.confirmed for person in persons], dtype=bool)),
             gate=self.rules.gate.radii(f.Pp, R),
-            evidence=self.rules.stage1_appearance.evidence)
+            evidence=self.rules.stage1_appearance.evidence,
+            admissible=self.rules.shape.admissible(
+                f.pred, f.dets, f.owners, f.delta,
+                np.array([b.kind == VISIBLE for b in f.branches], dtype=bool)))
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())}
 
