@@ -46,6 +46,7 @@ from hydra.experimental.callback import Callback
 from hydra.types import RunMode
 from omegaconf import DictConfig
 
+from harness.errors import RunError
 from harness.io.mot import write_atomic, write_mot
 from harness.progress import bars_wanted
 from harness.report.overlays import draw_overlay
@@ -162,8 +163,10 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
     """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
     from hydra.utils import instantiate
 
+    from harness.pipeline.build import build_source
+
     sequences = list(instantiate(cfg.dataset))
-    source = instantiate(cfg.detector)
+    source = build_source(cfg.detector, cache=False)  # RunError naming what cannot be built
     cache = _cache_of(source, cfg.detector)
     iou = cfg.get("iou_threshold", 0.5)
     if isinstance(iou, bool) or not isinstance(iou, int | float) or not 0 < iou <= 1:
@@ -314,7 +317,7 @@ def app(cfg: DictConfig) -> None:
             bool(cfg.get("progress", True)), HydraConfig.get().mode == RunMode.MULTIRUN))
     except DetectionFailed as err:
         table, failed = err.table, err
-    except (ValueError, OSError) as err:
+    except (ValueError, OSError, RunError) as err:
         raise SystemExit(f"harness.commands.detect: {err}") from None
     if HydraConfig.get().mode == RunMode.MULTIRUN:  # one table when the multirun ends
         log.info("job %s [%s]: %s", HydraConfig.get().job.num,

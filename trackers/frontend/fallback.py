@@ -31,8 +31,11 @@ person-sized boxes whose size is learnt from the scene as it runs (no ground tru
   (k-means on its pixel coordinates, seeded); the typical person area is the running median of
   the areas of the regions reported so far (starting at ``initial_area``).
 
-It finds people who move; people who stay where they are in the first frames are part of any
-background learnt from the clip itself and are not found.
+From the clip alone it finds people who move; people who stay where they are in the first
+frames are part of any background learnt from the clip itself. Given other footage of the
+same camera (``footage``: ``trackers.frontend.footage``, images only), the background starts
+from the footage's empty floor where the clip shows something steady on it, so that they are
+found too.
 
 Plain numpy and OpenCV. Measurement history lives in docs/generalisation.md ("lobby").
 """
@@ -41,11 +44,12 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
 
+from trackers.frontend.footage import CameraBackground, start_with
 from trackers.records import Detections
 
 log = logging.getLogger(__name__)
@@ -143,12 +147,19 @@ class MedianBackground:
             (0: off).
         blur: Gaussian kernel (odd) applied to every frame before differencing (0/1: none).
         open_kernel, close_kernel: elliptic opening and closing of the mask (0/1: none).
+        footage: the camera's background learnt from its other footage
+            (``footage.CameraBackground``; None: the clip's own median only). With it the
+            clip starts from ``footage.start_with``: the footage's background where the clip's
+            own median differs from it on steady floor (someone standing still).
+        steady_spread: the footage's spread (grey levels) above which the clip's own median
+            is kept (glare and lighting the other clips disagree on).
     """
 
     def __init__(self, init_frames: int = 100, fast_rate: float = 0.02, slow_rate: float = 0.002,
                  k_sigma: float = 4.0, min_difference: float = 20.0, saturation: int = 245,
                  chroma_tolerance: float = 0.0, blur: int = 3, open_kernel: int = 3,
-                 close_kernel: int = 7) -> None:
+                 close_kernel: int = 7, footage: CameraBackground | None = None,
+                 steady_spread: float = 8.0) -> None:
         if init_frames < 1:
             raise ValueError(f"init_frames must be >= 1, got {init_frames}")
         if not 0.0 <= slow_rate <= fast_rate <= 1.0:
@@ -163,11 +174,22 @@ class MedianBackground:
         self.blur = int(blur)
         self._open = _ellipse(open_kernel)
         self._close = _ellipse(close_kernel)
+        if steady_spread < 0:
+            raise ValueError(f"steady_spread must be >= 0, got {steady_spread}")
+        self.footage, self.steady_spread = footage, float(steady_spread)
         self.reset()
 
     def reset(self) -> None:
         self.background: np.ndarray | None = None  # (H, W, 3) float32
         self.noise: np.ndarray | None = None  # (H, W) float32
+        self.from_footage = 0.0  # share of the starting background taken from the footage
+
+    def describe(self) -> str:
+        """Where the background starts from, in a few words (for the log line)."""
+        if self.footage is None:
+            return f"a background from the clip's own first {self.init_frames} frames"
+        return (f"a background learnt from other footage of this camera ({self.footage.label}) "
+                f"and the clip's own first {self.init_frames} frames")
 
     def _smooth(self, frame: np.ndarray) -> np.ndarray:
         f = cv2.GaussianBlur(frame, (self.blur, self.blur), 0) if self.blur > 1 else frame
@@ -183,6 +205,14 @@ class MedianBackground:
         grey = stack.mean(axis=3)
         mad = np.median(np.abs(grey - np.median(grey, axis=0)), axis=0)
         self.noise = np.maximum(1.4826 * mad, 1.0).astype(np.float32)
+        if self.footage is not None:
+            img = self.footage.image
+            pooled = replace(self.footage, image=cv2.GaussianBlur(img, (self.blur, self.blur), 0)
+                             if self.blur > 1 else img)
+            threshold = np.maximum(self.k_sigma * self.noise, self.min_difference)
+            self.background, taken = start_with(pooled, self.background, threshold,
+                                                self.steady_spread)
+            self.from_footage = float(taken.mean())
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
         """(H, W) bool foreground of ``frame``; then the background learns from it."""
@@ -254,7 +284,10 @@ class RegionDetector:
         seed: k-means seed of the splits.
     """
 
-    name = "foreground regions (trackers.frontend.fallback.RegionDetector)"
+    @property
+    def name(self) -> str:
+        return (f"foreground regions (trackers.frontend.fallback.RegionDetector) on "
+                f"{self.background.describe()}")
 
     def __init__(self, background: MedianBackground | None = None, min_area: int = 40,
                  min_share: float = 0.0, merge_gap: float = 0.3, split_ratio: float | None = None,

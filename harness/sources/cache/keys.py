@@ -6,7 +6,8 @@
   are never hashed. Sequences of another kind are not cached (None).
 * the frame window (first frame and length: the warm-up samples frames over it);
 * the detector's whole config, resolved, with the bytes of every existing file it names
-  (a template, a mixture file) and so its seeds (``calibration.seed``);
+  (a template, a mixture file) and of every file in every folder it names (the background
+  footage's frames), and so its seeds (``calibration.seed``);
 * the code (``code_version``): every file of ``trackers/frontend`` and the ``trackers``
   modules it imports, ``harness/sources`` and ``harness/datasets`` (decoding), and the
   versions of the libraries computing or decoding pixels. Editing a tracker does not
@@ -98,12 +99,18 @@ def frames_digest(sequence: Sequence) -> str | None:
 
 
 def config_digest(config: dict[str, Any]) -> str:
-    """Digest of a resolved detector config and of the bytes of every file it names."""
+    """Digest of a resolved detector config and of the bytes of every file it names, and of
+    every file inside every folder it names (background footage: folders of frames)."""
     h = hashlib.sha256(json.dumps(config, sort_keys=True, default=repr).encode())
     for value in _strings(config):
         path = Path(value).expanduser()
-        if len(value) < 4096 and path.is_file():
-            h.update(value.encode() + b"\0" + path.read_bytes())
+        if len(value) >= 4096:
+            continue
+        files = [path] if path.is_file() else sorted(
+            p for p in path.rglob("*") if p.is_file()) if path.is_dir() else []
+        for f in files:  # the folder's files by their names inside it
+            name = value if f == path else f"{value}/{f.relative_to(path).as_posix()}"
+            h.update(name.encode() + b"\0" + f.read_bytes())
     return h.hexdigest()
 
 
