@@ -50,6 +50,7 @@ import cv2
 import numpy as np
 
 from trackers.frontend.footage import CameraBackground, start_with
+from trackers.frontend.regions import merge_near, split_kmeans
 from trackers.records import Detections
 
 log = logging.getLogger(__name__)
@@ -183,6 +184,7 @@ class MedianBackground:
         self.background: np.ndarray | None = None  # (H, W, 3) float32
         self.noise: np.ndarray | None = None  # (H, W) float32
         self.from_footage = 0.0  # share of the starting background taken from the footage
+        self.unsteady: np.ndarray | None = None  # (H, W) bool: footage spread > steady_spread
 
     def describe(self) -> str:
         """Where the background starts from, in a few words (for the log line)."""
@@ -213,6 +215,7 @@ class MedianBackground:
             self.background, taken = start_with(pooled, self.background, threshold,
                                                 self.steady_spread)
             self.from_footage = float(taken.mean())
+            self.unsteady = pooled.spread > self.steady_spread
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
         """(H, W) bool foreground of ``frame``; then the background learns from it."""
@@ -282,6 +285,9 @@ class RegionDetector:
         split_ratio: a region larger than this times the typical area is split (None: never).
         initial_area: typical person area before the scene has shown any, pixels.
         seed: k-means seed of the splits.
+        max_unsteady: a region with more than this share of its pixels where the background
+            footage's clips disagree (``MedianBackground.unsteady``: glare, plants) is dropped
+            (1: never; without footage: never).
     """
 
     @property
@@ -291,7 +297,7 @@ class RegionDetector:
 
     def __init__(self, background: MedianBackground | None = None, min_area: int = 40,
                  min_share: float = 0.0, merge_gap: float = 0.3, split_ratio: float | None = None,
-                 initial_area: float = 600.0, seed: int = 0) -> None:
+                 initial_area: float = 600.0, seed: int = 0, max_unsteady: float = 1.0) -> None:
         if min_area < 1 or not 0 <= min_share < 1:
             raise ValueError(f"need min_area >= 1 and 0 <= min_share < 1, got {min_area}, {min_share}")
         if merge_gap < 0 or (split_ratio is not None and split_ratio <= 1) or initial_area <= 0:
@@ -302,6 +308,9 @@ class RegionDetector:
         self.merge_gap = float(merge_gap)
         self.split_ratio = None if split_ratio is None else float(split_ratio)
         self.initial_area, self.seed = float(initial_area), int(seed)
+        if not 0.0 <= max_unsteady <= 1.0:
+            raise ValueError(f"max_unsteady must be in [0, 1], got {max_unsteady}")
+        self.max_unsteady = float(max_unsteady)
         self.reset()
 
     def reset(self) -> None:
@@ -319,12 +328,17 @@ class RegionDetector:
         fg = self.background.apply(frame)
         return self.detect_on(frame, fg), fg
 
+    def _unsteady(self, mask: np.ndarray) -> bool:
+        """The region lies mostly where the footage's clips disagree (glare, plants)."""
+        zone = self.background.unsteady
+        return self.max_unsteady < 1.0 and zone is not None and zone[mask].mean() > self.max_unsteady
+
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
         n, lab, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), 8)
         typical = self.sizes.typical()
         floor = max(self.min_area, self.min_share * typical)
         keep = [i for i in range(1, n) if stats[i, cv2.CC_STAT_AREA] >= self.min_area]
-        groups = _merge(stats, keep, self.merge_gap * np.sqrt(typical))
+        groups = merge_near(stats, keep, self.merge_gap * np.sqrt(typical))
         boxes: list[np.ndarray] = []
         labels = np.zeros(fg.shape, dtype=np.int32)
         for g in groups:
@@ -332,9 +346,11 @@ class RegionDetector:
             if area < floor:
                 continue
             mask = np.isin(lab, g)
+            if self._unsteady(mask):
+                continue
             big = self.split_ratio is not None and area > self.split_ratio * typical
             parts = max(round(area / typical), 1) if big else 1
-            for part in _split(mask, parts, self.seed):
+            for part in split_kmeans(mask, parts, self.seed):
                 rows, cols = np.nonzero(part)
                 boxes.append(np.array([cols.min(), rows.min(), np.ptp(cols) + 1, np.ptp(rows) + 1],
                                       dtype=np.float64))
@@ -343,48 +359,3 @@ class RegionDetector:
         if not boxes:
             return Detections.empty()
         return Detections(np.stack(boxes), np.ones(len(boxes)), labels)
-
-
-def _merge(stats: np.ndarray, keep: list[int], gap: float) -> list[list[int]]:
-    """Components (indices into ``stats``) grouped when their boxes lie within ``gap``
-    pixels of each other (transitively)."""
-    parent = {i: i for i in keep}
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    box = {i: stats[i, :4].astype(np.float64) for i in keep}
-    for a_i, a in enumerate(keep):
-        for b in keep[a_i + 1:]:
-            xa, ya, wa, ha = box[a]
-            xb, yb, wb, hb = box[b]
-            dx = max(xb - (xa + wa), xa - (xb + wb), 0.0)
-            dy = max(yb - (ya + ha), ya - (yb + hb), 0.0)
-            if max(dx, dy) <= gap:
-                parent[root(a)] = root(b)
-    groups: dict[int, list[int]] = {}
-    for i in keep:
-        groups.setdefault(root(i), []).append(i)
-    return list(groups.values())
-
-
-def _split(mask: np.ndarray, parts: int, seed: int) -> list[np.ndarray]:
-    """``mask`` as ``parts`` masks by k-means on its pixel coordinates (one when parts = 1)."""
-    if parts <= 1:
-        return [mask]
-    rows, cols = np.nonzero(mask)
-    pts = np.column_stack([cols, rows]).astype(np.float32)
-    cv2.setRNGSeed(seed)
-    crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 20, 0.5)
-    _, assign, _ = cv2.kmeans(pts, parts, None, crit, 1, cv2.KMEANS_PP_CENTERS)
-    out = []
-    for k in range(parts):
-        sel = assign.ravel() == k
-        if sel.any():
-            m = np.zeros_like(mask)
-            m[rows[sel], cols[sel]] = True
-            out.append(m)
-    return out

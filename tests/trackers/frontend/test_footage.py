@@ -87,3 +87,17 @@ def test_footage_of_another_size_is_refused_naming_it():
         start_with(fp, np.zeros((60, 80, 3), np.float32), np.full((60, 80), 20.0), 8.0)
     with pytest.raises(ValueError, match="different sizes"):
         pool_clips([np.zeros((4, 4, 3), np.float32), np.zeros((4, 5, 3), np.float32)], "x")
+
+
+def test_regions_where_the_footage_disagrees_are_dropped():
+    fg = np.zeros((60, 80), dtype=bool)
+    fg[5:20, 5:25] = True  # on the unsteady zone (a glaring window in some clips)
+    fg[35:50, 40:60] = True  # on steady floor
+    zone = np.zeros((60, 80), dtype=bool)
+    zone[0:25, 0:30] = True
+    for max_unsteady, boxes in ((0.5, [[40, 35, 20, 15]]), (1.0, [[5, 5, 20, 15], [40, 35, 20, 15]])):
+        det = RegionDetector(MedianBackground(), initial_area=300.0, max_unsteady=max_unsteady)
+        det.background.unsteady = zone  # as MedianBackground.start sets it from the footage
+        assert det.detect_on(None, fg).boxes.tolist() == boxes
+    with pytest.raises(ValueError, match="max_unsteady"):
+        RegionDetector(max_unsteady=1.5)
