@@ -216,6 +216,9 @@ class MedianBackground:
                                                 self.steady_spread)
             self.from_footage = float(taken.mean())
             self.unsteady = pooled.spread > self.steady_spread
+            log.info("background footage (%s) taken on %.1f%% of the picture (where the clip "
+                     "shows something steady on the footage's empty floor)",
+                     self.footage.label, 100 * self.from_footage)
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
         """(H, W) bool foreground of ``frame``; then the background learns from it."""
