@@ -85,3 +85,16 @@ def test_the_config_builds_it_and_the_cache_key_follows_the_footage_bytes(tmp_pa
     assert config_digest(node) != key
     default = compose_config(["detector=silhouette"], config_name="detect")
     assert instantiate(default.detector).detector.fallback.background.footage is None
+
+
+def test_a_run_with_missing_footage_stops_in_one_line_naming_it(tmp_path):
+    from harness.errors import RunError
+    from harness.pipeline.build import build_source
+
+    missing = tmp_path / "clip"
+    cfg = compose_config(["detector=silhouette",
+                          f"detector.detector.fallback.background.footage.paths=[{missing}]"],
+                         config_name="detect")
+    with pytest.raises(RunError, match=f"FootageError: background footage {missing}: no such") as err:
+        build_source(cfg.detector, cache=False)
+    assert "\n" not in str(err.value)
