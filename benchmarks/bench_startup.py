@@ -37,7 +37,7 @@ one (e.g. ``git worktree add /tmp/before <commit>`` for a before/after on the sa
 the same time), and prints its figures beside these with the CPU ratio.
 
 Usage: ``python benchmarks/bench_startup.py [--runs 5] [--tracker reta] [--no-sweep]
-[--vs CHECKOUT]``.
+[--no-served] [--vs CHECKOUT]``.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 With ``OCCBENCH_SERVER=on``, the first ``occbench`` command that finds no server starts one
 in the background (its own session, no terminal, its log beside its socket) and runs
-itself cold; later commands are forked from it, already imported and warmed up (about 0.5 s
-to a run's first frame instead of 2.5). It exits after 15 minutes without a request, when
+itself cold; later commands are forked from it, already imported and warmed up (a run
+reaches its first frame in about a quarter of the cold time: ``benchmarks/bench_startup.py``). It exits after 15 minutes without a request, when
 the installed code changes (it is then never used: ``harness.server.trust``), or on
 ``occbench server stop``. ``OCCBENCH_SERVER=off`` (the default) runs every command cold.
 One server per user, interpreter, ``sys.path`` and import-time environment: each checkout

@@ -145,6 +145,25 @@ def test_a_changed_source_file_is_never_served_by_the_old_server(toy):
     assert proc.wait(timeout=60) == 0  # the stale server exits
 
 
+def test_sigterm_stops_the_server_and_removes_its_socket(toy):
+    _, env, cwd, _, proc = toy
+    path = _socket(env, cwd)
+    assert path.exists()
+    proc.terminate()
+    assert proc.wait(timeout=60) == 0 and not path.exists()
+
+
+def test_server_status_and_stop_without_a_server(tmp_path):
+    env = _env(Path(tempfile.mkdtemp(prefix="obs", dir="/tmp")))
+    status = _run([sys.executable, "-m", "harness", "server", "status"], env=env, cwd=tmp_path,
+                  capture_output=True, text=True, timeout=120)
+    stop = _run([sys.executable, "-m", "harness", "server", "stop"], env=env, cwd=tmp_path,
+                capture_output=True, text=True, timeout=120)
+    shutil.rmtree(env["XDG_RUNTIME_DIR"], ignore_errors=True)
+    assert status.returncode == 3 and "none running" in status.stdout
+    assert stop.returncode == 0 and "none running" in stop.stdout
+
+
 def _files(run_dir: Path) -> dict[str, bytes]:
     """Every file of a run folder, its own path replaced by RUN (config.yaml names it; the
     report's title names the folder: both are called ``run``)."""
