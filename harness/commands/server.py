@@ -75,6 +75,7 @@ def main(argv: Sequence[str] | None = None) -> int:
           f"{answer['running']} running, idle {answer['idle']:.0f} s of "
           f"{answer['idle_limit']:.0f}\n  socket {path}\n  log {path[:-5]}.log\n  "
           + (f"stale: {answer['stale']}" if answer["stale"] else "code unchanged since start")
+          + "\n  " + ", ".join(f"{k} {v}" for k, v in answer["versions"].items())
           + f"\n  OCCBENCH_SERVER={client.mode()}")
     return 0
 

@@ -179,7 +179,7 @@ class Server:
         return {"pid": os.getpid(), "started": self.started, "served": self.served,
                 "running": len(self.jobs), "idle": time.time() - self.last,
                 "idle_limit": self.idle, "socket": self.path,
-                "stale": self.fingerprint.changed()}
+                "stale": self.fingerprint.changed(), "versions": self.fingerprint.versions}
 
     def _start(self, conn: socket.socket, request: dict, fds: list[int]) -> None:
         why = ("another interpreter, sys.path or import-time environment"

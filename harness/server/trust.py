@@ -4,11 +4,12 @@
 project: size, mtime and inode of every ``.py`` and ``.yaml`` file of the project's code
 (``harness/``, ``trackers/``, ``conf/`` and every folder of the ``hydra_plugins`` namespace,
 installed plugins too), of each preloaded library's ``__init__.py`` (an upgrade rewrites it)
-and of the interpreter, with the libraries' versions beside them. ``changed()``, asked on
-every request, takes it again and names the first difference: a file added, removed or
-rewritten, another version. A file modified within ``RACY_NS`` of the first fingerprint
-could be rewritten again within the file system's timestamp granularity without its stat
-changing (git's "racily clean" entries), so its content hash is kept and compared as well.
+and of the interpreter (the libraries' versions are recorded beside them, for ``occbench
+server status``). ``changed()``, asked on every request (about 10 ms), takes it again and
+names the first difference: a file added, removed or rewritten (a library upgraded). A
+file modified within ``RACY_NS`` of the first fingerprint could be rewritten again within
+the file system's timestamp granularity without its stat changing (git's "racily clean"
+entries), so its content hash is kept and compared as well.
 """
 
 from __future__ import annotations
@@ -20,10 +21,9 @@ import os
 import sys
 import time
 
-# the libraries a served run has preloaded (import name, distribution name)
-LIBRARIES = (("numpy", "numpy"), ("scipy", "scipy"), ("cv2", "opencv-python"),
-             ("numba", "numba"), ("llvmlite", "llvmlite"), ("hydra", "hydra-core"),
-             ("omegaconf", "omegaconf"), ("pandas", "pandas"), ("matplotlib", "matplotlib"))
+# the libraries a served run has preloaded (import names)
+LIBRARIES = ("numpy", "scipy", "cv2", "numba", "llvmlite", "hydra", "omegaconf", "pandas",
+             "matplotlib")
 SUFFIXES = (".py", ".yaml")
 RACY_NS = 3_000_000_000
 
@@ -49,7 +49,7 @@ def watched_files(folders: list[str] | None = None) -> list[str]:
         for here, dirs, names in os.walk(top):
             dirs[:] = sorted(d for d in dirs if d != "__pycache__")
             files.extend(os.path.join(here, n) for n in sorted(names) if n.endswith(SUFFIXES))
-    for name, _ in LIBRARIES:
+    for name in LIBRARIES:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin:
             files.append(spec.origin)
@@ -57,12 +57,14 @@ def watched_files(folders: list[str] | None = None) -> list[str]:
 
 
 def versions() -> dict[str, str]:
+    """``LIBRARIES``' installed versions by import name (a metadata search: at start only)."""
+    dists = importlib.metadata.packages_distributions()
     out = {}
-    for _, dist in LIBRARIES:
+    for name in LIBRARIES:
         try:
-            out[dist] = importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            out[dist] = "absent"
+            out[name] = importlib.metadata.version(dists[name][0])
+        except (KeyError, importlib.metadata.PackageNotFoundError):
+            out[name] = "absent"
     return out
 
 
@@ -108,9 +110,3 @@ class Fingerprint:
             if _digest(path) != before:
                 return f"{path} changed (same size and time stamp)"
         return None
-
-    def changed_versions(self) -> str | None:
-        """A library's version that differs from the start (slower: a metadata search)."""
-        now = versions()
-        diff = [f"{d} {self.versions[d]} -> {v}" for d, v in now.items() if v != self.versions[d]]
-        return "; ".join(diff) or None
