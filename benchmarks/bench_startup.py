@@ -140,8 +140,9 @@ def _child_cpu() -> float:
 
 
 def tree_env(root: Path) -> dict[str, str]:
-    """The environment of a process running the code of the checkout ``root``."""
-    return {**os.environ, "OMP_NUM_THREADS": "1",
+    """The environment of a process running the code of the checkout ``root``, cold (no
+    warm server: ``ServedRuns`` sets its own)."""
+    return {**os.environ, "OMP_NUM_THREADS": "1", "OCCBENCH_SERVER": "off",
             "PYTHONPATH": os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")])}
 
 

@@ -1,10 +1,10 @@
 """``python -m harness`` and the console script ``occbench``: the commands of
 ``harness.commands.cli``.
 
-The fast path first: with ``OCCBENCH_SERVER=on`` the command goes to this installation's warm
-server (``harness.server``) when one answers, and this process only waits for its exit
-status, forwarding Ctrl-C; otherwise (no server, another code, ``OCCBENCH_SERVER=off``) it
-runs here, cold (``harness.commands.cli.run``). Nothing but the standard library is imported
+The fast path first: when this installation's warm server (``harness.server``; ``occbench
+server start``, or ``OCCBENCH_SERVER=on``) answers, the command goes to it and this process
+only waits for its exit status, forwarding Ctrl-C; otherwise (no server, another code,
+``OCCBENCH_SERVER=off``) it runs here, cold (``harness.commands.cli.run``). Nothing but the standard library is imported
 before that choice.
 """
 

@@ -1,11 +1,13 @@
 """``occbench server [status | stop | start [--foreground]]``: the warm server for single runs.
 
-With ``OCCBENCH_SERVER=on``, the first ``occbench`` command that finds no server starts one
-in the background (its own session, no terminal, its log beside its socket) and runs
-itself cold; later commands are forked from it, already imported and warmed up (a run
-reaches its first frame in about a quarter of the cold time: ``benchmarks/bench_startup.py``). It exits after 15 minutes without a request, when
-the installed code changes (it is then never used: ``harness.server.trust``), or on
-``occbench server stop``. ``OCCBENCH_SERVER=off`` (the default) runs every command cold.
+``occbench server start`` starts one in the background (its own session, no terminal, its
+log beside its socket); with ``OCCBENCH_SERVER=on`` the first ``occbench`` command that finds
+none starts one too, and runs itself cold. Later commands are forked from it, already
+imported and warmed up (a run reaches its first frame in about a quarter of the cold time:
+``benchmarks/bench_startup.py``). It exits after 15 minutes without a request, when the
+installed code changes (it is then never used: ``harness.server.trust``), or on ``occbench
+server stop``. ``OCCBENCH_SERVER=off`` runs every command cold; the default, ``auto``, uses
+a server that runs and never starts one.
 One server per user, interpreter, ``sys.path`` and import-time environment: each checkout
 has its own.
 

@@ -6,9 +6,10 @@ the umask and the environment, and passes its stdin, stdout and stderr themselve
 (``SCM_RIGHTS``); the server forks a preloaded child that runs the command as a cold
 process would and answers with its exit status. SIGINT, SIGTERM and SIGHUP received here
 go to the job's process group. ``None`` means "run cold": the server is off
-(``OCCBENCH_SERVER=off``, the default), none answers (one is then started in the background
-for the next command), or it refused (its code is no longer the installed code: it exits,
-and a new one is started). ``occbench server ...`` itself always runs here.
+(``OCCBENCH_SERVER=off``), none answers (with ``OCCBENCH_SERVER=on`` one is then started in
+the background for the next command; by default, ``auto``, only ``occbench server start``
+starts one), or it refused (its code is no longer the installed code: it exits, and with
+``on`` a new one is started). ``occbench server ...`` itself always runs here.
 
 Which server: one per user and per ``identity()`` - the interpreter, ``sys.path`` and the
 environment variables the preloaded libraries read when they are imported - so two
@@ -25,9 +26,10 @@ import socket
 import sys
 
 ENV = "OCCBENCH_SERVER"
-# on: use a server, start one when none answers; off: always run cold
-MODES = ("on", "off")
-DEFAULT = "off"
+# on: use a server, start one when none answers; auto: use one that runs (``occbench server
+# start``), never start one; off: always run cold
+MODES = ("on", "auto", "off")
+DEFAULT = "auto"
 # read by the preloaded libraries when they are imported: a server serves only its own values
 IMPORT_ENV = ("PYTHON", "LANG", "LC_", "NUMBA_", "OMP_", "OPENBLAS_", "MKL_", "GOTO",
               "VECLIB", "MPL", "OPENCV_", "KMP_", "TBB", "HYDRA_")
@@ -35,12 +37,12 @@ HEADER = 8  # bytes: the length of the JSON body that follows, in decimal, zero-
 
 
 def mode() -> str:
-    """``OCCBENCH_SERVER`` (``on`` or ``off``; unset: ``DEFAULT``); a platform without Unix
+    """``OCCBENCH_SERVER`` (``MODES``; unset: ``DEFAULT``); a platform without Unix
     sockets and ``SCM_RIGHTS`` (Windows) is always ``off``."""
     value = os.environ.get(ENV, "").strip().lower() or DEFAULT
     if not (hasattr(socket, "AF_UNIX") and hasattr(socket, "send_fds")):
         return "off"
-    return value if value in MODES else "off"
+    return value
 
 
 def identity() -> dict:
@@ -94,6 +96,10 @@ def ask(ident: dict, message: dict, timeout: float = 5.0) -> dict | None:
 def served(argv: list[str]) -> int | None:
     """Run ``argv`` (without the program name) on the warm server: its exit status, or
     None when it must run cold here (see the module docstring)."""
+    if mode() not in MODES:
+        print(f"occbench: {ENV} must be one of {', '.join(MODES)}, got {mode()!r}",
+              file=sys.stderr)
+        return 2
     if mode() == "off" or (argv and argv[0] == "server"):
         return None
     ident = identity()
@@ -102,7 +108,8 @@ def served(argv: list[str]) -> int | None:
         sock.connect(socket_path(ident))
     except OSError:
         sock.close()
-        start_server(ident)
+        if mode() == "on":
+            start_server(ident)
         return None
     request = {"op": "run", "identity": ident, "argv": [sys.argv[0], *argv],
                "orig_argv": list(getattr(sys, "orig_argv", sys.argv)), "cwd": os.getcwd(),
@@ -148,7 +155,8 @@ def _wait(sock: socket.socket, ident: dict) -> int | None:
             elif "signal" in answer:
                 return _die_as(int(answer["signal"]), saved)
             elif "stale" in answer:  # it is not this code's server: it exits, we run cold
-                start_server(ident)
+                if mode() == "on":
+                    start_server(ident)
                 return None
     except (OSError, ValueError):
         pass

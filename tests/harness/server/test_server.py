@@ -145,6 +145,18 @@ def test_a_changed_source_file_is_never_served_by_the_old_server(toy):
     assert proc.wait(timeout=60) == 0  # the stale server exits
 
 
+@pytest.mark.parametrize(("mode", "says", "status"), [
+    ("auto", ["cold"], 0), ("on", ["starts a server", "cold"], 0), ("off", ["cold"], 0),
+    ("yes", ["status 2"], 2)])
+def test_without_a_server_only_on_starts_one(tmp_path, mode, says, status):
+    folder = Path(tempfile.mkdtemp(prefix="obs", dir="/tmp"))
+    out = _run([sys.executable, "-c", CLIENT, "x"], env=_env(folder, OCCBENCH_SERVER=mode),
+               cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    shutil.rmtree(folder, ignore_errors=True)
+    assert (out.stdout.split(), out.returncode) == ([w for s in says for w in s.split()], status)
+    assert ("must be one of on, auto, off" in out.stderr) == (mode == "yes")
+
+
 def test_sigterm_stops_the_server_and_removes_its_socket(toy):
     _, env, cwd, _, proc = toy
     path = _socket(env, cwd)
