@@ -8,6 +8,7 @@ hidden one, one box covers a group), after BoostTrack's shape similarity;
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -16,8 +17,10 @@ import numpy as np
 class AnyShape:
     """3.3.2 as written: a measurement of any size may continue a person."""
 
+    uses_seen: ClassVar[bool] = False
+
     def admissible(self, pred: np.ndarray, dets: np.ndarray, owners: np.ndarray,
-                   delta: np.ndarray, seen: np.ndarray) -> None:
+                   delta: np.ndarray, seen: np.ndarray | None) -> None:
         return None
 
 
@@ -42,6 +45,7 @@ class ShapeGate:
     hypothesis explains, is still matched."""
 
     min_similarity: float
+    uses_seen: ClassVar[bool] = True  # the tracker passes its nodes' visible flags
 
     def admissible(self, pred: np.ndarray, dets: np.ndarray, owners: np.ndarray,
                    delta: np.ndarray, seen: np.ndarray) -> np.ndarray | None:

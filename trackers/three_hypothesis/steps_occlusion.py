@@ -42,16 +42,16 @@ class OcclusionSteps:
             len(persons), len(support)))
         sqrt_p = np.sqrt(np.array([h[support] for h in f.p]).reshape(len(f.dets), len(support)))
         R = np.array([person.R[0, 0] for person in persons])[f.owners]  # R = (sigma_z h)^2 I
-        a = self.association
+        a, shape = self.association, self.rules.shape
+        seen = (np.array([b.kind == VISIBLE for b in f.branches], dtype=bool)
+                if shape.uses_seen else None)  # visible nodes of t-1, for the shape rule
         f.matches = m = associate(
             f.pred, f.owners, sqrt_q, f.dets, sqrt_p, a.mu_rho, a.mu_g, delta=f.delta,
             gated=self.rules.stage2.entrants(
                 np.array([person.confirmed for person in persons], dtype=bool)),
             gate=self.rules.gate.radii(f.Pp, R),
             evidence=self.rules.stage1_appearance.evidence,
-            admissible=self.rules.shape.admissible(
-                f.pred, f.dets, f.owners, f.delta,
-                np.array([b.kind == VISIBLE for b in f.branches], dtype=bool)))
+            admissible=shape.admissible(f.pred, f.dets, f.owners, f.delta, seen))
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())}
 
