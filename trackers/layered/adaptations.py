@@ -108,7 +108,7 @@ class Adaptations:
             its box holds (``evidence.HiddenEvidence``: foreground, a nearer found target
             over it, or memory growing with its matches); None: reported for
             ``reporting.max_misses`` frames (paper: reporting is ours; None). Replaces
-            ``report_support`` (one rule per step: set one of the two).
+            ``report_support`` (one rule per step: set one of the two, the other None / 0).
     """
 
     model_spread: float = 4.5
@@ -130,7 +130,7 @@ class Adaptations:
     profile_heads: bool = True
     one_to_one: bool = True
     report_support: float = 0.0
-    hidden_evidence: HiddenEvidence | None = None
+    hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",

@@ -138,6 +138,7 @@ def _walk_then_vanish(report_predicted: bool, fg_after: bool | None = None
     cfg.adaptations.report_predicted = report_predicted
     if fg_after is not None:
         cfg.adaptations.report_support = 0.6  # (off by default: docs/adaptations.md)
+        cfg.adaptations.hidden_evidence = None  # (one rule per step)
     tracker = instantiate(cfg)
     rng = np.random.default_rng(0)
     background = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)

@@ -20,6 +20,7 @@ from trackers.layered import (
     CandidateParams,
     FeatureModels,
     FeatureParams,
+    HiddenEvidence,
     LifeCycleParams,
     MatchParams,
     PBMTracker,
@@ -810,7 +811,7 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
                                        R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne,
-                                       R.ReportUnfound]  # report_support off
+                                       HiddenEvidence]  # report_support off
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
                                         R.LastBox, R.AsMeasured, R.PredictedSize, R.Alone,
                                         R.ReportUnfound]
@@ -826,12 +827,13 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     fg = np.zeros((20, 20), dtype=bool)
     fg[:, :6] = True  # columns 0-5
     boxes = np.array([[0.0, 0, 10, 10], [1.0, 0, 10, 10], [30.0, 30, 5, 5]])
-    shown = R.build_rules(Adaptations(report_support=0.6)).report_shown
+    shown = R.build_rules(Adaptations(report_support=0.6, hidden_evidence=None)).report_shown
     hits, misses = np.full(3, 20), np.ones(3, dtype=int)
     assert shown.shown(boxes, fg, hits, misses).tolist() == [True, False, False]
     assert shown.shown(boxes, None, hits, misses) is None
     assert paper.report_shown.shown(boxes, fg, hits, misses) is None
-    assert ours.report_shown.shown(boxes, fg, hits, misses) is None
+    # ours (hidden_evidence): tracked 20 frames and unfound 1, memory shows all three
+    assert ours.report_shown.shown(boxes, fg, hits, misses).tolist() == [True, True, True]
     # birth support: a part with 0.3 foreground or more
     assert not ours.birth.supported(np.full(5, 0.1), True)
     assert ours.birth.supported(np.full(5, 0.1), False)
