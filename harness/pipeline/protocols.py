@@ -101,6 +101,30 @@ class Follower:
     first_id: int = -1
 
 
+@dataclass
+class ReportedIds:
+    """One tracker's reported ids under the protocol, unique over all its followers.
+
+    Attributes:
+        next: the next free reported id (1-based).
+        first_of: reported id -> the reported id of its follower's first report (the
+            follower's lineage, ``TrackerOutput.followers``).
+    """
+
+    next: int = 1
+    first_of: dict[int, int] = field(default_factory=dict)
+
+    def of(self, follower: Follower, track_id: int) -> int:
+        """The reported id of ``follower``'s tracker id ``track_id`` (a new one the first time)."""
+        if track_id not in follower.out_ids:
+            follower.out_ids[track_id] = self.next
+            if follower.first_id < 0:
+                follower.first_id = self.next
+            self.first_of[self.next] = follower.first_id
+            self.next += 1
+        return follower.out_ids[track_id]
+
+
 def run_single_target(
     builders: Mapping[str, Callable[[], Tracker]],
     sequence: Sequence,
@@ -136,8 +160,7 @@ def run_single_target(
     fg_of = ForegroundProvider(foreground, sequence, background)
     bank = TrackerBank(dict.fromkeys(builders))  # one tracker per person, fed by hand
     live: dict[tuple[str, int], Follower] = {}
-    next_id = dict.fromkeys(builders, 1)  # the next reported id of each tracker
-    lineage: dict[str, dict[int, int]] = {t: {} for t in builders}  # reported id -> follower's first
+    ids = {t: ReportedIds() for t in builders}
     bar = (progress or no_progress)(total=sequence.info.length, desc=name)
     try:
         for k in sequence.frame_numbers():
@@ -163,14 +186,7 @@ def run_single_target(
                 if start is not None and follower.followed < 0:
                     log.warning("%s on %s: target %d not started at frame %d (no output box "
                                 "overlaps its ground truth)", t, name, gid, k)
-                for tr in mine:
-                    if tr.id not in follower.out_ids:
-                        follower.out_ids[tr.id] = next_id[t]
-                        if follower.first_id < 0:
-                            follower.first_id = next_id[t]
-                        lineage[t][next_id[t]] = follower.first_id
-                        next_id[t] += 1
-                bank.report(t, k, [Track(follower.out_ids[tr.id], tr.box, tr.state, tr.score,
+                bank.report(t, k, [Track(ids[t].of(follower, tr.id), tr.box, tr.state, tr.score,
                                          tr.extra) for tr in mine])
             for key in [key for key in live if key[0] not in bank.active
                         or spans[key[1]][1] == k]:  # failed, or the person's last frame
@@ -180,7 +196,7 @@ def run_single_target(
         bar.close()
     outputs = bank.finish()
     for t, out in outputs.items():
-        out.followers = lineage[t]
+        out.followers = ids[t].first_of
     return outputs
 
 

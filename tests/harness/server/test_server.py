@@ -55,9 +55,11 @@ def _run(cmd: list[str], **kwargs) -> subprocess.CompletedProcess:
 
 
 def _env(folder: Path, **extra: str) -> dict[str, str]:
+    # no empty PYTHONPATH entry: it would put the current folder on sys.path, so a client
+    # in another folder would have another identity (another server)
+    paths = [str(ROOT), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
     return {**os.environ, "XDG_RUNTIME_DIR": str(folder), "OCCBENCH_SERVER": "on",
-            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-            **extra}
+            "PYTHONPATH": os.pathsep.join(paths), **extra}
 
 
 def _socket(env: dict[str, str], cwd: Path) -> Path:
