@@ -146,10 +146,12 @@ def write_case(root: Path, gt: np.ndarray, res: np.ndarray, frames: int) -> None
 
 def timed(cmd: list[str], log: Path) -> tuple[float, float, float]:
     """Run ``cmd`` as a child process; (wall seconds, CPU seconds (user + system), peak
-    resident MB) of the child."""
+    resident MB) of the child. Never through a warm server (``harness.server``): the child
+    would only wait for the server's process, and its CPU and memory would not be the job's."""
+    env = {**os.environ, "OCCBENCH_SERVER": "off"}
     with log.open("ab") as fh:
         start = time.perf_counter()
-        proc = subprocess.Popen(cmd, stdout=fh, stderr=fh, stdin=subprocess.DEVNULL)
+        proc = subprocess.Popen(cmd, stdout=fh, stderr=fh, stdin=subprocess.DEVNULL, env=env)
         _, status, usage = os.wait4(proc.pid, 0)
         wall = time.perf_counter() - start
     proc.returncode = os.waitstatus_to_exitcode(status)

@@ -41,8 +41,9 @@ def load() -> str:
 
 
 def run(args: list[str], cache: Path, checkout: Path) -> float:
-    """Wall seconds of ``python -m harness ARGS`` with ``OCCBENCH_CACHE=cache``."""
-    env = dict(os.environ, OCCBENCH_CACHE=str(cache),
+    """Wall seconds of ``python -m harness ARGS`` with ``OCCBENCH_CACHE=cache``, cold (a
+    warm server, ``harness.server``, would start the job from its preloaded process)."""
+    env = dict(os.environ, OCCBENCH_CACHE=str(cache), OCCBENCH_SERVER="off",
                PYTHONPATH=os.pathsep.join([str(checkout), os.environ.get("PYTHONPATH", "")]))
     t0 = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "harness", *args], env=env, cwd=checkout, check=False,
