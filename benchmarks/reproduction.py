@@ -98,9 +98,22 @@ def merge(tables: list[Path]) -> str:
     return "\n".join(first[:last_row + 1] + ours + first[last_row + 1:]).strip() + "\n"
 
 
+def code_commit(doc: Path = DOC) -> str:
+    """The checkout's commit, ``-dirty`` when a file other than ``doc`` (which this script
+    writes) differs from it; ``unknown`` outside git."""
+    git = ["git", "-C", str(ROOT)]
+    head = subprocess.run([*git, "rev-parse", "--short", "HEAD"], capture_output=True,
+                          text=True, check=False).stdout.strip()
+    if not head:
+        return "unknown"
+    changed = subprocess.run([*git, "status", "--porcelain", "--untracked-files=no", "--",
+                              ".", f":(exclude){doc.resolve().relative_to(ROOT)}"],
+                             capture_output=True, text=True, check=False).stdout.strip()
+    return head + ("-dirty" if changed else "")
+
+
 def section(table: str, body: str, seconds: float) -> str:
-    commit = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"],
-                            capture_output=True, text=True, check=False).stdout.strip() or "unknown"
+    commit = code_commit()
     title, _, rest = body.partition("\n")
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     made = (f"{' and '.join(f'`{c}`' for c in commands(table))} (commit {commit}, {stamp}, "
