@@ -5,7 +5,8 @@ this installation's server (``socket_path``), sends the command line, the curren
 the umask and the environment, and passes its stdin, stdout and stderr themselves
 (``SCM_RIGHTS``); the server forks a preloaded child that runs the command as a cold
 process would and answers with its exit status. SIGINT, SIGTERM and SIGHUP received here
-go to the job's process group. ``None`` means "run cold": the server is off
+go to the job's process group; Ctrl-Z (SIGTSTP) stops the job's process group and then this
+process, and SIGCONT (the shell's ``fg`` or ``bg``) continues the job. ``None`` means "run cold": the server is off
 (``OCCBENCH_SERVER=off``), none answers (with ``OCCBENCH_SERVER=on`` one is then started in
 the background for the next command; by default, ``auto``, only ``occbench server start``
 starts one), or it refused (its code is no longer the installed code: it exits, and with
@@ -142,7 +143,18 @@ def _wait(sock: socket.socket, ident: dict) -> int | None:
         else:
             pending.append(signum)
 
+    def suspend(signum: object, frame: object) -> None:  # Ctrl-Z: the job stops with us
+        if job:
+            os.killpg(job[0], signal.SIGSTOP)
+        os.kill(os.getpid(), signal.SIGSTOP)  # returns when the shell continues us (fg, bg)
+
+    def resume(signum: object, frame: object) -> None:
+        if job:
+            os.killpg(job[0], signal.SIGCONT)
+
     saved = {s: signal.signal(s, forward) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    saved.update({signal.SIGTSTP: signal.signal(signal.SIGTSTP, suspend),
+                  signal.SIGCONT: signal.signal(signal.SIGCONT, resume)})
     try:
         for line in sock.makefile("rb"):
             answer = json.loads(line)

@@ -28,7 +28,7 @@ def run(args):
         os.kill(os.getpid(), 11)
     if args[0] == "sleep":
         try:
-            print("sleeping", flush=True)
+            print("sleeping", os.getpid(), flush=True)
             time.sleep(60)
         except KeyboardInterrupt:
             print("interrupted", file=sys.stderr, flush=True)
@@ -118,7 +118,35 @@ def test_ctrl_c_in_the_client_reaches_the_job(toy):
     client, env, cwd, _, _ = toy
     job = subprocess.Popen([*client, "sleep"], env=env, cwd=cwd, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
-    assert job.stdout.readline().strip() == "sleeping"
+    assert job.stdout.readline().split()[0] == "sleeping"
+    job.send_signal(signal.SIGINT)
+    out, err = job.communicate(timeout=30)
+    assert (job.returncode, out.strip(), err.strip()) == (130, "status 130", "interrupted")
+
+
+def _state(pid: int) -> str:
+    """The process state letter of ``pid`` (/proc/PID/stat: T stopped, S sleeping)."""
+    return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+
+
+def _wait_state(pid: int, states: str) -> str:
+    end = time.monotonic() + 30
+    while _state(pid) not in states and time.monotonic() < end:
+        time.sleep(0.05)
+    return _state(pid)
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="needs Linux's /proc")
+def test_ctrl_z_in_the_client_stops_the_job_and_fg_continues_it(toy):
+    client, env, cwd, _, _ = toy
+    job = subprocess.Popen([*client, "sleep"], env=env, cwd=cwd, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    pid = int(job.stdout.readline().split()[1])
+    assert _state(pid) != "T"
+    job.send_signal(signal.SIGTSTP)
+    assert (_wait_state(job.pid, "T"), _wait_state(pid, "T")) == ("T", "T")
+    job.send_signal(signal.SIGCONT)
+    assert _wait_state(pid, "SR") in "SR" and _wait_state(job.pid, "SR") in "SR"
     job.send_signal(signal.SIGINT)
     out, err = job.communicate(timeout=30)
     assert (job.returncode, out.strip(), err.strip()) == (130, "status 130", "interrupted")
