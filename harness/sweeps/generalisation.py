@@ -102,6 +102,11 @@ LOBBY = "CAVIAR-lobby"
 LOBBY_REPORTED = ("CAVIAR1-Browse1-f0630-0745", "CAVIAR1-Fight_RunAway1-f0319-0379",
                   "CAVIAR1-Fight_RunAway2-f0300-0385", "CAVIAR1-Walk2-f0800-0999",
                   "CAVIAR1-Walk3-f0212-0772")
+#: the lobby's choosing clips C (docs/generalisation.md, "Lobby"); with noisy ground truth a
+#: choosing set for pbm's identity rules (pbmgt)
+LOBBY_CHOSEN = ("CAVIAR1-Browse2-f0548-0749", "CAVIAR1-Browse4-f0278-0364",
+                "CAVIAR1-Rest_FallOnFloor-f0655-0935", "CAVIAR1-Rest_InChair-f0475-0771",
+                "CAVIAR1-Walk3-f1096-1378", "CAVIAR1-Walk2-f0400-0599")
 
 
 SETS: tuple[EvalSet, ...] = (
@@ -139,6 +144,11 @@ SETS: tuple[EvalSet, ...] = (
             (1000,), requires=(f"data:{LOBBY}",),
             description="the five multi-person CAVIAR lobby clips nobody chooses on (a second "
             "camera, looking down), noisy gt miss 0.3"),
+    EvalSet("lobby-C gt", TUNING, ("dataset=mot", f"dataset.root=${{data:{LOBBY}}}",
+                                   f"dataset.sequences=[{','.join(LOBBY_CHOSEN)}]", *GT03),
+            UNTOUCHED_SEEDS, requires=(f"data:{LOBBY}",),
+            description="the six CAVIAR lobby clips of the lobby's choosing set C, noisy gt "
+            "miss 0.3 (for choosing pbm's identity rules)"),
     EvalSet("OLS2cor", UNTOUCHED, _replay("CAVIAR-OneLeaveShop2cor", *GT03), (1000,),
             description="CAVIAR OneLeaveShop2cor trajectories replayed (25 fps), noisy gt miss 0.3",
             requires=("CAVIAR-OneLeaveShop2cor",)),

@@ -17,6 +17,8 @@ def test_every_set_composes_and_is_marked():
     assert roles["cav1-150 sil"] == roles["ecp1-180 sil"] == roles["ecp1-180 gt"] == G.TUNING
     assert roles["cav151-295 sil"] == roles["ecp181-383 sil"] == G.UNTOUCHED
     assert roles["ecp181-383 gt"] == roles["lobby gt"] == G.UNTOUCHED
+    assert roles["lobby-C gt"] == G.TUNING  # the lobby's choosing clips C, never its R
+    assert not set(G.LOBBY_CHOSEN) & set(G.LOBBY_REPORTED)
     for s in G.SETS:
         assert s.role in (G.TUNING, G.UNTOUCHED)
         if s.role == G.UNTOUCHED and "dataset=synthetic" in s.overrides:
