@@ -21,6 +21,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from harness.datasets.base import Sequence
+from harness.pipeline.warmup import config_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = ROOT / "conf"
@@ -94,12 +95,7 @@ def _targets(node) -> list[str]:
     """Every ``_target_`` in a config node, nested ones included."""
     if OmegaConf.is_config(node):
         node = OmegaConf.to_container(node, resolve=False)
-    if isinstance(node, dict):
-        own = [str(node["_target_"])] if "_target_" in node else []
-        return own + [t for v in node.values() for t in _targets(v)]
-    if isinstance(node, list):
-        return [t for v in node for t in _targets(v)]
-    return []
+    return config_targets(node)
 
 
 def _skip_unbuilt(node) -> None:

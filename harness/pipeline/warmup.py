@@ -162,20 +162,21 @@ def preload_spec(cfg: Any, choice: str | None = None) -> dict[str, Any]:
 
     from harness.pipeline.build import tracker_configs
 
-    targets = _targets(OmegaConf.to_container(cfg, resolve=False))
+    targets = config_targets(OmegaConf.to_container(cfg, resolve=False))
     return {"modules": sorted({t.rsplit(".", 1)[0] for t in targets if t.startswith(OURS)}),
             "trackers": {name: OmegaConf.to_container(node, resolve=True)
                          for name, node in tracker_configs(cfg.tracker, choice).items()
                          if str(node["_target_"]).startswith(OURS)}}
 
 
-def _targets(node: Any) -> list[str]:
-    """Every ``_target_`` string in a nested container."""
+def config_targets(node: Any) -> list[str]:
+    """Every ``_target_`` string in a nested container (a config as plain dicts and lists),
+    nested ones included."""
     if isinstance(node, dict):
         own = [str(node["_target_"])] if "_target_" in node else []
-        return own + [t for v in node.values() for t in _targets(v)]
+        return own + [t for v in node.values() for t in config_targets(v)]
     if isinstance(node, list):
-        return [t for v in node for t in _targets(v)]
+        return [t for v in node for t in config_targets(v)]
     return []
 
 

@@ -3,30 +3,18 @@ appearance of a person standing behind another."""
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
+from reta_scenes import RED, detections, ellipse_frame
 
 from trackers.geometry import iou_matrix
-from trackers.records import Detections, TrackState
+from trackers.records import TrackState
 from trackers.three_hypothesis import Adaptations, RetaTracker
 
 W, H = 160, 120
-RED = ((40, 40, 200), (60, 60, 120))
 
 
 def _frame(boxes, colours):
-    """(H, W, 3) image of people drawn as two-colour ellipses in their xywh boxes."""
-    img = np.full((H, W, 3), 90, np.uint8)
-    for (x, y, w, h), (top, body) in zip(boxes, colours):
-        c = (int(x + w / 2), int(y + h / 2))
-        cv2.ellipse(img, (c, (int(w), int(h)), 0), body, -1)
-        cv2.ellipse(img, ((c[0], int(y + h * 0.3)), (int(w * 0.9), int(h * 0.55)), 0), top, -1)
-    return img
-
-
-def _dets(boxes):
-    b = np.array(boxes, dtype=float).reshape(-1, 4)
-    return Detections(b, np.ones(len(b)))
+    return ellipse_frame(boxes, colours, (W, H))
 
 
 def test_standing_person_does_not_jump_to_a_neighbour_through_the_gate():
@@ -43,9 +31,9 @@ def test_standing_person_does_not_jump_to_a_neighbour_through_the_gate():
 
     def run(tracker):
         for _ in range(10):
-            tracks = tracker.update(_frame([a], [RED]), _dets([a]))
+            tracks = tracker.update(_frame([a], [RED]), detections([a]))
         (first,) = [t for t in tracks if t.state == TrackState.CONFIRMED]
-        tracks = tracker.update(_frame([a, b], [RED, RED]), _dets([b]))
+        tracks = tracker.update(_frame([a, b], [RED, RED]), detections([b]))
         return first.id, tracks
 
     ident, tracks = run(RetaTracker(adaptations=Adaptations(gate_sigmas=0.0)))  # the paper's fixed radius mu_g
@@ -76,7 +64,7 @@ def test_appearance_of_a_person_standing_behind_another_follows_the_light():
             dim = 1 - 0.6 * min(max((t - 15) / 25, 0), 1)
             colour = tuple(tuple(int(c) for c in row) for row in blue * dim)
             a = [min(10.0 + 4 * t, 66.0), 24.0, 22.0, 62.0]
-            tracks = tracker.update(_frame([b, a], [colour, RED]), _dets([b, a]))
+            tracks = tracker.update(_frame([b, a], [colour, RED]), detections([b, a]))
             for track in tracks:
                 if track.state == TrackState.CONFIRMED:
                     near_b, near_a = iou_matrix(track.box[None], np.array([b, a]))[0] > 0.8
@@ -110,7 +98,7 @@ def test_flickering_false_alarm_on_the_bare_floor_is_never_reported():
             x, y, w, h = (int(v) for v in person)
             mask[y:y + h, x:x + w] = True
             boxes = [person] + ([fa] if t % 4 != 3 else [])
-            for track in tracker.update(img, _dets(boxes), mask):
+            for track in tracker.update(img, detections(boxes), mask):
                 if track.state.reported and iou_matrix(track.box[None], np.array([fa]))[0, 0] > 0.3:
                     on_fa += 1
                 if track.state == TrackState.CONFIRMED and track.box[0] < 100:
@@ -137,7 +125,7 @@ def test_person_standing_undetected_on_foreground_keeps_the_id():
     def ids(tracker):
         seen = set()
         for t in range(35):
-            dets = _dets([p] if t < 10 or t >= 25 else [])
+            dets = detections([p] if t < 10 or t >= 25 else [])
             for track in tracker.update(_frame([p], [RED]), dets, mask):
                 if track.state == TrackState.CONFIRMED:
                     seen.add(track.id)

@@ -4,36 +4,22 @@ a hidden person's id."""
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
+from reta_scenes import RED, detections, ellipse_frame
 
 from trackers.geometry import iou_matrix
-from trackers.records import Detections, TrackState
+from trackers.records import TrackState
 from trackers.three_hypothesis import Adaptations, RetaTracker
 from trackers.three_hypothesis.appearance import EllipseHistogrammer
 from trackers.three_hypothesis.rules import build_rules
 from trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate, shape_similarity
 
 W, H = 200, 120
-RED = ((40, 40, 200), (60, 60, 120))
 
 
 def _frame(boxes, colours):
-    """(H, W, 3) image of people drawn as two-colour ellipses in their xywh boxes."""
-    img = np.full((H, W, 3), 90, np.uint8)
-    for (x, y, w, h), (top, body) in zip(boxes, colours):
-        c = (int(x + w / 2), int(y + h / 2))
-        cv2.ellipse(img, (c, (int(w), int(h)), 0), body, -1)
-        cv2.ellipse(img, ((c[0], int(y + h * 0.3)), (int(w * 0.9), int(h * 0.55)), 0), top, -1)
-    return img
-
-
-def _dets(boxes):
-    b = np.array(boxes, dtype=float).reshape(-1, 4)
-    return Detections(b, np.ones(len(b)))
-
-
+    return ellipse_frame(boxes, colours, (W, H))
 
 
 def test_paper_mode_has_no_shape_gate():
@@ -84,7 +70,7 @@ def _crossing(tracker, frames: int = 40):
         part = [b[0] + 20.0, b[1], 20.0, b[3]]
         hidden = b[0] < a[0] + a[2] and a[0] < b[0] + b[2] and t >= 12
         dets = ([] if hidden else [a]) + [part if t < 12 else b]
-        out = tracker.update(_frame([a, b], [RED, RED]), _dets(dets), None)
+        out = tracker.update(_frame([a, b], [RED, RED]), detections(dets), None)
         on = {}
         for o in out:
             if o.state == TrackState.CONFIRMED:
