@@ -18,7 +18,8 @@ stack that frame or the one before) at one-person frames of stacks and in duplic
 the two-person stacks that are found in turn and never together (what the boxes and the
 found states alone cannot tell from a duplicate); docs/adaptations.md, "stacked targets".
 
-Every run also counts issue 28's three failure modes (``mode_counts``, on the CLEAR matching):
+Every run also puts IDF1's misses down to causes (``idf1_losses``; with ``--events``, per
+sequence with the persons losing most). Every run also counts issue 28's three failure modes (``mode_counts``, on the CLEAR matching):
 (a) *reused*: an id unmatched for more than ``--gap`` frames comes back on another person
 (``reused_new``: one first matched in the last ``--gap`` frames, a newcomer); (b) *phantom*:
 hidden-person reports (OCCLUDED) matched to nobody (``phantom_empty``: overlapping no person,
@@ -56,6 +57,8 @@ sys.path.insert(0, str(ROOT))
 
 from shared_data import use_shared_data  # noqa: E402
 
+from idf1_losses import idf1_losses, losses_line  # noqa: E402
+
 from harness.io.mot import MotTable  # noqa: E402
 from harness.metrics import combine, score_sequence  # noqa: E402
 from harness.metrics.paper import considered, match_rows  # noqa: E402
@@ -76,6 +79,8 @@ class Tally:
     exchanges: int = 0
     stacks: Counter = field(default_factory=Counter)  # ``stack_counts`` summed
     modes: Counter = field(default_factory=Counter)  # ``mode_counts`` summed
+    missed: Counter = field(default_factory=Counter)  # ``idf1_losses``: IDFN causes summed
+    false: Counter = field(default_factory=Counter)  # ... and IDFP causes
     events: list[dict] = field(default_factory=list)
     scores: list = field(default_factory=list)
 
@@ -85,6 +90,8 @@ class Tally:
         self.exchanges += other.exchanges
         self.stacks.update(other.stacks)
         self.modes.update(other.modes)
+        self.missed.update(other.missed)
+        self.false.update(other.false)
         self.events += other.events
         self.scores += other.scores
 
@@ -107,7 +114,7 @@ def set_overrides(name: str, seed: int, length: int | None) -> list[str]:
 
 
 def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], gap: int,
-             stacks: bool = False) -> dict[str, Tally]:
+             stacks: bool = False, show_losses: bool = False) -> dict[str, Tally]:
     """Every tracker on every sequence of one composed run; the tallies per tracker."""
     cfg = G.compose(overrides)
     tallies = {label: Tally() for label, _, _ in trackers}
@@ -118,6 +125,7 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
         last = {label: {} for label in built}  # id -> (person, frame)
         holder = {label: {} for label in built}  # person -> (id, frame)
         rows = {label: ([], [], [], []) for label in built}
+        unconfirmed = {label: {} for label in built}  # frame -> (K, 4) TENTATIVE boxes
         dets: dict[int, np.ndarray] = {}  # frame -> (N, 4) xywh detections
         gt = seq.gt.table
         for step in frames(seq, build_source(cfg.detector), str(cfg.get("foreground", "auto"))):
@@ -128,8 +136,10 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
             gtb, gti = gt.boxes[r], gt.ids[r]
             for label, tracker in built.items():
                 image = None if step.image is None else step.image.copy()
-                tracks = [t for t in tracker.update(image, step.detections, step.foreground)
-                          if t.state.reported]
+                out = tracker.update(image, step.detections, step.foreground)
+                tracks = [t for t in out if t.state.reported]
+                unconfirmed[label][k] = np.array([t.box for t in out if not t.state.reported],
+                                                 dtype=np.float64).reshape(-1, 4)
                 fr, ids, boxes, hidden = rows[label]
                 for t in tracks:
                     fr.append(k)
@@ -168,6 +178,12 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
             tallies[label].scores.append(score_sequence(gt, table))
             tallies[label].modes.update(mode_counts(gt, table, np.asarray(hidden, dtype=bool)
                                                     [order], dets, gap))
+            fn, fp = idf1_losses(gt, table, np.asarray(hidden, dtype=bool)[order],
+                                 unconfirmed[label])
+            tallies[label].missed.update({k: v for k, v in fn.items() if isinstance(k, str)})
+            tallies[label].false.update(fp)
+            if show_losses:
+                print(f"    {seq.info.name} {label}: {losses_line(fn, fp)}")
             if stacks:
                 tallies[label].stacks.update(
                     stack_counts(gt, table, np.asarray(hidden, dtype=bool)[order]))
@@ -308,7 +324,8 @@ def line(label: str, tally: Tally, m: np.ndarray) -> str:
     return (f"{label}: IDF1/HOTA/MOTA {m[0]:.3f}/{m[1]:.3f}/{m[2]:.3f} IDs {m[3]:.0f}; "
             f"re-acquisitions wrong {tally.wrong}/{tally.reacquired}; "
             f"exchanges {tally.exchanges}; modes "
-            + " ".join(f"{k} {tally.modes.get(k, 0)}" for k in MODES))
+            + " ".join(f"{k} {tally.modes.get(k, 0)}" for k in MODES)
+            + "; " + losses_line(tally.missed, tally.false))
 
 
 def main(argv=None) -> int:
@@ -347,7 +364,7 @@ def run_set(name: str, seeds: list[int], trackers: list, args) -> None:
     per_seed: dict[str, list[np.ndarray]] = {label: [] for label in total}
     for seed in seeds:
         tallies = run_seed(set_overrides(name, seed, args.length), trackers, args.gap,
-                           args.stacks)
+                           args.stacks, args.events)
         for label, tally in tallies.items():
             m = metrics(tally)
             per_seed[label].append(m)

@@ -109,6 +109,9 @@ class Adaptations:
             over it, or memory growing with its matches); None: reported for
             ``reporting.max_misses`` frames (paper: reporting is ours; None). Replaces
             ``report_support`` (one rule per step: set one of the two, the other None / 0).
+        rival_match: a target found last frame takes no candidate scoring below this x its
+            last match's score that another target may take (``rules.RivalMatch``; paper:
+            0, off).
     """
 
     model_spread: float = 4.5
@@ -131,12 +134,13 @@ class Adaptations:
     one_to_one: bool = True
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
+    rival_match: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
                 self.model_spread)
         unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
-             report_support=self.report_support)
+             report_support=self.report_support, rival_match=self.rival_match)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses)
@@ -150,7 +154,7 @@ class Adaptations:
                              f"rules for one step: set one (report_support {self.report_support})")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
-                                       "report_support"),
+                                       "report_support", "rival_match"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -167,7 +171,7 @@ class Adaptations:
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
                    profile_heads=False, one_to_one=False, report_support=0.0,
-                   hidden_evidence=None)
+                   hidden_evidence=None, rival_match=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

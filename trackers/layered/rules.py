@@ -104,6 +104,30 @@ class RelativeMatch:
         return weak.any(axis=0)
 
 
+@dataclass(frozen=True)
+class RivalMatch:
+    """``relative_match`` and ``rival_match``: as ``RelativeMatch``, and a target found last
+    frame takes no candidate scoring below ``rival`` x its last match's score when another
+    target may take that candidate (scores it >= ``match_threshold`` and is not so held
+    back itself): a neighbour whose own detection was missed does not take a person that
+    another target is there for (one person's box over another's, issue 28 item 1)."""
+
+    fraction: float
+    rival: float
+
+    def withhold(self, S: np.ndarray, targets: Targets, match_threshold: float) -> np.ndarray | None:
+        """As ``RelativeMatch.withhold``; the rival-held pairs are struck from S too, but
+        their candidates are not withheld (a rival takes them)."""
+        withheld = RelativeMatch(self.fraction).withhold(S, targets, match_threshold)
+        if withheld is None:
+            return None
+        ref = np.where(targets.misses == 0, targets.score, 0.0)
+        ok = S >= match_threshold
+        low = ok & (S < self.rival * ref[:, None])
+        S[low & (ok & ~low).any(axis=0)] = -np.inf
+        return withheld
+
+
 # --------------------------------------------------------------- PBM 4 step 4: who takes what
 
 
@@ -207,7 +231,7 @@ class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
     compared: LastModels | PredictedModels
-    match: AnyAboveThreshold | RelativeMatch
+    match: AnyAboveThreshold | RelativeMatch | RivalMatch
     birth: AnyCandidate | ForegroundSupport
     report_box: LastBox | PredictedBox
     gap: AsMeasured | PerFrame
@@ -220,7 +244,8 @@ def build_rules(a: Adaptations) -> Rules:
     """The paper's rule where the adaptation is off (false, 0), ours where it is on."""
     return Rules(
         compared=PredictedModels() if a.motion_compensation else LastModels(),
-        match=RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold(),
+        match=(RivalMatch(a.relative_match, a.rival_match) if a.rival_match > 0 else
+               RelativeMatch(a.relative_match) if a.relative_match > 0 else AnyAboveThreshold()),
         birth=ForegroundSupport(a.min_support) if a.min_support > 0 else AnyCandidate(),
         report_box=PredictedBox() if a.report_predicted else LastBox(),
         gap=PerFrame() if a.gap_division else AsMeasured(),
