@@ -183,6 +183,13 @@ class Adaptations:
             (BoostTrack's shape similarity exp(-(|dw| / max w + |dh| / max h)) below this)
             while another person's node meets the measurement with a size that agrees, in
             [0, 1); 0: any size (the paper, 3.3.2).
+        early_confirm: a tentative track is confirmed after this many matches (fewer
+            than ``LifeCycle.confirm_frames``) when its measurement scores at least
+            ``early_confirm_score`` and meets no other measurement and no other person's
+            predicted region (ByteTrack, norfair: a clear detection confirmed sooner);
+            0: after ``confirm_frames`` matches always (the paper's reading, 3.3).
+        early_confirm_score: the smallest detection score of an early confirmation, in
+            [0, 1].
     """
 
     gate_sigmas: float = 3.0
@@ -204,10 +211,12 @@ class Adaptations:
     correct_behind: bool = True
     filter_size: bool = True
     shape_gate: float = 0.0
+    early_confirm: int = 0
+    early_confirm_score: float = 0.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
-                      "shape_gate": float, "blend_visible": bool,
+                      "shape_gate": float, "early_confirm_score": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool, "foreground_presence": bool,
@@ -216,9 +225,11 @@ class Adaptations:
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
-                 tentative_misses=self.tentative_misses)
+                 tentative_misses=self.tentative_misses,
+                 early_confirm=self.early_confirm)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
-        unit("adaptations", report_support=self.report_support)
+        unit("adaptations", report_support=self.report_support,
+             early_confirm_score=self.early_confirm_score)
         require("adaptations.shape_gate", 0.0 <= self.shape_gate < 1.0, "must lie in [0, 1)",
                 self.shape_gate)
 
@@ -232,7 +243,8 @@ class Adaptations:
                    max_hidden=1_000_000, appearance_margin=False, measured_velocity=False,
                    foreground_presence=False, tentative_stage1_only=False,
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
-                   filter_size=False, shape_gate=0.0)
+                   filter_size=False, shape_gate=0.0, early_confirm=0,
+                   early_confirm_score=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

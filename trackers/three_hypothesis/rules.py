@@ -27,6 +27,12 @@ from trackers.three_hypothesis.motion import (
 )
 from trackers.three_hypothesis.params import Adaptations, LifeCycle
 from trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
+from trackers.three_hypothesis.tentative import (
+    AfterMatches,
+    ClearEarly,
+    ConfirmedInStage2,
+    EveryNodeInStage2,
+)
 
 # --------------------------------------------------------------- eq. 1: which pixels count
 
@@ -75,28 +81,6 @@ class KalmanGate:
             return None
         var = np.maximum(P[:, 0, 0], P[:, 1, 1]) + R  # S = H P H' + R, centre terms
         return self.sigmas * np.sqrt(var)
-
-
-# --------------------------------------------------------------- 3.3.2 steps 5-8: who enters stage 2
-
-
-@dataclass(frozen=True)
-class EveryNodeInStage2:
-    """Alg. 1 as written: every node of t-1 left unassociated by stage 1, tentative tracks'
-    too, competes in stage 2 (MaxSimilarity(n_j, N^{t-1} \\ Assoc))."""
-
-    def entrants(self, confirmed: np.ndarray) -> None:
-        return None  # associate() lets every person in
-
-
-@dataclass(frozen=True)
-class ConfirmedInStage2:
-    """``tentative_stage1_only``: a tentative track is matched in stage 1 only (it has no
-    velocity to justify a jump through the gate)."""
-
-    def entrants(self, confirmed: np.ndarray) -> np.ndarray:
-        """(P,) bool: the persons that may take part in stage 2, from (P,) ``confirmed``."""
-        return confirmed
 
 
 # --------------------------------------------------------------- 3.3.2 step 2: appearance in stage 1
@@ -368,6 +352,7 @@ class Rules(NamedTuple):
     report: ReportRule
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
     shape: AnyShape | ShapeGate  # which sizes may continue a node (3.3.2)
+    confirm: AfterMatches | ClearEarly  # when a tentative track is confirmed (3.3)
 
 
 def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
@@ -396,4 +381,6 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         report=ReportRule(a.report_exposed, a.report_spread, a.report_support),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
         shape=ShapeGate(a.shape_gate) if a.shape_gate > 0 else AnyShape(),
+        confirm=(ClearEarly(a.early_confirm, a.early_confirm_score) if a.early_confirm
+                 else AfterMatches()),
     )

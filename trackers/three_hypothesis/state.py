@@ -57,7 +57,7 @@ class Person:
 @dataclass(slots=True)
 class Frame:
     """What the steps of one frame t share (Alg. 1's variables), filled step by step:
-    ``_measure`` sets dets, p, support; ``_predict`` branches .. pred; ``_occlusions`` delta,
+    ``_measure`` sets dets, scores, p, support; ``_predict`` branches .. pred; ``_occlusions`` delta,
     near, pairs; ``_associate`` matches, matched; ``_sort_occlusions`` in_front;
     ``_update_matched`` visible, visible_dets and absorbed."""
 
@@ -66,6 +66,7 @@ class Frame:
     height: int
     persons: list[Person]  # tracked at t-1, in key order
     dets: np.ndarray = None  # (D, 4) measurements V
+    scores: np.ndarray = None  # (D,) their detection scores
     p: list[np.ndarray] = None  # D histograms (eq. 1)
     support: np.ndarray = None  # (K,) bins where some p is nonzero
     branches: list[Branch] = None  # the B nodes of t-1, grouped by person

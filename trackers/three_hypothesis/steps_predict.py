@@ -18,10 +18,11 @@ class PredictSteps:
 
     def _measure(self, f: Frame, frame: np.ndarray, detections: Detections) -> None:
         """V = PeopleDetection(I^t) (3.1-3.2): the detections kept and, per measurement,
-        its histogram p over the ellipse S inscribed in its box (eq. 1), and ``support``,
-        the bins where some measurement has pixels."""
+        its score and its histogram p over the ellipse S inscribed in its box (eq. 1), and
+        ``support``, the bins where some measurement has pixels."""
         keep = valid_boxes(detections.boxes) & (detections.scores >= self.min_score)
         f.dets = detections.boxes[keep]
+        f.scores = detections.scores[keep]
         f.p, f.support = self.histograms.measure(frame, f.dets, self.rules.pixels.mask(f.foreground))
 
     def _predict(self, f: Frame) -> None:

@@ -12,6 +12,7 @@ from trackers.three_hypothesis.graph import VISIBLE
 from trackers.three_hypothesis.motion import box_measurements, state_boxes
 from trackers.three_hypothesis.occlusion import covered_fraction
 from trackers.three_hypothesis.state import Branch, Frame, Person
+from trackers.three_hypothesis.tentative import clear_measurements
 
 log = logging.getLogger(__name__)
 
@@ -27,7 +28,8 @@ class UpdateSteps:
         q and S; one behind another keeps q and takes S from its prediction area
         (``rules.appearance_behind`` and ``rules.shape_behind``). A person matched through a
         hypothesis keeps its id and loses its other hypotheses; a tentative track is
-        confirmed after ``confirm_frames`` matches, with the id ``rules.identity`` gives."""
+        confirmed after ``confirm_frames`` matches (or sooner, by ``rules.confirm``), with
+        the id ``rules.identity`` gives."""
         rows = sorted(f.matched.items())
         f.visible = np.zeros((0, 4))
         if not rows:
@@ -49,6 +51,8 @@ class UpdateSteps:
         # a detection on no foreground does not confirm a tentative track
         empty_dets = set() if empty is None else {d for d, e in zip(tent, empty.tolist()) if e}
         visible_share = self._visible_share(f, rows, behind)
+        clear = self._clear(f, [(i, d) for i, (d, _, _, _) in rows
+                                if d in tent and d not in empty_dets])
         for r, (i, (d, n, stage, rho)) in enumerate(rows):
             person = persons[i]
             if not behind[r]:
@@ -61,7 +65,9 @@ class UpdateSteps:
                 person.hits += 1
             person.misses = 0
             person.spawned = False
-            if not person.confirmed and person.hits >= self.life_cycle.confirm_frames:
+            if not person.confirmed and rules.confirm.confirms(
+                    person.hits, self.life_cycle.confirm_frames, clear.get(d, False),
+                    float(f.scores[d])):
                 self._confirm(f, person, shape)
             fronts = in_front.get(n, [])
             branch = Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
@@ -73,20 +79,38 @@ class UpdateSteps:
 
     def _start_tracks(self, f: Frame) -> list[Person]:
         """Each unmatched measurement starts a tentative track (3.3), confirmed in later
-        frames (at once when ``confirm_frames`` is 1)."""
+        frames (at once when ``confirm_frames`` is 1, or ``rules.confirm`` confirms one
+        match)."""
         out: list[Person] = []
-        for d in f.matches.unmatched_measurements:
+        new = f.matches.unmatched_measurements.tolist()
+        empty = (self.rules.support.empty(f.foreground, f.dets[new])
+                 if new and self.rules.confirm.uses_clear else None)
+        clear = self._clear(f, [(-1, d) for k, d in enumerate(new)  # -1: all are others
+                                if empty is None or not empty[k]])
+        for d in new:
             x0, P0, Q0, R0 = self.rules.motion.init(f.dets[d])
             person = Person(self._next_key, f.p[d], Q0, R0, [Branch(VISIBLE, x0, P0)],
                              shape=f.dets[d])
             self._next_key += 1
-            if self.life_cycle.confirm_frames <= 1:
+            if self.rules.confirm.confirms(1, self.life_cycle.confirm_frames,
+                                           clear.get(d, False), float(f.scores[d])):
                 person.id = self._next_id
                 self._next_id += 1
             person.branches[0].node = self._add_node(person, person.branches[0], f.dets[d],
                                                      None, 0, float("nan"))
             out.append(person)
         return out
+
+    def _clear(self, f: Frame, tentative: list[tuple[int, int]]) -> dict[int, bool]:
+        """Per (person, measurement) pair of a matched tentative track, whether the
+        measurement is unambiguous (``tentative.clear_measurements``); only measured for a
+        confirmation rule that reads it."""
+        if not self.rules.confirm.uses_clear or not tentative:
+            return {}
+        rows = np.array([d for _, d in tentative])
+        others = f.owners[None, :] != np.array([i for i, _ in tentative])[:, None]
+        return dict(zip(rows.tolist(), clear_measurements(f.dets, rows, f.delta,
+                                                          others).tolist()))
 
     def _visible_share(self, f: Frame, rows: list, behind: np.ndarray) -> list[float]:
         """Per matched row, the share v of its measured region left visible by the matched
