@@ -4,9 +4,9 @@ lone person is confirmed at once and two people whose boxes meet wait ``confirm_
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
+from reta_scenes import RED, ellipse_frame
 
 from trackers.records import Detections
 from trackers.three_hypothesis import Adaptations, RetaTracker
@@ -17,20 +17,14 @@ from trackers.three_hypothesis.tentative import AfterMatches, ClearEarly, clear_
 W, H = 240, 120
 
 
-def _frame(boxes):
-    """(H, W, 3) image of people drawn as filled ellipses of distinct colours."""
-    img = np.full((H, W, 3), 90, np.uint8)
-    for k, (x, y, w, h) in enumerate(boxes):
-        colour = ((40 + 70 * k) % 256, 200 - 60 * k, 60 + 50 * k)
-        cv2.ellipse(img, ((int(x + w / 2), int(y + h / 2)), (int(w), int(h)), 0), colour, -1)
-    return img
+BLUE = ((200, 60, 40), (120, 60, 60))
 
 
 def _states(tracker, boxes, scores=None, frames=4):
     """Per frame, the states of the tracker's outputs, people standing at ``boxes``."""
     s = np.ones(len(boxes)) if scores is None else np.asarray(scores, float)
     dets = Detections(np.array(boxes, float).reshape(-1, 4), s)
-    return [sorted(t.state.name for t in tracker.update(_frame(boxes), dets, None))
+    return [sorted(t.state.name for t in tracker.update(ellipse_frame(boxes, [RED, BLUE][:len(boxes)], (W, H)), dets, None))
             for _ in range(frames)]
 
 
