@@ -19,14 +19,16 @@ the two-person stacks that are found in turn and never together (what the boxes 
 found states alone cannot tell from a duplicate); docs/adaptations.md, "stacked targets".
 
 Every run also puts IDF1's misses down to causes (``idf1_losses``; with ``--events``, per
-sequence with the persons losing most). Every run also counts issue 28's three failure modes (``mode_counts``, on the CLEAR matching):
-(a) *reused*: an id unmatched for more than ``--gap`` frames comes back on another person
-(``reused_new``: one first matched in the last ``--gap`` frames, a newcomer); (b) *phantom*:
-hidden-person reports (OCCLUDED) matched to nobody (``phantom_empty``: overlapping no person,
-IoU < 0.1), of ``hidden`` in all; (c) *handed*: CLEAR ID switches, each put down to the
-detections around it: ``merged`` (a detection covers the person and another, at the switch or
-the frame before), ``split`` (two detections lie mostly inside the person's box), ``misses``
-(the person had no detection at IoU >= 0.5 for >= 3 frames before), else ``other``.
+sequence with the persons losing most), and counts issue 28's three failure modes
+(``mode_counts``, on the CLEAR matching): (a) *reused*: an id unmatched for more than
+``--gap`` frames comes back on another person (``reused_new``: one first matched in the last
+``--gap`` frames, a newcomer; ``outlived``: after any gap, an id whose last person is no
+longer annotated comes back on another); (b) *phantom*: hidden-person reports (OCCLUDED)
+matched to nobody (``phantom_empty``: overlapping no person, IoU < 0.1), of ``hidden`` in all;
+(c) *handed*: CLEAR ID switches, each put down to the detections around it: ``merged`` (a
+detection covers the person and another, at the switch or the frame before), ``split`` (two
+detections lie mostly inside the person's box), ``misses`` (the person had no detection at
+IoU >= 0.5 for >= 3 frames before), else ``other``.
 
 For choosing rules on tuning data only (docs/generalisation.md): the sets are those of
 ``harness.sweeps.generalisation``; the seeds are the set's own for a tuning set (default),
@@ -55,9 +57,8 @@ from scipy.optimize import linear_sum_assignment
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from shared_data import use_shared_data  # noqa: E402
-
 from idf1_losses import idf1_losses, losses_line  # noqa: E402
+from shared_data import use_shared_data  # noqa: E402
 
 from harness.io.mot import MotTable  # noqa: E402
 from harness.metrics import combine, score_sequence  # noqa: E402
@@ -303,6 +304,8 @@ def mode_counts(gt: MotTable, res: MotTable, hidden: np.ndarray, dets: dict[int,
         if i in last_id and last_id[i][0] != g and f - last_id[i][1] - 1 > gap:
             c["reused"] += 1  # (a)
             c["reused_new"] += f - first[g] <= gap
+        if i in last_id and last_id[i][0] != g and not (gt.ids[rows_of[f]] == last_id[i][0]).any():
+            c["outlived"] += 1  # (a) after any gap: its person is no longer in the picture
         if last_of.get(g, i) != i:  # (c) a CLEAR ID switch
             c["handed"] += 1
             c[_cause(f, g, gt, rows_of, dets)] += 1
@@ -310,7 +313,7 @@ def mode_counts(gt: MotTable, res: MotTable, hidden: np.ndarray, dets: dict[int,
     return c
 
 
-MODES = ("reused", "reused_new", "phantom", "phantom_empty", "hidden", "handed", "merged",
+MODES = ("reused", "reused_new", "outlived", "phantom", "phantom_empty", "hidden", "handed", "merged",
          "split", "misses", "other")
 
 

@@ -58,7 +58,7 @@ def test_failure_modes_counted_on_a_hand_made_table():
     hidden = np.array([False] * 3 + [True] * 2 + [False] * 3)
     dets = {f: np.array([[100.0, 50, 40, 100]]) for f in range(1, 4)}
     c = bench.mode_counts(gt, table(rows), hidden, dets, gap=5)
-    assert c["reused"] == 1 and c["reused_new"] == 1
+    assert c["reused"] == 1 and c["reused_new"] == 1 and c["outlived"] == 1
     assert c["hidden"] == 2 and c["phantom"] == 2 and c["phantom_empty"] == 1
     assert c["handed"] == 0
 
@@ -78,4 +78,21 @@ def test_a_switch_is_put_down_to_a_merged_box_or_a_run_of_misses():
             6: np.array([[100.0, 50, 40, 100], [300, 50, 40, 100]])}
     c = bench.mode_counts(gt, table(rows), np.zeros(len(rows), dtype=bool), dets, gap=5)
     assert c["handed"] == 2 and c["merged"] == 1 and c["misses"] == 1
-    assert c["reused"] == c["phantom"] == 0
+    assert c["reused"] == c["phantom"] == c["outlived"] == 0
+
+
+def test_idf1_misses_put_down_to_causes():
+    from idf1_losses import idf1_losses
+
+    # person 1 in frames 1-6 tracked by id 1 (frames 1-3), then by id 2 (4-5, id 1 elsewhere
+    # in frame 4), unreported but tentative in frame 6; id 3 hidden on nobody in frame 6
+    gt = table([(f, 1, 100, 50, 40, 100) for f in range(1, 7)])
+    rows = [(f, 1, 100, 50, 40, 100) for f in range(1, 4)]
+    rows += [(4, 1, 400, 50, 40, 100), (4, 2, 100, 50, 40, 100), (5, 2, 100, 50, 40, 100),
+             (6, 3, 600, 50, 40, 100)]
+    hidden = np.array([False] * 6 + [True])
+    tentative = {6: np.array([[100.0, 50, 40, 100]])}
+    fn, fp = idf1_losses(gt, table(rows), hidden, tentative)
+    assert (fn["other_id_found"], fn["tentative"], fn["unreported"]) == (2, 1, 0)
+    assert fn[(1, "other_id_found")] == 2
+    assert (fp["on_person"], fp["found_nobody"], fp["hidden_nobody"], fp["nobody_empty"]) == (2, 1, 1, 2)
