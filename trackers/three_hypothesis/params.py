@@ -211,7 +211,7 @@ class Adaptations:
     correct_behind: bool = True
     filter_size: bool = True
     shape_gate: float = 0.0
-    early_confirm: int = 0
+    early_confirm: int = 1
     early_confirm_score: float = 0.0
 
     def __post_init__(self) -> None:

@@ -163,4 +163,5 @@ def test_groups_are_frozen_and_paper_mode_changes_nothing_else():
         "shape_estimate", "foreground_histograms", "foreground_support", "report_exposed",
         "report_spread", "tentative_misses", "max_hidden", "appearance_margin",
         "measured_velocity", "foreground_presence", "tentative_stage1_only",
-        "inherit_hidden_id", "merge_duplicates", "correct_behind", "filter_size"]
+        "inherit_hidden_id", "merge_duplicates", "correct_behind", "filter_size",
+        "early_confirm"]

@@ -64,9 +64,9 @@ def test_clear_measurements_by_hand():
 
 def test_a_lone_person_is_confirmed_at_once_with_the_rule_and_after_three_without():
     person = [[100.0, 20.0, 20.0, 60.0]]
-    assert _states(RetaTracker(), person) == [["TENTATIVE"], ["TENTATIVE"], ["CONFIRMED"],
-                                              ["CONFIRMED"]]
-    early = RetaTracker(adaptations=Adaptations(early_confirm=1))
+    paper = RetaTracker(adaptations=Adaptations(early_confirm=0))
+    assert _states(paper, person) == [["TENTATIVE"], ["TENTATIVE"], ["CONFIRMED"], ["CONFIRMED"]]
+    early = RetaTracker()  # early_confirm 1, the default
     assert _states(early, person) == [["CONFIRMED"]] * 4
     # a detection below the score waits the full count
     unsure = RetaTracker(adaptations=Adaptations(early_confirm=1, early_confirm_score=0.8))

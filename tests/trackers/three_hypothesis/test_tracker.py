@@ -324,7 +324,7 @@ def test_paper_mode_turns_every_adaptation_off():
         "foreground_support", "report_exposed", "report_spread", "tentative_misses",
         "max_hidden", "measured_velocity", "appearance_margin", "foreground_presence",
         "tentative_stage1_only", "inherit_hidden_id", "merge_duplicates", "correct_behind",
-        "filter_size"}
+        "filter_size", "early_confirm"}
     for group in ("association", "occlusion", "appearance", "motion", "life_cycle"):
         assert getattr(paper, group) == getattr(ours, group), group
 
@@ -565,7 +565,7 @@ def test_graph_snapshot_export_and_drawing(tmp_path):
 
     frames = _scene([_line((50, 150), (1.5, 0), 110), _line((270, 152), (-1.5, 0), 110)],
                     [RED, BLUE])
-    tracker = RetaTracker()
+    tracker = RetaTracker(adaptations=Adaptations(early_confirm=0))  # tentative nodes too
     rec = GraphRecorder("crossing")
     kinds = set()
     hyp_snapshot = None
