@@ -112,6 +112,9 @@ class Adaptations:
         rival_match: a target found last frame takes no candidate scoring below this x its
             last match's score that another target may take (``rules.RivalMatch``; paper:
             0, off).
+        early_confirm: a new target overlapping no other live target (IoU < 0.1) is
+            confirmed after this many matches (``rules.IsolatedEarly``; 0: after
+            ``life_cycle.min_hits``, our life cycle's rule; the paper starts targets by hand).
     """
 
     model_spread: float = 4.5
@@ -135,6 +138,7 @@ class Adaptations:
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
     rival_match: float = 0.0
+    early_confirm: int = 0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -143,7 +147,7 @@ class Adaptations:
              report_support=self.report_support, rival_match=self.rival_match)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
-        at_least("adaptations", 0, exit_misses=self.exit_misses)
+        at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
         if self.hidden_evidence is not None and not isinstance(self.hidden_evidence, HiddenEvidence):
@@ -160,7 +164,7 @@ class Adaptations:
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "one_to_one"),
                                       bool),
-                      "prune_max_misses": int, "exit_misses": int})
+                      "prune_max_misses": int, "exit_misses": int, "early_confirm": int})
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -171,7 +175,7 @@ class Adaptations:
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
                    profile_heads=False, one_to_one=False, report_support=0.0,
-                   hidden_evidence=None, rival_match=0.0)
+                   hidden_evidence=None, rival_match=0.0, early_confirm=0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from trackers.common.assignment import assign
+from trackers.geometry import iou_matrix
 from trackers.layered.adaptations import Adaptations
 from trackers.layered.evidence import HiddenEvidence, box_foreground
 from trackers.layered.parts import PartFeatures
@@ -227,6 +228,38 @@ class ReportOnForeground:
         return (misses == 0) | (box_foreground(boxes, fg) >= self.fraction)
 
 
+# --------------------------------------------------------------- life cycle: confirmation (ours)
+
+
+class InARow:
+    """A new target is confirmed after ``life_cycle.min_hits`` matches in a row (a miss
+    before that drops it)."""
+
+    def confirm(self, targets: Targets, rows: np.ndarray, min_hits: int) -> None:
+        """Confirms, in place, the targets at ``rows`` (matched this frame) that qualify."""
+        targets.confirmed[rows] |= targets.hits[rows] >= min_hits
+
+
+@dataclass(frozen=True)
+class IsolatedEarly:
+    """``early_confirm``: a new target is confirmed after ``hits`` matches when its box
+    overlaps no other live target's (IoU < ``max_iou``): a lone newcomer is a person, not a
+    fragment or a second response of one (after ByteTrack and OC-SORT, which report a track
+    from its first frames); otherwise after ``life_cycle.min_hits``."""
+
+    hits: int
+    max_iou: float = 0.1
+
+    def confirm(self, targets: Targets, rows: np.ndarray, min_hits: int) -> None:
+        InARow().confirm(targets, rows, min_hits)
+        early = rows[(targets.hits[rows] >= self.hits) & ~targets.confirmed[rows]]
+        if not len(early):
+            return
+        iou = iou_matrix(targets.boxes[early], targets.boxes)
+        iou[np.arange(len(early)), early] = 0.0  # a target does not overlap itself
+        targets.confirmed[early[iou.max(axis=1) < self.max_iou]] = True
+
+
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -238,6 +271,7 @@ class Rules(NamedTuple):
     unfound_size: PredictedSize | HeldSize
     sharing: Alone | OneToOne
     report_shown: ReportUnfound | ReportOnForeground | HiddenEvidence
+    confirmation: InARow | IsolatedEarly
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -253,4 +287,5 @@ def build_rules(a: Adaptations) -> Rules:
         sharing=OneToOne() if a.one_to_one else Alone(),
         report_shown=a.hidden_evidence or (ReportOnForeground(a.report_support)
                                            if a.report_support > 0 else ReportUnfound()),
+        confirmation=IsolatedEarly(a.early_confirm) if a.early_confirm > 0 else InARow(),
     )

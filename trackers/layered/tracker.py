@@ -324,7 +324,7 @@ class PBMTracker:
         for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
             if tpl is not None:
                 targets.head_template[ti] = tpl
-        targets.confirmed[mt] |= targets.hits[mt] >= self.life_cycle.min_hits
+        self.rules.confirmation.confirm(targets, mt, self.life_cycle.min_hits)
 
     # ------------------------------------------------------------------ life cycle (ours)
     def _end_targets(self, W: int, H: int) -> None:

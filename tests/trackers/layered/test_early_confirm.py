@@ -1,0 +1,43 @@
+"""``adaptations.early_confirm`` (``rules.IsolatedEarly``): a new target overlapping no other
+live target is confirmed after ``hits`` matches, others after ``life_cycle.min_hits``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from trackers.layered import Adaptations
+from trackers.layered.dynamics import Gate
+from trackers.layered.rules import InARow, IsolatedEarly, build_rules
+from trackers.layered.targets import Targets
+
+
+def _targets(boxes, hits) -> Targets:
+    tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
+    tg.dof = np.array([[x, y, x + w / 2, y + h / 2, w, h] for x, y, w, h in boxes], dtype=float)
+    tg.hits, tg.confirmed = np.array(hits), np.zeros(len(hits), dtype=bool)
+    return tg
+
+
+def test_a_lone_newcomer_is_confirmed_early_a_fragment_is_not():
+    # 0: alone, second match; 1: second match inside 2's box (a fragment); 2: first match
+    boxes = [(10.0, 10, 20, 60), (100.0, 10, 20, 30), (100.0, 10, 20, 60)]
+    rows = np.array([0, 1, 2])
+    off = _targets(boxes, [2, 2, 1])
+    InARow().confirm(off, rows, 3)
+    assert off.confirmed.tolist() == [False, False, False]  # three in a row needed
+    on = _targets(boxes, [2, 2, 1])
+    IsolatedEarly(2).confirm(on, rows, 3)
+    assert on.confirmed.tolist() == [True, False, False]
+    # min_hits still confirms the overlapping one in the end
+    on.hits[1] = 3
+    IsolatedEarly(2).confirm(on, rows, 3)
+    assert on.confirmed.tolist() == [True, True, False]
+
+
+def test_early_confirm_is_off_in_paper_mode_and_checked():
+    assert isinstance(build_rules(Adaptations()).confirmation, InARow)
+    assert isinstance(build_rules(Adaptations(early_confirm=2)).confirmation, IsolatedEarly)
+    assert Adaptations.paper().early_confirm == 0
+    with pytest.raises(ValueError, match="early_confirm"):
+        Adaptations(early_confirm=-1)
