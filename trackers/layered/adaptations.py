@@ -138,7 +138,7 @@ class Adaptations:
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
     rival_match: float = 0.0
-    early_confirm: int = 0
+    early_confirm: int = 2
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",

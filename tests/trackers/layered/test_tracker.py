@@ -811,7 +811,7 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
                                        R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne,
-                                       HiddenEvidence, R.InARow]  # report_support off
+                                       HiddenEvidence, R.IsolatedEarly]  # report_support off
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
                                         R.LastBox, R.AsMeasured, R.PredictedSize, R.Alone,
                                         R.ReportUnfound, R.InARow]
