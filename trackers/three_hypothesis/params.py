@@ -190,6 +190,10 @@ class Adaptations:
             0: after ``confirm_frames`` matches always (the paper's reading, 3.3).
         early_confirm_score: the smallest detection score of an early confirmation, in
             [0, 1].
+        report_memory: a hidden person no visible person covers is reported only while
+            its frames unmatched are at most this many times its matches (norfair's hit
+            counter: the longer tracked, the longer believed); 0 reports it however young
+            (the paper).
     """
 
     gate_sigmas: float = 3.0
@@ -213,10 +217,12 @@ class Adaptations:
     shape_gate: float = 0.0
     early_confirm: int = 1
     early_confirm_score: float = 0.0
+    report_memory: float = 0.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
-                      "shape_gate": float, "early_confirm_score": float, "blend_visible": bool,
+                      "shape_gate": float, "early_confirm_score": float,
+                      "report_memory": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool, "foreground_presence": bool,
@@ -226,7 +232,7 @@ class Adaptations:
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
                  tentative_misses=self.tentative_misses,
-                 early_confirm=self.early_confirm)
+                 early_confirm=self.early_confirm, report_memory=self.report_memory)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
              early_confirm_score=self.early_confirm_score)
@@ -244,7 +250,7 @@ class Adaptations:
                    foreground_presence=False, tentative_stage1_only=False,
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
                    filter_size=False, shape_gate=0.0, early_confirm=0,
-                   early_confirm_score=0.0)
+                   early_confirm_score=0.0, report_memory=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

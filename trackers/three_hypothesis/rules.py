@@ -313,6 +313,7 @@ class ReportRule:
     exposed: int
     spread: float
     support: float = 0.0
+    memory: float = 0.0  # ``report_memory``: frames unmatched per match, 0: any
 
     def shares(self, histograms: EllipseHistogrammer, foreground: np.ndarray | None,
                boxes: np.ndarray) -> np.ndarray | None:
@@ -322,12 +323,15 @@ class ReportRule:
             return None
         return histograms.foreground_share(foreground, boxes)
 
-    def reported(self, hypothesis) -> bool:
+    def reported(self, hypothesis, hits: int = 1, misses: int = 0) -> bool:
         """``hypothesis``: a hypothesis branch (``covered``, ``exposed``, ``unseen``,
-        ``share``, Kalman ``x`` (8,) and ``P`` (8, 8)). A region seen empty is never
-        reported."""
+        ``share``, Kalman ``x`` (8,) and ``P`` (8, 8)) of a person matched ``hits`` times
+        and unmatched for ``misses`` frames. A region seen empty is never reported; with
+        ``memory``, one nobody covers only while misses <= memory x hits."""
         h = hypothesis
         if h.unseen or (not h.covered and h.exposed > self.exposed) or h.share < self.support:
+            return False
+        if self.memory > 0 and not h.covered and misses > self.memory * hits:
             return False
         P = h.P
         return not (self.spread > 0 and max(P[0, 0], P[1, 1]) > (self.spread * h.x[2]) ** 2)
@@ -378,7 +382,8 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         presence=ForegroundPresence(histograms) if a.foreground_presence else NoPresence(),
         duplicates=MergeDuplicates() if a.merge_duplicates else KeepDuplicates(),
         choice=FirstHypothesis() if first else LeastContradicted(),
-        report=ReportRule(a.report_exposed, a.report_spread, a.report_support),
+        report=ReportRule(a.report_exposed, a.report_spread, a.report_support,
+                          a.report_memory),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
         shape=ShapeGate(a.shape_gate) if a.shape_gate > 0 else AnyShape(),
         confirm=(ClearEarly(a.early_confirm, a.early_confirm_score) if a.early_confirm

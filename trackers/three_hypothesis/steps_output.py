@@ -55,7 +55,7 @@ class OutputSteps:
             best = self.rules.choice.choose([b.kind for b in branches],
                                             [b.exposed for b in branches],
                                             [b.covered for b in branches])
-            if not report.reported(branches[best]):
+            if not report.reported(branches[best], person.hits, person.misses):
                 best = -1  # drawn (HYPOTHESIS), not reported
             for k, b in enumerate(branches):
                 state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS

@@ -137,6 +137,12 @@ def test_report_rule_bounds_time_in_plain_view_and_spread():
     assert not ReportRule(4, 3.0, 0.4).reported(hyp(share=0.3))
     assert ReportRule(4, 3.0, 0.4).reported(hyp(share=0.4)) and rule.reported(hyp(share=0.0))
     assert rule.shares(None, np.ones((4, 4), bool), np.zeros((1, 4))) is None
+    # report_memory: one nobody covers, while misses <= memory x hits (norfair's hit counter)
+    young = ReportRule(4, 3.0, memory=0.5)
+    assert young.reported(hyp(covered=False), hits=4, misses=2)
+    assert not young.reported(hyp(covered=False), hits=4, misses=3)  # 3 > 0.5 x 4
+    assert young.reported(hyp(covered=True), hits=4, misses=30)  # behind a visible person
+    assert rule.reported(hyp(covered=False), hits=1, misses=4)  # 0: however young
 
 
 @pytest.mark.parametrize("group,kwargs,name", [
