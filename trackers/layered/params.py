@@ -280,7 +280,8 @@ class LifeCycleParams:
     initialises each target by hand, PBM 3, and tracks it "until lost").
 
     Args:
-        min_hits: matches in a row that confirm a new target.
+        min_hits: matches in a row that confirm a new target (``adaptations.early_confirm``:
+            fewer for one that overlaps no other).
         max_misses: frames a confirmed target survives unfound.
         min_height: smallest candidate height that starts a target (pixels).
         new_track_iou: a free candidate overlapping a live target by more IoU than this

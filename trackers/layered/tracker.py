@@ -19,8 +19,8 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
    target at once.
 6. ``_end_targets`` and ``_start_targets`` (ours: PBM 3 starts each target by hand): a
    candidate no target takes starts a TENTATIVE target, CONFIRMED after
-   ``life_cycle.min_hits`` matches; a target is dropped after ``life_cycle.max_misses``
-   frames unfound.
+   ``life_cycle.min_hits`` matches (``rules.confirmation``: a lone one sooner); a target is
+   dropped after ``life_cycle.max_misses`` frames unfound.
 7. ``_report``: found targets, and confirmed unfound ones for ``reporting.max_misses``
    frames (OCCLUDED).
 
@@ -292,7 +292,7 @@ class PBMTracker:
         ``model_update.part_threshold`` (``update_parts``; with ``adaptations.stale`` a
         visible part failing to match is re-learned), the match scores, the head templates
         of unoccluded targets whose head matched (PBM 4.1), and confirmation after
-        ``life_cycle.min_hits`` matches."""
+        ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
         targets, u = self.targets, self.model_update
         mt, mn = matches[:, 0], matches[:, 1]
         dof, pj, occl, ks = matched_rows(mt, mn, scores.hyp, cand.box, cand.centroid, cand.blob,
