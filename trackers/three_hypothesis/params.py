@@ -217,7 +217,7 @@ class Adaptations:
     shape_gate: float = 0.0
     early_confirm: int = 1
     early_confirm_score: float = 0.0
-    report_memory: float = 0.0
+    report_memory: float = 1.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,

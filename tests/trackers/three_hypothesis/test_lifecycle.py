@@ -134,3 +134,24 @@ def test_person_standing_undetected_on_foreground_keeps_the_id():
 
     assert len(ids(RetaTracker())) == 1
     assert len(ids(RetaTracker(adaptations=Adaptations(foreground_presence=False)))) == 2
+
+
+def test_report_memory_stops_reporting_a_young_track_that_vanished_on_foreground():
+    """A person found 4 frames vanishes from the detections in plain view, its place still
+    foreground (a small object the detector found now and then): without the rule its
+    hypothesis is held by the foreground and reported frame after frame; with
+    report_memory 0.5 it is reported for 2 frames (0.5 x 4 matches), then only drawn."""
+    box = [100.0, 20.0, 20.0, 60.0]
+    fg = np.zeros((H, W), bool)
+    fg[20:80, 100:120] = True
+    img = _frame([box], [RED])
+
+    def reported(tracker):
+        for _ in range(4):
+            tracker.update(img, detections([box]), fg)
+        return [sum(t.state.name == "OCCLUDED" for t in tracker.update(img, detections(
+            []), fg)) for _ in range(8)]
+
+    assert reported(RetaTracker(adaptations=Adaptations(report_memory=0.0))) == [1] * 8
+    assert reported(RetaTracker(adaptations=Adaptations(report_memory=0.5))) == \
+        [1, 1] + [0] * 6

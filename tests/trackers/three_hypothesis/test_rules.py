@@ -46,7 +46,7 @@ def test_paper_mode_picks_the_papers_rule_at_every_step():
     assert isinstance(ours.stage1_appearance, AppearanceMargin)
     assert isinstance(ours.appearance_behind, BlendVisible)
     assert isinstance(ours.shape_behind, EstimateShape)
-    assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0)
+    assert ours.support == ForegroundSupport(h) and ours.report == ReportRule(4, 3.0, memory=1.0)
     assert ours.presence == ForegroundPresence(h)
     assert isinstance(ours.velocity, MeasuredVelocity)
     built = RetaTracker(adaptations=Adaptations.paper()).rules
@@ -170,4 +170,4 @@ def test_groups_are_frozen_and_paper_mode_changes_nothing_else():
         "report_spread", "tentative_misses", "max_hidden", "appearance_margin",
         "measured_velocity", "foreground_presence", "tentative_stage1_only",
         "inherit_hidden_id", "merge_duplicates", "correct_behind", "filter_size",
-        "early_confirm"]
+        "early_confirm", "report_memory"]
