@@ -6,8 +6,8 @@ the umask and the environment, and passes its stdin, stdout and stderr themselve
 (``SCM_RIGHTS``); the server forks a preloaded child that runs the command as a cold
 process would and answers with its exit status. SIGINT, SIGTERM and SIGHUP received here
 go to the job's process group; Ctrl-Z (SIGTSTP) stops the job's process group and then this
-process, and SIGCONT (the shell's ``fg`` or ``bg``) continues the job. ``None`` means "run cold": the server is off
-(``OCCBENCH_SERVER=off``), none answers (with ``OCCBENCH_SERVER=on`` one is then started in
+process, and SIGCONT (the shell's ``fg`` or ``bg``) continues the job. ``None`` means "run
+cold": the server is off (``OCCBENCH_SERVER=off``), none answers (with ``OCCBENCH_SERVER=on`` one is then started in
 the background for the next command; by default, ``auto``, only ``occbench server start``
 starts one), or it refused (its code is no longer the installed code: it exits, and with
 ``on`` a new one is started). ``occbench server ...`` itself always runs here.

@@ -103,7 +103,7 @@ LOBBY_REPORTED = ("CAVIAR1-Browse1-f0630-0745", "CAVIAR1-Fight_RunAway1-f0319-03
                   "CAVIAR1-Fight_RunAway2-f0300-0385", "CAVIAR1-Walk2-f0800-0999",
                   "CAVIAR1-Walk3-f0212-0772")
 #: the lobby's choosing clips C (docs/generalisation.md, "Lobby"); with noisy ground truth a
-#: choosing set for pbm's identity rules (pbmgt)
+#: choosing set for pbm's and reta's identity rules
 LOBBY_CHOSEN = ("CAVIAR1-Browse2-f0548-0749", "CAVIAR1-Browse4-f0278-0364",
                 "CAVIAR1-Rest_FallOnFloor-f0655-0935", "CAVIAR1-Rest_InChair-f0475-0771",
                 "CAVIAR1-Walk3-f1096-1378", "CAVIAR1-Walk2-f0400-0599")
@@ -148,7 +148,7 @@ SETS: tuple[EvalSet, ...] = (
                                    f"dataset.sequences=[{','.join(LOBBY_CHOSEN)}]", *GT03),
             UNTOUCHED_SEEDS, requires=(f"data:{LOBBY}",),
             description="the six CAVIAR lobby clips of the lobby's choosing set C, noisy gt "
-            "miss 0.3 (for choosing pbm's identity rules)"),
+            "miss 0.3 (for choosing pbm's and reta's identity rules)"),
     EvalSet("OLS2cor", UNTOUCHED, _replay("CAVIAR-OneLeaveShop2cor", *GT03), (1000,),
             description="CAVIAR OneLeaveShop2cor trajectories replayed (25 fps), noisy gt miss 0.3",
             requires=("CAVIAR-OneLeaveShop2cor",)),
