@@ -115,6 +115,10 @@ class Adaptations:
         early_confirm: a new target overlapping no other live target (IoU < 0.1) is
             confirmed after this many matches (``rules.IsolatedEarly``; 0: after
             ``life_cycle.min_hits``, our life cycle's rule; the paper starts targets by hand).
+        reupdate: a target found again after at least this many frames unfound has KF1 and
+            KF2 rewound to its last observation and re-run over the line from it to the new
+            one (``reupdate.ReUpdate``, OC-SORT's observation-centric re-update; 0: off,
+            one update after the gap's predictions, eqs. 7-8).
     """
 
     model_spread: float = 4.5
@@ -139,6 +143,7 @@ class Adaptations:
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
     rival_match: float = 0.0
     early_confirm: int = 2
+    reupdate: int = 0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -147,7 +152,8 @@ class Adaptations:
              report_support=self.report_support, rival_match=self.rival_match)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
-        at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm)
+        at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
+                 reupdate=self.reupdate)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
         if self.hidden_evidence is not None and not isinstance(self.hidden_evidence, HiddenEvidence):
@@ -164,7 +170,8 @@ class Adaptations:
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "one_to_one"),
                                       bool),
-                      "prune_max_misses": int, "exit_misses": int, "early_confirm": int})
+                      "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
+                      "reupdate": int})
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -175,7 +182,7 @@ class Adaptations:
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
                    profile_heads=False, one_to_one=False, report_support=0.0,
-                   hidden_evidence=None, rival_match=0.0, early_confirm=0)
+                   hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

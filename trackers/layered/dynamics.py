@@ -56,6 +56,11 @@ class ConstantVelocity2D:
         self.qp = np.zeros(0)
         self.qv = np.zeros(0)
         self.r = np.zeros(0)
+        # state and measurement at each filter's last observation (``observed``; read by
+        # ``reupdate.ReUpdate``, OC-SORT's re-update after a gap)
+        self.seen_x = np.zeros((0, 4))
+        self.seen_p = np.zeros((0, 2, 4))
+        self.seen_z = np.zeros((0, 2))
 
     def __len__(self) -> int:
         return len(self.x)
@@ -70,12 +75,22 @@ class ConstantVelocity2D:
         self.qp = np.append(self.qp, qp**2 * s2)
         self.qv = np.append(self.qv, qv**2 * s2)
         self.r = np.append(self.r, r**2 * s2)
+        self.seen_x = np.vstack([self.seen_x, self.x[-1:]])
+        self.seen_p = np.concatenate([self.seen_p, self.p[-1:]])
+        self.seen_z = np.vstack([self.seen_z, self.x[-1:, :2]])
 
     def take(self, rows) -> None:
         """Keep only the filters at ``rows`` (in that order)."""
         rows = np.asarray(rows, dtype=np.intp)
         self.x, self.p = self.x[rows], self.p[rows]
         self.qp, self.qv, self.r = self.qp[rows], self.qv[rows], self.r[rows]
+        self.seen_x, self.seen_p = self.seen_x[rows], self.seen_p[rows]
+        self.seen_z = self.seen_z[rows]
+
+    def observed(self, rows: np.ndarray, z: np.ndarray) -> None:
+        """Remember the state (x, P) of the filters at ``rows``, just updated with their
+        measurements z (M, 2), as their last observation's."""
+        self.seen_x[rows], self.seen_p[rows], self.seen_z[rows] = self.x[rows], self.p[rows], z
 
     def state(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """(4,) state and (4, 4) covariance of filter ``i`` (copies)."""

@@ -20,6 +20,7 @@ from trackers.geometry import iou_matrix
 from trackers.layered.adaptations import Adaptations
 from trackers.layered.evidence import HiddenEvidence, box_foreground
 from trackers.layered.parts import PartFeatures
+from trackers.layered.reupdate import AfterPrediction, ReUpdate
 from trackers.layered.targets import Targets
 
 # --------------------------------------------------------------- eq. 11: the model compared
@@ -272,6 +273,7 @@ class Rules(NamedTuple):
     sharing: Alone | OneToOne
     report_shown: ReportUnfound | ReportOnForeground | HiddenEvidence
     confirmation: InARow | IsolatedEarly
+    reupdate: AfterPrediction | ReUpdate
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -288,4 +290,5 @@ def build_rules(a: Adaptations) -> Rules:
         report_shown=a.hidden_evidence or (ReportOnForeground(a.report_support)
                                            if a.report_support > 0 else ReportUnfound()),
         confirmation=IsolatedEarly(a.early_confirm) if a.early_confirm > 0 else InARow(),
+        reupdate=ReUpdate(a.reupdate) if a.reupdate > 0 else AfterPrediction(),
     )

@@ -288,18 +288,18 @@ class PBMTracker:
                        pred_wh: np.ndarray, image_size: tuple[int, int]) -> None:
         """PBM 4.2 for the (M, 2) matched (target, candidate) pairs, all at once: the global
         models and filters (``Targets.update``: DOF measured when unoccluded, window-averaged
-        when occluded), then each part by a running average weighted by p_j, frozen below
-        ``model_update.part_threshold`` (``update_parts``; with ``adaptations.stale`` a
-        visible part failing to match is re-learned), the match scores, the head templates
-        of unoccluded targets whose head matched (PBM 4.1), and confirmation after
-        ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
+        when occluded; after a gap ``rules.reupdate``), then each part by a running average
+        weighted by p_j, frozen below ``model_update.part_threshold`` (``update_parts``; with
+        ``adaptations.stale`` a visible part failing to match is re-learned), the match
+        scores, the head templates of unoccluded targets whose head matched (PBM 4.1), and
+        confirmation after ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
         targets, u = self.targets, self.model_update
         mt, mn = matches[:, 0], matches[:, 1]
         dof, pj, occl, ks = matched_rows(mt, mn, scores.hyp, cand.box, cand.centroid, cand.blob,
                                          pred_wh, targets.alpha, scores.pj, scores.dof_h,
                                          scores.pj_h, scores.k_h)
         measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
-        shift = targets.update(mt, dof, measured, occl, pj, u.part_threshold)
+        shift = self.rules.reupdate.update(targets, mt, dof, measured, occl, pj, u.part_threshold)
         # then the parts models, from the feature arrays the candidates were measured in
         dof_t = targets.dof
         n_occl = np.count_nonzero(occl)
