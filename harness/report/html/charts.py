@@ -24,9 +24,14 @@ WIDTH = 900
 
 
 def _spec(chart: Any) -> dict[str, Any]:
-    """The Vega-Lite dict of an Altair chart, with readable fonts."""
-    return chart.configure_axis(**FONT).configure_legend(**FONT).configure_title(
-        fontSize=14, anchor="start").to_dict()
+    """The Vega-Lite dict of an Altair chart, with readable fonts. Every row goes in: Altair
+    refuses data over 5,000 rows by default (a guard against huge notebooks), which a long
+    sequence's timeline of twenty trackers passes; the page is self-contained by design."""
+    import altair as alt
+
+    with alt.data_transformers.disable_max_rows():
+        return chart.configure_axis(**FONT).configure_legend(**FONT).configure_title(
+            fontSize=14, anchor="start").to_dict()
 
 
 def segments(frames: np.ndarray, count: np.ndarray) -> list[tuple[int, int, int]]:
