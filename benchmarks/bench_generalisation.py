@@ -12,7 +12,9 @@ docs/generalisation.md.
     .venv/bin/python benchmarks/bench_generalisation.py --docs          # + docs' table section
 
 Writes ``generalisation.csv`` (long: set, role, tracker, IDF1, HOTA, MOTA, n_seeds,
-failures) and ``generalisation.md`` (the wide table and the legend of the sets) into
+failures), ``generalisation.md`` (the wide table and the legend of the sets) and
+``versus.md`` (reta and pbm against the best outside tracker of each set, per metric, with
+the verdict: ``harness.sweeps.versus``) into
 ``--out`` (default ``results/generalisation/<date>_<time>/``), each set's run directories
 under ``runs/``, and prints the table. Sets whose data is absent are skipped with a
 message; trackers whose library is not installed are skipped with the reason. Every
@@ -35,6 +37,7 @@ sys.path.insert(0, str(ROOT))
 from shared_data import use_shared_data  # noqa: E402
 
 from harness.sweeps import generalisation as G  # noqa: E402
+from harness.sweeps import versus as V  # noqa: E402
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
@@ -149,6 +152,9 @@ def main(argv=None) -> int:
 def _report(table, sets, out: Path, args, argv) -> int:
     text = G.markdown(table, sets)
     print(text)
+    verdicts = V.markdown(V.versus_outside(table), sets)  # issue 28's acceptance, per set
+    (out / "versus.md").write_text(verdicts)
+    print(f"Ours against the best outside tracker of each set:\n\n{verdicts}")
     print(f"results: {out}")
     if args.docs:
         note = "" if args.length is None else f" (sequences cut to {args.length} frames)"

@@ -90,6 +90,8 @@ def test_combine_joins_earlier_tables(tmp_path):
     assert list(out["tracker"]) == ["reta", "pbm", "norfair_tuned"]  # table order
     assert out.set_index("tracker").loc["pbm", "IDF1"] == 0.55
     assert "0.700 / 0.600 / 0.400" in (tmp_path / "out" / "generalisation.md").read_text()
+    versus = (tmp_path / "out" / "versus.md").read_text()  # ours against the best outside
+    assert "| synth (U) | pbm | 0.550 / 0.500 / 0.500 | norfair_tuned 0.700;" in versus
 
 
 def test_docs_table_replaced_and_the_reading_around_it_kept():

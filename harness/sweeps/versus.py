@@ -1,0 +1,76 @@
+"""Each of our trackers against the best outside tracker of every set of a generalisation
+table (``harness.sweeps.generalisation``): issue 28's acceptance ("each paper tracker ahead
+of every outside tracker, tuned or not, on IDF1 and HOTA"), computed from the table rather
+than read off it by eye.
+
+*Outside* is every tracker of the table that is not the project's own (``OWN``: our SORT
+baseline, the two paper trackers and their paper modes), so tuned and BoxMOT rows count.
+Per metric the best outside tracker is taken on its own (the best IDF1 and the best HOTA may
+be two trackers), as the acceptance asks to beat every one of them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import pandas as pd
+
+from harness.sweeps.generalisation import METRICS, TUNING, EvalSet
+
+#: the project's own trackers: never the "outside" reference
+OWN = ("baseline", "reta", "reta_paper", "pbm", "pbm_paper")
+
+
+def versus_outside(table: pd.DataFrame, ours: Sequence[str] = ("reta", "pbm")) -> pd.DataFrame:
+    """One row per (set, tracker of ``ours``) present in ``table`` (the long table:
+    set, role, tracker, IDF1, HOTA, MOTA, ...): the tracker's metrics, the best outside
+    tracker's per metric (``best_<M>``, ``best_<M>_by``) and the margin ``<M> - best``
+    (``margin_<M>``). A set without an outside tracker gives no row."""
+    rows = []
+    for name, s in table.groupby("set", sort=False):
+        outside = s[~s["tracker"].isin(OWN)].dropna(subset=list(METRICS), how="all")
+        if outside.empty:
+            continue
+        best = {m: outside.loc[outside[m].idxmax()] for m in METRICS}
+        for t in ours:
+            mine = s[s["tracker"] == t]
+            if mine.empty:
+                continue
+            row = {"set": name, "role": mine["role"].iloc[0], "tracker": t}
+            for m in METRICS:
+                row[m] = float(mine[m].iloc[0])
+                row[f"best_{m}"], row[f"best_{m}_by"] = float(best[m][m]), best[m]["tracker"]
+                row[f"margin_{m}"] = row[m] - row[f"best_{m}"]
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def verdict(row: pd.Series) -> str:
+    """"ahead" when IDF1 and HOTA both beat the best outside tracker's at three decimals
+    (the table's precision); else which are level and which behind, by how much."""
+    level, behind = [], []
+    for m in ("IDF1", "HOTA"):
+        gap = round(round(row[m], 3) - round(row[f"best_{m}"], 3), 3)
+        if gap == 0:
+            level.append(m)
+        elif gap < 0:
+            behind.append(f"{m} {gap:+.3f}")
+    parts = ([f"level: {', '.join(level)}"] if level else []) + (
+        [f"behind: {', '.join(behind)}"] if behind else [])
+    return "; ".join(parts) or "ahead"
+
+
+def markdown(versus: pd.DataFrame, sets: Sequence[EvalSet]) -> str:
+    """The verdicts as a table, sets in ``sets``' order, choosing (T) and reporting (U) sets
+    side by side."""
+    order = {s.name: i for i, s in enumerate(sets)}
+    v = versus.sort_values("set", key=lambda c: c.map(lambda n: order.get(n, len(order))),
+                           kind="stable")
+    lines = ["| set | tracker | IDF1 / HOTA / MOTA | best outside: IDF1; HOTA; MOTA | verdict |",
+             "|---|---|---|---|---|"]
+    for _, r in v.iterrows():
+        mark = "T" if r["role"] == TUNING else "U"
+        ours = " / ".join(f"{r[m]:.3f}" for m in METRICS)
+        best = "; ".join(f"{r[f'best_{m}_by']} {r[f'best_{m}']:.3f}" for m in METRICS)
+        lines.append(f"| {r['set']} ({mark}) | {r['tracker']} | {ours} | {best} | {verdict(r)} |")
+    return "\n".join(lines) + "\n"
