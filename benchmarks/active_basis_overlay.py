@@ -21,9 +21,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from harness.pipeline.build import compose_config  # noqa: E402
-from harness.report.primitives import legend_strip  # noqa: E402
-from trackers.geometry import iou_matrix  # noqa: E402
+from occbench.pipeline.build import compose_config  # noqa: E402
+from occbench.report.primitives import legend_strip  # noqa: E402
+from occbench.trackers.geometry import iou_matrix  # noqa: E402
 
 GREEN, RED, MAGENTA = (0, 200, 0), (0, 0, 255), (255, 0, 255)
 

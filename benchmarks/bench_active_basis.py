@@ -32,8 +32,8 @@ sys.path.insert(0, str(ROOT))
 from hydra.utils import instantiate
 from shared_data import use_shared_data
 
-from harness.commands.detect import match_count
-from harness.sources.frontend import compose_config, load_sequences
+from occbench.commands.detect import match_count
+from occbench.sources.frontend import compose_config, load_sequences
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 

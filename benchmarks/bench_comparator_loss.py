@@ -1,9 +1,9 @@
 """PBM's comparators (mean shift, the colour particle filter) under PBM's single-target
-protocol with candidate loss and restart rules (``trackers.comparators.loss``): the figures
+protocol with candidate loss and restart rules (``occbench.trackers.comparators.loss``): the figures
 the rules were chosen on, and those they are reported on.
 
 Every candidate follows every person of a set under ``+experiment=pbm_table1``'s protocol
-(``harness.pipeline.protocols.run_single_target``: started from the person's ground-truth
+(``occbench.pipeline.protocols.run_single_target``: started from the person's ground-truth
 box, a restart reported under a new id); frames are read and detected once per set. Prints,
 per candidate, each set's IDF1 and the IDF1 / MOTA pooled over the chosen sets (counts
 summed, ratios recomputed), then PBM Table 1's and Tables 2-4's columns pooled the same way.
@@ -33,12 +33,12 @@ sys.path.insert(0, str(ROOT))
 from bench_reacquisition import parse_tracker  # noqa: E402
 from shared_data import use_shared_data  # noqa: E402
 
-from harness.metrics import combine, score_sequence  # noqa: E402
-from harness.metrics.paper import combine as combine_paper  # noqa: E402
-from harness.metrics.paper import paper_counts  # noqa: E402
-from harness.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
-from harness.pipeline.protocols import run_single_target  # noqa: E402
-from harness.sweeps import generalisation as G  # noqa: E402
+from occbench.metrics import combine, score_sequence  # noqa: E402
+from occbench.metrics.paper import combine as combine_paper  # noqa: E402
+from occbench.metrics.paper import paper_counts  # noqa: E402
+from occbench.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
+from occbench.pipeline.protocols import run_single_target  # noqa: E402
+from occbench.sweeps import generalisation as G  # noqa: E402
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: EnterExitCrossingPaths1cor is not shipped
 

@@ -12,7 +12,7 @@ runs them: ``occbench eval GT RESULTS --csv`` and TrackEval's ``Evaluator`` on
 run ``--repeats`` times in turn; wall time, CPU time (user + system: steadier than wall time
 on a shared machine) and peak memory (the child's own maximum resident set) are given as
 medians, with the ratios TrackEval / occbench. The figures of both (every
-column of ``harness.metrics.COLUMNS`` on the COMBINED row) must agree to 1e-6.
+column of ``occbench.metrics.COLUMNS`` on the COMBINED row) must agree to 1e-6.
 
 The run's own scoring (``run_experiment`` -> ``score_sequence`` and ``extra_score``, the
 paper and occlusion metrics) is timed in this process on the same tables.
@@ -39,9 +39,9 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from harness.io.mot import read_mot
-from harness.metrics import COLUMNS, score_sequence
-from harness.metrics.occlusion import extra_score
+from occbench.io.mot import read_mot
+from occbench.metrics import COLUMNS, score_sequence
+from occbench.metrics.occlusion import extra_score
 
 SEQ = "MOT20-density"
 WIDTH, HEIGHT = 1920, 1080
@@ -146,7 +146,7 @@ def write_case(root: Path, gt: np.ndarray, res: np.ndarray, frames: int) -> None
 
 def timed(cmd: list[str], log: Path) -> tuple[float, float, float]:
     """Run ``cmd`` as a child process; (wall seconds, CPU seconds (user + system), peak
-    resident MB) of the child. Never through a warm server (``harness.server``): the child
+    resident MB) of the child. Never through a warm server (``occbench.server``): the child
     would only wait for the server's process, and its CPU and memory would not be the job's."""
     env = {**os.environ, "OCCBENCH_SERVER": "off"}
     with log.open("ab") as fh:
@@ -217,7 +217,7 @@ def run_comparison(root: Path, repeats: int, with_trackeval: bool) -> str:
     import shutil
 
     occbench = shutil.which("occbench")
-    ours_cmd = ([occbench] if occbench else [sys.executable, "-m", "harness"]) + [
+    ours_cmd = ([occbench] if occbench else [sys.executable, "-m", "occbench"]) + [
         "eval", str(root / "gt"), str(root / "tracks" / "bench"), "--csv", str(root / "ours.csv")]
     te_cmd = None
     if with_trackeval:

@@ -14,7 +14,7 @@
     384x288 and 80 frames/s at 768x576.
 
 Run: ``python benchmarks/bench_frontend.py [--frames N] [--skip-quality] [--skip-speed]``.
-Reads the shipped CAVIAR-OneLeaveShop1cor (``harness.paths``, $OCCBENCH_DATA moves it); exits with a message
+Reads the shipped CAVIAR-OneLeaveShop1cor (``occbench.paths``, $OCCBENCH_DATA moves it); exits with a message
 when it is absent.
 """
 
@@ -39,12 +39,12 @@ sys.path.insert(0, str(ROOT))
 
 from hydra.utils import instantiate
 
-from harness.commands.detect import match_count, run_detection
-from harness.io.mot import read_mot
-from harness.paths import data_path
-from harness.sources.frontend import compose_config
-from trackers.frontend.blobs import blobs_from_mask
-from trackers.three_hypothesis.features import ellipse_histograms
+from occbench.commands.detect import match_count, run_detection
+from occbench.io.mot import read_mot
+from occbench.paths import data_path
+from occbench.sources.frontend import compose_config
+from occbench.trackers.frontend.blobs import blobs_from_mask
+from occbench.trackers.three_hypothesis.features import ellipse_histograms
 
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
 
@@ -108,7 +108,7 @@ def _timed(fn, *args):
 
 def speed(n_frames: int) -> None:
     cv2.setNumThreads(1)
-    from harness.datasets.caviar import load_caviar
+    from occbench.datasets.caviar import load_caviar
 
     (seq,) = load_caviar(CAVIAR)
     originals = [img for k, img in seq.frames() if k <= n_frames]

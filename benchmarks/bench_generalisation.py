@@ -14,7 +14,7 @@ docs/generalisation.md.
 Writes ``generalisation.csv`` (long: set, role, tracker, IDF1, HOTA, MOTA, n_seeds,
 failures), ``generalisation.md`` (the wide table and the legend of the sets) and
 ``versus.md`` (reta and pbm against the best outside tracker of each set, per metric, with
-the verdict: ``harness.sweeps.versus``) into
+the verdict: ``occbench.sweeps.versus``) into
 ``--out`` (default ``results/generalisation/<date>_<time>/``), each set's run directories
 under ``runs/``, and prints the table. Sets whose data is absent are skipped with a
 message; trackers whose library is not installed are skipped with the reason. Every
@@ -36,8 +36,8 @@ sys.path.insert(0, str(ROOT))
 
 from shared_data import use_shared_data  # noqa: E402
 
-from harness.sweeps import generalisation as G  # noqa: E402
-from harness.sweeps import versus as V  # noqa: E402
+from occbench.sweeps import generalisation as G  # noqa: E402
+from occbench.sweeps import versus as V  # noqa: E402
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 

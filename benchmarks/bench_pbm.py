@@ -34,12 +34,12 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
 
-from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
-from harness.paths import data_path
-from harness.pipeline.loop import run_sequence
-from harness.pipeline.record import score
-from harness.pipeline.summary import summary_rows
-from harness.sources.annotations import NoisyGroundTruth
+from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
+from occbench.paths import data_path
+from occbench.pipeline.loop import run_sequence
+from occbench.pipeline.record import score
+from occbench.pipeline.summary import summary_rows
+from occbench.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[1]
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
@@ -166,7 +166,7 @@ def main() -> None:
         accuracy(suite, miss, args.seed, "auto",
                  f"synthetic suite, noisy_gt miss {miss} seed {args.seed}, exact foreground")
     if CAVIAR.is_dir():
-        from harness.datasets.caviar import load_caviar
+        from occbench.datasets.caviar import load_caviar
 
         cav = load_caviar(CAVIAR)
         for fg in ("none", "mog2"):

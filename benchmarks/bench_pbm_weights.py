@@ -5,7 +5,7 @@ models were) writes the models and the learned omega (``--models``). Evaluation 
 data, each variant with those same models (only omega differs): ``hand`` = omega of
 ``conf/tracker/pbm.yaml``, ``learned`` = omega of the fit. Data: the synthetic suite at
 ``--seeds`` (not 0, which the defaults were tuned on, not the fit seed) with ``NoisyGroundTruth``
-at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (shipped, ``harness.paths``) at ``--miss``
+at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (shipped, ``occbench.paths``) at ``--miss``
 with foreground none, detection noise seeded by each of ``--seeds``. Prints the COMBINED
 HOTA, IDF1, MOTA, IDs, Frag per data set and variant (per sequence with ``--per-sequence``).
 
@@ -38,14 +38,14 @@ import pandas as pd
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
-from harness.fit.pbm import load_feature_weights
-from harness.fit.pbm import main as fit_main
-from harness.paths import data_path
-from harness.pipeline.loop import run_sequence
-from harness.pipeline.record import score
-from harness.pipeline.summary import summary_rows
-from harness.sources.annotations import NoisyGroundTruth
+from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
+from occbench.fit.pbm import load_feature_weights
+from occbench.fit.pbm import main as fit_main
+from occbench.paths import data_path
+from occbench.pipeline.loop import run_sequence
+from occbench.pipeline.record import score
+from occbench.pipeline.summary import summary_rows
+from occbench.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[1]
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
@@ -118,7 +118,7 @@ def main() -> None:
     if args.skip_caviar:
         return
     if CAVIAR.is_dir():
-        from harness.datasets.caviar import load_caviar
+        from occbench.datasets.caviar import load_caviar
 
         caviar = load_caviar(CAVIAR)
         for seed in args.seeds:

@@ -31,7 +31,7 @@ detections lie mostly inside the person's box), ``misses`` (the person had no de
 IoU >= 0.5 for >= 3 frames before), else ``other``.
 
 For choosing rules on tuning data only (docs/generalisation.md): the sets are those of
-``harness.sweeps.generalisation``; the seeds are the set's own for a tuning set (default),
+``occbench.sweeps.generalisation``; the seeds are the set's own for a tuning set (default),
 else yours (``--seeds``); seeds of a set's untouched list are refused unless ``--untouched``
 is given (to measure, once, not to choose: then the set's own seeds are the default). Several ``--set`` are run one after the other.
 
@@ -60,13 +60,13 @@ sys.path.insert(0, str(ROOT))
 from idf1_losses import idf1_losses, losses_line  # noqa: E402
 from shared_data import use_shared_data  # noqa: E402
 
-from harness.io.mot import MotTable  # noqa: E402
-from harness.metrics import combine, score_sequence  # noqa: E402
-from harness.metrics.paper import considered, match_rows  # noqa: E402
-from harness.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
-from harness.pipeline.loop import frames  # noqa: E402
-from harness.sweeps import generalisation as G  # noqa: E402
-from trackers.geometry import iou_matrix  # noqa: E402
+from occbench.io.mot import MotTable  # noqa: E402
+from occbench.metrics import combine, score_sequence  # noqa: E402
+from occbench.metrics.paper import considered, match_rows  # noqa: E402
+from occbench.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
+from occbench.pipeline.loop import frames  # noqa: E402
+from occbench.sweeps import generalisation as G  # noqa: E402
+from occbench.trackers.geometry import iou_matrix  # noqa: E402
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
@@ -334,7 +334,7 @@ def line(label: str, tally: Tally, m: np.ndarray) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--set", nargs="+", default=["crowd d0.4"],
-                    help="sets of harness.sweeps.generalisation")
+                    help="sets of occbench.sweeps.generalisation")
     ap.add_argument("--seeds", type=int, nargs="+",
                     help="default: a tuning set's own seeds, else 0-5")
     ap.add_argument("--trackers", nargs="+", default=["reta", "pbm"])

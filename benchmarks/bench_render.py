@@ -14,7 +14,7 @@ import time
 
 import cv2
 
-from harness.datasets.synthetic import load_scenario
+from occbench.datasets.synthetic import load_scenario
 
 
 def main() -> None:

@@ -11,10 +11,10 @@ workload run in the same process, and the CPU time of each step of Alg. 1 (one m
 instrumented run; ``tracker_timing``). ``--check [DIGESTS.json]`` prints the sha256 of the
 reported rows (and writes or compares the file): a speed-up must leave them unchanged.
 
-Accuracy: IDF1 and HOTA (``harness.metrics``) of reta and the baseline on the synthetic
-suite (``harness.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
+Accuracy: IDF1 and HOTA (``occbench.metrics``) of reta and the baseline on the synthetic
+suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
 (miss rate 0 and 0.3), and on CAVIAR OneLeaveShop1cor (noisy gt, miss 0.3, seed 0) when
-the data root (``harness.paths``: shipped, or $OCCBENCH_DATA) holds it.
+the data root (``occbench.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
 Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]
 [--people 10 40 100] [--repeats 3] [--check [DIGESTS.json]]``.
@@ -42,10 +42,10 @@ if str(ROOT) not in sys.path:
 
 from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
 
-from harness.paths import data_path
-from trackers.baseline import BaselineTracker
-from trackers.records import Detections
-from trackers.three_hypothesis import Appearance, RetaTracker
+from occbench.paths import data_path
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.records import Detections
+from occbench.trackers.three_hypothesis import Appearance, RetaTracker
 
 WIDTH, HEIGHT = 640, 480
 
@@ -133,11 +133,11 @@ def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
 
 def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
     """IDF1 / HOTA / MOTA / IDs of reta and baseline on the synthetic suite and CAVIAR."""
-    from harness import metrics
-    from harness.datasets.synthetic import load_suite
-    from harness.pipeline.loop import run_sequence
-    from harness.pipeline.record import score
-    from harness.sources.annotations import NoisyGroundTruth
+    from occbench import metrics
+    from occbench.datasets.synthetic import load_suite
+    from occbench.pipeline.loop import run_sequence
+    from occbench.pipeline.record import score
+    from occbench.sources.annotations import NoisyGroundTruth
 
     rows = []
 
@@ -161,7 +161,7 @@ def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
         run("synthetic", suite, miss)
     caviar = data_path("CAVIAR-OneLeaveShop1cor")
     if caviar.is_dir():
-        from harness.datasets.caviar import load_caviar
+        from occbench.datasets.caviar import load_caviar
 
         run("caviar", load_caviar(str(caviar)), 0.3)
     else:

@@ -28,11 +28,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from harness.commands.detect import run_detection
-from harness.datasets.caviar import load_caviar
-from harness.paths import data_path
-from harness.pipeline.experiment import run_experiment
-from harness.sources.frontend import compose_config
+from occbench.commands.detect import run_detection
+from occbench.datasets.caviar import load_caviar
+from occbench.paths import data_path
+from occbench.pipeline.experiment import run_experiment
+from occbench.sources.frontend import compose_config
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = data_path("CAVIAR-OneLeaveShop1cor")

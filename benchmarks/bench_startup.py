@@ -8,7 +8,7 @@ warm machine (numba's cache filled by an earlier run).
 
 - ``python -c pass``: the reference.
 - ``occbench --version``: the console script, wall time.
-- import: ``import harness.commands.run, harness.pipeline.experiment`` in a fresh process.
+- import: ``import occbench.commands.run, occbench.pipeline.experiment`` in a fresh process.
 - build: in one fresh process, after the imports above: compose the config of ``tracker=T``
   and build the tracker (its own imports included), then its warm-up (numba kernels loaded
   from the cache) - for reta and pbm.
@@ -16,7 +16,7 @@ warm machine (numba's cache filled by an earlier run).
   frame loop (``run_sequence`` entered: config, checks, trackers built and warmed up; the
   data's own warm-up, e.g. a detector's background, is what the loop does first and is
   left out), on the synthetic ``crossing`` scene, split into (wall, the same process):
-  interpreter + imports (to the Hydra app's start: ``harness.commands.cli.main`` called),
+  interpreter + imports (to the Hydra app's start: ``occbench.commands.cli.main`` called),
   Hydra compose (both of Hydra's compositions: the mode's, ``Hydra.get_mode``, then the
   run's), build (the run's plan: checks, config.yaml, trackers built with their imports,
   detection source, sequences loaded) and warm-up (``plan.prepare_trackers``); what is left
@@ -24,7 +24,7 @@ warm machine (numba's cache filled by an earlier run).
 - first frame, default suite: the same for ``occbench tracker=reta`` on the default dataset
   (the eight synthetic scenes).
 - first frame, served: the one-job run handed by the console script's fast path
-  (``harness.__main__.main``, ``OCCBENCH_SERVER=on``) to a warm server (``harness.server``,
+  (``occbench.__main__.main``, ``OCCBENCH_SERVER=on``) to a warm server (``occbench.server``,
   started once by the bench in a temporary folder with the real preload; its children apply
   the same stage timers), from the client's start to the served child's frame loop.
 - sweep job: a 4-job sweep (``hydra.launcher.n_jobs=1``, one job at a time) on the default
@@ -64,10 +64,10 @@ SCENE = ["dataset.scenarios=[crossing]", "dataset.length=20", "progress=false"]
 FIRST_FRAME = """
 import json, os, sys, time
 T0 = float(os.environ["BENCH_T0"])
-import harness.pipeline.experiment as experiment
-import harness.pipeline.plan as plan
+import occbench.pipeline.experiment as experiment
+import occbench.pipeline.plan as plan
 from hydra._internal.hydra import Hydra
-from harness.commands.cli import main
+from occbench.commands.cli import main
 def now():
     return time.time() - T0, time.process_time()
 spent, ended = {"interpreter + imports": now(), "Hydra compose": (0.0, 0.0)}, {}
@@ -103,10 +103,10 @@ def now():
 def since(t):
     return [b - a for a, b in zip(t, now())]
 t = now()
-import harness.commands.run, harness.pipeline.experiment
+import occbench.commands.run, occbench.pipeline.experiment
 out = {"import": since(t)}
-from harness.pipeline.build import build_tracker, compose_config
-from harness.pipeline.warmup import warm_up
+from occbench.pipeline.build import build_tracker, compose_config
+from occbench.pipeline.warmup import warm_up
 for name in sys.argv[1:]:
     t = now()
     tracker = build_tracker(name, compose_config([f"tracker={name}"]).tracker, "tracker")
@@ -121,8 +121,8 @@ print(json.dumps(out))
 # the bench's own server: the real preload; each child times its stages as FIRST_FRAME does
 SERVED_SERVER = """
 import sys
-from harness.commands.server import preload
-from harness.server.serve import Server
+from occbench.commands.server import preload
+from occbench.server.serve import Server
 def run(args):
     sys.argv = ["occbench", *args]
     exec(compile(FIRST_FRAME, "first_frame", "exec"), {"__name__": "first_frame"})
@@ -131,7 +131,7 @@ FIRST_FRAME = sys.argv[2]
 sys.exit(Server(sys.argv[1], run, preload).serve())
 """
 # the console script's fast path, in a ``python -c`` process as the server is (same sys.path)
-CLIENT = "import sys; from harness.__main__ import main; sys.argv[0] = 'occbench'; main()"
+CLIENT = "import sys; from occbench.__main__ import main; sys.argv[0] = 'occbench'; main()"
 
 
 def _child_cpu() -> float:
@@ -172,7 +172,7 @@ class ServedRuns:
     def __init__(self, root: Path, folder: Path) -> None:
         self.root = root
         self.env = {**tree_env(root), "XDG_RUNTIME_DIR": str(folder), "OCCBENCH_SERVER": "on"}
-        code = ("from harness.server.client import identity, socket_path; "
+        code = ("from occbench.server.client import identity, socket_path; "
                 "print(socket_path(identity()))")
         self.path = Path(run([sys.executable, "-c", code], root, self.env)[1].strip())
         self.proc = subprocess.Popen([sys.executable, "-c", SERVED_SERVER, str(self.path),
@@ -207,7 +207,7 @@ def _stamp(line: str) -> float:
 
 def job_gaps(sweep_dir: Path, *extra: str) -> list[float]:
     """Seconds from each job's last log line to the next job's frame loop."""
-    subprocess.run([sys.executable, "-m", "harness", "-m", "tracker=reta", "seed=0,1,2,3",
+    subprocess.run([sys.executable, "-m", "occbench", "-m", "tracker=reta", "seed=0,1,2,3",
                     *SCENE, "hydra.launcher.n_jobs=1", f"hydra.sweep.dir={sweep_dir}", *extra],
                    check=True, cwd=ROOT, env=tree_env(ROOT), capture_output=True, timeout=1800)
     logs = [(sweep_dir / str(j) / "occbench.log").read_text().splitlines() for j in range(4)]
@@ -222,7 +222,7 @@ def one_round(root: Path, trackers: list[str], tmp: Path,
               add: Callable[[str, list[float]], None], served: ServedRuns | None = None) -> None:
     """Every per-process figure once, for the code of ``root`` (``served``: its server)."""
     add("python -c pass", run([sys.executable, "-c", "pass"], root)[0])
-    add("occbench --version", run([sys.executable, "-m", "harness", "--version"], root)[0])
+    add("occbench --version", run([sys.executable, "-m", "occbench", "--version"], root)[0])
     for key, value in json.loads(run([sys.executable, "-c", BUILD, *trackers], root)[1]).items():
         add(key, value)
     for name in trackers:

@@ -1,6 +1,6 @@
 """Sweep benchmark: a 6-job tracker sweep against one job, each from an empty front-end cache.
 
-Runs, as a user would from the shell (``python -m harness``, the ``occbench`` command):
+Runs, as a user would from the shell (``python -m occbench``, the ``occbench`` command):
 
 * one job: ``occbench tracker=reta dataset=caviar detector=silhouette``;
 * a multirun of the same over ``tracker.association.mu_g=60,90,120,150,180,240`` (the
@@ -41,12 +41,12 @@ def load() -> str:
 
 
 def run(args: list[str], cache: Path, checkout: Path) -> float:
-    """Wall seconds of ``python -m harness ARGS`` with ``OCCBENCH_CACHE=cache``, cold (a
-    warm server, ``harness.server``, would start the job from its preloaded process)."""
+    """Wall seconds of ``python -m occbench ARGS`` with ``OCCBENCH_CACHE=cache``, cold (a
+    warm server, ``occbench.server``, would start the job from its preloaded process)."""
     env = dict(os.environ, OCCBENCH_CACHE=str(cache), OCCBENCH_SERVER="off",
                PYTHONPATH=os.pathsep.join([str(checkout), os.environ.get("PYTHONPATH", "")]))
     t0 = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "harness", *args], env=env, cwd=checkout, check=False,
+    done = subprocess.run([sys.executable, "-m", "occbench", *args], env=env, cwd=checkout, check=False,
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     seconds = time.perf_counter() - t0
     if done.returncode != 0:

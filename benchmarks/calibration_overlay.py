@@ -1,7 +1,7 @@
 """The scene calibration the silhouette detector learns on unlabelled videos (by eye, no score).
 
 For each video: the default front end (``detector=silhouette``) warms up on it, which learns
-the perspective line (``trackers.frontend.calibration``: expected person height against the
+the perspective line (``occbench.trackers.frontend.calibration``: expected person height against the
 foot row), then runs to a chosen frame. The picture shows that frame with the foreground
 tinted, the detector's boxes, and the expected person box the learnt line gives at every
 40th foot row (or a note that the calibration fell back to searching every height).
@@ -23,9 +23,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from harness.pipeline.build import compose_config  # noqa: E402
-from harness.report.draw import grid  # noqa: E402
-from harness.report.primitives import legend_strip  # noqa: E402
+from occbench.pipeline.build import compose_config  # noqa: E402
+from occbench.report.draw import grid  # noqa: E402
+from occbench.report.primitives import legend_strip  # noqa: E402
 
 VIDEOS = ROOT.parent / "shared" / "data" / "videos"
 DEFAULT = ["CAVIAR-ShopAssistant1cor.mp4", "CAVIAR-OneStopEnter1front.mp4",

@@ -19,9 +19,9 @@ from collections import Counter
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harness.io.mot import MotTable
-from harness.metrics.paper import considered
-from trackers.geometry import iou_matrix
+from occbench.io.mot import MotTable
+from occbench.metrics.paper import considered
+from occbench.trackers.geometry import iou_matrix
 
 FN_CAUSES = ("other_id_found", "other_id_hidden", "id_elsewhere", "tentative", "unreported")
 FP_CAUSES = ("on_person", "hidden_nobody", "found_nobody", "nobody_empty")

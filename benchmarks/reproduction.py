@@ -6,7 +6,7 @@
 
 For each table it runs the table's harness commands (``TABLES`` below: the experiment config
 holds the paper's rows, our data note and every reason the figures can differ), reads the
-``paper_table.md`` each run writes (``harness.report.paper_tables``) and replaces that table's
+``paper_table.md`` each run writes (``occbench.report.paper_tables``) and replaces that table's
 section of ``docs/reproduction.md`` with them (one table: every run's ``ours:`` rows), headed by
 the exact commands, the commit and the date; the other sections are left as they are. Every
 number in the document therefore comes from a command printed above it. The run folders go under ``--runs`` (default
@@ -72,7 +72,7 @@ def run_table(table: str, runs: Path) -> tuple[list[Path], float]:
 
 def _run(table: str, args: list[str], out: Path) -> tuple[list[Path], float]:
     folder_key = "hydra.sweep.dir" if "-m" in args else "hydra.run.dir"
-    argv = [sys.executable, "-m", "harness", *args, "progress=false", f"{folder_key}={out}"]
+    argv = [sys.executable, "-m", "occbench", *args, "progress=false", f"{folder_key}={out}"]
     log = out.with_suffix(".log")
     log.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

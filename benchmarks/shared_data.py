@@ -2,7 +2,7 @@
 checkout, or beside the main checkout from a worktree under ``wt/``): the benchmark scripts
 that read it call ``use_shared_data()`` first, which sets ``$OCCBENCH_SHARED`` unless the
 user already did and returns the folder (the library takes it as an argument, e.g.
-``harness.sweeps.generalisation.run_table``'s ``data_root``)."""
+``occbench.sweeps.generalisation.run_table``'s ``data_root``)."""
 
 from __future__ import annotations
 

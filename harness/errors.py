@@ -14,6 +14,6 @@ class ConfigError(ValueError):
 
 
 class Terminated(BaseException):  # a signal, named as KeyboardInterrupt
-    """SIGTERM received: raised in the main thread (``harness.commands.cli.run``) so that a
+    """SIGTERM received: raised in the main thread (``occbench.commands.cli.run``) so that a
     run stops as on Ctrl-C (its summary says interrupted, errors.txt says where) and exits
     143."""

@@ -10,7 +10,7 @@ is taken against the current directory when it is read). Its layout::
     <root>/<anything you download>   e.g. MOT17/train/<sequence>/ (git-ignored)
 
 Configs name files under the root with the ``occbench.data`` resolver
-(``root: ${occbench.data:CAVIAR-OneLeaveShop1cor}``), registered when ``harness.pipeline`` is imported.
+(``root: ${occbench.data:CAVIAR-OneLeaveShop1cor}``), registered when ``occbench.pipeline`` is imported.
 """
 
 from __future__ import annotations

@@ -6,6 +6,13 @@ from __future__ import annotations
 
 import pytest
 
+from occbench.config import register
+
+
+def pytest_configure(config):
+    """Every composition of the session finds the project's resolvers and launcher."""
+    register()
+
 
 @pytest.fixture(autouse=True, scope="session")
 def _session_cache(tmp_path_factory):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harness.metrics.hota import ALPHAS, HotaCounts
+from occbench.metrics.hota import ALPHAS, HotaCounts
 
 
 def reference_hota(gt_ids, tr_ids, sims) -> HotaCounts:
@@ -61,8 +61,8 @@ def reference_hota(gt_ids, tr_ids, sims) -> HotaCounts:
 
 def reference_match_rows(gt, res, iou_threshold: float = 0.5) -> np.ndarray:
     """``paper.match_rows`` as a loop over frames and GT rows (dense IoU per frame)."""
-    from trackers.common.assignment import assign
-    from trackers.geometry import iou_matrix
+    from occbench.trackers.common.assignment import assign
+    from occbench.trackers.geometry import iou_matrix
 
     out = np.full(len(gt), -1, dtype=np.int64)
     if len(gt) == 0 or len(res) == 0:
@@ -99,7 +99,7 @@ def reference_match_rows(gt, res, iou_threshold: float = 0.5) -> np.ndarray:
 
 def reference_responses(gt, res, match: np.ndarray, inside: float = 0.5):
     """``paper.responses`` frame by frame on the dense cover matrix."""
-    from trackers.geometry import overlap_ratio_matrix
+    from occbench.trackers.geometry import overlap_ratio_matrix
 
     g_rows = [np.flatnonzero(match >= 0)]
     r_rows = [match[g_rows[0]]]

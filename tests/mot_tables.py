@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.io.mot import MotTable
+from occbench.io.mot import MotTable
 
 
 def table(rows, conf=None, classes=None) -> MotTable:

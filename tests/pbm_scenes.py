@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from trackers.layered.feature_models import FeatureModels, FoldedMixture
-from trackers.layered.parts import FEATURES, N_PARTS, PartFeatures
-from trackers.records import Detections
+from occbench.trackers.layered.feature_models import FeatureModels, FoldedMixture
+from occbench.trackers.layered.parts import FEATURES, N_PARTS, PartFeatures
+from occbench.trackers.records import Detections
 
 
 @dataclass

@@ -6,9 +6,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence
-from harness.io.mot import MotTable
-from trackers.records import Detections, SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence
+from occbench.io.mot import MotTable
+from occbench.trackers.records import Detections, SequenceInfo
 
 
 def mot(rows, vis=None) -> MotTable:

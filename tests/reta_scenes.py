@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from trackers.records import Detections
+from occbench.trackers.records import Detections
 
 RED = ((40, 40, 200), (60, 60, 120))  # (shirt, body) BGR of a person in red
 

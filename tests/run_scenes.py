@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from hydra import compose, initialize_config_dir
 
-from harness.datasets.base import GroundTruth, Sequence
-from harness.io.mot import MotTable
-from harness.pipeline.experiment import run_experiment as _run_experiment
-from harness.sources.annotations import NoisyGroundTruth
-from trackers.baseline import BaselineTracker
-from trackers.records import Detections, SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence
+from occbench.io.mot import MotTable
+from occbench.pipeline.experiment import run_experiment as _run_experiment
+from occbench.sources.annotations import NoisyGroundTruth
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.records import Detections, SequenceInfo
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = ROOT / "conf"
@@ -123,7 +123,7 @@ class NanSource(NoisyGroundTruth):
 
 
 def run_experiment(cfg, out_dir, tracker_name=None):
-    """``harness.pipeline.experiment.run_experiment`` naming a single tracker as the app does (its choice)."""
+    """``occbench.pipeline.experiment.run_experiment`` naming a single tracker as the app does (its choice)."""
     if tracker_name is None and "_target_" in cfg.tracker:
         tracker_name = "baseline"
     return _run_experiment(cfg, out_dir, tracker_name=tracker_name)

@@ -20,8 +20,8 @@ from hydra.errors import MissingConfigException
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from harness.datasets.base import Sequence
-from harness.pipeline.warmup import config_targets
+from occbench.datasets.base import Sequence
+from occbench.pipeline.warmup import config_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = ROOT / "conf"
@@ -114,7 +114,7 @@ def test_primary_config_composes(primary):
 
 def test_default_app_config():
     cfg = _compose("config", [], hydra=True)
-    # unresolved: resolving it creates the folder (harness.pipeline.rundir)
+    # unresolved: resolving it creates the folder (occbench.pipeline.rundir)
     assert OmegaConf.to_container(cfg.hydra.run)["dir"].startswith(
         "${occbench.unique_dir:results/")
     assert cfg.foreground == "auto" and cfg.objective.metric == "IDF1"
@@ -128,8 +128,8 @@ def test_default_app_config():
     # everyone) and PBM's single-target comparators (pbm_comparison) are not in all
     built = {n for n, target in tracker_targets.items()
              if target is not None
-             and not str(target).startswith(("trackers.outside.", "trackers.bytetrack.",
-                                             "trackers.comparators."))
+             and not str(target).startswith(("occbench.trackers.outside.", "occbench.trackers.bytetrack.",
+                                             "occbench.trackers.comparators."))
              and _missing_module(str(target)) is None}
     assert built <= set(cfg.tracker), "conf/tracker/all.yaml must list every built tracker"
 
@@ -154,7 +154,7 @@ def test_detector_config_instantiates(name):
 def _instantiate_or_skip_extra(node, key: str):
     """``instantiate(node)``; an outside tracker whose library (an extra) is not installed
     skips the test with the install hint."""
-    if not str(node.get("_target_", "")).startswith("trackers.outside."):
+    if not str(node.get("_target_", "")).startswith("occbench.trackers.outside."):
         return instantiate(node, _convert_="all")
     try:
         return instantiate(node, _convert_="all")
@@ -180,7 +180,7 @@ def test_tracker_config_instantiates(name):
 def test_evaluation_config(name):
     cfg = _compose("config", [f"evaluation={name}", "dataset=mot", "dataset.root=unused"])
     assert 0 < cfg.evaluation.iou_threshold <= 1
-    from harness.metrics import COLUMNS
+    from occbench.metrics import COLUMNS
 
     for key in ("table", "plot"):
         unknown = set(cfg.evaluation.get(key) or []) - set(COLUMNS)

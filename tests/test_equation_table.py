@@ -59,7 +59,7 @@ def references(cell: str) -> list[tuple[str, str]]:
 
 def resolve(path: str, name: str) -> object:
     """The object ``name`` (``Class.method`` allowed) of module ``trackers/<path>``."""
-    obj = importlib.import_module("trackers." + path.removesuffix(".py").replace("/", "."))
+    obj = importlib.import_module("occbench.trackers." + path.removesuffix(".py").replace("/", "."))
     for part in name.split("."):
         obj = getattr(obj, part)
     return obj
@@ -111,7 +111,7 @@ def test_each_row_names_code_a_default_run_calls(row):
 # Code docs/adaptations.md records as built, measured and removed: it must not exist.
 REMOVED = {
     "trackers/common/noise.py": "noise14, removed in commit 1233596",
-    "trackers.common.noise.KalmanNoiseML": "noise14",
+    "occbench.trackers.common.noise.KalmanNoiseML": "noise14",
     "KalmanNoiseML": "noise14",
     "KalmanNoiseML.predicted": "noise14",
     "tests/test_position_gate.py": "pbmnoise14, 'of that commit'",
@@ -166,17 +166,17 @@ def _exists(section: str, ref: str, classes: dict[str, list[str]]) -> tuple[bool
         path = ROOT / ref
         rel = ref.removeprefix("trackers/")
         return path.is_file(), {(rel, "")} if ref.startswith("trackers/") else set()
-    if ref.startswith(("trackers.", "harness.")):
+    if ref.startswith("occbench."):
         module, _, name = ref.rpartition(".")
         try:
             getattr(importlib.import_module(module), name)
         except (ImportError, AttributeError):
             return False, set()
-        path = module.removeprefix("trackers.").replace(".", "/") + ".py"
-        return True, {(path, name)} if ref.startswith("trackers.") else set()
+        path = module.removeprefix("occbench.trackers.").replace(".", "/") + ".py"
+        return True, {(path, name)} if ref.startswith("occbench.trackers.") else set()
     if ref.startswith("rules."):
         name = ref.split(".")[1]
-        ok = hasattr(importlib.import_module(f"trackers.{section}.rules"), name)
+        ok = hasattr(importlib.import_module(f"occbench.trackers.{section}.rules"), name)
         return ok, {(f"{section}/rules.py", name)}
     if ref.startswith("test_"):
         prefix = ref.removesuffix("...")

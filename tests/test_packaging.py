@@ -1,8 +1,9 @@
-"""Packaging: the import names resolve to this repository, the console script is declared.
+"""Packaging: the import names resolve to this repository, the console script is declared,
+every package of the source folders is installed.
 
-``trackers`` is also the import name of an unrelated PyPI project (roboflow's ``trackers``);
-with both installed, the one found first on ``sys.path`` wins. These tests fail loudly when
-the other one shadows ours.
+The import packages live under ``occbench`` (harness/ is ``occbench``, trackers/ is
+``occbench.trackers``: pyproject.toml's package-dir), so that roboflow's ``trackers`` (an
+unrelated PyPI project whose import name is ``trackers``) installs beside this one.
 """
 
 from __future__ import annotations
@@ -17,22 +18,46 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 
 
-@pytest.mark.parametrize("name", ["trackers", "harness"])
-def test_import_names_come_from_this_repository(name):
+@pytest.mark.parametrize("name, folder", [("occbench.trackers", "trackers"),
+                                          ("occbench", "harness")])
+def test_import_names_come_from_this_repository(name, folder):
     module = importlib.import_module(name)
     path = Path(module.__file__).resolve()
-    assert path.is_relative_to(ROOT), f"{name} imported from {path}, not from {ROOT}"
+    assert path == ROOT / folder / "__init__.py", f"{name} imported from {path}"
     # and it is ours: modules only this project has
-    ours = {"trackers": "trackers.records", "harness": "harness.pipeline.experiment"}[name]
+    ours = {"trackers": "occbench.trackers.records", "harness": "occbench.pipeline.experiment"}[folder]
     assert Path(importlib.import_module(ours).__file__).resolve().is_relative_to(ROOT)
 
 
+def test_no_top_level_name_of_another_project():
+    """The distribution's packages are ``occbench...`` and Hydra's shared plugin namespace only:
+    no top-level ``trackers`` or ``harness`` to overwrite another project's."""
+    setup = PYPROJECT["tool"]["setuptools"]
+    tops = {p.split(".")[0] for p in setup["packages"]}
+    assert tops == {"occbench", "hydra_plugins"}
+    assert setup["package-dir"] == {"occbench": "harness", "occbench.trackers": "trackers",
+                                    "hydra_plugins": "hydra_plugins"}
+
+
+def test_every_source_package_is_listed():
+    """A new folder with an ``__init__.py`` must be added to pyproject.toml's ``packages``
+    (listed by hand because of the package-dir mapping), or an installed copy lacks it."""
+    found = {"occbench" + "".join(f".{p}" for p in d.relative_to(ROOT / "harness").parts)
+             for d in (p.parent for p in (ROOT / "harness").rglob("__init__.py"))}
+    found |= {"occbench.trackers" + "".join(f".{p}" for p in d.relative_to(ROOT / "trackers").parts)
+              for d in (p.parent for p in (ROOT / "trackers").rglob("__init__.py"))}
+    found |= {"hydra_plugins." + d.parent.name
+              for d in (ROOT / "hydra_plugins").glob("*/__init__.py")}
+    assert found == set(PYPROJECT["tool"]["setuptools"]["packages"])
+
+
 def test_console_script_is_the_app():
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert project["scripts"]["occbench"] == "harness.__main__:main"  # -> harness.commands.cli.main
-    from harness.__main__ import main
+    project = PYPROJECT["project"]
+    assert project["scripts"]["occbench"] == "occbench.__main__:main"  # -> occbench.commands.cli.main
+    from occbench.__main__ import main
 
     assert callable(main)
 
@@ -44,22 +69,22 @@ def test_installed_console_script_points_to_the_app():
         eps = ()
     if not eps:
         pytest.skip("occbench is not installed (pip install -e .): no console script")
-    assert next(iter(eps)).value == "harness.__main__:main"
+    assert next(iter(eps)).value == "occbench.__main__:main"
 
 
 def test_app_finds_its_configs():
-    import harness.commands.run as app
+    import occbench.commands.run as app
 
     assert Path(app.CONF_DIR).is_absolute()
     assert (Path(app.CONF_DIR) / "config.yaml").is_file()
 
 
 def test_console_script_runs_from_anywhere(tmp_path):
-    """``occbench`` (not ``python -m harness``) finds conf/ from another working directory."""
+    """``occbench`` (not ``python -m occbench``) finds conf/ from another working directory."""
     script = Path(sys.executable).parent / "occbench"
     if not script.is_file():
         pytest.skip(f"no console script at {script} (pip install -e .)")
     p = subprocess.run([str(script), "--cfg", "job", "tracker=baseline"], cwd=tmp_path,
                        capture_output=True, text=True, timeout=120, check=False)
     assert p.returncode == 0, p.stderr
-    assert "_target_: trackers.baseline.BaselineTracker" in p.stdout
+    assert "_target_: occbench.trackers.baseline.BaselineTracker" in p.stdout

@@ -26,8 +26,8 @@ def _loaded_after(code: str) -> list[str]:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-@pytest.mark.parametrize("module", ["harness.commands.cli", "harness.commands.run",
-                                    "harness.pipeline.experiment", "harness.sweeps.callbacks",
+@pytest.mark.parametrize("module", ["occbench.commands.cli", "occbench.commands.run",
+                                    "occbench.pipeline.experiment", "occbench.sweeps.callbacks",
                                     "hydra_plugins.occbench_launcher.launcher"])
 def test_harness_imports_leave_heavy_libraries_out(module):
     assert _loaded_after(f"import {module}") == []
@@ -35,15 +35,15 @@ def test_harness_imports_leave_heavy_libraries_out(module):
 
 @pytest.mark.parametrize("tracker", ["reta", "pbm"])
 def test_paper_trackers_build_without_filterpy_or_pandas(tracker):
-    code = ("from harness.pipeline.build import build_tracker, compose_config\n"
+    code = ("from occbench.pipeline.build import build_tracker, compose_config\n"
             f"cfg = compose_config(['tracker={tracker}'])\n"
             f"build_tracker('{tracker}', cfg.tracker, 'tracker')")
     assert _loaded_after(code) == []
 
 
 def test_baseline_imports_filterpy_only_when_a_filter_is_built():
-    assert _loaded_after("from trackers.baseline import BaselineTracker; BaselineTracker()") == []
-    loaded = _loaded_after("import numpy as np\nfrom trackers.common.kalman import "
+    assert _loaded_after("from occbench.trackers.baseline import BaselineTracker; BaselineTracker()") == []
+    loaded = _loaded_after("import numpy as np\nfrom occbench.trackers.common.kalman import "
                            "constant_velocity_box_filter\n"
                            "constant_velocity_box_filter(np.array([0.0, 0.0, 10.0, 20.0]))")
     assert "filterpy" in loaded
@@ -75,11 +75,11 @@ def test_every_numba_kernel_is_cached():
 KERNEL_STATS = """
 import json, sys
 import numba.core.registry
-from harness.pipeline.build import build_tracker, compose_config
-from harness.pipeline.warmup import warm_up
+from occbench.pipeline.build import build_tracker, compose_config
+from occbench.pipeline.warmup import warm_up
 warm_up(build_tracker('reta', compose_config(['tracker=reta']).tracker, 'tracker'))
 hits = misses = 0
-for module in [m for n, m in list(sys.modules.items()) if n.startswith('trackers.')]:
+for module in [m for n, m in list(sys.modules.items()) if n.startswith('occbench.trackers.')]:
     for obj in vars(module).values():
         stats = getattr(obj, 'stats', None)
         if hasattr(stats, 'cache_hits'):
@@ -100,11 +100,12 @@ def test_a_new_process_loads_the_kernels_from_the_cache():
 
 
 def test_the_console_scripts_fast_path_imports_no_library():
-    """Before it knows whether a warm server answers (``harness.server.client.served``),
+    """Before it knows whether a warm server answers (``occbench.server.client.served``),
     ``occbench`` has imported the standard library only: ``harness`` itself imports nothing."""
-    code = ("import json, sys\nimport harness.__main__, harness.server.client\n"
-            "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules} & "
-            "{'omegaconf', 'hydra', 'numpy', 'yaml', 'trackers', 'scipy', 'cv2'})))")
+    code = ("import json, sys\nimport occbench.__main__, occbench.server.client\n"
+            "print(json.dumps(sorted({'.'.join(m.split('.')[:2 if m.startswith('occbench.') else 1])"
+            " for m in sys.modules} & {'omegaconf', 'hydra', 'numpy', 'yaml', 'occbench.trackers',"
+            " 'scipy', 'cv2'})))")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          cwd=ROOT, check=True, timeout=300)

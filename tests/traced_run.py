@@ -5,7 +5,7 @@ Run as a script, ``python tests/traced_run.py TRACKER [TRACKER ...]`` (a name of
 Python functions they are written as and every call is seen. Under a ``sys.setprofile``
 hook it builds each tracker from its config as a run does and tracks the synthetic
 ``crossing`` scene (two people, the far one totally hidden, 30 frames, 320 x 240) through
-``harness.pipeline.experiment.run_tracker`` with the default run's detector; it prints one
+``occbench.pipeline.experiment.run_tracker`` with the default run's detector; it prints one
 JSON object {tracker: [[path, qualname], ...]}, paths relative to ``trackers/``. ``calls``
 runs it in a subprocess.
 """
@@ -35,9 +35,9 @@ def calls(*names: str) -> dict[str, set[tuple[str, str]]]:
 
 
 def _trace(name: str) -> list[tuple[str, str]]:
-    from harness.datasets.synthetic import load_suite
-    from harness.pipeline.build import build_source, build_tracker, compose_config
-    from harness.pipeline.loop import run_tracker
+    from occbench.datasets.synthetic import load_suite
+    from occbench.pipeline.build import build_source, build_tracker, compose_config
+    from occbench.pipeline.loop import run_tracker
 
     cfg = compose_config([f"tracker={name}"])  # the default run's detector and foreground
     source = build_source(cfg.detector)

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.common.assignment import assign
-from trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
-from trackers.geometry import iou_matrix
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.common.assignment import assign
+from occbench.trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections, Track, TrackState
 
 
 class _BoxTrack:

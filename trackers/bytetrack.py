@@ -4,9 +4,9 @@ Zhang, Sun, Jiang, Yu, Weng, Yuan, Luo, Liu, Wang, "ByteTrack: Multi-Object Trac
 Associating Every Detection Box", ECCV 2022 (Algorithm 1), following the control flow of
 the authors' ``yolox/tracker/byte_tracker.py``. No installable package implements it
 without torch (``bytetracker``, ``boxmot``) or a second OpenCV (``supervision<0.27``), so it
-is written here on the project's Kalman set-up (``trackers.common.kalman``: constant
+is written here on the project's Kalman set-up (``occbench.trackers.common.kalman``: constant
 velocity on centre and size, noise scaled by the box height, instead of the authors' xyah
-filter) and gated Hungarian assignment (``trackers.common.assignment``, in place of
+filter) and gated Hungarian assignment (``occbench.trackers.common.assignment``, in place of
 ``lap.lapjv`` with ``cost_limit``).
 
 Per frame t (Algorithm 1):
@@ -32,10 +32,10 @@ from enum import Enum
 
 import numpy as np
 
-from trackers.common.assignment import assign
-from trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
-from trackers.geometry import iou_matrix
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.common.assignment import assign
+from occbench.trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections, Track, TrackState
 
 DUPLICATE_IOU_DISTANCE = 0.15  # remove_duplicate_stracks in the authors' code
 

@@ -10,7 +10,7 @@ from typing import Protocol
 
 import numpy as np
 
-from trackers.records import Detections, Track
+from occbench.trackers.records import Detections, Track
 
 
 class Tracker(Protocol):

@@ -2,7 +2,7 @@
 
 Box convention everywhere inside the project: ``xywh`` in pixels, float64, with (x, y) the
 top-left corner in 0-based image coordinates (pixel (0, 0) is the top-left pixel).
-MOTChallenge files are 1-based; ``harness.io.mot`` is the one place that converts.
+MOTChallenge files are 1-based; ``occbench.io.mot`` is the one place that converts.
 """
 
 from __future__ import annotations

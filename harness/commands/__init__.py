@@ -1,6 +1,6 @@
-"""The commands of ``occbench`` (``harness.commands.cli``): one module per subcommand.
+"""The commands of ``occbench`` (``occbench.commands.cli``): one module per subcommand.
 
-Each parses its own command line and calls the library rooms (``harness.pipeline``,
-``harness.sources``, ``harness.sweeps``, ``harness.metrics``, ``harness.report``,
-``harness.fit``); nothing in the library imports a command.
+Each parses its own command line and calls the library rooms (``occbench.pipeline``,
+``occbench.sources``, ``occbench.sweeps``, ``occbench.metrics``, ``occbench.report``,
+``occbench.fit``); nothing in the library imports a command.
 """

@@ -121,8 +121,8 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
     """Stage-by-stage timings of a front-end detector on ``images`` (frames 1..n), and the
     warm-up seconds of each run (empty lists when the source has no timed stages); ``bar``
     (a progress bar) advances by one after each run, outside the timed code."""
-    from harness.pipeline.loop import ForegroundProvider, clean_detections
-    from trackers.frontend.blobs import blobs_from_mask
+    from occbench.pipeline.loop import ForegroundProvider, clean_detections
+    from occbench.trackers.frontend.blobs import blobs_from_mask
 
     if _staged_detector(make_source()) is None:
         return [], []
@@ -178,7 +178,7 @@ def bench_sequence(sequence: Any, make_source: Callable[[], Any],
     """Time decode, front end and every tracker on the first ``frames`` frames of
     ``sequence`` (``repeats`` runs each; fresh source and trackers for every run).
 
-    ``progress``: a progress-bar factory (``harness.progress.progress_factory``); its bar
+    ``progress``: a progress-bar factory (``occbench.progress.progress_factory``); its bar
     counts the runs of every stage and advances between runs, never inside a timed one.
     """
     if repeats < 1:
@@ -215,7 +215,7 @@ def _bench_stages(sequence: Any, make_source: Callable[[], Any],
                   foreground: str, background: Mapping[str, Any] | None,
                   bar: Any) -> list[StageTiming]:
     """``bench_sequence``'s stages in order, ``bar`` advanced after each run."""
-    from harness.pipeline.loop import frames as frame_loop
+    from occbench.pipeline.loop import frames as frame_loop
 
     global _clock
     clock, _clock = _clock, (time.process_time if _clock is time.thread_time else _clock)
@@ -263,7 +263,7 @@ def bench_tracker(name: str, tracker: Any, images: Sequence[Any],
     Raises:
         RuntimeError: the tracker failed (its error in the message).
     """
-    from harness.pipeline.bank import TrackerBank
+    from occbench.pipeline.bank import TrackerBank
 
     bank = TrackerBank({name: tracker}, clock=_clock)
     for k, (img, (dets, fg)) in enumerate(zip(images, inputs), 1):
@@ -294,7 +294,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import pandas as pd
 
     cv2.setNumThreads(1)
-    from harness.pipeline.build import (
+    from occbench.pipeline.build import (
         build_source,
         build_tracker,
         compose_config,
@@ -311,8 +311,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"no sequence {args.sequence!r}; have {sorted(by_name)}")
         seq = by_name[args.sequence] if args.sequence else sequences[0]
         configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
-        from harness.pipeline.warmup import warm_up_once  # compile kernels before timing
-        from harness.progress import progress_factory
+        from occbench.pipeline.warmup import warm_up_once  # compile kernels before timing
+        from occbench.progress import progress_factory
 
         progress = progress_factory()  # on stderr when it is a terminal, else nothing
         warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))

@@ -1,6 +1,6 @@
 """``occbench cache``: what the front-end cache holds, and clearing it.
 
-The cache (``harness.sources.cache``) keeps each sequence's front-end outputs under
+The cache (``occbench.sources.cache``) keeps each sequence's front-end outputs under
 ``OCCBENCH_CACHE`` (default ``$XDG_CACHE_HOME/occbench`` or ``~/.cache/occbench``;
 ``off`` disables it). Runs and ``occbench detect`` fill it.
 
@@ -19,8 +19,8 @@ import sys
 import time
 from collections.abc import Sequence
 
-from harness.sources.cache import ENV, Store, cache_root
-from harness.sources.cache.store import EntryInfo
+from occbench.sources.cache import ENV, Store, cache_root
+from occbench.sources.cache.store import EntryInfo
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -2,21 +2,21 @@
 
 ``occbench COMMAND ARGS...`` hands ``ARGS`` to the command's own parser; without a command
 (plain ``occbench``, or ``occbench key=value ...``, ``occbench -m ...``) the arguments go to
-``run``, the Hydra app (``harness.commands.run.app``), as they always did. ``python -m harness``
+``run``, the Hydra app (``occbench.commands.run.app``), as they always did. ``python -m occbench``
 is the same command.
 
 Commands and where they live:
 
 =========  ==================================  =========================================
-run        ``harness.commands.run.app``        Hydra: overrides, ``-m``, ``--cfg job``
-detect     ``harness.commands.detect.app``     Hydra (``conf/detect.yaml``)
-eval       ``harness.commands.evaluate.main``  argparse: ``GT RESULTS``
-sweep      ``harness.sweeps.gather.main``      argparse: ``SWEEP_DIR``
-report     ``harness.commands.report.main``    argparse: ``RUN_DIR``
-bench      ``harness.commands.bench.main``     argparse + overrides
-fit        ``harness.commands.fit.main``       ``pbm | heads | silhouette | active_basis``
-cache      ``harness.commands.cache.main``     argparse: ``[list | clear] [filters]``
-server     ``harness.commands.server.main``    argparse: ``status | stop | start``
+run        ``occbench.commands.run.app``        Hydra: overrides, ``-m``, ``--cfg job``
+detect     ``occbench.commands.detect.app``     Hydra (``conf/detect.yaml``)
+eval       ``occbench.commands.evaluate.main``  argparse: ``GT RESULTS``
+sweep      ``occbench.sweeps.gather.main``      argparse: ``SWEEP_DIR``
+report     ``occbench.commands.report.main``    argparse: ``RUN_DIR``
+bench      ``occbench.commands.bench.main``     argparse + overrides
+fit        ``occbench.commands.fit.main``       ``pbm | heads | silhouette | active_basis``
+cache      ``occbench.commands.cache.main``     argparse: ``[list | clear] [filters]``
+server     ``occbench.commands.server.main``    argparse: ``status | stop | start``
 =========  ==================================  =========================================
 """
 
@@ -31,23 +31,23 @@ PROG = "occbench"
 
 # name -> (module, function, one-line description, True when the function is a Hydra app)
 COMMANDS: dict[str, tuple[str, str, str, bool]] = {
-    "run": ("harness.commands.run", "app",
+    "run": ("occbench.commands.run", "app",
             "run trackers on a dataset and score them (default)", True),
-    "detect": ("harness.commands.detect", "app",
+    "detect": ("occbench.commands.detect", "app",
                "run one detector alone: det/ files, precision, recall", True),
-    "eval": ("harness.commands.evaluate", "main",
+    "eval": ("occbench.commands.evaluate", "main",
              "score MOT result files against ground truth", False),
-    "sweep": ("harness.sweeps.gather", "main",
+    "sweep": ("occbench.sweeps.gather", "main",
               "gather a multirun folder into sweep.csv, .md, plots/", False),
-    "report": ("harness.commands.report", "main",
+    "report": ("occbench.commands.report", "main",
                "annotated video, contact sheet, trajectory plot of a run", False),
-    "bench": ("harness.commands.bench", "main",
+    "bench": ("occbench.commands.bench", "main",
               "frames/s per stage: decode, front end, each tracker", False),
-    "fit": ("harness.commands.fit", "main",
+    "fit": ("occbench.commands.fit", "main",
             "refit models: pbm | heads | silhouette | active_basis", False),
-    "cache": ("harness.commands.cache", "main",
+    "cache": ("occbench.commands.cache", "main",
               "what the front-end cache holds (OCCBENCH_CACHE); clear it", False),
-    "server": ("harness.commands.server", "main",
+    "server": ("occbench.commands.server", "main",
                "the warm server for single runs (OCCBENCH_SERVER): status, stop, start", False),
 }
 
@@ -104,9 +104,11 @@ def _call_hydra(app: Callable, prog: str, args: Sequence[str], config_name: str,
                 verbose: bool = False) -> int:
     """Run a ``@hydra.main`` app with ``args`` as its command line (Hydra reads sys.argv); a
     config mistake or a refused run is one line on stderr and exit status 1, the traceback
-    only when ``verbose`` (``harness.commands.mistakes``)."""
-    from harness.commands.mistakes import explain, hydra_raises
+    only when ``verbose`` (``occbench.commands.mistakes``)."""
+    from occbench.commands.mistakes import explain, hydra_raises
+    from occbench.config import register
 
+    register()
     saved = sys.argv
     sys.argv = [prog, *args]
     try:
@@ -125,7 +127,7 @@ def _call_hydra(app: Callable, prog: str, args: Sequence[str], config_name: str,
 def _check_checkout() -> str | None:
     """Why this installation cannot run, or None: the configs (``conf/``) and the shipped data
     (``datasets/``) live in the project checkout, which only an editable install keeps."""
-    from harness.paths import PROJECT_ROOT
+    from occbench.paths import PROJECT_ROOT
 
     if (PROJECT_ROOT / "conf" / "config.yaml").is_file():
         return None
@@ -134,18 +136,18 @@ def _check_checkout() -> str | None:
 
 
 def _terminate(signum: int, frame: object) -> None:
-    from harness.errors import Terminated
+    from occbench.errors import Terminated
 
     raise Terminated
 
 
 def run(argv: Sequence[str]) -> int:
-    """``main(argv)`` as a process runs it (``harness.__main__``, cold, or a served child):
+    """``main(argv)`` as a process runs it (``occbench.__main__``, cold, or a served child):
     Ctrl-C (SIGINT) and SIGTERM end it with one line on stderr and exit status 130 or 143,
-    never a traceback: SIGTERM raises ``harness.errors.Terminated`` in the main thread, as
+    never a traceback: SIGTERM raises ``occbench.errors.Terminated`` in the main thread, as
     SIGINT raises KeyboardInterrupt, so a run marks itself interrupted on the way out
-    (``harness.commands.run`` prints the line naming the run folder)."""
-    from harness.errors import EXIT_SIGINT, EXIT_SIGTERM, Terminated
+    (``occbench.commands.run`` prints the line naming the run folder)."""
+    from occbench.errors import EXIT_SIGINT, EXIT_SIGTERM, Terminated
 
     signal.signal(signal.SIGTERM, _terminate)
     try:
@@ -160,7 +162,7 @@ def run(argv: Sequence[str]) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
-    from harness.commands.mistakes import verbose_requested
+    from occbench.commands.mistakes import verbose_requested
 
     verbose, args = verbose_requested(list(sys.argv[1:] if argv is None else argv))
     if args and args[0] in ("-h", "--help", "help"):
@@ -181,7 +183,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if "--version" in args or "-V" in args:  # Hydra's own would print Hydra's version
             print(f"{PROG} {version()}")
             return 0
-        from harness.sweeps.plugins import check_plugins
+        from occbench.sweeps.plugins import check_plugins
 
         check_plugins(args)  # a missing launcher or sweeper names the extra to install
         return _call_hydra(func, f"{PROG} {command}" if command != "run" else PROG, args,

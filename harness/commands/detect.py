@@ -4,7 +4,7 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
 ``dataset=`` and ``detector=`` groups. Writes into the Hydra run directory:
 
 * ``det/<sequence>.txt``: MOTChallenge detection rows ``frame,-1,left,top,w,h,score,-1,-1,-1``
-  (written by ``harness.io.mot.write_mot``, the one place converting to 1-based boxes);
+  (written by ``occbench.io.mot.write_mot``, the one place converting to 1-based boxes);
 * ``front_end.txt``: one line per sequence on which the front end fell back to another
   detector (which, and why; also printed);
 * ``detection_metrics.csv``: detections (and per frame), TP, FP, FN, precision, recall and
@@ -14,7 +14,7 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
   the labelled sequences only (``ground_truth``: "2 of 3"; printed below the table);
 * a multirun (``-m``) prints one table of every job's COMBINED row when it ends
   (``GatherDetections``), each job one log line;
-* the front-end cache (``harness.sources.cache``, ``OCCBENCH_CACHE``): a front-end
+* the front-end cache (``occbench.sources.cache``, ``OCCBENCH_CACHE``): a front-end
   detector's outputs of each sequence, so that later runs on the same frames with the same
   detector config read them; ``detect`` always computes (its frames/s are the detector's);
 * with ``overlays.frames=[first,last]``: ``overlays/<sequence>/<frame>.png`` showing the
@@ -46,14 +46,14 @@ from hydra.experimental.callback import Callback
 from hydra.types import RunMode
 from omegaconf import DictConfig
 
-from harness.errors import RunError
-from harness.io.mot import write_atomic, write_mot
-from harness.progress import bars_wanted
-from harness.report.overlays import draw_overlay
-from trackers.common.assignment import assign
-from trackers.geometry import iou_matrix
+from occbench.errors import RunError
+from occbench.io.mot import write_atomic, write_mot
+from occbench.progress import bars_wanted
+from occbench.report.overlays import draw_overlay
+from occbench.trackers.common.assignment import assign
+from occbench.trackers.geometry import iou_matrix
 
-log = logging.getLogger("harness.commands.detect")
+log = logging.getLogger("occbench.commands.detect")
 
 METRIC_COLUMNS = ("ground_truth", "frames", "detections", "per_frame", "gt", "TP", "FP", "FN",
                   "precision", "recall", "F1", "frames_per_second")
@@ -163,7 +163,7 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
     """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
     from hydra.utils import instantiate
 
-    from harness.pipeline.build import build_source
+    from occbench.pipeline.build import build_source
 
     sequences = list(instantiate(cfg.dataset))
     source = build_source(cfg.detector, cache=False)  # RunError naming what cannot be built
@@ -180,7 +180,7 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
         ov_frames = (int(ov_frames[0]), int(ov_frames[1]))
     head_detector = None
     if ov_frames is not None and ov.get("heads", True):
-        from trackers.frontend.heads import HeadDetector
+        from occbench.trackers.frontend.heads import HeadDetector
 
         head_detector = HeadDetector()
     counts: dict[str, DetectionCounts] = {}
@@ -241,7 +241,7 @@ def _cache_of(source, node: DictConfig) -> tuple | None:
     """(store, resolved config) when ``source`` is a front-end one and the cache is on."""
     from omegaconf import OmegaConf
 
-    from harness.sources.cache import Store, cache_root, worth_caching
+    from occbench.sources.cache import Store, cache_root, worth_caching
 
     root = cache_root()
     if root is None or not worth_caching(source):
@@ -254,8 +254,8 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
                      cache: tuple | None = None) -> None:
     """Detect one sequence: its det file, overlays and counts (added to ``counts``); with
     ``cache`` (store, detector config), its outputs into the front-end cache."""
-    from harness.sources.cache.source import EntryBuilder, store_outputs
-    from trackers.frontend.blobs import blob_boxes, blobs_from_mask
+    from occbench.sources.cache.source import EntryBuilder, store_outputs
+    from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
 
     name = seq.info.name
     built = EntryBuilder() if cache is not None else None
@@ -318,7 +318,7 @@ def app(cfg: DictConfig) -> None:
     except DetectionFailed as err:
         table, failed = err.table, err
     except (ValueError, OSError, RunError) as err:
-        raise SystemExit(f"harness.commands.detect: {err}") from None
+        raise SystemExit(f"occbench.commands.detect: {err}") from None
     if HydraConfig.get().mode == RunMode.MULTIRUN:  # one table when the multirun ends
         log.info("job %s [%s]: %s", HydraConfig.get().job.num,
                  " ".join(HydraConfig.get().overrides.task), combined_line(table))
@@ -329,7 +329,7 @@ def app(cfg: DictConfig) -> None:
               .replace("\n", "\n  "))
     print(f"results: {out_dir}")
     if failed is not None:
-        raise SystemExit(f"harness.commands.detect: {len(failed.failures)} sequence(s) failed (the "
+        raise SystemExit(f"occbench.commands.detect: {len(failed.failures)} sequence(s) failed (the "
                          f"others are written; see {out_dir / 'errors.txt'}):\n  "
                          + "\n  ".join(failed.failures))
 

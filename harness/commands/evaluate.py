@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from harness.datasets.mot import read_seqinfo, seqinfo_number
-from harness.io.mot import MotTable, read_mot
-from harness.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
+from occbench.datasets.mot import read_seqinfo, seqinfo_number
+from occbench.io.mot import MotTable, read_mot
+from occbench.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
 
 log = logging.getLogger(__name__)
 

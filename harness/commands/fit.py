@@ -1,6 +1,6 @@
 """``occbench fit <what> [options]``: fit a model from annotated sequences.
 
-Each subcommand lives in its own module ``harness.fit.<what>`` exposing ``main(argv)``.
+Each subcommand lives in its own module ``occbench.fit.<what>`` exposing ``main(argv)``.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def main(argv: list[str] | None = None) -> int:
         lines = [f"  {name:<13} {what}" for name, what in COMMANDS.items()]
         print("usage: occbench fit {" + ",".join(COMMANDS) + "} [options]\n" + "\n".join(lines))
         return 0 if argv and argv[0] in ("-h", "--help") else 2
-    module = importlib.import_module(f"harness.fit.{argv[0]}")
+    module = importlib.import_module(f"occbench.fit.{argv[0]}")
     return int(module.main(argv[1:]) or 0)
 
 

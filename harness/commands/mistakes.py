@@ -4,7 +4,7 @@ keys and choices (``difflib``), a value the run refuses gets its message; the fu
 only under ``occbench -v`` or ``OCCBENCH_VERBOSE=1``.
 
 Hydra itself suggests ``+trackr=reta`` for a typo, which adds the key and runs with it
-ignored, and wraps each error in three more lines; ``harness.commands.cli`` lets Hydra raise
+ignored, and wraps each error in three more lines; ``occbench.commands.cli`` lets Hydra raise
 instead (``HYDRA_FULL_ERROR``) and hands the exception to ``explain`` here.
 """
 
@@ -42,7 +42,8 @@ def _config_keys(config_name: str, overrides: Sequence[str]) -> list[str]:
     from hydra.core.override_parser.overrides_parser import OverridesParser
     from omegaconf import OmegaConf
 
-    from harness.commands.run import CONF_DIR
+    from occbench.commands.run import CONF_DIR
+    from occbench.config import register
 
     kept = []
     for text in overrides:
@@ -54,6 +55,7 @@ def _config_keys(config_name: str, overrides: Sequence[str]) -> list[str]:
         if not (o.is_sweep_override() or "." in group or group.startswith("hydra")):
             kept.append(text)  # the choices of config groups: they shape the config
     GlobalHydra.instance().clear()
+    register()
     try:
         with initialize_config_dir(CONF_DIR, version_base="1.3"):
             cfg = compose(config_name, overrides=kept)
@@ -79,7 +81,7 @@ def _top_level(config_name: str) -> list[str]:
 
     from omegaconf import OmegaConf
 
-    from harness.commands.run import CONF_DIR
+    from occbench.commands.run import CONF_DIR
 
     conf = Path(CONF_DIR)
     keys = [k for k in OmegaConf.load(conf / f"{config_name}.yaml") if k != "defaults"]

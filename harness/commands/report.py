@@ -1,15 +1,15 @@
-"""``occbench report RUN_DIR`` (``python -m harness.report RUN_DIR``): the pictures of a
+"""``occbench report RUN_DIR`` (``python -m occbench.report RUN_DIR``): the pictures of a
 finished run, written into the run directory.
 
 * ``report/<sequence>.mp4`` and ``report/<sequence>_sheet.png``: every tracker of the run
-  drawn its own way, side by side (``harness.report.video``; the trackers are run again with
+  drawn its own way, side by side (``occbench.report.video``; the trackers are run again with
   the run's saved config, so the drawings show the run's tracks);
 * ``plots/trajectory_<sequence>_<person>.png``: the most occluded ground-truth person's path
-  beside the ids that followed it (``harness.report.trajectories``; none for a sequence
+  beside the ids that followed it (``occbench.report.trajectories``; none for a sequence
   without ground truth);
 * printed: the tracks per tracker and sequence, their lengths and frames/s
-  (``harness.report.tracks``), with or without ground truth;
-* ``report.html`` written again (``harness.report.html``), now with the video playing beside
+  (``occbench.report.tracks``), with or without ground truth;
+* ``report.html`` written again (``occbench.report.html``), now with the video playing beside
   the error timelines and the new plots.
 
 Each part can be skipped (``--no-video``, ``--no-trajectories``); ``--sequence`` picks the
@@ -37,7 +37,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-video", action="store_true", help="skip the video and contact sheet")
     p.add_argument("--no-trajectories", action="store_true", help="skip the trajectory plot")
     args = p.parse_args(argv)
-    from harness.report.tracks import tracks_text
+    from occbench.report.tracks import tracks_text
 
     if not (args.run_dir / "config.yaml").is_file():
         print(f"error: {args.run_dir / 'config.yaml'} not found (a run directory of "
@@ -46,18 +46,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     common = ["--sequence", args.sequence] if args.sequence else []
     status = 0
     if not args.no_video:
-        from harness.report import video
+        from occbench.report import video
 
         extra = [*common, *(["--no-gt"] if args.no_gt else [])]
         if args.frames:
             extra += ["--frames", *map(str, args.frames)]
         status = max(status, video.main(["--run", str(args.run_dir), *extra]))
     if not args.no_trajectories:
-        from harness.report import trajectories
+        from occbench.report import trajectories
 
         status = max(status, trajectories.main([str(args.run_dir), *common]))
     if (args.run_dir / "metrics.csv").is_file():  # the page again, with the video and plots
-        from harness.report.html import write_run_report
+        from occbench.report.html import write_run_report
 
         seq = args.sequence or _first_sequence(args.run_dir)
         first = {seq: args.frames[0]} if args.frames else None
@@ -80,11 +80,11 @@ def _first_sequence(run_dir: Path) -> str:
 
 def counted(run_dir: Path):
     """Tracks per tracker and sequence of a run, read from its track files and timings.csv
-    (``harness.report.tracks``): what a run without ground truth can say."""
+    (``occbench.report.tracks``): what a run without ground truth can say."""
     import csv
 
-    from harness.io.mot import read_mot
-    from harness.report.tracks import track_rows, track_stats
+    from occbench.io.mot import read_mot
+    from occbench.report.tracks import track_rows, track_stats
 
     stats: dict[str, dict] = {}
     for folder in sorted(p for p in (run_dir / "tracks").iterdir() if p.is_dir()):

@@ -1,22 +1,22 @@
-"""``occbench run`` (plain ``occbench``, ``python -m harness``): the Hydra app.
+"""``occbench run`` (plain ``occbench``, ``python -m occbench``): the Hydra app.
 
 Runs the selected trackers (default: every built tracker, ``conf/tracker/all.yaml``) on the
 selected dataset (default: the synthetic suite) with the selected detection source, writes
 the run directory (``results/<date>/<time>/``: metrics.csv, summary.md, tracks/, plots/,
 config.yaml) and prints the COMBINED comparison table. Examples::
 
-    python -m harness tracker=baseline
-    python -m harness dataset=synthetic dataset.scenarios=[stop_behind] dataset.seed=3
-    python -m harness detector=noisy_gt detector.miss_rate=0.3
-    python -m harness dataset=mot dataset.root=datasets/trajectories/TUD-Campus dataset.image_size=[640,480] detector=noisy_gt tracker=baseline
-    python -m harness +external.sort=path/to/results   # score another tracker's files too
+    python -m occbench tracker=baseline
+    python -m occbench dataset=synthetic dataset.scenarios=[stop_behind] dataset.seed=3
+    python -m occbench detector=noisy_gt detector.miss_rate=0.3
+    python -m occbench dataset=mot dataset.root=datasets/trajectories/TUD-Campus dataset.image_size=[640,480] detector=noisy_gt tracker=baseline
+    python -m occbench +external.sort=path/to/results   # score another tracker's files too
 
 The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
 ``objective.tracker`` (default IDF1 of the first tracker).
 
-Ctrl-C and SIGTERM (``harness.errors.Terminated``, raised by ``harness.commands.cli.run``'s
+Ctrl-C and SIGTERM (``occbench.errors.Terminated``, raised by ``occbench.commands.cli.run``'s
 handler) stop the run: it marks its metrics and summary interrupted and writes errors.txt on the way
-out (``harness.pipeline.experiment``), then one line on stderr names the run folder and the
+out (``occbench.pipeline.experiment``), then one line on stderr names the run folder and the
 exit status is 130 (SIGINT) or 143 (SIGTERM), with no traceback.
 """
 
@@ -34,9 +34,9 @@ from hydra.errors import CompactHydraException
 from hydra.types import RunMode
 from omegaconf import DictConfig
 
-from harness.errors import Terminated
+from occbench.errors import Terminated
 
-log = logging.getLogger("harness")
+log = logging.getLogger("occbench")
 
 # Columns of the table printed at the end (all columns are in summary.md and metrics.csv).
 PRINTED = ("HOTA", "DetA", "AssA", "IDF1", "MOTA", "MOTP", "Recall", "Precision", "MT", "ML",
@@ -56,15 +56,15 @@ CONF_DIR = str(Path(__file__).resolve().parents[2] / "conf")
 def app(cfg: DictConfig) -> float:
     """The Hydra task: run the experiment, print the table, return the objective.
 
-    In a multirun each job goes through ``harness.sweeps.gather.guarded``: a job already done with
-    the same overrides and the same inputs (config, code, data: ``harness.sweeps.fingerprint``) is
+    In a multirun each job goes through ``occbench.sweeps.gather.guarded``: a job already done with
+    the same overrides and the same inputs (config, code, data: ``occbench.sweeps.fingerprint``) is
     skipped, a failing job is recorded in its ``status.json`` (and
     gathered into sweep.csv) while the other jobs go on.
     """
     hc = HydraConfig.get()
     if hc.mode == RunMode.MULTIRUN:
-        from harness.sweeps.fingerprint import inputs
-        from harness.sweeps.gather import guarded
+        from occbench.sweeps.fingerprint import inputs
+        from occbench.sweeps.gather import guarded
 
         return guarded(hc.runtime.output_dir, list(hc.overrides.task), lambda: run_app(cfg),
                        inputs=lambda: inputs(cfg))
@@ -75,9 +75,9 @@ def run_app(cfg: DictConfig) -> float:
     """One run: the experiment, the printed table, the objective (raises AppError on failure)."""
     from tqdm.contrib.logging import logging_redirect_tqdm
 
-    from harness.errors import RunError
-    from harness.pipeline.experiment import run_experiment
-    from harness.progress import progress_factory
+    from occbench.errors import RunError
+    from occbench.pipeline.experiment import run_experiment
+    from occbench.progress import progress_factory
 
     hc = HydraConfig.get()
     out_dir = Path(hc.runtime.output_dir)
@@ -98,16 +98,16 @@ def run_app(cfg: DictConfig) -> float:
                  objective.get("tracker") or result.trackers[0],
                  objective.get("metric") or "IDF1", value)
     else:
-        from harness.report.tables import comparison, to_text
+        from occbench.report.tables import comparison, to_text
 
         if not result.metrics.empty:
-            from harness.report.paired import paired_footer
+            from occbench.report.paired import paired_footer
 
             print(f"{result.title} (COMBINED)")
             print(to_text(comparison(result.metrics, PRINTED)), end="")
             print(paired_footer(result.paired), end="")
         if result.tracks is not None:
-            from harness.report.tracks import tracks_text
+            from occbench.report.tracks import tracks_text
 
             print(f"{result.title}: tracks counted, not scored (no ground truth)")
             print(tracks_text(result.tracks), end="")
@@ -121,7 +121,7 @@ def run_app(cfg: DictConfig) -> float:
 
 def _stopped(err: BaseException, out_dir: Path) -> NoReturn:
     """One line for a run stopped by Ctrl-C or SIGTERM, then exit 130 or 143."""
-    from harness.errors import EXIT_SIGINT, EXIT_SIGTERM
+    from occbench.errors import EXIT_SIGINT, EXIT_SIGTERM
 
     how, status = (("terminated (SIGTERM)", EXIT_SIGTERM) if isinstance(err, Terminated)
                    else ("interrupted (Ctrl-C)", EXIT_SIGINT))

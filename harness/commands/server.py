@@ -5,15 +5,15 @@ log beside its socket); with ``OCCBENCH_SERVER=on`` the first ``occbench`` comma
 none starts one too, and runs itself cold. Later commands are forked from it, already
 imported and warmed up (a run reaches its first frame in about a quarter of the cold time:
 ``benchmarks/bench_startup.py``). It exits after 15 minutes without a request, when the
-installed code changes (it is then never used: ``harness.server.trust``), or on ``occbench
+installed code changes (it is then never used: ``occbench.server.trust``), or on ``occbench
 server stop``. ``OCCBENCH_SERVER=off`` runs every command cold; the default, ``auto``, uses
 a server that runs and never starts one.
 One server per user, interpreter, ``sys.path`` and import-time environment: each checkout
 has its own.
 
-``serve(path)`` is the server process's own entry point (``harness.server.client``
+``serve(path)`` is the server process's own entry point (``occbench.server.client``
 starts it); what it preloads: the default run's config composed once (Hydra, OmegaConf and
-their parsers warmed up), then ``harness.pipeline.warmup.preload`` of that run (the app's
+their parsers warmed up), then ``occbench.pipeline.warmup.preload`` of that run (the app's
 imports, the scoring, the plots, the trackers' compiled kernels).
 """
 
@@ -24,24 +24,24 @@ import sys
 import time
 from collections.abc import Sequence
 
-from harness.server import client
-from harness.server.serve import Server
+from occbench.server import client
+from occbench.server.serve import Server
 
 PROG = "occbench server"
 
 
 def preload() -> None:
     """Warm this process up for the commands it will fork: see the module docstring."""
-    from harness.pipeline.build import compose_config
-    from harness.pipeline.warmup import preload as warm
-    from harness.pipeline.warmup import preload_spec
+    from occbench.pipeline.build import compose_config
+    from occbench.pipeline.warmup import preload as warm
+    from occbench.pipeline.warmup import preload_spec
 
     warm(preload_spec(compose_config([])))  # tracker=all: every tracker by its name
 
 
 def serve(path: str) -> int:
     """Run the server of this process's identity on ``path`` until it exits."""
-    from harness.commands.cli import run
+    from occbench.commands.cli import run
 
     return Server(path, run, preload).serve()
 

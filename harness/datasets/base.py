@@ -1,7 +1,7 @@
 """The sequence interface every dataset reader yields.
 
-A ``Sequence`` has ``info`` (``trackers.records.SequenceInfo``), optional ground truth
-(``GroundTruth``), optional public detections (``harness.io.mot.MotTable``) and frames:
+A ``Sequence`` has ``info`` (``occbench.trackers.records.SequenceInfo``), optional ground truth
+(``GroundTruth``), optional public detections (``occbench.io.mot.MotTable``) and frames:
 ``frame(k)`` returns frame k (1-based) as an (H, W, 3) uint8 BGR array, or None when the
 dataset carries no pixels. Iterating ``frames()`` yields ``(k, image)`` for k in
 ``frame_numbers()``: 1..length, or first..last for a ``FrameWindow`` (a part of a longer
@@ -16,8 +16,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from harness.io.mot import MotTable
-from trackers.records import SequenceInfo
+from occbench.io.mot import MotTable
+from occbench.trackers.records import SequenceInfo
 
 
 @dataclass

@@ -9,7 +9,7 @@ Conversion (worked out from ``CAVIAR-OneLeaveShop1cor/gt/gt.txt``, whose MOT row
 ``frame = n + 1, id = i + 1, left = xc - w / 2, top = yc - h / 2`` in MOT's 1-based pixel
 coordinates, e.g. xc=114, w=57 -> left 85.5): the CAVIAR centre is a 1-based coordinate, so
 the 0-based box in memory is ``(xc - w/2 - 1, yc - h/2 - 1, w, h)``, exactly what
-``harness.io.mot.read_mot`` gives for gt.txt.
+``occbench.io.mot.read_mot`` gives for gt.txt.
 
 Folder layouts accepted by ``load_caviar(root)``:
   * MOT-style: ``root/img1/000001.jpg ...``, ``root/seqinfo.ini``, ``root/gt/<name>.xml``;
@@ -26,12 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence, window
-from harness.datasets.images import ImageSequence, numbered_images, read_image
-from harness.datasets.mot import APPEARANCE_LABELS, read_seqinfo, seqinfo_number
-from harness.datasets.video import VIDEO_EXTENSIONS, VideoSequence
-from harness.io.mot import MAX_INT, MotTable, read_mot
-from trackers.records import SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence, window
+from occbench.datasets.images import ImageSequence, numbered_images, read_image
+from occbench.datasets.mot import APPEARANCE_LABELS, read_seqinfo, seqinfo_number
+from occbench.datasets.video import VIDEO_EXTENSIONS, VideoSequence
+from occbench.io.mot import MAX_INT, MotTable, read_mot
+from occbench.trackers.records import SequenceInfo
 
 log = logging.getLogger(__name__)
 
@@ -187,7 +187,7 @@ def load_caviar(root: str | Path, xml: str | Path | None = None, video: str | Pa
         fps: frame rate; None = seqinfo.ini's, else the video's, else CAVIAR's 25.
         prefetch: frames decoded ahead while iterating a JPEG sequence.
         frames: [first, last] (1-based, inclusive) to keep only those frames, numbered as in
-            the whole sequence (``harness.datasets.base.window``); None = all.
+            the whole sequence (``occbench.datasets.base.window``); None = all.
     Returns:
         a one-element list (the dataset-config contract) holding the sequence, whose
         ``gt.labels`` are the appearance labels and ``gt.occluded`` flags ``occluded``.

@@ -15,9 +15,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence
-from harness.io.mot import MotTable
-from trackers.records import SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence
+from occbench.io.mot import MotTable
+from occbench.trackers.records import SequenceInfo
 
 log = logging.getLogger(__name__)
 

@@ -8,7 +8,7 @@ Layout of one sequence folder (MOT15/16/17/20 and the shipped ``datasets/traject
     gt/gt_caviar_appearance.txt   optional ``frame,id,label`` CAVIAR appearance labels
     det/det.txt          public detections (optional)
 
-Boxes are converted to 0-based xywh by ``harness.io.mot.read_mot`` only.
+Boxes are converted to 0-based xywh by ``occbench.io.mot.read_mot`` only.
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence, window
-from harness.datasets.images import ImageSequence, numbered_images
-from harness.datasets.images import image_size as read_image_size
-from harness.io.mot import MAX_INT, MotFormatError, MotTable, read_mot, text_lines
-from trackers.records import SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence, window
+from occbench.datasets.images import ImageSequence, numbered_images
+from occbench.datasets.images import image_size as read_image_size
+from occbench.io.mot import MAX_INT, MotFormatError, MotTable, read_mot, text_lines
+from occbench.trackers.records import SequenceInfo
 
 log = logging.getLogger(__name__)
 
@@ -55,7 +55,7 @@ def load_mot(root: str | Path, sequences: list[str] | None = None,
             ``GroundTruth.occluded``; CAVIAR ``occluded`` labels are flagged too.
         prefetch: frames decoded ahead while iterating ``frames()``.
         frames: [first, last] (1-based, inclusive) to keep only those frames of every
-            sequence, numbered as in the whole sequence (``harness.datasets.base.window``).
+            sequence, numbered as in the whole sequence (``occbench.datasets.base.window``).
     Returns:
         one ``ImageSequence`` per folder; without ``img1/`` the sequence is box-only
         (``has_pixels`` False, ``frame`` returns None): only box-only trackers can run on it.

@@ -14,11 +14,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence, window
-from harness.datasets.images import FrameError
-from harness.datasets.mot import ground_truth_from_table
-from harness.io.mot import MotTable, read_mot
-from trackers.records import SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence, window
+from occbench.datasets.images import FrameError
+from occbench.datasets.mot import ground_truth_from_table
+from occbench.io.mot import MotTable, read_mot
+from occbench.trackers.records import SequenceInfo
 
 log = logging.getLogger(__name__)
 
@@ -252,7 +252,7 @@ def load_video(path: str | Path, gt: str | Path | None = None, name: str | None 
         det: optional MOT detection file (public detections).
         exact: never seek by frame number (see ``VideoSequence``); None = only for MPEG.
         frames: [first, last] (1-based, inclusive) to keep only those frames, numbered as in
-            the whole video (``harness.datasets.base.window``); None = all.
+            the whole video (``occbench.datasets.base.window``); None = all.
     """
     path = Path(path).expanduser()
     if not path.exists():

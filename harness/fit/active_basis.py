@@ -1,6 +1,6 @@
 """``occbench fit active_basis``: learn the active-basis person template (Reta 3.1).
 
-Training people (aligned grey patches, ``trackers.frontend.active_basis.crop_patch``) come
+Training people (aligned grey patches, ``occbench.trackers.frontend.active_basis.crop_patch``) come
 from two sources, each optional:
 
 * the synthetic renderer (``--synthetic-seed``, default 0, a tuning seed; 384x288 frames,
@@ -33,8 +33,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch, learn
-from trackers.geometry import intersection_matrix
+from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch, learn
+from occbench.trackers.geometry import intersection_matrix
 
 log = logging.getLogger(__name__)
 
@@ -124,7 +124,7 @@ def fit(synthetic_seed: int | None = 0, caviar: bool = True, step: int = 5, cavi
     OneLeaveShop1cor frames 1-150 (``caviar``)."""
     from hydra.utils import instantiate
 
-    from harness.pipeline.build import compose_config
+    from occbench.pipeline.build import compose_config
 
     bank = GaborBank()
     b1, b2 = 2, 1

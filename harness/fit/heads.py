@@ -3,7 +3,7 @@
 Two sources of pixels:
 
 * ``--references``: samples around reference hair and skin colours
-  (``trackers.frontend.heads.REFERENCE_RGB``), seeded; this is how the shipped default
+  (``occbench.trackers.frontend.heads.REFERENCE_RGB``), seeded; this is how the shipped default
   ``trackers/frontend/data/heads.npz`` was made.
 * Hydra overrides naming a dataset with ground truth (e.g. ``dataset=synthetic``): in every
   ``--step``-th frame, the head box of each gt person (the sequence's own head boxes when it
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trackers.frontend.heads import (
+from occbench.trackers.frontend.heads import (
     HAIR,
     SKIN,
     ColourMixtures,
@@ -93,12 +93,12 @@ def main(argv: list[str] | None = None) -> int:
             reference_samples(seed=args.seed), k=args.components,
             provenance=(
                 f"EM fit (k={args.components}) to seeded samples (seed {args.seed}) around "
-                "reference hair and skin colours (trackers.frontend.heads.REFERENCE_RGB), by "
+                "reference hair and skin colours (occbench.trackers.frontend.heads.REFERENCE_RGB), by "
                 "`occbench fit heads --references`"
             ),
         )
     else:
-        from harness.sources.frontend import load_sequences
+        from occbench.sources.frontend import load_sequences
 
         sequences = load_sequences(args.overrides)
         pixels = head_pixels_of(sequences, step=args.step)

@@ -2,7 +2,7 @@
 and learn the feature weights omega of eq. 12 (PBM 4.1).
 
 Models. For every annotated person visible in two consecutive frames, the five parts of
-its ground-truth box are measured in both frames (``trackers.layered.parts``) and the
+its ground-truth box are measured in both frames (``occbench.trackers.layered.parts``) and the
 absolute differences of the six features (eq. 11) are collected per feature and part.
 With the tracker config's ``adaptations.motion_compensation`` (the default), overlap and
 displacement compare the person with its previous parts moved by its previous step, as the
@@ -36,15 +36,15 @@ densities over the histograms of the differences (the paper's Fig. 3).
 
 Sources (any combination; a real source may name a frame window, ``ROOT@FIRST-LAST``,
 1-based inclusive, original frame numbers):
-    --synthetic [NAME ...]   built-in synthetic scenarios (harness.datasets.synthetic)
-    --mot ROOT[@F-L] ...     MOTChallenge folder(s) with frames and gt (harness.datasets.mot)
+    --synthetic [NAME ...]   built-in synthetic scenarios (occbench.datasets.synthetic)
+    --mot ROOT[@F-L] ...     MOTChallenge folder(s) with frames and gt (occbench.datasets.mot)
     --caviar ROOT[@F-L] ...  CAVIAR sequence folder(s): video or JPEGs and CVML gt with its
-                             occlusion labels (harness.datasets.caviar)
+                             occlusion labels (occbench.datasets.caviar)
 
 The foreground (``--foreground``) is what the tracker would get: ``auto`` = the sequence's
 exact label image when it has one (synthetic scenes), else the whole box (with a warning:
 area and perimeter then carry no information); ``mog2`` = the front end's background
-subtraction (``trackers.frontend.BackgroundModel`` at its defaults, which are
+subtraction (``occbench.trackers.frontend.BackgroundModel`` at its defaults, which are
 ``detector=foreground``'s), for real frames.
 
 Real frames (``tracker=pbm_paper``'s models, ``trackers/layered/data/real_uncompensated.yaml``;
@@ -63,7 +63,7 @@ Example:
     occbench fit pbm --synthetic --seed 1 --out models.yaml --plot models.png
 
 Using the learned weights (the command prints the exact line):
-    python -m harness tracker.pbm.features.models.path=models.yaml \\
+    python -m occbench tracker.pbm.features.models.path=models.yaml \\
         'tracker.pbm.features.feature_weights={area:0.2,perimeter:0.0,hsv:0.2,xyz:0.4,displacement:0.2,overlap:0.0}'
 (``tracker.features.feature_weights=...`` when the run selects ``tracker=pbm`` alone.)
 Measured on held-out data, the omega learned on synthetic seed 1 tracks worse than the
@@ -81,15 +81,15 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from harness.fit.pbm_pairs import collect_pairs, positive_differences
-from harness.fit.pbm_weights import WeightFit, search_weights
-from trackers.layered.feature_models import (
+from occbench.fit.pbm_pairs import collect_pairs, positive_differences
+from occbench.fit.pbm_weights import WeightFit, search_weights
+from occbench.trackers.layered.feature_models import (
     FeatureModels,
     FoldedMixture,
     fit_difference_model,
     load_feature_models,
 )
-from trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
+from occbench.trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
 
 log = logging.getLogger(__name__)
 
@@ -156,7 +156,7 @@ def load_feature_weights(path: str | Path) -> dict[str, float] | None:
 
 
 def weights_override(weights: Mapping[str, float], prefix: str = "tracker.pbm") -> str:
-    """The Hydra command-line override that sets omega, e.g. for ``python -m harness``."""
+    """The Hydra command-line override that sets omega, e.g. for ``python -m occbench``."""
     body = ",".join(f"{f}:{float(weights[f]):g}" for f in FEATURES)
     return f"'{prefix}.features.feature_weights={{{body}}}'"
 
@@ -238,9 +238,9 @@ def _composed_tracker(name: str) -> dict:
     """``conf/tracker/<name>.yaml`` composed by Hydra (its defaults list applied), as a dict."""
     from hydra import compose, initialize_config_dir
     from omegaconf import OmegaConf
+    from occbench.config import register
 
-    import harness  # noqa: F401  (registers the config resolvers)
-
+    register()  # the project's resolvers and launcher
     with initialize_config_dir(config_dir=str(ROOT / "conf"), version_base=None):
         cfg = compose(config_name="config", overrides=[f"tracker={name}"])
     return OmegaConf.to_container(cfg.tracker, resolve=True)
@@ -284,7 +284,7 @@ def _sequences(args: argparse.Namespace) -> tuple[list, list[str]]:
     sequences = []
     sources = []
     if args.synthetic is not None:
-        from harness.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
+        from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
 
         names = args.synthetic or list(DEFAULT_SCENARIOS)
         sequences += load_suite(names, seed=args.seed, length=args.length)
@@ -293,10 +293,10 @@ def _sequences(args: argparse.Namespace) -> tuple[list, list[str]]:
         for spec in roots:
             root, frames = _window_spec(spec)
             if kind == "MOT":
-                from harness.datasets.mot import load_mot as load
+                from occbench.datasets.mot import load_mot as load
             else:
-                from harness.datasets.caviar import load_caviar as load
-            from harness.datasets.base import window
+                from occbench.datasets.caviar import load_caviar as load
+            from occbench.datasets.base import window
 
             try:
                 sequences += window(load(root), frames)
@@ -345,7 +345,7 @@ def _print_fit(args: argparse.Namespace, fit: WeightFit) -> None:
     print(f"{args.folds}-fold cross-validation accuracy {fit.accuracy:.4f} "
           f"(nested {fit.nested_accuracy:.4f}{ref}) on {fit.settings['positives']} positive and "
           f"{fit.settings['negatives']} negative pairs, {fit.settings['grid_points']} grid points")
-    print(f"use with: python -m harness tracker.pbm.features.models.path={args.out} "
+    print(f"use with: python -m occbench tracker.pbm.features.models.path={args.out} "
           f"{weights_override(fit.weights)}")
 
 

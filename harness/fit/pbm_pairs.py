@@ -1,10 +1,10 @@
 """Samples for fitting PBM's feature models and weights (PBM 2.2, 4.1): pairs (a person in
 frame k-1, a person in frame k) of annotated sequences, measured as the tracker measures
-them (``trackers.layered.parts``, eq. 11 differences, optionally motion-compensated).
+them (``occbench.trackers.layered.parts``, eq. 11 differences, optionally motion-compensated).
 
 Positive pairs are a person against itself in the next frame (what the difference models
 are fitted on); negative pairs are a person against its nearest other people within the
-tracker's gate (what the weight search must tell apart). Used by ``harness.fit.pbm``.
+tracker's gate (what the weight search must tell apart). Used by ``occbench.fit.pbm``.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from harness.pipeline.loop import ForegroundProvider
-from trackers.layered.association import feature_differences
-from trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor, centroid_ratios
+from occbench.pipeline.loop import ForegroundProvider
+from occbench.trackers.layered.association import feature_differences
+from occbench.trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor, centroid_ratios
 
 log = logging.getLogger(__name__)
 
@@ -50,7 +50,7 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
     """Positive and negative frame-to-frame pairs of annotated people (PBM 4.1 samples).
 
     Args:
-        sequences: ``harness.datasets.base.Sequence`` objects with ground truth and frames.
+        sequences: ``occbench.datasets.base.Sequence`` objects with ground truth and frames.
         max_frames: frames read per sequence (None = all).
         min_visibility: people below this visibility (when known) or flagged occluded are
             skipped: the models describe unoccluded matches.
@@ -65,7 +65,7 @@ def collect_pairs(sequences: Iterable, max_frames: int | None = None, min_visibi
             displacement differences are taken, as the tracker moves a target's parts model
             by KF1's constant-velocity prediction.
         foreground, background: the foreground the parts are measured on, as the
-            tracker gets it (``harness.pipeline.loop.ForegroundProvider``): ``auto`` = the
+            tracker gets it (``occbench.pipeline.loop.ForegroundProvider``): ``auto`` = the
             sequence's exact person mask (synthetic scenes), else none (the whole box counts
             as foreground: area and perimeter then carry no information); ``mog2`` = the
             front end's background subtraction (real frames), ``background`` its arguments.
@@ -193,7 +193,7 @@ def collect_differences(sequences: Iterable, max_frames: int | None = None,
     """Frame-to-frame part feature differences of annotated people (eq. 11).
 
     Args:
-        sequences: ``harness.datasets.base.Sequence`` objects with ground truth and frames.
+        sequences: ``occbench.datasets.base.Sequence`` objects with ground truth and frames.
         max_frames: frames read per sequence (None = all).
         min_visibility: people below this visibility (when known) or flagged occluded are
             skipped: the models describe unoccluded matches.
@@ -215,6 +215,6 @@ def positive_differences(samples: PairSamples) -> dict[str, np.ndarray]:
 
 
 def _centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
-    from trackers.layered.search import region_centroid
+    from occbench.trackers.layered.search import region_centroid
 
     return region_centroid(fg, box)

@@ -1,7 +1,7 @@
 """The feature weights omega of PBM eq. 12, learned by cross-validated grid search (PBM 4.1:
 "trained with maximum cross-validation accuracy by a search over interval [0,1] and
-normalized to add up to 1"). Samples come from ``harness.fit.pbm_pairs.collect_pairs``; used
-by ``harness.fit.pbm``.
+normalized to add up to 1"). Samples come from ``occbench.fit.pbm_pairs.collect_pairs``; used
+by ``occbench.fit.pbm``.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from harness.fit.pbm_pairs import PairSamples
-from trackers.layered.feature_models import FeatureModels
-from trackers.layered.parts import FEATURES
+from occbench.fit.pbm_pairs import PairSamples
+from occbench.trackers.layered.feature_models import FeatureModels
+from occbench.trackers.layered.parts import FEATURES
 
 log = logging.getLogger(__name__)
 

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from trackers.frontend.silhouette import TEMPLATE_HEIGHT, fit_template
-from trackers.geometry import intersection_matrix
+from occbench.trackers.frontend.silhouette import TEMPLATE_HEIGHT, fit_template
+from occbench.trackers.geometry import intersection_matrix
 
 log = logging.getLogger(__name__)
 
@@ -95,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     from hydra.utils import instantiate
 
-    from harness.pipeline.build import compose_config
+    from occbench.pipeline.build import compose_config
 
     overrides = list(args.overrides) or ["dataset=synthetic"]
     cfg = compose_config([*overrides, f"detector={args.detector}"])

@@ -1,6 +1,6 @@
 """The numbers of comma-separated rows in one pass of a C reader (``read_columns``).
 
-``harness.io.mot`` reads a MOT file's text here first and line by line only when this gives
+``occbench.io.mot`` reads a MOT file's text here first and line by line only when this gives
 None. Both readers give every number exactly as Python's ``float`` parses it (correctly
 rounded), so they give the same table (``tests/harness/io/test_mot.py``):
 

@@ -2,7 +2,7 @@
 
 Rows are ``frame, id, left, top, width, height, conf, x, y, z`` (MOT15) or
 ``frame, id, left, top, width, height, conf, class, visibility`` (MOT16+ gt). Boxes in
-memory are xywh with a 0-based top-left (see ``trackers.records``): reading subtracts 1
+memory are xywh with a 0-based top-left (see ``occbench.trackers.records``): reading subtracts 1
 from left and top, writing adds it back.
 """
 
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.io.columns import read_columns
+from occbench.io.columns import read_columns
 
 log = logging.getLogger(__name__)
 
@@ -86,7 +86,7 @@ NO_CLASS = -1
 
 def scored_gt_mask(gt: MotTable) -> np.ndarray:
     """(N,) bool: gt rows that are scored: conf != 0 and class pedestrian or no class (the
-    MOTChallenge rule; ``harness.metrics.frames`` applies it)."""
+    MOTChallenge rule; ``occbench.metrics.frames`` applies it)."""
     return (gt.conf != 0) & np.isin(gt.classes, (PEDESTRIAN_CLASS, NO_CLASS))
 
 
@@ -171,7 +171,7 @@ def _parse_text(text: str, path: Path, kind: str, last_frame: int | None) -> Mot
 
 def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> MotTable | None:
     """The common case in one vectorised pass (a C reader, floats parsed as Python parses
-    them: ``harness.io.columns``): comma-separated rows all of one width (6 to 10), no
+    them: ``occbench.io.columns``): comma-separated rows all of one width (6 to 10), no
     comment, every row valid by ``_check_row``'s rules. None for anything else, which
     ``_parse`` then reads line by line with its exact warnings and errors naming the line
     (tests/harness/io/test_mot.py: both give the same table)."""

@@ -2,7 +2,7 @@
 
 Public API::
 
-    score = score_sequence(gt, res, iou_threshold=0.5)   # gt, res: harness.io.mot.MotTable
+    score = score_sequence(gt, res, iou_threshold=0.5)   # gt, res: occbench.io.mot.MotTable
     table = summarize({"seq-a": score_a, "seq-b": score_b})
 
 ``summarize`` returns one row per sequence plus a ``COMBINED`` row, columns ``sequence`` +
@@ -10,7 +10,7 @@ Public API::
 The combined row sums the counts of all sequences and recomputes every ratio from the sums
 (MOTA is never averaged); HOTA is combined as TrackEval does (TP/FN/FP summed per alpha,
 AssA and LocA weighted by the TP counts). Which gt and tracker rows are scored is decided
-in ``harness.metrics.frames`` (MOTChallenge devkit ignore rules).
+in ``occbench.metrics.frames`` (MOTChallenge devkit ignore rules).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from harness.io.mot import MotTable
-from harness.metrics.clear import ClearCounts, clear_counts
-from harness.metrics.frames import pair_frames
-from harness.metrics.hota import HotaCounts, combine_hota, hota_counts
+from occbench.io.mot import MotTable
+from occbench.metrics.clear import ClearCounts, clear_counts
+from occbench.metrics.frames import pair_frames
+from occbench.metrics.hota import HotaCounts, combine_hota, hota_counts
 
 if TYPE_CHECKING:  # pandas is imported where used (start-up time)
     import pandas as pd
@@ -148,7 +148,7 @@ def summarize(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
 
 
 def hota_alpha_table(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
-    """HOTA and its sub-metrics at each of the 19 alphas (``harness.metrics.hota.ALPHAS``).
+    """HOTA and its sub-metrics at each of the 19 alphas (``occbench.metrics.hota.ALPHAS``).
 
     Returns:
         DataFrame with columns ``sequence``, ``alpha`` + ``HOTA_ALPHA_COLUMNS``: 19 rows per
@@ -157,7 +157,7 @@ def hota_alpha_table(scores: Mapping[str, SequenceScore]) -> pd.DataFrame:
     """
     import pandas as pd
 
-    from harness.metrics.hota import ALPHAS
+    from occbench.metrics.hota import ALPHAS
 
     parts = [*scores.items(), (COMBINED, combine(scores))]
     frames = []

@@ -17,8 +17,8 @@ TrackEval re-scores a run folder to the same figures (``clear_counts``):
 * MT / ML: matched in more than 80 % / fewer than 20 % of their annotated frames.
 
 Identity metrics (IDF1, IDP, IDR: a global one-to-one assignment of ids) come from
-``harness.metrics.identity`` (sparse over the id pairs that overlap; equal to TrackEval's
-``Identity``). Both read the IoU matrices of ``harness.metrics.frames``, computed once.
+``occbench.metrics.identity`` (sparse over the id pairs that overlap; equal to TrackEval's
+``Identity``). Both read the IoU matrices of ``occbench.metrics.frames``, computed once.
 
 What is kept per sequence are counts (``ClearCounts``), so sequences combine by summing and
 recomputing ratios; MOTP is reported as the mean IoU of the matched pairs.
@@ -31,9 +31,9 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harness.metrics.arrays import distinct
-from harness.metrics.frames import FramePairs
-from harness.metrics.identity import identity_counts
+from occbench.metrics.arrays import distinct
+from occbench.metrics.frames import FramePairs
+from occbench.metrics.identity import identity_counts
 
 MT_ABOVE = 0.8  # mostly tracked: matched in more than 80 % of the annotated frames
 ML_BELOW = 0.2  # mostly lost: matched in fewer than 20 %
@@ -107,7 +107,7 @@ def clear_matching(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearCounts
     """CLEAR MOT counts of one sequence, as the MOTChallenge devkit / TrackEval's CLEAR.
 
     Args:
-        pairs: the scored gt and tracker boxes per frame (``harness.metrics.frames``).
+        pairs: the scored gt and tracker boxes per frame (``occbench.metrics.frames``).
         iou_threshold: smallest IoU of a match.
     Returns:
         ClearCounts with objects, predictions, matches, switches, false_positives, misses,
@@ -160,7 +160,7 @@ class ClearMatches:
 def clear_matches(pairs: FramePairs, iou_threshold: float = 0.5) -> ClearMatches:
     """CLEAR's matching of one sequence (``matched_entries``) and its switches: the one
     place both the counts (``clear_matching``) and the per-frame timeline
-    (``harness.metrics.timeline``) read."""
+    (``occbench.metrics.timeline``) read."""
     eps = np.finfo(float).eps
     pairable = np.flatnonzero(pairs.iou >= iou_threshold - eps)  # entries a match may take
     matched = pairable[matched_entries(pairs, pairable)]

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harness.io.mot import MotTable, scored_gt_mask
-from harness.metrics.arrays import distinct
-from harness.metrics.overlaps import sparse_iou
-from trackers.geometry import iou_matrix
+from occbench.io.mot import MotTable, scored_gt_mask
+from occbench.metrics.arrays import distinct
+from occbench.metrics.overlaps import sparse_iou
+from occbench.trackers.geometry import iou_matrix
 
 log = logging.getLogger(__name__)
 
@@ -147,7 +147,7 @@ def check_unique_ids(table: MotTable, what: str) -> None:
 
 def pair_frames(gt: MotTable, res: MotTable) -> FramePairs:
     """Apply the ignore rules and compute one IoU matrix per frame, kept sparse
-    (``harness.metrics.overlaps.sparse_iou``), read by CLEAR, IDF1 and HOTA alike.
+    (``occbench.metrics.overlaps.sparse_iou``), read by CLEAR, IDF1 and HOTA alike.
 
     Args:
         gt: ground truth read with ``read_mot(path, gt=True)`` (boxes xywh, 0-based).

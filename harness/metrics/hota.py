@@ -15,7 +15,7 @@ Per sequence, for the localisation thresholds alpha = 0.05, 0.10, ..., 0.95:
 Sequences are combined as TrackEval's ``combine_sequences``: TP, FN, FP summed per alpha;
 AssA, AssRe, AssPr and LocA averaged with the per-sequence TP counts as weights.
 
-The similarities are the nonzero IoUs of ``harness.metrics.frames.FramePairs``; everything
+The similarities are the nonzero IoUs of ``occbench.metrics.frames.FramePairs``; everything
 is kept sparse over the gt/tracker id pairs that ever overlap (potential matches, alignment
 scores, match counts per alpha), so memory does not grow with ``#gt ids * #tracker ids``
 (TrackEval holds a dense matrix of each, 19 of them for the match counts). The only Python
@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harness.metrics.frames import FramePairs
+from occbench.metrics.frames import FramePairs
 
 ALPHAS: np.ndarray = np.arange(0.05, 0.99, 0.05)  # the 19 thresholds, exactly TrackEval's
 _EPS = np.finfo(float).eps
@@ -96,7 +96,7 @@ def hota_counts(pairs: FramePairs) -> HotaCounts:
 
     Args:
         pairs: the scored gt and tracker boxes per frame and their IoU, the similarity
-            (``harness.metrics.frames``).
+            (``occbench.metrics.frames``).
     Returns:
         HotaCounts with TrackEval's per-alpha TP/FN/FP, AssA/AssRe/AssPr and LocA.
     """
@@ -132,7 +132,7 @@ class HotaMatches:
 def hota_matches(pairs: FramePairs, res: HotaCounts) -> HotaMatches:
     """Steps 1 and 2 on a sequence with gt and tracker boxes: the global alignment and the
     per-frame matches; adds TP, FN, FP and LocA to ``res`` (``match_frames``). Read by
-    ``hota_counts`` and by the per-frame timeline (``harness.metrics.timeline``)."""
+    ``hota_counts`` and by the per-frame timeline (``occbench.metrics.timeline``)."""
     # contiguous id indices (TrackEval relabels the same way)
     g_uniq, g_idx = np.unique(pairs.gt_ids, return_inverse=True)
     t_uniq, t_idx = np.unique(pairs.tracker_ids, return_inverse=True)

@@ -19,7 +19,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from harness.metrics.frames import FramePairs
+from occbench.metrics.frames import FramePairs
 
 
 def overlap_counts(pairs: FramePairs, iou_threshold: float = 0.5

@@ -29,7 +29,7 @@ Counts are additive over sequences (``OcclusionCounts.__add__``); ``columns`` re
 ratios from the sums.
 
 For the runner: ``extra_score(gt, res)`` computes these and the paper metrics
-(``harness.metrics.paper``) of one sequence, ``extra_rows`` turns them into ``metrics.csv``
+(``occbench.metrics.paper``) of one sequence, ``extra_rows`` turns them into ``metrics.csv``
 rows (per sequence and COMBINED) with the columns ``EXTRA_COLUMNS``.
 """
 
@@ -43,16 +43,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from harness.datasets.base import GroundTruth
-from harness.io.mot import MotTable
-from harness.metrics.arrays import distinct
-from harness.metrics.counts import combine_counts
-from harness.metrics.frames import FramePairs, frame_pairs
-from harness.metrics.identity import overlap_counts
-from harness.metrics.paper import COLUMNS as PAPER_COLUMNS
-from harness.metrics.paper import PaperCounts, paper_counts
-from harness.metrics.rows import RowMatching, considered_mask, row_matching
-from trackers.common.assignment import assign
+from occbench.datasets.base import GroundTruth
+from occbench.io.mot import MotTable
+from occbench.metrics.arrays import distinct
+from occbench.metrics.counts import combine_counts
+from occbench.metrics.frames import FramePairs, frame_pairs
+from occbench.metrics.identity import overlap_counts
+from occbench.metrics.paper import COLUMNS as PAPER_COLUMNS
+from occbench.metrics.paper import PaperCounts, paper_counts
+from occbench.metrics.rows import RowMatching, considered_mask, row_matching
+from occbench.trackers.common.assignment import assign
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -122,7 +122,7 @@ def identity_mapping(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
     """GT id -> result id of the IDF1 mapping (Ristani et al. 2016): the one-to-one pairing
     maximising the number of frames in which the pair overlaps with IoU >= threshold.
 
-    The frame counts are gathered sparse (``harness.metrics.identity.overlap_counts`` of
+    The frame counts are gathered sparse (``occbench.metrics.identity.overlap_counts`` of
     ``pairs``, the ``frame_pairs`` of all rows when already computed); the assignment is
     solved on the dense (GT ids, result ids) matrix, whose tie-breaking among equally good
     mappings decides which rows count as matched with the mapped id."""
@@ -250,7 +250,7 @@ class ExtraScore:
 def extra_score(gt: MotTable | GroundTruth, res: MotTable, iou_threshold: float = 0.5,
                 hidden_below: float = 0.05,
                 followers: Mapping[int, int] | None = None) -> ExtraScore:
-    """Paper metrics (``harness.metrics.paper``; ``followers`` as there) and occlusion
+    """Paper metrics (``occbench.metrics.paper``; ``followers`` as there) and occlusion
     metrics of one sequence."""
     table = gt.table if isinstance(gt, GroundTruth) else gt
     matching = row_matching(table, res, iou_threshold)  # one matching for both

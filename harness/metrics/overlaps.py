@@ -1,6 +1,6 @@
 """The nonzero IoUs of every frame at once, without the dense matrices (``sparse_iou``).
 
-Per frame, ``trackers.geometry.iou_matrix`` of N gt boxes against M tracker boxes holds
+Per frame, ``occbench.trackers.geometry.iou_matrix`` of N gt boxes against M tracker boxes holds
 N x M entries, about 1 % of them nonzero at MOT20 density (100 people in a frame). Here the
 tracker boxes are sorted by frame and left edge, and each gt box is paired only with the
 tracker boxes of its frame whose left edge lies within (its left edge - the widest tracker

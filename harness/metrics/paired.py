@@ -6,7 +6,7 @@ frames (the last one shorter); a resample draws, within every sequence, as many 
 has, with replacement (a stratified bootstrap of non-overlapping blocks: every sequence keeps its
 weight, and frames stay together in blocks, so that the temporal correlation of a track's
 errors is kept inside a block). Both trackers get the same draw: the difference is paired.
-Each resample sums the drawn frames' counts (``harness.metrics.timeline.FrameCounts``) over
+Each resample sums the drawn frames' counts (``occbench.metrics.timeline.FrameCounts``) over
 all sequences and recomputes MOTA, IDF1 and HOTA from the sums, as a COMBINED row is
 (``timeline.scores``). The matching, the identity mapping and HOTA's association scores are
 the whole run's, not re-solved per resample (the interval is conditional on them).
@@ -24,8 +24,8 @@ from itertools import combinations
 
 import numpy as np
 
-from harness.metrics.arrays import distinct
-from harness.metrics.timeline import FrameCounts, scores
+from occbench.metrics.arrays import distinct
+from occbench.metrics.timeline import FrameCounts, scores
 
 METRICS = ("IDF1", "HOTA", "MOTA")
 BLOCK = 10  # frames per block

@@ -2,7 +2,7 @@
 
 Both papers score trajectories, not frames. Everything here starts from one frame-by-frame
 matching of ground-truth rows to result rows made the CLEAR MOT way
-(``harness.metrics.rows.match_rows``, re-exported here). Ground-truth rows with
+(``occbench.metrics.rows.match_rows``, re-exported here). Ground-truth rows with
 ``conf == 0`` (MOT16 "ignore") or a class other than pedestrian are left out
 (``considered_mask``).
 
@@ -70,11 +70,11 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from harness.io.mot import MotTable
-from harness.metrics.arrays import distinct
-from harness.metrics.counts import combine_counts
-from harness.metrics.identity import count_pairs
-from harness.metrics.rows import (  # noqa: F401 - considered, match_rows: paper's API too
+from occbench.io.mot import MotTable
+from occbench.metrics.arrays import distinct
+from occbench.metrics.counts import combine_counts
+from occbench.metrics.identity import count_pairs
+from occbench.metrics.rows import (  # noqa: F401 - considered, match_rows: paper's API too
     RowMatching,
     considered,
     considered_mask,
@@ -85,7 +85,7 @@ from harness.metrics.rows import (  # noqa: F401 - considered, match_rows: paper
 log = logging.getLogger(__name__)
 
 # Column names, prefixed by the paper whose table they fill (avoids clashing with CLEAR's
-# MT/ML in harness.metrics.COLUMNS, which use different thresholds and matching).
+# MT/ML in occbench.metrics.COLUMNS, which use different thresholds and matching).
 RETA_COLUMNS = ["Song_GT", "Song_MT%", "Song_PT%", "Song_ML%", "Song_Frag", "Song_IDS"]
 PBM_COLUMNS = [
     "PBM_GT", "PBM_MT", "PBM_MT1", "PBM_ML", "PBM_Missed", "PBM_Under", "PBM_Over",
@@ -189,7 +189,7 @@ def responses(m: RowMatching, inside: float = 0.5) -> tuple[np.ndarray, np.ndarr
     g, r = p.gt_rows[p.row], p.tracker_rows[p.col]
     g, r = g[~used[r]], r[~used[r]]
     cover = _intersection(m.res.boxes[r], m.gt.boxes[g])  # |r & g| / |r|, as
-    area = m.res.boxes[r, 2] * m.res.boxes[r, 3]  # trackers.geometry.overlap_ratio_matrix
+    area = m.res.boxes[r, 2] * m.res.boxes[r, 3]  # occbench.trackers.geometry.overlap_ratio_matrix
     with np.errstate(invalid="ignore", divide="ignore"):
         cover = np.where(area > 0, cover / area, 0.0)
     order = np.lexsort((g, -cover, r))  # per result box the best cover, then the first gt
@@ -202,7 +202,7 @@ def responses(m: RowMatching, inside: float = 0.5) -> tuple[np.ndarray, np.ndarr
 
 def _intersection(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(K,) intersection areas of the xywh box pairs a[k], b[k] (the entries of
-    ``trackers.geometry.intersection_matrix``, computed alike)."""
+    ``occbench.trackers.geometry.intersection_matrix``, computed alike)."""
     w = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2]) - np.maximum(a[:, 0], b[:, 0])
     h = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3]) - np.maximum(a[:, 1], b[:, 1])
     return np.clip(w, 0.0, None) * np.clip(h, 0.0, None)
@@ -219,7 +219,7 @@ def paper_counts(gt: MotTable, res: MotTable, iou_threshold: float = 0.5,
         iou_threshold: smallest IoU of a match.
         matching: ``row_matching(gt, res, iou_threshold)`` when already computed.
         followers: result id -> the id its follower started under (PBM's single-target
-            protocol, ``harness.pipeline.protocols``); None: every id is its own.
+            protocol, ``occbench.pipeline.protocols``); None: every id is its own.
 
     Raises:
         ValueError: a result id has no follower in ``followers``.

@@ -1,11 +1,11 @@
 """GT rows matched to result rows frame by frame, the CLEAR MOT way (Bernardin &
-Stiefelhagen 2008), for the paper and occlusion metrics (``harness.metrics.paper``,
-``harness.metrics.occlusion``): a pair matched in the last frame the person was matched is
+Stiefelhagen 2008), for the paper and occlusion metrics (``occbench.metrics.paper``,
+``occbench.metrics.occlusion``): a pair matched in the last frame the person was matched is
 kept while its IoU stays >= the threshold, the remaining rows are matched by the Hungarian
 method on IoU (pairs below the threshold are forbidden). GT rows with ``conf == 0`` (MOT16
 "ignore") or a class other than pedestrian are left out (``considered_mask``).
 
-The IoUs come from ``harness.metrics.frames.frame_pairs`` (nonzero entries of each frame,
+The IoUs come from ``occbench.metrics.frames.frame_pairs`` (nonzero entries of each frame,
 computed once); ``row_matching`` keeps them with the matching for every metric that reads
 either (``tests/harness/metrics/test_matching.py``: equal to the loop over frames and rows).
 """
@@ -16,15 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.io.mot import MotTable, scored_gt_mask
-from harness.metrics.arrays import distinct
-from harness.metrics.frames import FramePairs, check_unique_ids, frame_pairs
-from trackers.common.assignment import assign
+from occbench.io.mot import MotTable, scored_gt_mask
+from occbench.metrics.arrays import distinct
+from occbench.metrics.frames import FramePairs, check_unique_ids, frame_pairs
+from occbench.trackers.common.assignment import assign
 
 
 def considered_mask(gt: MotTable) -> np.ndarray:
     """(N,) bool: GT rows that are scored, by the MOTChallenge rule
-    (``harness.io.mot.scored_gt_mask``): ``conf != 0`` and class pedestrian (1) or none."""
+    (``occbench.io.mot.scored_gt_mask``): ``conf != 0`` and class pedestrian (1) or none."""
     return scored_gt_mask(gt)
 
 

@@ -1,12 +1,12 @@
 """Per-frame counts of one tracker on one sequence: the metrics' own matching, frame by frame.
 
-``frame_counts(gt, res)`` pairs the boxes once (``harness.metrics.frames.pair_frames``) and
+``frame_counts(gt, res)`` pairs the boxes once (``occbench.metrics.frames.pair_frames``) and
 reads the same matchings the sequence's scores come from: CLEAR's (``clear_matches``: misses,
 false positives, identity switches), the identity mapping (``identity_pairs``: IDTP) and
 HOTA's per-frame matches with their association scores (``hota_matches``). Every count is
 additive over frames, and summed over a sequence's frames gives its MOTA, IDF1 and HOTA
 exactly (``FrameCounts.total`` and ``scores``): the report's timeline and the paired
-bootstrap (``harness.metrics.paired``) read these, not a looser re-count.
+bootstrap (``occbench.metrics.paired``) read these, not a looser re-count.
 
 HOTA per frame: at each alpha a, a TP of id pair c adds 1 to TP_a and A_a(c) = |TPA_a(c)| /
 (|TPA_a(c)| + |FNA_a(c)| + |FPA_a(c)|) to the association sum, A_a(c) being the pair's
@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.io.mot import MotTable
-from harness.metrics.clear import clear_matches
-from harness.metrics.frames import FramePairs, pair_frames
-from harness.metrics.hota import ALPHAS, HotaCounts, hota_matches, pair_match_counts
-from harness.metrics.identity import identity_pairs
+from occbench.io.mot import MotTable
+from occbench.metrics.clear import clear_matches
+from occbench.metrics.frames import FramePairs, pair_frames
+from occbench.metrics.hota import ALPHAS, HotaCounts, hota_matches, pair_match_counts
+from occbench.metrics.identity import identity_pairs
 
 #: the scalar per-frame counts, columns 0..5 of ``FrameCounts.matrix``
 SCALARS = ("objects", "predictions", "misses", "false_positives", "switches", "idtp")

@@ -4,11 +4,11 @@
 before timing (``warmup``) and the run folder (``rundir``, ``writer``, ``summary``).
 
 Importing it registers the project's OmegaConf resolvers, which its configs use:
-``${occbench.data:...}`` (``harness.paths``), ``${occbench.choose:...}`` (``choose``) and
+``${occbench.data:...}`` (``occbench.paths``), ``${occbench.choose:...}`` (``choose``) and
 ``${occbench.unique_dir:...}`` (``rundir``)."""
 
-from harness.paths import register_resolver as _register_resolver
-from harness.pipeline import choose as _choose  # noqa: F401 - the ${occbench.choose:...} resolver
-from harness.pipeline import rundir as _rundir  # noqa: F401 - the ${occbench.unique_dir:...} resolver
+from occbench.paths import register_resolver as _register_resolver
+from occbench.pipeline import choose as _choose  # noqa: F401 - the ${occbench.choose:...} resolver
+from occbench.pipeline import rundir as _rundir  # noqa: F401 - the ${occbench.unique_dir:...} resolver
 
-_register_resolver()  # configs name data files as ${occbench.data:...} (harness.paths)
+_register_resolver()  # configs name data files as ${occbench.data:...} (occbench.paths)

@@ -4,8 +4,8 @@ A ``TrackerBank`` holds the trackers of a run on one sequence. For every frame i
 tracker its own copy of the inputs (the frame, the detections, the foreground), times its
 ``update`` (the copies are made outside the timed section), catches a failure (the tracker
 drops out of the sequence, its error and traceback kept in its ``TrackerOutput``) and
-collects the tracks it reports. The run (``harness.pipeline.loop.run_sequence``), the
-single-target protocol (``harness.pipeline.protocols``), the video report and the bench all
+collects the tracks it reports. The run (``occbench.pipeline.loop.run_sequence``), the
+single-target protocol (``occbench.pipeline.protocols``), the video report and the bench all
 feed their trackers through it.
 """
 
@@ -20,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from harness.io.mot import MotTable
-from trackers.protocol import Tracker
-from trackers.records import Detections, Track
+from occbench.datasets.base import Sequence
+from occbench.io.mot import MotTable
+from occbench.trackers.protocol import Tracker
+from occbench.trackers.records import Detections, Track
 
 log = logging.getLogger(__name__)
 
@@ -44,7 +44,7 @@ class TrackerOutput:
         trace: the traceback of the failure, else None.
         followers: the single-target protocol's reported id -> the reported id its follower
             started under (a restart belongs to the follower of the person it was started
-            for: ``harness.pipeline.protocols``); None when every id is its own track.
+            for: ``occbench.pipeline.protocols``); None when every id is its own track.
     """
 
     table: MotTable
@@ -109,7 +109,7 @@ def copy_inputs(image: np.ndarray | None, detections: Detections,
 def start_trackers(trackers: Mapping[str, Tracker], sequence: Sequence) -> None:
     """Tell each tracker that has a ``start_sequence(info)`` method the sequence's
     ``SequenceInfo`` (frame rate, size) before its first frame: trackers whose parameters
-    are in frames per second (e.g. BoxMOT's, ``trackers.outside.boxmot``) take the rate
+    are in frames per second (e.g. BoxMOT's, ``occbench.trackers.outside.boxmot``) take the rate
     from there rather than from a config value that would be wrong on another dataset."""
     for tracker in trackers.values():
         start = getattr(tracker, "start_sequence", None)

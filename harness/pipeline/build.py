@@ -3,7 +3,7 @@
 ``compose_config`` composes ``conf/`` (or loads a finished run's ``config.yaml``);
 ``tracker_configs`` names the tracker configs of ``cfg.tracker``; ``build_tracker``,
 ``build_source`` and ``load_sequences`` instantiate them, type-checked against the target's
-signature (``harness.pipeline.config_check``), with a ``RunError`` naming the key when they
+signature (``occbench.pipeline.config_check``), with a ``RunError`` naming the key when they
 cannot be.
 """
 
@@ -14,10 +14,10 @@ from collections.abc import Sequence as Seq
 from pathlib import Path
 from typing import Any
 
-from harness.datasets.base import Sequence
-from harness.errors import RunError
-from harness.sources.base import DetectionSource
-from trackers.protocol import Tracker
+from occbench.datasets.base import Sequence
+from occbench.errors import RunError
+from occbench.sources.base import DetectionSource
+from occbench.trackers.protocol import Tracker
 
 CONF_DIR = Path(__file__).resolve().parents[2] / "conf"
 
@@ -31,11 +31,14 @@ def compose_config(overrides: Seq[str], run_dir: Path | None = None,
     if run_dir is not None:
         path = Path(run_dir) / "config.yaml"
         if not path.is_file():
-            raise FileNotFoundError(f"{path} not found (a run directory of python -m harness)")
+            raise FileNotFoundError(f"{path} not found (a run directory of python -m occbench)")
         cfg = OmegaConf.load(path)
         return OmegaConf.merge(cfg, OmegaConf.from_dotlist(list(overrides)))
     from hydra import compose, initialize_config_dir
 
+    from occbench.config import register
+
+    register()
     with initialize_config_dir(str(CONF_DIR), version_base="1.3"):
         return compose(config_name, overrides=list(overrides))
 
@@ -125,8 +128,8 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
 
 def missing_library(err: BaseException):
     """The outside tracker's missing optional library behind ``err``
-    (``trackers.outside.MissingLibrary``, found along its causes), else None."""
-    from trackers.outside import MissingLibrary
+    (``occbench.trackers.outside.MissingLibrary``, found along its causes), else None."""
+    from occbench.trackers.outside import MissingLibrary
 
     seen = set()
     while err is not None and id(err) not in seen:
@@ -139,9 +142,9 @@ def missing_library(err: BaseException):
 
 def check_node(node: Any, key: str, target: Any) -> None:
     """Type-check a ``_target_`` config against ``target``'s signature
-    (``harness.pipeline.config_check.check_target``); RunError naming ``key.<argument>``."""
-    from harness.errors import ConfigError
-    from harness.pipeline.config_check import check_target
+    (``occbench.pipeline.config_check.check_target``); RunError naming ``key.<argument>``."""
+    from occbench.errors import ConfigError
+    from occbench.pipeline.config_check import check_target
 
     try:
         check_target(dict(container(node)), key, target)
@@ -199,7 +202,7 @@ def load_sequences(node: Any) -> list[Sequence]:
     for s in seqs:
         if not isinstance(s, Sequence):
             raise RunError(f"dataset ({node['_target_']}) yielded {type(s).__name__}, "
-                           "not a harness.datasets.base.Sequence")
+                           "not a occbench.datasets.base.Sequence")
     names = [s.info.name for s in seqs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -209,13 +212,13 @@ def load_sequences(node: Any) -> list[Sequence]:
 
 def build_source(node: Any, cache: bool = True) -> DetectionSource:
     """Instantiate the detector config; with ``cache``, a front-end source reads and fills
-    the front-end cache (``harness.sources.cache``: ``OCCBENCH_CACHE``)."""
+    the front-end cache (``occbench.sources.cache``: ``OCCBENCH_CACHE``)."""
     if node is None or "_target_" not in node:
         raise RunError("detector: no detection source selected (detector=<name>)")
     _check_located(node, "detector")
     source = _instantiate(node, "detector")
     if not cache:
         return source
-    from harness.sources.cache import cached
+    from occbench.sources.cache import cached
 
     return cached(source, container(node))

@@ -7,7 +7,7 @@ a paper table that follows the tracker (``conf/experiment/reta_table2.yaml``)::
 
 Hydra resolves a defaults-list override after every group's choice is known, so ``${tracker}``
 is the final tracker choice (the command line's or the experiment's); a detector chosen on the
-command line still wins. Registered when ``harness.pipeline`` is imported.
+command line still wins. Registered when ``occbench.pipeline`` is imported.
 """
 
 from __future__ import annotations

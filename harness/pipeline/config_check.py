@@ -29,7 +29,7 @@ from collections.abc import Callable, Mapping
 from pathlib import PurePath
 from typing import Any
 
-from harness.errors import ConfigError
+from occbench.errors import ConfigError
 
 HYDRA_KEYS = frozenset({"_target_", "_convert_", "_recursive_", "_partial_", "_args_"})
 
@@ -189,8 +189,8 @@ def check_target(node: Mapping[str, Any], key: str, target: Any) -> None:
 
 def metric_names() -> list[str]:
     """Every column of metrics.csv besides tracker and sequence."""
-    from harness.metrics import COLUMNS
-    from harness.metrics.occlusion import EXTRA_COLUMNS
+    from occbench.metrics import COLUMNS
+    from occbench.metrics.occlusion import EXTRA_COLUMNS
 
     return list(dict.fromkeys([*COLUMNS, *EXTRA_COLUMNS]))
 
@@ -214,7 +214,7 @@ def _metric(v: str) -> str | None:
 
 
 def _foreground(v: str) -> str | None:
-    from harness.pipeline.loop import FOREGROUND_MODES
+    from occbench.pipeline.loop import FOREGROUND_MODES
 
     return None if v in FOREGROUND_MODES else f"must be one of {list(FOREGROUND_MODES)}"
 

@@ -2,15 +2,15 @@
 
 Per sequence the data flow is: frame k -> detection source (once per frame) -> every
 tracker (the same detections and foreground, each tracker its own copy:
-``harness.pipeline.bank.TrackerBank``) -> reported tracks -> ``tracks/<tracker>/<sequence>.txt``
+``occbench.pipeline.bank.TrackerBank``) -> reported tracks -> ``tracks/<tracker>/<sequence>.txt``
 -> metrics against the ground truth.
 
 ``run_experiment`` runs a whole composed config (dataset x detector x trackers, plus
-external result folders) in three steps: the plan (``harness.pipeline.plan``: everything
+external result folders) in three steps: the plan (``occbench.pipeline.plan``: everything
 checked and built before the first frame), the bank (``track_sequence``: the frame loop
-into the trackers, ``harness.pipeline.loop.run_sequence`` or the single-target protocol)
-and the record (``harness.pipeline.record.RunRecord``: the run directory written as results
-arrive; the Markdown summary is ``harness.pipeline.summary``).
+into the trackers, ``occbench.pipeline.loop.run_sequence`` or the single-target protocol)
+and the record (``occbench.pipeline.record.RunRecord``: the run directory written as results
+arrive; the Markdown summary is ``occbench.pipeline.summary``).
 
 A failing tracker (an exception in ``update``) or a failing sequence (an unreadable frame,
 a failing detector) is recorded in ``errors.txt`` and the run goes on; everything written
@@ -25,15 +25,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from harness.datasets.base import Sequence
-from harness.errors import RunError
-from harness.metrics import COMBINED
-from harness.pipeline.bank import TrackerOutput
-from harness.pipeline.build import build_source
-from harness.pipeline.loop import ProgressFactory, no_progress, run_sequence
-from harness.pipeline.plan import RunPlan, plan_run
-from harness.pipeline.record import RunRecord
-from harness.pipeline.writer import Failure
+from occbench.datasets.base import Sequence
+from occbench.errors import RunError
+from occbench.metrics import COMBINED
+from occbench.pipeline.bank import TrackerOutput
+from occbench.pipeline.build import build_source
+from occbench.pipeline.loop import ProgressFactory, no_progress, run_sequence
+from occbench.pipeline.plan import RunPlan, plan_run
+from occbench.pipeline.record import RunRecord
+from occbench.pipeline.writer import Failure
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -49,10 +49,10 @@ class ExperimentResult:
         timings: per tracker and sequence: frames, seconds, frames/s (``timings.csv``).
         out_dir: the run directory.
         trackers: names of the trackers run, in order (then the external names).
-        paired: ``harness.metrics.paired.PairedDifference`` of every pair of trackers.
+        paired: ``occbench.metrics.paired.PairedDifference`` of every pair of trackers.
         title: what was run: dataset, sequences, detector (as summary.md opens).
         tracks: tracks counted per tracker on the sequences without ground truth (None when
-            every sequence has it): ``harness.report.tracks.track_rows``.
+            every sequence has it): ``occbench.report.tracks.track_rows``.
     """
 
     metrics: pd.DataFrame
@@ -149,7 +149,7 @@ def track_sequence(plan: RunPlan, seq: Sequence,
     plan.writer.ground_truth(seq)
     source = build_source(plan.detector)
     if plan.protocol == "single_target":
-        from harness.pipeline.protocols import run_single_target
+        from occbench.pipeline.protocols import run_single_target
 
         builders = {n: (lambda n=n: plan.build(n)) for n in plan.configs}
         outputs = run_single_target(builders, seq, source, plan.foreground, plan.background,

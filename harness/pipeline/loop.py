@@ -3,8 +3,8 @@
 Per frame k of a sequence: the frame is read once, the detection source runs once, bad
 detections are dropped (``clean_detections``) and the foreground is chosen once
 (``ForegroundProvider``); ``frames`` yields them in order (``LoopFrame``). The consumers
-(``run_sequence`` here, ``harness.report.video``, ``harness.commands.bench``) hand each step
-to a ``harness.pipeline.bank.TrackerBank``, which feeds the trackers.
+(``run_sequence`` here, ``occbench.report.video``, ``occbench.commands.bench``) hand each step
+to a ``occbench.pipeline.bank.TrackerBank``, which feeds the trackers.
 
 Frames are visited once, in order, and every tracker advances on the same frame before the
 next one is read: the detections are computed once per sequence, identical for every
@@ -20,13 +20,13 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from harness.errors import RunError
-from harness.io.mot import MotTable
-from harness.pipeline.bank import TrackerBank, TrackerOutput, start_trackers
-from harness.sources.base import DetectionSource
-from trackers.protocol import Tracker
-from trackers.records import Detections
+from occbench.datasets.base import Sequence
+from occbench.errors import RunError
+from occbench.io.mot import MotTable
+from occbench.pipeline.bank import TrackerBank, TrackerOutput, start_trackers
+from occbench.sources.base import DetectionSource
+from occbench.trackers.protocol import Tracker
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -68,7 +68,7 @@ class ForegroundProvider:
     The dataset's exact foreground is a label image of ground-truth ids; trackers get its
     nonzero pixels as a bool mask, never the ids (which would leak the ground truth).
         none: always None.
-        mog2: a background-subtraction mask (``trackers.frontend.BackgroundModel``, one
+        mog2: a background-subtraction mask (``occbench.trackers.frontend.BackgroundModel``, one
             model per sequence, built with ``background`` as keyword arguments), unless
             the detection source computes its own mask, which then takes precedence.
     """
@@ -82,9 +82,9 @@ class ForegroundProvider:
         self._model = None
         if mode == "mog2":
             try:
-                from trackers.frontend import BackgroundModel
+                from occbench.trackers.frontend import BackgroundModel
             except ImportError as err:  # the front end is an optional part of the build
-                raise RunError(f"foreground=mog2 needs trackers.frontend ({err})") from err
+                raise RunError(f"foreground=mog2 needs occbench.trackers.frontend ({err})") from err
             self._model = BackgroundModel(**dict(background or {}))
             warm = getattr(self._model, "warm_up_sequence", None)
             if warm is not None:

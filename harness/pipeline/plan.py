@@ -4,7 +4,7 @@
 resolved ``config.yaml`` first), reads the evaluation settings, builds every tracker once
 (an outside tracker whose optional library is missing is left out of a group), checks the
 external result folders, the detector and the dataset, and warms the trackers up
-(``harness.pipeline.warmup``), so that a bad config fails before anything is timed.
+(``occbench.pipeline.warmup``), so that a bad config fails before anything is timed.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from harness.datasets.base import Sequence
-from harness.errors import RunError
-from harness.metrics import COMBINED
-from harness.paths import absolute_paths
-from harness.pipeline.build import (
+from occbench.datasets.base import Sequence
+from occbench.errors import RunError
+from occbench.metrics import COMBINED
+from occbench.paths import absolute_paths
+from occbench.pipeline.build import (
     build_source,
     build_tracker,
     cfg_get,
@@ -29,11 +29,11 @@ from harness.pipeline.build import (
     missing_library,
     tracker_configs,
 )
-from harness.pipeline.loop import FOREGROUND_MODES, ProgressFactory
-from harness.pipeline.writer import RunWriter
-from harness.report.bars import DEFAULT_METRICS
-from harness.report.graph import GraphExport
-from trackers.protocol import Tracker
+from occbench.pipeline.loop import FOREGROUND_MODES, ProgressFactory
+from occbench.pipeline.writer import RunWriter
+from occbench.report.bars import DEFAULT_METRICS
+from occbench.report.graph import GraphExport
+from occbench.trackers.protocol import Tracker
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +46,7 @@ class RunPlan:
         writer: the run directory's writer.
         foreground, background: the foreground mode and the background model's keywords.
         iou_threshold, hidden_below: the evaluation's IoU threshold and the visible share
-            below which a person counts as hidden (``harness.metrics.occlusion``).
+            below which a person counts as hidden (``occbench.metrics.occlusion``).
         table_columns, plot_metrics: the summary's columns (None = all) and plotted metrics.
         graphs: the per-frame tracking-graph export (config key ``graph``).
         protocol, targets: ``multi`` or ``single_target``, and the followed ground-truth ids.
@@ -179,10 +179,10 @@ def left_out_line(missing: Mapping[str, Any]) -> str:
 
 
 def check_config(cfg: Any) -> None:
-    """Type- and range-check the app's own keys (``harness.pipeline.config_check.check_app``)
+    """Type- and range-check the app's own keys (``occbench.pipeline.config_check.check_app``)
     before anything is built or written; RunError naming the key."""
-    from harness.errors import ConfigError
-    from harness.pipeline.config_check import APP_SCHEMA, check_app
+    from occbench.errors import ConfigError
+    from occbench.pipeline.config_check import APP_SCHEMA, check_app
 
     plain: dict[str, Any] = {}
     for top in dict.fromkeys(k.split(".")[0] for k in APP_SCHEMA):
@@ -200,10 +200,10 @@ def check_config(cfg: Any) -> None:
 
 def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence],
                      progress: ProgressFactory | None = None) -> None:
-    """Before anything is timed (``harness.pipeline.warmup``): reject a tracker that needs
+    """Before anything is timed (``occbench.pipeline.warmup``): reject a tracker that needs
     frames when a sequence has none, then warm every tracker class up once per process
     (a ``progress`` bar over the warm-up's passes)."""
-    from harness.pipeline.warmup import needs_pixels, warm_up_once
+    from occbench.pipeline.warmup import needs_pixels, warm_up_once
 
     frameless = [s.info.name for s in sequences if not s.has_pixels]
     if frameless:

@@ -18,9 +18,9 @@ follower that drifts onto someone else and restarts thus shows as over-segmentat
 more IDs per trajectory; a restart keeps its follower's past (``TrackerOutput.followers``:
 reported id -> the id its follower started under, written beside the tracks), so one that
 lands on another person is an ID switch, as when PBM's tracker drifts onto someone under its
-one id (PBM Table 1's columns, ``harness.metrics.paper``). A follower's other tracks (people a multi-target
+one id (PBM Table 1's columns, ``occbench.metrics.paper``). A follower's other tracks (people a multi-target
 tracker starts while its followed track lives) are not reported; PBM itself runs with
-``starts: GivenTargetOnly`` (``trackers.layered.starts``), so it follows its one target
+``starts: GivenTargetOnly`` (``occbench.trackers.layered.starts``), so it follows its one target
 with no competing or replacing targets. Ids are made unique over the followers of one
 tracker (numbered 1, 2, ... in order of first report); the hand-started track is reported
 from its first frame, restarts as the tracker reports them. A person's follower ends at the
@@ -40,15 +40,15 @@ from typing import Any
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from harness.errors import RunError
-from harness.io.mot import MotTable
-from harness.pipeline.bank import TrackerBank, TrackerOutput
-from harness.pipeline.loop import ForegroundProvider, clean_detections, no_progress
-from harness.sources.base import DetectionSource
-from trackers.geometry import iou_matrix
-from trackers.protocol import Tracker
-from trackers.records import Detections, Track, TrackState
+from occbench.datasets.base import Sequence
+from occbench.errors import RunError
+from occbench.io.mot import MotTable
+from occbench.pipeline.bank import TrackerBank, TrackerOutput
+from occbench.pipeline.loop import ForegroundProvider, clean_detections, no_progress
+from occbench.sources.base import DetectionSource
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.protocol import Tracker
+from occbench.trackers.records import Detections, Track, TrackState
 
 log = logging.getLogger(__name__)
 
@@ -140,7 +140,7 @@ def run_single_target(
         builders: tracker name -> a function building a fresh tracker.
         sequence: a sequence with ground truth (a frame window runs its own frames).
         source: detection source for the frames after each person's first.
-        foreground, background: as for ``harness.pipeline.loop.run_sequence``.
+        foreground, background: as for ``occbench.pipeline.loop.run_sequence``.
         progress: progress-bar factory; None shows nothing.
         targets: ground-truth ids to follow; None = every person.
     Returns:

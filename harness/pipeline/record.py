@@ -15,11 +15,11 @@ import traceback
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from harness.datasets.base import Sequence
-from harness.io.mot import MotTable, format_mot, read_mot, read_mot_text, write_atomic
-from harness.pipeline.bank import TrackerOutput
-from harness.pipeline.plan import RunPlan
-from harness.pipeline.summary import (
+from occbench.datasets.base import Sequence
+from occbench.io.mot import MotTable, format_mot, read_mot, read_mot_text, write_atomic
+from occbench.pipeline.bank import TrackerOutput
+from occbench.pipeline.plan import RunPlan
+from occbench.pipeline.summary import (
     hota_alpha_frame,
     mark_complete,
     metrics_frame,
@@ -27,19 +27,19 @@ from harness.pipeline.summary import (
     summary_markdown,
     with_extras,
 )
-from harness.pipeline.writer import Failure
+from occbench.pipeline.writer import Failure
 
 if TYPE_CHECKING:  # pandas, the metrics and the reports are imported after the first frames
     import pandas as pd
 
-    from harness.metrics import SequenceScore
+    from occbench.metrics import SequenceScore
 
 log = logging.getLogger(__name__)
 
 
 def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScore:
-    """``harness.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth."""
-    from harness.metrics import score_sequence
+    """``occbench.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth."""
+    from occbench.metrics import score_sequence
 
     return score_sequence(gt.table, result, iou_threshold=iou_threshold)
 
@@ -49,7 +49,7 @@ class RunRecord:
 
     Attributes:
         scores, extras: tracker -> sequence -> ``SequenceScore`` / paper-table and
-            occlusion metrics (``harness.metrics.occlusion.extra_score``).
+            occlusion metrics (``occbench.metrics.occlusion.extra_score``).
         failures: every ``Failure`` (also in ``errors.txt``).
         timings: per tracker and sequence: frames, seconds, frames/s (``timings.csv``).
         metrics: the last published ``metrics.csv`` rows.
@@ -67,7 +67,7 @@ class RunRecord:
         self.paired: list[Any] = []  # PairedDifference of every pair of trackers
         self.tracked: list[str] = []  # sequences with gt and track files: gt/seqmap.txt
         self.expected = sum(1 for s in plan.sequences if s.gt is not None)  # can be scored
-        #: per tracker and sequence without ground truth: harness.report.tracks.track_stats
+        #: per tracker and sequence without ground truth: occbench.report.tracks.track_stats
         self.unscored: dict[str, dict[str, Any]] = {}
 
     def fail(self, tracker: str, sequence: str, stage: str, err: BaseException | str,
@@ -87,7 +87,7 @@ class RunRecord:
         if frame.empty:
             import pandas as pd
 
-            from harness.metrics import COLUMNS
+            from occbench.metrics import COLUMNS
 
             frame = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
         return frame
@@ -104,14 +104,14 @@ class RunRecord:
         status = run_status(state, done, len(self.plan.sequences), self.failures)
         try:  # the paired differences (summary.md's section, the printed footer) once the
             # run has ended: 1000 resamples per pair are not redone after every sequence
-            from harness.metrics.paired import all_pairs
+            from occbench.metrics.paired import all_pairs
 
             self.paired = all_pairs(self.frames) if state != "running" else []
         except Exception as err:  # noqa: BLE001 - recorded, the summary is written without
             self.paired = []
             self.fail("*", sname, "paired", err, traceback.format_exc())
         try:
-            from harness.report.paired import paired_markdown
+            from occbench.report.paired import paired_markdown
 
             self.writer.text("summary.md", summary_markdown(
                 frame, self.failures, self.plan.table_columns, self.plan.title, status,
@@ -124,7 +124,7 @@ class RunRecord:
         """Tracks counted on the sequences without ground truth (None: every sequence has)."""
         if not self.unscored:
             return None
-        from harness.report.tracks import track_rows
+        from occbench.report.tracks import track_rows
 
         return track_rows(self.unscored, self.timings)
 
@@ -166,7 +166,7 @@ class RunRecord:
             return
         log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
         if seq.gt is None:
-            from harness.report.tracks import track_stats
+            from occbench.report.tracks import track_stats
 
             log.info("%s has no ground truth: %s's tracks counted, not scored", sname, n)
             self.unscored.setdefault(n, {})[sname] = track_stats(out.table.ids)
@@ -179,13 +179,13 @@ class RunRecord:
 
     def _score(self, n: str, seq: Sequence, table: MotTable,
                followers: dict[int, int] | None = None) -> None:
-        from harness.metrics.occlusion import extra_score
+        from occbench.metrics.occlusion import extra_score
 
         plan, sname = self.plan, seq.info.name
         self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
         self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
                                             plan.hidden_below, followers)
-        from harness.metrics.timeline import frame_counts  # the report's timeline, paired
+        from occbench.metrics.timeline import frame_counts  # the report's timeline, paired
 
         try:
             self.frames[n][sname] = frame_counts(seq.gt.table, table, plan.iou_threshold)
@@ -219,9 +219,9 @@ class RunRecord:
         report.html (summary.md written again if the page fails); a failing
         one is recorded and the others are still written. ``metrics`` keeps every scored
         sequence whatever could be written (disk full...)."""
-        from harness.report.bars import metric_bars
-        from harness.report.hota_alpha import hota_alpha_plot
-        from harness.report.tables import comparison, to_latex
+        from occbench.report.bars import metric_bars
+        from occbench.report.hota_alpha import hota_alpha_plot
+        from occbench.report.tables import comparison, to_latex
 
         plan, writer = self.plan, self.writer
         self.metrics = self.current("finished")
@@ -252,7 +252,7 @@ class RunRecord:
         except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
             self.fail("*", "*", "metrics", err, traceback.format_exc())
         try:  # the page of the run, last: it shows every output above
-            from harness.report.html import write_run_report
+            from occbench.report.html import write_run_report
 
             write_run_report(writer.out_dir, self.frames, plan.title)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand

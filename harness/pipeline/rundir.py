@@ -31,7 +31,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
-from harness.errors import RunError
+from occbench.errors import RunError
 
 RESOLVER = "occbench.unique_dir"
 LOCK_FILE = ".occbench.lock"

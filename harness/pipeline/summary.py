@@ -6,9 +6,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from harness.errors import RunError
-from harness.metrics import COMBINED
-from harness.pipeline.writer import Failure
+from occbench.errors import RunError
+from occbench.metrics import COMBINED
+from occbench.pipeline.writer import Failure
 
 if TYPE_CHECKING:  # pandas and the tables are imported where used (start-up time)
     import pandas as pd
@@ -16,11 +16,11 @@ if TYPE_CHECKING:  # pandas and the tables are imported where used (start-up tim
 
 def summary_rows(tracker: str, scores: Mapping[str, Any]) -> pd.DataFrame:
     """``summarize(scores)`` with a leading ``tracker`` column."""
-    from harness.metrics import summarize
+    from occbench.metrics import summarize
 
     frame = summarize(dict(scores)).reset_index(drop=True)
     if "sequence" not in frame.columns:
-        raise RunError("harness.metrics.summarize returned no 'sequence' column")
+        raise RunError("occbench.metrics.summarize returned no 'sequence' column")
     frame.insert(0, "tracker", tracker)
     return frame
 
@@ -59,11 +59,11 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                      status: str | None = None, paired: str = "",
                      tracks: pd.DataFrame | None = None) -> str:
     """``summary.md``: the COMBINED comparison, per-sequence tables, the ``paired``
-    differences section (``harness.report.paired.paired_markdown``) and failures; opened by
+    differences section (``occbench.report.paired.paired_markdown``) and failures; opened by
     ``status`` (``run_status``) when the run is incomplete or partly failed; ``tracks``
-    (``harness.report.tracks.track_rows``) counts the tracks of sequences without ground
+    (``occbench.report.tracks.track_rows``) counts the tracks of sequences without ground
     truth."""
-    from harness.report.tables import comparison, direction, per_sequence, to_markdown
+    from occbench.report.tables import comparison, direction, per_sequence, to_markdown
 
     lines = ["# occbench results", ""]
     if title:
@@ -71,7 +71,7 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
     if status:
         lines += [status, ""]
     if tracks is not None and not tracks.empty:
-        from harness.report.tracks import tracks_markdown
+        from occbench.report.tracks import tracks_markdown
 
         lines += tracks_markdown(tracks)
     if metrics.empty:
@@ -97,7 +97,7 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                       to_markdown(per_sequence(metrics, metric, seqs), sense=direction(metric))]
         if paired:
             lines += [paired]
-        from harness.report.legend import column_legend
+        from occbench.report.legend import column_legend
 
         lines += column_legend(c for table in shown for c in table.columns)
     if failures:
@@ -110,7 +110,7 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
 
 def with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     """``metrics`` with the paper-table and occlusion columns appended (same rows)."""
-    from harness.metrics.occlusion import extra_rows
+    from occbench.metrics.occlusion import extra_rows
 
     if metrics.empty:
         return metrics
@@ -119,10 +119,10 @@ def with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) 
 
 
 def hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
-    """``hota_alpha.csv``: ``tracker`` + ``harness.metrics.hota_alpha_table`` per tracker."""
+    """``hota_alpha.csv``: ``tracker`` + ``occbench.metrics.hota_alpha_table`` per tracker."""
     import pandas as pd
 
-    from harness.metrics import hota_alpha_table
+    from occbench.metrics import hota_alpha_table
 
     parts = []
     for name, s in scores.items():

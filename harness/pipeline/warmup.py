@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from harness.pipeline.bank import TrackerBank
-from harness.pipeline.loop import Progress, ProgressFactory, no_progress
-from trackers.protocol import Tracker
-from trackers.records import Detections
+from occbench.pipeline.bank import TrackerBank
+from occbench.pipeline.loop import Progress, ProgressFactory, no_progress
+from occbench.trackers.protocol import Tracker
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -143,15 +143,15 @@ class WarmUp:
 
 
 # what every job imports besides its config's _target_s: the app, scoring, tables, plots
-JOB_MODULES = ("harness.commands.run", "harness.pipeline.experiment", "harness.pipeline.summary",
-               "harness.metrics", "harness.metrics.occlusion", "harness.report.tables",
-               "harness.report.hota_alpha", "harness.sweeps.gather", "harness.sweeps.fingerprint",
+JOB_MODULES = ("occbench.commands.run", "occbench.pipeline.experiment", "occbench.pipeline.summary",
+               "occbench.metrics", "occbench.metrics.occlusion", "occbench.report.tables",
+               "occbench.report.hota_alpha", "occbench.sweeps.gather", "occbench.sweeps.fingerprint",
                "motmetrics", "tqdm.contrib.logging")
 
 
 # only this project's code is imported and built ahead of a job: a tracker of someone else's
 # (a test's, a plugin's) might sleep or crash in its constructor
-OURS = ("harness.", "trackers.")
+OURS = ("occbench.",)
 
 
 def preload_spec(cfg: Any, choice: str | None = None) -> dict[str, Any]:
@@ -160,7 +160,7 @@ def preload_spec(cfg: Any, choice: str | None = None) -> dict[str, Any]:
     ``_target_``s and the resolved configs of the project's trackers."""
     from omegaconf import OmegaConf
 
-    from harness.pipeline.build import tracker_configs
+    from occbench.pipeline.build import tracker_configs
 
     targets = config_targets(OmegaConf.to_container(cfg, resolve=False))
     return {"modules": sorted({t.rsplit(".", 1)[0] for t in targets if t.startswith(OURS)}),
@@ -188,14 +188,14 @@ def preload(spec: Mapping[str, Any]) -> list[str]:
     it as it always does (logged here at debug level)."""
     import matplotlib
 
-    matplotlib.use("Agg", force=False)  # as harness.report's plots do
+    matplotlib.use("Agg", force=False)  # as occbench.report's plots do
     importlib.import_module("matplotlib.pyplot")
     for name in (*JOB_MODULES, *spec.get("modules", ())):
         try:
             importlib.import_module(name)
         except Exception as err:  # noqa: BLE001 - the job imports it again and says why
             log.debug("preload: %s not imported: %s: %s", name, type(err).__name__, err)
-    from harness.pipeline.build import build_tracker
+    from occbench.pipeline.build import build_tracker
 
     builders = {n: (lambda n=n, node=node: build_tracker(n, node))
                 for n, node in dict(spec.get("trackers", {})).items()}

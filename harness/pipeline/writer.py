@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from harness.datasets.base import Sequence
-from harness.errors import RunError
-from harness.io.mot import (
+from occbench.datasets.base import Sequence
+from occbench.errors import RunError
+from occbench.io.mot import (
     MotTable,
     WriteError,
     write_atomic,
@@ -56,7 +56,7 @@ class RunWriter:
     each sequence), ``timings.csv``, ``errors.txt`` (only when something failed),
     ``summary.tex`` (COMBINED LaTeX table), ``hota_alpha.csv`` (HOTA and its sub-metrics at
     each alpha), ``plots/`` (``metrics.png``, ``hota_alpha.png``) and ``report.html``
-    (``harness.report.html``) at the end.
+    (``occbench.report.html``) at the end.
     """
 
     #: everything a run writes into its folder, by top-level name: the writer, the plots,
@@ -71,7 +71,7 @@ class RunWriter:
              "paper_table.md", "paper_table.csv", "report.html")
 
     def __init__(self, out_dir: str | Path) -> None:
-        from harness.pipeline.rundir import busy
+        from occbench.pipeline.rundir import busy
 
         self.out_dir = Path(out_dir)
         owner = busy(self.out_dir)

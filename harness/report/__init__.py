@@ -1,7 +1,7 @@
 """Reports of a run: comparison tables (CSV, Markdown, LaTeX, text) and bar charts.
 
 The names below are loaded on first use (PEP 562): importing one module of the room, e.g.
-``harness.report.graph`` before a run's first frame, does not import pandas with the
+``occbench.report.graph`` before a run's first frame, does not import pandas with the
 tables."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-_WHERE = {"metric_bars": "harness.report.bars"} | dict.fromkeys(
+_WHERE = {"metric_bars": "occbench.report.bars"} | dict.fromkeys(
     ("COMBINED", "best_mask", "comparison", "direction", "per_sequence", "to_latex",
-     "to_markdown", "to_text"), "harness.report.tables")
+     "to_markdown", "to_text"), "occbench.report.tables")
 
 __all__ = ["COMBINED", "best_mask", "comparison", "direction", "metric_bars", "per_sequence",
            "to_latex", "to_markdown", "to_text"]

@@ -1,6 +1,6 @@
 """Picture of an active-basis template: its Gabor elements as oriented bars.
 
-``python -m harness.report.active_basis [--template T.npz] [--out docs/img/active_basis.png]``
+``python -m occbench.report.active_basis [--template T.npz] [--out docs/img/active_basis.png]``
 draws the template (default: the shipped one) three times: alone (bar thickness and colour
 by lambda_i, the element's weight), over a rendered person and over a rendered background
 patch of a synthetic scene (seed 3, never used for learning), each titled with its score
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trackers.frontend.active_basis import ActiveBasis, crop_patch, shift_offsets
+from occbench.trackers.frontend.active_basis import ActiveBasis, crop_patch, shift_offsets
 
 
 def deformed(template: ActiveBasis, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,7 +64,7 @@ def draw(template: ActiveBasis, person: np.ndarray, background: np.ndarray, path
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
 
-    from harness.report.figures import save_figure
+    from occbench.report.figures import save_figure
 
     t = template
     H, W = t.size
@@ -97,7 +97,7 @@ def draw(template: ActiveBasis, person: np.ndarray, background: np.ndarray, path
 def example_patches(template: ActiveBasis, seed: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """A rendered person (the first fully visible, isolated one of the ``crossing`` scene)
     and a background patch of the same size beside it in the first frame without people there."""
-    from harness.datasets.synthetic import load_scenario
+    from occbench.datasets.synthetic import load_scenario
 
     seq = load_scenario("crossing", seed=seed, width=384, height=288)
     for k in seq.frame_numbers():
@@ -119,9 +119,9 @@ def example_patches(template: ActiveBasis, seed: int = 3) -> tuple[np.ndarray, n
 
 
 def main(argv: list[str] | None = None) -> int:
-    from harness.fit.active_basis import load
+    from occbench.fit.active_basis import load
 
-    ap = argparse.ArgumentParser(prog="python -m harness.report.active_basis", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m occbench.report.active_basis", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--template", type=Path, default=None, help="template .npz (default: shipped)")
     ap.add_argument("--out", type=Path, default=Path("docs/img/active_basis.png"))

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from harness.report.figures import save_figure
+from occbench.report.figures import save_figure
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -30,7 +30,7 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
         The written path, or None when there is nothing to draw (no COMBINED row or none of
         ``names`` present).
     """
-    from harness.report.tables import COMBINED
+    from occbench.report.tables import COMBINED
 
     rows = metrics[metrics["sequence"] == COMBINED]
     names = [m for m in names if m in rows.columns]

@@ -8,7 +8,7 @@
   nodes.
 * parts (PBM, Fig. 7; ``Track.extra['parts']`` (5, 4) xywh part rectangles: head, left/right
   torso-arm, left/right leg): the five rectangles in the id's colour, frozen (occluded) parts
-  dashed, when ``harness.report.parts.draw_parts`` (the paper's drawing) fails.
+  dashed, when ``occbench.report.parts.draw_parts`` (the paper's drawing) fails.
 
 All images are (H, W, 3) uint8 BGR; boxes are xywh with a 0-based top-left (pixels).
 """
@@ -21,9 +21,9 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-from harness.report.graph import id_colour
-from harness.report.parts import draw_parts as pbm_draw_parts
-from harness.report.primitives import (
+from occbench.report.graph import id_colour
+from occbench.report.parts import draw_parts as pbm_draw_parts
+from occbench.report.primitives import (
     GREY,
     WHITE,
     _label,
@@ -33,7 +33,7 @@ from harness.report.primitives import (
     legend_block,
     title_band,
 )
-from trackers.records import Track, TrackState
+from occbench.trackers.records import Track, TrackState
 
 log = logging.getLogger(__name__)
 
@@ -90,13 +90,13 @@ def draw_ellipses(img: np.ndarray, tracks: Sequence[Track], thickness: int = 2,
 
 def draw_parts(img: np.ndarray, tracks: Sequence[Track], thickness: int = 1,
                taken: list | None = None) -> None:
-    try:  # PBM's own drawing (harness.report.parts)
+    try:  # PBM's own drawing (occbench.report.parts)
         out = pbm_draw_parts(img, tracks, taken=taken)
         if isinstance(out, np.ndarray) and out.shape == img.shape:
             img[...] = out
         return
     except Exception:  # fall back to ours rather than lose the frame
-        log.exception("harness.report.parts.draw_parts failed: drawing parts here")
+        log.exception("occbench.report.parts.draw_parts failed: drawing parts here")
     for t in tracks:
         parts = t.extra.get("parts")
         if parts is None:

@@ -2,7 +2,7 @@
 
 A tracker that keeps a graph exposes ``graph_snapshot()`` returning
 ``{'frame': t, 'nodes': [record, ...], 'edges': [record, ...]}`` (see
-``trackers.three_hypothesis.graph``). ``GraphRecorder`` collects the snapshots of a run and
+``occbench.trackers.three_hypothesis.graph``). ``GraphRecorder`` collects the snapshots of a run and
 writes them beside the tracks as CSV (``<stem>_nodes.csv`` and ``<stem>_edges.csv``) or JSON
 (``<stem>.json``); ``draw_graph`` draws one frame the paper's way: solid ellipses for nodes
 matched by a detection, dashed ellipses for hypotheses, light grey for tentative nodes, ids
@@ -24,7 +24,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from harness.pipeline.bank import TrackerBank
+from occbench.pipeline.bank import TrackerBank
 
 log = logging.getLogger(__name__)
 
@@ -202,7 +202,7 @@ def draw_graph(frame: np.ndarray, snapshot: dict, previous: dict | None = None,
     as a thin line from the predecessor's centre to the node's centre. Labels are moved
     off each other (``taken``: rectangles of labels already drawn; ``primitives._label``).
     """
-    from harness.report.primitives import _label
+    from occbench.report.primitives import _label
 
     taken = [] if taken is None else taken
     img = frame.copy()
@@ -236,7 +236,7 @@ def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str
 
     Args:
         tracker: a tracker with ``reset``, ``update`` and ``graph_snapshot``.
-        sequence: a ``harness.datasets.base.Sequence`` (frames 1..length are read in order).
+        sequence: a ``occbench.datasets.base.Sequence`` (frames 1..length are read in order).
         source: a ``DetectionSource``; ``start(sequence)`` is called here.
         path: graph file, ``.csv`` (two files) or ``.json``; put it beside the tracks, e.g.
             ``tracks/<tracker>/<sequence>_graph.csv``.

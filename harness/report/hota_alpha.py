@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from harness.report.figures import save_figure
-from harness.report.tables import COMBINED
+from occbench.report.figures import save_figure
+from occbench.report.tables import COMBINED
 
 log = logging.getLogger(__name__)
 

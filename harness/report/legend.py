@@ -2,9 +2,9 @@
 tables (``column_legend``), only for the columns the summary shows.
 
 The definitions are those of the code that computes them: CLEAR MOT and identity
-(``harness.metrics``), HOTA (Luiten et al. 2021, computed as TrackEval does), the occlusion columns
-(``harness.metrics.occlusion``) and the two papers' trajectory metrics
-(``harness.metrics.paper``: Song et al. as Reta et al. 2015 report them, and PBM 5.2).
+(``occbench.metrics``), HOTA (Luiten et al. 2021, computed as TrackEval does), the occlusion columns
+(``occbench.metrics.occlusion``) and the two papers' trajectory metrics
+(``occbench.metrics.paper``: Song et al. as Reta et al. 2015 report them, and PBM 5.2).
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from harness.report.primitives import WHITE, _label, legend_block
+from occbench.report.primitives import WHITE, _label, legend_block
 
 FOREGROUND = (255, 0, 255)  # magenta tint
 BLOB = (255, 128, 0)  # blue

@@ -1,11 +1,11 @@
 """Paired comparisons as text: the ``summary.md`` section, the printed table's footer and the
-rows of the HTML report (``harness.metrics.paired`` computes them)."""
+rows of the HTML report (``occbench.metrics.paired`` computes them)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from harness.metrics.paired import Bootstrap, PairedDifference
+from occbench.metrics.paired import Bootstrap, PairedDifference
 
 NOT_DISTINGUISHABLE = "not distinguishable on this data"
 

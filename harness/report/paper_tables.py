@@ -22,8 +22,8 @@ An experiment config (``conf/experiment/reta_table2.yaml`` ...) holds a ``paper_
 
 ``paper_table(metrics, spec)`` builds the table (reported lines labelled ``reported:``, ours
 ``ours:``); ``write_paper_table(run_dir, spec)`` writes ``paper_table.md`` and
-``paper_table.csv`` into the run directory (the ``harness.sweeps.callbacks.PaperTable`` callback
-calls it at the end of the job); ``python -m harness.report.paper_tables RUN_DIR`` rebuilds
+``paper_table.csv`` into the run directory (the ``occbench.sweeps.callbacks.PaperTable`` callback
+calls it at the end of the job); ``python -m occbench.report.paper_tables RUN_DIR`` rebuilds
 it from a finished run (its ``config.yaml`` holds the spec). The reported figures are the
 papers', on the papers' data: they are reference figures, not results of this project.
 
@@ -184,7 +184,7 @@ def write_paper_table(run_dir: str | Path, spec: Mapping[str, Any]) -> Path:
 
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(
-        prog="python -m harness.report.paper_tables",
+        prog="python -m occbench.report.paper_tables",
         description="Rebuild paper_table.md of a finished `+experiment=...` run.")
     p.add_argument("run_dir", type=Path, help="run directory holding config.yaml and metrics")
     args = p.parse_args(argv)

@@ -17,9 +17,9 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-from harness.report.graph import id_colour
-from harness.report.primitives import GREY, _label, _pt, dashed_rectangle
-from trackers.records import Track, TrackState
+from occbench.report.graph import id_colour
+from occbench.report.primitives import GREY, _label, _pt, dashed_rectangle
+from occbench.trackers.records import Track, TrackState
 
 
 def _tint(img: np.ndarray, box: np.ndarray, colour, alpha: float) -> None:

@@ -1,4 +1,4 @@
-"""Drawing primitives shared by ``harness.report.draw``, ``harness.report.parts`` and the
+"""Drawing primitives shared by ``occbench.report.draw``, ``occbench.report.parts`` and the
 benchmarks' overlays: points, dashed lines and rectangles (OpenCV has no dashed style),
 labels, a legend strip, colours.
 

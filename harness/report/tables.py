@@ -1,6 +1,6 @@
 """Comparison tables: one row per tracker, one column per metric, best value per column marked.
 
-Input is a metrics frame as ``harness.pipeline.experiment`` writes to ``metrics.csv``: columns ``tracker``,
+Input is a metrics frame as ``occbench.pipeline.experiment`` writes to ``metrics.csv``: columns ``tracker``,
 ``sequence`` plus metric columns. ``comparison`` picks one sequence (``COMBINED`` by
 default) and indexes the rows by tracker; the writers format it as Markdown (best value in
 ``**bold**``), LaTeX (booktabs, ``\\textbf``) or aligned plain text (best value followed by
@@ -25,11 +25,11 @@ COMBINED = "COMBINED"
 # Lower is better: error counts and rates (a distance MOTP is not listed: ours is an IoU).
 LOWER_IS_BETTER: frozenset[str] = frozenset({
     "FP", "FN", "IDs", "IDSW", "Frag", "ML", "IDFP", "IDFN",
-    # paper tables (harness.metrics.paper): Song et al. for Reta, PBM Tables 1-4
+    # paper tables (occbench.metrics.paper): Song et al. for Reta, PBM Tables 1-4
     "Song_ML%", "Song_Frag", "Song_IDS", "PBM_ML", "PBM_Missed", "PBM_Under", "PBM_Over",
     "PBM_IDsw/traj", "PBM_IDs/traj", "PBM_IDs/frame", "PBM_dx%", "PBM_dy%", "PBM_dw%",
     "PBM_dh%",
-    # occlusion (harness.metrics.occlusion): frames to re-identify after a total occlusion
+    # occlusion (occbench.metrics.occlusion): frames to re-identify after a total occlusion
     "ReID_frames",
 })
 LOWER_PREFIXES = ("IDs_", "FP_", "FN_", "Frag_")  # per-bin error counts, e.g. IDs_v0-25

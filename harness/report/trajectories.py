@@ -2,7 +2,7 @@
 beside the paths of the tracker ids that followed it, one colour per id.
 
 For a chosen GT person, every tracker id matched to that person in at least one frame
-(``harness.metrics.paper.match_rows``: IoU >= threshold, CLEAR matching) is drawn over the
+(``occbench.metrics.paper.match_rows``: IoU >= threshold, CLEAR matching) is drawn over the
 person's lifetime, as a line of box centres labelled ``<tracker>-<id>``. Frames where the
 person is hidden (visibility < ``hidden_below`` or an occluded label) are marked on the GT
 path. Top row: image x and y (y downwards), time implicit, as in the paper; bottom row: x
@@ -11,7 +11,7 @@ paper overlays all trackers; separate panels keep each id's colour readable).
 
 Command line, on a finished run::
 
-    python -m harness.report.trajectories RUN_DIR --sequence stop_behind --person 2
+    python -m occbench.report.trajectories RUN_DIR --sequence stop_behind --person 2
 """
 
 from __future__ import annotations
@@ -24,10 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import GroundTruth
-from harness.io.mot import MotTable, read_mot
-from harness.metrics.occlusion import row_visibility
-from harness.metrics.paper import considered, match_rows
+from occbench.datasets.base import GroundTruth
+from occbench.io.mot import MotTable, read_mot
+from occbench.metrics.occlusion import row_visibility
+from occbench.metrics.paper import considered, match_rows
 
 log = logging.getLogger(__name__)
 
@@ -150,21 +150,21 @@ def plot_person(gt: GroundTruth | MotTable, results: Mapping[str, MotTable], per
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m harness.report.trajectories",
+    p = argparse.ArgumentParser(prog="python -m occbench.report.trajectories",
                                 description="PBM Figs. 8-10 style trajectory plot of a run.")
-    p.add_argument("run_dir", type=Path, help="run directory of python -m harness")
+    p.add_argument("run_dir", type=Path, help="run directory of python -m occbench")
     p.add_argument("--sequence", help="sequence name (default: the first with tracks)")
     p.add_argument("--person", type=int, help="GT id (default: the most occluded person)")
     p.add_argument("--out", type=Path, help="PNG path (default RUN_DIR/plots/trajectory_...)")
     p.add_argument("--iou", type=float, default=0.5)
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from harness.pipeline.build import compose_config, load_sequences
+    from occbench.pipeline.build import compose_config, load_sequences
 
     try:
         tracks = args.run_dir / "tracks"
         if not tracks.is_dir():
-            raise FileNotFoundError(f"{tracks} not found (a run directory of python -m harness)")
+            raise FileNotFoundError(f"{tracks} not found (a run directory of python -m occbench)")
         cfg = compose_config([], args.run_dir)
         sequences = {s.info.name: s for s in load_sequences(cfg.dataset)}
         name = args.sequence or next(iter(sequences))

@@ -4,8 +4,8 @@ The result files hold only the scored boxes; the drawings need every output of e
 (hypotheses, tentative tracks, ellipses, part rectangles), so ``render`` runs the trackers
 again, exactly as the runner does (same detection source, same foreground, each tracker its
 own copy of the inputs: the tracks are the ones of the run with the same config and seed),
-and draws each frame as one panel per tracker (``harness.report.draw``; a tracker that exposes
-its tracking graph, Reta et al.'s, is drawn by ``harness.report.graph.draw_graph``: solid,
+and draws each frame as one panel per tracker (``occbench.report.draw``; a tracker that exposes
+its tracking graph, Reta et al.'s, is drawn by ``occbench.report.graph.draw_graph``: solid,
 dashed and grey ellipses with the edges from the previous frame), ground truth thin white
 underneath when asked.
 
@@ -13,13 +13,13 @@ Outputs: an H.264 MP4 (``H264Writer``: the ffmpeg that imageio-ffmpeg ships, lib
 yuv420p, avc1 in the container, so browsers play it) of the panels, and a contact sheet: a
 PNG grid with one row per chosen frame and one column per tracker. Each panel's title is in
 a band above its picture; both outputs end with a legend of the marks
-(``harness.report.draw.legend``).
+(``occbench.report.draw.legend``).
 
-Command line (config overrides as for ``python -m harness``, or the config of a finished run)::
+Command line (config overrides as for ``python -m occbench``, or the config of a finished run)::
 
-    python -m harness.report.video --sequence stop_behind --out stop_behind.mp4 \\
+    python -m occbench.report.video --sequence stop_behind --out stop_behind.mp4 \\
         --sheet stop_behind.png -- dataset=synthetic dataset.scenarios=[stop_behind]
-    python -m harness.report.video --run results/2026-01-01/12-00-00 --sequence crossing
+    python -m occbench.report.video --run results/2026-01-01/12-00-00 --sequence crossing
 
 With ``--run`` and neither ``--out`` nor ``--sheet``, both are written into the run directory:
 ``report/<sequence>.mp4`` and ``report/<sequence>_sheet.png``.
@@ -37,13 +37,13 @@ from typing import Any
 import cv2
 import numpy as np
 
-from harness.datasets.base import Sequence as DataSequence
-from harness.pipeline.bank import TrackerBank, start_trackers
-from harness.pipeline.build import compose_config, tracker_choice
-from harness.pipeline.loop import frames, no_progress
-from harness.report.draw import TRACKER_STYLES, draw_tracks, grid, legend, with_legend
-from harness.sources.base import DetectionSource
-from trackers.records import Track
+from occbench.datasets.base import Sequence as DataSequence
+from occbench.pipeline.bank import TrackerBank, start_trackers
+from occbench.pipeline.build import compose_config, tracker_choice
+from occbench.pipeline.loop import frames, no_progress
+from occbench.report.draw import TRACKER_STYLES, draw_tracks, grid, legend, with_legend
+from occbench.sources.base import DetectionSource
+from occbench.trackers.records import Track
 
 log = logging.getLogger(__name__)
 
@@ -98,7 +98,7 @@ def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: De
                  last: int | None = None) -> Iterable[tuple[int, np.ndarray | None,
                                                            dict[str, list[Track]]]]:
     """Yield ``(k, frame, {tracker: tracks})`` for frames up to ``last`` (default: all),
-    running every tracker on the frame loop of the runner (``harness.pipeline.loop.frames``)
+    running every tracker on the frame loop of the runner (``occbench.pipeline.loop.frames``)
     through a ``TrackerBank``, each on its own copy of the frame, the detections and the
     foreground (a lone tracker on the inputs themselves).
 
@@ -121,7 +121,7 @@ def track_frames(trackers: Mapping[str, Any], sequence: DataSequence, source: De
 
 class _GraphDrawing:
     """Draws a tracker that exposes its tracking graph (``graph_snapshot()``, Reta et al.)
-    with ``harness.report.graph.draw_graph``; ``step()`` must be called after every frame so
+    with ``occbench.report.graph.draw_graph``; ``step()`` must be called after every frame so
     that edges join each node to its predecessor of the previous frame."""
 
     def __init__(self, tracker: Any, draw_graph: Any) -> None:
@@ -134,7 +134,7 @@ class _GraphDrawing:
         if not callable(getattr(tracker, "graph_snapshot", None)):
             return None
         try:
-            from harness.report.graph import draw_graph
+            from occbench.report.graph import draw_graph
         except ImportError:
             return None
         return cls(tracker, draw_graph)
@@ -213,7 +213,7 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
             sequence's ``frame_numbers()``, e.g. 151..295 for a ``dataset.frames`` window).
         columns: panels per row in a video frame (default: all side by side).
         scale: resize factor of each panel.
-        progress: progress-bar factory (``harness.progress.progress_factory``): a bar over
+        progress: progress-bar factory (``occbench.progress.progress_factory``): a bar over
             the frames tracked; None shows nothing.
     Returns:
         {"video": path, "sheet": path} for what was written.
@@ -285,7 +285,7 @@ def run_choice(run_dir: Path, group: str) -> str | None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m harness.report.video",
+    p = argparse.ArgumentParser(prog="python -m occbench.report.video",
                                 description="Annotated side-by-side video and contact sheet.")
     p.add_argument("overrides", nargs="*", help="config overrides, e.g. dataset=synthetic")
     p.add_argument("--run", type=Path, help="use the config saved in this run directory")
@@ -301,8 +301,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
-    from harness.pipeline.build import build_source, build_tracker, load_sequences, tracker_configs
-    from harness.progress import progress_factory
+    from occbench.pipeline.build import build_source, build_tracker, load_sequences, tracker_configs
+    from occbench.progress import progress_factory
 
     try:
         cfg = compose_config(args.overrides, args.run)

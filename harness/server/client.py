@@ -15,7 +15,7 @@ starts one), or it refused (its code is no longer the installed code: it exits, 
 Which server: one per user and per ``identity()`` - the interpreter, ``sys.path`` and the
 environment variables the preloaded libraries read when they are imported - so two
 checkouts, or two Python set-ups, never share one. The server checks the identity again
-and the installed sources' fingerprint on every request (``harness.server.trust``).
+and the installed sources' fingerprint on every request (``occbench.server.trust``).
 """
 
 from __future__ import annotations
@@ -199,7 +199,7 @@ def start_server(ident: dict) -> None:
     path = socket_path(ident)
     os.makedirs(os.path.dirname(path), mode=0o700, exist_ok=True)
     boot = ("import json, sys; sys.path[:] = json.loads(sys.argv[1]); "
-            "from harness.commands.server import serve; sys.exit(serve(sys.argv[2]))")
+            "from occbench.commands.server import serve; sys.exit(serve(sys.argv[2]))")
     log = os.open(path[:-5] + ".log", os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
     with open(log, "ab") as log:
         subprocess.Popen([ident["executable"], "-c", boot, json.dumps(ident["path"]), path],

@@ -2,7 +2,7 @@
 
 Life cycle: ``Server.serve()`` takes the identity's lock file (a second server of the same
 identity exits, once it sees the first one listening or after waiting a minute for one that
-is stopping), takes the code's fingerprint (``harness.server.trust``), runs ``preload``
+is stopping), takes the code's fingerprint (``occbench.server.trust``), runs ``preload``
 (imports, compiled kernels, a config composed once), then listens on its Unix socket (mode
 0600, in a 0700 folder) until ``idle`` seconds pass without a request and without a running
 job, ``stop`` is asked, a request finds the code changed, or its socket file is removed
@@ -12,7 +12,7 @@ its children start fresh.
 
 A request (``client.send``): ``run`` with the client's stdin, stdout and stderr attached,
 ``status`` or ``stop``. ``run`` is checked (identity equal, code unchanged), then forked
-(``harness.server.job``); the server answers ``{"pid": n}`` at once and
+(``occbench.server.job``); the server answers ``{"pid": n}`` at once and
 ``{"exit": status}`` or ``{"signal": n}`` when the child ends. A client that goes away
 before its job ends (killed) has its job's process group sent SIGTERM, as a cold run would
 have ended with it. A crashing job is one child: the server goes on.
@@ -31,9 +31,9 @@ import sys
 import time
 from collections.abc import Callable
 
-from harness.server import client
-from harness.server.job import become_job
-from harness.server.trust import Fingerprint
+from occbench.server import client
+from occbench.server.job import become_job
+from occbench.server.trust import Fingerprint
 
 IDLE = 15 * 60  # seconds without a request before the server exits
 

@@ -31,10 +31,10 @@ RACY_NS = 3_000_000_000
 def code_folders() -> list[str]:
     """The project's code as a cold process of this ``sys.path`` would find it."""
     out = []
-    for name in ("harness", "trackers", "hydra_plugins"):
+    for name in ("occbench", "occbench.trackers", "hydra_plugins"):
         spec = importlib.util.find_spec(name)
         out.extend(spec.submodule_search_locations or [] if spec else [])
-    harness = importlib.util.find_spec("harness")
+    harness = importlib.util.find_spec("occbench")
     if harness and harness.submodule_search_locations:
         out.append(os.path.join(os.path.dirname(next(iter(harness.submodule_search_locations))),
                                 "conf"))

@@ -1,6 +1,6 @@
 """Detection sources built from the dataset's annotations: noisy ground truth and public files.
 
-Both implement ``harness.sources.base.DetectionSource`` (``start(sequence)``, then
+Both implement ``occbench.sources.base.DetectionSource`` (``start(sequence)``, then
 ``detect(k, frame) -> (Detections, None)``) and ignore the pixels, so they run on box-only
 sequences too. Neither computes a foreground mask.
 """
@@ -12,10 +12,10 @@ import zlib
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from harness.io.mot import MotTable
-from trackers.geometry import clip_boxes
-from trackers.records import Detections, SequenceInfo
+from occbench.datasets.base import Sequence
+from occbench.io.mot import MotTable
+from occbench.trackers.geometry import clip_boxes
+from occbench.trackers.records import Detections, SequenceInfo
 
 log = logging.getLogger(__name__)
 

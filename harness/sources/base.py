@@ -12,8 +12,8 @@ from typing import Protocol
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from trackers.records import Detections
+from occbench.datasets.base import Sequence
+from occbench.trackers.records import Detections
 
 
 class DetectionSource(Protocol):

@@ -1,4 +1,4 @@
-"""Other footage of a camera, read into its empty background (``trackers.frontend.footage``).
+"""Other footage of a camera, read into its empty background (``occbench.trackers.frontend.footage``).
 
 ``camera_background(paths)`` is what ``detector.detector.fallback.background.footage`` builds
 (``conf/detector/silhouette.yaml``): each path is one clip of the same camera, either a
@@ -9,7 +9,7 @@ no label file is read. An empty list gives None (no footage: the clip's own back
 
 A path that does not exist, a folder without frames, a frame or video that does not decode,
 or clips of different sizes stop the run with one line naming the path. The front-end cache
-key holds the bytes of every file of every named folder (``harness.sources.cache.keys``).
+key holds the bytes of every file of every named folder (``occbench.sources.cache.keys``).
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.images import IMAGE_EXTENSIONS, FrameError, read_image
-from trackers.frontend.footage import CameraBackground, clip_median, pool_clips
+from occbench.datasets.images import IMAGE_EXTENSIONS, FrameError, read_image
+from occbench.trackers.frontend.footage import CameraBackground, clip_median, pool_clips
 
 log = logging.getLogger(__name__)
 
@@ -48,7 +48,7 @@ def clip_frames(path: str | Path, count: int) -> list[np.ndarray]:
 
 
 def _video_frames(path: Path, count: int) -> list[np.ndarray]:
-    from harness.datasets.video import VideoSequence
+    from occbench.datasets.video import VideoSequence
 
     try:
         video = VideoSequence(path)

@@ -1,4 +1,4 @@
-"""Front-end person detectors (``trackers.frontend``) as harness detection sources.
+"""Front-end person detectors (``occbench.trackers.frontend``) as harness detection sources.
 
 ``FrontendSource`` wraps any detector with ``reset()``, ``detect(frame) -> (Detections,
 foreground)`` and optionally ``warm_up_sequence(length, frame_fn)``: ``start(sequence)``
@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from harness.pipeline.build import compose_config
-from trackers.records import Detections
+from occbench.datasets.base import Sequence
+from occbench.pipeline.build import compose_config
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -30,7 +30,7 @@ class FrontendSource:
             nested ``detector`` config.
     """
 
-    #: its outputs are worth keeping in the front-end cache (``harness.sources.cache``)
+    #: its outputs are worth keeping in the front-end cache (``occbench.sources.cache``)
     cacheable = True
     #: it reads the frames: a sequence without pixels is refused before the run starts
     needs_pixels = True

@@ -1,8 +1,8 @@
 """Hydra callbacks of the app (registered under ``hydra.callbacks`` in ``conf/config.yaml``).
 
 ``GatherSweep``: at the end of a multirun, gather every job's ``metrics.csv`` into
-``sweep.csv``, ``sweep.md`` and ``plots/`` in the sweep directory (``harness.sweeps.gather``; an
-Optuna study's plots are Optuna's own, ``harness.sweeps.tune``) and print the sweep's summary. It runs
+``sweep.csv``, ``sweep.md`` and ``plots/`` in the sweep directory (``occbench.sweeps.gather``; an
+Optuna study's plots are Optuna's own, ``occbench.sweeps.tune``) and print the sweep's summary. It runs
 in the launching process, whatever the launcher (basic, joblib, Ray, SLURM via submitit), so
 the job directories must be on a file system it can read.
 """
@@ -26,7 +26,7 @@ class GatherSweep(Callback):
 
     Args:
         metrics: metric columns shown in sweep.md and plotted (COMBINED rows); None =
-            ``harness.sweeps.gather.DEFAULT_METRICS``.
+            ``occbench.sweeps.gather.DEFAULT_METRICS``.
         plots: draw the metric-vs-parameter plots and heatmaps.
 
     Hydra builds its callbacks at every start, a single run's too: the gathering code (and
@@ -40,7 +40,7 @@ class GatherSweep(Callback):
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         """Mark the sweep folder as this multirun's (``sweep.json``), so that the job folders
         an earlier sweep left in it are never gathered as this one's."""
-        from harness.sweeps.jobs import begin_sweep
+        from occbench.sweeps.jobs import begin_sweep
 
         sweep_dir = Path(str(config.hydra.sweep.dir))
         try:
@@ -49,7 +49,7 @@ class GatherSweep(Callback):
             _exit_failed(f"occbench: cannot use the sweep folder {sweep_dir}: {err}")
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
-        from harness.sweeps.gather import (
+        from occbench.sweeps.gather import (
             DEFAULT_METRICS,
             failed_summary,
             not_done,
@@ -62,7 +62,7 @@ class GatherSweep(Callback):
         if not sweep_dir.is_dir():
             log.warning("sweep directory %s does not exist: nothing gathered", sweep_dir)
             return
-        from harness.sweeps.tune import is_optuna
+        from occbench.sweeps.tune import is_optuna
 
         optuna = is_optuna(config)
         try:  # an Optuna study is drawn with Optuna's own views, not as parameter lines
@@ -74,7 +74,7 @@ class GatherSweep(Callback):
             return
         if self.plots and optuna:
             try:
-                from harness.sweeps.tune import plot_study
+                from occbench.sweeps.tune import plot_study
 
                 metric = OmegaConf.select(config, "objective.metric", default=None) or "objective"
                 plot_study(sweep_dir, config, metric=str(metric))
@@ -98,12 +98,12 @@ def _exit_failed(message: str) -> None:
 class PaperTable(Callback):
     """At the end of a job whose config has a ``paper_table`` node (``+experiment=...``),
     write ``paper_table.md`` / ``.csv`` into the job's output directory and log the table.
-    ``harness.report.paper_tables`` documents the node."""
+    ``occbench.report.paper_tables`` documents the node."""
 
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
         from omegaconf import OmegaConf
 
-        from harness.report.paper_tables import write_paper_table
+        from occbench.report.paper_tables import write_paper_table
 
         spec = config.get("paper_table")
         if not spec:

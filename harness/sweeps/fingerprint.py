@@ -1,7 +1,7 @@
 """Fingerprints of a job's inputs, so that a resumed sweep recomputes what changed.
 
 ``inputs(cfg)`` gives three hex digests, stored in each sweep job's ``status.json``
-(``harness.sweeps.gather.guarded``); a job done before is skipped only when all three are the same:
+(``occbench.sweeps.gather.guarded``); a job done before is skipped only when all three are the same:
 
 * ``config``: the job's whole composed config, interpolations resolved (so a changed
   default in ``conf/`` counts, not only the command line's overrides);
@@ -16,7 +16,7 @@ A path is the value of a path key (``PATH_KEYS``: ``root``, ``path``, ``gt``, ``
 every value under ``external``...) whatever it looks like (``dataset.root=rs2``), or any
 other string with a "/" or "." naming an existing file or folder. A path key naming nothing
 that exists, or a data path holding no file, raises ``FingerprintError``: the job then runs
-(``harness.sweeps.resume.guarded``), it is never skipped on a fingerprint of nothing. A
+(``occbench.sweeps.resume.guarded``), it is never skipped on a fingerprint of nothing. A
 dataset without files (synthetic) is fingerprinted by its config alone; its data digest says
 so, it is never the digest of no bytes.
 """

@@ -3,21 +3,21 @@
 A Hydra multirun (``occbench -m tracker=baseline tracker.max_age=1,3 seed=0,1,2``) writes one
 job directory per parameter combination under ``hydra.sweep.dir`` (``<sweep>/<job
 number>/``), each with the run's ``metrics.csv``, Hydra's ``.hydra/overrides.yaml`` and the
-job's ``status.json`` (``harness.sweeps.resume``: each job is skipped when truly done, its
+job's ``status.json`` (``occbench.sweeps.resume``: each job is skipped when truly done, its
 failure recorded, its outputs fingerprinted).
 
 * ``gather(sweep_dir)`` reads the jobs of the sweep that last used the folder
-  (``harness.sweeps.jobs.members``; folders left by an earlier sweep are listed as ignored)
+  (``occbench.sweeps.jobs.members``; folders left by an earlier sweep are listed as ignored)
   into one frame: one row per job and sequence (the per-sequence and COMBINED rows of each
   ``metrics.csv``) with the job number, every overridden value as a column, ``status`` and
   ``error`` (a failed job is one row with its error and no metrics). A job whose status says
   done but whose outputs are missing, cut short or changed since (a ``metrics.csv`` truncated
   at a line end included) is ``damaged``, named file by file. Rows are ordered by job number,
   tracker and sequence as the run wrote them, so the table does not depend on the launcher.
-* ``write_sweep(sweep_dir)`` writes ``sweep.csv``, ``sweep.md`` (``harness.sweeps.tables``),
-  ``plots/`` (``harness.sweeps.plots``) and ``report.html`` (``harness.report.html``).
+* ``write_sweep(sweep_dir)`` writes ``sweep.csv``, ``sweep.md`` (``occbench.sweeps.tables``),
+  ``plots/`` (``occbench.sweeps.plots``) and ``report.html`` (``occbench.report.html``).
 
-The Hydra callback ``harness.sweeps.callbacks.GatherSweep`` calls ``write_sweep`` at the end
+The Hydra callback ``occbench.sweeps.callbacks.GatherSweep`` calls ``write_sweep`` at the end
 of a multirun; ``occbench sweep <sweep_dir>`` does the same by hand and exits 1 when any job
 is not done (failed, damaged, missing).
 """
@@ -33,7 +33,7 @@ from typing import Any
 
 import pandas as pd
 
-from harness.sweeps.jobs import (  # noqa: F401 - re-exported: harness.sweeps.gather's names
+from occbench.sweeps.jobs import (  # noqa: F401 - re-exported: occbench.sweeps.gather's names
     DAMAGED,
     DONE,
     FAILED,
@@ -45,15 +45,15 @@ from harness.sweeps.jobs import (  # noqa: F401 - re-exported: harness.sweeps.ga
     read_overrides,
     read_status,
 )
-from harness.sweeps.plots import plot_sweep
-from harness.sweeps.resume import (  # noqa: F401 - re-exported
+from occbench.sweeps.plots import plot_sweep
+from occbench.sweeps.resume import (  # noqa: F401 - re-exported
     changed_inputs,
     damage,
     finished,
     guarded,
     write_status,
 )
-from harness.sweeps.tables import (  # noqa: F401 - re-exported
+from occbench.sweeps.tables import (  # noqa: F401 - re-exported
     COMBINED,
     DEFAULT_METRICS,
     aggregate,
@@ -201,7 +201,7 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
                 plots: bool = True) -> pd.DataFrame:
     """Gather a sweep and write ``sweep.csv``, ``sweep.md`` and ``plots/`` into it."""
     sweep_dir = Path(sweep_dir)
-    from harness.io.mot import write_atomic
+    from occbench.io.mot import write_atomic
 
     frame = gather(sweep_dir)
     write_atomic(sweep_dir / "sweep.csv",
@@ -215,8 +215,8 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
             plot_sweep(frame, sweep_dir / "plots", metrics)
         except Exception:  # a plot is not worth losing the table for
             log.exception("sweep plots failed")
-    try:  # the sweep's page (harness.report.html); the tables above stand without it
-        from harness.report.html import write_sweep_report
+    try:  # the sweep's page (occbench.report.html); the tables above stand without it
+        from occbench.report.html import write_sweep_report
 
         write_sweep_report(sweep_dir, frame, metrics)
     except Exception:
@@ -237,7 +237,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     from omegaconf import OmegaConf
 
-    from harness.sweeps.tune import is_optuna
+    from occbench.sweeps.tune import is_optuna
 
     config = None  # Hydra's copy of a job's config (with hydra.sweeper): an Optuna study?
     found = sorted(args.sweep_dir.glob("*/.hydra/hydra.yaml"))
@@ -256,7 +256,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     if optuna and not args.no_plots:
-        from harness.sweeps.tune import plot_study
+        from occbench.sweeps.tune import plot_study
 
         try:
             plot_study(args.sweep_dir, config,

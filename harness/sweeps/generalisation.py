@@ -3,7 +3,7 @@ or tuned parameter was chosen on (``tuning``) and those nobody chose anything on
 (``untouched``).
 
 An evaluation set is a list of Hydra overrides (dataset, detector, their keys) run at one
-or more seeds; every tracker of a set runs in one ``harness.pipeline.experiment.run_experiment``, so all of
+or more seeds; every tracker of a set runs in one ``occbench.pipeline.experiment.run_experiment``, so all of
 them see the same frames and the same detections. A set run at several seeds reports the
 mean of its COMBINED IDF1 / HOTA / MOTA over the seeds.
 
@@ -176,6 +176,9 @@ def compose(overrides: Sequence[str]):
     from hydra import compose as _compose
     from hydra import initialize_config_dir
 
+    from occbench.config import register
+
+    register()
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         return _compose("config", overrides=list(overrides))
 
@@ -227,8 +230,8 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
     ``names`` None = ``TRACKERS`` plus every ``conf/tracker/*_tuned.yaml`` (after the
     tracker it tunes).
     """
-    from harness.errors import RunError
-    from harness.pipeline.build import build_tracker
+    from occbench.errors import RunError
+    from occbench.pipeline.build import build_tracker
 
     if names is None:
         names = ordered_trackers()
@@ -256,8 +259,8 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
     mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too)."""
     from omegaconf import OmegaConf, open_dict
 
-    from harness.metrics import COMBINED
-    from harness.pipeline.experiment import run_experiment
+    from occbench.metrics import COMBINED
+    from occbench.pipeline.experiment import run_experiment
 
     rows = []
     for seed in s.seeds:

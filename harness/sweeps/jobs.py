@@ -1,10 +1,10 @@
 """A sweep folder's job folders: their status (``status.json``) and overrides
-(``.hydra/overrides.yaml``), read by ``harness.sweeps.gather`` (tables, plots) and
-``harness.sweeps.tune`` (an Optuna study of a finished sweep).
+(``.hydra/overrides.yaml``), read by ``occbench.sweeps.gather`` (tables, plots) and
+``occbench.sweeps.tune`` (an Optuna study of a finished sweep).
 
 A sweep folder may be reused by a later multirun with other settings: ``begin_sweep`` (called
 when a multirun starts) writes ``sweep.json`` with a new id, every ``status.json`` written
-afterwards in the folder's jobs carries that id (``harness.sweeps.resume.write_status``), and
+afterwards in the folder's jobs carries that id (``occbench.sweeps.resume.write_status``), and
 ``members`` tells the jobs of the latest sweep from the folders an earlier one left behind.
 """
 
@@ -87,7 +87,7 @@ def job_dirs(sweep_dir: str | Path) -> list[Path]:
 def begin_sweep(sweep_dir: str | Path, overrides: Sequence[str]) -> str:
     """Mark ``sweep_dir`` as used by a new multirun (``sweep.json``: a fresh id and the
     multirun's overrides); returns the id."""
-    from harness.io.mot import write_atomic
+    from occbench.io.mot import write_atomic
 
     ident = uuid.uuid4().hex[:16]
     body = {"id": ident, "overrides": [str(o) for o in overrides]}

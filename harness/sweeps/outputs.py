@@ -14,7 +14,7 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
-from harness.sweeps.jobs import STATUS_FILE
+from occbench.sweeps.jobs import STATUS_FILE
 
 SKIPPED_DIRS = (".hydra",)
 

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from harness.metrics import COMBINED
-from harness.sweeps.jobs import DONE
-from harness.sweeps.tables import aggregate, plot_axes, tick
+from occbench.metrics import COMBINED
+from occbench.sweeps.jobs import DONE
+from occbench.sweeps.tables import aggregate, plot_axes, tick
 
 MAX_HEATMAP_VALUES = 12  # a parameter with more distinct values gets no heatmap
 

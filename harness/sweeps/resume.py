@@ -8,9 +8,9 @@ A job counts as done only when all of these hold:
 
 * its ``status.json`` says ``done`` with exactly the same overrides;
 * the fingerprints of its inputs are the same (config, code, data:
-  ``harness.sweeps.fingerprint``);
+  ``occbench.sweeps.fingerprint``);
 * every output file it wrote is still there, whole and unchanged
-  (``harness.sweeps.outputs``: sizes and digests recorded when it finished).
+  (``occbench.sweeps.outputs``: sizes and digests recorded when it finished).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from harness.sweeps import outputs
-from harness.sweeps.jobs import DONE, FAILED, STATUS_FILE, read_status, sweep_id
+from occbench.sweeps import outputs
+from occbench.sweeps.jobs import DONE, FAILED, STATUS_FILE, read_status, sweep_id
 
 log = logging.getLogger(__name__)
 
@@ -34,9 +34,9 @@ def write_status(job_dir: str | Path, status: str, overrides: Sequence[str],
                  files: Mapping[str, Any] | None = None) -> Path:
     """Write ``status.json`` (atomically): status, overrides, objective, error, the
     fingerprint of the job's inputs (``inputs``: config, code, data), the outputs of a done
-    job (``files``: ``harness.sweeps.outputs.record``) and the id of the sweep that ran it
-    (``sweep.json`` of the parent folder: ``harness.sweeps.jobs.members``)."""
-    from harness.io.mot import write_atomic
+    job (``files``: ``occbench.sweeps.outputs.record``) and the id of the sweep that ran it
+    (``sweep.json`` of the parent folder: ``occbench.sweeps.jobs.members``)."""
+    from occbench.io.mot import write_atomic
 
     path = Path(job_dir) / STATUS_FILE
     obj = None if objective is None or not math.isfinite(objective) else float(objective)
@@ -49,7 +49,7 @@ def write_status(job_dir: str | Path, status: str, overrides: Sequence[str],
 
 def damage(job_dir: str | Path, status: Mapping[str, Any]) -> list[str]:
     """Why a job whose status says done cannot be trusted: its recorded outputs missing or
-    changed (``harness.sweeps.outputs.check``); [] for a status without a record (written
+    changed (``occbench.sweeps.outputs.check``); [] for a status without a record (written
     before records existed: then only ``metrics.csv`` is checked, when gathered)."""
     recorded = status.get("outputs")
     if not isinstance(recorded, dict):
@@ -98,7 +98,7 @@ def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], flo
         overrides: the job's task overrides (``HydraConfig.get().overrides.task``).
         run: the job; returns the objective.
         inputs: gives the fingerprint of the job's inputs (config, code version, data
-            files: ``harness.sweeps.fingerprint.inputs``); a job done with other inputs is run
+            files: ``occbench.sweeps.fingerprint.inputs``); a job done with other inputs is run
             again, and so is one whose inputs cannot be fingerprinted.
     Returns:
         The objective; the stored one for a skipped job; NaN for a failed job.

@@ -1,6 +1,6 @@
 """A gathered sweep as tables: settings (mean and 95% interval over seeds) and jobs.
 
-``harness.sweeps.gather.gather`` gives the frame (one row per job and sequence); here it is
+``occbench.sweeps.gather.gather`` gives the frame (one row per job and sequence); here it is
 grouped (``aggregate``: COMBINED rows of done jobs by setting), written as Markdown
 (``sweep_markdown``, ``sweep.md``) and printed (``summary_text``) at the end of a multirun.
 Keys named ``seed`` (``seed``, ``dataset.seed``, any group) are replicates, never a parameter
@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from harness.sweeps.jobs import DONE
+from occbench.sweeps.jobs import DONE
 
 COMBINED = "COMBINED"
 SEED = "seed"

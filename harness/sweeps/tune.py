@@ -111,7 +111,7 @@ def study_of(sweep_dir: str | Path, distributions: Mapping[str, Any],
     import optuna
     from optuna.trial import TrialState, create_trial
 
-    from harness.sweeps.jobs import DONE, members, parse_override, read_overrides, read_status
+    from occbench.sweeps.jobs import DONE, members, parse_override, read_overrides, read_status
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)

@@ -1,5 +1,5 @@
 """Each of our trackers against the best outside tracker of every set of a generalisation
-table (``harness.sweeps.generalisation``): issue 28's acceptance ("each paper tracker ahead
+table (``occbench.sweeps.generalisation``): issue 28's acceptance ("each paper tracker ahead
 of every outside tracker, tuned or not, on IDF1 and HOTA"), computed from the table rather
 than read off it by eye.
 
@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import pandas as pd
 
-from harness.sweeps.generalisation import METRICS, TUNING, EvalSet
+from occbench.sweeps.generalisation import METRICS, TUNING, EvalSet
 
 #: the project's own trackers: never the "outside" reference
 OWN = ("baseline", "reta", "reta_paper", "pbm", "pbm_paper")

@@ -2,7 +2,7 @@
 (``hydra/launcher=parallel``, see ``launcher.ProcessLauncher``).
 
 Hydra's plugin scan imports this package before it composes any config: importing
-``harness.pipeline`` here registers the project's resolvers (``${occbench.data:...}`` and
+``occbench.pipeline`` here registers the project's resolvers (``${occbench.data:...}`` and
 the others) for every composition, a test's or a script's own ``hydra.compose`` too."""
 
-import harness.pipeline  # noqa: F401 - registers the project's OmegaConf resolvers
+import occbench.pipeline  # noqa: F401 - registers the project's OmegaConf resolvers

@@ -5,7 +5,7 @@ a segfault in a compiled kernel), joblib aborts the whole ``Parallel`` call
 (``TerminatedWorkerError``): the other in-flight jobs are lost, later jobs never run and
 the sweep is not gathered. Here a job whose process dies is recorded as failed in its
 ``status.json`` ("process died: killed by SIGKILL"), returns NaN to the sweeper, and the
-sweep goes on; the sweep then exits with status 1 (``harness.sweeps.callbacks.GatherSweep``).
+sweep goes on; the sweep then exits with status 1 (``occbench.sweeps.callbacks.GatherSweep``).
 
 Each job process asks the kernel to end it when the launcher ends
 (``PR_SET_PDEATHSIG``, Linux) and also watches its parent, so killing the launcher ends
@@ -16,7 +16,7 @@ with ``forkserver`` where available, else ``spawn``.
 Jobs start warm (``preload: true``, the default): before the first job, the fork server
 (one process, started once per launcher process and kept for every batch of an Optuna
 study) imports what a job imports and warms the first job's trackers up
-(``harness.pipeline.warmup.preload``, through ``_preload``, which the server imports); each
+(``occbench.pipeline.warmup.preload``, through ``_preload``, which the server imports); each
 job is then forked from it with the imports, the loaded compiled kernels and the warm-up
 already done, so it goes straight to its data. The fork server never runs a job itself,
 and what a job changes dies with its process.
@@ -184,7 +184,7 @@ class ProcessLauncher(Launcher):
         trackers (resolved configs) of the job with ``overrides``, this project's only."""
         spec: dict[str, Any] = {"modules": [], "trackers": {}}
         try:
-            from harness.pipeline.warmup import preload_spec
+            from occbench.pipeline.warmup import preload_spec
 
             cfg = self.hydra_context.config_loader.load_sweep_config(self.config, list(overrides))
             choice = OmegaConf.select(cfg, "hydra.runtime.choices.tracker", default=None)
@@ -210,7 +210,7 @@ class ProcessLauncher(Launcher):
                 cfg.hydra.job.num = idx
             job_dir = Path(str(OmegaConf.select(cfg, "hydra.sweep.dir"))) / str(
                 OmegaConf.select(cfg, "hydra.sweep.subdir"))
-            from harness.sweeps.gather import read_status, write_status
+            from occbench.sweeps.gather import read_status, write_status
 
             old = read_status(job_dir) or {}
             write_status(job_dir, "failed", list(overrides), error=msg,

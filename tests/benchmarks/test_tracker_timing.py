@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trackers.records import Track, TrackState
+from occbench.trackers.records import Track, TrackState
 
 _PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "tracker_timing.py"
 _spec = importlib.util.spec_from_file_location("tracker_timing", _PATH)

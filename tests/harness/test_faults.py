@@ -2,7 +2,7 @@
 error naming the file, line or key, and loses nothing already computed (issue 17).
 
 Damaged frames are real JPEGs encoded here with cv2 and then cut or overwritten; sweeps run
-``python -m harness -m`` in a subprocess, with a job that kills its own process (as the
+``python -m occbench -m`` in a subprocess, with a job that kills its own process (as the
 out-of-memory killer would) from a helper module written into tmp_path.
 """
 
@@ -26,10 +26,10 @@ import pytest
 import yaml
 from hydra import compose, initialize_config_dir
 
-from harness.datasets.images import FrameError, read_image
-from harness.errors import RunError
-from harness.io.mot import MotFormatError, WriteError, read_mot, write_atomic
-from harness.pipeline.experiment import run_experiment
+from occbench.datasets.images import FrameError, read_image
+from occbench.errors import RunError
+from occbench.io.mot import MotFormatError, WriteError, read_mot, write_atomic
+from occbench.pipeline.experiment import run_experiment
 
 ROOT = Path(__file__).resolve().parents[2]
 CONF = ROOT / "conf"
@@ -98,7 +98,7 @@ def run(cfg, out: Path):
 
 def app(*args: str, cwd: Path = ROOT, env: dict | None = None,
         timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "harness", *args], cwd=cwd, text=True,
+    return subprocess.run([sys.executable, "-m", "occbench", *args], cwd=cwd, text=True,
                           capture_output=True, timeout=timeout,
                           env={**os.environ, "OMP_NUM_THREADS": "1", **(env or {})})
 
@@ -180,12 +180,12 @@ def test_gt_with_nan_frame_or_id_is_rejected_before_the_run(tmp_path):
     mot_folder(data, "a", frames=False, gt=gt_rows() + "nan,3,1,1,10,10,1,1,1\n")
     with pytest.raises(RunError, match=rf"a/gt/gt\.txt:{2 * N + 1}: frame must be"):
         run(mot_cfg(data), tmp_path / "run")
-    # harness.commands.evaluate: one line naming file and line, exit 2, no traceback
+    # occbench.commands.evaluate: one line naming file and line, exit 2, no traceback
     gt = tmp_path / "gt.txt"
     gt.write_text("1,1,1,1,5,5,1,1,1\n2,nan,1,1,5,5,1,1,1\n")
     res = tmp_path / "res.txt"
     res.write_text("1,1,1,1,5,5,1,-1,-1,-1\n")
-    proc = subprocess.run([sys.executable, "-m", "harness.commands.evaluate", str(gt), str(res)],
+    proc = subprocess.run([sys.executable, "-m", "occbench.commands.evaluate", str(gt), str(res)],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "gt.txt:2: id must be an integer up to 2147483647 in size, got nan" in proc.stderr
@@ -245,7 +245,7 @@ def test_seqinfo_length_that_is_not_an_integer_names_the_key(tmp_path):
 def test_eval_checks_gt_against_a_strict_seqlength(tmp_path, capsys, ini_length, message):
     """occbench eval: gt past seqLength refused as in a run; a seqLength that is not an
     integer names the key (it used to switch the check off without a word)."""
-    from harness.commands.evaluate import main
+    from occbench.commands.evaluate import main
 
     data = tmp_path / "data"
     seq = mot_folder(data, "a", frames=False, gt=gt_rows() + f"{N + 1},1,20,20,20,60,1,1,1\n")
@@ -392,7 +392,7 @@ def test_a_reused_run_folder_keeps_nothing_of_the_previous_run(tmp_path):
 def test_every_file_a_run_writes_is_owned_by_the_writer(tmp_path):
     """RunWriter.OWNED is what a reused folder is cleaned by: a new output outside it would
     survive into the next run's folder, so a real run's files must all fall under it."""
-    from harness.pipeline.writer import RunWriter
+    from occbench.pipeline.writer import RunWriter
 
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
@@ -407,7 +407,7 @@ def test_every_file_a_run_writes_is_owned_by_the_writer(tmp_path):
 SLOW = '''
 import os, time
 from pathlib import Path
-from trackers.baseline import BaselineTracker
+from occbench.trackers.baseline import BaselineTracker
 
 class Slow(BaselineTracker):
     """A tracker slow enough to be stopped mid-run (a sequence of 12 frames takes 6 s)."""
@@ -427,7 +427,7 @@ def _slow_run(tmp_path: Path, folder: Path, names: str = "abcdefghij") -> subpro
     env = {**os.environ, "OMP_NUM_THREADS": "1",
            "PYTHONPATH": f"{tmp_path / 'helpers'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
     return subprocess.Popen(
-        [sys.executable, "-m", "harness", "dataset=mot", "detector=noisy_gt",
+        [sys.executable, "-m", "occbench", "dataset=mot", "detector=noisy_gt",
          f"dataset.root={data}",
          "tracker=baseline", "tracker._target_=slow_tracker.Slow", "progress=false",
          f"hydra.run.dir={folder}"], cwd=ROOT, env=env, text=True, stdout=subprocess.PIPE,
@@ -521,7 +521,7 @@ def test_an_interrupted_run_says_so(tmp_path, monkeypatch):
     data = tmp_path / "data"
     for name in ("a", "b", "c"):
         mot_folder(data, name, frames=False)
-    import harness.pipeline.experiment as R
+    import occbench.pipeline.experiment as R
 
     real = R.run_sequence
 
@@ -559,7 +559,7 @@ def test_disk_full_or_unwritable_tracks_are_named_in_one_line(tmp_path, monkeypa
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
     out = tmp_path / "run"
-    import harness.io.mot as M
+    import occbench.io.mot as M
 
     def faulty_open(path, mode="r", *args, **kwargs):
         if "tracks" in str(path) and str(path).endswith(".part"):
@@ -593,7 +593,7 @@ def test_a_disk_full_after_one_sequence_keeps_its_metrics_and_every_error(tmp_pa
     empty or partial file is left."""
     import matplotlib.figure
 
-    import harness.io.mot as M
+    import occbench.io.mot as M
 
     data = tmp_path / "data"
     for name in "abc":
@@ -653,7 +653,7 @@ def test_write_atomic_on_a_full_disk_leaves_nothing(tmp_path):
 
 
 def test_detect_goes_on_past_a_corrupt_frame(tmp_path):
-    from harness.commands.detect import DetectionFailed, run_detection
+    from occbench.commands.detect import DetectionFailed, run_detection
 
     data = tmp_path / "data"
     mot_folder(data, "a")
@@ -695,7 +695,7 @@ GOOD = "tracker,sequence,IDF1,IDs\nbaseline,a,0.5,3\nbaseline,COMBINED,0.5,3\n"
 
 
 def test_sweep_on_damaged_job_folders_names_the_files(tmp_path):
-    from harness.sweeps.gather import DAMAGED, DONE, gather, main
+    from occbench.sweeps.gather import DAMAGED, DONE, gather, main
 
     fake_job(tmp_path, 0, GOOD)
     empty = fake_job(tmp_path, 1, "") / "metrics.csv"
@@ -712,7 +712,7 @@ def test_sweep_on_damaged_job_folders_names_the_files(tmp_path):
 
 
 def test_sweep_on_a_folder_that_is_not_a_sweep_is_an_error(tmp_path, capsys):
-    from harness.sweeps.gather import main
+    from occbench.sweeps.gather import main
 
     (tmp_path / "some_run" / "tracks").mkdir(parents=True)
     assert main([str(tmp_path)]) == 2
@@ -721,8 +721,8 @@ def test_sweep_on_a_folder_that_is_not_a_sweep_is_an_error(tmp_path, capsys):
 
 
 def test_resume_recomputes_a_job_whose_inputs_changed(tmp_path):
-    from harness.sweeps.fingerprint import inputs
-    from harness.sweeps.gather import guarded
+    from occbench.sweeps.fingerprint import inputs
+    from occbench.sweeps.gather import guarded
 
     data = tmp_path / "data"
     gt = mot_folder(data, "a", frames=False) / "gt" / "gt.txt"
@@ -750,7 +750,7 @@ def test_resume_recomputes_a_job_whose_inputs_changed(tmp_path):
 KILLER = '''
 import os, signal, time
 from pathlib import Path
-from trackers.baseline import BaselineTracker
+from occbench.trackers.baseline import BaselineTracker
 
 class SelfKill(BaselineTracker):
     """Dies as if the out-of-memory killer took it, when built."""
@@ -776,7 +776,7 @@ def test_a_killed_worker_fails_its_job_and_the_sweep_goes_on(tmp_path):
     mot_folder(data, "a", frames=False)
     sweep = tmp_path / "sweep"
     proc = app("-m", "tracker=baseline", "tracker.max_age=1,3",
-               "tracker._target_=faulty_trackers.SelfKill,trackers.baseline.BaselineTracker",
+               "tracker._target_=faulty_trackers.SelfKill,occbench.trackers.baseline.BaselineTracker",
                "dataset=mot", "detector=noisy_gt", f"dataset.root={data}", "progress=false",
                f"hydra.sweep.dir={sweep}", "hydra.launcher.n_jobs=2", env=sweep_env(tmp_path))
     assert proc.returncode == 1, proc.stderr[-3000:]
@@ -815,7 +815,7 @@ def test_killing_the_launcher_ends_its_workers(tmp_path):
     env = {**os.environ, "OMP_NUM_THREADS": "1", "SLEEPER_PIDS": str(pids),
            **sweep_env(tmp_path)}
     launcher = subprocess.Popen(
-        [sys.executable, "-m", "harness", "-m", "tracker=baseline",
+        [sys.executable, "-m", "occbench", "-m", "tracker=baseline",
          "tracker._target_=faulty_trackers.Sleeper", "tracker.max_age=1,2", "dataset=mot",
          "detector=noisy_gt",
          f"dataset.root={data}", "progress=false", f"hydra.sweep.dir={tmp_path / 's'}"],

@@ -9,8 +9,8 @@ import io
 import pytest
 from report_scenes import GtSource, Walk
 
-from harness.progress import progress_factory
-from trackers.baseline import BaselineTracker
+from occbench.progress import progress_factory
+from occbench.trackers.baseline import BaselineTracker
 
 
 class FakeTerminal(io.StringIO):
@@ -19,21 +19,21 @@ class FakeTerminal(io.StringIO):
 
 
 def _bench(progress) -> None:
-    from harness.commands.bench import bench_sequence
+    from occbench.commands.bench import bench_sequence
 
     bench_sequence(Walk(), GtSource, lambda: {"baseline": BaselineTracker()}, frames=4,
                    repeats=2, progress=progress)
 
 
 def _render(progress, tmp_path) -> None:
-    from harness.report.video import render
+    from occbench.report.video import render
 
     render({"baseline": BaselineTracker()}, Walk(), GtSource(), sheet=tmp_path / "s.png",
            progress=progress)
 
 
 def _warm_up(progress) -> None:
-    from harness.pipeline.warmup import WarmUp
+    from occbench.pipeline.warmup import WarmUp
 
     WarmUp()({"baseline": BaselineTracker}, progress=progress)  # a fresh one: not yet warm
 

@@ -15,7 +15,7 @@ TINY = ["dataset.scenarios=[crossing]", "dataset.length=12", "dataset.width=160"
 
 
 def _sweep(sweep_dir: Path, *extra: str) -> subprocess.CompletedProcess:
-    cmd = [sys.executable, "-m", "harness", "-m", "tracker=reta", "seed=0,1,2", *TINY,
+    cmd = [sys.executable, "-m", "occbench", "-m", "tracker=reta", "seed=0,1,2", *TINY,
            f"hydra.sweep.dir={sweep_dir}", *extra]
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, env=env,

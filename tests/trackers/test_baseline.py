@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from trackers.baseline import BaselineTracker
-from trackers.records import Detections
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.records import Detections
 
 
 def _run(tracker, frames):

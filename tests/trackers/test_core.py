@@ -5,9 +5,9 @@ import itertools
 import numpy as np
 import pytest
 
-from harness.io.mot import MotFormatError, read_mot, write_mot
-from trackers.common.assignment import assign, assign_min_cost
-from trackers.geometry import (
+from occbench.io.mot import MotFormatError, read_mot, write_mot
+from occbench.trackers.common.assignment import assign, assign_min_cost
+from occbench.trackers.geometry import (
     box_ellipses,
     centre_distance_matrix,
     ellipse_boxes,
@@ -16,8 +16,8 @@ from trackers.geometry import (
     overlap_ratio_matrix,
     valid_boxes,
 )
-from trackers.histograms import bhattacharyya, colour_histogram, masked_histogram
-from trackers.records import Detections, TrackState
+from occbench.trackers.histograms import bhattacharyya, colour_histogram, masked_histogram
+from occbench.trackers.records import Detections, TrackState
 
 
 def test_iou_hand_cases():

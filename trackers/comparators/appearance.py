@@ -8,7 +8,7 @@ that colour is. Neither uses detections while a target lives: a detection starts
 where no target stands (the harness's single-target protocol hands it exactly one, the
 person's ground-truth box), a target ends when its ``loss`` rule declares it lost or its
 centre leaves the image, and a tracker that lost a target starts again from the detection
-its ``restart`` rule accepts (``trackers.comparators.loss``: our reading, PBM states none).
+its ``restart`` rule accepts (``occbench.trackers.comparators.loss``: our reading, PBM states none).
 
 Boxes are xywh float64 pixels, 0-based top-left, as everywhere in ``trackers``.
 """
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.comparators.loss import AnyDetection, MostSimilar, NeverLost, SimilarityBelow
-from trackers.geometry import iou_matrix
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.comparators.loss import AnyDetection, MostSimilar, NeverLost, SimilarityBelow
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections, Track, TrackState
 
 HUE_BINS = 16
 SAT_BINS = 16
@@ -86,7 +86,7 @@ class ColourTrackerBase:
     Args:
         birth_iou: a detection starts a target when its IoU with every target's box is
             below this.
-        loss: when a target is lost (``trackers.comparators.loss``); None =
+        loss: when a target is lost (``occbench.trackers.comparators.loss``); None =
             ``SimilarityBelow(0.5, 11)``.
         restart: which detections a tracker that lost a target starts again from; None =
             ``AnyDetection()``.

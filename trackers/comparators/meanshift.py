@@ -5,7 +5,7 @@ is weighted by w_i = sqrt(q_u / p_u(y)), q the target's colour model and p(y) th
 candidate box's (eq. 10), and ``cv2.meanShift`` moves the box, at fixed size, to the
 weighted mean of its pixels (eq. 13, with the Epanechnikov profile's flat derivative);
 repeated until the box moves less than a pixel. Life cycle and colour model:
-``trackers.comparators.appearance``.
+``occbench.trackers.comparators.appearance``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from trackers.comparators.appearance import (
+from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
     Loss,

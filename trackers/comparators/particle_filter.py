@@ -6,21 +6,21 @@ random-walk noise, is weighted by the colour likelihood
 exp(-lambda d^2) with d^2 = 1 - rho(q, p) (rho the Bhattacharyya coefficient of the
 target's colour model q and the particle box's p), the estimate is the
 weighted mean, and the particles are resampled (systematic resampling). Seeded: the same
-seed gives the same tracks. Life cycle and colour model: ``trackers.comparators.appearance``.
+seed gives the same tracks. Life cycle and colour model: ``occbench.trackers.comparators.appearance``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from trackers.comparators.appearance import (
+from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
     Loss,
     Restart,
     colour_model,
 )
-from trackers.records import Detections, Track
+from occbench.trackers.records import Detections, Track
 
 
 class ColourParticleFilter(ColourTrackerBase):

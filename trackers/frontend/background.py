@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 import cv2
 import numpy as np
 
-from trackers.frontend.texture_colour import TextureColourMixture
+from occbench.trackers.frontend.texture_colour import TextureColourMixture
 
 log = logging.getLogger(__name__)
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.frontend.blobs import Blob
+from occbench.trackers.frontend.blobs import Blob
 
 log = logging.getLogger(__name__)
 

@@ -17,15 +17,15 @@ from collections.abc import Callable, Sequence
 import cv2
 import numpy as np
 
-from trackers.frontend.active_basis import ShapeVerifier
-from trackers.frontend.background import BackgroundModel
-from trackers.frontend.blobs import Blob, blobs_from_mask
-from trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
-from trackers.frontend.fallback import CameraFitCheck, FitEvidence, RegionDetector
-from trackers.frontend.heads import HeadDetector
-from trackers.frontend.silhouette import SilhouetteMatcher
-from trackers.geometry import iou_matrix
-from trackers.records import Detections
+from occbench.trackers.frontend.active_basis import ShapeVerifier
+from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.blobs import Blob, blobs_from_mask
+from occbench.trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
+from occbench.trackers.frontend.fallback import CameraFitCheck, FitEvidence, RegionDetector
+from occbench.trackers.frontend.heads import HeadDetector
+from occbench.trackers.frontend.silhouette import SilhouetteMatcher
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 

@@ -33,7 +33,7 @@ person-sized boxes whose size is learnt from the scene as it runs (no ground tru
 
 From the clip alone it finds people who move; people who stay where they are in the first
 frames are part of any background learnt from the clip itself. Given other footage of the
-same camera (``footage``: ``trackers.frontend.footage``, images only), the background starts
+same camera (``footage``: ``occbench.trackers.frontend.footage``, images only), the background starts
 from the footage's empty floor where the clip shows something steady on it, so that they are
 found too.
 
@@ -49,9 +49,9 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from trackers.frontend.footage import CameraBackground, start_with
-from trackers.frontend.regions import merge_near, split_kmeans
-from trackers.records import Detections
+from occbench.trackers.frontend.footage import CameraBackground, start_with
+from occbench.trackers.frontend.regions import merge_near, split_kmeans
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -295,7 +295,7 @@ class RegionDetector:
 
     @property
     def name(self) -> str:
-        return (f"foreground regions (trackers.frontend.fallback.RegionDetector) on "
+        return (f"foreground regions (occbench.trackers.frontend.fallback.RegionDetector) on "
                 f"{self.background.describe()}")
 
     def __init__(self, background: MedianBackground | None = None, min_area: int = 40,

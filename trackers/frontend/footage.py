@@ -23,7 +23,7 @@ the clip's own ``M``; elsewhere (the footage agrees on an empty floor and the cl
 something steady on it: someone standing still) ``P``.
 
 Plain numpy. Reading the footage (folders of frames, videos) is the harness's
-(``harness.sources.footage``).
+(``occbench.sources.footage``).
 """
 
 from __future__ import annotations

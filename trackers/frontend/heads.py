@@ -75,7 +75,7 @@ class ColourMixtures:
     def load(cls, path: str | Path | None = None) -> ColourMixtures:
         """Load an ``.npz`` written by ``save``; None loads the shipped default."""
         if path is None:
-            path = resources.files("trackers.frontend") / "data" / "heads.npz"
+            path = resources.files("occbench.trackers.frontend") / "data" / "heads.npz"
         path = Path(str(path))
         if not path.is_file():
             raise FileNotFoundError(f"head colour mixtures not found: {path}")
@@ -272,7 +272,7 @@ class HeadDetector:
             With ``boxes``: (N, 4) xywh head box per box (rows of NaN where none, the best
             one when ``max_heads`` == 1). Without: (M, 4) xywh of all heads found.
         """
-        from trackers.frontend.blobs import blob_boxes, blobs_from_mask
+        from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
 
         h, w = frame.shape[:2]
         per_box = boxes is not None

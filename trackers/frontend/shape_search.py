@@ -42,11 +42,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.frontend.active_basis import GRID, TAU, ActiveBasis, shift_offsets
-from trackers.frontend.calibration import Perspective
-from trackers.frontend.detectors import SilhouetteDetector, _labels_from_boxes
-from trackers.frontend.silhouette import load_template
-from trackers.records import Detections
+from occbench.trackers.frontend.active_basis import GRID, TAU, ActiveBasis, shift_offsets
+from occbench.trackers.frontend.calibration import Perspective
+from occbench.trackers.frontend.detectors import SilhouetteDetector, _labels_from_boxes
+from occbench.trackers.frontend.silhouette import load_template
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 

@@ -100,7 +100,7 @@ def fit_template(masks: list[np.ndarray], height: int = TEMPLATE_HEIGHT) -> np.n
 def load_template(path: str | Path | None = None) -> np.ndarray:
     """Load a template ``.npy``; None loads the shipped ``trackers/frontend/data/silhouette.npy``."""
     if path is None:
-        path = resources.files("trackers.frontend") / "data" / "silhouette.npy"
+        path = resources.files("occbench.trackers.frontend") / "data" / "silhouette.npy"
     path = Path(str(path))
     if not path.is_file():
         raise FileNotFoundError(f"silhouette template not found: {path}")
@@ -565,7 +565,7 @@ class SilhouetteMatcher:
         fits = np.zeros((len(label), self.max_people, 9))
         counts = np.zeros(len(label), dtype=np.int64)
         if self.compiled:
-            from trackers.frontend._silhouette_kernel import search_regions_kernel as search
+            from occbench.trackers.frontend._silhouette_kernel import search_regions_kernel as search
         else:
             search = search_regions
         search(small, lab, regions, np.ascontiguousarray(bands, dtype=np.int64), sc.ys, sc.xs,
@@ -607,7 +607,7 @@ class SilhouetteMatcher:
         search but it is not reported. This is the step a verifier of candidate boxes plugs
         into.
         """
-        from trackers.geometry import intersection_matrix
+        from occbench.trackers.geometry import intersection_matrix
 
         keep = np.ones(len(c), dtype=bool)
         for k in range(1, len(c)):

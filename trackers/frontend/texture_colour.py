@@ -177,7 +177,7 @@ class TextureColourMixture:
         H, W = frame.shape[:2]
         alpha = 1.0 / self.history if learningRate < 0 else float(learningRate)
         if self.compiled and self._mu is not None and self._shape == (H, W):
-            from trackers.frontend._texture_colour_kernel import apply_kernel
+            from occbench.trackers.frontend._texture_colour_kernel import apply_kernel
 
             label = np.empty((H, W), dtype=np.uint8)
             apply_kernel(np.ascontiguousarray(frame), self._mu, self._t, self._w, alpha,

@@ -1,9 +1,9 @@
-"""PBM: five-part model with layered data association (see ``trackers.layered.tracker``)."""
+"""PBM: five-part model with layered data association (see ``occbench.trackers.layered.tracker``)."""
 
-from trackers.layered.adaptations import Adaptations, StaleParts
-from trackers.layered.evidence import HiddenEvidence
-from trackers.layered.feature_models import FeatureModels, load_feature_models
-from trackers.layered.params import (
+from occbench.trackers.layered.adaptations import Adaptations, StaleParts
+from occbench.trackers.layered.evidence import HiddenEvidence
+from occbench.trackers.layered.feature_models import FeatureModels, load_feature_models
+from occbench.trackers.layered.params import (
     CandidateParams,
     FeatureParams,
     GateParams,
@@ -15,8 +15,8 @@ from trackers.layered.params import (
     SearchParams,
     UpdateParams,
 )
-from trackers.layered.starts import AutoStarts, GivenTargetOnly
-from trackers.layered.tracker import PBMTracker
+from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
+from occbench.trackers.layered.tracker import PBMTracker
 
 __all__ = ["Adaptations", "AutoStarts", "CandidateParams", "FeatureModels", "FeatureParams",
            "GateParams", "GivenTargetOnly", "HiddenEvidence", "LifeCycleParams", "MatchParams", "NoiseParams",

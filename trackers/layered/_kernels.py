@@ -2,7 +2,7 @@
 
 Each kernel computes one named equation or rule of the paper ("Tracking People under
 Heavy Occlusions by Layered Data Association") and is tested against its plain-numpy
-function in ``trackers.layered.equations`` (or the numpy expression its docstring quotes)
+function in ``occbench.trackers.layered.equations`` (or the numpy expression its docstring quotes)
 to a tolerance, not bit for bit (``tests/trackers/layered/test_equations.py``, rtol 1e-9):
 
 - part features (PBM 2.1-2.2): the split of a box at its centroid (eqs. 1-2,
@@ -43,7 +43,7 @@ if numba.config.DISABLE_JIT:  # plain Python (tests/traced_run.py): numba's intr
 else:
     from numba.cpython.unsafe.numbers import trailing_zeros
 
-from trackers.layered.equations import HEAD_FRACTION
+from occbench.trackers.layered.equations import HEAD_FRACTION
 
 
 @numba.njit(cache=True, inline="always")

@@ -1,4 +1,4 @@
-"""Compiled kernels of ``trackers.layered.search`` (numba, one core), kept where
+"""Compiled kernels of ``occbench.trackers.layered.search`` (numba, one core), kept where
 ``benchmarks/bench_pbm.py`` shows their numpy forms cost the tracker's speed: the head
 bands of the detection boxes (``band_heads``, PBM 3.1, tested against
 ``cv2.boundingRect`` of each band) and the foreground the detection boxes cover

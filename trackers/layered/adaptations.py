@@ -14,10 +14,10 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from trackers.common.checks import at_least, coerce, require, unit
-from trackers.layered.evidence import HiddenEvidence
-from trackers.layered.parts import PartFeatures
-from trackers.layered.targets import Targets, stale_parts
+from occbench.trackers.common.checks import at_least, coerce, require, unit
+from occbench.trackers.layered.evidence import HiddenEvidence
+from occbench.trackers.layered.parts import PartFeatures
+from occbench.trackers.layered.targets import Targets, stale_parts
 
 UNBOUNDED = 1_000_000
 """The paper's "until found or lost" / "never" for a count or a size."""

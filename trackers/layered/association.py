@@ -10,7 +10,7 @@ Global layer (eq. 13): p = sum_j gamma_j p_j.
 The layers run in small numba kernels over the scored (target, candidate) pairs with no
 (pairs, 6, 5, components) temporaries; ``pair_scores`` chains eqs. 11-13 for the
 selected pairs in one call (the models indexed, not copied per pair). The plain-numpy
-equations they compute are ``trackers.layered.equations.differences`` (eq. 11),
+equations they compute are ``occbench.trackers.layered.equations.differences`` (eq. 11),
 ``part_scores`` (eq. 12) and ``global_score`` (eq. 13); the kernels equal them to
 rounding (rtol 1e-9, ``tests/trackers/layered/test_equations.py``).
 """
@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from trackers.layered._kernels import (
+from occbench.trackers.layered._kernels import (
     _ambiguous_kernel,
     _ambiguous_rows_kernel,
     _differences_kernel,
@@ -29,10 +29,10 @@ from trackers.layered._kernels import (
     _scores_kernel,
     box_scores_kernel,
 )
-from trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
+from occbench.trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
 
 if TYPE_CHECKING:  # annotations only
-    from trackers.layered.feature_models import FeatureModels
+    from occbench.trackers.layered.feature_models import FeatureModels
 
 # ----------------------------------------------------------------------------- public API
 

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.geometry import iou_matrix
-from trackers.layered.params import CandidateParams
-from trackers.layered.search import (
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered.params import CandidateParams
+from occbench.trackers.layered.search import (
     Candidates,
     blobs_boxes,
     heads_from_bands,
@@ -29,7 +29,7 @@ from trackers.layered.search import (
     split_blob_box,
     top_profile_heads,
 )
-from trackers.records import Detections
+from occbench.trackers.records import Detections
 
 
 class ProfileHeads:

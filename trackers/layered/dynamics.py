@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.layered import _kernels
+from occbench.trackers.layered import _kernels
 
 
 class ConstantVelocity2D:

@@ -28,8 +28,8 @@ import numpy as np
 from scipy.special import ndtr
 
 if TYPE_CHECKING:  # annotations only
-    from trackers.layered.feature_models import FeatureModels
-    from trackers.layered.parts import PartFeatures
+    from occbench.trackers.layered.feature_models import FeatureModels
+    from occbench.trackers.layered.parts import PartFeatures
 
 __all__ = [
     "HEAD_FRACTION",

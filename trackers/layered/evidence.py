@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.common.checks import at_least, coerce
+from occbench.trackers.common.checks import at_least, coerce
 
 
 def box_foreground(boxes: np.ndarray, fg: np.ndarray) -> np.ndarray:

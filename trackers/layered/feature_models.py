@@ -27,8 +27,8 @@ import numpy as np
 import yaml
 from scipy.special import ndtr
 
-from trackers.layered._kernels import survival_kernel
-from trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
+from occbench.trackers.layered._kernels import survival_kernel
+from occbench.trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
 
 logger = logging.getLogger(__name__)
 

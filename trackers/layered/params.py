@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from trackers.common.checks import at_least, coerce, require, unit
-from trackers.layered.feature_models import FeatureModels
-from trackers.layered.parts import FEATURES, N_PARTS
+from occbench.trackers.common.checks import at_least, coerce, require, unit
+from occbench.trackers.layered.feature_models import FeatureModels
+from occbench.trackers.layered.parts import FEATURES, N_PARTS
 
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
@@ -105,7 +105,7 @@ class CandidateParams:
         head_separation: smallest distance between two heads of a blob, x blob height.
         blob_downsample: connected components run on the mask subsampled by this factor.
         head_detector: PBM 2.3 hair/skin head detector (``detect(frame, foreground,
-            boxes)``, e.g. ``trackers.frontend.heads.HeadDetector``) for detections without
+            boxes)``, e.g. ``occbench.trackers.frontend.heads.HeadDetector``) for detections without
             heads; None: the top 1/7 band of the box's foreground (``docs/adaptations.md``).
     """
 

@@ -11,7 +11,7 @@ the centroid ratios of PBM eqs. 1-2,
     yc = ytl + h / 7 + beta * (h - h / 7)          (eq. 2, sign-corrected)
 
 so a box plus (alpha, beta) gives the five rectangles (``part_boxes``; both equations
-are in ``trackers.layered.equations``, re-exported here).
+are in ``occbench.trackers.layered.equations``, re-exported here).
 
 PBM 2.2 describes each part by area, perimeter, HSV and XYZ colour histograms,
 displacement and overlap. ``PartFeatureExtractor.extract`` measures the first four (plus
@@ -22,7 +22,7 @@ normalised so one model fits near and far people:
 - area: fraction of the part rectangle that is foreground, in [0, 1];
 - perimeter: silhouette-outline pixels (foreground pixels with a background 4-neighbour)
   inside the part, divided by the part's half perimeter (w + h);
-- colour: joint ``bins**3`` histograms (as ``trackers.histograms.colour_histogram``) of
+- colour: joint ``bins**3`` histograms (as ``occbench.trackers.histograms.colour_histogram``) of
   the foreground pixels of the part, in OpenCV's 8-bit HSV (hue 0..179) and XYZ;
 - displacement: distance between part centroids, divided by the person height;
 - overlap: intersection over union of the two part rectangles.
@@ -38,9 +38,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from trackers.geometry import iou_matrix
-from trackers.layered import _kernels
-from trackers.layered.equations import (  # eqs. 1-2, re-exported here
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered import _kernels
+from occbench.trackers.layered.equations import (  # eqs. 1-2, re-exported here
     HEAD_FRACTION,
     centroid_ratios,  # noqa: F401
     part_boxes,  # noqa: F401
@@ -199,7 +199,7 @@ class PartFeatureExtractor:
 
     Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
     pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour).
-    One kernel call (``trackers.layered._kernels.part_features``) walks the samples of every box
+    One kernel call (``occbench.trackers.layered._kernels.part_features``) walks the samples of every box
     once: foreground test, part label, counts, centroid sums, outline test, and the joint
     HSV and XYZ bins of each foreground sample by OpenCV's own integer formulas (equal to
     ``cv2.cvtColor`` for every colour); the features equal a per-box numpy reference

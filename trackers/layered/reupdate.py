@@ -30,9 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.layered import _kernels
-from trackers.layered.dynamics import ConstantVelocity2D
-from trackers.layered.targets import Targets
+from occbench.trackers.layered import _kernels
+from occbench.trackers.layered.dynamics import ConstantVelocity2D
+from occbench.trackers.layered.targets import Targets
 
 _ROW0 = np.zeros(1, dtype=np.int64)
 

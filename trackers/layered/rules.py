@@ -15,13 +15,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trackers.common.assignment import assign
-from trackers.geometry import iou_matrix
-from trackers.layered.adaptations import Adaptations
-from trackers.layered.evidence import HiddenEvidence, box_foreground
-from trackers.layered.parts import PartFeatures
-from trackers.layered.reupdate import AfterPrediction, ReUpdate
-from trackers.layered.targets import Targets
+from occbench.trackers.common.assignment import assign
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.evidence import HiddenEvidence, box_foreground
+from occbench.trackers.layered.parts import PartFeatures
+from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
+from occbench.trackers.layered.targets import Targets
 
 # --------------------------------------------------------------- eq. 11: the model compared
 

@@ -30,11 +30,11 @@ import cv2
 import numpy as np
 from scipy.ndimage import minimum_filter1d
 
-from trackers.layered._search_kernels import (
+from occbench.trackers.layered._search_kernels import (
     band_heads,
     covered_count,
 )
-from trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
+from occbench.trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
 
 
 def _floats(v: np.ndarray) -> list[float]:

@@ -11,12 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.layered.adaptations import Adaptations
-from trackers.layered.association import ambiguous_rows
-from trackers.layered.params import MatchParams, PruneParams
-from trackers.layered.parts import N_PARTS, PartFeatures
-from trackers.layered.search import Candidates, match_head_template
-from trackers.layered.targets import Targets, dof_from_head
+from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.association import ambiguous_rows
+from occbench.trackers.layered.params import MatchParams, PruneParams
+from occbench.trackers.layered.parts import N_PARTS, PartFeatures
+from occbench.trackers.layered.search import Candidates, match_head_template
+from occbench.trackers.layered.targets import Targets, dof_from_head
 
 
 def _norms(v: np.ndarray) -> np.ndarray:

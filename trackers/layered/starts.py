@@ -3,7 +3,7 @@ single hand-initialised target (PBM 3), as small strategy objects.
 
 PBM 3: "the target and its initial position were selected manually [...] the user just drew
 a bounding box around the chosen target". ``GivenTargetOnly`` is that for the single-target
-protocol (``harness.pipeline.protocols``), whose only detection on the tracker's first frame
+protocol (``occbench.pipeline.protocols``), whose only detection on the tracker's first frame
 is the chosen person's box: the target started there is the only one, so no auto-started
 target competes with it for candidates and none replaces it once it is lost.
 ``PBMTracker._start_targets`` asks ``may_start`` before each start; the other tests of a

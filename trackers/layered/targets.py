@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.layered import _kernels
-from trackers.layered.dynamics import ConstantVelocity2D, Gate
-from trackers.layered.equations import dof_from_head as dofs_from_heads
-from trackers.layered.parts import (
+from occbench.trackers.layered import _kernels
+from occbench.trackers.layered.dynamics import ConstantVelocity2D, Gate
+from occbench.trackers.layered.equations import dof_from_head as dofs_from_heads
+from occbench.trackers.layered.parts import (
     N_PARTS,
     PartFeatures,
 )

@@ -42,14 +42,14 @@ import logging
 
 import numpy as np
 
-from trackers.common.checks import parameter_group
-from trackers.geometry import iou_matrix
-from trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
-from trackers.layered.adaptations import Adaptations
-from trackers.layered.association import box_scores, pair_scores
-from trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads, checked_inputs
-from trackers.layered.dynamics import Gate
-from trackers.layered.params import (
+from occbench.trackers.common.checks import parameter_group
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
+from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.association import box_scores, pair_scores
+from occbench.trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads, checked_inputs
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.params import (
     CandidateParams,
     FeatureParams,
     GateParams,
@@ -61,9 +61,9 @@ from trackers.layered.params import (
     SearchParams,
     UpdateParams,
 )
-from trackers.layered.parts import PartFeatureExtractor, PartFeatures, centroid_ratios
-from trackers.layered.rules import build_rules
-from trackers.layered.search import (
+from occbench.trackers.layered.parts import PartFeatureExtractor, PartFeatures, centroid_ratios
+from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.layered.search import (
     Candidates,
     head_fill,
     head_patch,
@@ -71,10 +71,10 @@ from trackers.layered.search import (
     occlusion_kinds,
     search_boxes_many,
 )
-from trackers.layered.selection import FrameScores, MultipleResponsePruning
-from trackers.layered.starts import AutoStarts, GivenTargetOnly
-from trackers.layered.targets import Targets, dof_from_box, update_parts
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.layered.selection import FrameScores, MultipleResponsePruning
+from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
+from occbench.trackers.layered.targets import Targets, dof_from_box, update_parts
+from occbench.trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
 
@@ -84,7 +84,7 @@ _BOX_COLUMNS = np.array([0, 1, 4, 5])  # xywh in the DOF (xtl, ytl, xc, yc, w, h
 class PBMTracker:
     """Five-part layered-association tracker (PBM), tracking every person in view.
 
-    Its settings come in groups, one per step of PBM Fig. 1 (``trackers.layered.params``;
+    Its settings come in groups, one per step of PBM Fig. 1 (``occbench.trackers.layered.params``;
     each checks itself and raises ``ValueError`` naming ``<group>.<field>``); None takes
     a group's defaults, which are ``conf/tracker/pbm.yaml``'s.
 
@@ -100,7 +100,7 @@ class PBMTracker:
             by hand).
         reporting: unfound targets in the output.
         adaptations: every rule the paper does not have (``tracker=pbm_paper``: all off).
-        starts: who may start a target (``trackers.layered.starts``): None = ``AutoStarts``
+        starts: who may start a target (``occbench.trackers.layered.starts``): None = ``AutoStarts``
             (every person in view); ``GivenTargetOnly`` for the single-target protocol.
     """
 

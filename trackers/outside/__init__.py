@@ -14,9 +14,9 @@ norfair and ocsort are installed without their dependencies because their metada
 numpy<2 (norfair) or scipy==1.9.3, lap, filterpy==1.4.5 (ocsort), which would downgrade
 numpy, OpenCV and pandas; their code runs on the project's numpy 2 (tested).
 
-Run them beside ours on the same detections: ``python -m harness tracker=everyone`` (ours
+Run them beside ours on the same detections: ``python -m occbench tracker=everyone`` (ours
 plus all outside trackers, conf/tracker/everyone.yaml), or pick with a multirun, e.g.
-``python -m harness -m tracker=baseline,reta,pbm,bytetrack,ocsort,norfair,motpy``.
+``python -m occbench -m tracker=baseline,reta,pbm,bytetrack,ocsort,norfair,motpy``.
 
 Identities are renumbered 1, 2, ... in order of first report, per adapter instance: some
 libraries draw ids from a class-level counter (OC-SORT) or from ``uuid4`` (motpy), which
@@ -31,15 +31,15 @@ Modules:
         compensation; extra ``boxmot``).
 
 ByteTrack (``bytetrack`` in the configs) is our own re-implementation of BYTE and lives in
-``trackers.bytetrack``, not here.
+``occbench.trackers.bytetrack``, not here.
 """
 
 from __future__ import annotations
 
-from trackers.outside._common import MissingLibrary
-from trackers.outside.boxmot import BoxmotTracker
-from trackers.outside.motpy import MotpyTracker
-from trackers.outside.norfair import NorfairTracker
-from trackers.outside.ocsort import OCSortTracker
+from occbench.trackers.outside._common import MissingLibrary
+from occbench.trackers.outside.boxmot import BoxmotTracker
+from occbench.trackers.outside.motpy import MotpyTracker
+from occbench.trackers.outside.norfair import NorfairTracker
+from occbench.trackers.outside.ocsort import OCSortTracker
 
 __all__ = ["BoxmotTracker", "MissingLibrary", "MotpyTracker", "NorfairTracker", "OCSortTracker"]

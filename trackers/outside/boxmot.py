@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
-from trackers.records import Detections, SequenceInfo, Track, TrackState
+from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
+from occbench.trackers.records import Detections, SequenceInfo, Track, TrackState
 
 INSTALL = ('torch==2.13.0 && pip install --no-deps boxmot==25.0.0 && '
            'pip install -e ".[boxmot]"')

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
+from occbench.trackers.records import Detections, Track, TrackState
 
 
 class MotpyTracker:

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy
+from occbench.trackers.records import Detections, Track, TrackState
 
 
 class NorfairTracker:

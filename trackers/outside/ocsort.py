@@ -25,8 +25,8 @@ import importlib
 
 import numpy as np
 
-from trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
-from trackers.records import Detections, Track, TrackState
+from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
+from occbench.trackers.records import Detections, Track, TrackState
 
 ASSOCIATION_COSTS = ("iou", "giou", "ciou", "diou", "ct_dist")
 

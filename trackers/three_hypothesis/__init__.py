@@ -10,15 +10,15 @@ groups), ``rules`` (the paper's rule and ours for each step an adaptation change
 ``steps_output`` (graph nodes, tracks), over the records of ``state``.
 """
 
-from trackers.three_hypothesis.motion import MotionModel
-from trackers.three_hypothesis.params import (
+from occbench.trackers.three_hypothesis.motion import MotionModel
+from occbench.trackers.three_hypothesis.params import (
     Adaptations,
     Appearance,
     Association,
     LifeCycle,
     Occlusion,
 )
-from trackers.three_hypothesis.tracker import RetaTracker
+from occbench.trackers.three_hypothesis.tracker import RetaTracker
 
 __all__ = ["Adaptations", "Appearance", "Association", "LifeCycle", "MotionModel", "Occlusion",
            "RetaTracker"]

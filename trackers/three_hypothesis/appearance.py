@@ -1,6 +1,6 @@
 """Appearance model q (Reta 3.2, eq. 1) and its similarity rho (eq. 4), fast path.
 
-The definition lives in ``trackers.three_hypothesis.features.ellipse_histograms``: joint
+The definition lives in ``occbench.trackers.three_hypothesis.features.ellipse_histograms``: joint
 16x16x16 colour histogram over the pixels whose centres lie in the ellipse inscribed in a
 box, optionally restricted to foreground pixels. This module computes exactly the same
 histograms for boxes snapped to whole pixels (``tests/trackers/three_hypothesis/
@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.three_hypothesis._kernels import ellipse_histograms
-from trackers.three_hypothesis.features import bhattacharyya
+from occbench.trackers.three_hypothesis._kernels import ellipse_histograms
+from occbench.trackers.three_hypothesis.features import bhattacharyya
 
 __all__ = ["EllipseHistogrammer", "bhattacharyya", "snap_boxes"]
 

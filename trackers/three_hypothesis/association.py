@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.common.assignment import assign_min_cost
-from trackers.geometry import centre_distance_matrix
-from trackers.three_hypothesis.features import region_similarity
+from occbench.trackers.common.assignment import assign_min_cost
+from occbench.trackers.geometry import centre_distance_matrix
+from occbench.trackers.three_hypothesis.features import region_similarity
 
 
 @dataclass
@@ -64,7 +64,7 @@ def _rows(*columns: np.ndarray) -> np.ndarray:
 
 def _hungarian(cost: np.ndarray, leave: float) -> np.ndarray:
     """Hungarian method where leaving a person unmatched costs ``leave``, which is also the
-    largest cost an accepted pair can have (``trackers.common.assignment.assign_min_cost``).
+    largest cost an accepted pair can have (``occbench.trackers.common.assignment.assign_min_cost``).
     Returns (K, 2) rows (person, measurement), sorted by person."""
     allowed = np.isfinite(cost) & (cost <= leave)
     if allowed.sum(axis=0).max() <= 1 and allowed.sum(axis=1).max() <= 1:

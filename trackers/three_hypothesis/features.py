@@ -1,15 +1,15 @@
 """Appearance and shape similarity of detections (Reta 3.2 eq. 1, 3.3.2 eqs. 4 and 5).
 
 All boxes are (N, 4) float64 xywh in 0-based pixels. The person region S of a box is the
-ellipse inscribed in it (``trackers.geometry.box_ellipses``).
+ellipse inscribed in it (``occbench.trackers.geometry.box_ellipses``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from trackers.geometry import box_slices, intersection_matrix
-from trackers.histograms import bhattacharyya
+from occbench.trackers.geometry import box_slices, intersection_matrix
+from occbench.trackers.histograms import bhattacharyya
 
 __all__ = ["bhattacharyya", "bin_image", "ellipse_histograms", "region_similarity"]
 
@@ -18,7 +18,7 @@ def bin_image(frame: np.ndarray, bins: int = 16) -> np.ndarray:
     """(H, W) int32 joint-bin index of every pixel of an (H, W, 3) uint8 frame.
 
     The index is ``(c0 * bins + c1) * bins + c2`` with ``ck = channel_k * bins // 256``, the
-    same order as ``trackers.histograms.colour_histogram`` (for a BGR frame: B major). The
+    same order as ``occbench.trackers.histograms.colour_histogram`` (for a BGR frame: B major). The
     bins partition the RGB cube, so the channel order does not change rho.
     """
     if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:

@@ -7,7 +7,7 @@ n^t_k carries the attributes Atr = [id, S, q, M] of eq. 1 and Sec. 3.2. A direct
 visible, a hypothesis trajectory otherwise.
 
 The graph is an output: ``snapshot`` gives the current frame's nodes and edges as plain
-records (``harness.report.graph`` writes and draws them). Only the last ``window`` frames
+records (``occbench.report.graph`` writes and draws them). Only the last ``window`` frames
 are kept, so memory stays flat however long the sequence.
 """
 

@@ -2,7 +2,7 @@
 
 Each node carries its own state x (8,) = (xc, yc, w, h, vx, vy, vw, vh) and covariance
 P (8, 8). The matrices F, H, Q, R come from
-``trackers.common.kalman.constant_velocity_model`` (one set-up for the project); the
+``occbench.trackers.common.kalman.constant_velocity_model`` (one set-up for the project); the
 predict and correct steps below are filterpy's equations applied to all nodes of a frame
 at once (``tests/trackers/three_hypothesis/test_tracker.py`` checks them against
 ``filterpy.kalman.KalmanFilter``).
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.common.checks import require
-from trackers.common.kalman import constant_velocity_model
+from occbench.trackers.common.checks import require
+from occbench.trackers.common.kalman import constant_velocity_model
 
 
 @dataclass(frozen=True)

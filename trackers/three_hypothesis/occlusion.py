@@ -1,7 +1,7 @@
 """Occlusion relations O (Reta 3.3.1, eq. 2) and depth order pi (eq. 3).
 
 Regions are the ellipses inscribed in (N, 4) float64 xywh boxes (0-based pixels), the
-shape S = (xc, yc, 0, w/2, h/2) of ``trackers.geometry.box_ellipses``.
+shape S = (xc, yc, 0, w/2, h/2) of ``occbench.trackers.geometry.box_ellipses``.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from trackers.three_hypothesis._kernels import region_overlap_pairs
+from occbench.trackers.three_hypothesis._kernels import region_overlap_pairs
 
 
 def region_overlaps(
@@ -20,7 +20,7 @@ def region_overlaps(
     """Region similarity delta of eq. 5 for ellipse regions, integrated only where needed.
 
     delta(Sp, Sq) = 2 |Sp & Sq| / (|Sp| + |Sq|). The values are exactly those of
-    ``trackers.three_hypothesis.features.region_similarity(a, b, "ellipse", samples)`` (the
+    ``occbench.trackers.three_hypothesis.features.region_similarity(a, b, "ellipse", samples)`` (the
     definition; ``tests/trackers/three_hypothesis/test_tracker.py`` checks equality):
     |Sa & Sb| is the share of a ``samples`` x ``samples`` grid over a's box lying in both
     ellipses, times |Sa| = pi/4 w h.
@@ -61,7 +61,7 @@ def _grid(samples: int) -> np.ndarray:
 
 def boxes_meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(N, M) bool: xywh boxes a (N, 4) and b (M, 4) share a positive area (the pairs whose
-    ``trackers.geometry.intersection_matrix`` is positive)."""
+    ``occbench.trackers.geometry.intersection_matrix`` is positive)."""
     ax1, ay1 = a[:, 0:1], a[:, 1:2]
     bx1, by1 = b[:, 0], b[:, 1]
     w = np.minimum(ax1 + a[:, 2:3], bx1 + b[:, 2]) - np.maximum(ax1, bx1)

@@ -5,14 +5,14 @@ naming the field and the value when one is out of range. Hydra builds each group
 nested ``_target_`` of ``conf/tracker/reta.yaml``. ``Adaptations`` holds every rule the
 paper does not have (``Adaptations.paper()`` turns them all off, as ``tracker=reta_paper``);
 ``docs/adaptations.md`` gives each one's paper section, value and evidence. The motion
-group is ``trackers.three_hypothesis.motion.MotionModel`` (Kalman noises of M, 3.2).
+group is ``occbench.trackers.three_hypothesis.motion.MotionModel`` (Kalman noises of M, 3.2).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from trackers.common.checks import at_least, coerce, require, unit
+from occbench.trackers.common.checks import at_least, coerce, require, unit
 
 __all__ = ["Adaptations", "Appearance", "Association", "LifeCycle", "Occlusion"]
 
@@ -153,7 +153,7 @@ class Adaptations:
             False: rho (eq. 4, the paper).
         measured_velocity: a reported hidden person stands at its last measured box moved
             by its measured velocity when that velocity has predicted its measurements
-            better than the Kalman filter's so far (``trackers.common.measured_velocity``);
+            better than the Kalman filter's so far (``occbench.trackers.common.measured_velocity``);
             False: where M predicts it (the paper's hypothesis region).
         foreground_presence: with a foreground mask, a hypothesis in plain view whose
             ellipse holds at least ``Appearance.min_foreground`` foreground is not

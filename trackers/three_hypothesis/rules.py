@@ -13,21 +13,21 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
-from trackers.geometry import iou_matrix
-from trackers.three_hypothesis._kernels import blend
-from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.hypotheses import PRIORITY
-from trackers.three_hypothesis.motion import (
+from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.three_hypothesis._kernels import blend
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.hypotheses import PRIORITY
+from occbench.trackers.three_hypothesis.motion import (
     BoxState,
     CentreState,
     CorrectedBehind,
     MotionModel,
     PredictedBehind,
 )
-from trackers.three_hypothesis.params import Adaptations, LifeCycle
-from trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
-from trackers.three_hypothesis.tentative import (
+from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle
+from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
+from occbench.trackers.three_hypothesis.tentative import (
     AfterMatches,
     ClearEarly,
     ConfirmedInStage2,

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from trackers.three_hypothesis.association import Matches
-from trackers.three_hypothesis.graph import Node
+from occbench.trackers.three_hypothesis.association import Matches
+from occbench.trackers.three_hypothesis.graph import Node
 
 
 @dataclass(slots=True)

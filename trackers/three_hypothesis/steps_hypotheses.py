@@ -8,11 +8,11 @@ import logging
 
 import numpy as np
 
-from trackers.three_hypothesis import hypotheses as hyp
-from trackers.three_hypothesis.graph import VISIBLE
-from trackers.three_hypothesis.motion import state_boxes
-from trackers.three_hypothesis.occlusion import covered_fraction
-from trackers.three_hypothesis.state import Branch, Frame, Person
+from occbench.trackers.three_hypothesis import hypotheses as hyp
+from occbench.trackers.three_hypothesis.graph import VISIBLE
+from occbench.trackers.three_hypothesis.motion import state_boxes
+from occbench.trackers.three_hypothesis.occlusion import covered_fraction
+from occbench.trackers.three_hypothesis.state import Branch, Frame, Person
 
 log = logging.getLogger(__name__)
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.three_hypothesis._kernels import depth_orders
-from trackers.three_hypothesis.association import associate
-from trackers.three_hypothesis.graph import VISIBLE
-from trackers.three_hypothesis.occlusion import boxes_meet, occlusion_pairs, region_overlaps
-from trackers.three_hypothesis.state import Frame
+from occbench.trackers.three_hypothesis._kernels import depth_orders
+from occbench.trackers.three_hypothesis.association import associate
+from occbench.trackers.three_hypothesis.graph import VISIBLE
+from occbench.trackers.three_hypothesis.occlusion import boxes_meet, occlusion_pairs, region_overlaps
+from occbench.trackers.three_hypothesis.state import Frame
 
 
 class OcclusionSteps:

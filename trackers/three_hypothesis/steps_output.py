@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.records import Track, TrackState
-from trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE
-from trackers.three_hypothesis.state import Branch, Person
+from occbench.trackers.records import Track, TrackState
+from occbench.trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE
+from occbench.trackers.three_hypothesis.state import Branch, Person
 
 
 class OutputSteps:

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.geometry import valid_boxes
-from trackers.records import Detections
-from trackers.three_hypothesis import hypotheses as hyp
-from trackers.three_hypothesis.motion import state_boxes
-from trackers.three_hypothesis.state import Frame
+from occbench.trackers.geometry import valid_boxes
+from occbench.trackers.records import Detections
+from occbench.trackers.three_hypothesis import hypotheses as hyp
+from occbench.trackers.three_hypothesis.motion import state_boxes
+from occbench.trackers.three_hypothesis.state import Frame
 
 
 class PredictSteps:

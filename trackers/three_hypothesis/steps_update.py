@@ -8,11 +8,11 @@ import logging
 
 import numpy as np
 
-from trackers.three_hypothesis.graph import VISIBLE
-from trackers.three_hypothesis.motion import box_measurements, state_boxes
-from trackers.three_hypothesis.occlusion import covered_fraction
-from trackers.three_hypothesis.state import Branch, Frame, Person
-from trackers.three_hypothesis.tentative import clear_measurements
+from occbench.trackers.three_hypothesis.graph import VISIBLE
+from occbench.trackers.three_hypothesis.motion import box_measurements, state_boxes
+from occbench.trackers.three_hypothesis.occlusion import covered_fraction
+from occbench.trackers.three_hypothesis.state import Branch, Frame, Person
+from occbench.trackers.three_hypothesis.tentative import clear_measurements
 
 log = logging.getLogger(__name__)
 

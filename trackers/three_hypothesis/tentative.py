@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from trackers.three_hypothesis.occlusion import boxes_meet
+from occbench.trackers.three_hypothesis.occlusion import boxes_meet
 
 # --------------------------------------------------------------- 3.3.2 steps 5-8: who enters stage 2
 

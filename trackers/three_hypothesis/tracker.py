@@ -37,25 +37,25 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.common.checks import parameter_group
-from trackers.records import Detections, Track
-from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.graph import TrackingGraph
-from trackers.three_hypothesis.motion import MotionModel
-from trackers.three_hypothesis.params import (
+from occbench.trackers.common.checks import parameter_group
+from occbench.trackers.records import Detections, Track
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.graph import TrackingGraph
+from occbench.trackers.three_hypothesis.motion import MotionModel
+from occbench.trackers.three_hypothesis.params import (
     Adaptations,
     Appearance,
     Association,
     LifeCycle,
     Occlusion,
 )
-from trackers.three_hypothesis.rules import build_rules
-from trackers.three_hypothesis.state import Frame, Person
-from trackers.three_hypothesis.steps_hypotheses import HypothesisSteps
-from trackers.three_hypothesis.steps_occlusion import OcclusionSteps
-from trackers.three_hypothesis.steps_output import OutputSteps
-from trackers.three_hypothesis.steps_predict import PredictSteps
-from trackers.three_hypothesis.steps_update import UpdateSteps
+from occbench.trackers.three_hypothesis.rules import build_rules
+from occbench.trackers.three_hypothesis.state import Frame, Person
+from occbench.trackers.three_hypothesis.steps_hypotheses import HypothesisSteps
+from occbench.trackers.three_hypothesis.steps_occlusion import OcclusionSteps
+from occbench.trackers.three_hypothesis.steps_output import OutputSteps
+from occbench.trackers.three_hypothesis.steps_predict import PredictSteps
+from occbench.trackers.three_hypothesis.steps_update import UpdateSteps
 
 
 class RetaTracker(PredictSteps, OcclusionSteps, UpdateSteps, HypothesisSteps, OutputSteps):

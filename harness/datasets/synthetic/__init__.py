@@ -1,7 +1,7 @@
 """Built-in synthetic scenes: the project's default dataset.
 
 ``load_suite(scenarios, seed, ...)`` renders one ``SyntheticSequence`` per scenario preset
-(see ``harness.datasets.synthetic.scenarios``); ``load_replay(gt_path, ...)`` draws people
+(see ``occbench.datasets.synthetic.scenarios``); ``load_replay(gt_path, ...)`` draws people
 along the boxes of a real MOT gt file. Both are Hydra ``_target_`` callables returning
 ``list[Sequence]`` (conf/dataset/synthetic.yaml, conf/dataset/replay.yaml).
 
@@ -23,13 +23,13 @@ from collections.abc import Sequence as Seq
 
 import numpy as np
 
-from harness.datasets.base import window
-from harness.datasets.synthetic.appearance import Appearance, random_appearance
-from harness.datasets.synthetic.people import draw_person, head_box
-from harness.datasets.synthetic.replay import load_replay
-from harness.datasets.synthetic.scenarios import SCENARIOS, illumination_gains, world_cast
-from harness.datasets.synthetic.scene import Camera, defer_background, render_background
-from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
+from occbench.datasets.base import window
+from occbench.datasets.synthetic.appearance import Appearance, random_appearance
+from occbench.datasets.synthetic.people import draw_person, head_box
+from occbench.datasets.synthetic.replay import load_replay
+from occbench.datasets.synthetic.scenarios import SCENARIOS, illumination_gains, world_cast
+from occbench.datasets.synthetic.scene import Camera, defer_background, render_background
+from occbench.datasets.synthetic.sequence import Cast, SyntheticSequence
 
 log = logging.getLogger(__name__)
 
@@ -151,7 +151,7 @@ def load_suite(
         shadows: draw soft cast shadows.
         occluded_below: gt rows with visibility below this are flagged occluded.
         frames: [first, last] (1-based, inclusive) to run only those frames of each scene,
-            numbered as in the whole scene (``harness.datasets.base.window``); None = all.
+            numbered as in the whole scene (``occbench.datasets.base.window``); None = all.
         reflection: opacity of a mirrored floor reflection under each person (0 = none;
             ``SyntheticSequence``).
         camera_height: height of the camera above the floor, metres, and

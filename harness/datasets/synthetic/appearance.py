@@ -1,6 +1,6 @@
 """How a synthetic person looks: skin, hair and clothes colours and patterns, drawn at random
 (``random_appearance``) or near-identical to another (``similar_appearance``).
-``harness.datasets.synthetic.people`` draws a person with them."""
+``occbench.datasets.synthetic.people`` draws a person with them."""
 
 from __future__ import annotations
 

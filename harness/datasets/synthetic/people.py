@@ -1,4 +1,4 @@
-"""Synthetic people: drawing (the appearance is ``harness.datasets.synthetic.appearance``).
+"""Synthetic people: drawing (the appearance is ``occbench.datasets.synthetic.appearance``).
 
 A person is drawn inside its box (xywh, pixels, 0-based top-left) from parts, in the
 proportions of PBM 2.1 (head = 1/7 of the height): a head (skin-tone face and a hair cap,
@@ -23,7 +23,7 @@ import math
 import cv2
 import numpy as np
 
-from harness.datasets.synthetic.appearance import Appearance
+from occbench.datasets.synthetic.appearance import Appearance
 
 SHIFT = 3
 _S = 1 << SHIFT

@@ -17,13 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.datasets.base import Sequence, window
-from harness.datasets.mot import read_seqinfo, seqinfo_number
-from harness.datasets.synthetic.appearance import random_appearance
-from harness.datasets.synthetic.scenarios import walking_poses
-from harness.datasets.synthetic.scene import Camera, render_background
-from harness.datasets.synthetic.sequence import Cast, SyntheticSequence
-from harness.io.mot import MotTable, read_mot
+from occbench.datasets.base import Sequence, window
+from occbench.datasets.mot import read_seqinfo, seqinfo_number
+from occbench.datasets.synthetic.appearance import random_appearance
+from occbench.datasets.synthetic.scenarios import walking_poses
+from occbench.datasets.synthetic.scene import Camera, render_background
+from occbench.datasets.synthetic.sequence import Cast, SyntheticSequence
+from occbench.io.mot import MotTable, read_mot
 
 log = logging.getLogger(__name__)
 
@@ -77,7 +77,7 @@ def load_replay(
         shadows, occluded_below: as in ``SyntheticSequence``.
         name: sequence name (default seqinfo's name, else the folder name).
         frames: [first, last] (1-based, inclusive) to run only those frames, numbered as in
-            the file (``harness.datasets.base.window``; the people are drawn as in the
+            the file (``occbench.datasets.base.window``; the people are drawn as in the
             whole replay); None = all.
     Returns:
         A one-element list (the dataset interface returns lists of sequences).

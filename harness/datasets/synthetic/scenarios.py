@@ -35,13 +35,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from harness.datasets.synthetic.appearance import (
+from occbench.datasets.synthetic.appearance import (
     Appearance,
     random_appearance,
     similar_appearance,
 )
-from harness.datasets.synthetic.scene import Camera
-from harness.datasets.synthetic.sequence import Cast
+from occbench.datasets.synthetic.scene import Camera
+from occbench.datasets.synthetic.sequence import Cast
 
 #: metres walked per walking cycle (two steps)
 STRIDE_M = 1.4

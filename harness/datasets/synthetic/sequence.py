@@ -31,11 +31,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from harness.datasets.base import GroundTruth, Sequence
-from harness.datasets.synthetic.appearance import Appearance
-from harness.datasets.synthetic.people import ShadowPainter, draw_person, head_box
-from harness.io.mot import MotTable
-from trackers.records import SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence
+from occbench.datasets.synthetic.appearance import Appearance
+from occbench.datasets.synthetic.people import ShadowPainter, draw_person, head_box
+from occbench.io.mot import MotTable
+from occbench.trackers.records import SequenceInfo
 
 log = logging.getLogger(__name__)
 

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from harness.report.html.run import write_run_report
-from harness.report.html.sweep import write_sweep_report
+from occbench.report.html.run import write_run_report
+from occbench.report.html.sweep import write_sweep_report
 
 __all__ = ["write_run_report", "write_sweep_report"]

@@ -1,6 +1,6 @@
 """The report's interactive charts as Vega-Lite specs, built with Altair.
 
-Each function returns a spec (a dict) that ``harness.report.html.page`` embeds with the
+Each function returns a spec (a dict) that ``occbench.report.html.page`` embeds with the
 Vega bundle inlined; the data travels inside the spec. Colours: one per tracker (Altair's
 category10, in the run's order), one per error kind in the timeline.
 """
@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from harness.metrics.paired import PairedDifference
-from harness.metrics.timeline import FrameCounts
+from occbench.metrics.paired import PairedDifference
+from occbench.metrics.timeline import FrameCounts
 
 #: the timeline's error kinds: (FrameCounts attribute, label, colour)
 KINDS = (("misses", "miss (FN)", "#9e9e9e"), ("false_positives", "false positive", "#ff9800"),

@@ -119,7 +119,7 @@ class Page:
             f'</video><span class="frame" id="frame-{s}">frame {int(first)}</span></div>')
 
     def write(self, path: Path) -> Path:
-        from harness.io.mot import write_atomic
+        from occbench.io.mot import write_atomic
 
         nav = " ".join(f'<a href="#{esc(a)}">{esc(h)}</a>' for a, h in self.toc)
         bundle = vega_bundle().replace("</script", "<\\/script")
@@ -134,13 +134,13 @@ class Page:
 @functools.cache
 def vega_bundle() -> str:
     """Vega, Vega-Lite and vega-embed as one script (``window.vegaEmbed``): vl-convert's
-    bundle, kept in the occbench cache folder (``harness.sources.cache.cache_root``) per
+    bundle, kept in the occbench cache folder (``occbench.sources.cache.cache_root``) per
     vl-convert version, since making it costs seconds of CPU in every process (each job of a
     sweep); made again when the kept copy is missing or not whole."""
     import vl_convert
 
-    from harness.io.mot import write_atomic
-    from harness.sources.cache import cache_root
+    from occbench.io.mot import write_atomic
+    from occbench.sources.cache import cache_root
 
     root = cache_root()
     path = None if root is None else root / f"vega-bundle-{vl_convert.__version__}.js"

@@ -17,12 +17,12 @@ from typing import Any
 
 import pandas as pd
 
-from harness.metrics import COMBINED
-from harness.metrics.paired import Bootstrap, PairedDifference, all_pairs
-from harness.metrics.timeline import FrameCounts
-from harness.report.html import charts
-from harness.report.html.page import Page, esc, table_html
-from harness.report.paired import NOT_DISTINGUISHABLE, by_pair, cell
+from occbench.metrics import COMBINED
+from occbench.metrics.paired import Bootstrap, PairedDifference, all_pairs
+from occbench.metrics.timeline import FrameCounts
+from occbench.report.html import charts
+from occbench.report.html.page import Page, esc, table_html
+from occbench.report.paired import NOT_DISTINGUISHABLE, by_pair, cell
 
 log = logging.getLogger(__name__)
 
@@ -35,8 +35,8 @@ def read_frame_counts(run_dir: Path, iou_threshold: float = 0.5
                       ) -> dict[str, dict[str, FrameCounts]]:
     """tracker -> sequence -> ``FrameCounts`` from the run folder's gt/ and tracks/ (the
     files the run scored)."""
-    from harness.io.mot import read_mot
-    from harness.metrics.timeline import frame_counts
+    from occbench.io.mot import read_mot
+    from occbench.metrics.timeline import frame_counts
 
     out: dict[str, dict[str, FrameCounts]] = {}
     for folder in sorted(p for p in (run_dir / "tracks").glob("*") if p.is_dir()):
@@ -122,7 +122,7 @@ def write_run_report(run_dir: str | Path, frames: Mapping[str, Mapping[str, Fram
 
 
 def _tables(page: Page, metrics: pd.DataFrame) -> None:
-    from harness.report.tables import direction
+    from occbench.report.tables import direction
 
     page.section("tables", "Metrics")
     if metrics.empty:

@@ -5,7 +5,7 @@ the sweep's plots and the command.
 The best settings are ranked on the COMBINED ``objective`` metric of one tracker (the
 sweep's ``objective``: by default IDF1 of the first tracker). The best two are compared on
 the same frames: their jobs are paired by their other values (the seeds), each job's
-sequences are strata of the block bootstrap (``harness.metrics.paired``).
+sequences are strata of the block bootstrap (``occbench.metrics.paired``).
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from typing import Any
 
 import pandas as pd
 
-from harness.metrics.paired import Bootstrap, PairedDifference
-from harness.report.html import charts
-from harness.report.html.page import Page, esc, table_html
-from harness.report.paired import NOT_DISTINGUISHABLE, cell
+from occbench.metrics.paired import Bootstrap, PairedDifference
+from occbench.report.html import charts
+from occbench.report.html.page import Page, esc, table_html
+from occbench.report.paired import NOT_DISTINGUISHABLE, cell
 
 log = logging.getLogger(__name__)
 
@@ -42,8 +42,8 @@ def objective_of(sweep_dir: Path, frame: pd.DataFrame) -> tuple[str, str]:
 
 def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFrame:
     """``aggregate`` of the swept settings of ``tracker``, best ``metric`` first."""
-    from harness.report.tables import direction
-    from harness.sweeps.tables import aggregate, swept
+    from occbench.report.tables import direction
+    from occbench.sweeps.tables import aggregate, swept
 
     by = [p for p in swept(frame) if p != "tracker_choice" and not p.endswith("seed")]
     agg = aggregate(frame, by, [metric])
@@ -56,8 +56,8 @@ def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFram
 def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
                 tracker: str) -> list[PairedDifference]:
     """The best setting minus the second best, on the frames of jobs paired by seed."""
-    from harness.report.html.run import read_frame_counts
-    from harness.sweeps.tables import COMBINED, DONE, parameters, swept
+    from occbench.report.html.run import read_frame_counts
+    from occbench.sweeps.tables import COMBINED, DONE, parameters, swept
 
     if len(best) < 2:
         return []
@@ -85,7 +85,7 @@ def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
 def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame,
                        metrics: Sequence[str]) -> Path:
     """Write ``<sweep_dir>/report.html`` from the gathered ``frame`` (``gather``)."""
-    from harness.sweeps.tables import aggregate, plot_axes, setting_table
+    from occbench.sweeps.tables import aggregate, plot_axes, setting_table
 
     sweep_dir = Path(sweep_dir)
     page = Page(f"occbench sweep {sweep_dir.name}")

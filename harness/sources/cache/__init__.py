@@ -4,11 +4,11 @@ later run and every job of a sweep.
 
 Where: ``OCCBENCH_CACHE`` (a folder; ``off`` disables the cache), by default
 ``$XDG_CACHE_HOME/occbench`` or ``~/.cache/occbench``. The folder may be shared by jobs on
-several machines (``harness.sources.cache.store``, ``.lock``).
+several machines (``occbench.sources.cache.store``, ``.lock``).
 
 ``cached(source, config)`` wraps a detection source built from ``config`` when the source
 says it is worth caching (a true ``cacheable`` attribute: the front end,
-``harness.sources.frontend.FrontendSource``); sources read from annotations cost nothing to
+``occbench.sources.frontend.FrontendSource``); sources read from annotations cost nothing to
 recompute and are returned as they are.
 """
 
@@ -18,8 +18,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from harness.sources.cache.source import CachedSource
-from harness.sources.cache.store import Store
+from occbench.sources.cache.source import CachedSource
+from occbench.sources.cache.store import Store
 
 ENV = "OCCBENCH_CACHE"
 OFF = "off"

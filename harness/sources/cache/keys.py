@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.datasets.base import FrameWindow, Sequence
+from occbench.datasets.base import FrameWindow, Sequence
 
 ROOT = Path(__file__).resolve().parents[3]
 #: source folders whose every file counts (relative to the checkout)
@@ -77,9 +77,9 @@ def _synthetic_state(seq: Any) -> dict[str, Any]:
 def frames_digest(sequence: Sequence) -> str | None:
     """Digest of what ``sequence``'s frames in its window are decoded or rendered from, or
     None when its kind is not known here (it is then not cached)."""
-    from harness.datasets.images import ImageSequence
-    from harness.datasets.synthetic.sequence import SyntheticSequence
-    from harness.datasets.video import VideoSequence
+    from occbench.datasets.images import ImageSequence
+    from occbench.datasets.synthetic.sequence import SyntheticSequence
+    from occbench.datasets.video import VideoSequence
 
     inner = sequence.inner if isinstance(sequence, FrameWindow) else sequence
     numbers = sequence.frame_numbers()

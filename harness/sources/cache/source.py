@@ -1,7 +1,7 @@
 """``CachedSource``: a front-end detection source whose per-sequence outputs come from the
 cache when the same frames, detector config and code were seen before.
 
-``start(sequence)`` looks the sequence up (``harness.sources.cache.keys.entry_key``); on a
+``start(sequence)`` looks the sequence up (``occbench.sources.cache.keys.entry_key``); on a
 miss it runs the wrapped source over every frame of the sequence, in order, exactly as the
 frame loop would (``start``, then ``detect(k, frame)`` for k in ``frame_numbers()``), and
 stores what it returned: per frame the detections (boxes, scores, heads, label image) and
@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from harness.datasets.base import Sequence
-from harness.sources.cache.keys import entry_key
-from harness.sources.cache.store import Arrays, CorruptEntry, Entry, Store
-from trackers.records import Detections
+from occbench.datasets.base import Sequence
+from occbench.sources.cache.keys import entry_key
+from occbench.sources.cache.store import Arrays, CorruptEntry, Entry, Store
+from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
 
@@ -159,7 +159,7 @@ class CachedSource:
     """A detection source whose outputs per sequence are read from (or written to) a cache.
 
     Args:
-        source: the wrapped source (``harness.sources.frontend.FrontendSource``).
+        source: the wrapped source (``occbench.sources.frontend.FrontendSource``).
         config: the source's resolved config (a plain dict): part of the key.
         store: the cache folder; None: the cache is off (``OCCBENCH_CACHE=off``) and the
             source runs as it is, the log saying so.

@@ -12,7 +12,7 @@ warning and recomputed. Entries are written to a unique temporary name in the sa
 and renamed into place, so a reader never sees a half-written one.
 
 ``Store.get_or_compute`` is the one way in: read the entry; else take its lock
-(``harness.sources.cache.lock``) and compute it, while other processes wanting the same
+(``occbench.sources.cache.lock``) and compute it, while other processes wanting the same
 key wait for the entry to appear, then read it.
 """
 
@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.sources.cache.lock import HEARTBEAT, STALE_AFTER, EntryLock
+from occbench.sources.cache.lock import HEARTBEAT, STALE_AFTER, EntryLock
 
 log = logging.getLogger(__name__)
 
@@ -129,7 +129,7 @@ def _signature(path: Path) -> tuple[int, int, int] | None:
 
 
 class Store:
-    """Entries under ``root`` (``OCCBENCH_CACHE``; see ``harness.sources.cache.cache_root``).
+    """Entries under ``root`` (``OCCBENCH_CACHE``; see ``occbench.sources.cache.cache_root``).
 
     Args:
         root: the cache folder (created on first write).

@@ -6,8 +6,8 @@ from report_scenes import GtSource, Walk
 
 
 def test_bench_times_every_stage():
-    from harness.commands.bench import bench_sequence
-    from trackers.baseline import BaselineTracker
+    from occbench.commands.bench import bench_sequence
+    from occbench.trackers.baseline import BaselineTracker
 
     timings = bench_sequence(Walk(), GtSource, lambda: {"baseline": BaselineTracker()},
                              frames=6, repeats=2)

@@ -12,16 +12,16 @@ from pathlib import Path
 
 import pytest
 
-from harness.commands import cli
-from harness.sweeps import plugins
+from occbench.commands import cli
+from occbench.sweeps import plugins
 
 ROOT = Path(__file__).resolve().parents[3]
 
 
 def _occbench(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    """``python -m harness ARGS`` (the console script's code) from ``cwd``."""
+    """``python -m occbench ARGS`` (the console script's code) from ``cwd``."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run([sys.executable, "-m", "harness", *args], cwd=cwd, env=env,
+    return subprocess.run([sys.executable, "-m", "occbench", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=120, check=False)
 
 
@@ -87,14 +87,14 @@ def test_version_help_and_hydra_pages_from_another_directory(tmp_path):
     p = _occbench("run", "--help", cwd=tmp_path)  # Hydra's page: every group and its choices
     assert p.returncode == 0 and "tracker: " in p.stdout and "baseline" in p.stdout
     p = _occbench("tracker=baseline", "--cfg", "job", cwd=tmp_path)
-    assert p.returncode == 0 and "_target_: trackers.baseline" in p.stdout
+    assert p.returncode == 0 and "_target_: occbench.trackers.baseline" in p.stdout
 
 
 def test_an_install_without_its_checkout_says_how_to_install(monkeypatch, tmp_path, capsys):
     """A non-editable install has no conf/ beside the package: one line naming the fix."""
-    import harness.paths
+    import occbench.paths
 
-    monkeypatch.setattr(harness.paths, "PROJECT_ROOT", tmp_path)
+    monkeypatch.setattr(occbench.paths, "PROJECT_ROOT", tmp_path)
     assert cli.main(["tracker=baseline"]) == 2
     err = capsys.readouterr().err
     assert str(tmp_path) in err and "pip install -e" in err
@@ -155,7 +155,7 @@ class _Stream:
 
 
 def test_progress_bars_only_on_a_terminal_and_never_in_a_multirun():
-    from harness.progress import bars_wanted, progress_factory
+    from occbench.progress import bars_wanted, progress_factory
 
     assert bars_wanted(True, False, _Stream(True))
     assert not bars_wanted(True, False, _Stream(False))  # a file or a pipe: no redraws

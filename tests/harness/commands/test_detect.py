@@ -9,7 +9,7 @@ import pytest
 import yaml
 from omegaconf import OmegaConf
 
-from harness.commands.detect import (
+from occbench.commands.detect import (
     DetectionCounts,
     GatherDetections,
     metrics_table,

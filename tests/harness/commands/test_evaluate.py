@@ -19,9 +19,9 @@ import pandas as pd
 import pytest
 from mot_tables import table
 
-from harness.commands.evaluate import main, pair_files
-from harness.io.mot import MotTable, read_mot
-from harness.metrics import COLUMNS, COMBINED, combine, score_sequence, summarize
+from occbench.commands.evaluate import main, pair_files
+from occbench.io.mot import MotTable, read_mot
+from occbench.metrics import COLUMNS, COMBINED, combine, score_sequence, summarize
 
 MM_DATA = Path(os.path.dirname(motmetrics.__file__)) / "data"
 TUD = ["TUD-Campus", "TUD-Stadtmitte"]

@@ -1,12 +1,12 @@
-"""harness.commands.mistakes: a config mistake on the command line is one line with a "did you
+"""occbench.commands.mistakes: a config mistake on the command line is one line with a "did you
 mean" from the config's own keys and choices; the traceback only under -v."""
 
 from __future__ import annotations
 
 import pytest
 
-from harness.commands.cli import main
-from harness.commands.mistakes import suggest, verbose_requested
+from occbench.commands.cli import main
+from occbench.commands.mistakes import suggest, verbose_requested
 
 
 def _one_line(capsys, *args: str) -> str:

@@ -1,5 +1,5 @@
 """The Hydra app: the command line, the printed table and the exit status, run in a
-subprocess (``python -m harness``) or through Hydra's compose API."""
+subprocess (``python -m occbench``) or through Hydra's compose API."""
 
 from __future__ import annotations
 
@@ -16,16 +16,16 @@ from run_scenes import (
     needs_synthetic,
 )
 
-from harness.errors import RunError
-from harness.metrics import COLUMNS
-from harness.metrics.occlusion import EXTRA_COLUMNS
-from harness.pipeline.experiment import run_experiment as _run_experiment
+from occbench.errors import RunError
+from occbench.metrics import COLUMNS
+from occbench.metrics.occlusion import EXTRA_COLUMNS
+from occbench.pipeline.experiment import run_experiment as _run_experiment
 
 
 def run_app(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(ROOT), "HYDRA_FULL_ERROR": ""}
     env.pop("HYDRA_FULL_ERROR")
-    return subprocess.run([sys.executable, "-m", "harness", "progress=false", *args], cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "occbench", "progress=false", *args], cwd=cwd,
                           capture_output=True, text=True, timeout=300, env=env, check=False)
 
 
@@ -45,7 +45,7 @@ def test_unknown_key_exits_nonzero_naming_it():
 def test_an_adaptation_key_a_tracker_does_not_have_is_named(tracker, key):
     """A user config naming an adaptation that does not exist (these were removed, not
     taken: docs/adaptations.md) stops the build with the key named, not silently ignored."""
-    from harness.pipeline.build import build_tracker, compose_config
+    from occbench.pipeline.build import build_tracker, compose_config
 
     node = compose_config([f"tracker={tracker}", f"+tracker.adaptations.{key}=0"]).tracker
     with pytest.raises(RunError, match=rf"tracker\.{tracker}\.adaptations\.{key}: not an argument"):

@@ -14,18 +14,18 @@ from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 from omegaconf.errors import MissingMandatoryValue
 
-import harness.datasets.video as video_module
-from harness.datasets.base import Sequence
-from harness.datasets.caviar import CaviarFormatError, load_caviar, read_cvml
-from harness.datasets.images import FrameError, ImageSequence, read_image
-from harness.datasets.mot import SeqInfoError, load_mot
-from harness.datasets.video import VideoSequence, load_video
-from harness.io.mot import MotFormatError, read_mot
-from harness.paths import DATA_ENV, SHIPPED_DATA, data_root
+import occbench.datasets.video as video_module
+from occbench.datasets.base import Sequence
+from occbench.datasets.caviar import CaviarFormatError, load_caviar, read_cvml
+from occbench.datasets.images import FrameError, ImageSequence, read_image
+from occbench.datasets.mot import SeqInfoError, load_mot
+from occbench.datasets.video import VideoSequence, load_video
+from occbench.io.mot import MotFormatError, read_mot
+from occbench.paths import DATA_ENV, SHIPPED_DATA, data_root
 
 ROOT = Path(__file__).resolve().parents[3]
 CONF = ROOT / "conf"
-DATA = SHIPPED_DATA  # the sample shipped in datasets/ (harness.paths)
+DATA = SHIPPED_DATA  # the sample shipped in datasets/ (occbench.paths)
 CAVIAR = DATA / "CAVIAR-OneLeaveShop1cor"
 PETS = DATA / "trajectories" / "PETS09-S2L1"
 TUD = DATA / "trajectories" / "TUD-Campus"

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.datasets.synthetic import load_suite, scene
-from harness.datasets.synthetic.scene import Camera, defer_background, render_background
+from occbench.datasets.synthetic import load_suite, scene
+from occbench.datasets.synthetic.scene import Camera, defer_background, render_background
 
 
 @pytest.mark.parametrize(("seed", "size", "camera_height"),

@@ -7,11 +7,11 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.datasets.caviar import CaviarFormatError, load_caviar, read_cvml
-from harness.datasets.images import FrameError
-from harness.datasets.mot import SeqInfoError, load_mot
-from harness.datasets.video import load_video
-from harness.io.mot import MotFormatError
+from occbench.datasets.caviar import CaviarFormatError, load_caviar, read_cvml
+from occbench.datasets.images import FrameError
+from occbench.datasets.mot import SeqInfoError, load_mot
+from occbench.datasets.video import load_video
+from occbench.io.mot import MotFormatError
 
 N = 10
 GT = "".join(f"{k},1,{10 + k},20,10,30,1,1,1\n" for k in range(1, N + 1))
@@ -186,7 +186,7 @@ def test_a_video_whose_frame_size_changes_is_refused(tmp_path):
 
 
 def test_replay_reads_seqinfo_and_gt_as_strictly(tmp_path):
-    from harness.datasets.synthetic import load_replay
+    from occbench.datasets.synthetic import load_replay
 
     seq = mot_seq(tmp_path, gt=GT + "11,1,21,20,10,30,1,1,1\n")
     with pytest.raises(MotFormatError, match=rf"gt\.txt:{N + 1}: frame 11 is beyond"):

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.datasets.synthetic import (
+from occbench.datasets.synthetic import (
     DEFAULT_SCENARIOS,
     SCENARIOS,
     SyntheticSequence,
@@ -18,7 +18,7 @@ from harness.datasets.synthetic import (
     load_scenario,
     load_suite,
 )
-from harness.io.mot import read_mot
+from occbench.io.mot import read_mot
 
 ROOT = Path(__file__).resolve().parents[3]
 OCCLUSION_PRESETS = ("crossing", "stop_behind", "follow_occluder", "uturn_behind")

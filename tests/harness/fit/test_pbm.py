@@ -1,5 +1,5 @@
 """The fitted PBM models and weights as YAML, and the override that uses them
-(``harness.fit.pbm``)."""
+(``occbench.fit.pbm``)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from pbm_scenes import unit_models
 
-from harness.fit.pbm import load_feature_weights, save_fit, weights_override
-from harness.fit.pbm_weights import WeightFit
-from trackers.layered.feature_models import load_feature_models
-from trackers.layered.parts import FEATURES
+from occbench.fit.pbm import load_feature_weights, save_fit, weights_override
+from occbench.fit.pbm_weights import WeightFit
+from occbench.trackers.layered.feature_models import load_feature_models
+from occbench.trackers.layered.parts import FEATURES
 
 
 def test_yaml_round_trip_and_older_files(tmp_path):
@@ -42,7 +42,7 @@ def test_fit_command_on_a_synthetic_scene_with_a_composed_paper_tracker(tmp_path
     """``occbench fit pbm`` on a tiny synthetic scene, reading gamma, spread and the
     compensation from ``conf/tracker/pbm_paper.yaml`` composed by Hydra (its defaults list
     applied): paper mode compares uncompensated features, and the file says so."""
-    from harness.fit.pbm import _tracker_settings, _window_spec, main
+    from occbench.fit.pbm import _tracker_settings, _window_spec, main
 
     assert _tracker_settings("pbm_paper")["motion_compensation"] is False
     assert _tracker_settings("pbm_paper")["model_spread"] == 1.0

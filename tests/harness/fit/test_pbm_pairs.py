@@ -1,4 +1,4 @@
-"""PBM's fitting samples (``harness.fit.pbm_pairs``): pairs of a person in consecutive frames,
+"""PBM's fitting samples (``occbench.fit.pbm_pairs``): pairs of a person in consecutive frames,
 itself and its nearest others inside the tracker's gate, optionally motion-compensated."""
 
 from __future__ import annotations
@@ -6,14 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.fit.pbm_pairs import collect_pairs
-from trackers.layered.parts import FEATURES
+from occbench.fit.pbm_pairs import collect_pairs
+from occbench.trackers.layered.parts import FEATURES
 
 N_PARTS = 5
 
 
 def test_pairs_are_self_then_nearest_others_inside_the_gate():
-    from harness.fit.pbm_pairs import _pairs
+    from occbench.fit.pbm_pairs import _pairs
 
     prev_ids = np.array([1, 2])
     prev_boxes = np.array([[0.0, 0, 10, 20], [100.0, 0, 10, 20]])  # centres (5, 10), (105, 10)
@@ -30,7 +30,7 @@ def test_pairs_are_self_then_nearest_others_inside_the_gate():
 
 
 def test_collect_pairs_on_a_synthetic_scene():
-    synthetic = pytest.importorskip("harness.datasets.synthetic")
+    synthetic = pytest.importorskip("occbench.datasets.synthetic")
     seq = synthetic.load_scenario("crowd", seed=1, length=8)
     samples = collect_pairs([seq], neighbours=2, radius=1.0, block_frames=3)
     assert samples.d.shape == (len(samples), len(FEATURES), N_PARTS)
@@ -48,7 +48,7 @@ def test_motion_compensated_pairs_measure_overlap_after_the_previous_step():
     moved by its previous step: walking people then differ far less in displacement and
     overlap; the appearance features are untouched; the first pair of a person (no step
     known yet) is the same either way."""
-    synthetic = pytest.importorskip("harness.datasets.synthetic")
+    synthetic = pytest.importorskip("occbench.datasets.synthetic")
     seq = synthetic.load_scenario("crowd", seed=1, length=20)
     moved = collect_pairs([seq], neighbours=0)
     plain = collect_pairs([seq], neighbours=0, motion_compensation=False)
@@ -63,8 +63,8 @@ def test_motion_compensated_pairs_measure_overlap_after_the_previous_step():
 
 
 def test_a_frame_window_collects_the_pairs_of_its_own_frames():
-    from harness.datasets.base import window
-    from harness.datasets.synthetic import load_scenario
+    from occbench.datasets.base import window
+    from occbench.datasets.synthetic import load_scenario
 
     seq = load_scenario("crowd", seed=1, length=12)
     # uncompensated: a compensated window's first pair knows no earlier step
@@ -80,7 +80,7 @@ def test_a_frame_window_collects_the_pairs_of_its_own_frames():
 def test_background_subtraction_foreground_measures_the_same_pairs_differently():
     """``foreground="mog2"`` (real frames) measures the parts on the front end's background
     subtraction instead of the exact masks: same pairs, other areas."""
-    from harness.datasets.synthetic import load_scenario
+    from occbench.datasets.synthetic import load_scenario
 
     seq = load_scenario("crossing", seed=1, length=12)
     exact = collect_pairs([seq], neighbours=0)

@@ -1,4 +1,4 @@
-"""Learning the feature weights omega of PBM eq. 12 (PBM 4.1) in ``harness.fit.pbm_weights``."""
+"""Learning the feature weights omega of PBM eq. 12 (PBM 4.1) in ``occbench.fit.pbm_weights``."""
 
 from __future__ import annotations
 
@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 from pbm_scenes import unit_models
 
-from harness.fit.pbm_pairs import PairSamples
-from harness.fit.pbm_weights import (
+from occbench.fit.pbm_pairs import PairSamples
+from occbench.fit.pbm_weights import (
     block_folds,
     fold_accuracies,
     pick_best,
     search_weights,
     weight_grid,
 )
-from trackers.layered.parts import FEATURES
+from occbench.trackers.layered.parts import FEATURES
 
 N_PARTS = 5
 

@@ -1,5 +1,5 @@
 """read_mot's vectorised reading (comma-separated rows of one width, all valid) gives the
-table the line-by-line reader gives, with either C reader of ``harness.io.columns``; a
+table the line-by-line reader gives, with either C reader of ``occbench.io.columns``; a
 comment line sends a file down the line-by-line path."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.io import columns
-from harness.io.columns import read_columns
-from harness.io.mot import read_mot
+from occbench.io import columns
+from occbench.io.columns import read_columns
+from occbench.io.mot import read_mot
 
 
 def _rows(rng: np.random.Generator, n: int, fields: int, gt: bool = False) -> str:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.io.mot import MAX_INT, MotFormatError, read_mot, read_mot_text
+from occbench.io.mot import MAX_INT, MotFormatError, read_mot, read_mot_text
 
 GT9 = "1,1,11,21,10,20,1,1,1\n"  # frame,id,left,top,w,h,conf,class,visibility (MOT16+)
 GT10 = "1,1,11,21,10,20,1,-1,-1,-1\n"  # MOT15: conf then world x,y,z

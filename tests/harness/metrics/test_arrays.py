@@ -1,11 +1,11 @@
-"""harness.metrics.arrays.distinct equals numpy's unique / union1d."""
+"""occbench.metrics.arrays.distinct equals numpy's unique / union1d."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from harness.metrics.arrays import distinct
+from occbench.metrics.arrays import distinct
 
 
 @pytest.mark.parametrize("n", [0, 1, 7, 1000])

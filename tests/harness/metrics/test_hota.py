@@ -11,11 +11,11 @@ import pytest
 from metric_references import reference_hota
 from mot_tables import table
 
-from harness.io.mot import MotTable, read_mot
-from harness.metrics import score_sequence
-from harness.metrics.frames import FramePairs
-from harness.metrics.hota import ALPHAS, combine_hota, hota_counts
-from trackers.geometry import iou_matrix
+from occbench.io.mot import MotTable, read_mot
+from occbench.metrics import score_sequence
+from occbench.metrics.frames import FramePairs
+from occbench.metrics.hota import ALPHAS, combine_hota, hota_counts
+from occbench.trackers.geometry import iou_matrix
 
 MM_DATA = os.path.join(os.path.dirname(motmetrics.__file__), "data")
 

@@ -1,7 +1,7 @@
 """The fast per-frame matching equals its plain definitions on random scenes with empty
 frames (no gt, no results, neither), equal IoUs (duplicated boxes on a pixel grid) and ids
 that appear and vanish: the sparse IoU of ``pair_frames`` (a compiled kernel) against
-``trackers.geometry.iou_matrix`` frame by frame, CLEAR's matching against its per-frame loop
+``occbench.trackers.geometry.iou_matrix`` frame by frame, CLEAR's matching against its per-frame loop
 (TrackEval's ``CLEAR.eval_sequence``), the identity counts against TrackEval's dense
 assignment, HOTA against TrackEval's loops, and the paper metrics' matching, responses and
 under-segmentation against their loops (``tests/metric_references.py``)."""
@@ -19,15 +19,15 @@ from metric_references import (
 from mot_tables import table
 from scipy.optimize import linear_sum_assignment
 
-from harness.io.mot import MotTable
-from harness.metrics import score_sequence
-from harness.metrics.clear import ML_BELOW, MT_ABOVE, ClearCounts, clear_counts
-from harness.metrics.frames import FramePairs, pair_frames, scored_gt_mask
-from harness.metrics.hota import hota_counts
-from harness.metrics.identity import identity_counts, max_weight_matching
-from harness.metrics.paper import paper_counts, responses
-from harness.metrics.rows import row_matching
-from trackers.geometry import iou_matrix
+from occbench.io.mot import MotTable
+from occbench.metrics import score_sequence
+from occbench.metrics.clear import ML_BELOW, MT_ABOVE, ClearCounts, clear_counts
+from occbench.metrics.frames import FramePairs, pair_frames, scored_gt_mask
+from occbench.metrics.hota import hota_counts
+from occbench.metrics.identity import identity_counts, max_weight_matching
+from occbench.metrics.paper import paper_counts, responses
+from occbench.metrics.rows import row_matching
+from occbench.trackers.geometry import iou_matrix
 
 EPS = np.finfo(float).eps
 

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from harness.datasets.base import GroundTruth
-from harness.io.mot import MotTable
-from harness.metrics.occlusion import (
+from occbench.datasets.base import GroundTruth
+from occbench.io.mot import MotTable
+from occbench.metrics.occlusion import (
     COLUMNS,
     OcclusionCounts,
     combine,
@@ -119,7 +119,7 @@ def test_combined_sums_counts():
 
 
 def test_extra_rows_for_metrics_csv_have_sequence_and_combined_rows():
-    from harness.metrics.occlusion import EXTRA_COLUMNS, extra_rows, extra_score
+    from occbench.metrics.occlusion import EXTRA_COLUMNS, extra_rows, extra_score
 
     gt = table(walk(1, range(1, 5)), [1, 1, 0, 1])
     good = extra_score(gt, table(walk(1, range(1, 5))))

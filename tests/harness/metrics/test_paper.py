@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from harness.io.mot import MotTable
-from harness.metrics.paper import (
+from occbench.io.mot import MotTable
+from occbench.metrics.paper import (
     COLUMNS,
     PaperCounts,
     combine,

@@ -13,11 +13,11 @@ import pytest
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 
-from harness.datasets.mot import read_seqinfo
-from harness.io.mot import read_mot
-from harness.metrics import COMBINED, HOTA_ALPHA_COLUMNS, score_sequence, summarize
-from harness.metrics.hota import ALPHAS
-from harness.pipeline.experiment import run_experiment
+from occbench.datasets.mot import read_seqinfo
+from occbench.io.mot import read_mot
+from occbench.metrics import COMBINED, HOTA_ALPHA_COLUMNS, score_sequence, summarize
+from occbench.metrics.hota import ALPHAS
+from occbench.pipeline.experiment import run_experiment
 
 CONF = Path(__file__).resolve().parents[3] / "conf"
 RUNS = {  # small runs of each kind of ground truth: rendered, replayed real, real CAVIAR

@@ -1,15 +1,15 @@
-"""Per-frame counts (harness.metrics.timeline) sum to the sequence's scores, and the paired
-bootstrap (harness.metrics.paired) says what differs and what does not."""
+"""Per-frame counts (occbench.metrics.timeline) sum to the sequence's scores, and the paired
+bootstrap (occbench.metrics.paired) says what differs and what does not."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from harness.io.mot import MotTable
-from harness.metrics import combine, score_sequence
-from harness.metrics.paired import Bootstrap, all_pairs
-from harness.metrics.timeline import frame_counts, scores, sequence_totals
+from occbench.io.mot import MotTable
+from occbench.metrics import combine, score_sequence
+from occbench.metrics.paired import Bootstrap, all_pairs
+from occbench.metrics.timeline import frame_counts, scores, sequence_totals
 
 
 def walkers(length: int, people: int, rng: np.random.Generator) -> MotTable:
@@ -113,8 +113,8 @@ def test_bootstrap_refuses_bad_settings() -> None:
 
 
 def test_summary_section_and_footer_say_what_is_not_distinguishable() -> None:
-    from harness.metrics.paired import PairedDifference
-    from harness.report.paired import paired_footer, paired_markdown
+    from occbench.metrics.paired import PairedDifference
+    from occbench.report.paired import paired_footer, paired_markdown
 
     real = PairedDifference("reta", "baseline", "IDF1", 0.9, 0.8, 0.05, 0.15, 2, 300)
     tie = PairedDifference("reta", "baseline", "MOTA", 0.8, 0.79, -0.02, 0.04, 2, 300)
@@ -129,8 +129,8 @@ def test_summary_section_and_footer_say_what_is_not_distinguishable() -> None:
 def test_footer_of_many_trackers_prints_the_leaders_pairs_and_says_where_the_rest_are() -> None:
     from itertools import combinations
 
-    from harness.metrics.paired import PairedDifference
-    from harness.report.paired import paired_footer, paired_markdown
+    from occbench.metrics.paired import PairedDifference
+    from occbench.report.paired import paired_footer, paired_markdown
 
     idf1 = {"a": 0.6, "b": 0.9, "c": 0.7, "d": 0.5, "e": 0.4}  # 10 pairs; leader b
     diffs = [PairedDifference(x, y, "IDF1", idf1[x], idf1[y], -1.0, 1.0, 1, 100)

@@ -9,8 +9,8 @@ import itertools
 import numpy as np
 import pytest
 
-from harness.pipeline.bank import TrackerBank, copy_inputs
-from trackers.records import Detections, Track, TrackState
+from occbench.pipeline.bank import TrackerBank, copy_inputs
+from occbench.trackers.records import Detections, Track, TrackState
 
 
 class _Scribbler:

@@ -7,8 +7,8 @@ from run_scenes import (
     compose_cfg,
 )
 
-from harness.errors import RunError
-from harness.pipeline.build import tracker_configs
+from occbench.errors import RunError
+from occbench.pipeline.build import tracker_configs
 
 
 def test_tracker_configs_single_and_dict():

@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 from hydra.utils import instantiate
 
-from harness.pipeline.build import compose_config
-from harness.pipeline.choose import choose
+from occbench.pipeline.build import compose_config
+from occbench.pipeline.choose import choose
 
-ACTIVE_BASIS = "trackers.frontend.shape_search.ActiveBasisDetector"
-SILHOUETTE = "trackers.frontend.detectors.SilhouetteDetector"
+ACTIVE_BASIS = "occbench.trackers.frontend.shape_search.ActiveBasisDetector"
+SILHOUETTE = "occbench.trackers.frontend.detectors.SilhouetteDetector"
 
 
 def test_choose_picks_by_key_else_the_default():
@@ -23,7 +23,7 @@ def test_choose_picks_by_key_else_the_default():
     (["tracker=reta_paper"], ACTIVE_BASIS),             # the paper, detector and all
     ([], SILHOUETTE),                                   # tracker=papers: one shared source
     (["tracker=reta"], SILHOUETTE),
-    (["tracker=reta_paper", "detector=hog"], "trackers.frontend.detectors.HogDetector"),
+    (["tracker=reta_paper", "detector=hog"], "occbench.trackers.frontend.detectors.HogDetector"),
 ])
 def test_reta_table2_detector_follows_the_tracker(overrides, target):
     cfg = compose_config(["+experiment=reta_table2", *overrides])
@@ -42,5 +42,5 @@ def test_reta_table2_runs_its_particle_filter_row_beside_the_papers_trackers():
     cfg = compose_config(["+experiment=reta_table2"])
     assert list(cfg.tracker) == ["baseline", "reta", "reta_paper", "pbm", "pbm_paper",
                                  "particle_filter"]
-    assert cfg.tracker.particle_filter._target_ == "trackers.comparators.ColourParticleFilter"
+    assert cfg.tracker.particle_filter._target_ == "occbench.trackers.comparators.ColourParticleFilter"
     assert "Basic particle filter [22]" in cfg.paper_table.reported.rows

@@ -8,12 +8,12 @@ import pytest
 from omegaconf import OmegaConf
 from run_scenes import compose_cfg
 
-from harness.errors import RunError
-from harness.pipeline.plan import detector_label, plan_run
-from harness.sources.annotations import NoisyGroundTruth
+from occbench.errors import RunError
+from occbench.pipeline.plan import detector_label, plan_run
+from occbench.sources.annotations import NoisyGroundTruth
 
-NOISY = "harness.sources.annotations.NoisyGroundTruth"
-FRONTEND = "harness.sources.frontend.FrontendSource"
+NOISY = "occbench.sources.annotations.NoisyGroundTruth"
+FRONTEND = "occbench.sources.frontend.FrontendSource"
 
 
 @pytest.mark.parametrize(("overrides", "target"), [

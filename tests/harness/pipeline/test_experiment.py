@@ -16,10 +16,10 @@ from run_scenes import (
     write_mot_sequence,
 )
 
-from harness.errors import RunError
-from harness.io.mot import read_mot
-from harness.metrics import COLUMNS
-from harness.metrics.occlusion import EXTRA_COLUMNS
+from occbench.errors import RunError
+from occbench.io.mot import read_mot
+from occbench.metrics import COLUMNS
+from occbench.metrics.occlusion import EXTRA_COLUMNS
 
 
 def test_experiment_writes_run_directory(tmp_path, mot_root):
@@ -123,7 +123,7 @@ def test_malformed_external_file_is_recorded_and_the_rest_written(tmp_path, mot_
 def test_failing_sequence_is_recorded_and_others_go_on(tmp_path, monkeypatch):
     seqs = [FailingSequence("broken", crossing_rows(10), 10),
             BoxSequence("fine", crossing_rows(10), 10)]
-    monkeypatch.setattr("harness.pipeline.plan.load_sequences", lambda node: seqs)
+    monkeypatch.setattr("occbench.pipeline.plan.load_sequences", lambda node: seqs)
     cfg = compose_cfg("dataset=mot", "detector=noisy_gt", "dataset.root=unused",
                       "tracker=baseline")
     result = run_experiment(cfg, tmp_path / "r")

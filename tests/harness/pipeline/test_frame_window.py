@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 from hydra import compose, initialize_config_dir
 
-from harness.datasets.base import FrameWindow, window
-from harness.datasets.mot import load_mot
-from harness.datasets.synthetic import load_suite
-from harness.io.mot import read_mot
-from harness.pipeline.experiment import run_experiment
-from harness.pipeline.loop import run_sequence
-from harness.sources.annotations import NoisyGroundTruth, PublicDetections
-from trackers.baseline import BaselineTracker
+from occbench.datasets.base import FrameWindow, window
+from occbench.datasets.mot import load_mot
+from occbench.datasets.synthetic import load_suite
+from occbench.io.mot import read_mot
+from occbench.pipeline.experiment import run_experiment
+from occbench.pipeline.loop import run_sequence
+from occbench.sources.annotations import NoisyGroundTruth, PublicDetections
+from occbench.trackers.baseline import BaselineTracker
 
 ROOT = Path(__file__).resolve().parents[3]
 

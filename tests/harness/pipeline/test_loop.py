@@ -13,12 +13,12 @@ from run_scenes import (
     crossing_rows,
 )
 
-from harness.errors import RunError
-from harness.io.mot import MotTable
-from harness.pipeline.loop import clean_detections, run_sequence, run_tracker
-from harness.sources.annotations import NoisyGroundTruth
-from trackers.baseline import BaselineTracker
-from trackers.records import Detections, Track
+from occbench.errors import RunError
+from occbench.io.mot import MotTable
+from occbench.pipeline.loop import clean_detections, run_sequence, run_tracker
+from occbench.sources.annotations import NoisyGroundTruth
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.records import Detections, Track
 
 
 def test_run_tracker_on_exact_crossing_detections():

@@ -7,8 +7,8 @@ import pytest
 from omegaconf import OmegaConf
 from run_scenes import mot_cfg
 
-from harness.errors import RunError
-from harness.pipeline.plan import buildable_trackers, plan_run
+from occbench.errors import RunError
+from occbench.pipeline.plan import buildable_trackers, plan_run
 
 
 def test_a_plan_holds_the_run_checked_and_built(tmp_path, mot_root):
@@ -23,8 +23,8 @@ def test_a_plan_holds_the_run_checked_and_built(tmp_path, mot_root):
 
 
 def test_a_group_names_each_tracker_by_its_key():
-    node = OmegaConf.create({"one": {"_target_": "trackers.baseline.BaselineTracker"},
-                             "two": {"_target_": "trackers.baseline.BaselineTracker",
+    node = OmegaConf.create({"one": {"_target_": "occbench.trackers.baseline.BaselineTracker"},
+                             "two": {"_target_": "occbench.trackers.baseline.BaselineTracker",
                                      "max_age": 3}})
     configs, keys = buildable_trackers(node, None)
     assert list(configs) == ["one", "two"]
@@ -48,11 +48,11 @@ def test_a_group_leaves_out_trackers_without_their_library_in_one_line(monkeypat
     for module in ("norfair", "motpy"):
         monkeypatch.setitem(sys.modules, module, None)  # import fails as if not installed
     node = OmegaConf.create({
-        "baseline": {"_target_": "trackers.baseline.BaselineTracker"},
-        "norfair": {"_target_": "trackers.outside.norfair.NorfairTracker"},
-        "norfair_tuned": {"_target_": "trackers.outside.norfair.NorfairTracker"},
-        "motpy": {"_target_": "trackers.outside.motpy.MotpyTracker"}})
-    with caplog.at_level("WARNING", logger="harness.pipeline.plan"):
+        "baseline": {"_target_": "occbench.trackers.baseline.BaselineTracker"},
+        "norfair": {"_target_": "occbench.trackers.outside.norfair.NorfairTracker"},
+        "norfair_tuned": {"_target_": "occbench.trackers.outside.norfair.NorfairTracker"},
+        "motpy": {"_target_": "occbench.trackers.outside.motpy.MotpyTracker"}})
+    with caplog.at_level("WARNING", logger="occbench.pipeline.plan"):
         configs, _ = buildable_trackers(node, None)
     assert list(configs) == ["baseline"]
     warnings = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]

@@ -5,12 +5,12 @@ new reported id, and PBM Table 1's columns count it (over-segmentation, IDs per 
 import numpy as np
 import pytest
 
-from harness.datasets.base import GroundTruth, Sequence
-from harness.io.mot import MotTable
-from harness.metrics.paper import paper_metrics
-from harness.pipeline.protocols import run_single_target
-from trackers.comparators import ColourParticleFilter, MeanShiftTracker, NeverLost, SimilarityBelow
-from trackers.records import Detections, SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence
+from occbench.io.mot import MotTable
+from occbench.metrics.paper import paper_metrics
+from occbench.pipeline.protocols import run_single_target
+from occbench.trackers.comparators import ColourParticleFilter, MeanShiftTracker, NeverLost, SimilarityBelow
+from occbench.trackers.records import Detections, SequenceInfo
 
 W, H, N = 200, 120, 30
 HIDDEN = range(11, 21)  # 1-based frames on which the red person is behind a grey occluder
@@ -68,8 +68,8 @@ def test_a_lost_follower_restarts_under_a_new_id(make):
 @pytest.mark.parametrize("experiment", ["pbm_table1", "pbm_segmentation"])
 def test_the_tables_build_mean_shift_with_its_loss_rule_and_the_filter_with_the_old_one(
         experiment):
-    from harness.pipeline.build import build_tracker, compose_config
-    from trackers.comparators import AnyDetection, MostSimilar
+    from occbench.pipeline.build import build_tracker, compose_config
+    from occbench.trackers.comparators import AnyDetection, MostSimilar
 
     cfg = compose_config([f"+experiment={experiment}"])
     ms = build_tracker("meanshift", cfg.tracker.meanshift)

@@ -1,4 +1,4 @@
-"""PBM's single-target protocol (harness.pipeline.protocols): each person started from its
+"""PBM's single-target protocol (occbench.pipeline.protocols): each person started from its
 box once, then followed by the tracker alone, restarts reported under new ids."""
 
 from types import SimpleNamespace
@@ -6,15 +6,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from harness.datasets.base import window
-from harness.datasets.synthetic import load_suite
-from harness.errors import RunError
-from harness.metrics.paper import paper_metrics
-from harness.pipeline.protocols import run_single_target, target_spans
-from harness.sources.annotations import NoisyGroundTruth
-from trackers.baseline import BaselineTracker
-from trackers.geometry import iou_matrix
-from trackers.records import Detections, Track, TrackState
+from occbench.datasets.base import window
+from occbench.datasets.synthetic import load_suite
+from occbench.errors import RunError
+from occbench.metrics.paper import paper_metrics
+from occbench.pipeline.protocols import run_single_target, target_spans
+from occbench.sources.annotations import NoisyGroundTruth
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections, Track, TrackState
 
 
 def _crossing():

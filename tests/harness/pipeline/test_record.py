@@ -7,10 +7,10 @@ from __future__ import annotations
 import pandas as pd
 from run_scenes import mot_cfg
 
-from harness.io.mot import read_mot
-from harness.pipeline.bank import TrackerOutput
-from harness.pipeline.plan import plan_run
-from harness.pipeline.record import RunRecord
+from occbench.io.mot import read_mot
+from occbench.pipeline.bank import TrackerOutput
+from occbench.pipeline.plan import plan_run
+from occbench.pipeline.record import RunRecord
 
 
 def _record(tmp_path, mot_root) -> RunRecord:

@@ -13,10 +13,10 @@ import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from harness.datasets.synthetic import load_scenario
-from harness.pipeline.loop import run_sequence
-from harness.pipeline.warmup import WarmUp, needs_pixels, warm_up
-from harness.sources.annotations import NoisyGroundTruth
+from occbench.datasets.synthetic import load_scenario
+from occbench.pipeline.loop import run_sequence
+from occbench.pipeline.warmup import WarmUp, needs_pixels, warm_up
+from occbench.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -27,16 +27,16 @@ import importlib, pkgutil, sys
 from hydra.utils import instantiate
 from numba.core.registry import CPUDispatcher
 from omegaconf import OmegaConf
-import trackers
-from harness.datasets.synthetic import load_scenario
-from harness.sources.annotations import NoisyGroundTruth
-from harness.pipeline.loop import run_sequence
-from harness.pipeline.warmup import warm_up_once
+import occbench.trackers
+from occbench.datasets.synthetic import load_scenario
+from occbench.sources.annotations import NoisyGroundTruth
+from occbench.pipeline.loop import run_sequence
+from occbench.pipeline.warmup import warm_up_once
 
 warm_up_once({"pbm": lambda: instantiate(OmegaConf.load(sys.argv[1]))})
 kernels = {}
-for m in pkgutil.walk_packages(trackers.__path__, "trackers."):
-    if m.name.startswith("trackers.outside"):
+for m in pkgutil.walk_packages(occbench.trackers.__path__, "occbench.trackers."):
+    if m.name.startswith("occbench.trackers.outside"):
         continue
     for v in vars(importlib.import_module(m.name)).values():
         if isinstance(v, CPUDispatcher):

@@ -1,11 +1,11 @@
-"""harness.report.html.charts: the specs carry every row of their data."""
+"""occbench.report.html.charts: the specs carry every row of their data."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from harness.metrics.timeline import FrameCounts
-from harness.report.html import charts
+from occbench.metrics.timeline import FrameCounts
+from occbench.report.html import charts
 
 
 def _counts(frames: int, seed: int) -> FrameCounts:

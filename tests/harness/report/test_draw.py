@@ -7,8 +7,8 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.report.draw import draw_tracks, grid, infer_style
-from trackers.records import Track, TrackState
+from occbench.report.draw import draw_tracks, grid, infer_style
+from occbench.trackers.records import Track, TrackState
 
 
 def _frame() -> np.ndarray:
@@ -52,7 +52,7 @@ def test_each_tracker_is_drawn_its_own_way():
 
 
 def test_titles_sit_above_the_picture_and_labels_do_not_overlap():
-    from harness.report.primitives import TITLE_BAND, _label
+    from occbench.report.primitives import TITLE_BAND, _label
 
     frame = _frame()
     frame[:12] = 255  # the video's own timestamp, top rows
@@ -73,10 +73,10 @@ def test_titles_sit_above_the_picture_and_labels_do_not_overlap():
 
 
 def test_the_legends_name_every_mark():
-    from harness.report.draw import legend
-    from harness.report.overlays import LEGEND, draw_overlay
-    from harness.report.primitives import legend_block
-    from trackers.records import Detections
+    from occbench.report.draw import legend
+    from occbench.report.overlays import LEGEND, draw_overlay
+    from occbench.report.primitives import legend_block
+    from occbench.trackers.records import Detections
 
     texts = " ".join(t for t, _, _ in legend(["ellipses", "parts"], gt=True, graph=True))
     for word in ("ground truth", "dashed", "tentative", "ellipse", "v/o/s", "PBM", "edge"):

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 from hydra import compose, initialize_config_dir
 
-from harness.errors import RunError
-from harness.pipeline.experiment import run_experiment
-from harness.report.graph import GraphExport, read_graph_csv
+from occbench.errors import RunError
+from occbench.pipeline.experiment import run_experiment
+from occbench.report.graph import GraphExport, read_graph_csv
 
 ROOT = Path(__file__).resolve().parents[3]
 

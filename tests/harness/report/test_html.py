@@ -25,7 +25,7 @@ SCENE = ("dataset=synthetic", "dataset.scenarios=[crossing]", "progress=false")
 @pytest.fixture(scope="session")
 def html_run(tmp_path_factory) -> Path:
     """A finished run with its video: ``occbench report`` wrote report.html again."""
-    from harness.commands.report import main as report_main
+    from occbench.commands.report import main as report_main
 
     out = tmp_path_factory.mktemp("html_run")
     cfg = compose_cfg(*SCENE, "dataset.length=40", "tracker=all", "~tracker.pbm")
@@ -43,8 +43,8 @@ def html_run(tmp_path_factory) -> Path:
 @pytest.fixture(scope="session")
 def html_sweep(tmp_path_factory) -> Path:
     """A finished 2x3 sweep, its jobs run as a multirun runs them (``guarded``)."""
-    from harness.sweeps.gather import guarded, write_sweep
-    from harness.sweeps.jobs import begin_sweep
+    from occbench.sweeps.gather import guarded, write_sweep
+    from occbench.sweeps.jobs import begin_sweep
 
     root = tmp_path_factory.mktemp("html_sweep")
     swept = ["tracker.max_age=1,5", "tracker.min_hits=1,2,3"]
@@ -141,7 +141,7 @@ def test_sweep_page_loads_with_no_error_and_no_network(browser, html_sweep) -> N
                  "tracker.min_hits", "HOTA against tracker.min_hits", "occbench -m"):
         assert part in text, part
     # each swept parameter against each metric (the sweep's default ones), and the forest
-    from harness.sweeps.tables import DEFAULT_METRICS
+    from occbench.sweeps.tables import DEFAULT_METRICS
 
     assert page.locator(".chart svg").count() == 2 * len(DEFAULT_METRICS) + 1
     page.close()

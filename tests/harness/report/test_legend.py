@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pandas as pd
 
-from harness.metrics import COLUMNS
-from harness.metrics.occlusion import EXTRA_COLUMNS
-from harness.pipeline.summary import summary_markdown
-from harness.report.legend import column_legend, meaning
+from occbench.metrics import COLUMNS
+from occbench.metrics.occlusion import EXTRA_COLUMNS
+from occbench.pipeline.summary import summary_markdown
+from occbench.report.legend import column_legend, meaning
 
 
 def test_every_metric_column_is_explained():

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from harness.report.paper_tables import (
+from occbench.report.paper_tables import (
     PaperTableError,
     combined_dataset,
     paper_table,
@@ -96,7 +96,7 @@ def test_experiment_run_writes_paper_table_with_our_rows(tmp_path):
     (seq / "seqinfo.ini").write_text("[Sequence]\nname=walk\nimWidth=200\nimHeight=100\n"
                                      "frameRate=10\nseqLength=20\n")
     out = tmp_path / "run"
-    cmd = [sys.executable, "-m", "harness", "+experiment=reta_table2", "tracker=baseline",
+    cmd = [sys.executable, "-m", "occbench", "+experiment=reta_table2", "tracker=baseline",
            "detector=noisy_gt", "dataset=mot", f"dataset.root={tmp_path / 'data'}",
            "progress=false", f"hydra.run.dir={out}"]
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True,

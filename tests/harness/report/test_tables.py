@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from harness.metrics import COLUMNS
-from harness.metrics.occlusion import EXTRA_COLUMNS
-from harness.report.tables import best_mask, comparison, to_latex, to_markdown, to_text
+from occbench.metrics import COLUMNS
+from occbench.metrics.occlusion import EXTRA_COLUMNS
+from occbench.report.tables import best_mask, comparison, to_latex, to_markdown, to_text
 
 
 def test_best_values_are_marked_by_direction():
@@ -39,7 +39,7 @@ def test_comparison_picks_combined_rows():
 
 
 def test_every_metric_column_has_a_deliberate_direction():
-    from harness.report.tables import direction
+    from occbench.report.tables import direction
 
     lower = {"FP", "FN", "IDs", "Frag", "ML", "Song_ML%", "Song_IDS", "PBM_Missed",
              "PBM_IDs/frame", "PBM_dx%", "IDs_v0-25", "ReID_frames"}

@@ -1,4 +1,4 @@
-"""harness.report.tracks: a run without ground truth counts its tracks, their lengths and
+"""occbench.report.tracks: a run without ground truth counts its tracks, their lengths and
 frames/s; summary.md shows them instead of "No sequence was scored"."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from harness.pipeline.summary import summary_markdown
-from harness.report.tracks import track_rows, track_stats, tracks_text
+from occbench.pipeline.summary import summary_markdown
+from occbench.report.tracks import track_rows, track_stats, tracks_text
 
 
 def test_track_stats_by_hand():

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from report_scenes import Walk, mot
 
-from harness.report.trajectories import most_occluded_person, person_paths, plot_person
+from occbench.report.trajectories import most_occluded_person, person_paths, plot_person
 
 
 def test_trajectory_plot_follows_the_matched_ids(tmp_path):
@@ -28,7 +28,7 @@ def test_trajectory_plot_follows_the_matched_ids(tmp_path):
 
 
 def test_a_path_is_not_drawn_across_missed_frames():
-    from harness.report.trajectories import gaps_broken
+    from occbench.report.trajectories import gaps_broken
 
     frames = np.array([1, 2, 5, 6])
     out = gaps_broken(frames, np.array([[0.0], [1.0], [4.0], [5.0]]))

@@ -9,15 +9,15 @@ from report_scenes import GtSource, Walk
 
 
 def _legend_height(width: int) -> int:
-    from harness.report.draw import legend
-    from harness.report.primitives import legend_block
+    from occbench.report.draw import legend
+    from occbench.report.primitives import legend_block
 
     return legend_block(legend(["boxes"], gt=True), width).shape[0]
 
 
 def test_video_and_contact_sheet_side_by_side(tmp_path):
-    from harness.report.video import render
-    from trackers.baseline import BaselineTracker
+    from occbench.report.video import render
+    from occbench.trackers.baseline import BaselineTracker
 
     seq = Walk()
     trackers = {"baseline": BaselineTracker(min_hits=1), "other": BaselineTracker(max_age=0)}
@@ -44,9 +44,9 @@ def test_video_and_contact_sheet_side_by_side(tmp_path):
 
 def test_a_frame_window_is_rendered_by_its_own_frame_numbers(tmp_path):
     # dataset.frames=[5,9]: the window's frames keep their numbers 5..9, and so do the video's
-    from harness.datasets.base import window
-    from harness.report.video import render
-    from trackers.baseline import BaselineTracker
+    from occbench.datasets.base import window
+    from occbench.report.video import render
+    from occbench.trackers.baseline import BaselineTracker
 
     (seq,) = window([Walk()], [5, 9])
     out = render({"baseline": BaselineTracker(min_hits=1)}, seq, GtSource(), tmp_path / "w.mp4",
@@ -65,7 +65,7 @@ def test_a_frame_window_is_rendered_by_its_own_frame_numbers(tmp_path):
 
 
 def test_h264_writer_pads_odd_sizes_and_checks_frames(tmp_path):
-    from harness.report.video import H264Writer
+    from occbench.report.video import H264Writer
 
     rng = np.random.default_rng(0)
     writer = H264Writer(tmp_path / "odd.mp4", 25.0, (33, 21))

@@ -1,4 +1,4 @@
-"""The warm server (``harness.server``), each test with its own server in its own temporary
+"""The warm server (``occbench.server``), each test with its own server in its own temporary
 folder (``XDG_RUNTIME_DIR``), stopped at the end: a served command gets the client's
 arguments, folder, environment, umask and stdio; the exit status comes back; Ctrl-C in the
 client reaches the job; a crashing job fails alone; a changed source file makes the server
@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[3]
 # a server whose "command" is this function and whose code is the folder argv[2]
 SERVER = """
 import os, sys, time
-from harness.server.serve import Server
+from occbench.server.serve import Server
 def run(args):
     if args[0] == "crash":
         os.kill(os.getpid(), 11)
@@ -41,7 +41,7 @@ sys.exit(Server(sys.argv[1], run, lambda: None, watch=[sys.argv[2]]).serve())
 """
 CLIENT = """
 import sys
-from harness.server import client
+from occbench.server import client
 client.start_server = lambda ident: print("starts a server", flush=True)  # not in a test
 status = client.served(sys.argv[1:])
 print("cold" if status is None else f"status {status}", flush=True)
@@ -64,7 +64,7 @@ def _env(folder: Path, **extra: str) -> dict[str, str]:
 
 def _socket(env: dict[str, str], cwd: Path) -> Path:
     """The socket of the identity a ``python -c`` process in ``cwd`` with ``env`` has."""
-    code = "from harness.server.client import identity, socket_path; print(socket_path(identity()))"
+    code = "from occbench.server.client import identity, socket_path; print(socket_path(identity()))"
     out = subprocess.run([sys.executable, "-c", code], env=env, cwd=cwd, capture_output=True,
                          text=True, check=True, timeout=60)
     return Path(out.stdout.strip())
@@ -197,9 +197,9 @@ def test_sigterm_stops_the_server_and_removes_its_socket(toy):
 
 def test_server_status_and_stop_without_a_server(tmp_path):
     env = _env(Path(tempfile.mkdtemp(prefix="obs", dir="/tmp")))
-    status = _run([sys.executable, "-m", "harness", "server", "status"], env=env, cwd=tmp_path,
+    status = _run([sys.executable, "-m", "occbench", "server", "status"], env=env, cwd=tmp_path,
                   capture_output=True, text=True, timeout=120)
-    stop = _run([sys.executable, "-m", "harness", "server", "stop"], env=env, cwd=tmp_path,
+    stop = _run([sys.executable, "-m", "occbench", "server", "stop"], env=env, cwd=tmp_path,
                 capture_output=True, text=True, timeout=120)
     shutil.rmtree(env["XDG_RUNTIME_DIR"], ignore_errors=True)
     assert status.returncode == 3 and "none running" in status.stdout
@@ -221,7 +221,7 @@ def test_a_run_is_byte_identical_served_and_cold(tmp_path):
     cold: every file of the run folder equal (times excepted: timings.csv, the log)."""
     folder = Path(tempfile.mkdtemp(prefix="obs", dir="/tmp"))
     env = _env(folder)
-    occbench = [sys.executable, "-m", "harness"]
+    occbench = [sys.executable, "-m", "occbench"]
     server = subprocess.Popen([*occbench, "server", "start", "--foreground"], env=env,
                               cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                               text=True)

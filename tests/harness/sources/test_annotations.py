@@ -10,14 +10,14 @@ import pytest
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 
-from harness.datasets.base import GroundTruth, Sequence
-from harness.datasets.caviar import load_caviar
-from harness.datasets.mot import ground_truth_from_table, load_mot
-from harness.io.mot import MotTable, read_mot
-from harness.paths import SHIPPED_DATA
-from harness.sources.annotations import NoisyGroundTruth, PublicDetections
-from trackers.geometry import clip_boxes, iou_matrix
-from trackers.records import Detections, SequenceInfo
+from occbench.datasets.base import GroundTruth, Sequence
+from occbench.datasets.caviar import load_caviar
+from occbench.datasets.mot import ground_truth_from_table, load_mot
+from occbench.io.mot import MotTable, read_mot
+from occbench.paths import SHIPPED_DATA
+from occbench.sources.annotations import NoisyGroundTruth, PublicDetections
+from occbench.trackers.geometry import clip_boxes, iou_matrix
+from occbench.trackers.records import Detections, SequenceInfo
 
 ROOT = Path(__file__).resolve().parents[3]
 DATA = SHIPPED_DATA  # the sample shipped in datasets/

@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.commands import cache as cache_command
-from harness.pipeline.build import build_source, compose_config, load_sequences
-from harness.sources.cache import CachedSource, Store, cached
-from harness.sources.cache.keys import code_version, entry_key
-from harness.sources.cache.lock import EntryLock
-from harness.sources.cache.store import CorruptEntry, decode, encode
+from occbench.commands import cache as cache_command
+from occbench.pipeline.build import build_source, compose_config, load_sequences
+from occbench.sources.cache import CachedSource, Store, cached
+from occbench.sources.cache.keys import code_version, entry_key
+from occbench.sources.cache.lock import EntryLock
+from occbench.sources.cache.store import CorruptEntry, decode, encode
 
 TINY = ["dataset=synthetic", "dataset.scenarios=[pair_walk]", "dataset.length=12",
         "dataset.width=320", "dataset.height=240", "detector=foreground"]
@@ -49,7 +49,7 @@ def test_hit_and_miss_equal_no_cache(scene, tmp_path, monkeypatch, caplog):
     monkeypatch.setenv("OCCBENCH_CACHE", str(tmp_path))
     cold = build_source(cfg.detector)
     assert isinstance(cold, CachedSource)
-    with caplog.at_level(logging.INFO, logger="harness.sources.cache"):
+    with caplog.at_level(logging.INFO, logger="occbench.sources.cache"):
         assert outputs(cold, seq) == plain
         warm = build_source(cfg.detector)
         assert outputs(warm, seq) == plain
@@ -73,7 +73,7 @@ def test_key_follows_frames_window_and_config(scene):
     cfg, seq = scene
     from omegaconf import OmegaConf
 
-    from harness.datasets.base import FrameWindow
+    from occbench.datasets.base import FrameWindow
 
     config = OmegaConf.to_container(cfg.detector, resolve=True)
     key = entry_key(seq, config)
@@ -206,7 +206,7 @@ def test_annotation_sources_are_not_wrapped():
 
 
 def test_detect_fills_the_cache_runs_read(scene, tmp_path, monkeypatch):
-    from harness.commands.detect import run_detection
+    from occbench.commands.detect import run_detection
 
     cfg, seq = scene
     monkeypatch.setenv("OCCBENCH_CACHE", str(tmp_path / "cache"))

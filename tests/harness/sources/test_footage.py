@@ -1,4 +1,4 @@
-"""Reading a camera's other footage (harness.sources.footage): folders of frames and videos,
+"""Reading a camera's other footage (occbench.sources.footage): folders of frames and videos,
 clear one-line errors naming a bad path, and the front-end cache key following its bytes."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from harness.sources.cache.keys import config_digest
-from harness.sources.footage import FootageError, camera_background
-from harness.sources.frontend import compose_config
+from occbench.sources.cache.keys import config_digest
+from occbench.sources.footage import FootageError, camera_background
+from occbench.sources.frontend import compose_config
 
 H, W = 48, 64
 
@@ -88,8 +88,8 @@ def test_the_config_builds_it_and_the_cache_key_follows_the_footage_bytes(tmp_pa
 
 
 def test_a_run_with_missing_footage_stops_in_one_line_naming_it(tmp_path):
-    from harness.errors import RunError
-    from harness.pipeline.build import build_source
+    from occbench.errors import RunError
+    from occbench.pipeline.build import build_source
 
     missing = tmp_path / "clip"
     cfg = compose_config(["detector=silhouette",

@@ -9,21 +9,21 @@ import pandas as pd
 import pytest
 from hydra.utils import instantiate
 
-from harness.commands.detect import DetectionCounts, match_count, metrics_table, run_detection
-from harness.io.mot import read_mot
-from harness.sources.frontend import FrontendSource, compose_config
+from occbench.commands.detect import DetectionCounts, match_count, metrics_table, run_detection
+from occbench.io.mot import read_mot
+from occbench.sources.frontend import FrontendSource, compose_config
 
 TINY = ["dataset=synthetic", "dataset.scenarios=[pair_walk]", "dataset.length=12",
         "dataset.width=320", "dataset.height=240"]
 
 
 def test_imports_come_from_this_repository():
-    import harness.sources.frontend
-    import trackers.frontend
+    import occbench.sources.frontend
+    import occbench.trackers.frontend
 
     root = Path(__file__).resolve().parents[3]
-    assert Path(trackers.frontend.__file__).resolve().parents[2] == root
-    assert Path(harness.sources.frontend.__file__).resolve().parents[2] == root
+    assert Path(occbench.trackers.frontend.__file__).resolve().parents[2] == root
+    assert Path(occbench.sources.frontend.__file__).resolve().parents[2] == root
 
 
 @pytest.mark.parametrize("name", ["foreground", "silhouette", "hog"])
@@ -77,10 +77,10 @@ def test_frontend_source_requires_start_and_pixels():
 
 
 def test_fit_silhouette_and_heads_commands(tmp_path):
-    from harness.fit.heads import main as fit_heads
-    from harness.fit.silhouette import main as fit_silhouette
-    from trackers.frontend.heads import ColourMixtures
-    from trackers.frontend.silhouette import load_template
+    from occbench.fit.heads import main as fit_heads
+    from occbench.fit.silhouette import main as fit_silhouette
+    from occbench.trackers.frontend.heads import ColourMixtures
+    from occbench.trackers.frontend.silhouette import load_template
 
     assert fit_silhouette([*TINY, "--step", "3", "--out", str(tmp_path / "t.npy")]) == 0
     t = load_template(tmp_path / "t.npy")

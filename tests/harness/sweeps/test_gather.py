@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from harness.sweeps.gather import (
+from occbench.sweeps.gather import (
     DONE,
     FAILED,
     aggregate,
@@ -35,7 +35,7 @@ from harness.sweeps.gather import (
     write_status,
     write_sweep,
 )
-from harness.sweeps.gather import main as sweep_main
+from occbench.sweeps.gather import main as sweep_main
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -209,7 +209,7 @@ def tiny_mot(tmp_path_factory) -> Path:
 
 
 def _multirun(data: Path, sweep_dir: Path, *extra: str) -> subprocess.CompletedProcess:
-    cmd = [sys.executable, "-m", "harness", "-m", "tracker=baseline", "tracker.max_age=1,3",
+    cmd = [sys.executable, "-m", "occbench", "-m", "tracker=baseline", "tracker.max_age=1,3",
            "seed=0,1,2", "dataset=mot", f"dataset.root={data}", "detector=noisy_gt",
            "detector.miss_rate=0.25",
            "detector.jitter=0.05", "progress=false", f"hydra.sweep.dir={sweep_dir}", *extra]
@@ -238,7 +238,7 @@ def test_joblib_sweep_equals_basic_launcher(tiny_mot, tmp_path):
 
 
 def test_failing_job_is_recorded_and_a_rerun_skips_finished_jobs(tiny_mot, tmp_path):
-    cmd = [sys.executable, "-m", "harness", "-m", "tracker=baseline", "tracker.max_age=-1,2",
+    cmd = [sys.executable, "-m", "occbench", "-m", "tracker=baseline", "tracker.max_age=-1,2",
            "dataset=mot", "detector=noisy_gt", f"dataset.root={tiny_mot}", "progress=false",
            f"hydra.sweep.dir={tmp_path}", "hydra/launcher=basic"]
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, timeout=300)
@@ -269,7 +269,7 @@ def test_ray_launcher_sweep_equals_basic(tiny_mot, tmp_path):
 
 def test_optuna_study_starts_with_the_defaults_and_is_drawn_by_optuna(tmp_path):
     pytest.importorskip("hydra_plugins.hydra_optuna_sweeper")
-    cmd = [sys.executable, "-m", "harness", "+experiment=tune_baseline",
+    cmd = [sys.executable, "-m", "occbench", "+experiment=tune_baseline",
            "hydra.sweeper.n_trials=3", "hydra.sweeper.n_jobs=1", "hydra/launcher=basic",
            "dataset.length=12", "dataset.scenarios=[crossing]", "dataset.width=160",
            "dataset.height=120", f"hydra.sweep.dir={tmp_path}"]

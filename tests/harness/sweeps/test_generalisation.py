@@ -1,10 +1,10 @@
-"""The generalisation table (harness.sweeps.generalisation, benchmarks/bench_generalisation.py)."""
+"""The generalisation table (occbench.sweeps.generalisation, benchmarks/bench_generalisation.py)."""
 
 from __future__ import annotations
 
 import pandas as pd
 
-from harness.sweeps import generalisation as G
+from occbench.sweeps import generalisation as G
 
 
 def test_every_set_composes_and_is_marked():

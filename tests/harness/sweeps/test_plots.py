@@ -1,11 +1,11 @@
-"""harness.sweeps.plots: intervals that respect each metric's range, a grid with one legend."""
+"""occbench.sweeps.plots: intervals that respect each metric's range, a grid with one legend."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from harness.sweeps.plots import interval, plot_sweep
+from occbench.sweeps.plots import interval, plot_sweep
 
 
 def test_the_interval_stays_inside_the_values_seen():

@@ -19,10 +19,10 @@ import pytest
 import yaml
 from hydra import compose, initialize_config_dir
 
-from harness.sweeps.fingerprint import FingerprintError, inputs
-from harness.sweeps.gather import DAMAGED, DONE, gather, main, summary_text
-from harness.sweeps.jobs import begin_sweep
-from harness.sweeps.resume import finished, guarded
+from occbench.sweeps.fingerprint import FingerprintError, inputs
+from occbench.sweeps.gather import DAMAGED, DONE, gather, main, summary_text
+from occbench.sweeps.jobs import begin_sweep
+from occbench.sweeps.resume import finished, guarded
 
 ROOT = Path(__file__).resolve().parents[3]
 METRICS = ("tracker,sequence,IDF1,IDs,complete\nbaseline,a,0.5,3,True\nbaseline,b,0.7,1,True\n"
@@ -156,7 +156,7 @@ def test_resumed_sweep_over_a_relative_root_and_other_settings(tmp_path):
 
     def sweep(ages: str) -> subprocess.CompletedProcess:
         return subprocess.run(
-            [sys.executable, "-m", "harness", "-m", "tracker=baseline", f"tracker.max_age={ages}",
+            [sys.executable, "-m", "occbench", "-m", "tracker=baseline", f"tracker.max_age={ages}",
              "dataset=mot", "detector=noisy_gt",
  "dataset.root=rs2", "progress=false", "hydra.sweep.dir=S",
              "hydra/launcher=basic"], check=False, cwd=tmp_path, env=env, text=True,

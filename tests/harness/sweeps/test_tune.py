@@ -22,7 +22,7 @@ TUNE = sorted(p.stem for p in (CONF / "experiment").glob("tune_*.yaml"))
 def _compose(overrides: list[str]):
     from hydra import compose, initialize_config_dir
 
-    import harness  # noqa: F401 - the ${occbench...} resolvers
+    import occbench  # noqa: F401 - the ${occbench...} resolvers
 
     with initialize_config_dir(str(CONF), version_base="1.3"):
         return compose("config", overrides=overrides, return_hydra_config=True)
@@ -39,7 +39,7 @@ def test_tune_experiment_composes_with_the_default_launcher(name):
 
 def test_tune_reta_on_the_default_launcher_reports_its_best_job(tmp_path):
     pytest.importorskip("hydra_plugins.hydra_optuna_sweeper")
-    cmd = [sys.executable, "-m", "harness", "+experiment=tune_reta", "hydra.sweeper.n_trials=3",
+    cmd = [sys.executable, "-m", "occbench", "+experiment=tune_reta", "hydra.sweeper.n_trials=3",
            "dataset.length=20", "dataset.scenarios=[crossing]", "dataset.width=160",
            "dataset.height=120", f"hydra.sweep.dir={tmp_path}"]
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True,

@@ -1,11 +1,11 @@
-"""harness.sweeps.versus: our trackers against the best outside tracker of each set."""
+"""occbench.sweeps.versus: our trackers against the best outside tracker of each set."""
 
 from __future__ import annotations
 
 import pandas as pd
 
-from harness.sweeps import generalisation as G
-from harness.sweeps import versus as V
+from occbench.sweeps import generalisation as G
+from occbench.sweeps import versus as V
 
 
 def _table() -> pd.DataFrame:

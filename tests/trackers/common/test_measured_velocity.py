@@ -7,11 +7,11 @@ from __future__ import annotations
 import numpy as np
 import pbm_scenes as S
 
-from trackers.common.measured_velocity import MeasuredVelocity
-from trackers.geometry import iou_matrix
-from trackers.records import TrackState
-from trackers.three_hypothesis import Adaptations as RetaAdaptations
-from trackers.three_hypothesis import RetaTracker
+from occbench.trackers.common.measured_velocity import MeasuredVelocity
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import TrackState
+from occbench.trackers.three_hypothesis import Adaptations as RetaAdaptations
+from occbench.trackers.three_hypothesis import RetaTracker
 
 
 def test_the_predictor_with_the_smaller_error_places_the_hidden_box():

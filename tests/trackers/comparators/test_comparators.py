@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from trackers.comparators import ColourParticleFilter, MeanShiftTracker, SimilarityBelow
-from trackers.geometry import iou_matrix
-from trackers.records import Detections
+from occbench.trackers.comparators import ColourParticleFilter, MeanShiftTracker, SimilarityBelow
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections
 
 W, H = 200, 120
 

@@ -1,11 +1,11 @@
-"""The comparators' loss and restart rules (trackers.comparators.loss) on hand-made colour
+"""The comparators' loss and restart rules (occbench.trackers.comparators.loss) on hand-made colour
 scenes: a person hidden behind a grey occluder is declared lost after k frames and the
 tracker restarts from a later detection; NeverLost keeps the old single track."""
 
 import numpy as np
 import pytest
 
-from trackers.comparators import (
+from occbench.trackers.comparators import (
     AnyDetection,
     ColourParticleFilter,
     MeanShiftTracker,
@@ -13,7 +13,7 @@ from trackers.comparators import (
     NeverLost,
     SimilarityBelow,
 )
-from trackers.records import Detections
+from occbench.trackers.records import Detections
 
 W, H = 200, 120
 HIDDEN = range(10, 20)  # frames (0-based) on which the red person is behind the occluder

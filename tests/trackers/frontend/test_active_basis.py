@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from harness.datasets.synthetic import load_scenario
-from harness.fit.active_basis import collect, load, save
-from harness.pipeline.build import compose_config
-from trackers.frontend.active_basis import ActiveBasis, GaborBank, ShapeVerifier, crop_patch, learn
-from trackers.frontend.detectors import SilhouetteDetector
+from occbench.datasets.synthetic import load_scenario
+from occbench.fit.active_basis import collect, load, save
+from occbench.pipeline.build import compose_config
+from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, ShapeVerifier, crop_patch, learn
+from occbench.trackers.frontend.detectors import SilhouetteDetector
 
 SIZE = (48, 20)
 PAD = 2 + GaborBank().ksize // 2
@@ -108,7 +108,7 @@ def test_silhouette_shape_config_composes_and_builds():
 
 
 def test_propose_finds_a_person_on_unexplained_foreground():
-    from trackers.geometry import iou_matrix
+    from occbench.trackers.geometry import iou_matrix
 
     seq = load_scenario("crossing", seed=11, width=384, height=288, length=40)
     k = 20

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.datasets.synthetic import load_scenario
-from trackers.frontend.background import BackgroundModel
-from trackers.frontend.texture_colour import TextureColourMixture, siltp
+from occbench.datasets.synthetic import load_scenario
+from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.texture_colour import TextureColourMixture, siltp
 
 
 def test_siltp_is_scale_invariant_and_ignores_faint_patterns():

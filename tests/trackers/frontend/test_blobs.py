@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.frontend.background import BackgroundModel
-from trackers.frontend.blobs import blob_boxes, blobs_from_mask
+from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
 
 
 def test_blobs_of_known_mask():
@@ -109,7 +109,7 @@ def test_empty_mask_has_no_blobs():
 
 
 def test_inpainted_estimate_removes_a_person_who_never_leaves():
-    from trackers.frontend.background import background_estimate
+    from occbench.trackers.frontend.background import background_estimate
 
     yy, xx = np.mgrid[0:80, 0:100]
     bg = np.dstack([100 + xx // 2, 120 + yy // 4, np.full_like(xx, 140)]).astype(np.uint8)

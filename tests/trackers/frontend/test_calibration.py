@@ -1,4 +1,4 @@
-"""Scene self-calibration (trackers.frontend.calibration) and the calibrated silhouette
+"""Scene self-calibration (occbench.trackers.frontend.calibration) and the calibrated silhouette
 detector on synthetic scenes rendered with a known perspective."""
 
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.commands.detect import match_count
-from harness.datasets.synthetic import load_scenario
-from harness.sources.frontend import compose_config
-from trackers.frontend.calibration import PerspectiveCalibration, active_area, fit_perspective
+from occbench.commands.detect import match_count
+from occbench.datasets.synthetic import load_scenario
+from occbench.sources.frontend import compose_config
+from occbench.trackers.frontend.calibration import PerspectiveCalibration, active_area, fit_perspective
 
 
 def _detector():

@@ -6,22 +6,22 @@ import cv2
 import numpy as np
 import pytest
 
-from trackers.frontend.background import BackgroundModel
-from trackers.frontend.detectors import (
+from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.detectors import (
     ForegroundDetector,
     HogDetector,
     SilhouetteDetector,
     nms,
 )
-from trackers.frontend.heads import HeadDetector
-from trackers.frontend.silhouette import (
+from occbench.trackers.frontend.heads import HeadDetector
+from occbench.trackers.frontend.silhouette import (
     SilhouetteMatcher,
     analytic_template,
     fit_height_model,
     fit_template,
     load_template,
 )
-from trackers.geometry import iou_matrix
+from occbench.trackers.geometry import iou_matrix
 
 
 def _person_mask(shape, box):
@@ -148,7 +148,7 @@ def test_nms_keeps_best_of_overlapping():
 
 
 def test_hog_runs_and_returns_frame_coordinates():
-    synthetic = pytest.importorskip("harness.datasets.synthetic")
+    synthetic = pytest.importorskip("occbench.datasets.synthetic")
     seq = synthetic.load_scenario("crossing", length=10)
     frame, labels = seq.frame(5), seq.foreground(5)
     gt = seq.gt.table.boxes[seq.gt.rows_of(5)]
@@ -176,7 +176,7 @@ def test_detector_arguments_validated():
 def test_template_cells_sum_like_the_piecewise_constant_template():
     """sum_{a,b} coef I[Y + ys[a], X + xs[b]] (the cells' corners on an integral image) is the
     correlation of the image with T~, the template averaged over each cell; sum T~ = sum T."""
-    from trackers.frontend.silhouette import _integral
+    from occbench.trackers.frontend.silhouette import _integral
 
     m = SilhouetteMatcher(min_height=12, max_height=90, n_scales=5, downscale=1)
     sc = m._kernels_for(200)

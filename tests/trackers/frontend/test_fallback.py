@@ -1,4 +1,4 @@
-"""The front end's camera-fit check and its fallback (trackers.frontend.fallback): an
+"""The front end's camera-fit check and its fallback (occbench.trackers.frontend.fallback): an
 overhead scene the upright-person model does not fit is noticed, said in one line, and its
 people found by foreground regions; a scene it fits (synthetic, and the shipped CAVIAR
 corridor sample) is left to the silhouette detector."""
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from harness.commands.detect import fallback_note, match_count
-from harness.sources.frontend import compose_config
-from trackers.frontend.fallback import (
+from occbench.commands.detect import fallback_note, match_count
+from occbench.sources.frontend import compose_config
+from occbench.trackers.frontend.fallback import (
     CameraFitCheck,
     FitEvidence,
     MedianBackground,
@@ -59,7 +59,7 @@ def test_misfit_is_noticed_said_in_one_line_and_the_fallback_finds_the_people(ca
     frames, boxes = _overhead()
     det = _silhouette()
     det.reset()
-    with caplog.at_level(logging.INFO, logger="trackers.frontend.detectors"):
+    with caplog.at_level(logging.INFO, logger="occbench.trackers.frontend.detectors"):
         det.warm_up_sequence(LENGTH, lambda k: frames[k - 1])
     assert det.fallback_reason is not None and "does not fit" in det.fallback_reason
     said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
@@ -79,7 +79,7 @@ def test_misfit_is_noticed_said_in_one_line_and_the_fallback_finds_the_people(ca
 
 
 def test_a_scene_the_model_fits_is_left_to_the_silhouette_detector():
-    from harness.datasets.synthetic import load_scenario
+    from occbench.datasets.synthetic import load_scenario
 
     seq = load_scenario("crowd", seed=0, width=W, height=H, length=40, camera_height=2.5,
                         horizon=0.1, people=8)
@@ -92,7 +92,7 @@ def test_a_scene_the_model_fits_is_left_to_the_silhouette_detector():
 
 
 def test_the_shipped_corridor_sample_does_not_fall_back():
-    from harness.sources.frontend import load_sequences
+    from occbench.sources.frontend import load_sequences
 
     seq = load_sequences(["dataset=caviar", "dataset.frames=[1,40]"])[0]
     source = instantiate(compose_config(["detector=silhouette"], config_name="detect").detector)

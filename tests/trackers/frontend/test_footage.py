@@ -1,4 +1,4 @@
-"""A camera's background learnt from its other footage (trackers.frontend.footage): people
+"""A camera's background learnt from its other footage (occbench.trackers.frontend.footage): people
 standing still from a clip's first frame are found with it and missed without it."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.commands.detect import match_count
-from trackers.frontend.fallback import MedianBackground, RegionDetector
-from trackers.frontend.footage import CameraBackground, clip_median, pool_clips, start_with
+from occbench.commands.detect import match_count
+from occbench.trackers.frontend.fallback import MedianBackground, RegionDetector
+from occbench.trackers.frontend.footage import CameraBackground, clip_median, pool_clips, start_with
 
 H, W = 120, 160
 FLOOR = (140 + np.random.default_rng(7).normal(0, 8, (H, W, 1)) + np.zeros((1, 1, 3))).clip(0, 255)

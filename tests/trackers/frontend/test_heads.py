@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from trackers.frontend.heads import (
+from occbench.trackers.frontend.heads import (
     HAIR,
     SKIN,
     ColourMixtures,
@@ -16,7 +16,7 @@ from trackers.frontend.heads import (
     fit_colour_mixtures,
     reference_samples,
 )
-from trackers.geometry import iou_matrix
+from occbench.trackers.geometry import iou_matrix
 
 
 def test_em_recovers_a_known_two_component_mixture():
@@ -88,7 +88,7 @@ def test_finds_drawn_heads_at_their_place():
 
 
 def test_finds_rendered_heads():
-    synthetic = pytest.importorskip("harness.datasets.synthetic")
+    synthetic = pytest.importorskip("occbench.datasets.synthetic")
     seq = synthetic.load_scenario("pair_walk", length=30)
     hd = HeadDetector(threshold_hair=10, threshold_skin=10)
     hits = total = 0

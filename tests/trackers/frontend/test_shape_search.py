@@ -7,12 +7,12 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.fit.active_basis import load
-from trackers.frontend.active_basis import crop_patch
-from trackers.frontend.calibration import Perspective
-from trackers.frontend.shape_search import ActiveBasisDetector, ShapeSearch, shape_filter_map
-from trackers.frontend.silhouette import load_template
-from trackers.geometry import iou_matrix
+from occbench.fit.active_basis import load
+from occbench.trackers.frontend.active_basis import crop_patch
+from occbench.trackers.frontend.calibration import Perspective
+from occbench.trackers.frontend.shape_search import ActiveBasisDetector, ShapeSearch, shape_filter_map
+from occbench.trackers.frontend.silhouette import load_template
+from occbench.trackers.geometry import iou_matrix
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """PBM layered-association scoring (eqs. 11-13): the compiled kernels of
-``trackers.layered.association`` against the plain-numpy equations of
-``trackers.layered.equations``, equal to rounding (rtol 1e-9: the kernels sum in their own
+``occbench.trackers.layered.association`` against the plain-numpy equations of
+``occbench.trackers.layered.equations``, equal to rounding (rtol 1e-9: the kernels sum in their own
 order and take the normal CDF from ``math.erfc``), on mixtures of 1-3 components, empty
 parts, degenerate rectangles and any histogram size; and the best/runner-up rule.
 """
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from pbm_scenes import random_features, random_models
 
-from trackers.layered import equations as E
-from trackers.layered.association import (
+from occbench.trackers.layered import equations as E
+from occbench.trackers.layered.association import (
     ambiguous,
     ambiguous_rows,
     feature_differences,
@@ -20,8 +20,8 @@ from trackers.layered.association import (
     pair_scores,
     selected_differences,
 )
-from trackers.layered.feature_models import FeatureModels
-from trackers.layered.parts import FEATURES, N_PARTS
+from occbench.trackers.layered.feature_models import FeatureModels
+from occbench.trackers.layered.parts import FEATURES, N_PARTS
 
 NF = len(FEATURES)
 RTOL, ATOL = 1e-9, 1e-12  # rounding: the kernels' summation order and erfc against numpy's

@@ -11,15 +11,15 @@ import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from harness.datasets.synthetic import load_scenario
-from harness.metrics import score_sequence
-from harness.pipeline.loop import run_sequence
-from harness.sources.annotations import NoisyGroundTruth
-from trackers.layered.adaptations import Adaptations
-from trackers.layered.dynamics import Gate
-from trackers.layered.parts import PartFeatureExtractor
-from trackers.layered.rules import build_rules
-from trackers.layered.targets import Targets
+from occbench.datasets.synthetic import load_scenario
+from occbench.metrics import score_sequence
+from occbench.pipeline.loop import run_sequence
+from occbench.sources.annotations import NoisyGroundTruth
+from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.parts import PartFeatureExtractor
+from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.layered.targets import Targets
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -132,7 +132,7 @@ def _walk_then_vanish(report_predicted: bool, fg_after: bool | None = None
     the boxes pbm reports for it in the 4 frames after. ``fg_after``: None = no foreground
     mask; else the mask holds the person's box while detected, and after that the box
     (True: the person stands there undetected) or nothing (False: nobody is there)."""
-    from trackers.records import Detections, TrackState
+    from occbench.trackers.records import Detections, TrackState
 
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
     cfg.adaptations.report_predicted = report_predicted
@@ -187,7 +187,7 @@ def test_someone_missed_at_the_border_is_kept_and_someone_who_walked_out_is_drop
     """Life cycle: A stands at the top-left border and is missed for 6 frames (more than
     ``exit_misses``): A keeps the id. B walks out through the left border at 4 px per
     frame: KF1 carries B's box beyond the border and B is dropped after ``exit_misses``."""
-    from trackers.records import Detections
+    from occbench.trackers.records import Detections
 
     tracker = instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     rng = np.random.default_rng(1)
@@ -217,7 +217,7 @@ def test_someone_missed_at_the_border_is_kept_and_someone_who_walked_out_is_drop
 def _doorway(lone_growth: bool) -> list[float]:
     """A person stepping out of a doorway: the detection widens from 10 to 44 px over 6
     frames (height 90), then stays; the widths pbm reports for the person."""
-    from trackers.records import Detections
+    from occbench.trackers.records import Detections
 
     cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
     cfg.adaptations.lone_growth = lone_growth

@@ -1,5 +1,5 @@
 """The compiled PBM kernels against the plain-numpy equations of
-``trackers.layered.equations`` (eqs. 1-2, 7, 8, 9-10, 11, 12, 13 and the section 4.2
+``occbench.trackers.layered.equations`` (eqs. 1-2, 7, 8, 9-10, 11, 12, 13 and the section 4.2
 update), to a tolerance (rtol 1e-9), not bit for bit."""
 
 from __future__ import annotations
@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 from pbm_scenes import random_features, random_models
 
-from trackers.layered import equations as E
-from trackers.layered.association import pair_scores, selected_differences
-from trackers.layered.parts import N_PARTS, PartFeatureExtractor
-from trackers.layered.search import search_boxes_many
+from occbench.trackers.layered import equations as E
+from occbench.trackers.layered.association import pair_scores, selected_differences
+from occbench.trackers.layered.parts import N_PARTS, PartFeatureExtractor
+from occbench.trackers.layered.search import search_boxes_many
 
 RTOL, ATOL = 1e-9, 1e-12
 
@@ -63,7 +63,7 @@ def test_eq1_2_ratios_of_the_extractor_equal_the_equation():
 def test_eq7_8_filter_kernels_equal_the_equations():
     """KF1 (eq. 7) and KF2 (eq. 8): the per-axis compiled steps of ``ConstantVelocity2D``
     against the matrix form of ``equations.cv_predicted`` / ``cv_updated``."""
-    from trackers.layered.dynamics import ConstantVelocity2D
+    from occbench.trackers.layered.dynamics import ConstantVelocity2D
 
     rng = np.random.default_rng(10)
     kf = ConstantVelocity2D(0.5, 0.2, 0.5)
@@ -88,8 +88,8 @@ def test_section_4_2_update_kernels_equal_the_equations():
     """The model update (PBM 4.2): ``Targets.update`` (global DOF, ratios, eqs. 1-2) and
     ``update_parts`` (running averages, frozen parts, rectangles) against
     ``equations.update_global`` and ``equations.update_parts``."""
-    from trackers.layered.dynamics import Gate
-    from trackers.layered.targets import Targets, update_parts
+    from occbench.trackers.layered.dynamics import Gate
+    from occbench.trackers.layered.targets import Targets, update_parts
 
     rng = np.random.default_rng(12)
     ex = PartFeatureExtractor()
@@ -133,7 +133,7 @@ def test_section_4_2_update_kernels_equal_the_equations():
 def test_eq1_2_kernels_equal_the_equations():
     """The part split (``_part_rects``), the ratios (``_centroid_ratios``) and the DOF
     under occlusion (``_dof_from_head``, in ``carved_rows``) against eqs. 1-2."""
-    from trackers.layered._kernels import carved_rows
+    from occbench.trackers.layered._kernels import carved_rows
 
     rng = np.random.default_rng(13)
     frame = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.layered import Adaptations, HiddenEvidence, PBMTracker
-from trackers.layered.evidence import box_foreground, covered_from_front
-from trackers.records import Detections, TrackState
+from occbench.trackers.layered import Adaptations, HiddenEvidence, PBMTracker
+from occbench.trackers.layered.evidence import box_foreground, covered_from_front
+from occbench.trackers.records import Detections, TrackState
 
 
 def test_each_piece_of_evidence_alone_shows_a_hidden_target():

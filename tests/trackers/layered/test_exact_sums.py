@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from pbm_scenes import random_models
 
-from trackers.layered._kernels import rho_bins
-from trackers.layered.association import layered_scores
-from trackers.layered.parts import N_FEATURES, N_PARTS
+from occbench.trackers.layered._kernels import rho_bins
+from occbench.trackers.layered.association import layered_scores
+from occbench.trackers.layered.parts import N_FEATURES, N_PARTS
 
 
 def _plain_rho(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -83,7 +83,7 @@ def _sequential_sum(v: np.ndarray) -> float:
 
 
 def test_part_features_with_the_frames_pixels_converted_before_are_the_same():
-    from trackers.layered.parts import PartFeatureExtractor
+    from occbench.trackers.layered.parts import PartFeatureExtractor
 
     rng = np.random.default_rng(6)
     frames = [rng.integers(0, 256, (80, 100, 3), dtype=np.uint8) for _ in range(2)]
@@ -108,8 +108,8 @@ def test_box_scores_have_the_bits_of_extract_then_pair_scores(bins, with_fg):
     equals extracting the boxes' features and scoring them as pairs, bit for bit: boxes
     partly or wholly outside the image, repeated boxes (ties), parts without foreground,
     models with non-finite histograms; 5 bins (125 > 64) take the scan."""
-    from trackers.layered.association import box_scores, pair_scores
-    from trackers.layered.parts import PartFeatureExtractor
+    from occbench.trackers.layered.association import box_scores, pair_scores
+    from occbench.trackers.layered.parts import PartFeatureExtractor
 
     rng = np.random.default_rng(bins * 10 + with_fg)
     frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8)

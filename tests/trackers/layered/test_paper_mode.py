@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from trackers.layered import Adaptations, CandidateParams, PBMTracker
-from trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads
-from trackers.layered.rules import build_rules
-from trackers.records import Detections
+from occbench.trackers.layered import Adaptations, CandidateParams, PBMTracker
+from occbench.trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads
+from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.records import Detections
 
 ADAPTATIONS_MD = Path(__file__).resolve().parents[3] / "docs" / "adaptations.md"
 
@@ -40,7 +40,7 @@ READINGS = {
 
 
 def _trackers() -> tuple[PBMTracker, PBMTracker]:
-    from harness.sources.frontend import compose_config
+    from occbench.sources.frontend import compose_config
 
     return (instantiate(compose_config(["tracker=pbm"]).tracker),
             instantiate(compose_config(["tracker=pbm_paper"]).tracker))

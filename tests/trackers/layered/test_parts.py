@@ -1,4 +1,4 @@
-"""The five-part split and per-part features (trackers.layered.parts, PBM 2.1-2.2)."""
+"""The five-part split and per-part features (occbench.trackers.layered.parts, PBM 2.1-2.2)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from trackers.histograms import colour_histogram
-from trackers.layered.parts import (
+from occbench.trackers.histograms import colour_histogram
+from occbench.trackers.layered.parts import (
     DEFAULT_ALPHA,
     DEFAULT_BETA,
     HEAD_FRACTION,
@@ -150,7 +150,7 @@ def test_bad_input():
 
 def test_lut_bins_equal_the_joint_index_formula():
     # the cv2.LUT quantisation used by the extractor equals min(v * bins // range, bins - 1)
-    from trackers.layered.parts import HSV_RANGES, XYZ_RANGES, _joint_index, _joint_lut
+    from occbench.trackers.layered.parts import HSV_RANGES, XYZ_RANGES, _joint_index, _joint_lut
 
     img = np.random.default_rng(3).integers(0, 256, (40, 30, 3), dtype=np.uint8)
     for bins in (2, 4, 8):
@@ -180,7 +180,7 @@ def _reference(frame, fg, boxes, alpha, beta, bins, rows, cols, at_centroids=Fal
     """PartFeatures (and centroids) of each box, one box at a time, with the operations
     of the vectorised extractor the kernels replaced (equal to rounding, rtol 1e-9):
     a sample grid, cv2.cvtColor of the foreground samples, np.bincount per part."""
-    from trackers.layered.parts import HSV_RANGES, XYZ_RANGES, PartFeatures, _joint_index
+    from occbench.trackers.layered.parts import HSV_RANGES, XYZ_RANGES, PartFeatures, _joint_index
 
     H, W = frame.shape[:2]
     fr, fc = (np.arange(rows) + 0.5) / rows, (np.arange(cols) + 0.5) / cols
@@ -287,7 +287,7 @@ def test_extractor_equals_the_reference(fg_kind, bins, grid):
 def test_colour_conversion_equals_cvtcolor_for_every_colour():
     # the kernels' integer HSV and XYZ formulas against OpenCV on all 2**24 BGR colours,
     # 16 blue values (2**20 colours) at a time
-    from trackers.layered import _kernels
+    from occbench.trackers.layered import _kernels
 
     v = np.arange(256, dtype=np.uint8)
     block = np.empty((16, 256, 256, 3), np.uint8)

@@ -10,8 +10,8 @@ import numpy as np
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from harness.datasets.synthetic import load_scenario
-from harness.sources.annotations import NoisyGroundTruth
+from occbench.datasets.synthetic import load_scenario
+from occbench.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[3]
 

@@ -8,13 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.layered import Adaptations
-from trackers.layered.dynamics import Gate
-from trackers.layered.equations import cv_predicted, cv_updated
-from trackers.layered.parts import PartFeatureExtractor
-from trackers.layered.reupdate import AfterPrediction, ReUpdate
-from trackers.layered.rules import build_rules
-from trackers.layered.targets import Targets
+from occbench.trackers.layered import Adaptations
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.equations import cv_predicted, cv_updated
+from occbench.trackers.layered.parts import PartFeatureExtractor
+from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
+from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.layered.targets import Targets
 
 GAP = 5  # frames unfound
 

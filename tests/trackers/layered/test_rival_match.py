@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.layered import Adaptations
-from trackers.layered.dynamics import Gate
-from trackers.layered.rules import OneToOne, RelativeMatch, RivalMatch, build_rules
-from trackers.layered.targets import Targets
+from occbench.trackers.layered import Adaptations
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.rules import OneToOne, RelativeMatch, RivalMatch, build_rules
+from occbench.trackers.layered.targets import Targets
 
 
 def _targets(misses, score) -> Targets:

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from pbm_scenes import two_heads_blob
 
-from trackers.geometry import box_slices
-from trackers.layered import search as S
+from occbench.trackers.geometry import box_slices
+from occbench.trackers.layered import search as S
 
 # ---------------------------------------------------------------------- references
 

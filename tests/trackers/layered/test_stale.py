@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pbm_scenes as S
 
-from trackers.layered import Adaptations, PBMTracker
-from trackers.layered.dynamics import Gate
-from trackers.layered.parts import PartFeatureExtractor
-from trackers.layered.targets import Targets, stale_parts
+from occbench.trackers.layered import Adaptations, PBMTracker
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.parts import PartFeatureExtractor
+from occbench.trackers.layered.targets import Targets, stale_parts
 
 
 def _targets() -> Targets:

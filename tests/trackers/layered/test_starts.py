@@ -1,4 +1,4 @@
-"""Who may start a PBM target (trackers.layered.starts): every free candidate, or only the
+"""Who may start a PBM target (occbench.trackers.layered.starts): every free candidate, or only the
 hand-initialised one of the single-target protocol (PBM 3)."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pbm_scenes as S
 
-from trackers.layered import GivenTargetOnly, PBMTracker
-from trackers.records import Detections
+from occbench.trackers.layered import GivenTargetOnly, PBMTracker
+from occbench.trackers.records import Detections
 
 
 def _two_walkers() -> S.Scene:

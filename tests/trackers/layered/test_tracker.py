@@ -1,4 +1,4 @@
-"""PBM tracker (trackers.layered): models, layers, dynamics, search and behaviour on scenes."""
+"""PBM tracker (occbench.trackers.layered): models, layers, dynamics, search and behaviour on scenes."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import yaml
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from trackers.baseline import BaselineTracker
-from trackers.geometry import iou_matrix
-from trackers.layered import (
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered import (
     Adaptations,
     CandidateParams,
     FeatureModels,
@@ -28,23 +28,23 @@ from trackers.layered import (
     StaleParts,
     load_feature_models,
 )
-from trackers.layered.association import ambiguous, layered_scores
-from trackers.layered.dynamics import Gate
-from trackers.layered.feature_models import (
+from occbench.trackers.layered.association import ambiguous, layered_scores
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.feature_models import (
     FoldedMixture,
     fit_difference_model,
     fit_half_normal,
     save_feature_models,
 )
-from trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor
-from trackers.layered.search import (
+from occbench.trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor
+from occbench.trackers.layered.search import (
     occlusion_kind,
     search_boxes,
     search_boxes_many,
     top_profile_heads,
 )
-from trackers.layered.targets import Targets
-from trackers.records import Detections, TrackState
+from occbench.trackers.layered.targets import Targets
+from occbench.trackers.records import Detections, TrackState
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -73,9 +73,9 @@ def run(tracker, scene, hidden=None, use_fg=True, min_visible=0.5):
 
 
 def test_imports_from_this_repository():
-    import trackers.layered
+    import occbench.trackers.layered
 
-    assert Path(trackers.layered.__file__).resolve().is_relative_to(ROOT)
+    assert Path(occbench.trackers.layered.__file__).resolve().is_relative_to(ROOT)
 
 
 def test_config_instantiates_with_shipped_models_and_is_in_all():
@@ -320,10 +320,10 @@ def test_tentative_before_confirmation():
 
 
 def test_synthetic_uturn_behind_beats_baseline():
-    synthetic = pytest.importorskip("harness.datasets.synthetic")
-    from harness.pipeline.loop import run_sequence
-    from harness.pipeline.record import score
-    from harness.sources.annotations import NoisyGroundTruth
+    synthetic = pytest.importorskip("occbench.datasets.synthetic")
+    from occbench.pipeline.loop import run_sequence
+    from occbench.pipeline.record import score
+    from occbench.sources.annotations import NoisyGroundTruth
 
     seq = synthetic.load_scenario("uturn_behind", seed=0, length=150)
     out = run_sequence({"pbm": PBMTracker(), "baseline": BaselineTracker()}, seq,
@@ -335,9 +335,9 @@ def test_synthetic_uturn_behind_beats_baseline():
 
 
 def test_drawing_parts_marks_frozen_parts():
-    from harness.report.draw import draw_tracks
-    from harness.report.parts import draw_parts
-    from trackers.records import Track
+    from occbench.report.draw import draw_tracks
+    from occbench.report.parts import draw_parts
+    from occbench.trackers.records import Track
 
     img = np.zeros((100, 100, 3), np.uint8)
     parts = np.array([[40, 10, 20, 10], [40, 20, 10, 30], [50, 20, 10, 30], [40, 50, 10, 40],
@@ -353,8 +353,8 @@ def test_drawing_parts_marks_frozen_parts():
 
 
 def test_fit_command_writes_models_and_plot(tmp_path):
-    pytest.importorskip("harness.datasets.synthetic")
-    from harness.commands.fit import main
+    pytest.importorskip("occbench.datasets.synthetic")
+    from occbench.commands.fit import main
 
     out, png = tmp_path / "m.yaml", tmp_path / "m.png"
     assert main(["pbm", "--synthetic", "crossing", "--length", "12", "--out", str(out),
@@ -390,7 +390,7 @@ def test_head_detector_fills_missing_heads():
 
 
 def test_blobs_equal_opencv_default_labelling():
-    from trackers.layered.search import blobs_boxes
+    from occbench.trackers.layered.search import blobs_boxes
 
     rng = np.random.default_rng(5)
     fg = cv2.dilate((rng.random((120, 160)) < 0.02).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
@@ -406,7 +406,7 @@ def test_blobs_equal_opencv_default_labelling():
 def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
     from filterpy.kalman import KalmanFilter
 
-    from trackers.layered.dynamics import ConstantVelocity2D
+    from occbench.trackers.layered.dynamics import ConstantVelocity2D
 
     rng = np.random.default_rng(6)
     kf = ConstantVelocity2D(0.5, 0.2, 0.5)
@@ -444,8 +444,8 @@ def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
 
 
 def test_selected_differences_equal_the_all_pairs_ones():
-    from trackers.layered.association import feature_differences, selected_differences
-    from trackers.layered.parts import PartFeatureExtractor
+    from occbench.trackers.layered.association import feature_differences, selected_differences
+    from occbench.trackers.layered.parts import PartFeatureExtractor
 
     rng = np.random.default_rng(8)
     frame = rng.integers(0, 256, (200, 300, 3), dtype=np.uint8)
@@ -472,8 +472,8 @@ def test_bool_and_label_foreground_give_the_same_tracks():
 
 
 def test_update_parts_equals_the_numpy_running_averages():
-    from trackers.layered.parts import part_boxes
-    from trackers.layered.targets import update_parts
+    from occbench.trackers.layered.parts import part_boxes
+    from occbench.trackers.layered.targets import update_parts
 
     rng = np.random.default_rng(11)
     ex = PartFeatureExtractor()
@@ -520,8 +520,8 @@ def test_occluded_update_averages_the_window_and_keeps_the_ratios():
 
 
 def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
-    from trackers.layered.selection import _norms
-    from trackers.layered.targets import dof_from_head, dofs_from_heads
+    from occbench.trackers.layered.selection import _norms
+    from occbench.trackers.layered.targets import dof_from_head, dofs_from_heads
 
     rng = np.random.default_rng(3)
     v = rng.normal(size=(500, 2)) * rng.uniform(0.1, 300.0, size=(500, 1))
@@ -541,9 +541,9 @@ def test_row_norms_and_occluded_dofs_equal_their_scalar_forms_bit_for_bit():
 def test_gated_pairs_equal_the_numpy_gating():
     """The compiled gating (PBM 3), occlusion-test pairs (PBM 3.1) and lone growth against
     numpy expressions, on random scenes with many boundary cases."""
-    from trackers.geometry import overlap_ratio_matrix
-    from trackers.layered._kernels import gated_pairs
-    from trackers.layered.search import occlusion_kinds
+    from occbench.trackers.geometry import overlap_ratio_matrix
+    from occbench.trackers.layered._kernels import gated_pairs
+    from occbench.trackers.layered.search import occlusion_kinds
 
     rng = np.random.default_rng(11)
     n_lone = 0
@@ -596,7 +596,7 @@ def test_assign_equals_the_numpy_gated_hungarian():
     step), on random matrices with ties, +-inf, NaN and every kind of gate."""
     from scipy.optimize import linear_sum_assignment
 
-    from trackers.common.assignment import assign
+    from occbench.trackers.common.assignment import assign
 
     def reference(cost, max_cost):
         n, m = cost.shape
@@ -626,7 +626,7 @@ def test_assign_equals_the_numpy_gated_hungarian():
 def test_prune_equals_the_numpy_centre_radius_and_nearest_head():
     """``MultipleResponsePruning.match_template``'s scalar arithmetic (few heads) and numpy
     path (many) against the numpy form: mean centre, largest norm as radius, nearest head to the refined one."""
-    from trackers.layered.search import head_patch, match_head_template
+    from occbench.trackers.layered.search import head_patch, match_head_template
 
     rng = np.random.default_rng(4)
     frame = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (5, 5), 0)
@@ -661,7 +661,7 @@ def test_the_tracker_accepts_every_foreground_dtype():
 
 
 def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
-    from trackers.layered._kernels import alive_rows, matched_rows
+    from occbench.trackers.layered._kernels import alive_rows, matched_rows
 
     rng = np.random.default_rng(9)
     T, N, P = 6, 8, 5
@@ -696,8 +696,8 @@ def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
 
 
 def test_carved_rows_equal_the_numpy_selection_of_searched_and_aligned_boxes():
-    from trackers.layered._kernels import carved_rows
-    from trackers.layered.targets import dofs_from_heads
+    from occbench.trackers.layered._kernels import carved_rows
+    from occbench.trackers.layered.targets import dofs_from_heads
 
     rng = np.random.default_rng(12)
     m, P, T = 25, 7, 4
@@ -779,8 +779,8 @@ def test_identities_kept_through_a_crowd_crossing_where_the_baseline_switches():
 
 def test_paper_mode_turns_every_adaptation_off():
     """``tracker=pbm_paper`` composes pbm.yaml with each adaptation at the paper's value."""
-    from harness.sources.frontend import compose_config
-    from trackers.frontend.heads import HeadDetector
+    from occbench.sources.frontend import compose_config
+    from occbench.trackers.frontend.heads import HeadDetector
 
     paper = instantiate(compose_config(["tracker=pbm_paper"]).tracker)
     ours = instantiate(compose_config(["tracker=pbm"]).tracker)
@@ -804,9 +804,9 @@ def test_paper_mode_turns_every_adaptation_off():
 
 def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     """``rules.build_rules``: paper mode's values select the paper's rule for each step."""
-    from harness.sources.frontend import compose_config
-    from trackers.layered import rules as R
-    from trackers.layered.reupdate import AfterPrediction
+    from occbench.sources.frontend import compose_config
+    from occbench.trackers.layered import rules as R
+    from occbench.trackers.layered.reupdate import AfterPrediction
 
     ours = R.build_rules(Adaptations())
     paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)

@@ -1,4 +1,4 @@
-"""BoxMOT's motion-only trackers (trackers.outside.BoxmotTracker; extra ``boxmot``, skipped
+"""BoxMOT's motion-only trackers (occbench.trackers.outside.BoxmotTracker; extra ``boxmot``, skipped
 when boxmot is not installed), and a tracker group leaving out a tracker whose optional
 library is missing."""
 
@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from harness.datasets.synthetic import load_suite
-from harness.errors import RunError
-from harness.pipeline.experiment import run_experiment
-from harness.pipeline.loop import run_sequence
-from harness.sources.annotations import NoisyGroundTruth
-from trackers.outside._common import require
-from trackers.records import Detections, SequenceInfo
+from occbench.datasets.synthetic import load_suite
+from occbench.errors import RunError
+from occbench.pipeline.experiment import run_experiment
+from occbench.pipeline.loop import run_sequence
+from occbench.sources.annotations import NoisyGroundTruth
+from occbench.trackers.outside._common import require
+from occbench.trackers.records import Detections, SequenceInfo
 
 NAMES = ("botsort", "bytetrack", "ocsort", "deepocsort", "hybridsort", "boosttrack",
          "occluboost", "sfsort")
@@ -23,7 +23,7 @@ INFO = SequenceInfo("walk", 320, 240, 7.0, 30)
 
 def _make(name: str, **kwargs):
     pytest.importorskip("boxmot")
-    from trackers.outside import BoxmotTracker
+    from occbench.trackers.outside import BoxmotTracker
 
     t = BoxmotTracker(name, **kwargs)
     t.start_sequence(INFO)
@@ -71,7 +71,7 @@ def test_motion_only_and_frame_rate_from_the_sequence():
 
 def test_runs_in_the_harness_on_box_only_and_rendered_scenes():
     pytest.importorskip("boxmot")
-    from trackers.outside import BoxmotTracker
+    from occbench.trackers.outside import BoxmotTracker
 
     seq = load_suite(["crossing"], length=20)[0]
     trackers = {n: BoxmotTracker(n) for n in ("sfsort", "hybridsort")}
@@ -88,12 +88,12 @@ class Ghost:
 
 
 def test_a_group_leaves_out_a_tracker_whose_library_is_missing(tmp_path):
-    base = {"dataset": {"_target_": "harness.datasets.synthetic.load_suite",
+    base = {"dataset": {"_target_": "occbench.datasets.synthetic.load_suite",
                         "scenarios": ["crossing"], "length": 10},
-            "detector": {"_target_": "harness.sources.annotations.NoisyGroundTruth"}}
+            "detector": {"_target_": "occbench.sources.annotations.NoisyGroundTruth"}}
     ghost = {"_target_": f"{__name__}.Ghost"}
     cfg = OmegaConf.create({**base, "tracker": {
-        "baseline": {"_target_": "trackers.baseline.BaselineTracker"}, "ghost": ghost}})
+        "baseline": {"_target_": "occbench.trackers.baseline.BaselineTracker"}, "ghost": ghost}})
     res = run_experiment(cfg, tmp_path / "group")
     assert res.trackers == ["baseline"] and res.ok
     with pytest.raises(RunError, match="no_such_tracker_lib"):  # selected alone: an error

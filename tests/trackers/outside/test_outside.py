@@ -1,7 +1,7 @@
-"""Outside-tracker adapters (trackers.outside) on short synthetic scenes with exact detections.
+"""Outside-tracker adapters (occbench.trackers.outside) on short synthetic scenes with exact detections.
 
 Each library is optional (the ``outside`` extra): its tests are skipped when it is missing.
-ByteTrack (``trackers.bytetrack``) is our re-implementation, run through the same tests and
+ByteTrack (``occbench.trackers.bytetrack``) is our re-implementation, run through the same tests and
 always tested.
 """
 
@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import trackers
-from trackers.outside._common import require
-from trackers.records import Detections, TrackState
+import occbench.trackers
+from occbench.trackers.outside._common import require
+from occbench.trackers.records import Detections, TrackState
 
 ADAPTERS = {  # class name -> import name of the library it wraps (None: ours)
     "ByteTrackTracker": None,
@@ -28,7 +28,7 @@ def _make(name: str, **kwargs):
     library = ADAPTERS[name]
     if library is not None:
         pytest.importorskip(library)
-    from trackers import bytetrack, outside
+    from occbench.trackers import bytetrack, outside
 
     return getattr(bytetrack if name == "ByteTrackTracker" else outside, name)(**kwargs)
 
@@ -53,7 +53,7 @@ def _as_tuples(history):
 
 
 def test_trackers_package_is_this_repository():
-    assert Path(trackers.__file__).resolve().parents[1] == Path(__file__).resolve().parents[3]
+    assert Path(occbench.trackers.__file__).resolve().parents[1] == Path(__file__).resolve().parents[3]
 
 
 @pytest.mark.parametrize("name", ADAPTERS)
@@ -135,7 +135,7 @@ def test_bytetrack_refinds_lost_track_within_buffer_and_reports_lost_when_asked(
 
 
 def test_bytetrack_rejects_bad_arguments():
-    from trackers.bytetrack import ByteTrackTracker
+    from occbench.trackers.bytetrack import ByteTrackTracker
 
     with pytest.raises(ValueError, match="match_thresh"):
         ByteTrackTracker(match_thresh=1.5)

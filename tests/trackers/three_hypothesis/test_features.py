@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.geometry import box_ellipses, ellipse_mask
-from trackers.histograms import masked_histogram
-from trackers.three_hypothesis.features import (
+from occbench.trackers.geometry import box_ellipses, ellipse_mask
+from occbench.trackers.histograms import masked_histogram
+from occbench.trackers.three_hypothesis.features import (
     bhattacharyya,
     bin_image,
     ellipse_histograms,

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
-from trackers.three_hypothesis.features import bin_image, ellipse_histograms
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
+from occbench.trackers.three_hypothesis.features import bin_image, ellipse_histograms
 
 
 def _reference(frame, boxes, fg, bins, min_foreground, stride):
@@ -75,8 +75,8 @@ def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
 
 
 def test_eq5_kernel_has_the_bits_of_the_definition():
-    from trackers.three_hypothesis.features import region_similarity
-    from trackers.three_hypothesis.occlusion import region_overlaps
+    from occbench.trackers.three_hypothesis.features import region_similarity
+    from occbench.trackers.three_hypothesis.occlusion import region_overlaps
 
     rng = np.random.default_rng(9)
     for k in range(40):
@@ -92,7 +92,7 @@ def test_eq5_kernel_has_the_bits_of_the_definition():
 
 
 def test_blend_kernel_has_the_bits_of_the_numpy_expression():
-    from trackers.three_hypothesis._kernels import blend
+    from occbench.trackers.three_hypothesis._kernels import blend
 
     rng = np.random.default_rng(11)
     for n in (0, 1, 7, 4096):
@@ -105,8 +105,8 @@ def test_blend_kernel_has_the_bits_of_the_numpy_expression():
 
 
 def test_eq3_kernel_gives_the_verdicts_of_depth_order():
-    from trackers.three_hypothesis._kernels import depth_orders
-    from trackers.three_hypothesis.occlusion import depth_order
+    from occbench.trackers.three_hypothesis._kernels import depth_orders
+    from occbench.trackers.three_hypothesis.occlusion import depth_order
 
     rng = np.random.default_rng(3)
     for n in (0, 1, 2, 9):

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 from reta_scenes import RED, detections, ellipse_frame
 
-from trackers.geometry import iou_matrix
-from trackers.records import TrackState
-from trackers.three_hypothesis import Adaptations, RetaTracker
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import TrackState
+from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
 
 W, H = 160, 120
 

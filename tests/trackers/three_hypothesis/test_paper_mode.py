@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 from filterpy.kalman import KalmanFilter
 
-from trackers.records import Detections, TrackState
-from trackers.three_hypothesis import Adaptations, LifeCycle, MotionModel, RetaTracker
-from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.motion import BoxState, CentreState, CorrectedBehind, PredictedBehind
-from trackers.three_hypothesis.rules import (
+from occbench.trackers.records import Detections, TrackState
+from occbench.trackers.three_hypothesis import Adaptations, LifeCycle, MotionModel, RetaTracker
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.motion import BoxState, CentreState, CorrectedBehind, PredictedBehind
+from occbench.trackers.three_hypothesis.rules import (
     ConfirmedInStage2,
     EveryNodeInStage2,
     FirstHypothesis,
@@ -45,7 +45,7 @@ AUDIT = {
 
 
 def test_every_rule_of_the_audit_is_a_paper_switch_or_a_documented_reading():
-    from harness.pipeline.build import build_tracker, compose_config
+    from occbench.pipeline.build import build_tracker, compose_config
 
     paper = build_tracker("reta_paper", compose_config(["tracker=reta_paper"]).tracker)
     ours = build_tracker("reta", compose_config(["tracker=reta"]).tracker)

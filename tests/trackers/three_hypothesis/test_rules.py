@@ -1,4 +1,4 @@
-"""Reta's parameter groups and the rules an adaptation switches (trackers.three_hypothesis
+"""Reta's parameter groups and the rules an adaptation switches (occbench.trackers.three_hypothesis
 params and rules): hand-derivable cases, the paper's rule beside ours."""
 
 from __future__ import annotations
@@ -8,10 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
-from trackers.three_hypothesis import Adaptations, Appearance, MotionModel, RetaTracker
-from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.rules import (
+from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
+from occbench.trackers.three_hypothesis import Adaptations, Appearance, MotionModel, RetaTracker
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.rules import (
     AbsoluteAppearance,
     AllPixels,
     AppearanceMargin,

@@ -1,4 +1,4 @@
-"""Reta's shape gate (trackers.three_hypothesis.shape_gate) beside the paper's rule: a
+"""Reta's shape gate (occbench.trackers.three_hypothesis.shape_gate) beside the paper's rule: a
 hand-derivable case and a constructed scene where the box of the person in front would carry
 a hidden person's id."""
 
@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from reta_scenes import RED, detections, ellipse_frame
 
-from trackers.geometry import iou_matrix
-from trackers.records import TrackState
-from trackers.three_hypothesis import Adaptations, RetaTracker
-from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.rules import build_rules
-from trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate, shape_similarity
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import TrackState
+from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.rules import build_rules
+from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate, shape_similarity
 
 W, H = 200, 120
 

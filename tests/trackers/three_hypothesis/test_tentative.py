@@ -1,4 +1,4 @@
-"""Reta's early confirmation (trackers.three_hypothesis.tentative) beside the paper's
+"""Reta's early confirmation (occbench.trackers.three_hypothesis.tentative) beside the paper's
 reading: a hand-derivable case of which measurements are clear, and constructed scenes where a
 lone person is confirmed at once and two people whose boxes meet wait ``confirm_frames``."""
 
@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from reta_scenes import RED, ellipse_frame
 
-from trackers.records import Detections
-from trackers.three_hypothesis import Adaptations, RetaTracker
-from trackers.three_hypothesis.appearance import EllipseHistogrammer
-from trackers.three_hypothesis.rules import build_rules
-from trackers.three_hypothesis.tentative import AfterMatches, ClearEarly, clear_measurements
+from occbench.trackers.records import Detections
+from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.rules import build_rules
+from occbench.trackers.three_hypothesis.tentative import AfterMatches, ClearEarly, clear_measurements
 
 W, H = 240, 120
 

@@ -12,23 +12,23 @@ import pytest
 from filterpy.kalman import KalmanFilter
 from scipy.optimize import linear_sum_assignment
 
-from trackers.baseline import BaselineTracker
-from trackers.common.assignment import assign
-from trackers.geometry import intersection_matrix, iou_matrix
-from trackers.histograms import bhattacharyya
-from trackers.records import Detections, TrackState
-from trackers.three_hypothesis import (
+from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers.common.assignment import assign
+from occbench.trackers.geometry import intersection_matrix, iou_matrix
+from occbench.trackers.histograms import bhattacharyya
+from occbench.trackers.records import Detections, TrackState
+from occbench.trackers.three_hypothesis import (
     Adaptations,
     Association,
     LifeCycle,
     Occlusion,
     RetaTracker,
 )
-from trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
-from trackers.three_hypothesis.association import _hungarian, _person_costs, associate
-from trackers.three_hypothesis.features import ellipse_histograms, region_similarity
-from trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
-from trackers.three_hypothesis.occlusion import (
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
+from occbench.trackers.three_hypothesis.association import _hungarian, _person_costs, associate
+from occbench.trackers.three_hypothesis.features import ellipse_histograms, region_similarity
+from occbench.trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
+from occbench.trackers.three_hypothesis.occlusion import (
     area_above,
     boxes_meet,
     depth_order,
@@ -36,7 +36,7 @@ from trackers.three_hypothesis.occlusion import (
     overlap_ratio,
     region_overlaps,
 )
-from trackers.three_hypothesis.rules import AppearanceMargin
+from occbench.trackers.three_hypothesis.rules import AppearanceMargin
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -314,7 +314,7 @@ def test_config_maps_onto_the_constructor():
 
 
 def test_paper_mode_turns_every_adaptation_off():
-    from harness.pipeline.build import build_tracker, compose_config
+    from occbench.pipeline.build import build_tracker, compose_config
 
     paper = build_tracker("reta_paper", compose_config(["tracker=reta_paper"]).tracker)
     ours = build_tracker("reta", compose_config(["tracker=reta"]).tracker)
@@ -509,8 +509,8 @@ def test_a_hidden_person_is_reported_only_on_enough_foreground():
 
 
 def _suite_run(name: str, tracker):
-    from harness.datasets.synthetic import load_scenario
-    from harness.sources.annotations import NoisyGroundTruth
+    from occbench.datasets.synthetic import load_scenario
+    from occbench.sources.annotations import NoisyGroundTruth
 
     seq = load_scenario(name)
     src = NoisyGroundTruth(seed=0)
@@ -561,7 +561,7 @@ def test_suite_scenarios_keep_ids_through_the_right_hypothesis(scenario, hypothe
 
 
 def test_graph_snapshot_export_and_drawing(tmp_path):
-    from harness.report.graph import GraphRecorder, draw_graph, read_graph_csv
+    from occbench.report.graph import GraphRecorder, draw_graph, read_graph_csv
 
     frames = _scene([_line((50, 150), (1.5, 0), 110), _line((270, 152), (-1.5, 0), 110)],
                     [RED, BLUE])
@@ -627,9 +627,9 @@ def test_memory_stays_flat_over_a_long_run():
 
 
 def test_record_sequence_writes_graph_beside_tracks_and_draws_frames(tmp_path):
-    from harness.datasets.base import Sequence
-    from harness.report.graph import record_sequence
-    from trackers.records import SequenceInfo
+    from occbench.datasets.base import Sequence
+    from occbench.report.graph import record_sequence
+    from occbench.trackers.records import SequenceInfo
 
     frames = _scene([_line((50, 150), (1.5, 0), 40), _line((120, 152), (-1.5, 0), 40)],
                     [RED, BLUE])
