@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from occbench.pipeline.build import compose_config  # noqa: E402
+from occbench.config.build import compose_config  # noqa: E402
 from occbench.report.primitives import legend_strip  # noqa: E402
 from occbench.trackers.geometry import iou_matrix  # noqa: E402
 

@@ -8,7 +8,7 @@ then each model's clean foreground (white) and the pixels it labelled shadow / e
 invariance and removed (red). Both models warm up on 50 frames sampled over the first 150.
 
 Run: ``python benchmarks/background_masks.py [--out docs/img/background_before_after.png]``.
-CAVIAR comes from the shipped sample (``occbench.paths``); the unlabelled videos from
+CAVIAR comes from the shipped sample (``occbench.config.paths``); the unlabelled videos from
 ``../shared/data/videos`` (optional material: their rows are left out without it).
 """
 
@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 from occbench.datasets.caviar import load_caviar  # noqa: E402
 from occbench.datasets.synthetic import load_scenario  # noqa: E402
 from occbench.datasets.video import load_video  # noqa: E402
-from occbench.paths import data_path  # noqa: E402
+from occbench.config.paths import data_path  # noqa: E402
 from occbench.trackers.frontend.background import BackgroundModel  # noqa: E402
 
 VIDEOS = ROOT.parent / "shared" / "data" / "videos"  # optional, not shipped

@@ -33,7 +33,7 @@ from hydra.utils import instantiate
 from shared_data import use_shared_data
 
 from occbench.commands.detect import match_count
-from occbench.sources.frontend import compose_config, load_sequences
+from occbench.config.build import compose_config, dataset_sequences as load_sequences
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 

@@ -36,7 +36,7 @@ from shared_data import use_shared_data  # noqa: E402
 from occbench.metrics import combine, score_sequence  # noqa: E402
 from occbench.metrics.paper import combine as combine_paper  # noqa: E402
 from occbench.metrics.paper import paper_counts  # noqa: E402
-from occbench.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
+from occbench.config.build import build_source, build_tracker, load_sequences  # noqa: E402
 from occbench.pipeline.protocols import run_single_target  # noqa: E402
 from occbench.sweeps import generalisation as G  # noqa: E402
 

@@ -14,7 +14,7 @@
     384x288 and 80 frames/s at 768x576.
 
 Run: ``python benchmarks/bench_frontend.py [--frames N] [--skip-quality] [--skip-speed]``.
-Reads the shipped CAVIAR-OneLeaveShop1cor (``occbench.paths``, $OCCBENCH_DATA moves it); exits with a message
+Reads the shipped CAVIAR-OneLeaveShop1cor (``occbench.config.paths``, $OCCBENCH_DATA moves it); exits with a message
 when it is absent.
 """
 
@@ -41,8 +41,8 @@ from hydra.utils import instantiate
 
 from occbench.commands.detect import match_count, run_detection
 from occbench.io.mot import read_mot
-from occbench.paths import data_path
-from occbench.sources.frontend import compose_config
+from occbench.config.paths import data_path
+from occbench.config.build import compose_config
 from occbench.trackers.frontend.blobs import blobs_from_mask
 from occbench.trackers.three_hypothesis.features import ellipse_histograms
 

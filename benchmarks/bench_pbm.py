@@ -35,7 +35,7 @@ from omegaconf import OmegaConf
 from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
 
 from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
-from occbench.paths import data_path
+from occbench.config.paths import data_path
 from occbench.pipeline.loop import run_sequence
 from occbench.pipeline.record import score
 from occbench.pipeline.summary import summary_rows

@@ -5,7 +5,7 @@ models were) writes the models and the learned omega (``--models``). Evaluation 
 data, each variant with those same models (only omega differs): ``hand`` = omega of
 ``conf/tracker/pbm.yaml``, ``learned`` = omega of the fit. Data: the synthetic suite at
 ``--seeds`` (not 0, which the defaults were tuned on, not the fit seed) with ``NoisyGroundTruth``
-at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (shipped, ``occbench.paths``) at ``--miss``
+at miss rates 0 and ``--miss``, and CAVIAR OneLeaveShop1cor (shipped, ``occbench.config.paths``) at ``--miss``
 with foreground none, detection noise seeded by each of ``--seeds``. Prints the COMBINED
 HOTA, IDF1, MOTA, IDs, Frag per data set and variant (per sequence with ``--per-sequence``).
 
@@ -41,7 +41,7 @@ from omegaconf import OmegaConf
 from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
 from occbench.fit.pbm import load_feature_weights
 from occbench.fit.pbm import main as fit_main
-from occbench.paths import data_path
+from occbench.config.paths import data_path
 from occbench.pipeline.loop import run_sequence
 from occbench.pipeline.record import score
 from occbench.pipeline.summary import summary_rows

@@ -63,7 +63,7 @@ from shared_data import use_shared_data  # noqa: E402
 from occbench.io.mot import MotTable  # noqa: E402
 from occbench.metrics import combine, score_sequence  # noqa: E402
 from occbench.metrics.paper import considered, match_rows  # noqa: E402
-from occbench.pipeline.build import build_source, build_tracker, load_sequences  # noqa: E402
+from occbench.config.build import build_source, build_tracker, load_sequences  # noqa: E402
 from occbench.pipeline.loop import frames  # noqa: E402
 from occbench.sweeps import generalisation as G  # noqa: E402
 from occbench.trackers.geometry import iou_matrix  # noqa: E402

@@ -14,7 +14,7 @@ reported rows (and writes or compares the file): a speed-up must leave them unch
 Accuracy: IDF1 and HOTA (``occbench.metrics``) of reta and the baseline on the synthetic
 suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
 (miss rate 0 and 0.3), and on CAVIAR OneLeaveShop1cor (noisy gt, miss 0.3, seed 0) when
-the data root (``occbench.paths``: shipped, or $OCCBENCH_DATA) holds it.
+the data root (``occbench.config.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
 Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]
 [--people 10 40 100] [--repeats 3] [--check [DIGESTS.json]]``.
@@ -42,7 +42,7 @@ if str(ROOT) not in sys.path:
 
 from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
 
-from occbench.paths import data_path
+from occbench.config.paths import data_path
 from occbench.trackers.baseline import BaselineTracker
 from occbench.trackers.records import Detections
 from occbench.trackers.three_hypothesis import Appearance, RetaTracker

@@ -30,9 +30,9 @@ import numpy as np
 
 from occbench.commands.detect import run_detection
 from occbench.datasets.caviar import load_caviar
-from occbench.paths import data_path
+from occbench.config.paths import data_path
 from occbench.pipeline.experiment import run_experiment
-from occbench.sources.frontend import compose_config
+from occbench.config.build import compose_config
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = data_path("CAVIAR-OneLeaveShop1cor")

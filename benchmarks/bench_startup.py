@@ -105,7 +105,7 @@ def since(t):
 t = now()
 import occbench.commands.run, occbench.pipeline.experiment
 out = {"import": since(t)}
-from occbench.pipeline.build import build_tracker, compose_config
+from occbench.config.build import build_tracker, compose_config
 from occbench.pipeline.warmup import warm_up
 for name in sys.argv[1:]:
     t = now()

@@ -1,7 +1,7 @@
 """The trackers on the unlabelled CAVIAR videos, drawn at the moments looked at by eye (no score).
 
 For each figure: ``tracker=all`` (baseline, reta, pbm) runs with the front end's own
-silhouette detector on the whole video (``occbench.report.video.render``, the same drawing
+silhouette detector on the whole video (``occbench.replay.video.render``, the same drawing
 as the side-by-side MP4: boxes for baseline; reta's graph, a solid ellipse per person a
 detection matched, dashed ones for its hypotheses with their kind after the id (v keep
 velocity, o follow the occluder, s stand still; negative ids: tentative nodes); pbm's five
@@ -29,14 +29,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from occbench.pipeline.build import (
+from occbench.config.build import (
     build_source,
     build_tracker,
     compose_config,
     load_sequences,
     tracker_configs,
 )
-from occbench.report.video import render
+from occbench.replay.video import render
 
 VIDEOS = ROOT.parent / "shared" / "data" / "videos"
 PANEL = (384, 288)  # (W, H) of one panel of the CAVIAR videos

@@ -1,7 +1,8 @@
 """The layout's rules, read from the source (every import, function-level ones too).
 
 - No import circles: no module in ``trackers/`` or ``harness/`` imports (directly or through
-  other modules of ours) a module that imports it back.
+  other modules of ours) a module that imports it back; no room of ``harness/`` imports
+  (directly or round a loop) a room that imports it back.
 - ``trackers`` never imports ``harness``.
 - ``harness/report/`` imports nothing from ``occbench.pipeline.experiment``.
 - ``harness/``'s rooms: at most 8 top modules, only the rooms; no library room imports a
@@ -124,7 +125,7 @@ def test_checker_sees_function_level_imports_and_circles() -> None:
     src = "def f():\n    from occbench.pipeline.experiment import run_sequence\n"
     tree = ast.parse(src)
     node = next(n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom))
-    assert _absolute(node, "occbench.report.video", False) == "occbench.pipeline.experiment"
+    assert _absolute(node, "occbench.replay.video", False) == "occbench.pipeline.experiment"
     assert len([n for n in _runtime_nodes(tree) if isinstance(n, ast.ImportFrom)]) == 1
     guarded = ast.parse("if TYPE_CHECKING:\n    from a import b\nelse:\n    import c\n")
     found = [n for n in _runtime_nodes(guarded) if isinstance(n, ast.Import | ast.ImportFrom)]
@@ -155,7 +156,7 @@ def test_report_imports_nothing_from_the_run() -> None:
 
 
 # harness/'s rooms: the commands apart from the library rooms they call
-ROOMS = {"config", "commands", "pipeline", "sources", "sweeps", "metrics", "datasets", "report", "fit", "io",
+ROOMS = {"config", "replay", "commands", "pipeline", "sources", "sweeps", "metrics", "datasets", "report", "fit", "io",
          "server"}
 MAX_TOP_MODULES = 8
 
@@ -165,6 +166,39 @@ def test_harness_top_holds_few_modules_and_only_rooms() -> None:
     assert len(top) <= MAX_TOP_MODULES, top
     rooms = {p.name for p in (ROOT / "harness").iterdir() if (p / "__init__.py").is_file()}
     assert rooms <= ROOMS, sorted(rooms - ROOMS)
+
+
+def room(module: str) -> str:
+    """The room of a module of ours: ``trackers`` for the trackers, else the harness room (or
+    top module) it sits in: ``occbench.pipeline.loop`` -> ``pipeline``."""
+    if _in_trackers(module):
+        return "trackers"
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "occbench"
+
+
+def room_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """Room -> the other rooms its modules import (anywhere in their source)."""
+    out: dict[str, set[str]] = {}
+    for module, targets in graph.items():
+        out.setdefault(room(module), set()).update(
+            room(t) for t in targets if room(t) != room(module))
+    return out
+
+
+def test_rooms_of_a_graph() -> None:
+    graph = {"occbench.report.tables": {"occbench.metrics.rows"},
+             "occbench.metrics.rows": {"occbench.trackers.common.assignment"},
+             "occbench.trackers.common.assignment": set()}
+    assert room_graph(graph) == {"report": {"metrics"}, "metrics": {"trackers"},
+                                 "trackers": set()}
+
+
+def test_harness_rooms_import_each_other_in_one_direction() -> None:
+    """No two rooms import each other, directly or round a loop (``report`` only reads run
+    folders: the ``pipeline`` writes them through it; ``replay`` re-runs and draws a run)."""
+    found = circles(room_graph(_graph()))
+    assert found == [], "rooms that import each other: " + "; ".join(" <-> ".join(c) for c in found)
 
 
 def test_library_rooms_never_import_a_command() -> None:

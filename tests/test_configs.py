@@ -114,7 +114,7 @@ def test_primary_config_composes(primary):
 
 def test_default_app_config():
     cfg = _compose("config", [], hydra=True)
-    # unresolved: resolving it creates the folder (occbench.pipeline.rundir)
+    # unresolved: resolving it creates the folder (occbench.config.rundir)
     assert OmegaConf.to_container(cfg.hydra.run)["dir"].startswith(
         "${occbench.unique_dir:results/")
     assert cfg.foreground == "auto" and cfg.objective.metric == "IDF1"

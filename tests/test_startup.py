@@ -35,7 +35,7 @@ def test_harness_imports_leave_heavy_libraries_out(module):
 
 @pytest.mark.parametrize("tracker", ["reta", "pbm"])
 def test_paper_trackers_build_without_filterpy_or_pandas(tracker):
-    code = ("from occbench.pipeline.build import build_tracker, compose_config\n"
+    code = ("from occbench.config.build import build_tracker, compose_config\n"
             f"cfg = compose_config(['tracker={tracker}'])\n"
             f"build_tracker('{tracker}', cfg.tracker, 'tracker')")
     assert _loaded_after(code) == []
@@ -75,7 +75,7 @@ def test_every_numba_kernel_is_cached():
 KERNEL_STATS = """
 import json, sys
 import numba.core.registry
-from occbench.pipeline.build import build_tracker, compose_config
+from occbench.config.build import build_tracker, compose_config
 from occbench.pipeline.warmup import warm_up
 warm_up(build_tracker('reta', compose_config(['tracker=reta']).tracker, 'tracker'))
 hits = misses = 0

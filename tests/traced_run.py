@@ -36,7 +36,7 @@ def calls(*names: str) -> dict[str, set[tuple[str, str]]]:
 
 def _trace(name: str) -> list[tuple[str, str]]:
     from occbench.datasets.synthetic import load_suite
-    from occbench.pipeline.build import build_source, build_tracker, compose_config
+    from occbench.config.build import build_source, build_tracker, compose_config
     from occbench.pipeline.loop import run_tracker
 
     cfg = compose_config([f"tracker={name}"])  # the default run's detector and foreground

@@ -294,7 +294,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import pandas as pd
 
     cv2.setNumThreads(1)
-    from occbench.pipeline.build import (
+    from occbench.config.build import (
         build_source,
         build_tracker,
         compose_config,

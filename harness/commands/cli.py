@@ -127,7 +127,7 @@ def _call_hydra(app: Callable, prog: str, args: Sequence[str], config_name: str,
 def _check_checkout() -> str | None:
     """Why this installation cannot run, or None: the configs (``conf/``) and the shipped data
     (``datasets/``) live in the project checkout, which only an editable install keeps."""
-    from occbench.paths import PROJECT_ROOT
+    from occbench.config.paths import PROJECT_ROOT
 
     if (PROJECT_ROOT / "conf" / "config.yaml").is_file():
         return None

@@ -163,7 +163,7 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.
     """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
     from hydra.utils import instantiate
 
-    from occbench.pipeline.build import build_source
+    from occbench.config.build import build_source
 
     sequences = list(instantiate(cfg.dataset))
     source = build_source(cfg.detector, cache=False)  # RunError naming what cannot be built

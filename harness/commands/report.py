@@ -2,10 +2,10 @@
 finished run, written into the run directory.
 
 * ``report/<sequence>.mp4`` and ``report/<sequence>_sheet.png``: every tracker of the run
-  drawn its own way, side by side (``occbench.report.video``; the trackers are run again with
+  drawn its own way, side by side (``occbench.replay.video``; the trackers are run again with
   the run's saved config, so the drawings show the run's tracks);
 * ``plots/trajectory_<sequence>_<person>.png``: the most occluded ground-truth person's path
-  beside the ids that followed it (``occbench.report.trajectories``; none for a sequence
+  beside the ids that followed it (``occbench.replay.trajectories``; none for a sequence
   without ground truth);
 * printed: the tracks per tracker and sequence, their lengths and frames/s
   (``occbench.report.tracks``), with or without ground truth;
@@ -46,14 +46,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     common = ["--sequence", args.sequence] if args.sequence else []
     status = 0
     if not args.no_video:
-        from occbench.report import video
+        from occbench.replay import video
 
         extra = [*common, *(["--no-gt"] if args.no_gt else [])]
         if args.frames:
             extra += ["--frames", *map(str, args.frames)]
         status = max(status, video.main(["--run", str(args.run_dir), *extra]))
     if not args.no_trajectories:
-        from occbench.report import trajectories
+        from occbench.replay import trajectories
 
         status = max(status, trajectories.main([str(args.run_dir), *common]))
     if (args.run_dir / "metrics.csv").is_file():  # the page again, with the video and plots

@@ -32,7 +32,7 @@ PROG = "occbench server"
 
 def preload() -> None:
     """Warm this process up for the commands it will fork: see the module docstring."""
-    from occbench.pipeline.build import compose_config
+    from occbench.config.build import compose_config
     from occbench.pipeline.warmup import preload as warm
     from occbench.pipeline.warmup import preload_spec
 

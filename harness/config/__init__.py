@@ -1,28 +1,36 @@
-"""Config to objects: the ground floor every other room builds on.
+"""Config to objects, the ground floor the run's rooms build on: composing a config
+(``build.compose_config``), checking it against the constructors (``check``), building
+trackers, sequences and detection sources from it (``build``), the data-path rules
+(``paths``) and the project's OmegaConf resolvers (``paths``, ``choose``, ``rundir``).
 
 ``register()`` makes the project's configs composable in this process. Call it before any
-``hydra.main`` app or ``hydra.compose`` (the commands, the library's own compositions and the
-test session do). Hydra's plugin scan would do part of this by itself for a regular install,
-but it lists ``hydra_plugins`` with ``pkgutil``, which cannot see the packages of an editable
-install (``pip install -e .``) mapped through setuptools' import hook (pyproject.toml's
-package-dir), so nothing here relies on that scan.
+``hydra.main`` app or ``hydra.compose``: the commands, the library's own compositions
+(``build.compose_config``) and the test session do. Nothing is registered on import. Hydra's
+plugin scan finds the project's launcher by itself in a regular install, but it lists
+``hydra_plugins`` with ``pkgutil``, which cannot see the packages of an editable install
+(``pip install -e .``) mapped through setuptools' import hook (pyproject.toml's package-dir),
+so nothing here relies on that scan.
 """
 
 from __future__ import annotations
 
 
+def register_resolvers() -> None:
+    """Register ``${occbench.data:...}``, ``${occbench.choose:...}`` and
+    ``${occbench.unique_dir:...}`` with OmegaConf (idempotent)."""
+    from occbench.config import choose, paths, rundir
+
+    paths.register_resolver()
+    choose.register()
+    rundir.register()
+
+
 def register() -> None:
-    """Register the OmegaConf resolvers (``${occbench.data:...}``, ``${occbench.choose:...}``,
-    ``${occbench.unique_dir:...}``) and the project's Hydra launcher (config
+    """Register the resolvers and the project's Hydra launcher (config
     ``hydra/launcher=processes`` and its class). Idempotent."""
     from hydra.core.plugins import Plugins
 
-    from occbench.paths import register_resolver
-    from occbench.pipeline import choose, rundir
-
-    register_resolver()
-    choose.register()
-    rundir.register()
+    register_resolvers()
     plugins = Plugins.instance()  # Hydra's scan first, so that it never replaces our class
     from hydra_plugins.occbench_launcher import config  # noqa: F401 - the ConfigStore node
     from hydra_plugins.occbench_launcher.launcher import ProcessLauncher

@@ -124,7 +124,7 @@ def fit(synthetic_seed: int | None = 0, caviar: bool = True, step: int = 5, cavi
     OneLeaveShop1cor frames 1-150 (``caviar``)."""
     from hydra.utils import instantiate
 
-    from occbench.pipeline.build import compose_config
+    from occbench.config.build import compose_config
 
     bank = GaborBank()
     b1, b2 = 2, 1

@@ -98,9 +98,9 @@ def main(argv: list[str] | None = None) -> int:
             ),
         )
     else:
-        from occbench.sources.frontend import load_sequences
+        from occbench.config.build import dataset_sequences
 
-        sequences = load_sequences(args.overrides)
+        sequences = dataset_sequences(args.overrides)
         pixels = head_pixels_of(sequences, step=args.step)
         if len(pixels) == 0:
             raise SystemExit("no annotated head pixels found in " + " ".join(args.overrides))

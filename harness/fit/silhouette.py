@@ -95,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     from hydra.utils import instantiate
 
-    from occbench.pipeline.build import compose_config
+    from occbench.config.build import compose_config
 
     overrides = list(args.overrides) or ["dataset=synthetic"]
     cfg = compose_config([*overrides, f"detector={args.detector}"])

@@ -1,14 +1,6 @@
-"""One run, from config to run folder: build (``build``, ``config_check``), the frame loop
-(``loop``), the tracker bank that feeds every tracker (``bank``), the run in three steps
-(``experiment``: ``plan``, the bank, ``record``; the single-target ``protocols``), the warm-up
-before timing (``warmup``) and the run folder (``rundir``, ``writer``, ``summary``).
-
-Importing it registers the project's OmegaConf resolvers, which its configs use:
-``${occbench.data:...}`` (``occbench.paths``), ``${occbench.choose:...}`` (``choose``) and
-``${occbench.unique_dir:...}`` (``rundir``)."""
-
-from occbench.paths import register_resolver as _register_resolver
-from occbench.pipeline import choose as _choose  # noqa: F401 - the ${occbench.choose:...} resolver
-from occbench.pipeline import rundir as _rundir  # noqa: F401 - the ${occbench.unique_dir:...} resolver
-
-_register_resolver()  # configs name data files as ${occbench.data:...} (occbench.paths)
+"""One run, from config to run folder: the frame loop (``loop``), the tracker bank that feeds
+every tracker (``bank``), the run in three steps (``experiment``: ``plan``, the bank,
+``record``; the single-target ``protocols``), the warm-up before timing (``warmup``) and the
+run folder's writer (``writer``, ``summary``). Turning config into objects is the room below
+(``occbench.config``); re-running a finished run to draw it is the room above
+(``occbench.replay``)."""

@@ -29,7 +29,7 @@ from occbench.datasets.base import Sequence
 from occbench.errors import RunError
 from occbench.metrics import COMBINED
 from occbench.pipeline.bank import TrackerOutput
-from occbench.pipeline.build import build_source
+from occbench.config.build import build_source
 from occbench.pipeline.loop import ProgressFactory, no_progress, run_sequence
 from occbench.pipeline.plan import RunPlan, plan_run
 from occbench.pipeline.record import RunRecord

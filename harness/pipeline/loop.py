@@ -3,7 +3,7 @@
 Per frame k of a sequence: the frame is read once, the detection source runs once, bad
 detections are dropped (``clean_detections``) and the foreground is chosen once
 (``ForegroundProvider``); ``frames`` yields them in order (``LoopFrame``). The consumers
-(``run_sequence`` here, ``occbench.report.video``, ``occbench.commands.bench``) hand each step
+(``run_sequence`` here, ``occbench.replay.video``, ``occbench.commands.bench``) hand each step
 to a ``occbench.pipeline.bank.TrackerBank``, which feeds the trackers.
 
 Frames are visited once, in order, and every tracker advances on the same frame before the
@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from occbench.config.check import FOREGROUND_MODES
 from occbench.datasets.base import Sequence
 from occbench.errors import RunError
 from occbench.io.mot import MotTable
@@ -29,8 +30,6 @@ from occbench.trackers.protocol import Tracker
 from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
-
-FOREGROUND_MODES = ("auto", "exact", "none", "mog2")
 
 
 class Progress(Protocol):

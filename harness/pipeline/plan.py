@@ -18,8 +18,8 @@ from typing import Any
 from occbench.datasets.base import Sequence
 from occbench.errors import RunError
 from occbench.metrics import COMBINED
-from occbench.paths import absolute_paths
-from occbench.pipeline.build import (
+from occbench.config.paths import absolute_paths
+from occbench.config.build import (
     build_source,
     build_tracker,
     cfg_get,
@@ -179,10 +179,10 @@ def left_out_line(missing: Mapping[str, Any]) -> str:
 
 
 def check_config(cfg: Any) -> None:
-    """Type- and range-check the app's own keys (``occbench.pipeline.config_check.check_app``)
+    """Type- and range-check the app's own keys (``occbench.config.check.check_app``)
     before anything is built or written; RunError naming the key."""
     from occbench.errors import ConfigError
-    from occbench.pipeline.config_check import APP_SCHEMA, check_app
+    from occbench.config.check import APP_SCHEMA, check_app
 
     plain: dict[str, Any] = {}
     for top in dict.fromkeys(k.split(".")[0] for k in APP_SCHEMA):

@@ -160,7 +160,7 @@ def preload_spec(cfg: Any, choice: str | None = None) -> dict[str, Any]:
     ``_target_``s and the resolved configs of the project's trackers."""
     from omegaconf import OmegaConf
 
-    from occbench.pipeline.build import tracker_configs
+    from occbench.config.build import tracker_configs
 
     targets = config_targets(OmegaConf.to_container(cfg, resolve=False))
     return {"modules": sorted({t.rsplit(".", 1)[0] for t in targets if t.startswith(OURS)}),
@@ -195,7 +195,7 @@ def preload(spec: Mapping[str, Any]) -> list[str]:
             importlib.import_module(name)
         except Exception as err:  # noqa: BLE001 - the job imports it again and says why
             log.debug("preload: %s not imported: %s: %s", name, type(err).__name__, err)
-    from occbench.pipeline.build import build_tracker
+    from occbench.config.build import build_tracker
 
     builders = {n: (lambda n=n, node=node: build_tracker(n, node))
                 for n, node in dict(spec.get("trackers", {})).items()}

@@ -71,7 +71,7 @@ class RunWriter:
              "paper_table.md", "paper_table.csv", "report.html")
 
     def __init__(self, out_dir: str | Path) -> None:
-        from occbench.pipeline.rundir import busy
+        from occbench.config.rundir import busy
 
         self.out_dir = Path(out_dir)
         owner = busy(self.out_dir)

@@ -6,7 +6,8 @@ A tracker that keeps a graph exposes ``graph_snapshot()`` returning
 writes them beside the tracks as CSV (``<stem>_nodes.csv`` and ``<stem>_edges.csv``) or JSON
 (``<stem>.json``); ``draw_graph`` draws one frame the paper's way: solid ellipses for nodes
 matched by a detection, dashed ellipses for hypotheses, light grey for tentative nodes, ids
-as labels, edges as lines from the predecessor's centre. ``GraphExport`` is the runner's
+as labels, edges as lines from the predecessor's centre (``occbench.replay.graph.record_sequence``
+re-runs a tracker over a sequence to draw its graph). ``GraphExport`` is the runner's
 hook (config key ``graph``): it records every graph-keeping tracker of a normal run and
 writes ``tracks/<tracker>/<sequence>.graph.json`` (or ``.graph_nodes.csv`` and
 ``.graph_edges.csv``) beside the tracks.
@@ -23,8 +24,6 @@ from typing import Any
 
 import cv2
 import numpy as np
-
-from occbench.pipeline.bank import TrackerBank
 
 log = logging.getLogger(__name__)
 
@@ -228,47 +227,3 @@ def draw_graph(frame: np.ndarray, snapshot: dict, previous: dict | None = None,
         org = (int(centre[0] - axes[0]), max(int(centre[1] - axes[1]) - 4, 10))
         _label(img, label, org, colour, taken=taken)
     return img
-
-
-def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str | Path | None = None,
-                    every: int = 1, foreground: bool = True) -> list[Path]:
-    """Run ``tracker`` over ``sequence`` with detections from ``source`` and export its graph.
-
-    Args:
-        tracker: a tracker with ``reset``, ``update`` and ``graph_snapshot``.
-        sequence: a ``occbench.datasets.base.Sequence`` (frames 1..length are read in order).
-        source: a ``DetectionSource``; ``start(sequence)`` is called here.
-        path: graph file, ``.csv`` (two files) or ``.json``; put it beside the tracks, e.g.
-            ``tracks/<tracker>/<sequence>_graph.csv``.
-        frames_dir: when given, every ``every``-th frame is drawn there as ``%06d.png``.
-        foreground: pass the source's mask, else the sequence's exact foreground, if any.
-    Returns:
-        the files written (graph files first, then drawn frames).
-    Raises:
-        TypeError: the tracker keeps no graph.
-    """
-    if not hasattr(tracker, "graph_snapshot"):
-        raise TypeError(f"{type(tracker).__name__} has no graph_snapshot(): it keeps no graph")
-    tracker.reset()
-    source.start(sequence)
-    bank = TrackerBank({"tracker": tracker})
-    recorder = GraphRecorder(sequence.info.name)
-    drawn: list[Path] = []
-    if frames_dir is not None:
-        frames_dir = Path(frames_dir)
-        frames_dir.mkdir(parents=True, exist_ok=True)
-    previous: dict | None = None
-    for k in sequence.frame_numbers():
-        frame = sequence.frame(k)
-        dets, mask = source.detect(k, frame)
-        fg = (mask if mask is not None else sequence.foreground(k)) if foreground else None
-        if not bank.step(k, frame, dets, fg):
-            raise RuntimeError(f"{sequence.info.name}: {bank.outputs['tracker'].error}")
-        snap = tracker.graph_snapshot()
-        recorder.add(snap, frame=k)
-        if frames_dir is not None and frame is not None and (k - 1) % max(every, 1) == 0:
-            target = frames_dir / f"{k:06d}.png"
-            cv2.imwrite(str(target), draw_graph(frame, snap, previous))
-            drawn.append(target)
-        previous = snap
-    return recorder.write(path) + drawn

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from occbench.datasets.base import Sequence
-from occbench.pipeline.build import compose_config
 from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
@@ -67,11 +66,3 @@ class FrontendSource:
         if frame is None:
             raise ValueError(f"{self._sequence.info.name}: frame {index} has no pixels")
         return self.detector.detect(frame)
-
-
-def load_sequences(overrides: list[str]) -> list[Sequence]:
-    """The sequences of ``dataset=...`` (and its keys) given as Hydra overrides."""
-    from hydra.utils import instantiate
-
-    cfg = compose_config(overrides)
-    return list(instantiate(cfg.dataset))

@@ -216,7 +216,7 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
         except Exception:  # a plot is not worth losing the table for
             log.exception("sweep plots failed")
     try:  # the sweep's page (occbench.report.html); the tables above stand without it
-        from occbench.report.html import write_sweep_report
+        from occbench.sweeps.page import write_sweep_report
 
         write_sweep_report(sweep_dir, frame, metrics)
     except Exception:

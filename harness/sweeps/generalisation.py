@@ -231,7 +231,7 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
     tracker it tunes).
     """
     from occbench.errors import RunError
-    from occbench.pipeline.build import build_tracker
+    from occbench.config.build import build_tracker
 
     if names is None:
         names = ordered_trackers()

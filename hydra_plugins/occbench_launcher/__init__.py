@@ -1,8 +1,10 @@
 """occbench's Hydra launcher: local parallel sweeps that survive their workers
 (``hydra/launcher=parallel``, see ``launcher.ProcessLauncher``).
 
-Hydra's plugin scan imports this package before it composes any config: importing
-``occbench.pipeline`` here registers the project's resolvers (``${occbench.data:...}`` and
-the others) for every composition, a test's or a script's own ``hydra.compose`` too."""
+Hydra's plugin scan imports this package before it composes any config (in a regular
+install; an editable one relies on ``occbench.config.register()``): it registers the project's
+resolvers (``${occbench.data:...}`` and the others) for every composition."""
 
-import occbench.pipeline  # noqa: F401 - registers the project's OmegaConf resolvers
+from occbench.config import register_resolvers
+
+register_resolvers()

@@ -26,7 +26,7 @@ def _bench(progress) -> None:
 
 
 def _render(progress, tmp_path) -> None:
-    from occbench.report.video import render
+    from occbench.replay.video import render
 
     render({"baseline": BaselineTracker()}, Walk(), GtSource(), sheet=tmp_path / "s.png",
            progress=progress)

@@ -1,4 +1,8 @@
-"""Optimal assignment (Hungarian method) with a gate."""
+"""Optimal assignment (Hungarian method) with a gate.
+
+Compiled with numba's ``cache=True``: the cache sits in ``__pycache__`` beside this file, keyed on
+the file's time stamp (not on its import name).
+"""
 
 from __future__ import annotations
 

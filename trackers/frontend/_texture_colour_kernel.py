@@ -1,6 +1,8 @@
 """Compiled kernel of ``TextureColourMixture.apply`` (texture_colour.py): the same equations,
 one pass over the pixels instead of a dozen (K, N) numpy temporaries. Tested against the numpy
 version (tests/trackers/frontend/test_background.py) to a tolerance: labels equal on >= 99.9% of pixels.
+Compiled with numba's ``cache=True``: the cache sits in ``__pycache__`` beside this file, keyed on
+the file's time stamp (not on its import name).
 """
 
 from __future__ import annotations

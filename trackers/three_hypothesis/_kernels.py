@@ -12,6 +12,8 @@ arithmetic), a pixel's joint bin ``(c0 * bins + c1) * bins + c2`` with ``ck = ch
 shift`` (``features.bin_image``), a histogram the counts divided by |S| in float64
 (``tests/trackers/three_hypothesis/test_kernels.py``). Compiled on first use, cached on
 disk (``cache=True``).
+Compiled with numba's ``cache=True``: the cache sits in ``__pycache__`` beside this file, keyed on
+the file's time stamp (not on its import name).
 """
 
 from __future__ import annotations

@@ -92,9 +92,9 @@ def test_version_help_and_hydra_pages_from_another_directory(tmp_path):
 
 def test_an_install_without_its_checkout_says_how_to_install(monkeypatch, tmp_path, capsys):
     """A non-editable install has no conf/ beside the package: one line naming the fix."""
-    import occbench.paths
+    import occbench.config.paths
 
-    monkeypatch.setattr(occbench.paths, "PROJECT_ROOT", tmp_path)
+    monkeypatch.setattr(occbench.config.paths, "PROJECT_ROOT", tmp_path)
     assert cli.main(["tracker=baseline"]) == 2
     err = capsys.readouterr().err
     assert str(tmp_path) in err and "pip install -e" in err

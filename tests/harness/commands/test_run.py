@@ -45,7 +45,7 @@ def test_unknown_key_exits_nonzero_naming_it():
 def test_an_adaptation_key_a_tracker_does_not_have_is_named(tracker, key):
     """A user config naming an adaptation that does not exist (these were removed, not
     taken: docs/adaptations.md) stops the build with the key named, not silently ignored."""
-    from occbench.pipeline.build import build_tracker, compose_config
+    from occbench.config.build import build_tracker, compose_config
 
     node = compose_config([f"tracker={tracker}", f"+tracker.adaptations.{key}=0"]).tracker
     with pytest.raises(RunError, match=rf"tracker\.{tracker}\.adaptations\.{key}: not an argument"):

@@ -21,11 +21,11 @@ from occbench.datasets.images import FrameError, ImageSequence, read_image
 from occbench.datasets.mot import SeqInfoError, load_mot
 from occbench.datasets.video import VideoSequence, load_video
 from occbench.io.mot import MotFormatError, read_mot
-from occbench.paths import DATA_ENV, SHIPPED_DATA, data_root
+from occbench.config.paths import DATA_ENV, SHIPPED_DATA, data_root
 
 ROOT = Path(__file__).resolve().parents[3]
 CONF = ROOT / "conf"
-DATA = SHIPPED_DATA  # the sample shipped in datasets/ (occbench.paths)
+DATA = SHIPPED_DATA  # the sample shipped in datasets/ (occbench.config.paths)
 CAVIAR = DATA / "CAVIAR-OneLeaveShop1cor"
 PETS = DATA / "trajectories" / "PETS09-S2L1"
 TUD = DATA / "trajectories" / "TUD-Campus"

@@ -68,7 +68,7 @@ def test_a_lost_follower_restarts_under_a_new_id(make):
 @pytest.mark.parametrize("experiment", ["pbm_table1", "pbm_segmentation"])
 def test_the_tables_build_mean_shift_with_its_loss_rule_and_the_filter_with_the_old_one(
         experiment):
-    from occbench.pipeline.build import build_tracker, compose_config
+    from occbench.config.build import build_tracker, compose_config
     from occbench.trackers.comparators import AnyDetection, MostSimilar
 
     cfg = compose_config([f"+experiment={experiment}"])

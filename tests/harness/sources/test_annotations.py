@@ -14,7 +14,7 @@ from occbench.datasets.base import GroundTruth, Sequence
 from occbench.datasets.caviar import load_caviar
 from occbench.datasets.mot import ground_truth_from_table, load_mot
 from occbench.io.mot import MotTable, read_mot
-from occbench.paths import SHIPPED_DATA
+from occbench.config.paths import SHIPPED_DATA
 from occbench.sources.annotations import NoisyGroundTruth, PublicDetections
 from occbench.trackers.geometry import clip_boxes, iou_matrix
 from occbench.trackers.records import Detections, SequenceInfo

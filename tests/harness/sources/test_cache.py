@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from occbench.commands import cache as cache_command
-from occbench.pipeline.build import build_source, compose_config, load_sequences
+from occbench.config.build import build_source, compose_config, load_sequences
 from occbench.sources.cache import CachedSource, Store, cached
 from occbench.sources.cache.keys import code_version, entry_key
 from occbench.sources.cache.lock import EntryLock

@@ -13,7 +13,7 @@ from omegaconf import OmegaConf
 
 from occbench.sources.cache.keys import config_digest
 from occbench.sources.footage import FootageError, camera_background
-from occbench.sources.frontend import compose_config
+from occbench.config.build import compose_config
 
 H, W = 48, 64
 
@@ -89,7 +89,7 @@ def test_the_config_builds_it_and_the_cache_key_follows_the_footage_bytes(tmp_pa
 
 def test_a_run_with_missing_footage_stops_in_one_line_naming_it(tmp_path):
     from occbench.errors import RunError
-    from occbench.pipeline.build import build_source
+    from occbench.config.build import build_source
 
     missing = tmp_path / "clip"
     cfg = compose_config(["detector=silhouette",

@@ -11,7 +11,8 @@ from hydra.utils import instantiate
 
 from occbench.commands.detect import DetectionCounts, match_count, metrics_table, run_detection
 from occbench.io.mot import read_mot
-from occbench.sources.frontend import FrontendSource, compose_config
+from occbench.config.build import compose_config
+from occbench.sources.frontend import FrontendSource
 
 TINY = ["dataset=synthetic", "dataset.scenarios=[pair_walk]", "dataset.length=12",
         "dataset.width=320", "dataset.height=240"]

@@ -22,7 +22,9 @@ TUNE = sorted(p.stem for p in (CONF / "experiment").glob("tune_*.yaml"))
 def _compose(overrides: list[str]):
     from hydra import compose, initialize_config_dir
 
-    import occbench  # noqa: F401 - the ${occbench...} resolvers
+    from occbench.config import register
+
+    register()  # the ${occbench...} resolvers
 
     with initialize_config_dir(str(CONF), version_base="1.3"):
         return compose("config", overrides=overrides, return_hydra_config=True)

@@ -10,7 +10,7 @@ from hydra.utils import instantiate
 
 from occbench.datasets.synthetic import load_scenario
 from occbench.fit.active_basis import collect, load, save
-from occbench.pipeline.build import compose_config
+from occbench.config.build import compose_config
 from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, ShapeVerifier, crop_patch, learn
 from occbench.trackers.frontend.detectors import SilhouetteDetector
 

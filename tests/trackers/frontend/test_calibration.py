@@ -8,7 +8,7 @@ import pytest
 
 from occbench.commands.detect import match_count
 from occbench.datasets.synthetic import load_scenario
-from occbench.sources.frontend import compose_config
+from occbench.config.build import compose_config
 from occbench.trackers.frontend.calibration import PerspectiveCalibration, active_area, fit_perspective
 
 

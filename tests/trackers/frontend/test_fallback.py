@@ -12,7 +12,7 @@ import pytest
 from hydra.utils import instantiate
 
 from occbench.commands.detect import fallback_note, match_count
-from occbench.sources.frontend import compose_config
+from occbench.config.build import compose_config
 from occbench.trackers.frontend.fallback import (
     CameraFitCheck,
     FitEvidence,
@@ -92,7 +92,7 @@ def test_a_scene_the_model_fits_is_left_to_the_silhouette_detector():
 
 
 def test_the_shipped_corridor_sample_does_not_fall_back():
-    from occbench.sources.frontend import load_sequences
+    from occbench.config.build import dataset_sequences as load_sequences
 
     seq = load_sequences(["dataset=caviar", "dataset.frames=[1,40]"])[0]
     source = instantiate(compose_config(["detector=silhouette"], config_name="detect").detector)

@@ -40,7 +40,7 @@ READINGS = {
 
 
 def _trackers() -> tuple[PBMTracker, PBMTracker]:
-    from occbench.sources.frontend import compose_config
+    from occbench.config.build import compose_config
 
     return (instantiate(compose_config(["tracker=pbm"]).tracker),
             instantiate(compose_config(["tracker=pbm_paper"]).tracker))

@@ -779,7 +779,7 @@ def test_identities_kept_through_a_crowd_crossing_where_the_baseline_switches():
 
 def test_paper_mode_turns_every_adaptation_off():
     """``tracker=pbm_paper`` composes pbm.yaml with each adaptation at the paper's value."""
-    from occbench.sources.frontend import compose_config
+    from occbench.config.build import compose_config
     from occbench.trackers.frontend.heads import HeadDetector
 
     paper = instantiate(compose_config(["tracker=pbm_paper"]).tracker)
@@ -804,7 +804,7 @@ def test_paper_mode_turns_every_adaptation_off():
 
 def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     """``rules.build_rules``: paper mode's values select the paper's rule for each step."""
-    from occbench.sources.frontend import compose_config
+    from occbench.config.build import compose_config
     from occbench.trackers.layered import rules as R
     from occbench.trackers.layered.reupdate import AfterPrediction
 

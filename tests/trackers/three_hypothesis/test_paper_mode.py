@@ -45,7 +45,7 @@ AUDIT = {
 
 
 def test_every_rule_of_the_audit_is_a_paper_switch_or_a_documented_reading():
-    from occbench.pipeline.build import build_tracker, compose_config
+    from occbench.config.build import build_tracker, compose_config
 
     paper = build_tracker("reta_paper", compose_config(["tracker=reta_paper"]).tracker)
     ours = build_tracker("reta", compose_config(["tracker=reta"]).tracker)

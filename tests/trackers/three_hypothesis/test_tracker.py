@@ -314,7 +314,7 @@ def test_config_maps_onto_the_constructor():
 
 
 def test_paper_mode_turns_every_adaptation_off():
-    from occbench.pipeline.build import build_tracker, compose_config
+    from occbench.config.build import build_tracker, compose_config
 
     paper = build_tracker("reta_paper", compose_config(["tracker=reta_paper"]).tracker)
     ours = build_tracker("reta", compose_config(["tracker=reta"]).tracker)
@@ -628,7 +628,7 @@ def test_memory_stays_flat_over_a_long_run():
 
 def test_record_sequence_writes_graph_beside_tracks_and_draws_frames(tmp_path):
     from occbench.datasets.base import Sequence
-    from occbench.report.graph import record_sequence
+    from occbench.replay.graph import record_sequence
     from occbench.trackers.records import SequenceInfo
 
     frames = _scene([_line((50, 150), (1.5, 0), 40), _line((120, 152), (-1.5, 0), 40)],

@@ -1,12 +1,12 @@
-"""The detector follows the tracker choice in the Reta tables (harness/pipeline/choose.py)."""
+"""The detector follows the tracker choice in the Reta tables (harness/config/choose.py)."""
 
 from __future__ import annotations
 
 import pytest
 from hydra.utils import instantiate
 
-from occbench.pipeline.build import compose_config
-from occbench.pipeline.choose import choose
+from occbench.config.build import compose_config
+from occbench.config.choose import choose
 
 ACTIVE_BASIS = "occbench.trackers.frontend.shape_search.ActiveBasisDetector"
 SILHOUETTE = "occbench.trackers.frontend.detectors.SilhouetteDetector"

@@ -1,4 +1,4 @@
-"""The annotated video and contact sheet (harness/report/video.py)."""
+"""The annotated video and contact sheet (harness/replay/video.py)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ def _legend_height(width: int) -> int:
 
 
 def test_video_and_contact_sheet_side_by_side(tmp_path):
-    from occbench.report.video import render
+    from occbench.replay.video import render
     from occbench.trackers.baseline import BaselineTracker
 
     seq = Walk()
@@ -45,7 +45,7 @@ def test_video_and_contact_sheet_side_by_side(tmp_path):
 def test_a_frame_window_is_rendered_by_its_own_frame_numbers(tmp_path):
     # dataset.frames=[5,9]: the window's frames keep their numbers 5..9, and so do the video's
     from occbench.datasets.base import window
-    from occbench.report.video import render
+    from occbench.replay.video import render
     from occbench.trackers.baseline import BaselineTracker
 
     (seq,) = window([Walk()], [5, 9])
@@ -65,7 +65,7 @@ def test_a_frame_window_is_rendered_by_its_own_frame_numbers(tmp_path):
 
 
 def test_h264_writer_pads_odd_sizes_and_checks_frames(tmp_path):
-    from occbench.report.video import H264Writer
+    from occbench.replay.video import H264Writer
 
     rng = np.random.default_rng(0)
     writer = H264Writer(tmp_path / "odd.mp4", 25.0, (33, 21))

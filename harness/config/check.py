@@ -33,6 +33,9 @@ from occbench.errors import ConfigError
 
 HYDRA_KEYS = frozenset({"_target_", "_convert_", "_recursive_", "_partial_", "_args_"})
 
+#: the top-level ``foreground`` key's values (the frame loop's modes, ``occbench.pipeline.loop``)
+FOREGROUND_MODES = ("auto", "exact", "none", "mog2")
+
 
 # --------------------------------------------------------------------------- values
 
@@ -214,8 +217,6 @@ def _metric(v: str) -> str | None:
 
 
 def _foreground(v: str) -> str | None:
-    from occbench.pipeline.loop import FOREGROUND_MODES
-
     return None if v in FOREGROUND_MODES else f"must be one of {list(FOREGROUND_MODES)}"
 
 

@@ -1,4 +1,4 @@
-"""Trajectory plots (harness/report/trajectories.py)."""
+"""Trajectory plots (harness/replay/trajectories.py)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from report_scenes import Walk, mot
 
-from occbench.report.trajectories import most_occluded_person, person_paths, plot_person
+from occbench.replay.trajectories import most_occluded_person, person_paths, plot_person
 
 
 def test_trajectory_plot_follows_the_matched_ids(tmp_path):
@@ -28,7 +28,7 @@ def test_trajectory_plot_follows_the_matched_ids(tmp_path):
 
 
 def test_a_path_is_not_drawn_across_missed_frames():
-    from occbench.report.trajectories import gaps_broken
+    from occbench.replay.trajectories import gaps_broken
 
     frames = np.array([1, 2, 5, 6])
     out = gaps_broken(frames, np.array([[0.0], [1.0], [4.0], [5.0]]))

@@ -1,4 +1,4 @@
-"""Tracker configs by name (harness/pipeline/build.py)."""
+"""Tracker configs by name (harness/config/build.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from run_scenes import (
 )
 
 from occbench.errors import RunError
-from occbench.pipeline.build import tracker_configs
+from occbench.config.build import tracker_configs
 
 
 def test_tracker_configs_single_and_dict():

@@ -1,4 +1,4 @@
-"""``report.html`` of a sweep folder: each swept parameter against each metric (mean and 95%
+"""``report.html`` of a sweep folder (the run page's parts, ``occbench.report.html``): each swept parameter against each metric (mean and 95%
 interval over seeds), the best settings, the paired difference of the best two, the jobs,
 the sweep's plots and the command.
 
@@ -22,6 +22,8 @@ from occbench.metrics.paired import Bootstrap, PairedDifference
 from occbench.report.html import charts
 from occbench.report.html.page import Page, esc, table_html
 from occbench.report.paired import NOT_DISTINGUISHABLE, cell
+from occbench.sweeps.tables import (COMBINED, DONE, aggregate, parameters, plot_axes, setting_table,
+                                    swept)
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +45,6 @@ def objective_of(sweep_dir: Path, frame: pd.DataFrame) -> tuple[str, str]:
 def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFrame:
     """``aggregate`` of the swept settings of ``tracker``, best ``metric`` first."""
     from occbench.report.tables import direction
-    from occbench.sweeps.tables import aggregate, swept
 
     by = [p for p in swept(frame) if p != "tracker_choice" and not p.endswith("seed")]
     agg = aggregate(frame, by, [metric])
@@ -57,7 +58,6 @@ def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
                 tracker: str) -> list[PairedDifference]:
     """The best setting minus the second best, on the frames of jobs paired by seed."""
     from occbench.report.html.run import read_frame_counts
-    from occbench.sweeps.tables import COMBINED, DONE, parameters, swept
 
     if len(best) < 2:
         return []
@@ -85,8 +85,6 @@ def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
 def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame,
                        metrics: Sequence[str]) -> Path:
     """Write ``<sweep_dir>/report.html`` from the gathered ``frame`` (``gather``)."""
-    from occbench.sweeps.tables import aggregate, plot_axes, setting_table
-
     sweep_dir = Path(sweep_dir)
     page = Page(f"occbench sweep {sweep_dir.name}")
     jobs = frame.drop_duplicates("job") if "job" in frame else frame

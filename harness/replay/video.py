@@ -17,9 +17,9 @@ a band above its picture; both outputs end with a legend of the marks
 
 Command line (config overrides as for ``python -m occbench``, or the config of a finished run)::
 
-    python -m occbench.report.video --sequence stop_behind --out stop_behind.mp4 \\
+    python -m occbench.replay.video --sequence stop_behind --out stop_behind.mp4 \\
         --sheet stop_behind.png -- dataset=synthetic dataset.scenarios=[stop_behind]
-    python -m occbench.report.video --run results/2026-01-01/12-00-00 --sequence crossing
+    python -m occbench.replay.video --run results/2026-01-01/12-00-00 --sequence crossing
 
 With ``--run`` and neither ``--out`` nor ``--sheet``, both are written into the run directory:
 ``report/<sequence>.mp4`` and ``report/<sequence>_sheet.png``.
@@ -39,7 +39,7 @@ import numpy as np
 
 from occbench.datasets.base import Sequence as DataSequence
 from occbench.pipeline.bank import TrackerBank, start_trackers
-from occbench.pipeline.build import compose_config, tracker_choice
+from occbench.config.build import compose_config, tracker_choice
 from occbench.pipeline.loop import frames, no_progress
 from occbench.report.draw import TRACKER_STYLES, draw_tracks, grid, legend, with_legend
 from occbench.sources.base import DetectionSource
@@ -285,7 +285,7 @@ def run_choice(run_dir: Path, group: str) -> str | None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m occbench.report.video",
+    p = argparse.ArgumentParser(prog="python -m occbench.replay.video",
                                 description="Annotated side-by-side video and contact sheet.")
     p.add_argument("overrides", nargs="*", help="config overrides, e.g. dataset=synthetic")
     p.add_argument("--run", type=Path, help="use the config saved in this run directory")
@@ -301,7 +301,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
-    from occbench.pipeline.build import build_source, build_tracker, load_sequences, tracker_configs
+    from occbench.config.build import build_source, build_tracker, load_sequences, tracker_configs
     from occbench.progress import progress_factory
 
     try:

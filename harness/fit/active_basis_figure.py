@@ -1,6 +1,6 @@
 """Picture of an active-basis template: its Gabor elements as oriented bars.
 
-``python -m occbench.report.active_basis [--template T.npz] [--out docs/img/active_basis.png]``
+``python -m occbench.fit.active_basis_figure [--template T.npz] [--out docs/img/active_basis.png]``
 draws the template (default: the shipped one) three times: alone (bar thickness and colour
 by lambda_i, the element's weight), over a rendered person and over a rendered background
 patch of a synthetic scene (seed 3, never used for learning), each titled with its score
@@ -121,7 +121,7 @@ def example_patches(template: ActiveBasis, seed: int = 3) -> tuple[np.ndarray, n
 def main(argv: list[str] | None = None) -> int:
     from occbench.fit.active_basis import load
 
-    ap = argparse.ArgumentParser(prog="python -m occbench.report.active_basis", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m occbench.fit.active_basis_figure", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--template", type=Path, default=None, help="template .npz (default: shipped)")
     ap.add_argument("--out", type=Path, default=Path("docs/img/active_basis.png"))

@@ -11,7 +11,7 @@ paper overlays all trackers; separate panels keep each id's colour readable).
 
 Command line, on a finished run::
 
-    python -m occbench.report.trajectories RUN_DIR --sequence stop_behind --person 2
+    python -m occbench.replay.trajectories RUN_DIR --sequence stop_behind --person 2
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def plot_person(gt: GroundTruth | MotTable, results: Mapping[str, MotTable], per
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m occbench.report.trajectories",
+    p = argparse.ArgumentParser(prog="python -m occbench.replay.trajectories",
                                 description="PBM Figs. 8-10 style trajectory plot of a run.")
     p.add_argument("run_dir", type=Path, help="run directory of python -m occbench")
     p.add_argument("--sequence", help="sequence name (default: the first with tracks)")
@@ -159,7 +159,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--iou", type=float, default=0.5)
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from occbench.pipeline.build import compose_config, load_sequences
+    from occbench.config.build import compose_config, load_sequences
 
     try:
         tracks = args.run_dir / "tracks"

@@ -3,7 +3,7 @@
 ``compose_config`` composes ``conf/`` (or loads a finished run's ``config.yaml``);
 ``tracker_configs`` names the tracker configs of ``cfg.tracker``; ``build_tracker``,
 ``build_source`` and ``load_sequences`` instantiate them, type-checked against the target's
-signature (``occbench.pipeline.config_check``), with a ``RunError`` naming the key when they
+signature (``occbench.config.check``), with a ``RunError`` naming the key when they
 cannot be.
 """
 
@@ -142,9 +142,9 @@ def missing_library(err: BaseException):
 
 def check_node(node: Any, key: str, target: Any) -> None:
     """Type-check a ``_target_`` config against ``target``'s signature
-    (``occbench.pipeline.config_check.check_target``); RunError naming ``key.<argument>``."""
+    (``occbench.config.check.check_target``); RunError naming ``key.<argument>``."""
     from occbench.errors import ConfigError
-    from occbench.pipeline.config_check import check_target
+    from occbench.config.check import check_target
 
     try:
         check_target(dict(container(node)), key, target)
@@ -222,3 +222,11 @@ def build_source(node: Any, cache: bool = True) -> DetectionSource:
     from occbench.sources.cache import cached
 
     return cached(source, container(node))
+
+
+def dataset_sequences(overrides: list[str]) -> list[Sequence]:
+    """The sequences of ``dataset=...`` (and its keys) given as Hydra overrides."""
+    from hydra.utils import instantiate
+
+    cfg = compose_config(overrides)
+    return list(instantiate(cfg.dataset))

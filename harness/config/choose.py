@@ -7,7 +7,7 @@ a paper table that follows the tracker (``conf/experiment/reta_table2.yaml``)::
 
 Hydra resolves a defaults-list override after every group's choice is known, so ``${tracker}``
 is the final tracker choice (the command line's or the experiment's); a detector chosen on the
-command line still wins. Registered when ``occbench.pipeline`` is imported.
+command line still wins. Registered by ``occbench.config.register_resolvers()``.
 """
 
 from __future__ import annotations
@@ -30,6 +30,3 @@ def register() -> None:
 
     if not OmegaConf.has_resolver(RESOLVER):
         OmegaConf.register_new_resolver(RESOLVER, choose)
-
-
-register()

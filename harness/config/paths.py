@@ -22,7 +22,7 @@ from pathlib import Path
 DATA_ENV = "OCCBENCH_DATA"
 
 #: The repository root of this installation (holds conf/, datasets/, harness/, trackers/).
-PROJECT_ROOT = Path(__file__).resolve().parent.parent
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
 
 #: The data shipped with the repository (see datasets/README.md).
 SHIPPED_DATA = PROJECT_ROOT / "datasets"
