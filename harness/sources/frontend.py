@@ -36,9 +36,13 @@ class FrontendSource:
 
     @property
     def label(self) -> str:
-        """What the results name this source by: ``silhouette front end`` and the like."""
+        """What the results name this source by: ``silhouette front end`` and the like, with
+        ``(warm-up on the whole sequence: future frames)`` when the detector's background or
+        calibration saw frames after the one detected (``warmup_span: sequence``)."""
         name = type(self.detector).__name__.removesuffix("Detector").lower()
-        return f"{name or type(self.detector).__name__} front end"
+        future = getattr(self.detector, "uses_future_frames", False)
+        return (f"{name or type(self.detector).__name__} front end"
+                + (" (warm-up on the whole sequence: future frames)" if future else ""))
 
     def __init__(self, detector) -> None:
         if not (hasattr(detector, "detect") and hasattr(detector, "reset")):

@@ -3,8 +3,11 @@
 OpenCV's MOG2 (default) or KNN model, or the texture and invariant-colour mixture of Reta 3.1
 (``texture_colour.TextureColourMixture``), gives a foreground mask; shadow pixels are
 labelled 127 and dropped (PBM 2: shadow removal). ``clean_mask`` applies the morphological
-opening and closing. A warm-up learns the background before the first frame from frames
-sampled across the sequence, for sequences that start with people in view.
+opening and closing. A warm-up learns the background for sequences that start with people in
+view: ``warmup_span`` "sequence" (before the first frame, from frames sampled across the whole
+sequence: future frames, as an offline detector) or "online" (frames up to the current one
+only: frame 1 before the first frame, then again at frames 2, 4, 8, ... from a sample of the
+frames seen so far; ``docs/adaptations.md``, "The shared front end").
 """
 
 from __future__ import annotations
@@ -62,6 +65,8 @@ def clean_mask(
 
 
 WARMUPS = ("samples", "median", "inpaint")
+SPANS = ("sequence", "online")
+ONLINE_LAST_REFRESH = 512  # "online": the warm-up is repeated at frames 2, 4, ..., 512
 METHODS = ("mog2", "knn", "texture_colour")
 
 
@@ -128,6 +133,13 @@ class BackgroundModel:
             "inpaint" feeds the median with high-spread pixels inpainted
             (``background_estimate``: for people who stay in one place).
         warmup_passes: times the sample is fed.
+        warmup_span: which frames the warm-up may see: "sequence" (``warmup_frames`` sampled
+            evenly over the whole sequence before the first frame: the detections of frame t
+            then depend on frames after t) or "online" (only frames up to the current one:
+            frame 1 before the first frame; at frames t = 2, 4, 8, ... up to
+            ``ONLINE_LAST_REFRESH`` the warm-up is repeated, without a reset, on at most
+            ``warmup_frames`` frames spread evenly over 1..t, kept by halving a sample of
+            every k-th frame as it fills).
         spread_threshold: grey-level spread above which a pixel is inpainted ("inpaint").
         gain_compensation: divide each frame, per channel, by its gain against a reference
             background (the warm-up estimate, else the first frame): the median of
@@ -157,6 +169,7 @@ class BackgroundModel:
         warmup_frames: int = 50,
         warmup: str = "inpaint",
         warmup_passes: int = 1,
+        warmup_span: str = "sequence",
         spread_threshold: float = 12.0,
         shadow_threshold: float = 0.5,
         work_scale: float = 1.0,
@@ -175,6 +188,8 @@ class BackgroundModel:
             raise ValueError(f"background_ratio must be in (0, 1], got {background_ratio}")
         if warmup not in WARMUPS:
             raise ValueError(f"warmup must be one of {WARMUPS}, got {warmup!r}")
+        if warmup_span not in SPANS:
+            raise ValueError(f"warmup_span must be one of {SPANS}, got {warmup_span!r}")
         if warmup_frames < 0 or warmup_passes < 1:
             raise ValueError(
                 f"warmup_frames must be >= 0 and warmup_passes >= 1, got "
@@ -192,6 +207,7 @@ class BackgroundModel:
         self.warmup_frames = int(warmup_frames)
         self.warmup = warmup
         self.warmup_passes = int(warmup_passes)
+        self.warmup_span = warmup_span
         self.spread_threshold = float(spread_threshold)
         if not 0.0 < shadow_threshold < 1.0:
             raise ValueError(f"shadow_threshold must be in (0, 1), got {shadow_threshold}")
@@ -209,6 +225,9 @@ class BackgroundModel:
         """Forget the learnt background."""
         self._reference: np.ndarray | None = None  # grid samples of the reference background
         self.last_gain = np.ones(3)
+        self._seen = 0  # frames applied so far ("online")
+        self._sample: list[np.ndarray] = []  # "online": every _stride-th frame seen
+        self._stride = 1
         if self.method == "texture_colour":
             self.mixture.reset()
             self._model = self.mixture
@@ -260,13 +279,22 @@ class BackgroundModel:
                     self._model.apply(np.where(moving, bg, f), learningRate=rate)
         log.debug("background warm-up (%s) on %d frames", self.warmup, len(frames))
     def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
-        """Warm up from ``warmup_frames`` frames sampled evenly over 1..length (1-based)."""
+        """Warm up from ``warmup_frames`` frames sampled evenly over 1..length (1-based);
+        "online": from frame 1 alone."""
         self.warm_up(self.sample_frames(length, frame))
 
+    @property
+    def uses_future_frames(self) -> bool:
+        """Whether the foreground of frame t depends on frames after t."""
+        return self.warmup_span == "sequence" and self.warmup_frames > 0
+
     def sample_frames(self, length: int, frame: Callable[[int], np.ndarray | None]) -> list:
-        """The ``warmup_frames`` frames sampled evenly over 1..length (empty when 0)."""
+        """The ``warmup_frames`` frames sampled evenly over 1..length (empty when 0);
+        "online": frame 1 only."""
         if self.warmup_frames <= 0 or length <= 0:
             return []
+        if self.warmup_span == "online":
+            return [f for f in (frame(1),) if f is not None]
         ks = np.unique(np.linspace(1, length, min(self.warmup_frames, length)).round().astype(int))
         return [f for f in (frame(int(k)) for k in ks) if f is not None]
 
@@ -309,7 +337,21 @@ class BackgroundModel:
 
     def raw(self, frame: np.ndarray) -> np.ndarray:
         """Raw model output (H, W) uint8: 255 foreground, 127 shadow, 0 background."""
+        if self.warmup_span == "online" and self.warmup_frames > 0:
+            self._online_warm_up(frame)
         return self._apply(frame, self.learning_rate)
+
+    def _online_warm_up(self, frame: np.ndarray) -> None:
+        """"online": keep every k-th frame (at most ``warmup_frames``, thinned by halves),
+        and at frames 2, 4, 8, ... repeat the warm-up on them: frames up to this one only."""
+        self._seen += 1
+        t = self._seen
+        if (t - 1) % self._stride == 0:
+            self._sample.append(frame)
+            if len(self._sample) > self.warmup_frames:
+                self._sample, self._stride = self._sample[::2], 2 * self._stride
+        if t >= 2 and t & (t - 1) == 0 and t <= ONLINE_LAST_REFRESH:
+            self.warm_up(self._sample)
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
         """Update with one (H, W, 3) uint8 BGR frame; (H, W) bool clean foreground mask."""

@@ -73,6 +73,11 @@ class _ForegroundPipeline:
         """Learn the background from frames sampled over the sequence (see BackgroundModel)."""
         self.background.warm_up_sequence(length, frame)
 
+    @property
+    def uses_future_frames(self) -> bool:
+        """Whether the detections of frame t depend on frames after t (the warm-up's span)."""
+        return self.background.uses_future_frames
+
     def foreground(self, frame: np.ndarray) -> np.ndarray:
         """(H, W) bool clean foreground of one frame (updates the model)."""
         return self.background.apply(frame)
@@ -94,8 +99,12 @@ class ForegroundDetector(_ForegroundPipeline):
         min_height: smallest person height, pixels.
         min_aspect: smallest width / height of a person box.
         max_aspect: largest width / height of a single person; wider blobs are split at the
-            heads found in them (``heads``); a wide blob without two heads stays whole.
+            heads found in them (``heads``, when ``split_heads``); a wide blob without two
+            heads stays whole.
         heads: head detector used to split groups and to report heads (None: no splitting).
+        split_heads: split wide blobs at their heads (ours: PBM 2 hands blobs to the tracker
+            whole and resolves merges itself, PBM 3.1; ``docs/adaptations.md``, "The shared
+            front end"); false: every blob is one detection.
         report_heads: attach one head box per detection (``Detections.heads``).
         person_aspect: typical person width / height, bounds the number of heads searched.
     """
@@ -110,8 +119,10 @@ class ForegroundDetector(_ForegroundPipeline):
         heads: HeadDetector | None = None,
         report_heads: bool = False,
         person_aspect: float = 0.4,
+        split_heads: bool = True,
     ) -> None:
         super().__init__(background)
+        self.split_heads = bool(split_heads)
         if min_area < 1 or min_height <= 0:
             raise ValueError(f"min_area and min_height must be positive, got {min_area}, {min_height}")
         if not 0 < min_aspect < max_aspect:
@@ -137,7 +148,7 @@ class ForegroundDetector(_ForegroundPipeline):
             if h < self.min_height or w / h < self.min_aspect:
                 continue
             parts = [(b.box, None, None)]
-            if w / h > self.max_aspect and self.heads is not None:
+            if w / h > self.max_aspect and self.heads is not None and self.split_heads:
                 n = int(np.ceil(w / (self.person_aspect * h))) + 1
                 hb = self.heads.heads_in(frame, labels_in == b.label, b.box, max_heads=n)
                 if len(hb) >= 2:
@@ -253,6 +264,7 @@ class SilhouetteDetector(_ForegroundPipeline):
         self.area: tuple[int, int, int, int] | None = None  # live picture, see active_area
         self.evidence = FitEvidence()
         self.fallback_reason: str | None = None  # why the fallback detects, None: it does not
+        self._online_frames: int | None = None  # "online": frames calibrated on so far
         if self.fallback is not None:
             self.fallback.reset()
         if self.calibration is not None:
@@ -265,6 +277,9 @@ class SilhouetteDetector(_ForegroundPipeline):
         if frames:
             self.area = active_area(frames)
         if self.calibration is None or self.matcher.fixed_height_model is not None:
+            return
+        if self.background.warmup_span == "online":  # calibrated as the frames arrive
+            self._online_frames = 0
             return
         n = min(self.calibration_frames, length)
         ks = np.unique(np.linspace(1, length, n).round().astype(int)) if n > 0 else []
@@ -298,10 +313,38 @@ class SilhouetteDetector(_ForegroundPipeline):
         self.fallback.warm_up_sequence(length, frame)
         return True
 
+    @property
+    def uses_future_frames(self) -> bool:
+        """Whether the detections of frame t depend on frames after t: the background's
+        warm-up, and the calibration's frames sampled over the sequence, when
+        ``warmup_span`` is "sequence"."""
+        return self.background.uses_future_frames or (
+            self.background.warmup_span == "sequence" and self.calibration is not None
+            and self.calibration_frames > 0 and self.matcher.fixed_height_model is None)
+
     def detect(self, frame: np.ndarray) -> tuple[Detections, np.ndarray]:
         if self.fallback_reason is not None:
             return self.fallback.detect(frame)
-        return super().detect(frame)
+        fg = self.foreground(frame)
+        if self._online_frames is not None and self._online_frames < self.calibration_frames:
+            self._calibrate_online(fg)
+        return self.detect_on(frame, fg), fg
+
+    def _calibrate_online(self, fg: np.ndarray) -> None:
+        """"online" calibration: this frame's samples, the line re-fitted at frames 16, 32,
+        64, ... and at ``calibration_frames`` (every height searched until a line is
+        found; the camera fit check and its fallback are not run online)."""
+        learnt = self.matcher.height_model
+        self.matcher.set_height_model(None)  # samples from fits without a size prior
+        self._collect(fg)
+        self.matcher.set_height_model(learnt)
+        self._online_frames += 1
+        t = self._online_frames
+        if (t >= 16 and t & (t - 1) == 0) or t == self.calibration_frames:
+            perspective = self.calibration.fit()
+            if perspective is not None:
+                self.perspective = perspective
+                self.matcher.set_height_model((perspective.a, perspective.b))
 
     def _live(self, fg: np.ndarray) -> tuple[np.ndarray, int, int]:
         """The live picture's part of ``fg`` and its (row, column) offset."""

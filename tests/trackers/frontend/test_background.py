@@ -99,3 +99,58 @@ def test_compiled_mixture_matches_the_numpy_equations():
     assert agree / total >= 0.999
     np.testing.assert_allclose(fast._w, ref._w, atol=1e-3)
     np.testing.assert_allclose(fast.getBackgroundImage(), ref.getBackgroundImage(), atol=2)
+
+
+def _walker_frames(n: int, seed: int, stay_from: int | None = None) -> list[np.ndarray]:
+    """n (72, 96, 3) frames of a textured floor and a bright 'person' walking right; from
+    frame ``stay_from`` on (1-based) a second person stands still at the left."""
+    rng = np.random.default_rng(seed)
+    floor = rng.integers(60, 120, size=(72, 96, 3), dtype=np.uint8)
+    out = []
+    for k in range(1, n + 1):
+        f = floor.copy()
+        x = 4 + 2 * k
+        f[20:60, x:x + 12] = (230, 200, 180)
+        if stay_from is not None and k >= stay_from:
+            f[10:50, 2:14] = (20, 240, 20)
+        out.append(f)
+    return out
+
+
+@pytest.mark.parametrize("method", ["mog2", "texture_colour"])
+def test_online_warm_up_never_reads_a_frame_after_the_current_one(method):
+    """``warmup_span: online``: the masks of frames 1..t do not change when the frames after
+    t do (here a person appears at frame 25 and stays); ``sequence`` reads them (the same
+    change moves the masks of earlier frames) and says so (``uses_future_frames``)."""
+    a, b = _walker_frames(40, 0), _walker_frames(40, 0, stay_from=25)
+    masks = {}
+    for span in ("online", "sequence"):
+        for name, frames in (("a", a), ("b", b)):
+            bg = BackgroundModel(method=method, warmup_frames=8, warmup_span=span)
+            asked: list[int] = []
+
+            def frame(k: int, frames=frames, asked=asked) -> np.ndarray:
+                asked.append(k)
+                return frames[k - 1]
+
+            bg.warm_up_sequence(len(frames), frame)
+            masks[span, name] = [bg.apply(f) for f in frames]
+            if span == "online":
+                assert asked == [1] and not bg.uses_future_frames
+            else:
+                assert max(asked) == 40 and bg.uses_future_frames
+    for t in range(24):
+        np.testing.assert_array_equal(masks["online", "a"][t], masks["online", "b"][t])
+    assert any((masks["sequence", "a"][t] != masks["sequence", "b"][t]).any() for t in range(24))
+
+
+def test_online_warm_up_keeps_an_even_sample_of_the_past():
+    bg = BackgroundModel(warmup_frames=4, warmup_span="online")
+    frames = _walker_frames(20, 1)
+    bg.warm_up_sequence(20, lambda k: frames[k - 1])
+    for f in frames[:13]:
+        bg.apply(f)
+    kept = [next(i for i, g in enumerate(frames) if g is s) + 1 for s in bg._sample]
+    assert kept == [1, 5, 9, 13]
+    with pytest.raises(ValueError, match="warmup_span"):
+        BackgroundModel(warmup_span="future")

@@ -127,6 +127,11 @@ def test_foreground_detector_splits_a_group_at_its_heads():
     assert np.isfinite(dets.heads).all()
     whole = ForegroundDetector(max_aspect=0.5, heads=None).detect_on(img, fg.astype(bool))
     assert len(whole) == 1
+    # split_heads off (PBM 2: a blob is one candidate): one box, the head still reported
+    unsplit = ForegroundDetector(max_aspect=0.5, heads=HeadDetector(), report_heads=True,
+                                 split_heads=False).detect_on(img, fg.astype(bool))
+    assert len(unsplit) == 1 and np.isfinite(unsplit.heads).all()
+    np.testing.assert_allclose(unsplit.boxes[0], whole.boxes[0])
 
 
 def test_silhouette_detector_end_to_end():
