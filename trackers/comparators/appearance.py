@@ -8,7 +8,7 @@ that colour is. Neither uses detections while a target lives: a detection starts
 where no target stands (the harness's single-target protocol hands it exactly one, the
 person's ground-truth box), a target ends when its ``loss`` rule declares it lost or its
 centre leaves the image, and a tracker that lost a target starts again from the detection
-its ``restart`` rule accepts (``occbench.trackers.comparators.loss``: our reading, PBM states none).
+its ``restart`` rule accepts (``occbench.trackers.comparators.loss``: our reading, PBM states none; ``tracker.meanshift.loss``).
 
 Boxes are xywh float64 pixels, 0-based top-left, as everywhere in ``trackers``.
 """

@@ -2,7 +2,8 @@
 
 PBM (Section 5.2) says only that mean shift and CCMSPF "lose" their target and are given new
 ids (its Table 1: 3 unique IDs and 3.11 ID switches per trajectory for MS); it states no loss
-test and no restart. Our reading, as two small strategy objects of ``ColourTrackerBase``:
+test and no restart. Our reading (``tracker.meanshift.loss``, ``tracker.meanshift.restart``), as
+two small strategy objects of ``ColourTrackerBase``:
 
 * ``loss``: each frame the comparator reports the Bhattacharyya coefficient rho of its
   followed box's colour with the target's model q (mean shift: at convergence; the particle

@@ -102,9 +102,9 @@ class ForegroundDetector(_ForegroundPipeline):
             heads found in them (``heads``, when ``split_heads``); a wide blob without two
             heads stays whole.
         heads: head detector used to split groups and to report heads (None: no splitting).
-        split_heads: split wide blobs at their heads (ours: PBM 2 hands blobs to the tracker
-            whole and resolves merges itself, PBM 3.1; ``docs/adaptations.md``, "The shared
-            front end"); false: every blob is one detection.
+        split_heads: split wide blobs at their heads (ours, ``detector.split_heads``: PBM 2
+            hands blobs to the tracker whole and resolves merges itself, PBM 3.1); false:
+            every blob is one detection.
         report_heads: attach one head box per detection (``Detections.heads``).
         person_aspect: typical person width / height, bounds the number of heads searched.
     """

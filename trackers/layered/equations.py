@@ -188,7 +188,7 @@ def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.n
     HSV and XYZ histograms (1 - Bhattacharyya coefficient; 1 when the candidate's part
     has no foreground), displacement of the part centroid over the target's height, and
     1 - IoU of the part rectangles. After a gap of ``misses`` frames the last two are
-    divided by 1 + misses (our reading: per-frame differences).
+    divided by 1 + misses (our reading: per-frame differences; ``adaptations.gap_division``).
 
     Returns:
         (K, 6, 5) differences, >= 0.

@@ -1,4 +1,5 @@
-"""KF1 and KF2 after a gap: as predicted through it (PBM 3), or OC-SORT's re-update (ours).
+"""KF1 and KF2 after a gap: as predicted through it (PBM 3), or OC-SORT's re-update (ours,
+``adaptations.reupdate``).
 
 PBM's filters (eq. 7: KF1, Z1 = (xc, yc); eq. 8: KF2, Z2 = (h, w)) predict blindly while a
 target is unfound and take one update when it is found again: the velocity they keep is the

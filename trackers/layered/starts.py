@@ -1,4 +1,5 @@
-"""Who may start a target, and when: the multi-target life cycle (ours) or the paper's
+"""Who may start a target, and when: the multi-target life cycle (ours,
+``life_cycle.min_hits``) or the paper's
 single hand-initialised target (PBM 3), as small strategy objects.
 
 PBM 3: "the target and its initial position were selected manually [...] the user just drew
@@ -14,8 +15,8 @@ from __future__ import annotations
 
 
 class AutoStarts:
-    """Ours (a multi-target run has no hand initialisation): any free candidate passing the
-    life cycle's tests starts a target, on any frame."""
+    """Ours (a multi-target run has no hand initialisation; ``life_cycle.min_hits``): any free
+    candidate passing the life cycle's tests starts a target, on any frame."""
 
     def may_start(self, frame: int, started: int) -> bool:
         """``frame``: 1-based count of frames seen; ``started``: targets started so far."""

@@ -27,9 +27,10 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
 Every rule the paper does not have is a field of ``adaptations.Adaptations`` (one row each
 in docs/adaptations.md; ``tracker=pbm_paper`` turns them off); a step such a rule changes
 calls a strategy of ``rules.py`` (the paper's or ours, chosen once in the constructor).
-Readings of the paper where it is silent (paper mode keeps them) are listed there too; also
-features measured on a fixed grid of samples per box (``PartFeatureExtractor``), delta of
-eqs. 9-10 relative (w (1 + delta i)) and eq. 2 used sign-corrected.
+Readings of the paper where it is silent (paper mode keeps them) are listed there too, among
+them features measured on a fixed grid of samples per box (``reading:sample_grid``), delta
+of eqs. 9-10 relative, w (1 + delta i) (``reading:relative_delta``), and eq. 2 used
+sign-corrected (``reading:eq2_sign``).
 
 Output ``Track.extra``: ``parts`` (5, 4) xywh part boxes, ``occluded_parts`` (5,) bool
 (frozen parts), ``part_scores`` (5,), ``gate`` (4,) xywh KF1 gate the frame's candidates

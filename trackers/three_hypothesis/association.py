@@ -3,8 +3,9 @@
 Predictions are the regions S^{t|t-1} of the nodes of the previous frame (a person may
 own several nodes: its hypotheses). All branches of one person share its appearance q,
 so the Hungarian method runs over persons x measurements with each pair's cost taken at
-the person's best node; the chosen node is returned so the other hypotheses of that
-person can be pruned. Boxes are (N, 4) float64 xywh, 0-based pixels.
+the person's best node (our reading of Alg. 1's MaxSimilarity over nodes,
+``reading:person_level_hungarian``); the chosen node is returned so the other hypotheses
+of that person can be pruned. Boxes are (N, 4) float64 xywh, 0-based pixels.
 """
 
 from __future__ import annotations

@@ -65,7 +65,8 @@ def spawn(x_parent: np.ndarray, occluder_velocity: np.ndarray) -> dict[str, np.n
 
 
 def outside_image(boxes: np.ndarray, width: int, height: int) -> np.ndarray:
-    """(N,) bool: the centre of each xywh box lies outside the image (the person left)."""
+    """(N,) bool: the centre of each xywh box lies outside the image (the person left: our
+    reading of 3.3's "objects getting out of the scene", ``reading:image_exit``)."""
     b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     c = b[:, :2] + b[:, 2:] / 2
     return (c[:, 0] < 0) | (c[:, 0] >= width) | (c[:, 1] < 0) | (c[:, 1] >= height)

@@ -89,9 +89,10 @@ class LifeCycle:
             which the hypothesis counts as covered (explains its missing detection);
             below it the hypothesis is in plain view (the paper's "contradictory"), in (0, 1].
         confirm_frames: matches that confirm a tentative track, >= 1 (the paper: "confirmed
-            in subsequent frames", no number; a reading, ``docs/adaptations.md``).
+            in subsequent frames", no number; a reading, ``life_cycle.confirm_frames``).
         reported_hypothesis: which hypothesis of a hidden person is reported as OCCLUDED
-            (the paper draws them all and gives no rule; a reading): 'least_contradicted'
+            (the paper draws them all and gives no rule; a reading,
+            ``life_cycle.reported_hypothesis``): 'least_contradicted'
             (covered by a visible person first, then fewest frames in plain view, then
             velocity > occluder > still) or 'first' (hypothesis 1, velocity, while it
             lives, then occluder, then still).

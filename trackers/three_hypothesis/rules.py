@@ -279,7 +279,8 @@ class HiddenIdentity:
 
 @dataclass(frozen=True)
 class LeastContradicted:
-    """Our reading (the paper draws every hypothesis, Figs. 3-5): the hypothesis least
+    """Our reading (``life_cycle.reported_hypothesis``; the paper draws every hypothesis,
+    Figs. 3-5): the hypothesis least
     contradicted by Alg. 1's own pruning criterion: covered by a visible person first (it
     explains the missing detection), then fewest frames in plain view, then velocity >
     occluder > still."""
@@ -292,7 +293,7 @@ class LeastContradicted:
 
 @dataclass(frozen=True)
 class FirstHypothesis:
-    """The other reading: hypothesis 1 (velocity, the one Alg. 1 makes for every missing
+    """The other reading (``life_cycle.reported_hypothesis``): hypothesis 1 (velocity, the one Alg. 1 makes for every missing
     person) while it lives, then occluder, then still."""
 
     def choose(self, kinds: list[str], exposed: list[int], covered: list[bool]) -> int:

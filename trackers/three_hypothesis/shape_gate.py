@@ -1,4 +1,4 @@
-"""Which sizes may continue a node (3.3.2): the paper's rule and ours against ids handed
+"""Which sizes may continue a node (3.3.2): the paper's rule and ours (``adaptations.shape_gate``) against ids handed
 across by the front end's boxes (issue 28 (c): the box of the person in front covers a
 hidden one, one box covers a group), after BoostTrack's shape similarity;
 ``rules.build_rules`` picks one; ``docs/adaptations.md`` gives the evidence. Boxes are

@@ -23,9 +23,10 @@ class HypothesisSteps:
     def _continue_unmatched(self, f: Frame) -> tuple[list, list[int]]:
         """Alg. 1's loop over a_i in N^{t-1} \\ Assoc: every unmatched person continues each
         hypothesis (N_h1: a visible node becomes 'velocity', keeping its velocity and
-        direction); at its first total occlusion (FirstOcclusion: behind a person visible
-        at t) a confirmed person also gets N_h2 (follows the occluder) and N_h3 (stands
-        still). A tentative track keeps one branch.
+        direction); at its first total occlusion (FirstOcclusion, our reading
+        ``reading:first_occlusion``: the first frame of its spell unmatched in which a node
+        lies behind a person matched at t) a confirmed person also gets N_h2 (follows the
+        occluder) and N_h3 (stands still). A tentative track keeps one branch.
 
         Returns:
             (person, new branches) per unmatched person, and per new branch the node of

@@ -1,6 +1,7 @@
 """Tentative tracks (3.3): who of them enters association stage 2, and when one is
-confirmed; the paper's rule (or reading) and ours beside each, ``rules.build_rules`` picks
-one. Ours against late confirmation (issue 28: with 30% of detections missed, people in view
+confirmed; the paper's rule (or reading, ``life_cycle.confirm_frames``) and ours beside each
+(``adaptations.tentative_stage1_only``, ``adaptations.early_confirm``), ``rules.build_rules``
+picks one. Ours (``adaptations.early_confirm``) against late confirmation (issue 28: with 30% of detections missed, people in view
 from a clip's first frame and newcomers stay tentative for their first 3-7 frames);
 ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64 xywh, 0-based pixels.
 """

@@ -17,15 +17,20 @@ methods live in one module per part of the paper, ``steps_*``, mixed into the cl
 8. ``_prune``: PruneHypothesis(G, m);
 9. ``_start_tracks``: an unmatched measurement starts a tentative track (3.3).
 
-Readings of what the paper leaves open (not switchable): shapes are the axis-aligned
-ellipses inscribed in the detection boxes (phi = 0); pairs with rho < mu_rho are excluded
+Readings of what the paper leaves open (not switchable; each a row of
+``docs/adaptations.md``): shapes are the axis-aligned ellipses inscribed in the detection
+boxes, phi = 0 (``reading:axis_aligned_ellipses``); pairs with rho < mu_rho are excluded
 before the Hungarian step, and leaving a person unmatched costs the largest acceptable pair
-cost (``association``); "contradictory" hypotheses are those in plain view (less than
-``LifeCycle.cover`` of the region hidden by a visible person) for m frames in a row; a
-hypothesis whose centre leaves the image ends; eq. 3 on a tie or unknown order puts the
-region with the lower bottom edge in front. Readings with a switch: ``LifeCycle``'s
-``confirm_frames`` and ``reported_hypothesis``. The rules the paper does not have are
-``params.Adaptations``, applied through ``rules``; ``docs/adaptations.md`` lists them all.
+cost (``reading:mu_rho_first``); the Hungarian step pairs persons, not nodes, with
+measurements (``reading:person_level_hungarian``); FirstOcclusion is the first frame of an
+unmatched spell behind a person matched at t (``reading:first_occlusion``); "contradictory"
+hypotheses are those in plain view (less than ``life_cycle.cover`` of the region hidden by a
+visible person) for m frames in a row; a hypothesis whose centre leaves the image ends
+(``reading:image_exit``); eq. 3 on a tie or unknown order puts the region with the lower
+bottom edge in front (``reading:eq3_tie``). Readings with a switch:
+``life_cycle.confirm_frames`` and ``life_cycle.reported_hypothesis``. The rules the paper does
+not have are ``params.Adaptations``, applied through ``rules``; ``docs/adaptations.md``
+lists them all.
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (one hypothesis of a hidden
 confirmed person, ``rules.choice``; ``rules.ReportRule`` decides whether it is reported),
