@@ -16,6 +16,10 @@ An experiment config (``conf/experiment/reta_table2.yaml`` ...) holds a ``paper_
       data_note: "..."              # what our data is (it is not the paper's)
       differences: {data: "...", protocol: "...", annotation: "..."}  # every reason our
                                     # figures can differ from the paper's, by aspect
+      test_data: [{sequence: CAVIAR-OneLeaveShop1cor, frames: [151, 295]}, ...]  # scored
+      fit_data:                     # everything the table depends on that was fitted or
+        - {what: "...", sequence: ..., frames: [1, 150]}   # chosen on data (never a
+                                    # test frame: tests/harness/report/test_fit_data.py)
       reported:
         citation: "..."             # where the figures come from
         rows: {"<method> (<data>)": [values in the order of `columns`], ...}
@@ -153,6 +157,7 @@ def to_markdown(table: pd.DataFrame, spec: Mapping[str, Any]) -> str:
         lines += [str(spec["caption"]).strip(), ""]
     if spec.get("data_note"):
         lines += [f"Our data: {str(spec['data_note']).strip()}", ""]
+    lines += _data_lines(spec)
     if spec.get("differences"):
         lines += ["Why our figures can differ from the paper's:", ""]
         lines += [f"- {aspect}: {str(why).strip()}" for aspect, why in spec["differences"].items()]
@@ -163,6 +168,24 @@ def to_markdown(table: pd.DataFrame, spec: Mapping[str, Any]) -> str:
                   "they were measured by the papers' authors on their data and are shown for "
                   "reference only, not as results of this project."), ""]
     return "\n".join(lines)
+
+
+def _frames(entry: Mapping[str, Any]) -> str:
+    frames = entry.get("frames")
+    where = str(entry["sequence"])
+    return f"{where} frames {frames[0]}-{frames[1]}" if frames else f"{where} (all frames)"
+
+
+def _data_lines(spec: Mapping[str, Any]) -> list[str]:
+    """The test frames and the fitting data of the table (``test_data``, ``fit_data``)."""
+    lines = []
+    if spec.get("test_data"):
+        lines += ["Test frames: " + "; ".join(_frames(e) for e in spec["test_data"]) + ".", ""]
+    if spec.get("fit_data"):
+        lines += ["Fitting data (what the table depends on was fitted or chosen there, never on "
+                  "a test frame): " + "; ".join(f"{str(e['what']).strip()}: {_frames(e)}"
+                                                 for e in spec["fit_data"]) + ".", ""]
+    return lines
 
 
 def write_paper_table(run_dir: str | Path, spec: Mapping[str, Any]) -> Path:
