@@ -47,6 +47,8 @@ class BaselineTracker:
         report_coasting: write coasting tracks' predicted boxes to the output.
     """
 
+    needs_frames = False  # boxes only
+
     def __init__(
         self,
         iou_threshold: float = 0.3,

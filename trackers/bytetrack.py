@@ -102,6 +102,8 @@ class ByteTrackTracker:
             Kalman noise std per 10 px of box height (``constant_velocity_box_filter``).
     """
 
+    needs_frames = False  # boxes only
+
     def __init__(
         self,
         track_thresh: float = 0.5,

@@ -22,7 +22,7 @@ import numpy as np
 
 from occbench.datasets.base import Sequence
 from occbench.io.mot import MotTable
-from occbench.trackers.protocol import Tracker
+from occbench.trackers.protocol import StartsSequence, Tracker
 from occbench.trackers.records import Detections, Track
 
 log = logging.getLogger(__name__)
@@ -107,14 +107,13 @@ def copy_inputs(image: np.ndarray | None, detections: Detections,
 
 
 def start_trackers(trackers: Mapping[str, Tracker], sequence: Sequence) -> None:
-    """Tell each tracker that has a ``start_sequence(info)`` method the sequence's
+    """Tell each tracker that has a ``start_sequence(info)`` method (``StartsSequence``) the sequence's
     ``SequenceInfo`` (frame rate, size) before its first frame: trackers whose parameters
     are in frames per second (e.g. BoxMOT's, ``occbench.trackers.outside.boxmot``) take the rate
     from there rather than from a config value that would be wrong on another dataset."""
     for tracker in trackers.values():
-        start = getattr(tracker, "start_sequence", None)
-        if callable(start):
-            start(sequence.info)
+        if isinstance(tracker, StartsSequence):
+            tracker.start_sequence(sequence.info)
 
 
 class TrackerBank:

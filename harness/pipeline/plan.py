@@ -33,7 +33,7 @@ from occbench.pipeline.loop import FOREGROUND_MODES, ProgressFactory
 from occbench.pipeline.writer import RunWriter
 from occbench.report.bars import DEFAULT_METRICS
 from occbench.report.graph import GraphExport
-from occbench.trackers.protocol import Tracker
+from occbench.trackers.protocol import Tracker, needs_frames
 
 log = logging.getLogger(__name__)
 
@@ -203,15 +203,20 @@ def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence],
     """Before anything is timed (``occbench.pipeline.warmup``): reject a tracker that needs
     frames when a sequence has none, then warm every tracker class up once per process
     (a ``progress`` bar over the warm-up's passes)."""
-    from occbench.pipeline.warmup import needs_pixels, warm_up_once
+    from occbench.pipeline.warmup import warm_up_once
 
     frameless = [s.info.name for s in sequences if not s.has_pixels]
     if frameless:
         for name, node in configs.items():
-            why = needs_pixels(build_tracker(name, node))
-            if why is not None:
+            tracker = build_tracker(name, node)
+            try:
+                declared = needs_frames(tracker)
+            except TypeError as err:
+                raise RunError(f"tracker {name!r}: {err}") from None
+            if declared:
                 raise RunError(
-                    f"tracker {name!r} needs frame pixels ({why}), but {len(frameless)} "
+                    f"tracker {name!r} needs frame pixels ({type(tracker).__name__}.needs_frames), "
+                    f"but {len(frameless)} "
                     f"sequence(s) have none (ground truth and detections only: "
                     f"{', '.join(frameless[:5])}{', ...' if len(frameless) > 5 else ''}); "
                     "run it on a dataset with frames, or choose a tracker that reads boxes "

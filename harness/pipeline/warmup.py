@@ -12,9 +12,6 @@ once with a bool foreground mask and once without. Each tracker is a fresh insta
 for the purpose and thrown away: the trackers of the run are built afterwards, as they
 always were, and are not touched.
 
-``needs_pixels`` asks the same kind of question before a run on frameless data (ground
-truth and detections only): does the tracker's ``update`` accept ``frame=None``?
-
 ``preload(spec)`` does all of this ahead of a sweep's jobs, in the launcher's fork server
 (``hydra_plugins.occbench_launcher``): it imports what a job imports (the app, the scoring,
 the plots, the config's ``_target_`` modules) and warms the job's trackers up, so that each
@@ -91,17 +88,6 @@ def warm_up(tracker: Tracker, bar: Progress | None = None) -> None:
     if bar is not None:
         bar.update(1)
     tracker.reset()
-
-
-def needs_pixels(tracker: Tracker) -> str | None:
-    """Why ``tracker`` cannot run without frames (the error its ``update(None, ...)`` raises
-    on the scene's first detections), or None when it can. Use a fresh tracker: it is
-    left in whatever state the attempt leaves it."""
-    _, _, dets = scene(0)
-    bank = TrackerBank({"probe": tracker})  # any refusal means the tracker needs pixels
-    if bank.feed("probe", 0, (None, dets, None), copy=False, where="") is None:
-        return bank.outputs["probe"].error
-    return None
 
 
 class WarmUp:

@@ -9,6 +9,7 @@ import cv2
 
 from occbench.pipeline.bank import TrackerBank
 from occbench.report.graph import GraphRecorder, draw_graph
+from occbench.trackers.protocol import KeepsGraph
 
 
 def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str | Path | None = None,
@@ -28,7 +29,7 @@ def record_sequence(tracker, sequence, source, path: str | Path, frames_dir: str
     Raises:
         TypeError: the tracker keeps no graph.
     """
-    if not hasattr(tracker, "graph_snapshot"):
+    if not isinstance(tracker, KeepsGraph):
         raise TypeError(f"{type(tracker).__name__} has no graph_snapshot(): it keeps no graph")
     tracker.reset()
     source.start(sequence)

@@ -43,6 +43,7 @@ from occbench.config.build import compose_config, tracker_choice
 from occbench.pipeline.loop import frames, no_progress
 from occbench.report.draw import TRACKER_STYLES, draw_tracks, grid, legend, with_legend
 from occbench.sources.base import DetectionSource
+from occbench.trackers.protocol import KeepsGraph
 from occbench.trackers.records import Track
 
 log = logging.getLogger(__name__)
@@ -131,7 +132,7 @@ class _GraphDrawing:
 
     @classmethod
     def of(cls, tracker: Any) -> _GraphDrawing | None:
-        if not callable(getattr(tracker, "graph_snapshot", None)):
+        if not isinstance(tracker, KeepsGraph):
             return None
         try:
             from occbench.report.graph import draw_graph

@@ -25,6 +25,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from occbench.trackers.protocol import KeepsGraph
+
 log = logging.getLogger(__name__)
 
 NODE_FIELDS = ["frame", "node", "id", "kind", "hypothesis", "xc", "yc", "phi", "rx", "ry", "vx",
@@ -142,11 +144,10 @@ class GraphExport:
 
     def record(self, tracker_name: str, frame: int, tracker: Any) -> None:
         """Add ``tracker.graph_snapshot()`` of frame ``frame`` (1-based) to its recorder."""
-        snapshot = getattr(tracker, "graph_snapshot", None)
-        if snapshot is None:
+        if not isinstance(tracker, KeepsGraph):
             return
         recorder = self._recorders.setdefault(tracker_name, GraphRecorder())
-        recorder.add(snapshot(), frame=frame)
+        recorder.add(tracker.graph_snapshot(), frame=frame)
 
     def write(self, sequence: str) -> list[Path]:
         """Write the recorded graphs of ``sequence`` (one file, or two for CSV, per tracker)

@@ -95,6 +95,8 @@ class ColourTrackerBase:
             while its target lives).
     """
 
+    needs_frames = True  # colour is all it sees
+
     def __init__(self, birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
         if not 0.0 <= birth_iou <= 1.0:

@@ -105,6 +105,8 @@ class PBMTracker:
             (every person in view); ``GivenTargetOnly`` for the single-target protocol.
     """
 
+    needs_frames = True  # colour histograms of the parts (PBM 2.2)
+
     def __init__(
         self,
         features: FeatureParams | None = None,

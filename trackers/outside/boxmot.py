@@ -77,6 +77,8 @@ class BoxmotTracker:
         min_score: detections below this score are not given to the tracker.
     """
 
+    needs_frames = False  # boxes only (motion-only trackers)
+
     def __init__(self, tracker: str, params: Mapping[str, Any] | None = None,
                  frame_rate: float | None = None, min_score: float = 0.0) -> None:
         require("boxmot", INSTALL, type(self).__name__, f"pip install {INSTALL}")

@@ -36,6 +36,8 @@ class MotpyTracker:
         min_score: detections below this score are not given to motpy.
     """
 
+    needs_frames = False  # boxes only (motion-only trackers)
+
     def __init__(
         self,
         dt: float = 1.0,

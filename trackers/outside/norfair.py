@@ -35,6 +35,8 @@ class NorfairTracker:
         min_score: detections below this score are not given to norfair.
     """
 
+    needs_frames = False  # boxes only (motion-only trackers)
+
     def __init__(
         self,
         distance_function: str = "iou",

@@ -64,6 +64,8 @@ class OCSortTracker:
         min_score: detections below this score are not given to OC-SORT.
     """
 
+    needs_frames = False  # boxes only (motion-only trackers)
+
     def __init__(
         self,
         det_thresh: float = 0.05,

@@ -77,6 +77,8 @@ class RetaTracker(PredictSteps, OcclusionSteps, UpdateSteps, HypothesisSteps, Ou
         min_score: detections below this score are ignored.
     """
 
+    needs_frames = True  # colour histograms of the measurements (eq. 1)
+
     def __init__(
         self,
         association: Association | None = None,

@@ -15,7 +15,7 @@ from omegaconf import OmegaConf
 
 from occbench.datasets.synthetic import load_scenario
 from occbench.pipeline.loop import run_sequence
-from occbench.pipeline.warmup import WarmUp, needs_pixels, warm_up
+from occbench.pipeline.warmup import WarmUp, warm_up
 from occbench.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -87,8 +87,7 @@ class _Counting:
         return []
 
 
-class _Pixels(_Counting):
-    def update(self, frame, detections, foreground=None):
+def update(self, frame, detections, foreground=None):
         if frame is None:
             raise ValueError("needs pixels")
         return super().update(frame, detections, foreground)
@@ -102,11 +101,6 @@ def test_warm_up_runs_once_per_tracker_class_and_announces_it():
     n = _Counting.updates
     assert once({"c": _Counting}, said.append) == []  # the class is warm: nothing run or said
     assert _Counting.updates == n and len(said) == 1
-
-
-def test_needs_pixels_asks_the_tracker():
-    assert needs_pixels(_Counting()) is None
-    assert needs_pixels(_Pixels()) == "ValueError: needs pixels"
 
 
 
