@@ -7,23 +7,13 @@ or more seeds; every tracker of a set runs in one ``occbench.pipeline.experiment
 them see the same frames and the same detections. A set run at several seeds reports the
 mean of its COMBINED IDF1 / HOTA / MOTA over the seeds.
 
-Which data is which (docs/generalisation.md says the same, with the latest table):
+Which data is which: each set's ``role`` and ``description`` below; docs/generalisation.md
+gives the split (issue 28's, and issue 35's with PETS09-S2L1-real frames 1-400 for choosing)
+and why each seed range counts as untouched or looked at.
 
-* tuning (choosing, issue 28): real detections of the front end on CAVIAR OneLeaveShop1cor
-  frames 1-150 and EnterExitCrossingPaths1cor frames 1-180, noisy ground truth on the same
-  frames; the ``tune_*`` experiments' data (synthetic suite, seed 100, 120 frames, exact
-  detections), on which the outside trackers' ``*_tuned`` rows were chosen.
-* untouched: synthetic seeds >= 1000 (the project's defaults and adaptations were measured
-  on seeds 0-15 and tuned on seed 100), OneLeaveShop1cor frames 151-295,
-  EnterExitCrossingPaths1cor frames 181-383, the replayed real trajectories (CAVIAR
-  OneLeaveShop2cor, PETS09-S2L1, TUD-Campus) at their real frame rates, the CAVIAR lobby
-  clips with noisy ground truth, the synthetic crowd at three densities (seeds 2000-2009: ten
-  seeds, because one late identity exchange moves a crowd seed's IDF1 by up to 0.1; seeds
-  1000-1009 decided a default, ``adaptations.appearance_margin``, so they count as looked at).
-
-The EnterExitCrossingPaths1cor and lobby sets read the folder given as ``data_root`` (not
-shipped with the project: the caller says where it is; without it they are skipped with a
-message).
+The EnterExitCrossingPaths1cor, PETS09-S2L1-real and lobby sets read the folder given as
+``data_root`` (not shipped with the project: the caller says where it is; without it they are
+skipped with a message).
 
 Used by ``benchmarks/bench_generalisation.py`` (the command line); ``run_table`` is the
 library entry point.
@@ -96,6 +86,11 @@ def _replay(name: str, *extra: str) -> tuple[str, ...]:
 ECP = "CAVIAR-EnterExitCrossingPaths1cor"
 #: the second corridor sequence (not shipped): frames and gt in MOT layout under data_root
 ECP_SET = ("dataset=mot", f"dataset.root=${{data:{ECP}}}")
+PETS_REAL = "PETS09-S2L1-real"
+#: PETS 2009 S2L1 View_001 frames 1-400, real pixels at 480x360 (not shipped); its frames
+#: 401-795 are kept out of the data folder as untouched footage
+PETS_REAL_SET = ("dataset=mot", f"dataset.root=${{data:{PETS_REAL}}}",
+                 "dataset.frames=[1,400]")
 LOBBY = "CAVIAR-lobby"
 #: the lobby's multi-person reporting clips (docs/generalisation.md, "Lobby": nothing is chosen
 #: or fitted on them)
@@ -139,6 +134,13 @@ SETS: tuple[EvalSet, ...] = (
     EvalSet("ecp181-383 gt", UNTOUCHED, (*ECP_SET, "dataset.frames=[181,383]", *GT03),
             UNTOUCHED_SEEDS, requires=(f"data:{ECP}",),
             description="CAVIAR EnterExitCrossingPaths1cor frames 181-383, noisy gt miss 0.3"),
+    EvalSet("pets1-400 sil", TUNING, (*PETS_REAL_SET, *SILHOUETTE), (0,), quick=True,
+            requires=(f"data:{PETS_REAL}",),
+            description="PETS09-S2L1 View_001 real pixels (480x360, 7 fps) frames 1-400, "
+            "the silhouette detector (issue 35: groups walking and crossing)"),
+    EvalSet("pets1-400 gt", TUNING, (*PETS_REAL_SET, *GT03), UNTOUCHED_SEEDS,
+            requires=(f"data:{PETS_REAL}",),
+            description="PETS09-S2L1 View_001 real pixels frames 1-400, noisy gt miss 0.3"),
     EvalSet("lobby gt", UNTOUCHED, ("dataset=mot", f"dataset.root=${{data:{LOBBY}}}",
                                     f"dataset.sequences=[{','.join(LOBBY_REPORTED)}]", *GT03),
             (1000,), requires=(f"data:{LOBBY}",),
@@ -155,6 +157,10 @@ SETS: tuple[EvalSet, ...] = (
     EvalSet("PETS09", UNTOUCHED, _replay("PETS09-S2L1", *GT03), (1000,),
             description="PETS09-S2L1 trajectories replayed (7 fps), noisy gt miss 0.3",
             requires=("PETS09-S2L1",)),
+    EvalSet("PETS09 401-795", UNTOUCHED,
+            _replay("PETS09-S2L1", "dataset.frames=[401,795]", *GT03), (1000,),
+            description="PETS09-S2L1 trajectories replayed, frames 401-795 only (no frame of "
+            "the choosing set pets1-400), noisy gt miss 0.3", requires=("PETS09-S2L1",)),
     EvalSet("TUD-Campus", UNTOUCHED,
             _replay("TUD-Campus", "dataset.width=640", "dataset.height=480", "dataset.fps=25",
                     *GT03), (1000,), quick=True,

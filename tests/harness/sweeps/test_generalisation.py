@@ -18,6 +18,12 @@ def test_every_set_composes_and_is_marked():
     assert roles["cav151-295 sil"] == roles["ecp181-383 sil"] == G.UNTOUCHED
     assert roles["ecp181-383 gt"] == roles["lobby gt"] == G.UNTOUCHED
     assert roles["lobby-C gt"] == G.TUNING  # the lobby's choosing clips C, never its R
+    # issue 35: PETS09-S2L1 real pixels frames 1-400 choose; the replay's other frames report
+    assert roles["pets1-400 sil"] == roles["pets1-400 gt"] == G.TUNING
+    assert roles["PETS09 401-795"] == G.UNTOUCHED
+    pets = {s.name: s for s in G.SETS}
+    assert "dataset.frames=[1,400]" in pets["pets1-400 sil"].overrides
+    assert "dataset.frames=[401,795]" in pets["PETS09 401-795"].overrides
     assert not set(G.LOBBY_CHOSEN) & set(G.LOBBY_REPORTED)
     for s in G.SETS:
         assert s.role in (G.TUNING, G.UNTOUCHED)
