@@ -45,6 +45,7 @@ overrides of the composed config). Run it niced on a shared machine: ``nice -n 1
 from __future__ import annotations
 
 import argparse
+import pickle
 import sys
 from collections import Counter
 from dataclasses import dataclass, field
@@ -57,7 +58,7 @@ from scipy.optimize import linear_sum_assignment
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from idf1_losses import idf1_losses, losses_line  # noqa: E402
+from idf1_losses import CAUSES, idf1_causes, idf1_losses, losses_line  # noqa: E402
 from shared_data import use_shared_data  # noqa: E402
 
 from occbench.io.mot import MotTable  # noqa: E402
@@ -82,6 +83,8 @@ class Tally:
     modes: Counter = field(default_factory=Counter)  # ``mode_counts`` summed
     missed: Counter = field(default_factory=Counter)  # ``idf1_losses``: IDFN causes summed
     false: Counter = field(default_factory=Counter)  # ... and IDFP causes
+    causes: Counter = field(default_factory=Counter)  # ``idf1_causes``: boxes by event
+    denominator: int = 0  # ... and IDF1's 2 IDTP + IDFP + IDFN, summed
     events: list[dict] = field(default_factory=list)
     scores: list = field(default_factory=list)
 
@@ -93,6 +96,8 @@ class Tally:
         self.modes.update(other.modes)
         self.missed.update(other.missed)
         self.false.update(other.false)
+        self.causes.update(other.causes)
+        self.denominator += other.denominator
         self.events += other.events
         self.scores += other.scores
 
@@ -115,7 +120,8 @@ def set_overrides(name: str, seed: int, length: int | None) -> list[str]:
 
 
 def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], gap: int,
-             stacks: bool = False, show_losses: bool = False) -> dict[str, Tally]:
+             stacks: bool = False, show_losses: bool = False,
+             dump: Path | None = None) -> dict[str, Tally]:
     """Every tracker on every sequence of one composed run; the tallies per tracker."""
     cfg = G.compose(overrides)
     tallies = {label: Tally() for label, _, _ in trackers}
@@ -183,6 +189,16 @@ def run_seed(overrides: list[str], trackers: list[tuple[str, str, list[str]]], g
                                  unconfirmed[label])
             tallies[label].missed.update({k: v for k, v in fn.items() if isinstance(k, str)})
             tallies[label].false.update(fp)
+            hid = np.asarray(hidden, dtype=bool)[order]
+            causes, denominator = idf1_causes(gt, table, match_rows(considered(gt), table), hid,
+                                              unconfirmed[label], dets)
+            tallies[label].causes.update(causes)
+            tallies[label].denominator += denominator
+            if dump is not None:  # what idf1_causes read, to study a rule's events offline
+                dump.mkdir(parents=True, exist_ok=True)
+                with open(dump / f"{seq.info.name}_{label}.pkl", "wb") as fh:
+                    pickle.dump(dict(gt=gt, res=table, hidden=hid,
+                                     tentative=unconfirmed[label], dets=dets), fh)
             if show_losses:
                 print(f"    {seq.info.name} {label}: {losses_line(fn, fp)}")
             if stacks:
@@ -328,7 +344,10 @@ def line(label: str, tally: Tally, m: np.ndarray) -> str:
             f"re-acquisitions wrong {tally.wrong}/{tally.reacquired}; "
             f"exchanges {tally.exchanges}; modes "
             + " ".join(f"{k} {tally.modes.get(k, 0)}" for k in MODES)
-            + "; " + losses_line(tally.missed, tally.false))
+            + "; " + losses_line(tally.missed, tally.false)
+            + "; IDF1 lost by cause (points) " + " ".join(
+                f"{c} {tally.causes.get(c, 0) / max(tally.denominator, 1):.3f}" for c in CAUSES
+                if tally.causes.get(c, 0)))
 
 
 def main(argv=None) -> int:
@@ -343,6 +362,7 @@ def main(argv=None) -> int:
     ap.add_argument("--events", action="store_true", help="print every wrong re-acquisition")
     ap.add_argument("--untouched", action="store_true", help="allow the set's untouched seeds")
     ap.add_argument("--stacks", action="store_true", help="count stacked targets (docstring)")
+    ap.add_argument("--dump", type=Path, help="pickle each run's gt, tracks and detections here")
     args = ap.parse_args(argv)
     sets = {e.name: e for e in G.SETS}
     bad = [n for n in args.set if n not in sets]
@@ -366,8 +386,9 @@ def run_set(name: str, seeds: list[int], trackers: list, args) -> None:
     total = {label: Tally() for label, _, _ in trackers}
     per_seed: dict[str, list[np.ndarray]] = {label: [] for label in total}
     for seed in seeds:
+        dump = args.dump / name.replace(" ", "_") / f"seed{seed}" if args.dump else None
         tallies = run_seed(set_overrides(name, seed, args.length), trackers, args.gap,
-                           args.stacks, args.events)
+                           args.stacks, args.events, dump)
         for label, tally in tallies.items():
             m = metrics(tally)
             per_seed[label].append(m)

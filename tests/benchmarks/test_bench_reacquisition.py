@@ -96,3 +96,48 @@ def test_idf1_misses_put_down_to_causes():
     assert (fn["other_id_found"], fn["tentative"], fn["unreported"]) == (2, 1, 0)
     assert fn[(1, "other_id_found")] == 2
     assert (fp["on_person"], fp["found_nobody"], fp["hidden_nobody"], fp["nobody_empty"]) == (2, 1, 1, 2)
+
+
+def _causes(gt, rows, hidden, dets):
+    res = table(sorted(rows))
+    hid = np.array([hidden.get((f, i), False) for f, i, *_ in sorted(rows)])
+    m = bench.match_rows(bench.considered(gt), res)
+    return bench.idf1_causes(gt, res, m, hid, {}, dets)
+
+
+def test_idf1_lost_to_a_split_a_run_of_misses_and_a_phantom():
+    # person 1 (x 100, frames 1-12): id 1 in 1-4, undetected and unreported in 5-7, id 2 in
+    # 8-12 (IDF1 takes id 2: id 1's 4 boxes are lost twice, to the run of misses);
+    # person 3 (x 300, frames 1-9): id 3 in 1-4; id 4 born at frame 3 on its upper part
+    # (a split box) takes it in 5-9; id 9: a hidden report on nobody at frame 3
+    gt = table(sorted([(f, 1, 100, 50, 40, 100) for f in range(1, 13)]
+                      + [(f, 3, 300, 50, 40, 100) for f in range(1, 10)]))
+    rows = [(f, 1, 100, 50, 40, 100) for f in range(1, 5)]
+    rows += [(f, 2, 100, 50, 40, 100) for f in range(8, 13)]
+    rows += [(f, 3, 300, 50, 40, 100) for f in range(1, 5)]
+    rows += [(f, 4, 300, 50, 40, 40) for f in (3, 4)] + [(f, 4, 300, 50, 40, 100)
+                                                       for f in range(5, 10)]
+    rows += [(3, 9, 600, 50, 40, 100)]
+    det = {f: np.array([[100.0, 50, 40, 100]]) for f in (*range(1, 5), *range(8, 13))}
+    causes, denominator = _causes(gt, rows, {(3, 9): True}, det)
+    assert causes["dropped_misses"] == 8 and causes["unreported"] == 3
+    assert causes["split"] == 4 + 4 + 2  # id 3's boxes (IDFN, IDFP), id 4's fragment boxes
+    assert causes["phantom"] == 1 and sum(causes.values()) == 8 + 3 + 10 + 1
+    # 2 IDTP + IDFP + IDFN: 10 credited boxes (5 + 5), 13 false, 3 + 4 + 4 missed
+    assert denominator == 2 * 10 + (4 + 4 + 2 + 1) + (3 + 4 + 4)
+
+
+def test_idf1_lost_at_a_swap_is_a_merged_box_or_a_contact():
+    # persons 1 and 2 walk side by side (x 100 and 130, boxes overlapping) in frames 1-10;
+    # ids 1 and 2 swap at frame 7: 4 + 4 boxes missed and 4 + 4 false
+    gt = table(sorted((f, g, x, 50, 40, 100) for f in range(1, 11)
+                      for g, x in ((1, 100), (2, 130))))
+    rows = [(f, 1 if f < 7 else 2, 100, 50, 40, 100) for f in range(1, 11)]
+    rows += [(f, 2 if f < 7 else 1, 130, 50, 40, 100) for f in range(1, 11)]
+    apart = {f: np.array([[100.0, 50, 40, 100], [130, 50, 40, 100]]) for f in range(1, 11)}
+    causes, _ = _causes(gt, rows, {}, apart)
+    assert causes == {"contact": 16}
+    merged = dict(apart)
+    merged[6] = np.array([[98.0, 48, 75, 104]])  # one box over both people
+    causes, _ = _causes(gt, rows, {}, merged)
+    assert causes == {"merged": 16}
