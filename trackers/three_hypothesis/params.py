@@ -195,6 +195,11 @@ class Adaptations:
             its frames unmatched are at most this many times its matches (norfair's hit
             counter: the longer tracked, the longer believed); 0 reports it however young
             (the paper).
+        contact_region: when two people are in O (eq. 2) and one measurement meets both in
+            stage 1, the measurement's histogram holds both, so their two pairs share one
+            appearance term (the mean) and the region term (eq. 5) decides between them
+            (a merged measurement is an occlusion); False: eq. 4 weighs each pair (the
+            paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -219,6 +224,7 @@ class Adaptations:
     early_confirm: int = 1
     early_confirm_score: float = 0.0
     report_memory: float = 1.0
+    contact_region: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -228,7 +234,8 @@ class Adaptations:
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool, "foreground_presence": bool,
                       "tentative_stage1_only": bool, "inherit_hidden_id": bool,
-                      "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool})
+                      "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
+                      "contact_region": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -251,7 +258,7 @@ class Adaptations:
                    foreground_presence=False, tentative_stage1_only=False,
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
                    filter_size=False, shape_gate=0.0, early_confirm=0,
-                   early_confirm_score=0.0, report_memory=0.0)
+                   early_confirm_score=0.0, report_memory=0.0, contact_region=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -109,6 +109,43 @@ class AppearanceMargin:
         return np.clip(r - rival, 0.0, 1.0)
 
 
+@dataclass(frozen=True)
+class AppearanceAtContact:
+    """3.3.2 as written: at a contact too, stage 1 weighs the appearance term of each pair
+    (eq. 4) as for any other pair."""
+
+    def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
+        return appearance
+
+
+@dataclass(frozen=True)
+class RegionAtContact:
+    """``contact_region``: a merged measurement is an occlusion. When two people are in O
+    (eq. 2: their predicted regions overlap by more than lambda) and one measurement meets
+    both in stage 1, its histogram p (eq. 1, over the measurement's ellipse) holds both
+    people's pixels, so eq. 4 cannot tell which of them it is: both pairs get the mean of
+    their appearance terms, and the region term (eq. 5, the motion model's prediction)
+    decides between them. Pairs of people not in O keep their appearance term."""
+
+    def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
+        """``appearance`` (rho (P, D), admissible (P, D) bool) -> (P, D) wrapped so that
+        the persons of every pair of O (``pairs``: (K, 2) node rows; ``owners``: (B,)
+        person of each node) share one term on every measurement admissible to both."""
+        if not len(pairs):
+            return appearance
+        persons = np.unique(np.sort(owners[pairs], axis=1), axis=0)  # (K', 2) i < j
+        persons = persons[persons[:, 0] != persons[:, 1]]
+
+        def evidence(rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
+            a = np.array(appearance(rho, admissible), dtype=np.float64)
+            for i, j in persons.tolist():
+                both = admissible[i] & admissible[j]  # (D,) measurements meeting both
+                a[i, both] = a[j, both] = 0.5 * (a[i, both] + a[j, both])
+            return a
+
+        return evidence
+
+
 def _rival(x: np.ndarray, axis: int) -> np.ndarray:
     """For every entry of x, the largest other entry along ``axis`` (0 when alone)."""
     if x.shape[axis] < 2:
@@ -345,6 +382,7 @@ class Rules(NamedTuple):
     gate: FixedGate | KalmanGate
     stage2: EveryNodeInStage2 | ConfirmedInStage2
     stage1_appearance: AbsoluteAppearance | AppearanceMargin
+    contact: AppearanceAtContact | RegionAtContact  # eq. 4 between people in O (3.3.2)
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
     appearance_behind: KeepAppearance | BlendVisible
@@ -374,6 +412,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         gate=KalmanGate(a.gate_sigmas) if a.gate_sigmas > 0 else FixedGate(),
         stage2=ConfirmedInStage2() if a.tentative_stage1_only else EveryNodeInStage2(),
         stage1_appearance=AppearanceMargin() if a.appearance_margin else AbsoluteAppearance(),
+        contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),

@@ -50,7 +50,8 @@ class OcclusionSteps:
             gated=self.rules.stage2.entrants(
                 np.array([person.confirmed for person in persons], dtype=bool)),
             gate=self.rules.gate.radii(f.Pp, R),
-            evidence=self.rules.stage1_appearance.evidence,
+            evidence=self.rules.contact.evidence(self.rules.stage1_appearance.evidence,
+                                                 f.pairs, f.owners),
             admissible=shape.admissible(f.pred, f.dets, f.owners, f.delta, seen))
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())}

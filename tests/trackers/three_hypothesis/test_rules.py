@@ -14,6 +14,7 @@ from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.rules import (
     AbsoluteAppearance,
     AllPixels,
+    AppearanceAtContact,
     AppearanceMargin,
     BlendVisible,
     EstimateShape,
@@ -26,6 +27,7 @@ from occbench.trackers.three_hypothesis.rules import (
     NoPresence,
     NoSupport,
     PredictionShape,
+    RegionAtContact,
     ReportRule,
     build_rules,
 )
@@ -76,6 +78,37 @@ def test_appearance_margin_is_rho_over_the_best_rival_of_row_and_column():
     assert AbsoluteAppearance().evidence(rho, admissible) is rho
     np.testing.assert_allclose(AppearanceMargin().evidence(rho[:1, :1], admissible[:1, :1]),
                                [[0.9]])  # one person, one measurement
+
+
+@pytest.mark.parametrize("margin", [False, True])
+def test_a_merged_measurement_at_a_contact_goes_to_the_region_not_the_colours(margin):
+    """Two people in O meet one measurement: person 0's colours fit it better (rho 0.95
+    against 0.7), person 1's predicted region better (delta 0.98 against 0.80). The paper
+    gives it to person 0; ``contact_region`` to person 1, and to person 0 again when the two
+    are not in O."""
+    from trackers.three_hypothesis.association import associate
+
+    sqrt_q = np.array([[0.95, np.sqrt(1 - 0.95**2)], [0.7, np.sqrt(1 - 0.7**2)]])
+    sqrt_p = np.array([[1.0, 0.0]])
+    boxes = np.array([[100.0, 50, 20, 60], [104.0, 50, 20, 60]])
+    delta = np.array([[0.80], [0.98]])
+    owners = np.array([0, 1])
+    appearance = (AppearanceMargin() if margin else AbsoluteAppearance()).evidence
+
+    def taker(rule, pairs):
+        m = associate(boxes, owners, sqrt_q, boxes[1:], sqrt_p, 0.5, 50.0, delta=delta,
+                      evidence=rule.evidence(appearance, pairs, owners))
+        return m.matches[:, 0].tolist()
+
+    in_o = np.array([[0, 1]])
+    assert taker(AppearanceAtContact(), in_o) == [0]
+    assert taker(RegionAtContact(), in_o) == [1]
+    assert taker(RegionAtContact(), np.zeros((0, 2), dtype=int)) == [0]
+    assert isinstance(build_rules(Adaptations.paper(), EllipseHistogrammer()).contact,
+                      AppearanceAtContact)
+    assert isinstance(build_rules(Adaptations(contact_region=True), EllipseHistogrammer())
+                      .contact, RegionAtContact)
+    assert Adaptations(contact_region=True).changed()[-1] == "contact_region"
 
 
 def test_appearance_behind_others_kept_or_blended_by_the_visible_share():
