@@ -143,7 +143,7 @@ def idf1_causes(gt: MotTable, res: MotTable, m: np.ndarray, hidden: np.ndarray,
     OCCLUDED) or ``found_nobody``.
 
     ``m``: (len(considered(gt)),) the CLEAR matching of the considered rows
-    (``harness.metrics.paper.match_rows``); ``hidden`` (len(res),) bool: OCCLUDED rows;
+    (``occbench.metrics.paper.match_rows``); ``hidden`` (len(res),) bool: OCCLUDED rows;
     ``tentative``: frame -> (K, 4) xywh unreported boxes; ``dets``: frame -> (N, 4) xywh
     detections the tracker was given.
     """

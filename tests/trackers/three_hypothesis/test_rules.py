@@ -86,7 +86,7 @@ def test_a_merged_measurement_at_a_contact_goes_to_the_region_not_the_colours(ma
     against 0.7), person 1's predicted region better (delta 0.98 against 0.80). The paper
     gives it to person 0; ``contact_region`` to person 1, and to person 0 again when the two
     are not in O."""
-    from trackers.three_hypothesis.association import associate
+    from occbench.trackers.three_hypothesis.association import associate
 
     sqrt_q = np.array([[0.95, np.sqrt(1 - 0.95**2)], [0.7, np.sqrt(1 - 0.7**2)]])
     sqrt_p = np.array([[1.0, 0.0]])
