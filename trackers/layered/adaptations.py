@@ -119,6 +119,11 @@ class Adaptations:
             KF2 rewound to its last observation and re-run over the line from it to the new
             one (``reupdate.ReUpdate``, OC-SORT's observation-centric re-update; 0: off,
             one update after the gap's predictions, eqs. 7-8).
+        contested_template: a candidate that two or more targets with fresh head templates
+            may take (each scores it >= ``matching.match_threshold`` and within this ratio
+            of the best) goes to the target whose head template matches at its head best
+            (PBM 4.1's template, applied to a candidate's column; ``rules.TemplateContest``);
+            0: left to the assignment (the paper's pruning looks along a target's row only).
     """
 
     model_spread: float = 4.5
@@ -144,6 +149,7 @@ class Adaptations:
     rival_match: float = 0.0
     early_confirm: int = 2
     reupdate: int = 0
+    contested_template: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -154,6 +160,9 @@ class Adaptations:
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
                  reupdate=self.reupdate)
+        require("adaptations.contested_template",
+                self.contested_template == 0 or self.contested_template >= 1,
+                "must be 0 (off) or >= 1", self.contested_template)
         if self.stale is not None and not isinstance(self.stale, StaleParts):
             raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
         if self.hidden_evidence is not None and not isinstance(self.hidden_evidence, HiddenEvidence):
@@ -164,7 +173,7 @@ class Adaptations:
                              f"rules for one step: set one (report_support {self.report_support})")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
-                                       "report_support", "rival_match"),
+                                       "report_support", "rival_match", "contested_template"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -182,7 +191,8 @@ class Adaptations:
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
                    profile_heads=False, one_to_one=False, report_support=0.0,
-                   hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0)
+                   hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
+                   contested_template=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

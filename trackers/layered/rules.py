@@ -21,6 +21,7 @@ from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.evidence import HiddenEvidence, box_foreground
 from occbench.trackers.layered.parts import PartFeatures
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
+from occbench.trackers.layered.search import Candidates, match_head_template
 from occbench.trackers.layered.targets import Targets
 
 # --------------------------------------------------------------- eq. 11: the model compared
@@ -261,6 +262,60 @@ class IsolatedEarly:
         targets.confirmed[early[iou.max(axis=1) < self.max_iou]] = True
 
 
+# --------------------------------------------------------------- PBM 4.1: a candidate two targets may take
+
+
+@dataclass(frozen=True)
+class NoContest:
+    """PBM 4 step 4 as written: a candidate that several targets may take is left to the
+    assignment (4.1's pruning looks along one target's candidates only)."""
+
+    def settle(self, S: np.ndarray, cand: Candidates, targets: Targets, frame: np.ndarray,
+               match_threshold: float, template_threshold: float) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class TemplateContest:
+    """``contested_template``: PBM 4.1's head template turned to a candidate's column. A
+    candidate region that several targets may take (each scores it p >= match_threshold,
+    eq. 13, and within ``margin`` of the best: p >= p_best / margin) is one merged or
+    shared region; the targets whose head templates are fresh (found within
+    ``prune_max_misses`` frames) are matched at its head (``match_head_template``, within
+    half a template width and 2 pixels), and only the best correlating one may take it when
+    it reaches ``template_threshold``; the others' pairs are struck from S. Targets with a
+    stale or no template keep their pairs."""
+
+    margin: float
+    prune_max_misses: int
+
+    def settle(self, S: np.ndarray, cand: Candidates, targets: Targets, frame: np.ndarray,
+               match_threshold: float, template_threshold: float) -> None:
+        """Strikes the losing pairs from the (T, N) scores S in place."""
+        if S.shape[0] < 2:
+            return
+        for n in range(S.shape[1]):
+            col = S[:, n]
+            rivals = np.flatnonzero(col >= match_threshold)
+            if len(rivals) < 2:
+                continue
+            rivals = rivals[col[rivals] * self.margin >= col[rivals].max()]
+            fresh = [t for t in rivals.tolist() if targets.head_template[t] is not None
+                     and targets.misses[t] <= self.prune_max_misses]
+            if len(fresh) < 2:
+                continue
+            hx, hy = float(cand.head[n, 0]), float(cand.head[n, 1])
+            corr = []
+            for t in fresh:
+                tw = targets.head_template[t].shape[1]
+                corr.append(match_head_template(frame, targets.head_template[t],
+                                                (hx - 0.5 * tw, hy), 0.5 * tw + 2)[1])
+            k = int(np.argmax(corr))
+            if corr[k] < template_threshold:
+                continue
+            S[[t for j, t in enumerate(fresh) if j != k], n] = -np.inf
+
+
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -274,6 +329,7 @@ class Rules(NamedTuple):
     report_shown: ReportUnfound | ReportOnForeground | HiddenEvidence
     confirmation: InARow | IsolatedEarly
     reupdate: AfterPrediction | ReUpdate
+    contest: NoContest | TemplateContest  # a candidate several targets may take (PBM 4.1)
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -291,4 +347,6 @@ def build_rules(a: Adaptations) -> Rules:
                                            if a.report_support > 0 else ReportUnfound()),
         confirmation=IsolatedEarly(a.early_confirm) if a.early_confirm > 0 else InARow(),
         reupdate=ReUpdate(a.reupdate) if a.reupdate > 0 else AfterPrediction(),
+        contest=(TemplateContest(a.contested_template, a.prune_max_misses)
+                 if a.contested_template > 0 else NoContest()),
     )

@@ -178,6 +178,9 @@ class PBMTracker:
         if len(self.targets) and len(cand):
             self._score_in_gates(scores, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
             self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
+            self.rules.contest.settle(scores.S, cand, self.targets, frame,  # 4.1, by column
+                                      self.matching.match_threshold,
+                                      self.pruning.template_threshold)
         withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
         matches, lost, free = self.rules.sharing.assign(cost, 1.0 - self.matching.match_threshold)
