@@ -254,7 +254,7 @@ class RunRecord:
         try:  # the page of the run, last: it shows every output above
             from occbench.report.html import write_run_report
 
-            write_run_report(writer.out_dir, self.frames, plan.title)
+            write_run_report(writer.out_dir, self.frames, plan.title, paired=self.paired)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
             self.fail("*", "*", "report.html", err, traceback.format_exc())
             self.publish("finished")  # summary.md counts this failure too

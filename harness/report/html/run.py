@@ -34,18 +34,29 @@ PER_SEQUENCE = ("HOTA", "IDF1", "MOTA", "FP", "FN", "IDs")
 def read_frame_counts(run_dir: Path, iou_threshold: float = 0.5
                       ) -> dict[str, dict[str, FrameCounts]]:
     """tracker -> sequence -> ``FrameCounts`` from the run folder's gt/ and tracks/ (the
-    files the run scored)."""
+    files the run scored), each tracker's sequences in the order the run tracked them
+    (``gt/seqmap.txt``): the bootstrap draws sequence by sequence, so that order is part of
+    the paired intervals, which must come out as the run's own."""
     from occbench.io.mot import read_mot
     from occbench.metrics.timeline import frame_counts
 
     out: dict[str, dict[str, FrameCounts]] = {}
     for folder in sorted(p for p in (run_dir / "tracks").glob("*") if p.is_dir()):
-        for path in sorted(folder.glob("*.txt")):
+        for path in sorted(folder.glob("*.txt"), key=run_order(run_dir)):
             gt = run_dir / "gt" / path.stem / "gt" / "gt.txt"
             if gt.is_file():
                 out.setdefault(folder.name, {})[path.stem] = frame_counts(
                     read_mot(gt, gt=True), read_mot(path, kind="result"), iou_threshold)
     return out
+
+
+def run_order(run_dir: Path):
+    """A sort key putting a sequence's file where ``gt/seqmap.txt`` (a header, then the
+    sequences in the order tracked) names it; unnamed ones after, by name."""
+    seqmap = run_dir / "gt" / "seqmap.txt"
+    names = seqmap.read_text().split()[1:] if seqmap.is_file() else []
+    rank = {n: i for i, n in enumerate(names)}
+    return lambda path: (rank.get(path.stem, len(rank)), path.stem)
 
 
 def _order(counts: Mapping[str, Any], metrics: pd.DataFrame) -> dict[str, Any]:
@@ -94,11 +105,12 @@ def videos(run_dir: Path, first: Mapping[str, int] | None = None) -> dict[str, t
 
 
 def write_run_report(run_dir: str | Path, frames: Mapping[str, Mapping[str, FrameCounts]]
-                     | None = None, title: str = "", first: Mapping[str, int] | None = None
-                     ) -> Path:
+                     | None = None, title: str = "", first: Mapping[str, int] | None = None,
+                     paired: Sequence[PairedDifference] | None = None) -> Path:
     """Write ``<run_dir>/report.html`` (module docstring); ``frames`` are the run's per-frame
     counts (None: scored again from the folder's files), ``first`` the first frame of a
-    sequence's video when it is not the run's first."""
+    sequence's video when it is not the run's first, ``paired`` the run's paired differences
+    (those of summary.md; None: computed from the counts, in the run's order)."""
     run_dir = Path(run_dir)
     metrics = pd.read_csv(run_dir / "metrics.csv") if (run_dir / "metrics.csv").is_file() \
         else pd.DataFrame()
@@ -106,7 +118,7 @@ def write_run_report(run_dir: str | Path, frames: Mapping[str, Mapping[str, Fram
     page = Page(f"occbench run {run_dir.name}" + (f": {title}" if title else ""))
     page.text(f"Run folder: {run_dir.resolve()}")
     _tables(page, metrics)
-    diffs = all_pairs(counts)
+    diffs = list(paired) if paired is not None else all_pairs(counts)
     if diffs:
         _paired(page, diffs)
     order = list(dict.fromkeys(metrics["sequence"])) if "sequence" in metrics else []
