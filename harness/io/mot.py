@@ -77,6 +77,8 @@ READ_KINDS = ("any", "gt", "det", "result")
 #: largest frame number, id or class accepted: a bigger one is a misprint (``1e20`` would
 #: wrap to -9223372036854775808 as int64); TrackEval reads these columns as 32-bit too
 MAX_INT = 2**31 - 1
+MAX_COORD = 1e9  # |left|, |top|, width, height beyond it: refused (no image is that large,
+# and 1e308 overflows the overlap arithmetic: every match of the sequence would be lost)
 
 #: MOTChallenge gt classes (column 8 of MOT16+ gt): 1 is a pedestrian; MOT15-style gt has
 #: no class column and its rows get NO_CLASS (scored as pedestrians, as by TrackEval)
@@ -112,7 +114,8 @@ def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
             UTF-8; fewer than 6 or more than 10 fields, an empty field, or another number
             of fields than the first row's; a field that is not a number; a frame that is
             not an integer in 1..``last_frame`` (or ``MAX_INT``); an id that is not an
-            integer as ``kind`` needs; a NaN or infinite confidence/score, class,
+            integer as ``kind`` needs; a box coordinate or size beyond +-``MAX_COORD``
+            (1e9 pixels); a NaN or infinite confidence/score, class,
             visibility or world coordinate; in gt, a conf other than 0 or 1, a class
             that is not a positive integer, a visibility outside [0, 1] (-1 = unknown),
             or no row to score at all (every row conf 0 or of another class than
@@ -189,6 +192,7 @@ def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> Mot
     ok = (frame == np.floor(frame)).all() and (frame >= 1).all() and (frame <= top).all()
     ok = ok and (ident == np.floor(ident)).all() and (np.abs(ident) <= MAX_INT).all()
     ok = ok and (a[:, 4] > 0).all() and (a[:, 5] > 0).all()
+    ok = ok and (np.abs(a[:, 2:6]) <= MAX_COORD).all()
     if kind in ("gt", "result"):
         ok = ok and (ident >= 1).all()
     elif kind == "any":
@@ -293,6 +297,10 @@ def _check_row(row: list[float], kind: str, last_frame: int | None, where: str,
     if kind == "any" and ident < 1 and ident != -1:
         raise MotFormatError(f"{where}: id must be a positive integer (or -1 for a detection), "
                              f"got {int(ident)}: {text!r}")
+    for col, name in enumerate(("left", "top", "width", "height"), 2):
+        if math.isfinite(row[col]) and abs(row[col]) > MAX_COORD:
+            raise MotFormatError(f"{where}: box {name} must lie within +-{MAX_COORD:.0e} "
+                                 f"pixels, got {_shown(row[col])}: {text!r}")
     for col in range(6, len(row)):
         if not math.isfinite(row[col]):
             name = "confidence/score" if col == 6 else f"column {col + 1}"

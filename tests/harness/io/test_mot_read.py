@@ -134,3 +134,22 @@ def test_a_field_that_is_not_a_plain_number_names_the_line(tmp_path, field):
     p = write(tmp_path, GT9 + f"2,1,{field},1,5,5,1,1,1\n")
     with pytest.raises(MotFormatError, match=r"f\.txt:2: (not a number|10 fields)"):
         read_mot(p, gt=True)
+
+
+@pytest.mark.parametrize("box", ["1e308,5,40,100", "5,5,1e308,100", "5,-2e9,40,100",
+                                 "5,5,40,1e10"])
+@pytest.mark.parametrize("kind", ["result", "gt", "det"])
+def test_absurd_box_coordinates_are_errors_naming_file_and_line(tmp_path, box, kind):
+    """A box beyond +-1e9 pixels is refused (issue 39: x or width 1e308 overflowed the
+    overlap code and broke the matching of the whole sequence, MOTA -0.93, exit 0)."""
+    path = tmp_path / "f.txt"
+    ident = "-1" if kind == "det" else "1"
+    path.write_text(f"1,1,5,5,40,100,1,1,1\n2,{ident},{box},1,1,1\n")
+    with pytest.raises(MotFormatError, match=r"f\.txt:2: box \w+ must lie within"):
+        read_mot(path, kind=kind)
+
+
+def test_boxes_up_to_1e9_are_read(tmp_path):
+    path = tmp_path / "f.txt"
+    path.write_text("1,1,-1e9,5,1e9,100,1,-1,-1,-1\n")
+    assert read_mot(path, kind="result").boxes[0, 2] == 1e9
