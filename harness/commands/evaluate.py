@@ -1,7 +1,8 @@
 """Score MOT result files against ground truth: ``occbench eval GT RESULTS``.
 
 GT is a gt file or a folder, either in MOTChallenge layout (``<seq>/gt/gt.txt``) or flat
-(``<seq>.txt``). RESULTS is a result file or a folder of ``<seq>.txt`` files. A sequence
+(``<seq>.txt``); a nested folder with a ``seqmap.txt`` (a run folder's ``gt/``) is scored
+on the sequences it lists only. RESULTS is a result file or a folder of ``<seq>.txt`` files. A sequence
 without a result file is scored as an empty result (a warning is logged). The table (one
 row per sequence and a ``COMBINED`` row; ratios as fractions with 3 decimals, as the app
 prints them) is printed, and written as CSV with ``--csv`` (6 decimals). Exit status 0 on success, 2 on bad paths.
@@ -49,13 +50,35 @@ def find_gt(gt: Path) -> dict[str, Path]:
         return {sequence_name(gt): gt}
     nested = sorted(gt.glob("*/gt/gt.txt"))
     if nested:
-        return {p.parent.parent.name: p for p in nested}
+        return listed({p.parent.parent.name: p for p in nested}, gt / "seqmap.txt")
     flat = sorted(p for p in gt.glob("*.txt") if p.is_file())
     if not flat:
         raise EvaluationInputError(
             f"{gt}: no ground truth found (expected <seq>/gt/gt.txt or <seq>.txt)"
         )
     return {p.stem: p for p in flat}
+
+
+def listed(found: dict[str, Path], seqmap: Path) -> dict[str, Path]:
+    """``found`` restricted to the sequences ``seqmap`` names (MOTChallenge's seqmap file: a
+    header line, then one sequence a line), when there is one: a run folder's gt/ holds the
+    gt of a sequence an interrupted run began but never finished, and its seqmap names only
+    those tracked (scoring the other would score a result the run never wrote).
+
+    Raises:
+        EvaluationInputError: the seqmap names a sequence without ``<seq>/gt/gt.txt``.
+    """
+    if not seqmap.is_file():
+        return found
+    names = [line.strip() for line in seqmap.read_text().splitlines()[1:] if line.strip()]
+    missing = [n for n in names if n not in found]
+    if missing:
+        raise EvaluationInputError(f"{seqmap} names {', '.join(missing)} but there is no "
+                                   f"{seqmap.parent / missing[0] / 'gt' / 'gt.txt'}")
+    left = sorted(set(found) - set(names))
+    if left:
+        log.warning("%s: %s not listed, not scored", seqmap, ", ".join(left))
+    return {n: p for n, p in found.items() if n in names}
 
 
 def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:

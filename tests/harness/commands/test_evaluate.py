@@ -289,3 +289,19 @@ def test_cli_malformed_file_names_file_and_line(tud_dirs, capsys):
     (res / "TUD-Campus.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n1,2,zero,0,1,1\n")
     assert main([str(nested), str(res)]) == 2
     assert "TUD-Campus.txt:2" in capsys.readouterr().err
+
+
+def test_cli_scores_only_the_sequences_of_the_seqmap(tud_dirs, tmp_path, capsys, caplog):
+    """A run folder's gt/ with its seqmap (issue 39: an interrupted run's gt/ holds the
+    sequence it began and never finished; eval scored it as an empty result)."""
+    nested, _, res = tud_dirs
+    (nested / "seqmap.txt").write_text("name\nTUD-Stadtmitte\n")
+    (res / "TUD-Campus.txt").unlink()  # the run never reached it
+    out = tmp_path / "t.csv"
+    with caplog.at_level(logging.WARNING):
+        assert main([str(nested), str(res), "--csv", str(out)]) == 0
+    assert pd.read_csv(out)["sequence"].tolist() == ["TUD-Stadtmitte", COMBINED]
+    assert "TUD-Campus not listed" in caplog.text and "empty" not in caplog.text
+    (nested / "seqmap.txt").write_text("name\nTUD-Stadtmitte\nTUD-Nowhere\n")
+    assert main([str(nested), str(res)]) != 0
+    assert "names TUD-Nowhere but there is no" in capsys.readouterr().err
