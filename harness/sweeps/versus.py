@@ -62,7 +62,11 @@ def verdict(row: pd.Series) -> str:
 
 def markdown(versus: pd.DataFrame, sets: Sequence[EvalSet]) -> str:
     """The verdicts as a table, sets in ``sets``' order, choosing (T) and reporting (U) sets
-    side by side."""
+    side by side; one sentence when no set has both one of ours and an outside tracker (the
+    outside extras not installed)."""
+    if versus.empty:
+        return ("No set has an outside tracker beside ours (are the outside extras installed? "
+                "README, 'Outside trackers'): nothing to compare against.\n")
     order = {s.name: i for i, s in enumerate(sets)}
     v = versus.sort_values("set", key=lambda c: c.map(lambda n: order.get(n, len(order))),
                            kind="stable")

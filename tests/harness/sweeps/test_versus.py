@@ -50,3 +50,12 @@ def test_markdown_follows_the_sets_order_and_marks_roles():
     assert lines[0].startswith("| synth-tune (T) | reta")  # G.SETS lists synth-tune first
     assert lines[1].startswith("| synth (U) | reta | 0.900 / 0.800 / 0.700")
     assert "norfair_tuned 0.850; motpy 0.840; norfair_tuned 0.750" in lines[1]
+
+
+def test_a_table_without_outside_rows_says_so_instead_of_failing():
+    """issue 39: without the outside extras the table has only our rows; markdown raised
+    KeyError: 'set' after the table was printed and the run exited 1."""
+    ours = _table()[lambda t: t["tracker"].isin(V.OWN)]
+    v = V.versus_outside(ours)
+    assert v.empty
+    assert "nothing to compare against" in V.markdown(v, G.SETS)
