@@ -179,8 +179,9 @@ class VideoSequence(Sequence):
         if self._next < k and (self.exact or k <= self._next + GRAB_AHEAD):
             while self._next < k:
                 if not cap.grab():
+                    failed = self._next  # close() starts the count again at 1
                     self.close()
-                    raise FrameError(f"{self.path}: cannot decode frame {self._next} "
+                    raise FrameError(f"{self.path}: cannot decode frame {failed} "
                                      f"of {self.info.length}")
                 self._next += 1
         elif k != self._next:

@@ -3,6 +3,8 @@ seqLength, appearance labels, CVML numbers; hand-made folders of a few rows, no 
 
 from __future__ import annotations
 
+import re
+
 import cv2
 import numpy as np
 import pytest
@@ -216,3 +218,28 @@ def test_a_video_with_rotation_metadata_is_not_a_size_change(tmp_path):
                     "-i", str(plain), "-c", "copy", str(turned)], check=True, timeout=60)
     (seq,) = load_video(turned)
     assert seq.refused is None and seq.frame(6).shape[:2] == (seq.info.height, seq.info.width)
+
+
+def test_a_truncated_mp4_names_the_frame_it_cannot_decode(tmp_path):
+    """issue 39: decoding forward to a later frame through a cut mp4, the message named
+    frame 1 (close() reset the position before the message was built)."""
+    import av
+
+    path = tmp_path / "whole.mp4"
+    with av.open(str(path), "w", options={"movflags": "faststart"}) as box:  # index first
+        stream = box.add_stream("mpeg4", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 160, 120, "yuv420p"
+        rng = np.random.default_rng(0)
+        for _ in range(60):
+            image = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)
+            box.mux(stream.encode(av.VideoFrame.from_ndarray(image, format="bgr24")))
+        box.mux(stream.encode())
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(path.read_bytes()[: len(path.read_bytes()) * 3 // 4])
+    (seq,) = load_video(cut)
+    assert seq.decodable == 60  # the container's count: the cut is found on decoding
+    seq.frame(30)
+    with pytest.raises(FrameError) as err:
+        seq.frame(60)  # decoded forward from 31
+    failed = int(re.search(r"cannot decode frame (\d+) of 60", str(err.value)).group(1))
+    assert 31 <= failed <= 60
