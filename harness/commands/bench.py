@@ -303,8 +303,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         tracker_configs,
     )
 
+    from hydra.errors import HydraException
+
+    from occbench.commands.mistakes import explain, refuse
+
     try:
         cfg = compose_config(args.overrides)
+    except HydraException as err:  # a key or choice that does not exist: as `run` says it
+        print(explain(err, "config", args.overrides), file=sys.stderr)
+        return 1
+    try:
         sequences = load_sequences(cfg.dataset)
         by_name = {s.info.name: s for s in sequences}
         if args.sequence and args.sequence not in by_name:
@@ -324,8 +332,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.frames, args.repeats, str(cfg.get("foreground", "auto")),
             cfg.get("background") or {}, progress)
     except (OSError, ValueError, RuntimeError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return refuse(err)
     table = pd.DataFrame([t.row() for t in timings])
     node = cfg.detector.get("detector") or cfg.detector  # a FrontendSource wraps a detector
     detector = str(node.get("_target_", "?")).rsplit(".", 1)[-1]

@@ -188,7 +188,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_plugins(args)  # a missing launcher or sweeper names the extra to install
         return _call_hydra(func, f"{PROG} {command}" if command != "run" else PROG, args,
                            "detect" if command == "detect" else "config", verbose)
-    return int(func(args) or 0)
+    try:
+        return int(func(args) or 0)
+    except Exception as err:  # noqa: BLE001 - every command's failure ends in one line
+        if verbose:
+            raise
+        from occbench.commands.mistakes import explain
+
+        print(explain(err, "config", args), file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -161,11 +161,9 @@ def table_text(table: pd.DataFrame, notes: list[str] | None = None) -> str:
 
 def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.DataFrame:
     """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
-    from hydra.utils import instantiate
+    from occbench.config.build import build_source, load_sequences
 
-    from occbench.config.build import build_source
-
-    sequences = list(instantiate(cfg.dataset))
+    sequences = load_sequences(cfg.dataset)  # RunError naming the cause
     source = build_source(cfg.detector, cache=False)  # RunError naming what cannot be built
     cache = _cache_of(source, cfg.detector)
     iou = cfg.get("iou_threshold", 0.5)
@@ -318,7 +316,7 @@ def app(cfg: DictConfig) -> None:
     except DetectionFailed as err:
         table, failed = err.table, err
     except (ValueError, OSError, RunError) as err:
-        raise SystemExit(f"occbench.commands.detect: {err}") from None
+        raise RunError(str(err)) from None
     if HydraConfig.get().mode == RunMode.MULTIRUN:  # one table when the multirun ends
         log.info("job %s [%s]: %s", HydraConfig.get().job.num,
                  " ".join(HydraConfig.get().overrides.task), combined_line(table))
@@ -329,9 +327,9 @@ def app(cfg: DictConfig) -> None:
               .replace("\n", "\n  "))
     print(f"results: {out_dir}")
     if failed is not None:
-        raise SystemExit(f"occbench.commands.detect: {len(failed.failures)} sequence(s) failed (the "
-                         f"others are written; see {out_dir / 'errors.txt'}):\n  "
-                         + "\n  ".join(failed.failures))
+        raise RunError(f"{len(failed.failures)} sequence(s) failed (the others are written; "
+                       f"tracebacks in {out_dir / 'errors.txt'}): "
+                       + "; ".join(f.replace("\n", " ") for f in failed.failures))
 
 
 def combined_line(table: pd.DataFrame) -> str:

@@ -5,7 +5,8 @@ GT is a gt file or a folder, either in MOTChallenge layout (``<seq>/gt/gt.txt``)
 on the sequences it lists only. RESULTS is a result file or a folder of ``<seq>.txt`` files. A sequence
 without a result file is scored as an empty result (a warning is logged). The table (one
 row per sequence and a ``COMBINED`` row; ratios as fractions with 3 decimals, as the app
-prints them) is printed, and written as CSV with ``--csv`` (6 decimals). Exit status 0 on success, 2 on bad paths.
+prints them) is printed, and written as CSV with ``--csv`` (6 decimals). Exit status 0 on
+success, 1 on a path or file it refuses (one line ``occbench: ...`` naming it).
 """
 
 from __future__ import annotations
@@ -174,8 +175,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         table = evaluate(args.gt, args.results, args.iou)
     except (FileNotFoundError, ValueError) as err:  # MotFormatError is a ValueError
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        from occbench.commands.mistakes import refuse
+
+        return refuse(err)
     print(f"IoU threshold {args.iou:g}; ratios as fractions")
     print(format_table(table))
     if args.csv is not None:

@@ -19,6 +19,8 @@ from collections.abc import Iterator, Sequence
 from typing import Any, TextIO
 
 ENV = "OCCBENCH_VERBOSE"
+REFUSED = 1  # exit status of a refused input (a missing file, a malformed row, a bad value)
+USAGE = 2  # exit status of a command line that cannot be parsed
 HINT = "(occbench -v ... shows the traceback)"
 _OVERRIDE = re.compile(r"Could not (?:override|delete from config\.) '([^']+)'")
 _MISSING = re.compile(r"Could not find '([^']+)'")
@@ -124,10 +126,20 @@ def explain(err: BaseException, config_name: str, overrides: Sequence[str]) -> s
         best = suggest(key, known)
         hint = f": did you mean '{best}'?" if best else " (add a new key with +key=value)"
         return f"occbench: unknown key '{key}'{hint}"
-    if isinstance(err, CompactHydraException):
+    from occbench.errors import RunError
+
+    if isinstance(err, CompactHydraException | RunError):  # a message made to be read
         first = text.splitlines()[0] if text else type(err).__name__
         return first if first.startswith("occbench:") else f"occbench: {first}"
     return f"occbench: {type(err).__name__}: {text.splitlines()[0] if text else ''} {HINT}"
+
+
+def refuse(err: object, status: int = REFUSED) -> int:
+    """Print ``occbench: <err>`` on stderr, the one prefix of every mistake of every command,
+    and return ``status`` (``REFUSED``: 1)."""
+    text = str(err).strip() or type(err).__name__
+    print(text if text.startswith("occbench:") else f"occbench: {text}", file=sys.stderr)
+    return status
 
 
 class _DropLine:

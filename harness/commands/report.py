@@ -39,10 +39,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = p.parse_args(argv)
     from occbench.report.tracks import tracks_text
 
+    from occbench.commands.mistakes import refuse
+
     if not (args.run_dir / "config.yaml").is_file():
-        print(f"error: {args.run_dir / 'config.yaml'} not found (a run directory of "
-              "occbench run)", file=sys.stderr)
-        return 2
+        return refuse(f"{args.run_dir / 'config.yaml'} not found (a run directory of "
+                      "occbench run)")
+    if not (args.run_dir / "tracks").is_dir():
+        errors = args.run_dir / "errors.txt"
+        return refuse(f"{args.run_dir / 'tracks'} not found: the run wrote no tracks"
+                      + (f" (it failed: {errors})" if errors.is_file() else ""))
     common = ["--sequence", args.sequence] if args.sequence else []
     status = 0
     if not args.no_video:
@@ -64,8 +69,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             print(f"page: {write_run_report(args.run_dir, first=first)}")
         except (OSError, ValueError) as err:
-            print(f"error: report.html: {err}", file=sys.stderr)
-            status = max(status, 2)
+            status = max(status, refuse(f"report.html: {err}"))
     print(tracks_text(counted(args.run_dir)), end="")
     return status
 

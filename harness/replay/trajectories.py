@@ -180,8 +180,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = args.out or args.run_dir / "plots" / f"trajectory_{name}_{person}.png"
         plot_person(seq.gt, results, person, out, args.iou)
     except (OSError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        from occbench.commands.mistakes import refuse
+
+        return refuse(err)
     print(out)
     return 0
 

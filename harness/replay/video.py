@@ -329,8 +329,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
                          cfg.get("background") or {}, progress_factory())
     except (OSError, ValueError, RuntimeError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        from occbench.commands.mistakes import refuse
+
+        return refuse(err)
     for kind, path in written.items():
         print(f"{kind}: {path}")
     return 0

@@ -222,8 +222,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise PaperTableError(f"{config}: no paper_table node (run with +experiment=...)")
         path = write_paper_table(args.run_dir, spec)
     except (OSError, ValueError, yaml.YAMLError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        from occbench.commands.mistakes import refuse
+
+        return refuse(err)
     print(path.read_text(), end="")
     return 0
 

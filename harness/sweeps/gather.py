@@ -253,8 +253,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         frame = write_sweep(args.sweep_dir, args.metrics, not args.no_plots and not optuna)
     except (OSError, ValueError, TypeError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        from occbench.commands.mistakes import refuse
+
+        return refuse(err)
     if optuna and not args.no_plots:
         from occbench.sweeps.tune import plot_study
 
@@ -268,7 +269,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(args.sweep_dir / "sweep.md")
     bad = not_done(frame)
     if bad:
-        print(f"error: {failed_summary(frame, args.sweep_dir)}", file=sys.stderr)
+        print(f"occbench: {failed_summary(frame, args.sweep_dir)}", file=sys.stderr)
         return 1
     return 0
 

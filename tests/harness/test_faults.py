@@ -180,14 +180,14 @@ def test_gt_with_nan_frame_or_id_is_rejected_before_the_run(tmp_path):
     mot_folder(data, "a", frames=False, gt=gt_rows() + "nan,3,1,1,10,10,1,1,1\n")
     with pytest.raises(RunError, match=rf"a/gt/gt\.txt:{2 * N + 1}: frame must be"):
         run(mot_cfg(data), tmp_path / "run")
-    # occbench.commands.evaluate: one line naming file and line, exit 2, no traceback
+    # occbench.commands.evaluate: one line naming file and line, exit 1, no traceback
     gt = tmp_path / "gt.txt"
     gt.write_text("1,1,1,1,5,5,1,1,1\n2,nan,1,1,5,5,1,1,1\n")
     res = tmp_path / "res.txt"
     res.write_text("1,1,1,1,5,5,1,-1,-1,-1\n")
     proc = subprocess.run([sys.executable, "-m", "occbench.commands.evaluate", str(gt), str(res)],
                           capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
     assert "gt.txt:2: id must be an integer up to 2147483647 in size, got nan" in proc.stderr
 
 
@@ -254,7 +254,7 @@ def test_eval_checks_gt_against_a_strict_seqlength(tmp_path, capsys, ini_length,
     res = tmp_path / "res"
     res.mkdir()
     (res / "a.txt").write_text("1,1,21,21,20,60,1,-1,-1,-1\n")
-    assert main([str(data), str(res)]) == 2
+    assert main([str(data), str(res)]) == 1
     assert re.search(message, capsys.readouterr().err)
 
 
@@ -715,8 +715,8 @@ def test_sweep_on_a_folder_that_is_not_a_sweep_is_an_error(tmp_path, capsys):
     from occbench.sweeps.gather import main
 
     (tmp_path / "some_run" / "tracks").mkdir(parents=True)
-    assert main([str(tmp_path)]) == 2
-    assert "not a sweep folder" in capsys.readouterr().err
+    assert main([str(tmp_path)]) == 1
+    assert capsys.readouterr().err.startswith("occbench: not a sweep folder")
     assert not (tmp_path / "sweep.csv").exists()
 
 

@@ -136,7 +136,7 @@ def test_report_writes_into_the_run_directory(tmp_path):
 
 
 def test_report_of_a_folder_that_is_no_run(tmp_path, capsys):
-    assert cli.main(["report", str(tmp_path)]) == 2
+    assert cli.main(["report", str(tmp_path)]) == 1
     assert "config.yaml" in capsys.readouterr().err
 
 

@@ -275,20 +275,20 @@ def test_cli_missing_result_is_empty_with_warning(tud_dirs, tmp_path, caplog):
 
 def test_cli_missing_path_is_a_clear_error(tud_dirs, tmp_path, capsys):
     nested, _, res = tud_dirs
-    assert main([str(tmp_path / "nope"), str(res)]) == 2
+    assert main([str(tmp_path / "nope"), str(res)]) == 1  # a refused input
     assert f"ground truth not found: {tmp_path / 'nope'}" in capsys.readouterr().err
-    assert main([str(nested), str(tmp_path / "none")]) == 2
+    assert main([str(nested), str(tmp_path / "none")]) == 1
     assert "results not found" in capsys.readouterr().err
     # one result file cannot be scored against two sequences
-    assert main([str(nested), str(res / "TUD-Campus.txt")]) == 2
+    assert main([str(nested), str(res / "TUD-Campus.txt")]) == 1
     assert "holds 2 sequences" in capsys.readouterr().err
 
 
 def test_cli_malformed_file_names_file_and_line(tud_dirs, capsys):
     nested, _, res = tud_dirs
     (res / "TUD-Campus.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n1,2,zero,0,1,1\n")
-    assert main([str(nested), str(res)]) == 2
-    assert "TUD-Campus.txt:2" in capsys.readouterr().err
+    assert main([str(nested), str(res)]) == 1
+    assert capsys.readouterr().err.startswith(f"occbench: {res / 'TUD-Campus.txt'}:2")
 
 
 def test_cli_scores_only_the_sequences_of_the_seqmap(tud_dirs, tmp_path, capsys, caplog):
