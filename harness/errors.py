@@ -3,6 +3,14 @@
 import signal
 
 EXIT_SIGINT, EXIT_SIGTERM = 128 + signal.SIGINT, 128 + signal.SIGTERM  # a stopped run's status
+REFUSED = 1  # exit status of a refused input (a missing file, a malformed row, a bad value)
+USAGE = 2  # exit status of a command line that cannot be parsed
+
+
+def refusal(err: object) -> str:
+    """``occbench: <err>``: the one line, one prefix, of every command's mistake."""
+    text = str(err).strip() or type(err).__name__
+    return text if text.startswith("occbench:") else f"occbench: {text}"
 
 
 class RunError(RuntimeError):

@@ -19,8 +19,6 @@ from collections.abc import Iterator, Sequence
 from typing import Any, TextIO
 
 ENV = "OCCBENCH_VERBOSE"
-REFUSED = 1  # exit status of a refused input (a missing file, a malformed row, a bad value)
-USAGE = 2  # exit status of a command line that cannot be parsed
 HINT = "(occbench -v ... shows the traceback)"
 _OVERRIDE = re.compile(r"Could not (?:override|delete from config\.) '([^']+)'")
 _MISSING = re.compile(r"Could not find '([^']+)'")
@@ -134,11 +132,12 @@ def explain(err: BaseException, config_name: str, overrides: Sequence[str]) -> s
     return f"occbench: {type(err).__name__}: {text.splitlines()[0] if text else ''} {HINT}"
 
 
-def refuse(err: object, status: int = REFUSED) -> int:
-    """Print ``occbench: <err>`` on stderr, the one prefix of every mistake of every command,
-    and return ``status`` (``REFUSED``: 1)."""
-    text = str(err).strip() or type(err).__name__
-    print(text if text.startswith("occbench:") else f"occbench: {text}", file=sys.stderr)
+def refuse(err: object, status: int = 1) -> int:
+    """Print ``occbench: <err>`` on stderr (``occbench.errors.refusal``), the one prefix of
+    every mistake of every command, and return ``status`` (1: a refused input)."""
+    from occbench.errors import refusal
+
+    print(refusal(err), file=sys.stderr)
     return status
 
 

@@ -180,9 +180,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = args.out or args.run_dir / "plots" / f"trajectory_{name}_{person}.png"
         plot_person(seq.gt, results, person, out, args.iou)
     except (OSError, ValueError) as err:
-        from occbench.commands.mistakes import refuse
+        from occbench.errors import REFUSED, refusal
 
-        return refuse(err)
+        print(refusal(err), file=sys.stderr)
+        return REFUSED
     print(out)
     return 0
 

@@ -329,9 +329,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
                          cfg.get("background") or {}, progress_factory())
     except (OSError, ValueError, RuntimeError) as err:
-        from occbench.commands.mistakes import refuse
+        from occbench.errors import REFUSED, refusal
 
-        return refuse(err)
+        print(refusal(err), file=sys.stderr)
+        return REFUSED
     for kind, path in written.items():
         print(f"{kind}: {path}")
     return 0

@@ -222,9 +222,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise PaperTableError(f"{config}: no paper_table node (run with +experiment=...)")
         path = write_paper_table(args.run_dir, spec)
     except (OSError, ValueError, yaml.YAMLError) as err:
-        from occbench.commands.mistakes import refuse
+        from occbench.errors import REFUSED, refusal
 
-        return refuse(err)
+        print(refusal(err), file=sys.stderr)
+        return REFUSED
     print(path.read_text(), end="")
     return 0
 

@@ -253,9 +253,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         frame = write_sweep(args.sweep_dir, args.metrics, not args.no_plots and not optuna)
     except (OSError, ValueError, TypeError) as err:
-        from occbench.commands.mistakes import refuse
+        from occbench.errors import REFUSED, refusal
 
-        return refuse(err)
+        print(refusal(err), file=sys.stderr)
+        return REFUSED
     if optuna and not args.no_plots:
         from occbench.sweeps.tune import plot_study
 
