@@ -132,7 +132,8 @@ def _check_checkout() -> str | None:
     if (PROJECT_ROOT / "conf" / "config.yaml").is_file():
         return None
     return (f"{PROG}: no conf/ beside the installed package ({PROJECT_ROOT}): occbench runs from "
-            "its checkout; install it with `pip install -e <checkout>` as the README says")
+            "its checkout; install it with `pip install -e <checkout> --config-settings "
+            "editable_mode=strict` as the README says")
 
 
 def _terminate(signum: int, frame: object) -> None:

@@ -35,9 +35,9 @@ def code_folders() -> list[str]:
         spec = importlib.util.find_spec(name)
         out.extend(spec.submodule_search_locations or [] if spec else [])
     harness = importlib.util.find_spec("occbench")
-    if harness and harness.submodule_search_locations:
-        out.append(os.path.join(os.path.dirname(next(iter(harness.submodule_search_locations))),
-                                "conf"))
+    if harness and harness.origin:  # the checkout's, not a strict editable install's link tree
+        out.append(os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(
+            harness.origin))), "conf"))
     return [p for p in dict.fromkeys(out) if os.path.isdir(p)]
 
 
@@ -53,7 +53,7 @@ def watched_files(folders: list[str] | None = None) -> list[str]:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin:
             files.append(spec.origin)
-    return files
+    return list(dict.fromkeys(files))  # once each: a strict editable install nests the folders
 
 
 def versions() -> dict[str, str]:

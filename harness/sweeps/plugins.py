@@ -36,6 +36,8 @@ PLUGINS: dict[tuple[str, str], tuple[tuple[str, ...], str, str]] = {
     ("sweeper", "optuna"): (("hydra_plugins.hydra_optuna_sweeper",), "tune",
                             "hydra-optuna-sweeper"),
 }
+#: the README's editable install (a lenient one is shadowed by a folder named occbench)
+STRICT = "--config-settings editable_mode=strict"
 
 
 class MissingPlugin(SystemExit):
@@ -84,8 +86,8 @@ def missing(overrides: Sequence[str]) -> list[str]:
         absent = [m for m in modules if not _installed(m)]
         if not absent:
             continue
-        how = (f'pip install -e "{ROOT}[{extra}]"' if extra
-               else f'pip install -e "{ROOT}"' if package == "occbench"
+        how = (f'pip install -e "{ROOT}[{extra}]" {STRICT}' if extra
+               else f'pip install -e "{ROOT}" {STRICT}' if package == "occbench"
                else f"pip install {package}")
         what = f"hydra/{group}={choice}"
         head = what if where == what else f"{where} (which selects {what})"

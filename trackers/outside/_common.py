@@ -29,7 +29,8 @@ class MissingLibrary(ImportError):
         self.module, self.command = module, command
 
 
-OUTSIDE_COMMAND = f'pip install -e ".[{EXTRA}]" && pip install --no-deps {NO_DEPS}'
+OUTSIDE_COMMAND = (f'pip install -e ".[{EXTRA}]" --config-settings editable_mode=strict && '
+                   f'pip install --no-deps {NO_DEPS}')
 
 
 def require(module: str, install: str, tracker: str,

@@ -32,7 +32,7 @@ from occbench.trackers.outside._common import IdMap, check_min_score, require, x
 from occbench.trackers.records import Detections, SequenceInfo, Track, TrackState
 
 INSTALL = ('torch==2.13.0 && pip install --no-deps boxmot==25.0.0 && '
-           'pip install -e ".[boxmot]"')
+           'pip install -e ".[boxmot]" --config-settings editable_mode=strict')
 
 #: tracker name -> (module, class) in boxmot 25
 CLASSES = {
