@@ -32,7 +32,8 @@ import numpy as np
 import pandas as pd
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
-from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
+from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, reference_seconds,
+                            rows_digest)
 
 from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
 from occbench.config.paths import data_path
@@ -59,11 +60,16 @@ PBM_STAGES = (("_find_candidates", "candidates + features"), ("_score_in_gates",
 """PBMTracker's steps (its module docstring), timed one by one in ``stages``."""
 TARGETS = {10: 1000, 100: 200}
 """frames/s targets of PBMTracker.update (with the foreground mask) per number of people."""
+TARGETS_HD = {150: 50}
+"""frames/s targets at 1920x1080 (issue 38)."""
+SIZE = (640, 480)
 
 
-def scene(frames: int, people: int, seed: int) -> list[tuple]:
-    """The ``crowd`` preset rendered once: (image, exact detections, exact person mask)."""
-    seq = load_scenario("crowd", seed=seed, length=frames, people=people)
+def scene(frames: int, people: int, seed: int, size: tuple[int, int] = SIZE) -> list[tuple]:
+    """The ``crowd`` preset rendered once at ``size`` (width, height): (image, exact
+    detections, exact person mask)."""
+    seq = load_scenario("crowd", seed=seed, length=frames, people=people, width=size[0],
+                        height=size[1])
     src = NoisyGroundTruth(seed=seed)
     src.start(seq)
     data = []
@@ -74,18 +80,20 @@ def scene(frames: int, people: int, seed: int) -> list[tuple]:
     return data
 
 
-def speed(frames: int, people: int, seed: int, repeats: int = 3) -> tuple[list[dict], dict, dict]:
+def speed(frames: int, people: int, seed: int, repeats: int = 3,
+          size: tuple[int, int] = SIZE) -> tuple[list[dict], dict, dict]:
     """Frames/s of ``PBMTracker.update`` with and without the foreground mask (median of
     ``repeats``), the digest of its reported rows and the stage table of one more,
     instrumented run, per mode."""
-    data = scene(frames, people, seed)
+    data = scene(frames, people, seed, size)
+    at = "" if size == SIZE else f" {size[0]}x{size[1]}"
     rows, digests, stages = [], {}, {}
     for label, use_fg in (("foreground mask", True), ("no foreground", False)):
         def run(tracker, use_fg=use_fg):
             return [tracker.update(img, dets, fg if use_fg else None) for img, dets, fg in data]
 
         times = [cpu_seconds(lambda: run(build("pbm"))) for _ in range(repeats)]
-        digests[f"pbm people={people} {label}"] = rows_digest(run(build("pbm")))
+        digests[f"pbm people={people} {label}{at}"] = rows_digest(run(build("pbm")))
         clock, tracker = StageClock(), build("pbm")
         for attr, name in PBM_STAGES:
             clock.wrap(tracker, attr, name)
@@ -126,6 +134,8 @@ def main() -> None:
     ap.add_argument("--people", type=int, nargs="+", default=[10, 40, 100],
                     help="numbers of people of the speed runs")
     ap.add_argument("--repeats", type=int, default=3, help="speed runs; the median is shown")
+    ap.add_argument("--size", type=frame_size, default=SIZE, metavar="WxH",
+                    help="frame size of the speed runs (default 640x480; 1920x1080: HD)")
     ap.add_argument("--length", type=int, default=150, help="frames per synthetic scene")
     ap.add_argument("--miss", type=float, default=0.3, help="noisy-gt miss rate")
     ap.add_argument("--seed", type=int, default=0)
@@ -142,7 +152,7 @@ def main() -> None:
         print(f"load average (uptime): {os.getloadavg()}")
         rows, digests = [], {}
         for people in args.people:
-            r, d, stages = speed(args.speed_frames, people, args.seed, args.repeats)
+            r, d, stages = speed(args.speed_frames, people, args.seed, args.repeats, args.size)
             rows += r
             digests.update(d)
             for label, table in stages.items():
@@ -150,9 +160,10 @@ def main() -> None:
                 print(table)
         table = pd.DataFrame(rows)
         print(f"Speed of PBMTracker.update (CPU time, median of {args.repeats}), crowd preset "
-              "640x480, one core; ref_units: ms per frame / the reference workload's ms")
+              f"{args.size[0]}x{args.size[1]}, one core; ref_units: ms per frame / the reference "
+              "workload's ms")
         print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}" if v < 1 else f"{v:.1f}"))
-        for people, target in TARGETS.items():
+        for people, target in (TARGETS if args.size == SIZE else TARGETS_HD).items():
             if people in args.people:
                 fps = table.loc[(table.people == people) & (table["mode"] == "foreground mask"), "fps"].iloc[0]
                 print(f"{people} people, foreground mask: {fps:.0f} frames/s -> target {target}: "

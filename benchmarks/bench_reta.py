@@ -4,7 +4,8 @@ Speed: time of ``RetaTracker.update`` (its feature extraction included; frame de
 rendering and background subtraction excluded) with N people walking and crossing at
 640x480 on one core (``cv2.setNumThreads(1)``, BLAS threads 1), for N = 10, 40, 100
 (``--people``); the targets are at least 1,000 frames/s with 10 people, 500 with 40 and
-300 with 100. Frames are pre-rendered with OpenCV (coloured ellipses on a noisy background,
+300 with 100; ``--size 1920x1080`` renders the same kind of scene at that size (people
+scaled with the frame height; target 50 frames/s with 150 people). Frames are pre-rendered with OpenCV (coloured ellipses on a noisy background,
 drawn far to near) and the detections are the boxes of people at least 30 % visible. Per
 number of people: the median of ``--repeats`` runs, the time in units of a reference
 workload run in the same process, and the CPU time of each step of Alg. 1 (one more,
@@ -17,7 +18,7 @@ suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` det
 the data root (``occbench.config.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
 Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]
-[--people 10 40 100] [--repeats 3] [--check [DIGESTS.json]]``.
+[--people 10 40 100] [--size 640x480] [--repeats 3] [--check [DIGESTS.json]]``.
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tracker_timing import StageClock, check_digests, cpu_seconds, reference_seconds, rows_digest
+from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, reference_seconds,
+                            rows_digest)
 
 from occbench.config.paths import data_path
 from occbench.trackers.baseline import BaselineTracker
@@ -50,14 +52,19 @@ from occbench.trackers.three_hypothesis import Appearance, RetaTracker
 WIDTH, HEIGHT = 640, 480
 
 
-def make_scene(people: int, frames: int, seed: int = 0) -> list[tuple[np.ndarray, Detections]]:
-    """Pre-rendered frames and exact detections of ``people`` walkers at 640x480."""
+def make_scene(people: int, frames: int, seed: int = 0, size: tuple[int, int] = (WIDTH, HEIGHT)
+               ) -> list[tuple[np.ndarray, Detections]]:
+    """Pre-rendered frames and exact detections of ``people`` walkers on a ``size`` (width,
+    height) frame; at 640x480 the scene of every earlier run, elsewhere the same scene with
+    rows, sizes and speeds scaled by height / 480 and columns by width / 640."""
+    WIDTH, HEIGHT = size  # noqa: N806 - the module's names, for this frame size
+    sy, sx = HEIGHT / 480, WIDTH / 640
     rng = np.random.default_rng(seed)
-    bottom = rng.uniform(200, 470, people)
-    height = 60 + (bottom - 200) * 0.5
+    bottom = rng.uniform(200, 470, people) * sy
+    height = 60 * sy + (bottom - 200 * sy) * 0.5
     width = height * 0.4
     x = rng.uniform(0, WIDTH, people)
-    vx = rng.choice([-1, 1], people) * rng.uniform(1.0, 3.0, people)
+    vx = rng.choice([-1, 1], people) * rng.uniform(1.0, 3.0, people) * sx
     colours = rng.integers(30, 230, (people, 2, 3))
     out = []
     for _ in range(frames):
@@ -90,11 +97,14 @@ RETA_STAGES = ("_measure", "_predict", "_occlusions", "_associate", "_sort_occlu
 the helpers they call per node or per frame (a graph node, a Track, ``rules.velocity``, the
 covered shares, a confirmation): their time is not their callers'."""
 TARGETS = {10: 1000, 40: 500, 100: 300}
-"""frames/s targets of RetaTracker.update per number of people."""
+"""frames/s targets of RetaTracker.update per number of people (640x480)."""
+TARGETS_HD = {150: 50}
+"""frames/s targets at 1920x1080 (issue 38)."""
 
 
 def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
-          pixel_stride: int = 1) -> tuple[pd.DataFrame, dict[str, str], dict[int, str]]:
+          pixel_stride: int = 1, size: tuple[int, int] = (WIDTH, HEIGHT)
+          ) -> tuple[pd.DataFrame, dict[str, str], dict[int, str]]:
     """Frames/s of ``RetaTracker.update`` (median of ``repeats``) per number of people, with
     the histograms of every ``pixel_stride``-th pixel row and column (``Appearance``).
 
@@ -106,7 +116,7 @@ def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
     cv2.setNumThreads(1)
     rows, digests, stage_tables = [], {}, {}
     for n in people_counts:
-        scene = make_scene(n, frames, seed=n)
+        scene = make_scene(n, frames, seed=n, size=size)
 
         def run(tracker, scene=scene):
             return [tracker.update(img, dets) for img, dets in scene]
@@ -115,7 +125,8 @@ def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
             return RetaTracker(appearance=Appearance(pixel_stride=pixel_stride))
 
         times = [cpu_seconds(lambda: run(build())) for _ in range(repeats)]
-        digests[f"reta people={n}"] = rows_digest(run(build()))
+        key = f"reta people={n}" + ("" if size == (WIDTH, HEIGHT) else f" {size[0]}x{size[1]}")
+        digests[key] = rows_digest(run(build()))
         clock, tracker = StageClock(), build()
         for name in RETA_STAGES:
             clock.wrap(tracker, name)
@@ -179,6 +190,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--people", type=int, nargs="+", default=[10, 40, 100],
                         help="numbers of people of the speed runs")
     parser.add_argument("--repeats", type=int, default=3, help="speed runs; the median is shown")
+    parser.add_argument("--size", type=frame_size, default=(WIDTH, HEIGHT), metavar="WxH",
+                        help="frame size of the speed runs (default 640x480; 1920x1080: HD)")
     parser.add_argument("--check", type=Path, nargs="?", const=None, default=False,
                         metavar="DIGESTS.json",
                         help="print the sha256 of the reported rows; with a file: write it when "
@@ -188,15 +201,17 @@ def main(argv: list[str] | None = None) -> int:
     status = 0
     if not args.accuracy_only:
         print(f"load average (uptime): {os.getloadavg()}")
-        table, digests, stages = speed(args.people, args.frames, args.repeats, args.pixel_stride)
+        table, digests, stages = speed(args.people, args.frames, args.repeats, args.pixel_stride,
+                                       args.size)
         print("Speed of RetaTracker.update (CPU time, median of "
-              f"{args.repeats}), 640x480, one core, pixel_stride={args.pixel_stride}; "
+              f"{args.repeats}), {args.size[0]}x{args.size[1]}, one core, "
+              f"pixel_stride={args.pixel_stride}; "
               f"ref_units: ms per frame / the reference workload's ms")
         print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}" if v < 1 else f"{v:.1f}"))
         for people in args.people:
             print(f"stages at {people} people (one instrumented run, exclusive CPU time):")
             print(stages[people])
-        for people, target in TARGETS.items():
+        for people, target in (TARGETS if args.size == (WIDTH, HEIGHT) else TARGETS_HD).items():
             if people in args.people:
                 fps = table.loc[table.people == people, "reta_fps"].iloc[0]
                 print(f"{people} people: {fps:.0f} frames/s -> target {target}: "

@@ -9,6 +9,7 @@ so the stages and "other" add up to ``update``.
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import json
 import statistics
@@ -105,3 +106,14 @@ def check_digests(path: Path | None, digests: dict[str, str]) -> bool:
         return False
     print(f"  identical to {path}")
     return True
+
+
+def frame_size(text: str) -> tuple[int, int]:
+    """``--size WxH`` (e.g. ``1920x1080``) as (width, height); argparse names a bad value."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1920x1080, got {text!r}") from None
+    if w < 64 or h < 64:
+        raise argparse.ArgumentTypeError(f"frame size {w}x{h} is below 64x64")
+    return w, h

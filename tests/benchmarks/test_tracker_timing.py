@@ -49,3 +49,16 @@ def test_stage_clock_keeps_results_and_counts_every_stage():
     assert all(s >= 0 for s in clock.seconds.values())
     lines = clock.table(total=1.0, frames=1).splitlines()
     assert [line.split()[0] for line in lines][-1] == "other" and len(lines) == 3
+
+
+def test_frame_size_reads_width_by_height_and_names_a_bad_value():
+    import argparse
+
+    import pytest
+    from tracker_timing import frame_size
+
+    assert frame_size("1920x1080") == (1920, 1080)
+    assert frame_size("640X480") == (640, 480)
+    for bad in ("1920", "axb", "32x32"):
+        with pytest.raises(argparse.ArgumentTypeError, match="1920x1080|below 64x64"):
+            frame_size(bad)
