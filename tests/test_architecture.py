@@ -247,6 +247,26 @@ def test_no_long_module_or_function_in_harness() -> None:
     assert sorted(set(TOO_LONG_ALLOWED) - set(found)) == [], "split: drop from the allow-list"
 
 
+# the same rules in trackers/ (issue 36 item 6): over them when the rule came, each to be
+# split; an entry leaves when its module is split, and nothing joins the list
+TRACKERS_TOO_LONG_ALLOWED = {
+    "trackers/frontend/active_basis.py": "526 lines",
+    "trackers/frontend/detectors.py": "541 lines (issue 37's warm-up span)",
+    "trackers/frontend/silhouette.py": "662 lines",
+    "trackers/frontend/silhouette.py:__init__": "SilhouetteMatcher's 25 flat arguments",
+    "trackers/layered/tracker.py": "409 lines",
+    "trackers/three_hypothesis/rules.py": "431 lines (issue 35's contact_region)",
+    "trackers/three_hypothesis/association.py:associate": "105 lines",
+}
+
+
+def test_no_long_module_or_function_in_trackers() -> None:
+    found = too_long(sorted((ROOT / "trackers").rglob("*.py")))
+    assert sorted(set(found) - set(TRACKERS_TOO_LONG_ALLOWED)) == []
+    assert sorted(set(TRACKERS_TOO_LONG_ALLOWED) - set(found)) == [], (
+        "split: drop from the allow-list")
+
+
 def _private(name: str) -> bool:
     return name.startswith("_") and not name.startswith("__")
 
