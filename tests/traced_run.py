@@ -20,7 +20,6 @@ import threading
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-TRACKERS = ROOT / "trackers"
 
 
 def calls(*names: str) -> dict[str, set[tuple[str, str]]]:
@@ -42,7 +41,11 @@ def _trace(name: str) -> list[tuple[str, str]]:
     cfg = compose_config([f"tracker={name}"])  # the default run's detector and foreground
     source = build_source(cfg.detector)
     (sequence,) = load_suite(["crossing"], length=30, width=320, height=240)
-    root = str(TRACKERS) + os.sep
+    import occbench.trackers
+
+    # where the trackers' code is loaded from: the checkout, or a strict editable install's
+    # link tree (build/__editable__.*/occbench/trackers), whose paths the frames carry
+    root = os.path.dirname(occbench.trackers.__file__) + os.sep
     seen: set[tuple[str, str]] = set()
 
     def hook(frame, event, arg):

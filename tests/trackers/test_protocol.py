@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from occbench.config.build import build_tracker, compose_config
+from occbench.config.build import build_tracker, compose_config, missing_library
+from occbench.errors import RunError
 from occbench.pipeline.warmup import SIZE, scene
 from occbench.trackers.outside import MissingLibrary
 from occbench.trackers.protocol import KeepsGraph, StartsSequence, Tracker, needs_frames
@@ -33,8 +34,11 @@ SINGLE = sorted(p.stem for p in CONF.glob("*.yaml") if _single(p))
 def _build(name: str):
     try:
         return build_tracker(name, compose_config([f"tracker={name}"]).tracker)
-    except MissingLibrary as err:
-        pytest.skip(f"optional library {err.module} is not installed")
+    except (MissingLibrary, RunError) as err:
+        missing = missing_library(err)
+        if missing is None:
+            raise
+        pytest.skip(f"optional library {missing.module} is not installed")
 
 
 def test_every_single_tracker_config_is_listed():
