@@ -20,6 +20,8 @@ An experiment config (``conf/experiment/reta_table2.yaml`` ...) holds a ``paper_
       fit_data:                     # everything the table depends on that was fitted or
         - {what: "...", sequence: ..., frames: [1, 150]}   # chosen on data (never a
                                     # test frame: tests/harness/report/test_fit_data.py)
+      fit_on_test: [{what: "...", why: "..."}]  # a fit_data entry that does meet the test
+                                    # frames, said under the table (choosing-set tables)
       reported:
         citation: "..."             # where the figures come from
         rows: {"<method> (<data>)": [values in the order of `columns`], ...}
@@ -185,6 +187,10 @@ def _data_lines(spec: Mapping[str, Any]) -> list[str]:
         lines += ["Fitting data (what the table depends on was fitted or chosen there, never on "
                   "a test frame): " + "; ".join(f"{str(e['what']).strip()}: {_frames(e)}"
                                                  for e in spec["fit_data"]) + ".", ""]
+    if spec.get("fit_on_test"):
+        lines += ["Fitted or chosen on these test frames too (so not untouched): " + "; ".join(
+            f"{str(e['what']).strip()} ({str(e['why']).strip()})" for e in spec["fit_on_test"])
+            + ".", ""]
     return lines
 
 
