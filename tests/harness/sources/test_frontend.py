@@ -94,3 +94,17 @@ def test_fit_silhouette_and_heads_commands(tmp_path):
     assert fit_heads(["--references", "--out", str(tmp_path / "r.npz")]) == 0
     shipped = ColourMixtures.load()
     np.testing.assert_allclose(ColourMixtures.load(tmp_path / "r.npz").means, shipped.means)
+
+
+def test_label_says_when_detections_used_future_frames():
+    """issue 37 item 4: summary and report name the source by its label, which says so."""
+    from occbench.sources.frontend import FrontendSource
+    from occbench.trackers.frontend.background import BackgroundModel
+    from occbench.trackers.frontend.detectors import ForegroundDetector
+
+    offline = FrontendSource(ForegroundDetector(BackgroundModel(warmup_span="sequence")))
+    online = FrontendSource(ForegroundDetector(BackgroundModel(warmup_span="online")))
+    assert offline.label == "foreground front end (warm-up on the whole sequence: future frames)"
+    assert online.label == "foreground front end"
+    no_warm_up = FrontendSource(ForegroundDetector(BackgroundModel(warmup_frames=0)))
+    assert no_warm_up.label == "foreground front end"
