@@ -144,13 +144,17 @@ def _wait(sock: socket.socket, ident: dict) -> int | None:
             pending.append(signum)
 
     def suspend(signum: object, frame: object) -> None:  # Ctrl-Z: the job stops with us
-        if job:
-            os.killpg(job[0], signal.SIGSTOP)
+        if not job:  # its pid is on its way (the job may already be running): stop then,
+            pending.append(signal.SIGTSTP)  # else we would stop and leave it running
+            return
+        os.killpg(job[0], signal.SIGSTOP)
         os.kill(os.getpid(), signal.SIGSTOP)  # returns when the shell continues us (fg, bg)
 
     def resume(signum: object, frame: object) -> None:
         if job:
             os.killpg(job[0], signal.SIGCONT)
+        elif signal.SIGTSTP in pending:  # continued before the job was known: no stop
+            pending.remove(signal.SIGTSTP)
 
     saved = {s: signal.signal(s, forward) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
     saved.update({signal.SIGTSTP: signal.signal(signal.SIGTSTP, suspend),
@@ -161,7 +165,7 @@ def _wait(sock: socket.socket, ident: dict) -> int | None:
             if "pid" in answer:
                 job.append(int(answer["pid"]))
                 for signum in pending:
-                    forward(signum, None)
+                    (suspend if signum == signal.SIGTSTP else forward)(signum, None)
             elif "exit" in answer:
                 return int(answer["exit"])
             elif "signal" in answer:

@@ -136,20 +136,85 @@ def _wait_state(pid: int, states: str) -> str:
     return _state(pid)
 
 
+def _end(proc: subprocess.Popen, group: int | None = None) -> None:
+    """No orphan, whatever the test's outcome: the job's process group (stopped or not) and
+    the client are killed."""
+    if group is not None:
+        for sig in (signal.SIGKILL, signal.SIGCONT):
+            try:
+                os.killpg(group, sig)
+            except OSError:
+                pass
+    if proc.poll() is None:
+        proc.kill()
+        proc.send_signal(signal.SIGCONT)
+    proc.communicate(timeout=30)
+
+
 @pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="needs Linux's /proc")
 def test_ctrl_z_in_the_client_stops_the_job_and_fg_continues_it(toy):
     client, env, cwd, _, _ = toy
     job = subprocess.Popen([*client, "sleep"], env=env, cwd=cwd, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
-    pid = int(job.stdout.readline().split()[1])
-    assert _state(pid) != "T"
-    job.send_signal(signal.SIGTSTP)
-    assert (_wait_state(job.pid, "T"), _wait_state(pid, "T")) == ("T", "T")
-    job.send_signal(signal.SIGCONT)
-    assert _wait_state(pid, "SR") in "SR" and _wait_state(job.pid, "SR") in "SR"
-    job.send_signal(signal.SIGINT)
-    out, err = job.communicate(timeout=30)
-    assert (job.returncode, out.strip(), err.strip()) == (130, "status 130", "interrupted")
+    pid = None
+    try:
+        pid = int(job.stdout.readline().split()[1])
+        assert _state(pid) != "T"
+        job.send_signal(signal.SIGTSTP)
+        assert (_wait_state(job.pid, "T"), _wait_state(pid, "T")) == ("T", "T")
+        job.send_signal(signal.SIGCONT)
+        assert _wait_state(pid, "SR") in "SR" and _wait_state(job.pid, "SR") in "SR"
+        job.send_signal(signal.SIGINT)
+        out, err = job.communicate(timeout=30)
+        assert (job.returncode, out.strip(), err.strip()) == (130, "status 130", "interrupted")
+    finally:
+        _end(job, pid)
+
+
+# a client whose job (a sleep in its own process group) is announced by the "server" only
+# after Ctrl-Z has reached the client: the race behind issue 39 item 4
+EARLY_STOP = """
+import json, os, signal, socket, subprocess, threading, time
+from occbench.server import client
+job = subprocess.Popen(["sleep", "60"], start_new_session=True)
+print(job.pid, flush=True)
+ours, server = socket.socketpair()
+stopped = threading.Event()
+def ctrl_z():
+    time.sleep(0.2)
+    os.kill(os.getpid(), signal.SIGTSTP)
+    stopped.set()
+def feed():
+    stopped.wait()
+    time.sleep(0.5)
+    server.sendall(json.dumps({"pid": job.pid}).encode() + b"\\n")
+    server.sendall(json.dumps({"exit": -job.wait()}).encode() + b"\\n")
+threading.Thread(target=ctrl_z, daemon=True).start()
+threading.Thread(target=feed, daemon=True).start()
+print("status", client._wait(ours, {}), flush=True)
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="needs Linux's /proc")
+def test_ctrl_z_before_the_job_is_known_stops_it_once_it_is(tmp_path):
+    """Ctrl-Z reaching the client before the server's pid answer: the job must stop with the
+    client (it used to stop the client alone, leaving the job running: ('T', 'S'))."""
+    proc = subprocess.Popen([sys.executable, "-c", EARLY_STOP], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=_env(tmp_path))
+    pid = None
+    try:
+        first = proc.stdout.readline()
+        assert first.strip().isdigit(), proc.stderr.read()
+        pid = int(first)
+        assert (_wait_state(proc.pid, "T"), _wait_state(pid, "T")) == ("T", "T")
+        proc.send_signal(signal.SIGCONT)  # fg
+        assert _wait_state(pid, "SR") in "SR" and _wait_state(proc.pid, "SR") in "SR"
+        proc.send_signal(signal.SIGTERM)  # forwarded to the job, which ends
+        out, _ = proc.communicate(timeout=30)
+        assert out.strip() == f"status {signal.SIGTERM}"
+    finally:
+        _end(proc, pid)
 
 
 def test_a_crashing_job_fails_alone_and_the_server_goes_on(toy):
