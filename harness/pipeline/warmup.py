@@ -1,8 +1,10 @@
 """Before anything is timed: every tracker of a run runs a short scripted scene once per
 process, so that compiled kernels (numba: compiled on the first use after an install,
 loaded from the ``__pycache__`` cache in every new process) and lazy imports are paid for
-here, not inside a timed ``update`` (``timings.csv`` measures tracking only). The wait is
-announced in one log line (stderr in the app).
+here, not inside a timed ``update`` (``timings.csv`` measures tracking only). A warm-up
+that lasts (compiling: half a minute to minutes) is announced in one log line (stderr in the
+app) after ``WarmUp.first`` seconds and then says it is still going every ``WarmUp.every``
+seconds (a warm run, loading its kernels in about a second, says nothing).
 
 The scene takes a tracker through the paths a run uses: four painted people on a 240x320
 frame. Two walk towards each other and merge into one foreground blob (PBM's occlusion
@@ -22,6 +24,9 @@ from __future__ import annotations
 
 import importlib
 import logging
+import threading
+import time
+from contextlib import contextmanager
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -97,8 +102,9 @@ class WarmUp:
     ``__call__(builders)`` takes ``{name: () -> fresh tracker}`` and returns the names
     warmed up now (the others' classes already were)."""
 
-    def __init__(self) -> None:
+    def __init__(self, first: float = 3.0, every: float = 15.0) -> None:
         self.done: set[str] = set()
+        self.first, self.every = first, every  # seconds before the announcement, between lines
 
     def __call__(self, builders: dict[str, Callable[[], Tracker]],
                  announce: Callable[[str], None] | None = None,
@@ -111,21 +117,53 @@ class WarmUp:
                 todo[name] = tracker
         if not todo:
             return []
-        if announce is not None:
-            announce(f"warming up {', '.join(todo)} before timing (the first run after an "
-                     "install compiles their kernels: half a minute to a few minutes; later "
-                     "runs load them in about a second)")
+        said = (f"warming up {', '.join(todo)} before timing (the first run after an "
+                "install compiles their kernels: half a minute to a few minutes; later runs "
+                "load them in about a second)")
         bar = (progress or no_progress)(total=PASSES * len(todo), desc="warm-up", unit="pass")
-        try:
+        with heartbeat(announce, said, self.first, self.every), _closing(bar):
             for name, tracker in todo.items():
                 try:
                     warm_up(tracker, bar)
                 except Exception as err:  # noqa: BLE001 - the run reports a failing tracker
                     log.debug("warm-up of %s stopped: %s: %s", name, type(err).__name__, err)
                 self.done.add(_kind(tracker))
-        finally:
-            bar.close()
         return list(todo)
+
+
+@contextmanager
+def _closing(bar: Progress):
+    try:
+        yield bar
+    finally:
+        bar.close()
+
+
+@contextmanager
+def heartbeat(announce: Callable[[str], None] | None, said: str, first: float, every: float):
+    """Within: ``announce(said)`` once the block has run ``first`` seconds, then a line
+    "still ..." every ``every`` seconds (from a daemon thread) until it ends; nothing said
+    for a block that ends sooner."""
+    if announce is None:
+        yield
+        return
+    done = threading.Event()
+    start = time.monotonic()
+
+    def speak() -> None:
+        if done.wait(first):
+            return
+        announce(said)
+        while not done.wait(every):
+            announce(f"still warming up ({time.monotonic() - start:.0f} s)")
+
+    thread = threading.Thread(target=speak, name="warm-up heartbeat", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()
 
 
 # what every job imports besides its config's _target_s: the app, scoring, tables, plots

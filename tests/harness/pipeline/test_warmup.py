@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -94,7 +96,7 @@ def update(self, frame, detections, foreground=None):
 
 
 def test_warm_up_runs_once_per_tracker_class_and_announces_it():
-    once, said = WarmUp(), []
+    once, said = WarmUp(first=0.0), []
     _Counting.updates = 0
     assert once({"a": _Counting, "b": _Counting}, said.append) == ["a"]
     assert _Counting.updates > 0 and len(said) == 1 and "warming up a" in said[0]
@@ -102,6 +104,31 @@ def test_warm_up_runs_once_per_tracker_class_and_announces_it():
     assert once({"c": _Counting}, said.append) == []  # the class is warm: nothing run or said
     assert _Counting.updates == n and len(said) == 1
 
+
+
+def test_a_quick_warm_up_says_nothing_and_a_long_one_keeps_saying_so():
+    """issue 39 item 8: "the first run compiles" was logged on every warm run, and a warm-up
+    compiling for 24 s showed a frozen bar and no line without a terminal."""
+    said: list[str] = []
+    assert WarmUp(first=600.0)({"a": _Counting}, said.append) == ["a"]
+    assert said == []  # over before it was worth a word
+    spoke = threading.Event()
+
+    class Slow(_Counting):  # compiles until the warm-up has said twice that it goes on
+        def update(self, frame, detections, foreground=None):
+            spoke.wait(60)
+            return []
+
+    def announce(text: str) -> None:
+        said.append(text)
+        if len(said) >= 2:
+            spoke.set()
+
+    assert WarmUp(first=0.0, every=0.01)({"slow": Slow}, announce) == ["slow"]
+    assert said[0].startswith("warming up slow") and said[1].startswith("still warming up")
+    n = len(said)
+    time.sleep(0.05)
+    assert len(said) == n  # the heartbeat ended with the warm-up
 
 
 def test_a_tracker_failing_in_the_warm_up_is_left_to_the_run():
