@@ -128,6 +128,7 @@ class WarmUp:
                 except Exception as err:  # noqa: BLE001 - the run reports a failing tracker
                     log.debug("warm-up of %s stopped: %s: %s", name, type(err).__name__, err)
                 self.done.add(_kind(tracker))
+        log.debug("warmed up %s", ", ".join(todo))  # hydra.verbose=[occbench.pipeline.warmup]
         return list(todo)
 
 

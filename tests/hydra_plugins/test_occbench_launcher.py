@@ -16,7 +16,7 @@ TINY = ["dataset.scenarios=[crossing]", "dataset.length=12", "dataset.width=160"
 
 def _sweep(sweep_dir: Path, *extra: str) -> subprocess.CompletedProcess:
     cmd = [sys.executable, "-m", "occbench", "-m", "tracker=reta", "seed=0,1,2", *TINY,
-           f"hydra.sweep.dir={sweep_dir}", *extra]
+           f"hydra.sweep.dir={sweep_dir}", "hydra.verbose=[occbench.pipeline.warmup]", *extra]
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, env=env,
                           timeout=600)
@@ -32,10 +32,10 @@ def test_warm_jobs_skip_the_warm_up_and_give_the_same_results(tmp_path):
     warm = _sweep(tmp_path / "warm")
     assert "jobs are forked from a warm process" in warm.stderr
     assert "trackers reta warmed up once" in warm.stderr
-    assert not any("warming up" in log for log in _job_logs(tmp_path / "warm"))
+    assert not any("warmed up" in log for log in _job_logs(tmp_path / "warm"))
     cold = _sweep(tmp_path / "cold", "hydra.launcher.preload=false")
     assert "warm process" not in cold.stderr
-    assert all("warming up reta" in log for log in _job_logs(tmp_path / "cold"))
+    assert all("warmed up reta" in log for log in _job_logs(tmp_path / "cold"))
     assert ((tmp_path / "warm" / "sweep.csv").read_text()
             == (tmp_path / "cold" / "sweep.csv").read_text())
     for j in range(3):
