@@ -169,7 +169,9 @@ def save(template: ActiveBasis, out: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="occbench fit active_basis", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", type=Path, default=None, help=f"output .npz (default {DEFAULT_OUT})")
+    ap.add_argument("--out", type=Path, required=True,
+                    help=f"output .npz (required: the shipped one is {DEFAULT_OUT}, tracked; "
+                         "name it to replace it)")
     ap.add_argument("--synthetic-seed", type=int, default=0,
                     help="renderer seed of the synthetic training people (-1: none)")
     ap.add_argument("--no-caviar", action="store_true", help="leave out CAVIAR OneLeaveShop1cor frames 1-150")
@@ -183,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     template = fit(None if args.synthetic_seed < 0 else args.synthetic_seed, not args.no_caviar,
                    args.step, args.caviar_step, args.min_height, args.background, args.elements, seed=args.seed)
-    out = args.out or DEFAULT_OUT
+    out = args.out
     save(template, out)
     log.info("wrote %s: %d elements on a %s template", out, template.n, template.size)
     return 0

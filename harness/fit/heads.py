@@ -79,7 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. dataset=synthetic")
     ap.add_argument("--references", action="store_true",
                     help="fit from samples around reference colours (the shipped default)")
-    ap.add_argument("--out", type=Path, default=None, help=f"output .npz (default {DEFAULT_OUT})")
+    ap.add_argument("--out", type=Path, required=True,
+                    help=f"output .npz (required: the shipped one is {DEFAULT_OUT}, tracked; "
+                         "name it to replace it)")
     ap.add_argument("--init", type=Path, default=None, help="starting mixtures (.npz)")
     ap.add_argument("--components", type=int, default=2, help="Gaussians per channel mixture")
     ap.add_argument("--step", type=int, default=5, help="use every step-th frame")
@@ -87,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    out = args.out or DEFAULT_OUT
+    out = args.out
     if args.references or not args.overrides:
         mix = fit_colour_mixtures(
             reference_samples(seed=args.seed), k=args.components,

@@ -84,7 +84,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="occbench fit silhouette", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. dataset=synthetic")
-    ap.add_argument("--out", type=Path, default=None, help=f"output .npy (default {DEFAULT_OUT})")
+    ap.add_argument("--out", type=Path, required=True,
+                    help=f"output .npy (required: the shipped one is {DEFAULT_OUT}, tracked; "
+                         "name it to replace it)")
     ap.add_argument("--step", type=int, default=5, help="use every step-th frame")
     ap.add_argument("--height", type=int, default=TEMPLATE_HEIGHT, help="template rows")
     ap.add_argument("--min-visibility", type=float, default=0.95)
@@ -106,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
     if not masks:
         raise SystemExit("no single-person masks found in " + " ".join(overrides))
     template = fit_template(masks, height=args.height)
-    out = args.out or DEFAULT_OUT
+    out = args.out
     out.parent.mkdir(parents=True, exist_ok=True)
     np.save(out, template)
     log.info("wrote %s: %s template from %d masks", out, template.shape, len(masks))

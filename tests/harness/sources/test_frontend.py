@@ -108,3 +108,17 @@ def test_label_says_when_detections_used_future_frames():
     assert online.label == "foreground front end"
     no_warm_up = FrontendSource(ForegroundDetector(BackgroundModel(warmup_frames=0)))
     assert no_warm_up.label == "foreground front end"
+
+
+@pytest.mark.parametrize("module", ["heads", "silhouette", "active_basis"])
+def test_fit_never_overwrites_a_shipped_file_by_default(module, capsys):
+    """issue 39 item 9: without --out, fit heads|silhouette wrote over the tracked files in
+    trackers/frontend/data; --out is now required (a usage error, exit 2, before any work)."""
+    import importlib
+
+    fit = importlib.import_module(f"occbench.fit.{module}")
+    shipped = fit.DEFAULT_OUT.read_bytes() if fit.DEFAULT_OUT.is_file() else None
+    with pytest.raises(SystemExit) as err:
+        fit.main(["dataset=synthetic"])
+    assert err.value.code == 2 and "--out" in capsys.readouterr().err
+    assert (fit.DEFAULT_OUT.read_bytes() if fit.DEFAULT_OUT.is_file() else None) == shipped
