@@ -58,7 +58,7 @@ from scipy.optimize import linear_sum_assignment
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from idf1_losses import CAUSES, idf1_causes, idf1_losses, losses_line  # noqa: E402
+from idf1_losses import CAUSES, idf1_causes, idf1_losses, inside, losses_line  # noqa: E402
 from shared_data import use_shared_data  # noqa: E402
 
 from occbench.io.mot import MotTable  # noqa: E402
@@ -264,16 +264,6 @@ def stack_counts(gt: MotTable, res: MotTable, hidden: np.ndarray, frames: int = 
     return c
 
 
-def _inside(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(len(a), len(b)) share of each box of a (xywh) that lies inside each box of b."""
-    x0 = np.maximum(a[:, None, 0], b[None, :, 0])
-    y0 = np.maximum(a[:, None, 1], b[None, :, 1])
-    x1 = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
-    y1 = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
-    inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
-    return inter / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
-
-
 def _cause(f: int, g: int, gt: MotTable, rows_of: dict, dets: dict, run: int = 3) -> str:
     """What the detections did to person g around a switch at frame f (module docstring)."""
     for k in (f - 1, f):
@@ -281,11 +271,11 @@ def _cause(f: int, g: int, gt: MotTable, rows_of: dict, dets: dict, run: int = 3
         mine = r[gt.ids[r] == g]
         if not len(d) or not len(mine):
             continue
-        covers = _inside(gt.boxes[r], d) >= 0.5  # (people, detections): person inside det
+        covers = inside(gt.boxes[r], d) >= 0.5  # (people, detections): person inside det
         on_g = covers[gt.ids[r] == g][0]
         if (covers[:, on_g].sum(axis=0) >= 2).any():
             return "merged"
-        if (_inside(d, gt.boxes[mine])[:, 0] >= 0.6).sum() >= 2:
+        if (inside(d, gt.boxes[mine])[:, 0] >= 0.6).sum() >= 2:
             return "split"
     missed = 0
     for k in range(f - 1, f - 1 - run, -1):

@@ -101,7 +101,7 @@ CAUSES = ("split", "merged", "dropped_misses", "phantom", "contact", "reacquired
           "unreported")
 
 
-def _inside(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def inside(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(len(a), len(b)) share of each box of ``a`` (xywh) that lies inside each box of ``b``."""
     x0 = np.maximum(a[:, None, 0], b[None, :, 0])
     y0 = np.maximum(a[:, None, 1], b[None, :, 1])
@@ -177,7 +177,7 @@ def idf1_causes(gt: MotTable, res: MotTable, m: np.ndarray, hidden: np.ndarray,
         mine = r[res.ids[r] == i]
         held = any(holder.get((p, k), i) != i for k in (b - 1, b) if (p, k) in holder)
         return bp is not None and len(mine) > 0 and held and \
-            _inside(res.boxes[mine[0]][None], bp[None])[0, 0] >= 0.6
+            inside(res.boxes[mine[0]][None], bp[None])[0, 0] >= 0.6
 
     def start_cause(p: int, i: int, s: int, before: int | None, first_of: dict) -> str | None:
         """How id i came to person p at frame s (None: p's first id, no event)."""
@@ -187,7 +187,7 @@ def idf1_causes(gt: MotTable, res: MotTable, m: np.ndarray, hidden: np.ndarray,
             for k in (s - 1, s):
                 bp, bq, d = box_of(k, p), box_of(k, q), dets.get(k, np.zeros((0, 4)))
                 if bp is not None and bq is not None and len(d):
-                    both = _inside(np.stack([bp, bq]), d) >= 0.5
+                    both = inside(np.stack([bp, bq]), d) >= 0.5
                     if (both[0] & both[1]).any():
                         return "merged"
             for k in range(s - run, s + 1):
@@ -263,11 +263,11 @@ def idf1_causes(gt: MotTable, res: MotTable, m: np.ndarray, hidden: np.ndarray,
             causes[run_cause[(int(gt.ids[matched_to[r]]), f)]] += 1
             continue
         iou = iou_matrix(res.boxes[r][None], gt.boxes[g])[0] if len(g) else np.zeros(0)
-        inside = _inside(res.boxes[r][None], gt.boxes[g])[0] if len(g) else np.zeros(0)
+        share = inside(res.boxes[r][None], gt.boxes[g])[0] if len(g) else np.zeros(0)
         if len(iou) and iou.max() >= 0.5:
             p = int(gt.ids[g[int(iou.argmax())]])
             causes["split" if fragment(i, p) else "double_box"] += 1
-        elif len(inside) and inside.max() >= 0.6 and fragment(i, int(gt.ids[g[inside.argmax()]])):
+        elif len(share) and share.max() >= 0.6 and fragment(i, int(gt.ids[g[share.argmax()]])):
             causes["split"] += 1  # a fragment's box on part of the person
         else:
             causes["phantom" if hidden[r] else "found_nobody"] += 1
