@@ -130,8 +130,11 @@ def main(argv=None) -> int:
         return _report(table, sets, out, args, argv)
     trackers, skipped = G.available_trackers(args.trackers)
     if args.list:
+        trajectories = G.trajectories_root()
         for s in G.SETS:
-            print(f"{s.name:16s} {s.role:9s} seeds {list(s.seeds)}  {s.description}")
+            missing = G.missing_data(s, trajectories, DATA)
+            where = f"  [absent: {', '.join(map(str, missing))}]" if missing else ""
+            print(f"{s.name:16s} {s.role:9s} seeds {list(s.seeds)}  {s.description}{where}")
         print("trackers:", ", ".join(trackers))
     for n, why in skipped.items():
         print(f"[skip tracker] {n}: {why}")

@@ -110,3 +110,24 @@ def test_docs_table_replaced_and_the_reading_around_it_kept():
                    "### Reading it\n\nwhy the gaps\n")
     assert G.with_table("# Head\n", "## Latest table (x)\n") == "# Head\n\n## Latest table (x)\n"
     assert G.with_table(new, "## Latest table (new)\n\n| new |\n") == new  # idempotent
+
+
+def test_list_names_the_sets_whose_data_is_absent(tmp_path, capsys, monkeypatch):
+    """``--list`` marks each set whose data folders do not exist (issue 39: it did not say)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_generalisation", G.ROOT / "benchmarks" / "bench_generalisation.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    monkeypatch.setattr(bench, "DATA", tmp_path / "nowhere")
+    assert bench.main(["--list", "--trackers", "baseline"]) == 0
+    out = capsys.readouterr().out.splitlines()
+
+    def line(s):
+        return next(v for v in out if v.startswith(f"{s.name:16s} "))
+
+    ecp = next(s for s in G.SETS if any(r.startswith("data:") for r in s.requires))
+    assert "[absent: " + str(tmp_path / "nowhere") in line(ecp)
+    shipped = next(s for s in G.SETS if not s.requires)
+    assert "[absent" not in line(shipped)
