@@ -82,3 +82,17 @@ def test_a_multirun_prints_one_table_of_its_jobs(tmp_path, capsys):
     assert "0.800" in row0 and "1 of 2" in row1 and "1.000" in row1
     assert "detector=old" not in out
     assert "labelled sequences only" in out
+
+
+def test_a_multirun_prints_the_scores_a_single_run_prints(tmp_path, capsys):
+    """``detect -m`` scores each job from its counts, not from the CSV's rounded ratios
+    (issue 39: F1 0.838 against 0.837). F1 = 2 * 2 / (9 + 10) = 0.21053: 0.211, where the
+    file's 0.2105 printed at 3 decimals gives 0.210."""
+    table = metrics_table({"a": DetectionCounts(10, 10, 9, 2, 1.0)})
+    assert table_text(table, []).count("0.211") >= 1
+    gather = GatherDetections()
+    gather.on_multirun_start(OmegaConf.create({}))
+    _job(tmp_path, 0, ["detector=silhouette"], table)
+    gather.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(tmp_path)}}}))
+    row = next(line for line in capsys.readouterr().out.splitlines() if "silhouette" in line)
+    assert "0.211" in row and "0.210" not in row
