@@ -20,6 +20,8 @@ imports, the scoring, the plots, the trackers' compiled kernels).
 from __future__ import annotations
 
 import argparse
+import fcntl
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -46,6 +48,22 @@ def serve(path: str) -> int:
     return Server(path, run, preload).serve()
 
 
+def starting(path: str) -> bool:
+    """Whether a server of this socket ``path`` holds its lock but does not answer yet: it is
+    preloading (``occbench.server.serve``: the lock is taken first, the socket last)."""
+    try:
+        lock = os.open(path[:-5] + ".lock", os.O_RDWR)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(lock)  # closing releases a lock taken here: a server starting waits for it
+    return False
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     parser.add_argument("action", nargs="?", default="status", choices=["status", "stop", "start"])
@@ -55,6 +73,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ident = client.identity()
     path = client.socket_path(ident)
     answer = client.ask(ident, {"op": "status"})
+    if answer is None and starting(path):  # not yet listening: "none running" would be wrong
+        print(f"{PROG}: starting (preloading, it answers in a few seconds; log "
+              f"{path[:-5]}.log)" + ("; ask again to stop it" if args.action == "stop" else ""))
+        return 3 if args.action == "stop" else 0
     if args.action == "start":
         if answer is not None:
             print(f"{PROG}: already running (pid {answer['pid']}, {path})")

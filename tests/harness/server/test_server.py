@@ -317,3 +317,36 @@ def test_a_run_is_byte_identical_served_and_cold(tmp_path):
     served, cold = _files(tmp_path / "served" / "run"), _files(tmp_path / "cold" / "run")
     assert sorted(served) == sorted(cold) and len(served) > 5
     assert [name for name in served if served[name] != cold[name]] == []
+
+
+def test_status_says_starting_while_the_server_preloads(tmp_path, monkeypatch, capsys):
+    """Between ``start`` and listening the server holds its lock and does not answer: status
+    says it is starting (issue 39 item 10: it said "none running" for a few seconds)."""
+    import fcntl
+
+    from occbench.commands import server as command
+    from occbench.server import client
+
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    path = client.socket_path(client.identity())
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    assert command.main(["status"]) == 3 and "none running" in capsys.readouterr().out
+    lock = os.open(path[:-5] + ".lock", os.O_RDWR | os.O_CREAT, 0o600)
+    child = os.fork()
+    if child == 0:  # the "server": holds the lock, never listens
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        time.sleep(30)
+        os._exit(0)
+    try:
+        end = time.monotonic() + 10
+        while not command.starting(path):
+            assert time.monotonic() < end
+            time.sleep(0.05)
+        assert command.main(["status"]) == 0
+        out = capsys.readouterr().out
+        assert "starting" in out and "none running" not in out
+    finally:
+        os.kill(child, signal.SIGKILL)
+        os.waitpid(child, 0)
+        os.close(lock)
+    assert not command.starting(path)
