@@ -76,7 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if answer is None and starting(path):  # not yet listening: "none running" would be wrong
         print(f"{PROG}: starting (preloading, it answers in a few seconds; log "
               f"{path[:-5]}.log)" + ("; ask again to stop it" if args.action == "stop" else ""))
-        return 3 if args.action == "stop" else 0
+        return 0 if args.action == "start" else 3  # status 0 only once it answers
     if args.action == "start":
         if answer is not None:
             print(f"{PROG}: already running (pid {answer['pid']}, {path})")
