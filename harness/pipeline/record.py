@@ -238,15 +238,18 @@ class RunRecord:
             metric_bars(self.metrics, writer.path("plots/metrics.png"), plan.plot_metrics,
                         plan.title)
         except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
-            self.fail("*", "*", "plot", err, traceback.format_exc())
+            self.fail("*", "*", "plot", _naming("plots/metrics.png", err),
+                      traceback.format_exc())
+        target = "hota_alpha.csv"  # the file being made when a failure comes, for its message
         try:  # HOTA and its sub-metrics at each alpha, and plots/hota_alpha.png
             alpha = hota_alpha_frame(self.scores)
             if not alpha.empty:
                 self.writer.text("hota_alpha.csv", alpha.to_csv(
                     index=False, float_format="%.6f", lineterminator="\n"))
+                target = "plots/hota_alpha.png"
                 hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
-            self.fail("*", "*", "hota_alpha", err, traceback.format_exc())
+            self.fail("*", "*", "hota_alpha", _naming(target, err), traceback.format_exc())
         try:
             self.publish("finished")
         except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
@@ -284,3 +287,9 @@ def _in_window(table: MotTable, seq: Sequence) -> MotTable:
     frames = seq.frame_numbers()
     keep = (table.frames >= frames.start) & (table.frames < frames.stop)
     return table if keep.all() else table.rows(keep)
+
+
+def _naming(name: str, err: BaseException) -> str:
+    """A failure's message naming the output file ``name`` that could not be made (an
+    ``OSError`` such as a full disk says only ``[Errno 28] No space left on device``)."""
+    return f"{name}: {type(err).__name__}: {err}"

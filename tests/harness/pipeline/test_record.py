@@ -45,3 +45,26 @@ def test_a_failed_tracker_is_recorded_and_its_tracks_kept(tmp_path, mot_root):
     assert "frame 4: ValueError: lost" in (tmp_path / "r" / "errors.txt").read_text()
     assert len(read_mot(tmp_path / "r" / "tracks" / "baseline" / "cross-b.txt")) == 6
     assert record.scores["baseline"] == {}  # not scored
+
+
+def _full_disk(*args, **kwargs):
+    raise OSError(28, "No space left on device")
+
+
+def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, mot_root, monkeypatch):
+    # issue 39: "plot failed ... OSError: [Errno 28]" said nothing of which file
+    import occbench.report.bars as bars
+    import occbench.report.hota_alpha as hota_alpha
+
+    record = _record(tmp_path, mot_root)
+    for seq in record.plan.sequences:
+        record.sequence(seq, {"baseline": TrackerOutput(seq.gt.table, frames=30, seconds=0.5)})
+        record.sequence_done(seq.info.name)
+    monkeypatch.setattr(bars, "metric_bars", _full_disk)
+    monkeypatch.setattr(hota_alpha, "hota_alpha_plot", _full_disk)
+    record.finish()
+    messages = {f.stage: f.message for f in record.failures}
+    assert messages["plot"].startswith("plots/metrics.png: OSError: [Errno 28]")
+    assert messages["hota_alpha"].startswith("plots/hota_alpha.png: OSError: [Errno 28]")
+    errors = (tmp_path / "r" / "errors.txt").read_text()
+    assert "plots/metrics.png: OSError" in errors and "plots/hota_alpha.png: OSError" in errors
