@@ -57,20 +57,20 @@ def make_scene(people: int, frames: int, seed: int = 0, size: tuple[int, int] = 
     """Pre-rendered frames and exact detections of ``people`` walkers on a ``size`` (width,
     height) frame; at 640x480 the scene of every earlier run, elsewhere the same scene with
     rows, sizes and speeds scaled by height / 480 and columns by width / 640."""
-    WIDTH, HEIGHT = size  # noqa: N806 - the module's names, for this frame size
-    sy, sx = HEIGHT / 480, WIDTH / 640
+    W, H = size
+    sy, sx = H / 480, W / 640
     rng = np.random.default_rng(seed)
     bottom = rng.uniform(200, 470, people) * sy
     height = 60 * sy + (bottom - 200 * sy) * 0.5
     width = height * 0.4
-    x = rng.uniform(0, WIDTH, people)
+    x = rng.uniform(0, W, people)
     vx = rng.choice([-1, 1], people) * rng.uniform(1.0, 3.0, people) * sx
     colours = rng.integers(30, 230, (people, 2, 3))
     out = []
     for _ in range(frames):
-        img = np.full((HEIGHT, WIDTH, 3), 100, np.uint8)
+        img = np.full((H, W, 3), 100, np.uint8)
         img += rng.integers(0, 8, img.shape, dtype=np.uint8)
-        label = np.zeros((HEIGHT, WIDTH), np.int32)
+        label = np.zeros((H, W), np.int32)
         boxes = np.column_stack([x - width / 2, bottom - height, width, height])
         for k in np.argsort(bottom):
             cx, cy = int(x[k]), int(bottom[k] - height[k] / 2)
@@ -81,11 +81,11 @@ def make_scene(people: int, frames: int, seed: int = 0, size: tuple[int, int] = 
             cv2.ellipse(label, (cx, cy), axes, 0, 0, 360, int(k + 1), -1)
         area = np.pi * (width / 2) * (height / 2)
         visible = np.bincount(label.ravel(), minlength=people + 1)[1:] / area
-        inside = (x > 0) & (x < WIDTH)
+        inside = (x > 0) & (x < W)
         keep = (visible >= 0.3) & inside
         out.append((img, Detections(boxes[keep], np.ones(int(keep.sum())))))
         x = x + vx
-        vx = np.where((x < -20) | (x > WIDTH + 20), -vx, vx)
+        vx = np.where((x < -20) | (x > W + 20), -vx, vx)
     return out
 
 

@@ -27,7 +27,7 @@ import time
 from collections.abc import Sequence
 
 from occbench.server import client
-from occbench.server.serve import Server
+from occbench.server.serve import Server, lock_path
 
 PROG = "occbench server"
 
@@ -52,7 +52,7 @@ def starting(path: str) -> bool:
     """Whether a server of this socket ``path`` holds its lock but does not answer yet: it is
     preloading (``occbench.server.serve``: the lock is taken first, the socket last)."""
     try:
-        lock = os.open(path[:-5] + ".lock", os.O_RDWR)
+        lock = os.open(lock_path(path), os.O_RDWR)
     except OSError:
         return False
     try:

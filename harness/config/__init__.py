@@ -7,9 +7,9 @@ trackers, sequences and detection sources from it (``build``), the data-path rul
 ``hydra.main`` app or ``hydra.compose``: the commands, the library's own compositions
 (``build.compose_config``) and the test session do. Nothing is registered on import. Hydra's
 plugin scan finds the project's launcher by itself in a regular install, but it lists
-``hydra_plugins`` with ``pkgutil``, which cannot see the packages of an editable install
-(``pip install -e .``) mapped through setuptools' import hook (pyproject.toml's package-dir),
-so nothing here relies on that scan.
+``hydra_plugins`` with ``pkgutil``, which cannot see the packages of a lenient editable install
+(plain ``pip install -e .``), mapped through setuptools' import hook (pyproject.toml's
+package-dir), so nothing here relies on that scan.
 """
 
 from __future__ import annotations

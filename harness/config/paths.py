@@ -1,7 +1,7 @@
 """Where the project's data lives: one data root, resolved against the installed project.
 
 The root is ``datasets/`` of the project checkout (found from this package's location, so
-the current directory does not matter; ``pip install -e .`` as the README says), or the
+the current directory does not matter; installed as the README says), or the
 folder named by the environment variable ``OCCBENCH_DATA`` when it is set (a relative value
 is taken against the current directory when it is read). Its layout::
 
@@ -10,7 +10,8 @@ is taken against the current directory when it is read). Its layout::
     <root>/<anything you download>   e.g. MOT17/train/<sequence>/ (git-ignored)
 
 Configs name files under the root with the ``occbench.data`` resolver
-(``root: ${occbench.data:CAVIAR-OneLeaveShop1cor}``), registered when ``occbench.pipeline`` is imported.
+(``root: ${occbench.data:CAVIAR-OneLeaveShop1cor}``), registered by
+``occbench.config.register_resolvers()``.
 """
 
 from __future__ import annotations

@@ -239,11 +239,17 @@ class Server:
         conn.close()
 
 
+def lock_path(path: str) -> str:
+    """The lock file of the server whose socket is ``path`` (held for the server's life, taken
+    before it preloads; its socket answers only after)."""
+    return path[:-5] + ".lock"
+
+
 def _take_lock(path: str, wait: float = 60.0) -> int | None:
     """The identity's lock file, held for the server's life; None when another server
     holds it and is listening, or still holds it after ``wait`` s (one stopping is waited
     for)."""
-    lock = os.open(path[:-5] + ".lock", os.O_RDWR | os.O_CREAT, 0o600)
+    lock = os.open(lock_path(path), os.O_RDWR | os.O_CREAT, 0o600)
     end = time.monotonic() + wait
     while True:
         try:

@@ -331,7 +331,7 @@ def test_status_says_starting_while_the_server_preloads(tmp_path, monkeypatch, c
     path = client.socket_path(client.identity())
     os.makedirs(os.path.dirname(path), exist_ok=True)
     assert command.main(["status"]) == 3 and "none running" in capsys.readouterr().out
-    lock = os.open(path[:-5] + ".lock", os.O_RDWR | os.O_CREAT, 0o600)
+    lock = os.open(command.lock_path(path), os.O_RDWR | os.O_CREAT, 0o600)
     child = os.fork()
     if child == 0:  # the "server": holds the lock, never listens
         fcntl.flock(lock, fcntl.LOCK_EX)
