@@ -232,6 +232,7 @@ def _non_negative(v: int) -> str | None:
 APP_SCHEMA: dict[str, tuple[Any, Callable[[Any], str | None] | None]] = {
     "seed": (int, _non_negative),
     "progress": (bool, None),
+    "report": (bool, None),
     "foreground": (str, _foreground),
     "background": (dict[str, Any], None),
     "external": (dict[str, str], None),

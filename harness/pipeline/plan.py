@@ -56,6 +56,9 @@ class RunPlan:
         sequences: the sequences, in order.
         names: the trackers' names, then the external ones.
         title: the run's title for the summary and plots.
+        report: write the run's pages and pictures (config key ``report``): report.html,
+            plots/ and the paired differences (with the per-frame counts they read); false
+            = the scores only, for large sweeps (``occbench.pipeline.record``).
     """
 
     writer: RunWriter
@@ -75,6 +78,7 @@ class RunPlan:
     sequences: list[Sequence]
     names: list[str]
     title: str
+    report: bool = True
 
     def build(self, name: str) -> Tracker:
         """A freshly built tracker ``name``."""
@@ -138,7 +142,7 @@ def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None,
         list(container(cfg_get(evaluation, "plot", DEFAULT_METRICS))), graphs, protocol,
         container(cfg_get(protocol_node, "targets", None)), configs, keys,
         cfg_get(cfg, "detector"), externals, sequences, names,
-        _title(cfg, sequences, detector))
+        _title(cfg, sequences, detector), bool(cfg_get(cfg, "report", True)))
 
 
 def buildable_trackers(node: Any, name: str | None) -> tuple[dict[str, Any], dict[str, str]]:

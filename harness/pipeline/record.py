@@ -106,7 +106,8 @@ class RunRecord:
             # run has ended: 1000 resamples per pair are not redone after every sequence
             from occbench.metrics.paired import all_pairs
 
-            self.paired = all_pairs(self.frames) if state != "running" else []
+            done = state != "running" and self.plan.report  # report: false skips them
+            self.paired = all_pairs(self.frames) if done else []
         except Exception as err:  # noqa: BLE001 - recorded, the summary is written without
             self.paired = []
             self.fail("*", sname, "paired", err, traceback.format_exc())
@@ -185,6 +186,8 @@ class RunRecord:
         self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
         self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
                                             plan.hidden_below, followers)
+        if not plan.report:  # the per-frame counts serve only the page and the paired bootstrap
+            return
         from occbench.metrics.timeline import frame_counts  # the report's timeline, paired
 
         try:
@@ -218,7 +221,8 @@ class RunRecord:
         summary.md (so that summary.md counts every failure the run reports), then
         report.html (summary.md written again if the page fails); a failing
         one is recorded and the others are still written. ``metrics`` keeps every scored
-        sequence whatever could be written (disk full...)."""
+        sequence whatever could be written (disk full...). With ``report: false`` the plots
+        and report.html are not made (nor the paired differences: ``publish``)."""
         from occbench.report.bars import metric_bars
         from occbench.report.hota_alpha import hota_alpha_plot
         from occbench.report.tables import comparison, to_latex
@@ -235,8 +239,9 @@ class RunRecord:
         except Exception as err:  # noqa: BLE001 - recorded
             self.fail("*", "*", "summary", err, traceback.format_exc())
         try:
-            metric_bars(self.metrics, writer.path("plots/metrics.png"), plan.plot_metrics,
-                        plan.title)
+            if plan.report:
+                metric_bars(self.metrics, writer.path("plots/metrics.png"), plan.plot_metrics,
+                            plan.title)
         except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
             self.fail("*", "*", "plot", _naming("plots/metrics.png", err),
                       traceback.format_exc())
@@ -247,13 +252,16 @@ class RunRecord:
                 self.writer.text("hota_alpha.csv", alpha.to_csv(
                     index=False, float_format="%.6f", lineterminator="\n"))
                 target = "plots/hota_alpha.png"
-                hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title)
+                if plan.report:
+                    hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
             self.fail("*", "*", "hota_alpha", _naming(target, err), traceback.format_exc())
         try:
             self.publish("finished")
         except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
             self.fail("*", "*", "metrics", err, traceback.format_exc())
+        if not plan.report:
+            return
         try:  # the page of the run, last: it shows every output above
             from occbench.report.html import write_run_report
 

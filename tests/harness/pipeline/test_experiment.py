@@ -98,6 +98,26 @@ def test_external_tracker_scores_equal_the_original(tmp_path, mot_root):
     assert second.objective("copy", "IDF1") < second.objective("baseline", "IDF1")
 
 
+def test_report_false_writes_the_same_scores_without_pages_plots_or_pairs(tmp_path, mot_root):
+    # a large sweep's jobs (benchmarks/tune_on_choosing.py) need the scores only
+    run_experiment(mot_cfg(mot_root, "detector.jitter=0.05"), tmp_path / "a")
+    other = f"+external.copy={tmp_path / 'a' / 'tracks' / 'baseline'}"  # a pair to compare
+    full = run_experiment(mot_cfg(mot_root, "detector.jitter=0.05", other), tmp_path / "full")
+    bare = run_experiment(mot_cfg(mot_root, "detector.jitter=0.05", other, "report=false"),
+                          tmp_path / "bare")
+    assert full.ok and bare.ok, (full.failures, bare.failures)
+    for f in ("metrics.csv", "hota_alpha.csv", "summary.tex", "tracks/baseline/cross-a.txt"):
+        assert (tmp_path / "full" / f).read_bytes() == (tmp_path / "bare" / f).read_bytes(), f
+    assert (tmp_path / "full" / "report.html").is_file() and full.paired
+    assert (tmp_path / "full" / "plots" / "metrics.png").is_file()
+    assert not (tmp_path / "bare" / "report.html").exists()
+    assert not (tmp_path / "bare" / "plots").exists() and bare.paired == []
+    assert "Paired differences" in (tmp_path / "full" / "summary.md").read_text()
+    assert "Paired differences" not in (tmp_path / "bare" / "summary.md").read_text()
+    with pytest.raises(RunError, match="report"):
+        run_experiment(mot_cfg(mot_root, "report=3"), tmp_path / "bad")
+
+
 def test_external_folder_missing_and_name_clash(tmp_path, mot_root):
     with pytest.raises(RunError, match="result folder not found"):
         run_experiment(mot_cfg(mot_root, f"+external.x={tmp_path / 'nope'}"), tmp_path / "r")
