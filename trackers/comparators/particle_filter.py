@@ -23,6 +23,14 @@ from occbench.trackers.comparators.appearance import (
 from occbench.trackers.records import Detections, Track
 
 
+def systematic_resample(weight: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Indices of N particles drawn by systematic resampling from normalised ``weight`` (N,):
+    one uniform offset, then N evenly spaced points on the cumulative weights."""
+    n = len(weight)
+    u = (rng.random() + np.arange(n)) / n
+    return np.minimum(np.searchsorted(np.cumsum(weight), u), n - 1)
+
+
 class ColourParticleFilter(ColourTrackerBase):
     """Bootstrap particle filter with a colour likelihood, one particle set per target.
 
@@ -81,9 +89,7 @@ class ColourParticleFilter(ColourTrackerBase):
         mean = weight @ s  # the posterior mean
         sc = np.exp(mean[4])
         target.box = np.array([mean[0] - w * sc / 2, mean[1] - h * sc / 2, w * sc, h * sc])
-        u = (self._rng.random() + np.arange(self.particles)) / self.particles  # systematic
-        idx = np.minimum(np.searchsorted(np.cumsum(weight), u), self.particles - 1)
-        s = s[idx]
+        s = s[systematic_resample(weight, self._rng)]
         s[:, 4] -= mean[4]  # scales relative to the new box
         self._sets[target.id] = s
         return float(np.sqrt(target.q * colour_model(bins, target.box)).sum())

@@ -3,7 +3,13 @@
 import numpy as np
 import pytest
 
-from occbench.trackers.comparators import ColourParticleFilter, MeanShiftTracker, SimilarityBelow
+from occbench.trackers.comparators import (
+    ColourParticleFilter,
+    ConnectedComponentMeanShiftPF,
+    MeanShiftTracker,
+    ScaleAdaptiveMeanShift,
+    SimilarityBelow,
+)
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections
 
@@ -29,7 +35,8 @@ def _follow(tracker, frames, boxes):
     return out
 
 
-@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter, ScaleAdaptiveMeanShift,
+                                  ConnectedComponentMeanShiftPF])
 def test_follows_a_coloured_person_from_its_first_box(make):
     frames, boxes = _scene()
     out = _follow(make(), frames, boxes)
@@ -38,7 +45,8 @@ def test_follows_a_coloured_person_from_its_first_box(make):
     assert min(iou) > 0.5
 
 
-@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter, ScaleAdaptiveMeanShift,
+                                  ConnectedComponentMeanShiftPF])
 def test_target_ends_when_its_colour_is_gone(make):
     frames, boxes = _scene(10)
     grey = [np.full((H, W, 3), 100, np.uint8)] * 15
@@ -46,7 +54,8 @@ def test_target_ends_when_its_colour_is_gone(make):
     assert len(out[9]) == 1 and out[-1] == []
 
 
-@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter, ScaleAdaptiveMeanShift,
+                                  ConnectedComponentMeanShiftPF])
 def test_a_detection_where_a_target_stands_starts_nothing(make):
     frames, boxes = _scene(5)
     tracker = make()
@@ -55,7 +64,8 @@ def test_a_detection_where_a_target_stands_starts_nothing(make):
     assert ids == [{1}] * 5
 
 
-@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter, ScaleAdaptiveMeanShift,
+                                  ConnectedComponentMeanShiftPF])
 def test_a_single_target_tracker_starts_nothing_more(make):
     frames, boxes = _scene(3)
     far = np.array([[150, 10, 16, 32]])

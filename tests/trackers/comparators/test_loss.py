@@ -8,9 +8,11 @@ import pytest
 from occbench.trackers.comparators import (
     AnyDetection,
     ColourParticleFilter,
+    ConnectedComponentMeanShiftPF,
     MeanShiftTracker,
     MostSimilar,
     NeverLost,
+    ScaleAdaptiveMeanShift,
     SimilarityBelow,
 )
 from occbench.trackers.records import Detections
@@ -47,7 +49,8 @@ def _run(tracker, frames, dets, every_detection: bool = True):
     return out
 
 
-@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter, ScaleAdaptiveMeanShift,
+                                  ConnectedComponentMeanShiftPF])
 def test_a_hidden_person_is_lost_after_k_frames_and_restarted_under_a_new_id(make):
     frames, _, dets = _scene()
     out = _run(make(max_targets=1, loss=SimilarityBelow(0.8, 3)), frames, dets)
@@ -57,7 +60,8 @@ def test_a_hidden_person_is_lost_after_k_frames_and_restarted_under_a_new_id(mak
     assert ids[HIDDEN.stop:] == [[2]] * (len(frames) - HIDDEN.stop)  # restarted on its return
 
 
-@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter])
+@pytest.mark.parametrize("make", [MeanShiftTracker, ColourParticleFilter, ScaleAdaptiveMeanShift,
+                                  ConnectedComponentMeanShiftPF])
 def test_never_lost_keeps_one_track_and_loss_changes_nothing_before_it(make):
     frames, _, dets = _scene()
     kept = _run(make(max_targets=1, loss=NeverLost()), frames, dets)
