@@ -1,5 +1,6 @@
 """Generalisation table: every tracker (ours and outside, at defaults and tuned where a
-``conf/tracker/<name>_tuned.yaml`` exists) x every evaluation set, COMBINED IDF1 / HOTA /
+``conf/tracker/<name>_tuned.yaml`` (synthetic tuning data) or ``<name>_tuned_real.yaml`` (the
+real choosing sets, ``benchmarks/tune_on_choosing.py``) exists) x every evaluation set, COMBINED IDF1 / HOTA /
 MOTA, each set marked tuning (T: a default or tuned parameter was chosen on it) or
 untouched (U). The sets and the seed choice: ``harness/sweeps/generalisation.py`` and
 docs/generalisation.md.
@@ -9,6 +10,7 @@ docs/generalisation.md.
     .venv/bin/python benchmarks/bench_generalisation.py --sets "cav151-295 sil" PETS09 \\
         --trackers reta pbm norfair norfair_tuned
     .venv/bin/python benchmarks/bench_generalisation.py --list          # sets and trackers
+    .venv/bin/python benchmarks/bench_generalisation.py --scores-only   # no pages or plots
     .venv/bin/python benchmarks/bench_generalisation.py --docs          # + docs' table section
 
 Writes ``generalisation.csv`` (long: set, role, tracker, IDF1, HOTA, MOTA, n_seeds,
@@ -95,6 +97,9 @@ def main(argv=None) -> int:
     ap.add_argument("--length", type=int, help="cut every synthetic scene / replay to N frames "
                     "(exploring only: not the reported table)")
     ap.add_argument("--out", type=Path, help="output folder")
+    ap.add_argument("--scores-only", action="store_true",
+                    help="runs write their scores only (report=false: no report.html, plots "
+                    "or paired differences; the same figures)")
     ap.add_argument("--docs", action="store_true",
                     help="replace the table section of docs/generalisation.md too")
     ap.add_argument("--list", action="store_true", help="list sets and trackers, run nothing")
@@ -145,7 +150,8 @@ def main(argv=None) -> int:
         return 1
     out = args.out or ROOT / "results" / "generalisation" / dt.datetime.now().strftime(
         "%Y-%m-%d_%H-%M-%S")
-    table = G.run_table(sets, trackers, out, args.length, data_root=DATA)
+    table = G.run_table(sets, trackers, out, args.length, data_root=DATA,
+                        extra=["report=false"] if args.scores_only else [])
     if table.empty:
         print("no set was run")
         return 1

@@ -42,11 +42,14 @@ UNTOUCHED_SEEDS = (1000, 1001)
 #: crowd seeds never used for any choice (one exchange moves a seed by up to 0.1 IDF1)
 CROWD_SEEDS = tuple(range(2000, 2010))
 #: every tracker of ours and outside, in table order; unavailable ones are skipped, and
-#: every conf/tracker/*_tuned.yaml is added after the tracker it tunes
+#: every conf/tracker/<name><suffix>.yaml of ``TUNED`` is added after the tracker it tunes
 TRACKERS = ("baseline", "reta", "reta_paper", "pbm", "pbm_paper", "bytetrack", "ocsort",
             "norfair", "motpy", "boxmot_botsort", "boxmot_bytetrack", "boxmot_ocsort",
             "boxmot_deepocsort", "boxmot_hybridsort", "boxmot_boosttrack",
             "boxmot_occluboost", "boxmot_sfsort")
+#: tuned rows, in table order: ``_tuned`` on synthetic data (``+experiment=tune_<name>``),
+#: ``_tuned_real`` on the real choosing sets (``benchmarks/tune_on_choosing.py``)
+TUNED = ("_tuned", "_tuned_real")
 
 
 @dataclass(frozen=True)
@@ -181,7 +184,6 @@ def compose(overrides: Sequence[str]):
     """The project's config composed with ``overrides`` (no Hydra app needed)."""
     from hydra import compose as _compose
     from hydra import initialize_config_dir
-
     from occbench.config import register
 
     register()
@@ -221,12 +223,12 @@ def missing_data(s: EvalSet, trajectories: Path, data_root: Path | None = None) 
 
 
 def ordered_trackers() -> list[str]:
-    """``TRACKERS`` with every ``conf/tracker/*_tuned.yaml`` after the tracker it tunes."""
-    tuned = sorted(p.stem for p in (CONF / "tracker").glob("*_tuned.yaml"))
+    """``TRACKERS``, each followed by its tuned rows (``conf/tracker/<name><TUNED>.yaml``)."""
+    tuned = sorted({p.stem for x in TUNED for p in (CONF / "tracker").glob(f"*{x}.yaml")})
     names = []
     for n in TRACKERS:
         names.append(n)
-        names += [t for t in tuned if t == f"{n}_tuned"]
+        names += [f"{n}{suffix}" for suffix in TUNED if f"{n}{suffix}" in tuned]
     return names + [t for t in tuned if t not in names]
 
 
@@ -260,9 +262,11 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
 
 
 def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
-            length: int | None = None, data_root: Path | None = None) -> pd.DataFrame:
+            length: int | None = None, data_root: Path | None = None,
+            extra: Sequence[str] = ()) -> pd.DataFrame:
     """Run every tracker on set ``s`` at each of its seeds; one row per tracker with the
-    mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too)."""
+    mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too). ``extra``: further
+    overrides of every run (e.g. ``report=false``: the scores only)."""
     from omegaconf import OmegaConf, open_dict
 
     from occbench.metrics import COMBINED
@@ -270,8 +274,8 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
 
     rows = []
     for seed in s.seeds:
-        overrides = _resolve(s.overrides, trajectories, data_root) + [f"seed={seed}",
-                                                                     "progress=false"]
+        overrides = _resolve(s.overrides, trajectories, data_root) + [
+            f"seed={seed}", "progress=false", *extra]
         if length is not None:  # exploring: shorter synthetic scenes and replays
             key = {"dataset=synthetic": "length", "dataset=replay": "max_frames"}
             overrides += [f"dataset.{key[o]}={length}" for o in overrides if o in key]
@@ -297,9 +301,11 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
 
 
 def run_table(sets: Sequence[EvalSet], trackers: dict, out_dir: Path,
-              length: int | None = None, data_root: Path | None = None) -> pd.DataFrame:
+              length: int | None = None, data_root: Path | None = None,
+              extra: Sequence[str] = ()) -> pd.DataFrame:
     """Every tracker on every set (skipping sets whose data is absent, with a message;
-    ``data_root``: the folder of the sets' ``data:`` folders, not shipped);
+    ``data_root``: the folder of the sets' ``data:`` folders, not shipped; ``extra``:
+    overrides of every run, ``run_set``);
     writes ``generalisation.csv`` and ``generalisation.md`` into ``out_dir`` after each set
     (a later failure loses nothing) and returns the long table (set, role, tracker,
     IDF1, HOTA, MOTA, n_seeds, failures)."""
@@ -315,7 +321,7 @@ def run_table(sets: Sequence[EvalSet], trackers: dict, out_dir: Path,
         print(f"[run] {s.name} ({s.role}): {s.description}, seeds {list(s.seeds)}", flush=True)
         try:
             parts.append(run_set(s, trackers, out_dir / "runs" / s.name.replace(" ", "_"),
-                                 trajectories, length, data_root))
+                                 trajectories, length, data_root, extra))
         except Exception as err:  # noqa: BLE001 - one set's failure must not lose the others
             print(f"[fail] {s.name}: {type(err).__name__}: {err}")
             continue

@@ -131,3 +131,13 @@ def test_list_names_the_sets_whose_data_is_absent(tmp_path, capsys, monkeypatch)
     assert "[absent: " + str(tmp_path / "nowhere") in line(ecp)
     shipped = next(s for s in G.SETS if not s.requires)
     assert "[absent" not in line(shipped)
+
+
+def test_a_tuned_real_row_is_listed_after_the_synthetic_one(monkeypatch, tmp_path):
+    (tmp_path / "tracker").mkdir()
+    for name in ("motpy", "motpy_tuned", "motpy_tuned_real"):
+        (tmp_path / "tracker" / f"{name}.yaml").write_text("")
+    monkeypatch.setattr(G, "CONF", tmp_path)
+    names = G.ordered_trackers()
+    assert names[names.index("motpy"):names.index("motpy") + 3] == [
+        "motpy", "motpy_tuned", "motpy_tuned_real"]

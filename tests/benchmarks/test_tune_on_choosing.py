@@ -1,0 +1,69 @@
+"""benchmarks/tune_on_choosing.py with a tiny budget: two trials of motpy on one short
+synthetic scene (a stand-in for the choosing sets), the defaults first, the best written as a
+config whose comments say where it came from."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from omegaconf import OmegaConf
+
+pytest.importorskip("optuna")
+pytest.importorskip("motpy")
+
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "tune_on_choosing.py"
+_spec = importlib.util.spec_from_file_location("tune_on_choosing", _PATH)
+tuner = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = tuner
+_spec.loader.exec_module(tuner)
+
+G = tuner.G
+TINY = G.EvalSet("tiny", G.TUNING, ("dataset=synthetic", "dataset.scenarios=[crossing]",
+                                    "dataset.length=20", "detector=noisy_gt"), (0,))
+
+
+def test_two_trials_defaults_first_and_the_best_written_with_its_provenance(tmp_path):
+    studies, table = tuner.tune(["motpy"], [TINY], trials=2, startup=1, out=tmp_path)
+    assert list(table["trial"]) == [0, 1]
+    defaults = OmegaConf.load(G.CONF / "tracker" / "motpy.yaml")
+    first = table.iloc[0]
+    for key in tuner.space("motpy"):  # trial 0 is motpy's defaults
+        assert first[key] == defaults[key.removeprefix("tracker.")], key
+    assert first["objective"] == pytest.approx(first["tiny"])  # one set: its IDF1
+    assert pd.read_csv(tmp_path / "trials.csv")["trial"].tolist() == [0, 1]
+    assert not (tmp_path / "batch0" / "tiny" / "seed0" / "report.html").exists()  # scores only
+    text = tuner.config_text("motpy", studies["motpy"], table, [TINY], 1, "2026-01-01, commit x")
+    assert "best of 2 trials" in text and "commit x" in text and "tiny" in text
+    node = OmegaConf.create(text)
+    best = studies["motpy"].best_trial
+    assert list(node.defaults) == ["motpy", "_self_"]
+    for key, value in best.params.items():
+        assert node[key.removeprefix("tracker.")] == pytest.approx(value, abs=1e-4)
+    assert best.value == pytest.approx(table["objective"].max())
+
+
+
+def _fake_batch(batch, sets, out, data_root):
+    """A stand-in for the harness runs: IDF1 a smooth function of the trial's parameters."""
+    def idf1(p):
+        return 1 - abs(p["tracker.min_iou"] - 0.3) - p["tracker.q_var_pos"] / 1e3
+
+    return pd.DataFrame([{"label": label, "set": s.name, "IDF1": idf1(p)}
+                         for label, (name, p) in batch.items() for s in sets])
+
+
+def test_a_longer_study_in_batches_begins_with_the_shorter_study(tmp_path, monkeypatch):
+    # --trials 40 --batches 6 24 holds the 16-trial study: both budgets from one run
+    monkeypatch.setattr(tuner, "run_batch", _fake_batch)
+    _, short = tuner.tune(["motpy"], [TINY], trials=4, startup=2, out=tmp_path / "a")
+    _, long = tuner.tune(["motpy"], [TINY], trials=7, startup=2, out=tmp_path / "b",
+                         batches=[2, 3])
+    pd.testing.assert_frame_equal(short, long.iloc[:4])
+    assert tuner.best_within(long, "motpy", 4)["objective"] == short["objective"].max()
+    assert tuner.batch_sizes(16, 10) == [10, 6]
+    with pytest.raises(SystemExit, match="do not make 40 trials"):
+        tuner.batch_sizes(40, 10, [6, 20])
