@@ -200,6 +200,12 @@ class Adaptations:
             appearance term (the mean) and the region term (eq. 5) decides between them
             (a merged measurement is an occlusion); False: eq. 4 weighs each pair (the
             paper, 3.3.2).
+        merged_appearance: a measurement merged over two tracked people is an occlusion:
+            the person matched to it, in O (eq. 2) with a confirmed person unmatched at t,
+            moves its appearance q towards the measurement's p only by the share of the
+            measured region the unmatched person's predicted region does not cover
+            (``contact.MergedAppearance``); False: q = p for everyone matched in front
+            (the paper, 3.3.3).
     """
 
     gate_sigmas: float = 3.0
@@ -225,6 +231,7 @@ class Adaptations:
     early_confirm_score: float = 0.0
     report_memory: float = 1.0
     contact_region: bool = False
+    merged_appearance: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -235,7 +242,7 @@ class Adaptations:
                       "measured_velocity": bool, "foreground_presence": bool,
                       "tentative_stage1_only": bool, "inherit_hidden_id": bool,
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
-                      "contact_region": bool})
+                      "contact_region": bool, "merged_appearance": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -258,7 +265,8 @@ class Adaptations:
                    foreground_presence=False, tentative_stage1_only=False,
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
                    filter_size=False, shape_gate=0.0, early_confirm=0,
-                   early_confirm_score=0.0, report_memory=0.0, contact_region=False)
+                   early_confirm_score=0.0, report_memory=0.0, contact_region=False,
+                   merged_appearance=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

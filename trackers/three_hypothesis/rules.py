@@ -17,6 +17,7 @@ from occbench.trackers.common.measured_velocity import FilterPrediction, Measure
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis._kernels import blend
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.contact import MeasurementAppearance, MergedAppearance
 from occbench.trackers.three_hypothesis.hypotheses import PRIORITY
 from occbench.trackers.three_hypothesis.motion import (
     BoxState,
@@ -386,6 +387,7 @@ class Rules(NamedTuple):
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
     appearance_behind: KeepAppearance | BlendVisible
+    appearance_front: MeasurementAppearance | MergedAppearance  # q of a person in front (3.3.3)
     shape_behind: PredictionShape | EstimateShape
     identity: NewIdentity | HiddenIdentity  # the id a confirmed track takes
     support: NoSupport | ForegroundSupport
@@ -416,6 +418,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
+        appearance_front=MergedAppearance() if a.merged_appearance else MeasurementAppearance(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
         identity=HiddenIdentity() if a.inherit_hidden_id else NewIdentity(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),

@@ -8,6 +8,7 @@ import logging
 
 import numpy as np
 
+from occbench.trackers.three_hypothesis.contact import own_shares
 from occbench.trackers.three_hypothesis.graph import VISIBLE
 from occbench.trackers.three_hypothesis.motion import box_measurements, state_boxes
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
@@ -51,12 +52,13 @@ class UpdateSteps:
         # a detection on no foreground does not confirm a tentative track
         empty_dets = set() if empty is None else {d for d, e in zip(tent, empty.tolist()) if e}
         visible_share = self._visible_share(f, rows, behind)
+        own = self._own_share(f, rows)
         clear = self._clear(f, [(i, d) for i, (d, _, _, _) in rows
                                 if d in tent and d not in empty_dets])
         for r, (i, (d, n, stage, rho)) in enumerate(rows):
             person = persons[i]
             if not behind[r]:
-                person.q = p[d]
+                person.q = rules.appearance_front.update(person.q, p[d], own[r])
                 shape = dbox[r]
             else:
                 shape = rules.shape_behind.region(estimate[r], pred[n])
@@ -129,6 +131,17 @@ class UpdateSteps:
         for a, r in enumerate(k.tolist()):
             share[r] = 1.0 - float(covered[a])
         return share
+
+    def _own_share(self, f: Frame, rows: list) -> np.ndarray:
+        """Per matched row, the share of its measured region no hidden confirmed partner
+        in O covers (``contact.own_shares``); 1 everywhere unless the front rule reads it."""
+        if not self.rules.appearance_front.uses_shares:
+            return np.ones(len(rows))
+        persons = f.persons
+        hidden = np.array([person.confirmed and i not in f.matched and i not in f.absorbed
+                           for i, person in enumerate(persons)], dtype=bool)
+        return own_shares([(i, d, n) for i, (d, n, _, _) in rows], f.pairs, f.owners, hidden,
+                          f.pred, f.dets, f.delta)
 
     def _confirm(self, f: Frame, person: Person, shape: np.ndarray) -> None:
         """A tentative track reaches ``confirm_frames``: it takes a new id, or (by

@@ -1,0 +1,81 @@
+"""People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
+says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``),
+``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
+one measurement often holds two people, and the person matched to it took the pair's
+histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
+xywh, 0-based pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from occbench.trackers.three_hypothesis._kernels import blend
+
+# --------------------------------------------------------------- 3.3.3: q of a person in front
+
+
+@dataclass(frozen=True)
+class MeasurementAppearance:
+    """3.3.3 as written: a matched person behind nobody takes its measurement's histogram p
+    as its appearance q."""
+
+    uses_shares: ClassVar[bool] = False
+
+    def update(self, q: np.ndarray, p: np.ndarray, own: float) -> np.ndarray:
+        return p
+
+
+@dataclass(frozen=True)
+class MergedAppearance:
+    """``merged_appearance``: a measurement merged over two tracked people is an occlusion
+    (3.3.1). When the person i matched to measurement d is in O (eq. 2) with a confirmed
+    person j left unmatched at t, d's ellipse may hold j's pixels as well as i's: only the
+    share ``own`` of d's region that j's predicted region does not cover is i's, so q moves
+    towards p by that share, q <- (1 - own) q + own p (``own`` 1: q = p as in the paper; j
+    wholly inside d: q kept), and the appearance models of people in contact do not absorb
+    each other."""
+
+    uses_shares: ClassVar[bool] = True
+
+    def update(self, q: np.ndarray, p: np.ndarray, own: float) -> np.ndarray:
+        if own >= 1.0:
+            return p
+        return blend(q, p, own) if own > 0 else q
+
+
+def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.ndarray,
+               hidden: np.ndarray, pred: np.ndarray, dets: np.ndarray,
+               delta: np.ndarray) -> np.ndarray:
+    """(K,) share of each matched measurement's region that no predicted region of a hidden
+    partner covers: 1 - max_m |S_m & S_d| / |S_d| over the nodes m, in O with the row's node,
+    of a person with ``hidden`` True (|S_m & S_d| = delta (|S_m| + |S_d|) / 2, eq. 5).
+
+    Args:
+        rows: (person, measurement d, node n) of each matched row.
+        pairs: O, (K', 2) node rows; owners: (B,) person of each node.
+        hidden: (P,) bool, persons unmatched at t that may be inside a measurement.
+        pred: (B, 4) predicted regions; dets: (D, 4) measurements.
+        delta: (B, D) region similarity of ``pred`` and ``dets`` (eq. 5).
+    """
+    own = np.ones(len(rows))
+    if not len(pairs) or not hidden.any():
+        return own
+    partners: dict[int, list[int]] = {}
+    for a, b in pairs.tolist():
+        if hidden[owners[b]]:
+            partners.setdefault(a, []).append(b)
+        if hidden[owners[a]]:
+            partners.setdefault(b, []).append(a)
+    area_n = pred[:, 2] * pred[:, 3]  # pi / 4 cancels in the ratio
+    for r, (_, d, n) in enumerate(rows):
+        m = partners.get(n)
+        if not m:
+            continue
+        area_d = dets[d, 2] * dets[d, 3]
+        inter = delta[m, d] * (area_n[m] + area_d) / 2
+        own[r] = float(np.clip(1.0 - inter.max() / max(area_d, 1e-9), 0.0, 1.0))
+    return own
