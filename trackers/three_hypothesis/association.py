@@ -86,6 +86,7 @@ def associate(
     gate: np.ndarray | None = None,
     evidence: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     admissible: np.ndarray | None = None,
+    barred: Callable[[np.ndarray], np.ndarray | None] | None = None,
 ) -> Matches:
     """Match measurements to persons in two stages.
 
@@ -121,6 +122,8 @@ def associate(
             (e.g. ``rules.AppearanceMargin().evidence``).
         admissible: optional (B, D) bool: node-measurement pairs either stage may match
             (default all; e.g. ``shape_gate.ShapeGate``'s).
+        barred: optional map (D,) bool measurements stage 1 matched -> (D,) bool
+            measurements stage 2 may not match, or None (e.g. ``contact.SplitParts``).
     """
     owners = np.asarray(owners, dtype=int)
     n_persons, n_meas = len(sqrt_q), len(measurement_boxes)
@@ -161,6 +164,9 @@ def associate(
     if eligible.any() and not matched_d.all():
         d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
         free = eligible[owners][:, None] & ~matched_d[None, :]
+        parts = None if barred is None else barred(matched_d)
+        if parts is not None:
+            free &= ~parts[None, :]
         radius = mu_g if gate is None else np.minimum(mu_g, np.asarray(gate, dtype=float))[:, None]
         c2 = np.where(free & (d <= radius) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
         cost2, best2 = _person_costs(c2, starts, owners)

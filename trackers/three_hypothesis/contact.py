@@ -79,3 +79,54 @@ def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.n
         inter = delta[m, d] * (area_n[m] + area_d) / 2
         own[r] = float(np.clip(1.0 - inter.max() / max(area_d, 1e-9), 0.0, 1.0))
     return own
+
+
+# --------------------------------------------------------------- 3.3.2 steps 5-8: who stage 2 may give a measurement
+
+
+@dataclass(frozen=True)
+class AnyLeftover:
+    """3.3.2 as written: every measurement stage 1 left over may be taken in stage 2 by a
+    prediction whose validation gate holds it."""
+
+    def barred(self, dets: np.ndarray, matched: np.ndarray) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class SplitParts:
+    """``split_parts``: a person partly seen is a split. A measurement stage 1 left over
+    whose region lies mostly (at least ``cover`` of its ellipse) on the measurements stage 1
+    matched is a second measurement of people already measured (the detector fitted one more
+    box across a group), neither a person come back nor a new one: stage 2 may not give it
+    to a person through the gate, and it starts no track."""
+
+    cover: float
+    samples: int = 12
+
+    def barred(self, dets: np.ndarray, matched: np.ndarray) -> np.ndarray | None:
+        """(D,) bool: leftover measurements of (D, 4) xywh ``dets`` lying on the union of the
+        ``matched`` (D,) bool ones by at least ``cover``."""
+        if not matched.any() or matched.all():
+            return None
+        out = np.zeros(len(dets), dtype=bool)
+        out[~matched] = union_cover(dets[~matched], dets[matched], self.samples) >= self.cover
+        return out
+
+
+def union_cover(boxes: np.ndarray, others: np.ndarray, samples: int = 12) -> np.ndarray:
+    """(N,) share of each box's inscribed ellipse lying inside the union of the ellipses of
+    (M, 4) xywh ``others``, integrated on a ``samples`` x ``samples`` grid over the box."""
+    t = (np.arange(samples) + 0.5) / samples
+    out = np.zeros(len(boxes))
+    for k, (x, y, w, h) in enumerate(np.asarray(boxes, dtype=np.float64).tolist()):
+        px, py = np.meshgrid(x + t * w, y + t * h)
+        inside = ((px - x - w / 2) / (w / 2)) ** 2 + ((py - y - h / 2) / (h / 2)) ** 2 <= 1.0
+        px, py = px[inside], py[inside]
+        hit = np.zeros(len(px), dtype=bool)
+        for ox, oy, ow, oh in np.asarray(others, dtype=np.float64).tolist():
+            if ox >= x + w or ox + ow <= x or oy >= y + h or oy + oh <= y:
+                continue
+            hit |= ((px - ox - ow / 2) / (ow / 2)) ** 2 + ((py - oy - oh / 2) / (oh / 2)) ** 2 <= 1.0
+        out[k] = hit.mean() if len(hit) else 0.0
+    return out

@@ -206,6 +206,12 @@ class Adaptations:
             measured region the unmatched person's predicted region does not cover
             (``contact.MergedAppearance``); False: q = p for everyone matched in front
             (the paper, 3.3.3).
+        split_parts: a person partly seen is a split: a measurement stage 1 left over that
+            lies mostly (``LifeCycle.cover`` of its ellipse) on the measurements stage 1
+            matched is a second measurement of people already measured; stage 2 may not give
+            it to anyone and it starts no track (``contact.SplitParts``); False: stage 2 may
+            give it to any prediction whose gate holds it, else it starts a track (the
+            paper, 3.3.2, 3.3).
     """
 
     gate_sigmas: float = 3.0
@@ -232,6 +238,7 @@ class Adaptations:
     report_memory: float = 1.0
     contact_region: bool = False
     merged_appearance: bool = False
+    split_parts: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -242,7 +249,8 @@ class Adaptations:
                       "measured_velocity": bool, "foreground_presence": bool,
                       "tentative_stage1_only": bool, "inherit_hidden_id": bool,
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
-                      "contact_region": bool, "merged_appearance": bool})
+                      "contact_region": bool, "merged_appearance": bool,
+                      "split_parts": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -266,7 +274,7 @@ class Adaptations:
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
                    filter_size=False, shape_gate=0.0, early_confirm=0,
                    early_confirm_score=0.0, report_memory=0.0, contact_region=False,
-                   merged_appearance=False)
+                   merged_appearance=False, split_parts=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -17,7 +17,12 @@ from occbench.trackers.common.measured_velocity import FilterPrediction, Measure
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis._kernels import blend
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
-from occbench.trackers.three_hypothesis.contact import MeasurementAppearance, MergedAppearance
+from occbench.trackers.three_hypothesis.contact import (
+    AnyLeftover,
+    MeasurementAppearance,
+    MergedAppearance,
+    SplitParts,
+)
 from occbench.trackers.three_hypothesis.hypotheses import PRIORITY
 from occbench.trackers.three_hypothesis.motion import (
     BoxState,
@@ -384,6 +389,7 @@ class Rules(NamedTuple):
     stage2: EveryNodeInStage2 | ConfirmedInStage2
     stage1_appearance: AbsoluteAppearance | AppearanceMargin
     contact: AppearanceAtContact | RegionAtContact  # eq. 4 between people in O (3.3.2)
+    parts: AnyLeftover | SplitParts  # what stage 2 may match (3.3.2 steps 5-8)
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
     appearance_behind: KeepAppearance | BlendVisible
@@ -415,6 +421,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         stage2=ConfirmedInStage2() if a.tentative_stage1_only else EveryNodeInStage2(),
         stage1_appearance=AppearanceMargin() if a.appearance_margin else AbsoluteAppearance(),
         contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
+        parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),

@@ -52,7 +52,8 @@ class OcclusionSteps:
             gate=self.rules.gate.radii(f.Pp, R),
             evidence=self.rules.contact.evidence(self.rules.stage1_appearance.evidence,
                                                  f.pairs, f.owners),
-            admissible=shape.admissible(f.pred, f.dets, f.owners, f.delta, seen))
+            admissible=shape.admissible(f.pred, f.dets, f.owners, f.delta, seen),
+            barred=lambda matched: self.rules.parts.barred(f.dets, matched))
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())}
 

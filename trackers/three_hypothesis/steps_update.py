@@ -85,6 +85,12 @@ class UpdateSteps:
         match)."""
         out: list[Person] = []
         new = f.matches.unmatched_measurements.tolist()
+        m = f.matches
+        first = np.zeros(len(f.dets), dtype=bool)
+        first[m.matches[m.stages == 1, 1]] = True
+        parts = self.rules.parts.barred(f.dets, first)  # a part of people measured: no track
+        if parts is not None:
+            new = [d for d in new if not parts[d]]
         empty = (self.rules.support.empty(f.foreground, f.dets[new])
                  if new and self.rules.confirm.uses_clear else None)
         clear = self._clear(f, [(-1, d) for k, d in enumerate(new)  # -1: all are others

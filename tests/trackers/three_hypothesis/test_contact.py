@@ -1,5 +1,6 @@
 """Reta's rules for people in contact (occbench.trackers.three_hypothesis.contact): a
-measurement merged over two tracked people, hand-derivable cases, the paper's rule beside ours."""
+measurement merged over two tracked people, a measurement across people already measured;
+hand-derivable cases, the paper's rule beside ours."""
 
 from __future__ import annotations
 
@@ -8,9 +9,12 @@ import numpy as np
 from occbench.trackers.three_hypothesis import Adaptations
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.contact import (
+    AnyLeftover,
     MeasurementAppearance,
     MergedAppearance,
+    SplitParts,
     own_shares,
+    union_cover,
 )
 from occbench.trackers.three_hypothesis.rules import build_rules
 
@@ -46,3 +50,43 @@ def test_merged_measurement_moves_q_by_the_own_share_only():
     assert isinstance(build_rules(Adaptations(merged_appearance=True), h).appearance_front,
                       MergedAppearance)
     assert "merged_appearance" in Adaptations(merged_appearance=True).changed()
+
+
+def test_union_cover_counts_the_ellipse_inside_any_other():
+    box = np.array([[10.0, 0.0, 10.0, 20.0]])
+    assert union_cover(box, box)[0] == 1.0
+    assert union_cover(box, np.array([[0.0, -10.0, 30.0, 40.0]]))[0] == 1.0  # wholly inside
+    assert union_cover(box, np.array([[40.0, 0.0, 10.0, 20.0]]))[0] == 0.0  # apart
+    halves = np.array([[5.0, 0.0, 10.0, 20.0], [15.0, 0.0, 10.0, 20.0]])
+    one, both = union_cover(box, halves[:1])[0], union_cover(box, halves)[0]
+    assert 0.3 < one < 0.7 and both > one and both == union_cover(box, halves[::-1])[0]
+
+
+def test_a_box_across_two_measured_people_is_a_part_stage_2_may_not_take():
+    """Measurements 0 and 2 are matched in stage 1 (persons 0 and 1); measurement 1 lies
+    across both. Person 2, hidden far away with a wide gate, takes it in stage 2 in the
+    paper; with ``split_parts`` it is barred (and a measurement apart is not)."""
+    from occbench.trackers.three_hypothesis.association import associate
+
+    dets = np.array([[0.0, 0, 10, 20], [5.0, 0, 10, 20], [10.0, 0, 10, 20], [60.0, 0, 10, 20]])
+    nodes = np.array([[0.0, 0, 10, 20], [10.0, 0, 10, 20], [40.0, 0, 10, 20]])
+    delta = np.zeros((3, 4))
+    delta[0, 0] = delta[1, 2] = 1.0
+    sqrt_q, sqrt_p = np.ones((3, 1)), np.ones((4, 1))
+    rule = SplitParts(0.5)
+    assert AnyLeftover().barred(dets, np.array([True, False, True, False])) is None
+    assert rule.barred(dets, np.array([True, False, True, False])).tolist() == [
+        False, True, False, False]
+
+    def taken(barred, d=dets):
+        m = associate(nodes, np.arange(3), sqrt_q, d, sqrt_p[:len(d)], 0.3, 100.0,
+                      delta=delta[:, :len(d)],
+                      barred=barred)
+        return {int(p): int(x) for p, x, _ in m.matches.tolist()}
+
+    assert taken(None, dets[:3])[2] == 1
+    assert 2 not in taken(lambda matched: rule.barred(dets[:3], matched), dets[:3])
+    assert taken(lambda matched: rule.barred(dets, matched))[2] == 3  # the one apart
+    h = EllipseHistogrammer()
+    assert isinstance(build_rules(Adaptations.paper(), h).parts, AnyLeftover)
+    assert build_rules(Adaptations(split_parts=True), h).parts == SplitParts(0.5)
