@@ -47,6 +47,35 @@ class MergedAppearance:
         return blend(q, p, own) if own > 0 else q
 
 
+# --------------------------------------------------------------- 3.3.3: M of a person in front
+
+
+@dataclass(frozen=True)
+class MeasurementMotion:
+    """3.3.3 as written: M of a matched person behind nobody is corrected by its measurement
+    with the measurement noise R."""
+
+    uses_shares: ClassVar[bool] = False
+
+    def noise(self, R: np.ndarray, own: np.ndarray) -> np.ndarray:
+        return R
+
+
+@dataclass(frozen=True)
+class MergedMotion:
+    """``merged_motion``: a measurement merged over two tracked people is an occlusion, its
+    box the pair's (centre between them, size of both): it measures the matched person only
+    by its own share (``own_shares``), so M is corrected with R / own (own 1: R as in the
+    paper; own near 0: M keeps its prediction through the contact, as the paper's person
+    behind others, 3.3.3)."""
+
+    uses_shares: ClassVar[bool] = True
+
+    def noise(self, R: np.ndarray, own: np.ndarray) -> np.ndarray:
+        """(K, 4, 4) R of the matched rows scaled by 1 / own, (K,) shares (floored at 1e-3)."""
+        return R / np.maximum(own, 1e-3)[:, None, None]
+
+
 def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.ndarray,
                hidden: np.ndarray, pred: np.ndarray, dets: np.ndarray,
                delta: np.ndarray) -> np.ndarray:

@@ -212,6 +212,10 @@ class Adaptations:
             it to anyone and it starts no track (``contact.SplitParts``); False: stage 2 may
             give it to any prediction whose gate holds it, else it starts a track (the
             paper, 3.3.2, 3.3).
+        merged_motion: a measurement merged over two tracked people is an occlusion: M of
+            the person matched to it in front is corrected with R divided by the share of the
+            measured region its unmatched partners in O do not cover
+            (``contact.MergedMotion``); False: with R (the paper, 3.3.3).
     """
 
     gate_sigmas: float = 3.0
@@ -239,6 +243,7 @@ class Adaptations:
     contact_region: bool = False
     merged_appearance: bool = False
     split_parts: bool = False
+    merged_motion: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -250,7 +255,7 @@ class Adaptations:
                       "tentative_stage1_only": bool, "inherit_hidden_id": bool,
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
                       "contact_region": bool, "merged_appearance": bool,
-                      "split_parts": bool})
+                      "split_parts": bool, "merged_motion": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -274,7 +279,8 @@ class Adaptations:
                    inherit_hidden_id=False, merge_duplicates=False, correct_behind=False,
                    filter_size=False, shape_gate=0.0, early_confirm=0,
                    early_confirm_score=0.0, report_memory=0.0, contact_region=False,
-                   merged_appearance=False, split_parts=False)
+                   merged_appearance=False, split_parts=False,
+                   merged_motion=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

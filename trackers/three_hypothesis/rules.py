@@ -20,7 +20,9 @@ from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
     MeasurementAppearance,
+    MeasurementMotion,
     MergedAppearance,
+    MergedMotion,
     SplitParts,
 )
 from occbench.trackers.three_hypothesis.hypotheses import PRIORITY
@@ -392,6 +394,7 @@ class Rules(NamedTuple):
     parts: AnyLeftover | SplitParts  # what stage 2 may match (3.3.2 steps 5-8)
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
+    motion_front: MeasurementMotion | MergedMotion  # R of a person in front (3.3.3)
     appearance_behind: KeepAppearance | BlendVisible
     appearance_front: MeasurementAppearance | MergedAppearance  # q of a person in front (3.3.3)
     shape_behind: PredictionShape | EstimateShape
@@ -424,6 +427,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
+        motion_front=MergedMotion() if a.merged_motion else MeasurementMotion(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
         appearance_front=MergedAppearance() if a.merged_appearance else MeasurementAppearance(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),

@@ -42,7 +42,9 @@ class UpdateSteps:
         f.visible = dbox = dets[f.visible_dets]
         behind = np.array([n in in_front for _, (_, n, _, _) in rows])
         z = box_measurements(dbox)
-        Rs = np.array([persons[i].R for i, _ in rows])
+        own = self._own_share(f, rows)
+        Rs = rules.motion_front.noise(np.array([persons[i].R for i, _ in rows]),
+                                      np.where(behind, 1.0, own))
         predicted = f.Xp[idx], f.Pp[idx]
         Xc, Pc = rules.motion_behind.update(rules.motion.correct(*predicted, z, Rs), predicted,
                                             behind)  # x = x + K y, Joseph P
@@ -52,7 +54,6 @@ class UpdateSteps:
         # a detection on no foreground does not confirm a tentative track
         empty_dets = set() if empty is None else {d for d, e in zip(tent, empty.tolist()) if e}
         visible_share = self._visible_share(f, rows, behind)
-        own = self._own_share(f, rows)
         clear = self._clear(f, [(i, d) for i, (d, _, _, _) in rows
                                 if d in tent and d not in empty_dets])
         for r, (i, (d, n, stage, rho)) in enumerate(rows):
@@ -140,8 +141,8 @@ class UpdateSteps:
 
     def _own_share(self, f: Frame, rows: list) -> np.ndarray:
         """Per matched row, the share of its measured region no hidden confirmed partner
-        in O covers (``contact.own_shares``); 1 everywhere unless the front rule reads it."""
-        if not self.rules.appearance_front.uses_shares:
+        in O covers (``contact.own_shares``); 1 everywhere unless a front rule reads it."""
+        if not (self.rules.appearance_front.uses_shares or self.rules.motion_front.uses_shares):
             return np.ones(len(rows))
         persons = f.persons
         hidden = np.array([person.confirmed and i not in f.matched and i not in f.absorbed

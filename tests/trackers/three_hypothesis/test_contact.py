@@ -11,7 +11,9 @@ from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
     MeasurementAppearance,
+    MeasurementMotion,
     MergedAppearance,
+    MergedMotion,
     SplitParts,
     own_shares,
     union_cover,
@@ -90,3 +92,14 @@ def test_a_box_across_two_measured_people_is_a_part_stage_2_may_not_take():
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).parts, AnyLeftover)
     assert build_rules(Adaptations(split_parts=True), h).parts == SplitParts(0.5)
+
+
+def test_merged_measurement_corrects_m_by_its_own_share_only():
+    R = np.stack([np.eye(4), 2 * np.eye(4)])
+    assert MeasurementMotion().noise(R, np.array([0.5, 0.0])) is R
+    out = MergedMotion().noise(R, np.array([0.5, 1.0]))
+    assert np.allclose(out, np.stack([2 * np.eye(4), 2 * np.eye(4)]))
+    assert MergedMotion().noise(R, np.array([0.0, 1.0]))[0, 0, 0] == 1000.0  # share floored
+    h = EllipseHistogrammer()
+    assert isinstance(build_rules(Adaptations.paper(), h).motion_front, MeasurementMotion)
+    assert isinstance(build_rules(Adaptations(merged_motion=True), h).motion_front, MergedMotion)
