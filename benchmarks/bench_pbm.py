@@ -41,6 +41,7 @@ from occbench.pipeline.loop import run_sequence
 from occbench.pipeline.record import score
 from occbench.pipeline.summary import summary_rows
 from occbench.sources.annotations import NoisyGroundTruth
+from occbench.config.meta import without_meta
 
 ROOT = Path(__file__).resolve().parents[1]
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
@@ -48,7 +49,7 @@ SHOWN = ["IDF1", "HOTA", "MOTA", "IDs", "Frag", "Recall", "Precision"]
 
 
 def build(name: str):
-    return instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / f"{name}.yaml"))
+    return instantiate(without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / f"{name}.yaml")))
 
 
 PBM_STAGES = (("_find_candidates", "candidates + features"), ("_score_in_gates", "gating"),

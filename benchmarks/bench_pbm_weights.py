@@ -46,6 +46,7 @@ from occbench.pipeline.loop import run_sequence
 from occbench.pipeline.record import score
 from occbench.pipeline.summary import summary_rows
 from occbench.sources.annotations import NoisyGroundTruth
+from occbench.config.meta import without_meta
 
 ROOT = Path(__file__).resolve().parents[1]
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
@@ -55,7 +56,7 @@ SHOWN = ["HOTA", "IDF1", "MOTA", "IDs", "Frag", "Recall", "Precision"]
 def build_pbm(models: Path, weights: dict[str, float] | None):
     """``conf/tracker/pbm.yaml`` with ``features.models.path`` and, if given,
     ``features.feature_weights``."""
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     cfg.features.models.path = str(models)
     if weights is not None:
         cfg.features.feature_weights = dict(weights)

@@ -36,6 +36,7 @@ from occbench.config.build import (
     load_sequences,
     tracker_configs,
 )
+from occbench.config.meta import metas
 from occbench.replay.video import render
 
 VIDEOS = ROOT.parent / "shared" / "data" / "videos"
@@ -120,7 +121,8 @@ def draw(fig: Figure, out_dir: Path, colours: int = 64) -> Path:
     with tempfile.TemporaryDirectory() as tmp:
         sheet_path = Path(tmp) / "sheet.png"
         render(trackers, seq, build_source(cfg.detector), None, sheet_path, list(fig.frames),
-               show_gt=False, frames=(1, max(fig.frames)))
+               show_gt=False, frames=(1, max(fig.frames)),
+               styles={n: m.style for n, m in metas(configs, configs).items()})
         sheet = cv2.imread(str(sheet_path))
     W, H = PANEL
     x0, y0, x1, y1 = fig.crop

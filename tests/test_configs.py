@@ -20,6 +20,7 @@ from hydra.errors import MissingConfigException
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from occbench.config.meta import ROLES, declared, without_meta
 from occbench.datasets.base import Sequence
 from occbench.pipeline.warmup import config_targets
 
@@ -153,7 +154,10 @@ def test_detector_config_instantiates(name):
 
 def _instantiate_or_skip_extra(node, key: str):
     """``instantiate(node)``; an outside tracker whose library (an extra) is not installed
-    skips the test with the install hint."""
+    skips the test with the install hint. A tracker's ``meta:`` block is for the views: it is
+    checked and stripped, as ``build_tracker`` does."""
+    declared(node, key)
+    node = without_meta(node)
     if not str(node.get("_target_", "")).startswith("occbench.trackers.outside."):
         return instantiate(node, _convert_="all")
     try:
@@ -174,6 +178,31 @@ def test_tracker_config_instantiates(name):
         tracker = _instantiate_or_skip_extra(node, key)
         assert callable(tracker.update) and callable(tracker.reset), key
         tracker.reset()
+
+
+@pytest.mark.parametrize("name", _configs("tracker"))
+def test_every_tracker_config_declares_how_the_views_show_it(name):
+    """A config that builds one tracker (``_target_`` once composed) declares its own
+    ``meta:`` block (label, colour, role; a paper mode or a tuned variant its own, never its
+    parent's); a config listing trackers (all, everyone...) declares none."""
+    cfg = _compose("config", [f"tracker={name}", "dataset=mot", "dataset.root=unused"])
+    own = OmegaConf.load(CONF / "tracker" / f"{name}.yaml")
+    if "_target_" not in cfg.tracker:
+        assert "meta" not in own, f"{name}: a list of trackers has no meta of its own"
+        return
+    assert "meta" in own, f"conf/tracker/{name}.yaml: no meta: block (occbench.config.meta)"
+    meta = declared(own, name)
+    assert {"label", "colour", "role"} <= set(own.meta) and meta.role in ROLES
+    assert declared(cfg.tracker, name) == meta  # composed: its own block, not its parent's
+
+
+def test_tracker_colours_and_labels_are_distinct():
+    from occbench.config.meta import shipped
+
+    found = {n: shipped(n) for n in _configs("tracker")}
+    found = {n: m for n, m in found.items() if m is not None}
+    assert len({m.colour.lower() for m in found.values()}) == len(found)
+    assert len({m.label for m in found.values()}) == len(found)
 
 
 @pytest.mark.parametrize("name", _configs("evaluation"))

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from occbench.datasets.base import Sequence
-from occbench.errors import RunError
+from occbench.errors import ConfigError, RunError
 from occbench.sources.base import DetectionSource
 from occbench.trackers.protocol import Tracker
 
@@ -143,7 +143,6 @@ def missing_library(err: BaseException):
 def check_node(node: Any, key: str, target: Any) -> None:
     """Type-check a ``_target_`` config against ``target``'s signature
     (``occbench.config.check.check_target``); RunError naming ``key.<argument>``."""
-    from occbench.errors import ConfigError
     from occbench.config.check import check_target
 
     try:
@@ -155,7 +154,16 @@ def check_node(node: Any, key: str, target: Any) -> None:
 def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
     """Instantiate one tracker config; RunError with a clear message when it cannot be.
 
-    ``key`` is the config path of ``node`` for messages (default ``tracker.<name>``)."""
+    ``key`` is the config path of ``node`` for messages (default ``tracker.<name>``); its
+    ``meta:`` block (``occbench.config.meta``, for the views) is checked, never passed on."""
+    from occbench.config.meta import declared, without_meta
+
+    key = key or f"tracker.{name}"
+    try:
+        declared(node, key)
+    except ConfigError as err:
+        raise RunError(str(err)) from None
+    node = without_meta(node)
     target = str(node["_target_"])
     try:
         cls = _locate_target(target)
@@ -164,7 +172,7 @@ def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
             f"tracker {name!r}: its code {target} is not built or cannot be imported "
             f"({type(err).__name__}: {err}). conf/tracker/all.yaml lists the built trackers."
         ) from err
-    check_node(node, key or f"tracker.{name}", cls)
+    check_node(node, key, cls)
     return _instantiate(node, f"tracker {name!r}")
 
 

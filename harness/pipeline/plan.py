@@ -18,6 +18,7 @@ from typing import Any
 from occbench.datasets.base import Sequence
 from occbench.errors import RunError
 from occbench.metrics import COMBINED
+from occbench.config.meta import TrackerMeta, metas
 from occbench.config.paths import absolute_paths
 from occbench.config.build import (
     build_source,
@@ -79,6 +80,11 @@ class RunPlan:
     names: list[str]
     title: str
     report: bool = True
+
+    @property
+    def metas(self) -> dict[str, TrackerMeta]:
+        """Name -> how the views show each tracker (its config's ``meta:`` block)."""
+        return metas(self.names, self.configs)
 
     def build(self, name: str) -> Tracker:
         """A freshly built tracker ``name``."""

@@ -241,7 +241,7 @@ class RunRecord:
         try:
             if plan.report:
                 metric_bars(self.metrics, writer.path("plots/metrics.png"), plan.plot_metrics,
-                            plan.title)
+                            plan.title, plan.metas)
         except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
             self.fail("*", "*", "plot", _naming("plots/metrics.png", err),
                       traceback.format_exc())
@@ -253,7 +253,8 @@ class RunRecord:
                     index=False, float_format="%.6f", lineterminator="\n"))
                 target = "plots/hota_alpha.png"
                 if plan.report:
-                    hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title)
+                    hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title,
+                                    plan.metas)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
             self.fail("*", "*", "hota_alpha", _naming(target, err), traceback.format_exc())
         try:

@@ -41,7 +41,7 @@ from occbench.datasets.base import Sequence as DataSequence
 from occbench.pipeline.bank import TrackerBank, start_trackers
 from occbench.config.build import compose_config, tracker_choice
 from occbench.pipeline.loop import frames, no_progress
-from occbench.report.draw import TRACKER_STYLES, draw_tracks, grid, legend, with_legend
+from occbench.report.draw import draw_tracks, grid, legend, with_legend
 from occbench.sources.base import DetectionSource
 from occbench.trackers.protocol import KeepsGraph
 from occbench.trackers.records import Track
@@ -159,7 +159,7 @@ def _blank(sequence: DataSequence) -> np.ndarray:
     return np.full((sequence.info.height, sequence.info.width, 3), 40, np.uint8)
 
 
-def _panel(name: str, k: int, base: np.ndarray, tracks: list[Track],
+def _panel(name: str, style: str, k: int, base: np.ndarray, tracks: list[Track],
            graph: _GraphDrawing | None, gt: tuple[np.ndarray, np.ndarray] | None,
            scale: float) -> np.ndarray:
     """Tracker ``name``'s panel of frame ``k``: its own graph drawing when it keeps one
@@ -167,7 +167,7 @@ def _panel(name: str, k: int, base: np.ndarray, tracks: list[Track],
     if graph is not None:
         p = draw_tracks(graph.draw(base), [], "boxes", gt, f"{name}  frame {k}")
     else:
-        p = draw_tracks(base, tracks, TRACKER_STYLES.get(name, "auto"), gt, f"{name}  frame {k}")
+        p = draw_tracks(base, tracks, style, gt, f"{name}  frame {k}")
     if scale != 1.0:
         p = cv2.resize(p, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
     return p
@@ -198,12 +198,13 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
            frames: tuple[int, int] | None = None, columns: int | None = None,
            scale: float = 1.0, foreground: str = "auto",
            background: Mapping[str, Any] | None = None,
-           progress: Callable[..., Any] | None = None) -> dict[str, Path]:
+           progress: Callable[..., Any] | None = None,
+           styles: Mapping[str, str] | None = None) -> dict[str, Path]:
     """Run the trackers on ``sequence`` and write the annotated video and/or contact sheet.
 
     Args:
         trackers: name -> freshly built tracker (drawn in this order, styled by name when the
-            name is known (``TRACKER_STYLES``), else by the tracks' ``extra`` data).
+            ``styles`` gives one, else by the tracks' ``extra`` data).
         sequence, source: the data and the detection source (as for the runner).
         video: MP4 path, or None for no video.
         sheet: PNG path of the contact sheet, or None.
@@ -216,6 +217,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
         scale: resize factor of each panel.
         progress: progress-bar factory (``occbench.progress.progress_factory``): a bar over
             the frames tracked; None shows nothing.
+        styles: name -> drawing style (the ``style`` of the tracker's ``meta:`` block,
+            ``occbench.config.meta``); a tracker without one is drawn by its tracks' data.
     Returns:
         {"video": path, "sheet": path} for what was written.
     """
@@ -225,7 +228,8 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
     first, last, wanted = _window(sequence, frames, sheet is not None, sheet_frames)
     end = max([last, *wanted])
     graphs = {name: _GraphDrawing.of(t) for name, t in trackers.items()}
-    items = legend([TRACKER_STYLES.get(n, "auto") for n in trackers], show_gt,
+    styles = {n: (styles or {}).get(n, "auto") for n in trackers}
+    items = legend(list(styles.values()), show_gt,
                    any(g is not None for g in graphs.values()))
     writer = None
     rows: dict[int, list[np.ndarray]] = {}
@@ -243,7 +247,7 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
                 continue
             base = frame if frame is not None else _blank(sequence)
             gt = _gt_of(sequence, k) if show_gt else None
-            panels = [_panel(name, k, base, out, graphs[name], gt, scale)
+            panels = [_panel(name, styles[name], k, base, out, graphs[name], gt, scale)
                       for name, out in tracks.items()]
             if k in wanted:
                 rows[k] = panels
@@ -303,6 +307,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
     from occbench.config.build import build_source, build_tracker, load_sequences, tracker_configs
+    from occbench.config.meta import metas
     from occbench.progress import progress_factory
 
     try:
@@ -320,6 +325,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             choice = run_choice(args.run, "tracker")
         configs = tracker_configs(cfg.tracker, choice)
         trackers = {n: build_tracker(n, node) for n, node in configs.items()}
+        styles = {n: m.style for n, m in metas(configs, configs).items()}
         out, sheet = args.out, args.sheet
         if out is None and sheet is None:  # --run alone: both, into the run directory
             out = args.run / "report" / f"{seq.info.name}.mp4"
@@ -327,7 +333,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         written = render(trackers, seq, build_source(cfg.detector), out, sheet,
                          args.sheet_frames, not args.no_gt, tuple(args.frames) if args.frames
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
-                         cfg.get("background") or {}, progress_factory())
+                         cfg.get("background") or {}, progress_factory(), styles)
     except (OSError, ValueError, RuntimeError) as err:
         from occbench.errors import REFUSED, refusal
 

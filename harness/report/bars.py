@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from occbench.config.meta import TrackerMeta, metas
 from occbench.report.figures import save_figure
 
 if TYPE_CHECKING:
@@ -20,12 +21,15 @@ DEFAULT_METRICS = ("HOTA", "DetA", "AssA", "IDF1", "MOTA")
 
 
 def metric_bars(metrics: pd.DataFrame, path: str | Path,
-                names: Sequence[str] = DEFAULT_METRICS, title: str | None = None) -> Path | None:
+                names: Sequence[str] = DEFAULT_METRICS, title: str | None = None,
+                shown: Mapping[str, TrackerMeta] | None = None) -> Path | None:
     """Draw the COMBINED rows of ``metrics`` as grouped bars into ``path`` (PNG).
 
     Args:
         metrics: frame with ``tracker``, ``sequence`` and metric columns (``metrics.csv``).
         names: metrics to draw, in order; names absent from ``metrics`` are left out.
+        shown: tracker -> its label and colour (``occbench.config.meta``; default: the
+            shipped configs' by name).
     Returns:
         The written path, or None when there is nothing to draw (no COMBINED row or none of
         ``names`` present).
@@ -42,6 +46,7 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
     trackers = list(dict.fromkeys(rows["tracker"]))
+    shown = metas(trackers, known=shown)
     values = np.array([[float(rows.loc[rows["tracker"] == t, m].iloc[0]) for m in names]
                        for t in trackers])
     width = 0.8 / len(trackers)
@@ -50,7 +55,8 @@ def metric_bars(metrics: pd.DataFrame, path: str | Path,
     fig, ax = plt.subplots(figsize=size, dpi=120)
     for i, t in enumerate(trackers):
         pos = x - 0.4 + width * (i + 0.5)
-        bars = ax.bar(pos, np.nan_to_num(values[i]), width, label=t)
+        bars = ax.bar(pos, np.nan_to_num(values[i]), width, label=shown[t].label,
+                      color=shown[t].colour)
         for b, v in zip(bars, values[i]):
             if np.isfinite(v):
                 ax.annotate(f"{v:.2f}", (b.get_x() + b.get_width() / 2, b.get_height()),

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
+from occbench.config.meta import STYLES  # a tracker's style is in its config's meta: block
 from occbench.report.graph import id_colour
 from occbench.report.parts import draw_parts as pbm_draw_parts
 from occbench.report.primitives import (
@@ -37,11 +38,7 @@ from occbench.trackers.records import Track, TrackState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["STYLES", "TRACKER_STYLES", "draw_tracks", "grid", "id_colour", "infer_style",
-           "legend"]
-STYLES = ("auto", "boxes", "ellipses", "parts")
-# the style of each known tracker (by config name); others are inferred from Track.extra
-TRACKER_STYLES = {"baseline": "boxes", "reta": "ellipses", "pbm": "parts"}
+__all__ = ["STYLES", "draw_tracks", "grid", "id_colour", "infer_style", "legend"]
 
 
 def _colour(t: Track):

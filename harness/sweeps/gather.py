@@ -44,6 +44,7 @@ from occbench.sweeps.jobs import (  # noqa: F401 - re-exported: occbench.sweeps.
     parse_override,
     read_overrides,
     read_status,
+    sweep_metas,
 )
 from occbench.sweeps.plots import plot_sweep
 from occbench.sweeps.resume import (  # noqa: F401 - re-exported
@@ -207,18 +208,19 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
     write_atomic(sweep_dir / "sweep.csv",
                  frame.to_csv(index=False, float_format="%.6f", lineterminator="\n"))
     write_atomic(sweep_dir / "sweep.md", sweep_markdown(frame, metrics, sweep_dir.name))
+    shown = sweep_metas(sweep_dir, frame)  # the trackers' labels, colours and roles
     if plots:
         for old in [*(sweep_dir / "plots").glob("sweep_*.png"),
                     *(sweep_dir / "plots").glob("heatmap_*.png")]:
             old.unlink()  # drawn for an earlier sweep's parameters, perhaps not swept now
         try:
-            plot_sweep(frame, sweep_dir / "plots", metrics)
+            plot_sweep(frame, sweep_dir / "plots", metrics, shown)
         except Exception:  # a plot is not worth losing the table for
             log.exception("sweep plots failed")
     try:  # the sweep's page (occbench.report.html); the tables above stand without it
         from occbench.sweeps.page import write_sweep_report
 
-        write_sweep_report(sweep_dir, frame, metrics)
+        write_sweep_report(sweep_dir, frame, metrics, shown)
     except Exception:
         log.exception("report.html of the sweep failed")
     n_bad = int((frame.drop_duplicates("job")["status"] != DONE).sum()) if len(frame) else 0

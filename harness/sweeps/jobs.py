@@ -129,3 +129,19 @@ def members(sweep_dir: str | Path) -> tuple[list[Path], list[tuple[Path, str]]]:
         else:
             kept.append(d)
     return kept, left
+
+
+def sweep_metas(sweep_dir: str | Path, frame: Any) -> dict[str, Any]:
+    """Tracker -> how the views show it (``occbench.config.meta``) for every tracker of a
+    gathered sweep ``frame``: the ``meta:`` block of the first job's config that runs it."""
+    from occbench.config.meta import metas, run_nodes
+
+    if "tracker" not in getattr(frame, "columns", ()):
+        return {}
+    nodes: dict[str, Any] = {}
+    for job, rows in frame.dropna(subset=["tracker"]).groupby("job", sort=False):
+        names = [n for n in dict.fromkeys(rows["tracker"].astype(str)) if n not in nodes]
+        if names:
+            found = run_nodes(Path(sweep_dir) / str(job), names)
+            nodes.update({n: v for n, v in found.items() if n in names})
+    return metas(dict.fromkeys(frame["tracker"].dropna().astype(str)), nodes)

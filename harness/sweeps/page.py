@@ -11,17 +11,19 @@ sequences are strata of the block bootstrap (``occbench.metrics.paired``).
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
+from occbench.config.meta import TrackerMeta
 from occbench.metrics.paired import Bootstrap, PairedDifference
 from occbench.report.html import charts
 from occbench.report.html.page import Page, esc, table_html
 from occbench.report.paired import NOT_DISTINGUISHABLE, cell
+from occbench.sweeps.jobs import sweep_metas
 from occbench.sweeps.tables import (COMBINED, DONE, aggregate, parameters, plot_axes, setting_table,
                                     swept)
 
@@ -82,10 +84,12 @@ def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
         return []
 
 
-def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame,
-                       metrics: Sequence[str]) -> Path:
-    """Write ``<sweep_dir>/report.html`` from the gathered ``frame`` (``gather``)."""
+def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame, metrics: Sequence[str],
+                       looks: Mapping[str, TrackerMeta] | None = None) -> Path:
+    """Write ``<sweep_dir>/report.html`` from the gathered ``frame`` (``gather``); ``looks``:
+    tracker -> label, colour and role (default: ``sweep_metas``)."""
     sweep_dir = Path(sweep_dir)
+    looks = sweep_metas(sweep_dir, frame) if looks is None else looks
     page = Page(f"occbench sweep {sweep_dir.name}")
     jobs = frame.drop_duplicates("job") if "job" in frame else frame
     page.text(f"Sweep folder: {sweep_dir.resolve()}; {len(jobs)} jobs.")
@@ -111,7 +115,7 @@ def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame,
         agg = aggregate(frame, [p], shown)
         for m in shown:
             if not agg.empty and m in agg:
-                page.chart(charts.metric_lines(agg, p, m))
+                page.chart(charts.metric_lines(agg, p, m, looks))
     page.section("settings", "Settings")
     page.add(table_html(setting_table(frame, shown)))
     page.section("jobs", "Jobs")

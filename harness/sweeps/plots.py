@@ -5,12 +5,13 @@ each pair."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from occbench.config.meta import TrackerMeta, metas
 from occbench.metrics import COMBINED
 from occbench.sweeps.jobs import DONE
 from occbench.sweeps.tables import aggregate, plot_axes, tick
@@ -18,14 +19,19 @@ from occbench.sweeps.tables import aggregate, plot_axes, tick
 MAX_HEATMAP_VALUES = 12  # a parameter with more distinct values gets no heatmap
 
 
-def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str]) -> list[Path]:
-    """Metric-vs-parameter line plots (mean, 95% bootstrap interval) and pairwise heatmaps."""
+def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str],
+               looks: Mapping[str, TrackerMeta] | None = None) -> list[Path]:
+    """Metric-vs-parameter line plots (mean, 95% bootstrap interval) and pairwise heatmaps;
+    ``looks``: tracker -> its label and colour (``occbench.config.meta``; default: the
+    shipped configs' by name)."""
     import matplotlib
 
     matplotlib.use("Agg")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     params = plot_axes(frame)
+    trackers = frame["tracker"].dropna().astype(str) if "tracker" in frame else []
+    looks = metas(dict.fromkeys(trackers), known=looks)
     shown = [m for m in metrics if m in frame.columns]
     written: list[Path] = []
     if "sequence" not in frame.columns:
@@ -33,7 +39,7 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str])
     for p in params:
         agg = aggregate(frame, [p], shown)
         if not agg.empty:
-            written.append(_line_plot(frame, p, shown, out_dir / f"sweep_{_safe(p)}.png"))
+            written.append(_line_plot(frame, p, shown, out_dir / f"sweep_{_safe(p)}.png", looks))
     jobs = frame.drop_duplicates("job")
     # a heatmap needs two parameter axes (never a tracker or seed) of 2..12 values each
     grid_params = [p for p in params if 2 <= jobs[p].nunique() <= MAX_HEATMAP_VALUES]
@@ -66,7 +72,8 @@ def interval(values: np.ndarray, seed: int = 0) -> tuple[float, float, float]:
     return float(v.mean()), float(ci.low), float(ci.high)
 
 
-def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path) -> Path:
+def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path,
+               looks: Mapping[str, TrackerMeta]) -> Path:
     """Each metric of ``shown`` against parameter ``p``, one line per tracker (the mean over
     the finished jobs' COMBINED rows, with ``interval``), one panel per metric in a grid and
     one legend, into ``path``."""
@@ -91,8 +98,10 @@ def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path) ->
             points.sort()
             x, mean, low, high = (np.array(c) for c in zip(*points))
             yerr = np.clip([mean - low, high - mean], 0.0, None)  # float round-off only
+            look = looks.get(str(tracker))
             ax.errorbar(x, mean, yerr=yerr, marker="o", capsize=3,
-                        label=tracker or None)
+                        label=look.label if look else None,
+                        color=look.colour if look else None)
         if not numeric:
             ax.set_xticks(range(len(labels)), [tick(v) for v in labels], rotation=30)
         elif len(labels) <= MAX_HEATMAP_VALUES:  # a grid: ticks at its values

@@ -3,8 +3,9 @@ table (``occbench.sweeps.generalisation``): issue 28's acceptance ("each paper t
 of every outside tracker, tuned or not, on IDF1 and HOTA"), computed from the table rather
 than read off it by eye.
 
-*Outside* is every tracker of the table that is not the project's own (``OWN``: our SORT
-baseline, the two paper trackers and their paper modes), so tuned and BoxMOT rows count.
+*Outside* is every tracker of the table whose config's ``meta:`` block gives the role
+``outside`` (``occbench.config.meta``; not our SORT baseline, the two paper trackers or their
+paper modes), so tuned and BoxMOT rows count; *ours* are those of role ``ours``.
 Per metric the best outside tracker is taken on its own (the best IDF1 and the best HOTA may
 be two trackers), as the acceptance asks to beat every one of them.
 """
@@ -15,20 +16,23 @@ from collections.abc import Sequence
 
 import pandas as pd
 
+from occbench.config.meta import metas
 from occbench.sweeps.generalisation import METRICS, TUNING, EvalSet
 
-#: the project's own trackers: never the "outside" reference
-OWN = ("baseline", "reta", "reta_paper", "pbm", "pbm_paper")
 
-
-def versus_outside(table: pd.DataFrame, ours: Sequence[str] = ("reta", "pbm")) -> pd.DataFrame:
-    """One row per (set, tracker of ``ours``) present in ``table`` (the long table:
-    set, role, tracker, IDF1, HOTA, MOTA, ...): the tracker's metrics, the best outside
-    tracker's per metric (``best_<M>``, ``best_<M>_by``) and the margin ``<M> - best``
-    (``margin_<M>``). A set without an outside tracker gives no row."""
+def versus_outside(table: pd.DataFrame, ours: Sequence[str] | None = None) -> pd.DataFrame:
+    """One row per (set, tracker of ``ours``, default: the table's trackers of role ``ours``)
+    present in ``table`` (the long table: set, role, tracker, IDF1, HOTA, MOTA, ...): the
+    tracker's metrics, the best outside tracker's per metric (``best_<M>``, ``best_<M>_by``)
+    and the margin ``<M> - best`` (``margin_<M>``). A set without an outside tracker gives
+    no row."""
+    roles = {n: m.role for n, m in metas(dict.fromkeys(table["tracker"].astype(str))).items()}
+    if ours is None:
+        ours = [n for n, role in roles.items() if role == "ours"]
     rows = []
     for name, s in table.groupby("set", sort=False):
-        outside = s[~s["tracker"].isin(OWN)].dropna(subset=list(METRICS), how="all")
+        outside = s[s["tracker"].astype(str).map(roles) == "outside"].dropna(
+            subset=list(METRICS), how="all")
         if outside.empty:
             continue
         best = {m: outside.loc[outside[m].idxmax()] for m in METRICS}

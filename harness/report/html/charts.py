@@ -1,8 +1,9 @@
 """The report's interactive charts as Vega-Lite specs, built with Altair.
 
 Each function returns a spec (a dict) that ``occbench.report.html.page`` embeds with the
-Vega bundle inlined; the data travels inside the spec. Colours: one per tracker (Altair's
-category10, in the run's order), one per error kind in the timeline.
+Vega bundle inlined; the data travels inside the spec. Colours: each tracker's own (its
+config's ``meta:`` block, ``occbench.config.meta``, as in the PNG plots), one per error kind
+in the timeline.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from occbench.config.meta import TrackerMeta, metas
 from occbench.metrics.paired import PairedDifference
 from occbench.metrics.timeline import FrameCounts
 
@@ -106,20 +108,26 @@ def paired_forest(diffs: Sequence[PairedDifference]) -> dict[str, Any]:
     return _spec(chart.properties(title="Paired differences (A - B)"))
 
 
-def metric_lines(agg: pd.DataFrame, parameter: str, metric: str) -> dict[str, Any]:
+def metric_lines(agg: pd.DataFrame, parameter: str, metric: str,
+                 looks: Mapping[str, TrackerMeta] | None = None) -> dict[str, Any]:
     """A sweep's ``metric`` (mean and 95% interval over seeds, ``aggregate``'s columns)
-    against one ``parameter``, one line per tracker."""
+    against one ``parameter``, one line per tracker in its label and colour (``looks``,
+    default: the shipped configs' by name)."""
     import altair as alt
 
     data = agg[[parameter, "tracker", metric, f"{metric}_ci95", "n"]].copy()
     data.columns = ["value", "tracker", "mean", "half", "n"]
+    looks = metas(dict.fromkeys(data["tracker"].astype(str)), known=looks)
+    data["tracker"] = [looks[str(t)].label for t in data["tracker"]]
     data["low"], data["high"] = data["mean"] - data["half"], data["mean"] + data["half"]
     numeric = pd.to_numeric(data["value"], errors="coerce").notna().all()
     if numeric:
         data["value"] = pd.to_numeric(data["value"])
     x = alt.X("value:Q" if numeric else "value:N", title=parameter,
               scale=alt.Scale(zero=False) if numeric else alt.Undefined)
-    color = alt.Color("tracker:N", title="tracker", legend=alt.Legend(orient="top"))
+    color = alt.Color("tracker:N", title="tracker", legend=alt.Legend(orient="top"),
+                      scale=alt.Scale(domain=[m.label for m in looks.values()],
+                                      range=[m.colour for m in looks.values()]))
     base = alt.Chart(data)
     line = base.mark_line(point=True).encode(x=x, y=alt.Y("mean:Q", title=metric,
                                                           scale=alt.Scale(zero=False)),

@@ -15,6 +15,7 @@ import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
+from occbench.config.meta import without_meta
 from occbench.datasets.synthetic import load_scenario
 from occbench.pipeline.loop import run_sequence
 from occbench.pipeline.warmup import WarmUp, warm_up
@@ -34,8 +35,9 @@ from occbench.datasets.synthetic import load_scenario
 from occbench.sources.annotations import NoisyGroundTruth
 from occbench.pipeline.loop import run_sequence
 from occbench.pipeline.warmup import warm_up_once
+from occbench.config.meta import without_meta
 
-warm_up_once({"pbm": lambda: instantiate(OmegaConf.load(sys.argv[1]))})
+warm_up_once({"pbm": lambda: instantiate(without_meta(OmegaConf.load(sys.argv[1])))})
 kernels = {}
 for m in pkgutil.walk_packages(occbench.trackers.__path__, "occbench.trackers."):
     if m.name.startswith("occbench.trackers.outside"):
@@ -47,7 +49,7 @@ before = {k: len(v.signatures) for k, v in kernels.items()}
 for seq in (load_scenario("crowd", seed=0, length=60, people=8),
             load_scenario("crossing", seed=0, length=60)):  # often one match or none a frame
     for fg in ("exact", "none"):
-        run_sequence({"pbm": instantiate(OmegaConf.load(sys.argv[1]))}, seq,
+        run_sequence({"pbm": instantiate(without_meta(OmegaConf.load(sys.argv[1])))}, seq,
                      NoisyGroundTruth(miss_rate=0.3, seed=0), foreground=fg)
 print(sorted(k for k, v in kernels.items() if len(v.signatures) != before[k]))
 print(sum(before.values()))
@@ -64,7 +66,7 @@ def test_a_warmed_up_process_has_loaded_every_kernel_a_run_uses(tracker, kernels
 
 
 def test_warm_up_leaves_the_tracker_as_built():
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     seq = load_scenario("pair_walk", seed=1, length=60)
     plain, warmed = instantiate(cfg), instantiate(cfg)
     warm_up(warmed)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from occbench.config.meta import shipped
 from occbench.sweeps import generalisation as G
 from occbench.sweeps import versus as V
 
@@ -55,7 +56,7 @@ def test_markdown_follows_the_sets_order_and_marks_roles():
 def test_a_table_without_outside_rows_says_so_instead_of_failing():
     """issue 39: without the outside extras the table has only our rows; markdown raised
     KeyError: 'set' after the table was printed and the run exited 1."""
-    ours = _table()[lambda t: t["tracker"].isin(V.OWN)]
+    ours = _table()[lambda t: t["tracker"].map(lambda n: shipped(n).role != "outside")]
     v = V.versus_outside(ours)
     assert v.empty
     assert "nothing to compare against" in V.markdown(v, G.SETS)

@@ -20,6 +20,7 @@ from occbench.trackers.layered.dynamics import Gate
 from occbench.trackers.layered.parts import PartFeatureExtractor
 from occbench.trackers.layered.rules import build_rules
 from occbench.trackers.layered.targets import Targets
+from occbench.config.meta import without_meta
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -74,7 +75,7 @@ def test_motion_compensation_helps_in_a_crowd():
     for seed in range(4):
         seq = load_scenario("crowd", seed=seed, length=100, people=10)
         for mc in (False, True):
-            cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+            cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
             cfg.adaptations.motion_compensation = mc
             res = run_sequence({"pbm": instantiate(cfg)}, seq, NoisyGroundTruth(seed=seed),
                                foreground="exact")
@@ -121,7 +122,7 @@ def test_a_person_who_walks_on_behind_an_occluder_keeps_the_id():
     comes out about four widths away; the grown gate (PBM 3) must still reach them, so
     that the person's first id is the one kept (a new id for the rest: IDF1 ~0.76)."""
     seq = load_scenario("follow_occluder", seed=0, length=150)
-    res = run_sequence({"pbm": instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))},
+    res = run_sequence({"pbm": instantiate(without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")))},
                        seq, NoisyGroundTruth(seed=0), foreground="exact")
     assert score_sequence(seq.gt.table, res["pbm"].table).row()["IDF1"] > 0.85
 
@@ -134,7 +135,7 @@ def _walk_then_vanish(report_predicted: bool, fg_after: bool | None = None
     (True: the person stands there undetected) or nothing (False: nobody is there)."""
     from occbench.trackers.records import Detections, TrackState
 
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     cfg.adaptations.report_predicted = report_predicted
     if fg_after is not None:
         cfg.adaptations.report_support = 0.6  # (off by default: docs/adaptations.md)
@@ -189,7 +190,7 @@ def test_someone_missed_at_the_border_is_kept_and_someone_who_walked_out_is_drop
     frame: KF1 carries B's box beyond the border and B is dropped after ``exit_misses``."""
     from occbench.trackers.records import Detections
 
-    tracker = instantiate(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
+    tracker = instantiate(without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")))
     rng = np.random.default_rng(1)
     background = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)
     colours = ((40, 80, 200), (30, 160, 60))
@@ -219,7 +220,7 @@ def _doorway(lone_growth: bool) -> list[float]:
     frames (height 90), then stays; the widths pbm reports for the person."""
     from occbench.trackers.records import Detections
 
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     cfg.adaptations.lone_growth = lone_growth
     tracker = instantiate(cfg)
     background = np.random.default_rng(2).integers(60, 120, (240, 320, 3), dtype=np.uint8)

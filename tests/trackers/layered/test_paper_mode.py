@@ -14,6 +14,7 @@ from occbench.trackers.layered import Adaptations, CandidateParams, PBMTracker
 from occbench.trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads
 from occbench.trackers.layered.rules import build_rules
 from occbench.trackers.records import Detections
+from occbench.config.meta import without_meta
 
 ADAPTATIONS_MD = Path(__file__).resolve().parents[3] / "docs" / "adaptations.md"
 
@@ -42,8 +43,8 @@ READINGS = {
 def _trackers() -> tuple[PBMTracker, PBMTracker]:
     from occbench.config.build import compose_config
 
-    return (instantiate(compose_config(["tracker=pbm"]).tracker),
-            instantiate(compose_config(["tracker=pbm_paper"]).tracker))
+    return (instantiate(without_meta(compose_config(["tracker=pbm"]).tracker)),
+            instantiate(without_meta(compose_config(["tracker=pbm_paper"]).tracker)))
 
 
 def test_every_rule_of_the_audit_is_a_paper_mode_switch_or_a_documented_reading():

@@ -12,6 +12,7 @@ from omegaconf import OmegaConf
 
 from occbench.datasets.synthetic import load_scenario
 from occbench.sources.annotations import NoisyGroundTruth
+from occbench.config.meta import without_meta
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -20,7 +21,7 @@ def _template_matches(duplicate_radius: float, prune_max_misses: int = 5,
                       misses: list | None = None) -> list[np.ndarray]:
     """The candidate heads (K, 2) of every head-template match of pbm on a crowd (and, in
     ``misses``, the frames the matched target had been unfound)."""
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     cfg.adaptations.duplicate_radius = duplicate_radius
     cfg.adaptations.prune_max_misses = prune_max_misses
     tracker = instantiate(cfg)

@@ -45,6 +45,7 @@ from occbench.trackers.layered.search import (
 )
 from occbench.trackers.layered.targets import Targets
 from occbench.trackers.records import Detections, TrackState
+from occbench.config.meta import without_meta
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -79,7 +80,7 @@ def test_imports_from_this_repository():
 
 
 def test_config_instantiates_with_shipped_models_and_is_in_all():
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "pbm.yaml"))
     tracker = instantiate(cfg)
     assert isinstance(tracker, PBMTracker)
     assert "synthetic" in tracker.features.models.description
@@ -782,8 +783,8 @@ def test_paper_mode_turns_every_adaptation_off():
     from occbench.config.build import compose_config
     from occbench.trackers.frontend.heads import HeadDetector
 
-    paper = instantiate(compose_config(["tracker=pbm_paper"]).tracker)
-    ours = instantiate(compose_config(["tracker=pbm"]).tracker)
+    paper = instantiate(without_meta(compose_config(["tracker=pbm_paper"]).tracker))
+    ours = instantiate(without_meta(compose_config(["tracker=pbm"]).tracker))
     assert isinstance(paper, PBMTracker) and isinstance(paper.candidates.head_detector, HeadDetector)
     assert ours.candidates.head_detector is None
     a = paper.adaptations
@@ -809,7 +810,7 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     from occbench.trackers.layered.reupdate import AfterPrediction
 
     ours = R.build_rules(Adaptations())
-    paper = R.build_rules(instantiate(compose_config(["tracker=pbm_paper"]).tracker).adaptations)
+    paper = R.build_rules(instantiate(without_meta(compose_config(["tracker=pbm_paper"]).tracker)).adaptations)
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
                                        R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne,
                                        HiddenEvidence, R.IsolatedEarly,

@@ -37,6 +37,7 @@ from occbench.trackers.three_hypothesis.occlusion import (
     region_overlaps,
 )
 from occbench.trackers.three_hypothesis.rules import AppearanceMargin
+from occbench.config.meta import without_meta
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -298,7 +299,7 @@ def test_config_maps_onto_the_constructor():
     from hydra.utils import instantiate
     from omegaconf import OmegaConf
 
-    cfg = OmegaConf.load(ROOT / "conf" / "tracker" / "reta.yaml")
+    cfg = without_meta(OmegaConf.load(ROOT / "conf" / "tracker" / "reta.yaml"))
     params = set(inspect.signature(RetaTracker.__init__).parameters) - {"self"}
     assert set(cfg.keys()) - {"_target_"} == params
     assert len(params) <= 12
