@@ -98,6 +98,9 @@ class Adaptations:
             its size (paper: the 50% size test of PBM 3.1 alone).
         profile_heads: a blob's heads are the peaks of its top profile (paper: the head
             detector of PBM 2.3, ``candidates.head_detector``).
+        held_detections: a detection lying in a blob (``search.overlap`` of its box inside)
+            is one more head of the blob's region unless its head is one of the blob's
+            (``candidates.HeldDetections``; paper: the blob's own heads, PBM 3.1).
         one_to_one: targets share candidates one-to-one (Hungarian on 1 - p, as many
             pairs as possible); off, each target takes its best candidate as if tracked
             alone, as the paper tracks each target (PBM 3, 4 step 4).
@@ -143,6 +146,7 @@ class Adaptations:
     blob_box_ratio: bool = True
     several_heads_merge: bool = True
     profile_heads: bool = True
+    held_detections: bool = False
     one_to_one: bool = True
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
@@ -177,7 +181,8 @@ class Adaptations:
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
-                                       "several_heads_merge", "profile_heads", "one_to_one"),
+                                       "several_heads_merge", "profile_heads", "held_detections",
+                                       "one_to_one"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int})
@@ -190,7 +195,7 @@ class Adaptations:
                    prune_max_misses=UNBOUNDED, stale=None, gate_max_fraction=float(UNBOUNDED),
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
-                   profile_heads=False, one_to_one=False, report_support=0.0,
+                   profile_heads=False, held_detections=False, one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0)
 

@@ -7,19 +7,20 @@ detection box; on blobs, the peaks of the top profile. With ``foreground=None`` 
 detection boxes are the candidate blobs and every box pixel counts as foreground. Boxes
 are xywh float64 in pixels.
 
-Two adaptations (``adaptations.Adaptations``; the paper's forms in brackets): a blob's
+Three adaptations (``adaptations.Adaptations``; the paper's forms in brackets): a blob's
 heads are the peaks of its top profile, ``ProfileHeads`` (the PBM 2.3 head detector run
 in the blob, ``DetectorHeads``); detection boxes and blob spans differ systematically (box
 margins, swinging limbs), so blob-born boxes are rescaled by a ratio learned online from
 isolated person/detection pairs, ``CandidateFinder``'s only state (``blob_box_ratio``;
-the paper: the blob's span, PBM 2.1).
+the paper: the blob's span, PBM 2.1); a detection lying in a blob is one more head of the
+blob's region, ``HeldDetections`` (only the blob's own heads count, ``NoHeldDetections``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.geometry import iou_matrix, overlap_ratio_matrix
 from occbench.trackers.layered.params import CandidateParams
 from occbench.trackers.layered.search import (
     Candidates,
@@ -73,6 +74,40 @@ class DetectorHeads:
                                 found[:, 1] / s - sbox[1]])
 
 
+class NoHeldDetections:
+    """The paper's count of a blob's heads: its own (PBM 3.1, "for each detected head in
+    the blob"); a detection lying in the blob adds none."""
+
+    def heads(self, region: np.ndarray, det_boxes: np.ndarray, on_peak: np.ndarray) -> int:
+        """Heads the detections add to the blob at ``region``: none."""
+        return 0
+
+
+class HeldDetections:
+    """``held_detections``: a detection whose box lies in a blob's region (at least
+    ``overlap`` of its area inside) is one more head of that region, unless its head is
+    one of the blob's own peaks (counted already). A person standing below another,
+    their heads one above the other, has no peak in the blob's top profile; the detection
+    found on it says the blob holds two people: a merge (searched, ``several_heads_merge``),
+    not one target grown to the blob's span (``lone_growth``).
+
+    Args:
+        overlap: share of a detection's box inside the blob's (``search.overlap``, the
+            share with which a region holds a target's box, PBM 3.1).
+    """
+
+    def __init__(self, overlap: float) -> None:
+        self.overlap = float(overlap)
+
+    def heads(self, region: np.ndarray, det_boxes: np.ndarray, on_peak: np.ndarray) -> int:
+        """Heads the detections (D, 4) add to the blob at ``region`` (4,) xywh; ``on_peak``
+        (D,) bool: the detection's head zone holds one of the blob's peaks."""
+        if not len(det_boxes):
+            return 0
+        held = overlap_ratio_matrix(det_boxes, region[None])[:, 0] >= self.overlap
+        return int(np.count_nonzero(held & ~on_peak))
+
+
 class CandidateFinder:
     """Candidates of each frame (``find``), learning the blob-to-detection box ratio.
 
@@ -82,13 +117,17 @@ class CandidateFinder:
             None: ``ProfileHeads``.
         blob_box_ratio: rescale blob-born boxes by the learnt ratio (an adaptation; off,
             a blob's box is its span, PBM 2.1).
+        held: how the detections lying in a blob count among its heads
+            (``HeldDetections``, ``NoHeldDetections``); None: ``NoHeldDetections``.
     """
 
     def __init__(self, params: CandidateParams, blob_heads: ProfileHeads | DetectorHeads | None = None,
-                 blob_box_ratio: bool = True) -> None:
+                 blob_box_ratio: bool = True,
+                 held: HeldDetections | NoHeldDetections | None = None) -> None:
         self.params = params
         self.blob_heads = ProfileHeads(params) if blob_heads is None else blob_heads
         self.blob_box_ratio = bool(blob_box_ratio)
+        self.held = NoHeldDetections() if held is None else held
         self.reset()
 
     def reset(self) -> None:
@@ -143,20 +182,23 @@ class CandidateFinder:
             hy = (peaks[:, 1] + y) * s
             # heads explained by a detection: inside a detection box's top third
             if len(det_boxes):
-                explained = ((hx >= zx0) & (hx <= zx1) & (hy >= zy0) & (hy <= zy1)).any(axis=0)
+                zone = (hx >= zx0) & (hx <= zx1) & (hy >= zy0) & (hy <= zy1)  # (D, K)
+                explained = zone.any(axis=0)
             else:
+                zone = np.zeros((0, len(peaks)), dtype=bool)
                 explained = np.zeros(len(peaks), dtype=bool)
             if len(peaks) == 1 and explained[0] and self.blob_box_ratio:
                 self._calibrate(bbox, blob_iou[i], det_boxes)
             if explained.all():
                 continue
             n = len(peaks)
+            in_region = n + self.held.heads(bbox, det_boxes, zone.any(axis=1))
             head_w = max(self.params.head_separation * bbox[3], 3.0)
             for k in np.nonzero(~explained)[0]:
                 own = (bbox.copy() if n == 1
                        else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
                 blob_rows.append((self._blob_box_as_detection(own), bbox,
-                                  np.array([hx[k], hy[k], head_w]), n))
+                                  np.array([hx[k], hy[k], head_w]), in_region))
         if not blob_rows:
             return Candidates(*rows)
         own, region, head, n = zip(*blob_rows)

@@ -48,7 +48,14 @@ from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import box_scores, pair_scores
-from occbench.trackers.layered.candidates import CandidateFinder, DetectorHeads, ProfileHeads, checked_inputs
+from occbench.trackers.layered.candidates import (
+    CandidateFinder,
+    DetectorHeads,
+    HeldDetections,
+    NoHeldDetections,
+    ProfileHeads,
+    checked_inputs,
+)
 from occbench.trackers.layered.dynamics import Gate
 from occbench.trackers.layered.params import (
     CandidateParams,
@@ -141,7 +148,8 @@ class PBMTracker:
         self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
         a = self.adaptations
         blob_heads = ProfileHeads(self.candidates) if a.profile_heads else DetectorHeads(self.candidates)
-        self._finder = CandidateFinder(self.candidates, blob_heads, a.blob_box_ratio)
+        held = HeldDetections(self.search.overlap) if a.held_detections else NoHeldDetections()
+        self._finder = CandidateFinder(self.candidates, blob_heads, a.blob_box_ratio, held)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
         self.rules = build_rules(self.adaptations)
         self.starts = AutoStarts() if starts is None else starts
