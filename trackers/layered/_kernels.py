@@ -969,8 +969,8 @@ def _lone_growth(kinds: np.ndarray, regions: np.ndarray, heads_in_region: np.nda
 
 @numba.njit(cache=True)
 def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
-                heads_in_region: np.ndarray, gates: np.ndarray, pred_wh: np.ndarray,
-                kinds: np.ndarray, dof: np.ndarray, misses: np.ndarray,
+                heads_in_region: np.ndarray, grown_heads: np.ndarray, gates: np.ndarray,
+                pred_wh: np.ndarray, kinds: np.ndarray, dof: np.ndarray, misses: np.ndarray,
                 search_overlap: float, present: np.ndarray,
                 several_heads_merge: bool) -> tuple:  # pragma: no cover (compiled)
     """Gating (PBM 3) and the occlusion test's pairs (PBM 3.1) of T targets and N candidates.
@@ -985,14 +985,16 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     region, a target missed last frame, or ``geometry.overlap_ratio_matrix(boxes of dof,
     regions)[t, n] >= search_overlap``.
 
-    Lone growth (adaptation): a region larger only by size (one head) that holds target t
-    and no other ``present`` target (both by ``search_overlap`` of their boxes) is t
+    Lone growth (adaptation): a region larger only by size (one head by ``grown_heads``,
+    which may count more than ``heads_in_region``: ``candidates.HeldDetections``) that
+    holds target t and no other ``present`` target (both by ``search_overlap`` of their boxes) is t
     itself, grown (entering through a border or a doorway, coming closer), not a merge:
     the pair is unoccluded (kind 0). ``present`` all False: never.
 
     Args:
         boxes, regions: (N, 4) xywh candidate boxes and regions. heads: (N, 3) heads.
-        heads_in_region: (N,) int. gates: (T, 4) xywh. pred_wh: (T, 2) KF2 (w, h).
+        heads_in_region: (N,) int. grown_heads: (N,) int, the heads lone growth counts.
+        gates: (T, 4) xywh. pred_wh: (T, 2) KF2 (w, h).
         dof: (T, 6) the targets' global models (xtl, ytl, xc, yc, w, h). misses: (T,) int.
         present: (T,) bool, the targets whose boxes can hold a region (found or recently
             missed).
@@ -1002,7 +1004,7 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     """
     T, N = kinds.shape
     if search_overlap > 0:
-        _lone_growth(kinds, regions, heads_in_region, dof, present, search_overlap)
+        _lone_growth(kinds, regions, grown_heads, dof, present, search_overlap)
     inside = np.zeros((T, N), np.bool_)
     n_in, n_occ = 0, 0
     for t in range(T):

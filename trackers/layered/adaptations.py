@@ -98,9 +98,9 @@ class Adaptations:
             its size (paper: the 50% size test of PBM 3.1 alone).
         profile_heads: a blob's heads are the peaks of its top profile (paper: the head
             detector of PBM 2.3, ``candidates.head_detector``).
-        held_detections: a detection lying in a blob (``search.overlap`` of its box inside)
-            is one more head of the blob's region unless its head is one of the blob's
-            (``candidates.HeldDetections``; paper: the blob's own heads, PBM 3.1).
+        held_detections: a blob holding a detection (``search.overlap`` of its box inside)
+            whose head is none of the blob's is never one target grown (``lone_growth``),
+            ``candidates.HeldDetections`` (paper: off; lone growth is ours).
         one_to_one: targets share candidates one-to-one (Hungarian on 1 - p, as many
             pairs as possible); off, each target takes its best candidate as if tracked
             alone, as the paper tracks each target (PBM 3, 4 step 4).

@@ -12,8 +12,8 @@ heads are the peaks of its top profile, ``ProfileHeads`` (the PBM 2.3 head detec
 in the blob, ``DetectorHeads``); detection boxes and blob spans differ systematically (box
 margins, swinging limbs), so blob-born boxes are rescaled by a ratio learned online from
 isolated person/detection pairs, ``CandidateFinder``'s only state (``blob_box_ratio``;
-the paper: the blob's span, PBM 2.1); a detection lying in a blob is one more head of the
-blob's region, ``HeldDetections`` (only the blob's own heads count, ``NoHeldDetections``).
+the paper: the blob's span, PBM 2.1); a detection lying in a blob keeps the blob from being
+one target grown, ``HeldDetections`` (the blob's own heads alone, ``NoHeldDetections``).
 """
 
 from __future__ import annotations
@@ -78,18 +78,18 @@ class NoHeldDetections:
     """The paper's count of a blob's heads: its own (PBM 3.1, "for each detected head in
     the blob"); a detection lying in the blob adds none."""
 
-    def heads(self, region: np.ndarray, det_boxes: np.ndarray, on_peak: np.ndarray) -> int:
-        """Heads the detections add to the blob at ``region``: none."""
+    def count(self, region: np.ndarray, det_boxes: np.ndarray, on_peak: np.ndarray) -> int:
+        """Detections held by the blob at ``region`` besides its heads: none."""
         return 0
 
 
 class HeldDetections:
     """``held_detections``: a detection whose box lies in a blob's region (at least
-    ``overlap`` of its area inside) is one more head of that region, unless its head is
-    one of the blob's own peaks (counted already). A person standing below another,
-    their heads one above the other, has no peak in the blob's top profile; the detection
-    found on it says the blob holds two people: a merge (searched, ``several_heads_merge``),
-    not one target grown to the blob's span (``lone_growth``).
+    ``overlap`` of its area inside), its head not one of the blob's own peaks, is a second
+    person in the region: the region is no target grown (``lone_growth``), whatever its
+    one peak says. A person standing below another, their heads one above the other,
+    has no peak in the blob's top profile; the detection found on it says the blob holds
+    two people. The region's heads (``several_heads_merge``) are still its own peaks.
 
     Args:
         overlap: share of a detection's box inside the blob's (``search.overlap``, the
@@ -99,9 +99,9 @@ class HeldDetections:
     def __init__(self, overlap: float) -> None:
         self.overlap = float(overlap)
 
-    def heads(self, region: np.ndarray, det_boxes: np.ndarray, on_peak: np.ndarray) -> int:
-        """Heads the detections (D, 4) add to the blob at ``region`` (4,) xywh; ``on_peak``
-        (D,) bool: the detection's head zone holds one of the blob's peaks."""
+    def count(self, region: np.ndarray, det_boxes: np.ndarray, on_peak: np.ndarray) -> int:
+        """Detections (D, 4) held by the blob at ``region`` (4,) xywh besides its heads;
+        ``on_peak`` (D,) bool: the detection's head zone holds one of the blob's peaks."""
         if not len(det_boxes):
             return 0
         held = overlap_ratio_matrix(det_boxes, region[None])[:, 0] >= self.overlap
@@ -117,8 +117,8 @@ class CandidateFinder:
             None: ``ProfileHeads``.
         blob_box_ratio: rescale blob-born boxes by the learnt ratio (an adaptation; off,
             a blob's box is its span, PBM 2.1).
-        held: how the detections lying in a blob count among its heads
-            (``HeldDetections``, ``NoHeldDetections``); None: ``NoHeldDetections``.
+        held: how the detections lying in a blob count (``HeldDetections``,
+            ``NoHeldDetections``; ``Candidates.held``); None: ``NoHeldDetections``.
     """
 
     def __init__(self, params: CandidateParams, blob_heads: ProfileHeads | DetectorHeads | None = None,
@@ -192,20 +192,22 @@ class CandidateFinder:
             if explained.all():
                 continue
             n = len(peaks)
-            in_region = n + self.held.heads(bbox, det_boxes, zone.any(axis=1))
+            held = self.held.count(bbox, det_boxes, zone.any(axis=1))
             head_w = max(self.params.head_separation * bbox[3], 3.0)
             for k in np.nonzero(~explained)[0]:
                 own = (bbox.copy() if n == 1
                        else split_blob_box(mask, sbox[:2], peaks[:, 0], int(k)) * s)
                 blob_rows.append((self._blob_box_as_detection(own), bbox,
-                                  np.array([hx[k], hy[k], head_w]), in_region))
+                                  np.array([hx[k], hy[k], head_w]), n, held))
         if not blob_rows:
             return Candidates(*rows)
-        own, region, head, n = zip(*blob_rows)
+        own, region, head, n, held = zip(*blob_rows)
         return Candidates(np.vstack([rows[0], own]), np.vstack([rows[1], region]),
                           np.vstack([rows[2], head]),
                           np.concatenate([rows[3], np.ones(len(own), dtype=bool)]),
-                          np.concatenate([rows[4], np.array(n, dtype=np.int64)]))
+                          np.concatenate([rows[4], np.array(n, dtype=np.int64)]),
+                          held=np.concatenate([np.zeros(len(rows[0]), dtype=np.int64),
+                                               np.array(held, dtype=np.int64)]))
 
     def _calibrate(self, blob_box: np.ndarray, iou: np.ndarray, det_boxes: np.ndarray) -> None:
         """Learn the ratio of detection box size to blob span from isolated people.

@@ -54,6 +54,8 @@ class Candidates:
         heads_in_region: (N,) int, number of heads found in the region.
         centroid: (N, 2) foreground centroids of the boxes (their centres without
             foreground); None until the tracker measures all candidates at once.
+        held: (N,) int, detections lying in a blob's region besides its heads
+            (``candidates.HeldDetections``); None: none.
     """
 
     box: np.ndarray
@@ -62,6 +64,7 @@ class Candidates:
     blob: np.ndarray
     heads_in_region: np.ndarray
     centroid: np.ndarray | None = None
+    held: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.box)

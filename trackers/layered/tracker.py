@@ -230,8 +230,9 @@ class PBMTracker:
         targets.last_gate = gates  # the gates this frame's candidates were validated in
         kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
         present = (targets.misses <= self.reporting.max_misses) & self.adaptations.lone_growth
+        grown_heads = cand.heads_in_region if cand.held is None else cand.heads_in_region + cand.held
         ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
-            cand.box, cand.region, cand.head, cand.heads_in_region, gates,
+            cand.box, cand.region, cand.head, cand.heads_in_region, grown_heads, gates,
             pred_wh, kinds, targets.dof, targets.misses, self.search.overlap, present,
             self.adaptations.several_heads_merge)
         pj_in, p_in = self._scores(model, feats, ti_in, n_in)

@@ -1,6 +1,6 @@
-"""``adaptations.held_detections``: a detection lying in a foreground blob is one more head
-of the blob's region, so a blob holding a person below another (one profile peak) is a
-merge, not one target grown to the blob's span (issue 35; docs/adaptations.md)."""
+"""``adaptations.held_detections``: a foreground blob holding a detection whose head is
+none of the blob's peaks (a person below another) is never one target grown to the blob's
+span (``lone_growth``); its heads stay its own (issue 35; docs/adaptations.md)."""
 
 import numpy as np
 
@@ -19,26 +19,25 @@ def _stacked_people() -> tuple[np.ndarray, Detections]:
     return fg, Detections(boxes=np.array([[18.0, 40.0, 23.0, 71.0]]), scores=np.ones(1))
 
 
-def _blob_rows(held) -> np.ndarray:
-    fg, det = _stacked_people()
-    cand = CandidateFinder(CandidateParams(), held=held).find(fg, det)
+def _blob(held, det: Detections | None = None) -> tuple[list, list]:
+    fg, stacked = _stacked_people()
+    cand = CandidateFinder(CandidateParams(), held=held).find(fg, stacked if det is None else det)
     assert cand.blob.sum() == 1  # the far person's head is the blob's only candidate
     assert abs(cand.head[cand.blob][0, 1] - 10) <= 2
-    return cand.heads_in_region[cand.blob]
+    held_rows = np.zeros(len(cand), dtype=np.int64) if cand.held is None else cand.held
+    return cand.heads_in_region[cand.blob].tolist(), held_rows[cand.blob].tolist()
 
 
-def test_a_detection_in_the_blob_counts_as_a_head_of_its_region():
-    assert _blob_rows(HeldDetections(0.5)).tolist() == [2]
-    assert _blob_rows(NoHeldDetections()).tolist() == [1]  # the paper's count: a lone head
-    assert _blob_rows(None).tolist() == [1]
+def test_a_detection_in_the_blob_is_held_and_its_heads_stay_the_blobs_own():
+    assert _blob(HeldDetections(0.5)) == ([1], [1])
+    assert _blob(NoHeldDetections()) == ([1], [0])  # the paper's count: a lone head
+    assert _blob(None) == ([1], [0])
 
 
-def test_a_detection_mostly_outside_the_blob_adds_no_head():
-    fg, _ = _stacked_people()
-    outside = Detections(boxes=np.array([[18.0, 40.0, 23.0, 71.0], [50.0, 40.0, 25.0, 71.0]]),
-                         scores=np.ones(2))
-    cand = CandidateFinder(CandidateParams(), held=HeldDetections(0.5)).find(fg, outside)
-    assert cand.heads_in_region[cand.blob].tolist() == [2]
+def test_a_detection_mostly_outside_the_blob_is_not_held():
+    two = Detections(boxes=np.array([[18.0, 40.0, 23.0, 71.0], [50.0, 40.0, 25.0, 71.0]]),
+                     scores=np.ones(2))
+    assert _blob(HeldDetections(0.5), two) == ([1], [1])
 
 
 def test_off_in_paper_mode_and_by_default():

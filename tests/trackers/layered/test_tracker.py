@@ -554,6 +554,7 @@ def test_gated_pairs_equal_the_numpy_gating():
         regions = np.where(rng.random((N, 1)) < 0.5, boxes, boxes * [1, 1, 2, 1.6])
         heads = np.column_stack([boxes[:, 0] + 0.5 * boxes[:, 2], boxes[:, 1], 0.3 * boxes[:, 2]])
         nh = rng.integers(1, 3, N)
+        grown = nh + rng.integers(0, 2, N)  # candidates.HeldDetections' detections in the blob
         gates = np.round(rng.uniform(0, 60, (T, 4)) * 2) / 2 + [0, 0, 10, 20]
         pred = rng.uniform(5, 60, (T, 2))
         tboxes = np.round(rng.uniform(0, 60, (T, 4)) * 2) / 2 + [0, 0, 0, 5]
@@ -564,12 +565,12 @@ def test_gated_pairs_equal_the_numpy_gating():
         dof = np.column_stack([tboxes[:, :2], tboxes[:, :2] + 0.5 * tboxes[:, 2:], tboxes[:, 2:]])
         present = rng.random(T) < (0.0 if trial % 4 == 0 else 0.8)
         merge_heads = trial % 3 != 1  # adaptations.several_heads_merge
-        got = gated_pairs(boxes, regions, heads, nh, gates, pred, kinds.copy(), dof, misses, so,
+        got = gated_pairs(boxes, regions, heads, nh, grown, gates, pred, kinds.copy(), dof, misses, so,
                           present, merge_heads)
         # the numpy reference
         if so > 0:  # lone growth: the one present target holding a one-head larger region
             holds = (overlap_ratio_matrix(tboxes, regions) >= so) & present[:, None]
-            lone = holds & (holds.sum(0) == 1) & (nh == 1) & (kinds > 0)
+            lone = holds & (holds.sum(0) == 1) & (grown == 1) & (kinds > 0)
             n_lone += lone.sum()
             kinds[lone] = 0
         c = boxes[:, :2] + 0.5 * boxes[:, 2:]
