@@ -98,6 +98,10 @@ class Adaptations:
             its size (paper: the 50% size test of PBM 3.1 alone).
         profile_heads: a blob's heads are the peaks of its top profile (paper: the head
             detector of PBM 2.3, ``candidates.head_detector``).
+        lone_shrink: a detection smaller than a target's prediction (PBM 3.1's size test)
+            is the target at its own size, not partly occluded, unless another live
+            target's box covers this share of its aligned predicted-size box
+            (``rules.LoneShrink``; 0: off, the paper's partial occlusion).
         held_detections: a blob holding a detection (``search.overlap`` of its box inside)
             whose head is none of the blob's is never one target grown (``lone_growth``),
             ``candidates.HeldDetections`` (paper: off; lone growth is ours).
@@ -147,6 +151,7 @@ class Adaptations:
     several_heads_merge: bool = True
     profile_heads: bool = True
     held_detections: bool = False
+    lone_shrink: float = 0.0
     one_to_one: bool = True
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
@@ -159,7 +164,8 @@ class Adaptations:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
                 self.model_spread)
         unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
-             report_support=self.report_support, rival_match=self.rival_match)
+             report_support=self.report_support, rival_match=self.rival_match,
+             lone_shrink=self.lone_shrink)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
@@ -177,7 +183,8 @@ class Adaptations:
                              f"rules for one step: set one (report_support {self.report_support})")
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
-                                       "report_support", "rival_match", "contested_template"),
+                                       "report_support", "rival_match", "contested_template",
+                                       "lone_shrink"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -195,7 +202,8 @@ class Adaptations:
                    prune_max_misses=UNBOUNDED, stale=None, gate_max_fraction=float(UNBOUNDED),
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
-                   profile_heads=False, held_detections=False, one_to_one=False, report_support=0.0,
+                   profile_heads=False, held_detections=False, lone_shrink=0.0,
+                   one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0)
 

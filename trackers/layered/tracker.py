@@ -48,14 +48,8 @@ from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import box_scores, pair_scores
-from occbench.trackers.layered.candidates import (
-    CandidateFinder,
-    DetectorHeads,
-    HeldDetections,
-    NoHeldDetections,
-    ProfileHeads,
-    checked_inputs,
-)
+from occbench.trackers.layered.candidates import (CandidateFinder, DetectorHeads, HeldDetections,
+                                                  NoHeldDetections, ProfileHeads, checked_inputs)
 from occbench.trackers.layered.dynamics import Gate
 from occbench.trackers.layered.params import (
     CandidateParams,
@@ -229,7 +223,9 @@ class PBMTracker:
         gates = targets.gate_boxes()
         targets.last_gate = gates  # the gates this frame's candidates were validated in
         kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
-        present = (targets.misses <= self.reporting.max_misses) & self.adaptations.lone_growth
+        live = targets.misses <= self.reporting.max_misses
+        self.rules.smaller.apply(kinds, cand, targets, pred_wh, live)
+        present = live & self.adaptations.lone_growth
         grown_heads = cand.heads_in_region if cand.held is None else cand.heads_in_region + cand.held
         ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
             cand.box, cand.region, cand.head, cand.heads_in_region, grown_heads, gates,
