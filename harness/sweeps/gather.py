@@ -59,7 +59,7 @@ from occbench.sweeps.tables import (  # noqa: F401 - re-exported
     DEFAULT_METRICS,
     aggregate,
     column,
-    interval95,
+    interval,
     is_replicate,
     parameters,
     plot_axes,

@@ -1,9 +1,11 @@
-"""``report.html`` of a sweep folder (the run page's parts, ``occbench.report.html``): each swept parameter against each metric (mean and 95%
-interval over seeds), the best settings, the paired difference of the best two, the jobs,
-the sweep's plots and the command.
+"""``report.html`` of a sweep folder (the run page's parts, ``occbench.report.html``): each
+swept parameter against each metric (mean and 95% interval over seeds), the best settings,
+the paired difference of the best two, the jobs, the sweep's plots and the command. Every
+interval is ``aggregate``'s, the one of sweep.md and the sweep's PNGs; every tracker is in
+its colour (``occbench.config.meta``).
 
 The best settings are ranked on the COMBINED ``objective`` metric of one tracker (the
-sweep's ``objective``: by default IDF1 of the first tracker). The best two are compared on
+sweep's ``objective``: by default IDF1 of the first of ours). The best two are compared on
 the same frames: their jobs are paired by their other values (the seeds), each job's
 sequences are strata of the block bootstrap (``occbench.metrics.paired``).
 """
@@ -18,20 +20,24 @@ from typing import Any
 
 import pandas as pd
 
-from occbench.config.meta import TrackerMeta
+from occbench.config.meta import TrackerMeta, first_of_ours
 from occbench.metrics.paired import Bootstrap, PairedDifference
 from occbench.report.html import charts
 from occbench.report.html.page import Page, esc, table_html
 from occbench.report.paired import NOT_DISTINGUISHABLE, cell
 from occbench.sweeps.jobs import sweep_metas
-from occbench.sweeps.tables import (COMBINED, DONE, aggregate, parameters, plot_axes, setting_table,
-                                    swept)
+from occbench.sweeps.tables import (BOUNDS, COMBINED, DONE, aggregate, parameters, plot_axes,
+                                    setting_table, swept)
+from occbench.sweeps.tables import cell as interval_cell
 
 log = logging.getLogger(__name__)
 
 
-def objective_of(sweep_dir: Path, frame: pd.DataFrame) -> tuple[str, str]:
-    """(tracker, metric) the sweep optimises: its jobs' ``objective`` (config.yaml)."""
+def objective_of(sweep_dir: Path, frame: pd.DataFrame,
+                 looks: Mapping[str, TrackerMeta]) -> tuple[str, str]:
+    """(tracker, metric) the sweep optimises: its jobs' ``objective`` (config.yaml); with no
+    tracker named there, the first of ours (``first_of_ours``: never the baseline when one of
+    ours ran)."""
     import yaml
 
     tracker, metric = None, "IDF1"
@@ -40,7 +46,7 @@ def objective_of(sweep_dir: Path, frame: pd.DataFrame) -> tuple[str, str]:
         tracker, metric = obj.get("tracker"), obj.get("metric") or "IDF1"
         break
     if tracker is None and "tracker" in frame.columns and frame["tracker"].notna().any():
-        tracker = str(frame["tracker"].dropna().iloc[0])
+        tracker = first_of_ours(dict.fromkeys(frame["tracker"].dropna().astype(str)), looks)
     return str(tracker), str(metric)
 
 
@@ -54,6 +60,14 @@ def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFram
         return agg
     agg = agg[agg["tracker"] == tracker] if "tracker" in agg else agg
     return agg.sort_values(metric, ascending=direction(metric) < 0, kind="stable")
+
+
+def best_table(best: pd.DataFrame, metric: str, rows: int = 10) -> pd.DataFrame:
+    """The first ``rows`` of ``best_settings`` as shown: ``metric`` as ``mean [low, high]``."""
+    top = best.head(rows).reset_index(drop=True)
+    top[metric] = [interval_cell(a, lo, hi) for a, lo, hi in zip(top[metric], top[f"{metric}_low"],
+                                                         top[f"{metric}_high"])]
+    return top.drop(columns=[f"{metric}{b}" for b in BOUNDS])
 
 
 def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
@@ -94,13 +108,14 @@ def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame, metrics: Sequ
     jobs = frame.drop_duplicates("job") if "job" in frame else frame
     page.text(f"Sweep folder: {sweep_dir.resolve()}; {len(jobs)} jobs.")
     shown = [m for m in metrics if m in frame.columns]
-    tracker, objective = objective_of(sweep_dir, frame)
+    tracker, objective = objective_of(sweep_dir, frame, looks)
     best = best_settings(frame, tracker, objective)
     page.section("best", "Best settings")
     if not best.empty:
         page.text(f"Ranked on the COMBINED {objective} of {tracker} (the sweep's objective), "
-                  "mean ± 95% interval over seeds (n jobs each).")
-        page.add(table_html(best.head(10).reset_index(drop=True)))
+                  "mean [95% bootstrap interval] over seeds (n jobs each), as in sweep.md "
+                  "and the plots.")
+        page.add(table_html(best_table(best, objective)))
     diffs = paired_best(sweep_dir, frame, best, tracker)
     if diffs:
         page.add("<h3>Best minus second best, paired</h3>")

@@ -54,29 +54,11 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str],
     return written
 
 
-def interval(values: np.ndarray, seed: int = 0) -> tuple[float, float, float]:
-    """Mean of ``values`` (the jobs' COMBINED figures of one setting) and its 95% bootstrap
-    percentile interval (``scipy.stats.bootstrap``, 2000 resamples, seeded): it stays inside
-    the values seen, so inside each metric's range (a t-interval of 3 jobs reached HOTA 1.2).
-    One value: the interval is that value."""
-    from scipy import stats
-
-    v = values[np.isfinite(values)]
-    if v.size == 0:
-        return float("nan"), float("nan"), float("nan")
-    if v.size == 1 or np.all(v == v[0]):
-        return float(v.mean()), float(v[0]), float(v[0])
-    res = stats.bootstrap((v,), np.mean, method="percentile", n_resamples=2000,
-                          random_state=np.random.default_rng(seed))
-    ci = res.confidence_interval
-    return float(v.mean()), float(ci.low), float(ci.high)
-
-
 def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path,
                looks: Mapping[str, TrackerMeta]) -> Path:
-    """Each metric of ``shown`` against parameter ``p``, one line per tracker (the mean over
-    the finished jobs' COMBINED rows, with ``interval``), one panel per metric in a grid and
-    one legend, into ``path``."""
+    """Each metric of ``shown`` against parameter ``p``, one line per tracker (``aggregate``:
+    the mean over the finished jobs' COMBINED rows and its 95% bootstrap interval), one panel
+    per metric in a grid and one legend, into ``path``."""
     import matplotlib.pyplot as plt
 
     rows = frame[(frame["status"] == DONE) & (frame["sequence"] == COMBINED)]
@@ -85,18 +67,15 @@ def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path,
     ncols = min(3, len(shown))
     nrows = -(-len(shown) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.4 * nrows), squeeze=False)
-    groups = list(rows.groupby("tracker", sort=False)) if "tracker" in rows else [("", rows)]
-    n_max = 0
+    agg = aggregate(frame, [p], shown)  # the page's and sweep.md's numbers, intervals included
+    trackers = list(dict.fromkeys(rows["tracker"])) if "tracker" in rows else [""]
+    n_max = int(agg["n"].max())
     for ax, m in zip(axes.flat, shown):
-        for tracker, g in groups:
-            points = []
-            for value, jobs in g.groupby(p, sort=False):
-                vals = pd.to_numeric(jobs[m], errors="coerce").to_numpy(dtype=float)
-                n_max = max(n_max, len(vals))
-                x = float(value) if numeric else labels.index(str(value))
-                points.append((x, *interval(vals)))
-            points.sort()
-            x, mean, low, high = (np.array(c) for c in zip(*points))
+        for tracker in trackers:
+            g = agg[agg["tracker"] == tracker] if tracker != "" else agg
+            x = [float(v) if numeric else labels.index(str(v)) for v in g[p]]
+            points = sorted(zip(x, g[m], g[f"{m}_low"], g[f"{m}_high"]))
+            x, mean, low, high = (np.array(c, dtype=float) for c in zip(*points))
             yerr = np.clip([mean - low, high - mean], 0.0, None)  # float round-off only
             look = looks.get(str(tracker))
             ax.errorbar(x, mean, yerr=yerr, marker="o", capsize=3,

@@ -23,6 +23,7 @@ COMBINED = "COMBINED"
 SEED = "seed"
 DEFAULT_METRICS = ("HOTA", "IDF1", "MOTA", "IDs", "ReID")
 # metrics.csv columns that an override key (a config-group choice) may share a name with
+BOUNDS = ("_low", "_high")  # aggregate's interval columns: <metric>_low, <metric>_high
 RESERVED = frozenset({"job", "status", "error", "tracker", "sequence"})
 
 
@@ -74,24 +75,30 @@ def swept(frame: pd.DataFrame) -> list[str]:
     return [c for c in parameters(frame) if jobs[c].astype(str).nunique() > 1]
 
 
-def interval95(values: np.ndarray) -> tuple[float, float, int]:
-    """Mean, half-width of the 95% t-interval, and number of finite values."""
+def interval(values: np.ndarray, seed: int = 0) -> tuple[float, float, float]:
+    """Mean of ``values`` (the jobs' COMBINED figures of one setting, NaN dropped) and its
+    95% bootstrap percentile interval (``scipy.stats.bootstrap``, 2000 resamples, seeded): it
+    stays inside the values seen, so inside each metric's range (a t-interval of 3 jobs
+    reached HOTA 1.2, and IDs 12.67 +/- 17 ran below 0). One value: the interval is that
+    value. The one interval of a sweep: its table, page and plots all read ``aggregate``."""
     from scipy import stats
 
     v = np.asarray(values, dtype=np.float64)
     v = v[np.isfinite(v)]
-    n = len(v)
-    if n == 0:
-        return float("nan"), float("nan"), 0
-    if n == 1:
-        return float(v[0]), 0.0, 1
-    half = stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / math.sqrt(n)
-    return float(v.mean()), float(half), n
+    if v.size == 0:
+        return float("nan"), float("nan"), float("nan")
+    if v.size == 1 or np.all(v == v[0]):
+        return float(v.mean()), float(v[0]), float(v[0])
+    res = stats.bootstrap((v,), np.mean, method="percentile", n_resamples=2000,
+                          random_state=np.random.default_rng(seed))
+    ci = res.confidence_interval
+    return float(v.mean()), float(ci.low), float(ci.high)
 
 
 def aggregate(frame: pd.DataFrame, by: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
-    """COMBINED rows of finished jobs grouped by ``by`` (+ tracker): mean, 95% half-width
-    and count of each metric (columns ``<m>``, ``<m>_ci95``, ``n``)."""
+    """COMBINED rows of finished jobs grouped by ``by`` (+ tracker): mean, 95% bootstrap
+    interval (``interval``) and count of each metric (columns ``<m>``, ``<m>_low``,
+    ``<m>_high``, ``n``)."""
     if "sequence" not in frame.columns:
         return pd.DataFrame()
     rows = frame[(frame["status"] == DONE) & (frame["sequence"] == COMBINED)]
@@ -103,8 +110,8 @@ def aggregate(frame: pd.DataFrame, by: Sequence[str], metrics: Sequence[str]) ->
         for m in metrics:
             if m not in g.columns:
                 continue
-            mean, half, _ = interval95(pd.to_numeric(g[m], errors="coerce").to_numpy())
-            rec[m], rec[f"{m}_ci95"] = mean, half
+            values = pd.to_numeric(g[m], errors="coerce").to_numpy(dtype=float)
+            rec[m], rec[f"{m}_low"], rec[f"{m}_high"] = interval(values)
         rec["n"] = len(g)
         out.append(rec)
     result = pd.DataFrame(out)
@@ -158,7 +165,7 @@ def sweep_markdown(frame: pd.DataFrame, metrics: Sequence[str], title: str = "")
     if not table.empty:
         seeds = [p for p in params if is_replicate(p)]
         over = f" over {', '.join(seeds)}" if seeds else ""
-        lines += [f"## COMBINED, mean ± 95% interval{over}", "", markdown_table(table), ""]
+        lines += [f"## COMBINED, mean [95% interval]{over}", "", markdown_table(table), ""]
     per_job = frame
     if "sequence" in frame.columns:
         per_job = frame[(frame["sequence"] == COMBINED) | frame["sequence"].isna()]
@@ -191,8 +198,8 @@ def ignored_lines(frame: pd.DataFrame) -> list[str]:
 
 
 def setting_table(frame: pd.DataFrame, metrics: Sequence[str]) -> pd.DataFrame:
-    """COMBINED ``metric`` as ``mean ± half-width`` per setting of the swept non-replicate
-    parameters and tracker (``n``: the jobs averaged, the seeds)."""
+    """COMBINED ``metric`` as ``mean [low, high]`` (``aggregate``'s 95% interval) per setting
+    of the swept non-replicate parameters and tracker (``n``: the jobs averaged, the seeds)."""
     shown = [m for m in metrics if m in frame.columns]
     if "sequence" not in frame.columns or not shown:
         return pd.DataFrame()
@@ -201,14 +208,22 @@ def setting_table(frame: pd.DataFrame, metrics: Sequence[str]) -> pd.DataFrame:
     agg = aggregate(frame, by, shown)
     if agg.empty:
         return agg
-    table = agg[[c for c in agg.columns if not c.endswith("_ci95")]].copy()
+    table = agg[[c for c in agg.columns if not c.endswith(BOUNDS)]].copy()
     for c in by:  # Optuna's values carry 17 digits
         table[c] = table[c].map(tick)
     for m in shown:
         if m in agg.columns:
-            table[m] = [f"{a:.4g} ± {b:.2g}" if np.isfinite(a) and b > 0 else _fmt(a)
-                        for a, b in zip(agg[m], agg[f"{m}_ci95"])]
+            table[m] = [cell(a, lo, hi) for a, lo, hi in zip(agg[m], agg[f"{m}_low"],
+                                                               agg[f"{m}_high"])]
     return table
+
+
+def cell(mean: float, low: float, high: float) -> str:
+    """``mean [low, high]`` (4 significant digits), the mean alone when the interval is a
+    point (one job, or equal values)."""
+    if not (np.isfinite(mean) and np.isfinite(low) and np.isfinite(high)) or low == high:
+        return _fmt(mean)
+    return f"{mean:.4g} [{low:.4g}, {high:.4g}]"
 
 
 def summary_text(frame: pd.DataFrame, metrics: Sequence[str] = DEFAULT_METRICS,
@@ -223,7 +238,7 @@ def summary_text(frame: pd.DataFrame, metrics: Sequence[str] = DEFAULT_METRICS,
     table = setting_table(frame, metrics)
     if not table.empty:
         seeds = [p for p in params if is_replicate(p)]
-        lines += ["", "COMBINED, mean ± 95% interval" + (f" over {', '.join(seeds)}" if seeds
+        lines += ["", "COMBINED, mean [95% interval]" + (f" over {', '.join(seeds)}" if seeds
                                                            else "")]
         with pd.option_context("display.width", 200, "display.max_columns", 50,
                                "display.max_colwidth", 40):

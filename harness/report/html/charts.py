@@ -110,16 +110,16 @@ def paired_forest(diffs: Sequence[PairedDifference]) -> dict[str, Any]:
 
 def metric_lines(agg: pd.DataFrame, parameter: str, metric: str,
                  looks: Mapping[str, TrackerMeta] | None = None) -> dict[str, Any]:
-    """A sweep's ``metric`` (mean and 95% interval over seeds, ``aggregate``'s columns)
+    """A sweep's ``metric`` (mean and 95% bootstrap interval over seeds: ``aggregate``'s
+    columns, the numbers of the sweep's PNG and sweep.md)
     against one ``parameter``, one line per tracker in its label and colour (``looks``,
     default: the shipped configs' by name)."""
     import altair as alt
 
-    data = agg[[parameter, "tracker", metric, f"{metric}_ci95", "n"]].copy()
-    data.columns = ["value", "tracker", "mean", "half", "n"]
+    data = agg[[parameter, "tracker", metric, f"{metric}_low", f"{metric}_high", "n"]].copy()
+    data.columns = ["value", "tracker", "mean", "low", "high", "n"]
     looks = metas(dict.fromkeys(data["tracker"].astype(str)), known=looks)
     data["tracker"] = [looks[str(t)].label for t in data["tracker"]]
-    data["low"], data["high"] = data["mean"] - data["half"], data["mean"] + data["half"]
     numeric = pd.to_numeric(data["value"], errors="coerce").notna().all()
     if numeric:
         data["value"] = pd.to_numeric(data["value"])
@@ -137,5 +137,5 @@ def metric_lines(agg: pd.DataFrame, parameter: str, metric: str,
     band = base.mark_errorbar(ticks=True).encode(x=x, y=alt.Y("low:Q", title=metric),
                                                  y2="high:Q", color=color)
     chart = alt.layer(band, line).properties(
-        width=300, height=200, title=f"{metric} against {parameter} (mean ± 95% interval)")
+        width=300, height=200, title=f"{metric} against {parameter} (mean, 95% interval)")
     return _spec(chart)

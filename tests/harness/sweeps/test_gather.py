@@ -25,7 +25,7 @@ from occbench.sweeps.gather import (
     finished,
     gather,
     guarded,
-    interval95,
+    interval,
     is_replicate,
     plot_sweep,
     setting_table,
@@ -97,8 +97,8 @@ def test_gather_one_row_per_job_and_sequence_with_params_status_and_errors(tmp_p
     assert swept(frame) == ["tracker.max_age", "seed"]
     agg = aggregate(frame, ["tracker.max_age"], ["IDF1"])
     assert len(agg) == 1 and agg.loc[0, "IDF1"] == pytest.approx(0.6)
-    # 95% t-interval of (0.5, 0.7): t(0.975, 1) * s / sqrt(2) = 12.706 * 0.1414 / 1.414
-    assert agg.loc[0, "IDF1_ci95"] == pytest.approx(12.7062 * 0.1, rel=1e-4)
+    # 95% bootstrap interval of (0.5, 0.7): means of resamples of two, 0.5 .. 0.7
+    assert (agg.loc[0, "IDF1_low"], agg.loc[0, "IDF1_high"]) == pytest.approx((0.5, 0.7))
     write_sweep(tmp_path, ["IDF1", "IDs"])
     again = pd.read_csv(tmp_path / "sweep.csv", keep_default_na=False)
     assert len(again) == 6
@@ -107,11 +107,11 @@ def test_gather_one_row_per_job_and_sequence_with_params_status_and_errors(tmp_p
     assert (tmp_path / "plots" / "sweep_tracker_max_age.png").is_file()
 
 
-def test_interval95_hand_values():
-    mean, half, n = interval95(np.array([1.0, 2.0, 3.0, np.nan]))
-    assert (mean, n) == (2.0, 3) and half == pytest.approx(4.302653 * 1.0 / math.sqrt(3))
-    assert interval95(np.array([4.0])) == (4.0, 0.0, 1)
-    assert math.isnan(interval95(np.array([]))[0])
+def test_interval_hand_values():
+    mean, low, high = interval(np.array([1.0, 2.0, 3.0, np.nan]))
+    assert mean == 2.0 and 1.0 <= low < 2.0 < high <= 3.0
+    assert interval(np.array([4.0])) == (4.0, 4.0, 4.0)
+    assert math.isnan(interval(np.array([]))[0])
 
 
 def test_two_swept_parameters_give_a_heatmap(tmp_path):
@@ -154,12 +154,12 @@ def test_a_seed_in_any_group_gives_mean_and_interval_never_an_axis(tmp_path, see
     table = setting_table(frame, ["IDF1"])
     assert table["tracker.max_age"].tolist() == ["1", "3"] and table["n"].tolist() == [3, 3]
     assert seed_key not in table.columns
-    # mean of 0.6, 0.61, 0.62 and the t-interval 4.303 * 0.01 / sqrt(3) = 0.0248
-    assert table.loc[0, "IDF1"] == "0.61 ± 0.025"
+    # mean of 0.6, 0.61, 0.62 and its bootstrap interval, inside the values seen
+    assert table.loc[0, "IDF1"] == "0.61 [0.6, 0.62]"
     names = sorted(p.name for p in plot_sweep(frame, tmp_path / "plots", ["IDF1", "HOTA"]))
     assert names == ["sweep_tracker_max_age.png"]  # no seed axis, no heatmap over seeds
     md = write_sweep(tmp_path, ["IDF1"]) is not None and (tmp_path / "sweep.md").read_text()
-    assert f"mean ± 95% interval over {seed_key}" in md
+    assert f"mean [95% interval] over {seed_key}" in md
 
 
 def test_no_heatmap_over_the_tracker_choice(tmp_path):
@@ -178,7 +178,7 @@ def test_summary_shows_settings_and_every_jobs_overrides(tmp_path):
     _seed_sweep(tmp_path)
     text = summary_text(gather(tmp_path), ["IDF1"], "demo")
     assert text.startswith("sweep demo: 6 jobs, 6 done, 0 failed or missing")
-    assert "mean ± 95% interval over dataset.seed" in text and "0.81 ± 0.025" in text
+    assert "mean [95% interval] over dataset.seed" in text and "0.81 [0.8, 0.82]" in text
     assert "\n    5  tracker.max_age=3 dataset.seed=2  [done]\n" in text
     assert "jobs (all with tracker=baseline):" in text
 
@@ -224,7 +224,7 @@ def test_joblib_sweep_equals_basic_launcher(tiny_mot, tmp_path):
     _multirun(tiny_mot, tmp_path / "joblib", "hydra/launcher=parallel",
               "hydra.launcher.n_jobs=2")
     # stdout: the sweep's summary once (seeds as replicates), no table per job
-    assert basic_run.stdout.count("COMBINED, mean ± 95% interval over seed\n") == 1
+    assert basic_run.stdout.count("COMBINED, mean [95% interval] over seed\n") == 1
     assert "results:" not in basic_run.stdout and "    5  tracker.max_age=3 seed=2" in basic_run.stdout
     basic = (tmp_path / "basic" / "sweep.csv").read_text()
     assert basic == (tmp_path / "joblib" / "sweep.csv").read_text()

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from occbench.sweeps.plots import interval, plot_sweep
+from occbench.sweeps.plots import plot_sweep
+from occbench.sweeps.tables import interval
 
 
 def test_the_interval_stays_inside_the_values_seen():
