@@ -37,7 +37,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-video", action="store_true", help="skip the video and contact sheet")
     p.add_argument("--no-trajectories", action="store_true", help="skip the trajectory plot")
     args = p.parse_args(argv)
-    from occbench.report.tracks import tracks_text
+    from occbench.report.tracks import counted, tracks_text
 
     from occbench.commands.mistakes import refuse
 
@@ -80,23 +80,6 @@ def _first_sequence(run_dir: Path) -> str:
     path = run_dir / "gt" / "seqmap.txt"
     names = path.read_text().split()[1:] if path.is_file() else []
     return names[0] if names else ""
-
-
-def counted(run_dir: Path):
-    """Tracks per tracker and sequence of a run, read from its track files and timings.csv
-    (``occbench.report.tracks``): what a run without ground truth can say."""
-    import csv
-
-    from occbench.io.mot import read_mot
-    from occbench.report.tracks import track_rows, track_stats
-
-    stats: dict[str, dict] = {}
-    for folder in sorted(p for p in (run_dir / "tracks").iterdir() if p.is_dir()):
-        for path in sorted(folder.glob("*.txt")):
-            stats.setdefault(folder.name, {})[path.stem] = track_stats(read_mot(path).ids)
-    timings = run_dir / "timings.csv"
-    rows = list(csv.DictReader(timings.open())) if timings.is_file() else []
-    return track_rows(stats, rows)
 
 
 if __name__ == "__main__":

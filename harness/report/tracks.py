@@ -5,6 +5,7 @@ distribution of their lengths and the frames per second (summary.md, the printed
 from __future__ import annotations
 
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -64,3 +65,23 @@ def tracks_markdown(rows) -> list[str]:
 def tracks_text(rows) -> str:
     """The printed table of a run without ground truth."""
     return rows.to_string(index=False, float_format=lambda v: f"{v:g}") + "\n"
+
+
+def counted(run_dir: Path, unscored: bool = False):
+    """``track_rows`` of a run folder, read from its track files and timings.csv: what a run
+    without ground truth can say. ``unscored``: only the sequences the run had no ground
+    truth for (no ``gt/<sequence>/gt/gt.txt``), as summary.md counts them."""
+    import csv
+
+    from occbench.io.mot import read_mot
+
+    stats: dict[str, dict] = {}
+    folders = (run_dir / "tracks").iterdir() if (run_dir / "tracks").is_dir() else []
+    for folder in sorted(p for p in folders if p.is_dir()):
+        for path in sorted(folder.glob("*.txt")):
+            if unscored and (run_dir / "gt" / path.stem / "gt" / "gt.txt").is_file():
+                continue
+            stats.setdefault(folder.name, {})[path.stem] = track_stats(read_mot(path).ids)
+    timings = run_dir / "timings.csv"
+    rows = list(csv.DictReader(timings.open())) if timings.is_file() else []
+    return track_rows(stats, rows)

@@ -49,11 +49,13 @@ def segments(frames: np.ndarray, count: np.ndarray) -> list[tuple[int, int, int]
     return out
 
 
-def timeline(sequence: str, counts: Mapping[str, FrameCounts]) -> dict[str, Any]:
+def timeline(sequence: str, counts: Mapping[str, FrameCounts],
+             video: bool = False) -> dict[str, Any]:
     """Each tracker's misses, false positives and identity switches over the frames of one
-    sequence (``FrameCounts``: the metrics' own matching); a mark's ``frame`` is what a click
-    seeks the video to. Runs of equal counts are one bar (``segments``), to keep the page
-    small."""
+    sequence (``FrameCounts``: the metrics' own matching), one row per tracker, a tracker
+    without errors too; with ``video``, a click on a mark seeks the sequence's video to its
+    ``frame`` (the title says so only then). Runs of equal counts are one bar
+    (``segments``), to keep the page small."""
     import altair as alt
 
     rows = []
@@ -69,7 +71,8 @@ def timeline(sequence: str, counts: Mapping[str, FrameCounts]) -> dict[str, Any]
     chart = alt.Chart(data).mark_rect(cursor="pointer").encode(
         x=alt.X("frame:Q", title="frame", scale=alt.Scale(domain=[first, last], nice=False)),
         x2="end:Q",
-        y=alt.Y("tracker:N", title=None, sort=list(counts)),
+        y=alt.Y("tracker:N", title=None, sort=list(counts),
+                scale=alt.Scale(domain=list(counts))),
         yOffset=alt.YOffset("kind:N", sort=kinds),
         color=alt.Color("kind:N", title="error", sort=kinds, scale=alt.Scale(
             domain=kinds, range=[k[2] for k in KINDS]), legend=alt.Legend(orient="top")),
@@ -77,7 +80,8 @@ def timeline(sequence: str, counts: Mapping[str, FrameCounts]) -> dict[str, Any]
                  alt.Tooltip("frame:Q", title="from frame"), alt.Tooltip("last:Q", title="to"),
                  alt.Tooltip("count:Q", title="per frame")],
     ).properties(width=WIDTH, height=alt.Step(9),
-                 title=f"{sequence}: errors per frame (click to seek the video)")
+                 title=f"{sequence}: errors per frame"
+                 + (" (click to seek the video)" if video else ""))
     return _spec(chart)
 
 

@@ -23,6 +23,7 @@ from occbench.metrics.timeline import FrameCounts
 from occbench.report.html import charts
 from occbench.report.html.page import Page, esc, table_html
 from occbench.report.paired import NOT_DISTINGUISHABLE, by_pair, cell
+from occbench.report.tracks import EXPLAINED, counted
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +118,7 @@ def write_run_report(run_dir: str | Path, frames: Mapping[str, Mapping[str, Fram
     counts = _order(read_frame_counts(run_dir) if frames is None else frames, metrics)
     page = Page(f"occbench run {run_dir.name}" + (f": {title}" if title else ""))
     page.text(f"Run folder: {run_dir.resolve()}")
-    _tables(page, metrics)
+    _tables(page, metrics, counted(run_dir, unscored=True))
     diffs = list(paired) if paired is not None else all_pairs(counts)
     if diffs:
         _paired(page, diffs)
@@ -133,13 +134,23 @@ def write_run_report(run_dir: str | Path, frames: Mapping[str, Mapping[str, Fram
     return page.write(run_dir / "report.html")
 
 
-def _tables(page: Page, metrics: pd.DataFrame) -> None:
+def _tables(page: Page, metrics: pd.DataFrame, tracks: pd.DataFrame) -> None:
+    """The metrics of the scored sequences, then the tracks counted on those without ground
+    truth (``occbench.report.tracks``, summary.md's table)."""
+    page.section("tables", "Metrics" if not metrics.empty or tracks.empty else "Tracks")
+    if metrics.empty and tracks.empty:
+        page.text("No sequence was scored (no ground truth, or the run failed first).")
+    if not metrics.empty:
+        _metric_tables(page, metrics)
+    if not tracks.empty:
+        page.add("<h3>Tracks (sequences without ground truth: counted, not scored)</h3>")
+        page.add(table_html(tracks))
+        page.text(EXPLAINED)
+
+
+def _metric_tables(page: Page, metrics: pd.DataFrame) -> None:
     from occbench.report.tables import direction
 
-    page.section("tables", "Metrics")
-    if metrics.empty:
-        page.text("No sequence was scored (no ground truth, or the run failed first).")
-        return
     combined = metrics[metrics["sequence"] == COMBINED]
     cols = ["tracker", *[c for c in SHOWN if c in metrics.columns]]
     page.add("<h3>COMBINED (click a header to sort; best per column marked)</h3>")
@@ -165,15 +176,21 @@ def _paired(page: Page, diffs: Sequence[PairedDifference]) -> None:
 
 def _timelines(page: Page, counts: Mapping[str, Mapping[str, FrameCounts]],
                clips: Mapping[str, tuple[str, int, float]], order: Sequence[str]) -> None:
+    """Each sequence's video (``occbench report`` renders it) and, when it was scored, its
+    error timeline, one row per tracker (a tracker without errors too)."""
     scored = {s for c in counts.values() for s in c}
-    sequences = [s for s in dict.fromkeys([*order, *sorted(scored)]) if s in scored]
+    sequences = [s for s in dict.fromkeys([*order, *sorted(scored), *clips])
+                 if s in scored or s in clips]
     sequences.sort(key=lambda s: s not in clips)  # those with a video first
     if not sequences:
         return
-    page.section("timeline", "Errors over time")
-    page.text("Misses, false positives and identity switches per frame, from the same "
-              "matching as the metrics. Click a bar to show its first frame in the video "
-              "(rendered by: occbench report RUN --sequence NAME).")
+    if scored:
+        page.section("timeline", "Errors over time")
+        page.text("Misses, false positives and identity switches per frame, from the same "
+                  "matching as the metrics. Click a bar to show its first frame in the video "
+                  "(rendered by: occbench report RUN --sequence NAME).")
+    else:
+        page.section("video", "Video")
     for seq in sequences:
         page.add(f'<h3 id="seq-{esc(seq)}">{esc(seq)}</h3>')
         if seq in clips:
@@ -181,8 +198,12 @@ def _timelines(page: Page, counts: Mapping[str, Mapping[str, FrameCounts]],
             page.video(src, seq, first, fps)
         else:
             page.text(f"No video of {seq} yet: occbench report RUN --sequence {seq}")
-        page.chart(charts.timeline(seq, {t: c[seq] for t, c in counts.items() if seq in c}),
-                   sequence=seq if seq in clips else None)
+        if seq in scored:
+            page.chart(charts.timeline(seq, {t: c[seq] for t, c in counts.items() if seq in c},
+                                       video=seq in clips),
+                       sequence=seq if seq in clips else None)
+        else:
+            page.text(f"{seq} has no ground truth: no errors to show.")
 
 
 def _pictures(page: Page, run_dir: Path) -> None:
