@@ -97,8 +97,9 @@ def _exit_failed(message: str) -> None:
 
 class PaperTable(Callback):
     """At the end of a job whose config has a ``paper_table`` node (``+experiment=...``),
-    write ``paper_table.md`` / ``.csv`` into the job's output directory and log the table.
-    ``occbench.report.paper_tables`` documents the node."""
+    write ``paper_table.md`` / ``.csv`` into the job's output directory and, in a single
+    run, print the table on stdout (a result; where it was written is a log line on
+    stderr). ``occbench.report.paper_tables`` documents the node."""
 
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
         from omegaconf import OmegaConf
@@ -114,7 +115,6 @@ class PaperTable(Callback):
         except Exception:  # the job's own results stay valid without the table
             log.exception("paper table for %s failed", out_dir)
             return
-        if str(config.hydra.mode) == "RunMode.MULTIRUN":  # the sweep prints its own table
-            log.info("paper table written to %s", path)
-        else:
-            log.info("paper table written to %s\n%s", path, path.read_text())
+        log.info("paper table written to %s", path)
+        if str(config.hydra.mode) != "RunMode.MULTIRUN":  # the sweep prints its own table
+            print(path.read_text(), end="", flush=True)

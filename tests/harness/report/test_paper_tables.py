@@ -105,4 +105,7 @@ def test_experiment_run_writes_paper_table_with_our_rows(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     md = (out / "paper_table.md").read_text()
     assert "| ours: baseline (dataset mot, noisy_gt detections) | 2 | 100 |" in md
+    # issue 39 item 7: a result goes to stdout, the log line saying where to stderr
+    assert "| ours: baseline (dataset mot, noisy_gt detections) | 2 | 100 |" in proc.stdout
+    assert "| ours: baseline" not in proc.stderr and "paper table written to" in proc.stderr
     assert "reported: Stochastic graph evolution framework [22]" in md
