@@ -77,7 +77,7 @@ def run_app(cfg: DictConfig) -> float:
 
     from occbench.errors import RunError
     from occbench.pipeline.experiment import run_experiment
-    from occbench.progress import progress_factory
+    from occbench.progress import bars_wanted, progress_factory
 
     hc = HydraConfig.get()
     out_dir = Path(hc.runtime.output_dir)
@@ -85,8 +85,9 @@ def run_app(cfg: DictConfig) -> float:
     objective = cfg.get("objective") or {}
     multirun = hc.mode == RunMode.MULTIRUN
     progress = progress_factory(bool(cfg.get("progress", True)), multirun)
+    bars = bars_wanted(bool(cfg.get("progress", True)), multirun)  # else log lines, or nothing
     try:
-        with logging_redirect_tqdm() if progress is not None else contextlib.nullcontext():
+        with logging_redirect_tqdm() if bars else contextlib.nullcontext():
             result = run_experiment(cfg, out_dir, tracker_name=choice, progress=progress)
         value = result.objective(objective.get("tracker"), objective.get("metric") or "IDF1")
     except RunError as err:

@@ -117,11 +117,18 @@ class WarmUp:
                 todo[name] = tracker
         if not todo:
             return []
-        said = (f"warming up {', '.join(todo)} before timing (the first run after an "
-                "install compiles their kernels: half a minute to a few minutes; later runs "
-                "load them in about a second)")
+        compiling = threading.Event()
+
+        def said() -> str:  # "compiles" only when numba has compiled (not loaded) a kernel
+            if compiling.is_set():
+                return (f"warming up {', '.join(todo)} before timing: compiling their kernels "
+                        "(the first run after an install: half a minute to a few minutes; "
+                        "later runs load them in about a second)")
+            return f"warming up {', '.join(todo)} before timing"
+
         bar = (progress or no_progress)(total=PASSES * len(todo), desc="warm-up", unit="pass")
-        with heartbeat(announce, said, self.first, self.every), _closing(bar):
+        with (heartbeat(announce, said, self.first, self.every), _closing(bar),
+              _compiles(compiling)):
             for name, tracker in todo.items():
                 try:
                     warm_up(tracker, bar)
@@ -141,10 +148,28 @@ def _closing(bar: Progress):
 
 
 @contextmanager
-def heartbeat(announce: Callable[[str], None] | None, said: str, first: float, every: float):
-    """Within: ``announce(said)`` once the block has run ``first`` seconds, then a line
-    "still ..." every ``every`` seconds (from a daemon thread) until it ends; nothing said
-    for a block that ends sooner."""
+def _compiles(seen: threading.Event):
+    """Within: ``seen`` is set when numba compiles a kernel (its ``numba:compile`` event; a
+    kernel loaded from the cache fires none)."""
+    from numba.core import event  # the trackers' kernels import numba anyway
+
+    class Listener(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            seen.set()
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    with event.install_listener("numba:compile", Listener()):
+        yield
+
+
+@contextmanager
+def heartbeat(announce: Callable[[str], None] | None, said: str | Callable[[], str],
+              first: float, every: float):
+    """Within: ``announce(said)`` (``said()`` when callable, asked then) once the block has
+    run ``first`` seconds, then a line "still ..." every ``every`` seconds (from a daemon
+    thread) until it ends; nothing said for a block that ends sooner."""
     if announce is None:
         yield
         return
@@ -154,7 +179,7 @@ def heartbeat(announce: Callable[[str], None] | None, said: str, first: float, e
     def speak() -> None:
         if done.wait(first):
             return
-        announce(said)
+        announce(said() if callable(said) else said)
         while not done.wait(every):
             announce(f"still warming up ({time.monotonic() - start:.0f} s)")
 

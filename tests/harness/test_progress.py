@@ -52,10 +52,10 @@ def test_a_bar_on_a_terminal_nothing_elsewhere(case, tmp_path, monkeypatch):
     shown = terminal.getvalue()
     assert desc in shown and total in shown and "\r" in shown
 
-    log = io.StringIO()  # a log file or a pipe: no factory, and nothing on the stream
+    log = io.StringIO()  # a log file or a pipe: log lines, none for a step this short
     monkeypatch.setattr("sys.stderr", log)
     factory = progress_factory()
-    assert factory is None
+    assert factory is not None and factory is not progress_factory(stream=terminal)
     run(factory, *args)
     assert log.getvalue() == ""
 
@@ -63,3 +63,41 @@ def test_a_bar_on_a_terminal_nothing_elsewhere(case, tmp_path, monkeypatch):
 def test_no_bar_when_switched_off_or_in_a_multirun_job():
     assert progress_factory(enabled=False, stream=FakeTerminal()) is None
     assert progress_factory(multirun=True, stream=FakeTerminal()) is None
+
+
+def test_a_long_step_without_a_terminal_says_where_it_is():
+    """issue 39 item 8: +experiment=pbm_table1 printed nothing for 92 s without a terminal.
+    A step that logs nothing for EVERY seconds gets one line with each open step's count;
+    the lines stop when the step ends."""
+    import logging
+    import threading
+
+    from occbench.progress import LogProgress
+
+    heard = threading.Event()
+    lines: list[str] = []
+
+    class Ear(logging.Handler):
+        def emit(self, record):
+            if "still working" in record.getMessage():
+                lines.append(record.getMessage())
+                heard.set()
+
+    ear = Ear()
+    logger = logging.getLogger("occbench.progress")
+    level = logger.level
+    logger.addHandler(ear)
+    logger.setLevel(logging.INFO)
+    try:
+        progress = LogProgress(every=0.05)
+        outer = progress.bar(total=8, desc="sequences", unit="seq")
+        inner = progress.bar(total=150, desc="crossing")
+        inner.update(45)
+        assert heard.wait(30)  # a silent step is never silent for long
+        assert "sequences 0/8 seqs, crossing 45/150 frames" in lines[0]
+        inner.close()
+        outer.close()
+        assert progress.stop is None and not progress.bars  # no watcher left running
+    finally:
+        logger.removeHandler(ear)
+        logger.setLevel(level)

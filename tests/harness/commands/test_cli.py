@@ -161,7 +161,8 @@ def test_progress_bars_only_on_a_terminal_and_never_in_a_multirun():
     assert not bars_wanted(True, False, _Stream(False))  # a file or a pipe: no redraws
     assert not bars_wanted(True, True, _Stream(True))  # a sweep job (joblib, Ray, SLURM)
     assert not bars_wanted(False, False, _Stream(True))
-    assert progress_factory(True, False, _Stream(False)) is None
+    assert progress_factory(True, False, _Stream(False)) is not None  # log lines instead
+    assert progress_factory(True, True, _Stream(False)) is None  # a sweep: a line per job
     bar = progress_factory(True, False, _Stream(True))(total=3, desc="s")
     bar.update(1)
     bar.close()

@@ -133,6 +133,36 @@ def test_a_quick_warm_up_says_nothing_and_a_long_one_keeps_saying_so():
     assert len(said) == n  # the heartbeat ended with the warm-up
 
 
+def test_the_warm_up_says_it_compiles_only_when_numba_compiles():
+    """issue 39 item 8: a warm run (kernels loaded from the cache) slower than the
+    announcement's delay, under load, said "the first run after an install compiles"."""
+    import numba
+
+    said: list[str] = []
+
+    class Loads(_Counting):  # slow, compiles nothing
+        def update(self, frame, detections, foreground=None):
+            time.sleep(0.01)
+            return []
+
+    WarmUp(first=0.0, every=600.0)({"loads": Loads}, said.append)
+    assert said and "compil" not in said[0]
+
+    @numba.njit(cache=False)
+    def fresh(x):  # compiled on its first call: numba's compile event
+        return x + 1
+
+    class Compiles(_Counting):
+        def update(self, frame, detections, foreground=None):
+            fresh(1)
+            time.sleep(0.01)
+            return []
+
+    said.clear()
+    WarmUp(first=0.05, every=600.0)({"compiles": Compiles}, said.append)
+    assert said and "compiling their kernels" in said[0]
+
+
 def test_a_tracker_failing_in_the_warm_up_is_left_to_the_run():
     class Failing(_Counting):
         def update(self, frame, detections, foreground=None):
