@@ -2,7 +2,8 @@
 
 PBM (Section 5) names it "the connected-component mean-shift with particle filter tracker
 (CCMSPF), representative of particle filters [14,17]"; the text we have gives no reference
-list and no equation, so this is our reading of the name, built from the standard parts:
+list and no equation, so this is our reading of the name (``reading:ccmspf``), built
+from the standard parts:
 
 * a particle filter over the box centre and scale (Perez et al. 2002; Nummiaro et al. 2003),
   seeded, with a random-walk prediction x_t = x_{t-1} + e (centre in box sizes, log scale);
@@ -28,15 +29,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from occbench.trackers.comparators.appearance import (
-    ColourTarget,
-    ColourTrackerBase,
-    Loss,
-    Restart,
-    clip_box,
-)
+from occbench.trackers.comparators.appearance import ColourTarget, Loss, Restart, clip_box
 from occbench.trackers.comparators.meanshift import mean_shift, similarity
-from occbench.trackers.comparators.particle_filter import systematic_resample
+from occbench.trackers.comparators.particle_filter import ParticleTrackerBase
 from occbench.trackers.records import Detections, Track
 
 
@@ -71,7 +66,7 @@ def component_dice(boxes: np.ndarray, labels: np.ndarray, areas: np.ndarray) -> 
     return out
 
 
-class ConnectedComponentMeanShiftPF(ColourTrackerBase):
+class ConnectedComponentMeanShiftPF(ParticleTrackerBase):
     """CCMSPF: particles moved by mean shift, weighted by colour and connected components.
 
     Args:
@@ -94,29 +89,21 @@ class ConnectedComponentMeanShiftPF(ColourTrackerBase):
                  component_lambda: float = 10.0, seed: int = 0,
                  birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
-        if particles < 1:
-            raise ValueError(f"particles must be >= 1, got {particles}")
         if mean_shift_iterations < 0:
             raise ValueError(f"mean_shift_iterations must be >= 0, got {mean_shift_iterations}")
-        for name, v in (("position_noise", position_noise), ("scale_noise", scale_noise),
-                        ("search", search), ("likelihood_lambda", likelihood_lambda),
-                        ("component_lambda", component_lambda)):
-            if v < 0:
-                raise ValueError(f"{name} must be >= 0, got {v}")
-        self.particles = particles
         self.position_noise = position_noise
         self.scale_noise = scale_noise
         self.mean_shift_iterations = mean_shift_iterations
         self.search = search
         self.likelihood_lambda = likelihood_lambda
         self.component_lambda = component_lambda
-        self.seed = seed
-        super().__init__(birth_iou, loss, restart, max_targets)
+        super().__init__(particles, seed, birth_iou, loss, restart, max_targets,
+                         position_noise=position_noise, scale_noise=scale_noise, search=search,
+                         likelihood_lambda=likelihood_lambda,
+                         component_lambda=component_lambda)
 
     def reset(self) -> None:
         super().reset()
-        self._rng = np.random.default_rng(self.seed)
-        self._sets: dict[int, np.ndarray] = {}  # id -> (N, 3): centre x, y, log scale
         self._components: tuple[np.ndarray, np.ndarray] | None = None
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
@@ -139,22 +126,13 @@ class ConnectedComponentMeanShiftPF(ColourTrackerBase):
             boxes, *self._components)
         weight = np.exp(-self.likelihood_lambda * (1.0 - rho)
                         - self.component_lambda * (1.0 - cue))  # p(z|x), two cues
-        weight /= weight.sum()
-        mean = weight @ s  # the posterior mean
-        sc = np.exp(mean[2])
-        target.box = np.array([mean[0] - w * sc / 2, mean[1] - h * sc / 2, w * sc, h * sc])
-        s = s[systematic_resample(weight, self._rng)]
-        s[:, 2] -= mean[2]  # scales relative to the new box
-        self._sets[target.id] = s
+        self._estimate(target, s, weight / weight.sum(), scale=2)
         return similarity(target.q, bins, target.box)
 
     def update(self, frame: np.ndarray | None, detections: Detections,
                foreground: np.ndarray | None = None) -> list[Track]:
         self._components = components(foreground)
-        tracks = super().update(frame, detections, foreground)
-        live = {t.id for t in self._targets}
-        self._sets = {k: v for k, v in self._sets.items() if k in live}
-        return tracks
+        return super().update(frame, detections, foreground)
 
     update.__doc__ = ("Advance one frame (``ColourTrackerBase.update``); ``foreground`` is "
                       "the (H, W) bool mask whose connected components weight the particles.")

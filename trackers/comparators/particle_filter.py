@@ -1,4 +1,5 @@
-"""Colour particle filter (Perez, Hue, Vermaak and Gangnet 2002), PBM's CCMSPF-like comparator.
+"""Colour particle filter (Perez, Hue, Vermaak and Gangnet 2002): Reta Table 2's "basic particle filter"
+row and a plain particle filter beside PBM's CCMSPF (``ccmspf``), with the particle sets they share.
 
 Each target carries N particles over its box centre, velocity and scale. Per frame (the
 bootstrap filter): every particle moves by second-order (constant-velocity) dynamics with
@@ -31,7 +32,58 @@ def systematic_resample(weight: np.ndarray, rng: np.random.Generator) -> np.ndar
     return np.minimum(np.searchsorted(np.cumsum(weight), u), n - 1)
 
 
-class ColourParticleFilter(ColourTrackerBase):
+class ParticleTrackerBase(ColourTrackerBase):
+    """A colour comparator with one seeded particle set per target (``_sets``, id -> (N, d)),
+    dropped when its target ends; subclasses implement ``_follow``.
+
+    Args:
+        particles: N, particles per target.
+        seed: seed of the random walk and the resampling (restarted by ``reset``).
+        birth_iou, loss, restart, max_targets: life cycle (``ColourTrackerBase``).
+        non_negative: the subclass's parameters that must be >= 0, by name.
+    """
+
+    def __init__(self, particles: int, seed: int, birth_iou: float, loss: Loss | None,
+                 restart: Restart | None, max_targets: int | None,
+                 **non_negative: float) -> None:
+        if particles < 1:
+            raise ValueError(f"particles must be >= 1, got {particles}")
+        for name, v in non_negative.items():
+            if v < 0:
+                raise ValueError(f"{name} must be >= 0, got {v}")
+        self.particles = particles
+        self.seed = seed
+        super().__init__(birth_iou, loss, restart, max_targets)
+
+    def reset(self) -> None:
+        super().reset()
+        self._rng = np.random.default_rng(self.seed)
+        self._sets: dict[int, np.ndarray] = {}
+
+    def _estimate(self, target: ColourTarget, s: np.ndarray, weight: np.ndarray,
+                  scale: int) -> None:
+        """The posterior mean of particles ``s`` (N, d) under normalised ``weight`` becomes
+        ``target.box`` (column 0-1 the centre, column ``scale`` the log scale against the
+        current box); then systematic resampling, scales made relative to the new box."""
+        mean = weight @ s  # the posterior mean
+        w, h = target.box[2:]
+        sc = np.exp(mean[scale])
+        target.box = np.array([mean[0] - w * sc / 2, mean[1] - h * sc / 2, w * sc, h * sc])
+        s = s[systematic_resample(weight, self._rng)]
+        s[:, scale] -= mean[scale]  # scales relative to the new box
+        self._sets[target.id] = s
+
+    def update(self, frame: np.ndarray | None, detections: Detections,
+               foreground: np.ndarray | None = None) -> list[Track]:
+        tracks = super().update(frame, detections, foreground)
+        live = {t.id for t in self._targets}
+        self._sets = {k: v for k, v in self._sets.items() if k in live}
+        return tracks
+
+    update.__doc__ = ColourTrackerBase.update.__doc__
+
+
+class ColourParticleFilter(ParticleTrackerBase):
     """Bootstrap particle filter with a colour likelihood, one particle set per target.
 
     Args:
@@ -50,24 +102,12 @@ class ColourParticleFilter(ColourTrackerBase):
                  scale_noise: float = 0.0, likelihood_lambda: float = 20.0, seed: int = 0,
                  birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
-        if particles < 1:
-            raise ValueError(f"particles must be >= 1, got {particles}")
-        for name, v in (("position_noise", position_noise), ("scale_noise", scale_noise),
-                        ("likelihood_lambda", likelihood_lambda)):
-            if v < 0:
-                raise ValueError(f"{name} must be >= 0, got {v}")
-        self.particles = particles
         self.position_noise = position_noise
         self.scale_noise = scale_noise
         self.likelihood_lambda = likelihood_lambda
-        self.seed = seed
-        self._sets: dict[int, np.ndarray] = {}
-        super().__init__(birth_iou, loss, restart, max_targets)
-
-    def reset(self) -> None:
-        super().reset()
-        self._rng = np.random.default_rng(self.seed)
-        self._sets = {}
+        super().__init__(particles, seed, birth_iou, loss, restart, max_targets,
+                         position_noise=position_noise, scale_noise=scale_noise,
+                         likelihood_lambda=likelihood_lambda)
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         x, y, w, h = target.box
@@ -85,20 +125,5 @@ class ColourParticleFilter(ColourTrackerBase):
                                  w * scale, h * scale])
         rho = np.array([np.sqrt(target.q * colour_model(bins, b)).sum() for b in boxes])
         weight = np.exp(-self.likelihood_lambda * (1.0 - rho))  # p(z|x) = exp(-lambda d^2)
-        weight /= weight.sum()
-        mean = weight @ s  # the posterior mean
-        sc = np.exp(mean[4])
-        target.box = np.array([mean[0] - w * sc / 2, mean[1] - h * sc / 2, w * sc, h * sc])
-        s = s[systematic_resample(weight, self._rng)]
-        s[:, 4] -= mean[4]  # scales relative to the new box
-        self._sets[target.id] = s
+        self._estimate(target, s, weight / weight.sum(), scale=4)
         return float(np.sqrt(target.q * colour_model(bins, target.box)).sum())
-
-    def update(self, frame: np.ndarray | None, detections: Detections,
-               foreground: np.ndarray | None = None) -> list[Track]:
-        tracks = super().update(frame, detections, foreground)
-        live = {t.id for t in self._targets}
-        self._sets = {k: v for k, v in self._sets.items() if k in live}
-        return tracks
-
-    update.__doc__ = ColourTrackerBase.update.__doc__
