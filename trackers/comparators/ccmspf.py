@@ -86,7 +86,7 @@ class ConnectedComponentMeanShiftPF(ParticleTrackerBase):
     def __init__(self, particles: int = 30, position_noise: float = 0.1,
                  scale_noise: float = 0.05, mean_shift_iterations: int = 2,
                  search: float = 0.5, likelihood_lambda: float = 20.0,
-                 component_lambda: float = 10.0, seed: int = 0,
+                 component_lambda: float = 1.0, seed: int = 0,
                  birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
         if mean_shift_iterations < 0:

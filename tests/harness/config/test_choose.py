@@ -41,6 +41,22 @@ def test_reta_table2_with_reta_paper_builds_the_active_basis_search():
 def test_reta_table2_runs_its_particle_filter_row_beside_the_papers_trackers():
     cfg = compose_config(["+experiment=reta_table2"])
     assert list(cfg.tracker) == ["baseline", "reta", "reta_paper", "pbm", "pbm_paper",
-                                 "particle_filter"]
+                                 "particle_filter", "meanshift_scale", "ccmspf"]
+    assert cfg.tracker.ccmspf._target_.endswith("ConnectedComponentMeanShiftPF")
+    assert cfg.tracker.meanshift_scale._target_.endswith("ScaleAdaptiveMeanShift")
     assert cfg.tracker.particle_filter._target_ == "occbench.trackers.comparators.ColourParticleFilter"
     assert "Basic particle filter [22]" in cfg.paper_table.reported.rows
+
+
+def test_pbm_table1_runs_the_papers_comparators_as_single_target_trackers():
+    cfg = compose_config(["+experiment=pbm_table1"])
+    for name in ("meanshift", "meanshift_scale", "ccmspf", "particle_filter"):
+        assert cfg.tracker[name].max_targets == 1, name
+    # the rules chosen on the choosing sets (docs/adaptations.md, "PBM's comparators")
+    rules = {name: (cfg.tracker[name].loss.threshold, cfg.tracker[name].loss.frames,
+                    cfg.tracker[name].restart.min_similarity)
+             for name in ("meanshift_scale", "ccmspf")}
+    assert rules == {"meanshift_scale": (0.9, 11, 0.9), "ccmspf": (0.9, 5, 0.9)}
+    trackers = instantiate(cfg.tracker.ccmspf), instantiate(cfg.tracker.meanshift_scale)
+    assert [type(t).__name__ for t in trackers] == ["ConnectedComponentMeanShiftPF",
+                                                    "ScaleAdaptiveMeanShift"]

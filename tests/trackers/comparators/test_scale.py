@@ -75,7 +75,8 @@ def test_smoothing_weight_zero_is_fixed_size_mean_shift():
 
 def test_ccmspf_sizes_its_box_on_the_connected_component():
     frames, boxes, masks = _scene(12, 24)
-    with_components = _final_box(ConnectedComponentMeanShiftPF(), frames, boxes, masks)
+    with_components = _final_box(ConnectedComponentMeanShiftPF(component_lambda=10.0), frames,
+                                  boxes, masks)
     colour_alone = _final_box(ConnectedComponentMeanShiftPF(component_lambda=0.0), frames, boxes,
                               masks)
     assert _iou(with_components, boxes[-1]) > 0.6
