@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from hydra.utils import instantiate
 
-from occbench.config.build import compose_config
+from occbench.config.build import build_tracker, compose_config
 from occbench.config.choose import choose
 
 ACTIVE_BASIS = "occbench.trackers.frontend.shape_search.ActiveBasisDetector"
@@ -57,6 +57,6 @@ def test_pbm_table1_runs_the_papers_comparators_as_single_target_trackers():
                     cfg.tracker[name].restart.min_similarity)
              for name in ("meanshift_scale", "ccmspf")}
     assert rules == {"meanshift_scale": (0.9, 11, 0.9), "ccmspf": (0.9, 5, 0.9)}
-    trackers = instantiate(cfg.tracker.ccmspf), instantiate(cfg.tracker.meanshift_scale)
+    trackers = [build_tracker(n, cfg.tracker[n]) for n in ("ccmspf", "meanshift_scale")]
     assert [type(t).__name__ for t in trackers] == ["ConnectedComponentMeanShiftPF",
                                                     "ScaleAdaptiveMeanShift"]
