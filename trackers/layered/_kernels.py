@@ -987,9 +987,9 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
 
     Lone growth (adaptation): a region larger only by size (one head by ``grown_heads``,
     which may count more than ``heads_in_region``: ``candidates.HeldDetections``) that
-    holds target t and no other ``present`` target (both by ``search_overlap`` of their boxes) is t
-    itself, grown (entering through a border or a doorway, coming closer), not a merge:
-    the pair is unoccluded (kind 0). ``present`` all False: never.
+    holds target t and no other ``present`` target (both by ``search_overlap`` of their
+    boxes) is t itself, grown (entering through a border or a doorway, coming closer), not
+    a merge: the pair is unoccluded (kind 0). ``present`` all False: never.
 
     Args:
         boxes, regions: (N, 4) xywh candidate boxes and regions. heads: (N, 3) heads.
