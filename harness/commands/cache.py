@@ -82,11 +82,10 @@ def table(infos: list[EntryInfo], now: float) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
     if args.older_than is not None and args.older_than < 0:
-        print(f"occbench: cache --older-than must be >= 0, got {args.older_than}",
-              file=sys.stderr)
-        return 2
+        parser.error(f"--older-than must be >= 0, got {args.older_than}")
     root = cache_root()
     if root is None:
         print(f"the front-end cache is off ({ENV}=off)")

@@ -22,10 +22,12 @@ server     ``occbench.commands.server.main``    argparse: ``status | stop | star
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import signal
 import sys
 from collections.abc import Callable, Sequence
+from typing import NoReturn
 
 PROG = "occbench"
 
@@ -161,9 +163,20 @@ def run(argv: Sequence[str]) -> int:
         return EXIT_SIGTERM
 
 
+def usage_error(parser: argparse.ArgumentParser, message: str) -> NoReturn:
+    """Every command's usage mistake (argparse's ``error``, Hydra's parser included): the
+    usage line, then one line ``occbench: COMMAND: message`` on stderr, exit status 2 (1 is
+    a refused input)."""
+    parser.print_usage(sys.stderr)
+    command = parser.prog.removeprefix(PROG).strip()
+    parser.exit(2, f"{PROG}: {command + ': ' if command else ''}{message}\n")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     from occbench.commands.mistakes import verbose_requested
+
+    argparse.ArgumentParser.error = usage_error  # one form for every command's parser
 
     verbose, args = verbose_requested(list(sys.argv[1:] if argv is None else argv))
     if args and args[0] in ("-h", "--help", "help"):

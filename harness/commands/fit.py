@@ -18,10 +18,15 @@ COMMANDS = {
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
-        lines = [f"  {name:<13} {what}" for name, what in COMMANDS.items()]
-        print("usage: occbench fit {" + ",".join(COMMANDS) + "} [options]\n" + "\n".join(lines))
-        return 0 if argv and argv[0] in ("-h", "--help") else 2
+    usage = "usage: occbench fit {" + ",".join(COMMANDS) + "} [options]"
+    if argv and argv[0] in ("-h", "--help"):
+        print(usage + "\n" + "\n".join(f"  {name:<13} {what}" for name, what in COMMANDS.items()))
+        return 0
+    if not argv or argv[0] not in COMMANDS:  # a usage mistake: as argparse's (cli.usage_error)
+        what = f"unknown model {argv[0]!r}" if argv else "which model to fit is required"
+        print(f"{usage}\noccbench: fit: {what} (choose from {', '.join(COMMANDS)})",
+              file=sys.stderr)
+        return 2
     module = importlib.import_module(f"occbench.fit.{argv[0]}")
     return int(module.main(argv[1:]) or 0)
 

@@ -166,3 +166,30 @@ def test_progress_bars_only_on_a_terminal_and_never_in_a_multirun():
     bar = progress_factory(True, False, _Stream(True))(total=3, desc="s")
     bar.update(1)
     bar.close()
+
+
+@pytest.mark.parametrize("argv, prefix", [
+    (["--bogus"], "occbench: unrecognized arguments: --bogus"),
+    (["run", "--bogus"], "occbench: unrecognized arguments: --bogus"),
+    (["detect", "--bogus"], "occbench: detect: unrecognized arguments: --bogus"),
+    (["eval"], "occbench: eval: the following arguments are required"),
+    (["sweep"], "occbench: sweep: the following arguments are required"),
+    (["report"], "occbench: report: the following arguments are required"),
+    (["bench", "--bogus"], "occbench: bench: unrecognized arguments"),
+    (["cache", "--older-than", "-1"], "occbench: cache: --older-than must be >= 0"),
+    (["server", "bogus"], "occbench: server: argument action: invalid choice"),
+    (["fit"], "occbench: fit: which model to fit is required"),
+    (["fit", "bogus"], "occbench: fit: unknown model 'bogus'"),
+    (["fit", "heads", "--bogus"], "occbench: fit heads: "),
+])
+def test_every_usage_mistake_is_the_usage_line_and_one_occbench_line_exit_2(argv, prefix, capsys):
+    """1 is a refused input, 2 a usage mistake: the usage line, then ``occbench: ...``
+    (argparse's own form was ``occbench eval: error: ...``)."""
+    try:
+        status = cli.main(argv)
+    except SystemExit as stop:
+        status = stop.code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2
+    assert err[0].startswith("usage: occbench") and err[-1].startswith(prefix)
+    assert not any("error:" in line or "Traceback" in line for line in err)
