@@ -3,7 +3,8 @@
 GT is a gt file or a folder, either in MOTChallenge layout (``<seq>/gt/gt.txt``) or flat
 (``<seq>.txt``); a nested folder with a ``seqmap.txt`` (a run folder's ``gt/``) is scored
 on the sequences it lists only. RESULTS is a result file or a folder of ``<seq>.txt`` files. A sequence
-without a result file is scored as an empty result (a warning is logged). The table (one
+without a result file is scored as an empty result (a warning is logged); a folder with no
+result file but tracker folders that hold some (a run's ``tracks/``) is refused, naming them. The table (one
 row per sequence and a ``COMBINED`` row; ratios as fractions with 3 decimals, as the app
 prints them) is printed, and written as CSV with ``--csv`` (6 decimals). Exit status 0 on
 success, 1 on a path or file it refuses (one line ``occbench: ...`` naming it).
@@ -87,7 +88,8 @@ def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
 
     Raises:
         FileNotFoundError: ``gt`` or ``results`` does not exist.
-        EvaluationInputError: a single result file against several gt sequences.
+        EvaluationInputError: a single result file against several gt sequences, or a
+            folder of tracker folders (a run's tracks/) in place of one of them.
     """
     gt_files = find_gt(gt)
     if not results.exists():
@@ -100,6 +102,13 @@ def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
             )
         ((name, g),) = gt_files.items()
         return {name: (g, results)}
+    if not any((results / f"{name}.txt").is_file() for name in gt_files):
+        holders = sorted(d.name for d in results.iterdir()
+                         if d.is_dir() and any((d / f"{n}.txt").is_file() for n in gt_files))
+        if holders:  # a run's tracks/: one folder per tracker, no result file of its own
+            raise EvaluationInputError(
+                f"{results} holds no result file but one folder per tracker "
+                f"({', '.join(holders)}): give one, e.g. {results / holders[0]}")
     pairs: dict[str, tuple[Path, Path | None]] = {}
     for name, g in gt_files.items():
         r = results / f"{name}.txt"

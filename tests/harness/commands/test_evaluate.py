@@ -305,3 +305,17 @@ def test_cli_scores_only_the_sequences_of_the_seqmap(tud_dirs, tmp_path, capsys,
     (nested / "seqmap.txt").write_text("name\nTUD-Stadtmitte\nTUD-Nowhere\n")
     assert main([str(nested), str(res)]) != 0
     assert "names TUD-Nowhere but there is no" in capsys.readouterr().err
+
+
+def test_cli_refuses_a_folder_of_tracker_folders_naming_them(tud_dirs, tmp_path, capsys):
+    """A run's tracks/ (one folder per tracker) in place of one tracker's folder: every
+    sequence was scored as an empty result, exit 0, a table of zeros (issue 39 item 5)."""
+    nested, _, res = tud_dirs
+    tracks = tmp_path / "run" / "tracks"
+    tracks.mkdir(parents=True)
+    shutil.copytree(res, tracks / "reta")
+    assert main([str(nested), str(tracks)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"occbench: {tracks} holds no result file")
+    assert f"(reta): give one, e.g. {tracks / 'reta'}" in err[0]
+    assert main([str(nested), str(tracks / "reta")]) == 0
