@@ -6,9 +6,12 @@ and no occlusion reasoning: the reference row every occlusion-aware tracker must
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from occbench.trackers.common.assignment import assign
+from occbench.trackers.common.assignment import assign_in_blocks
+from occbench.trackers.common.spatial import DENSE_LIMIT, blocks, meeting_pairs
 from occbench.trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections, Track, TrackState
@@ -76,6 +79,16 @@ class BaselineTracker:
         self._next_id = 1
         self._frame = 0
 
+    def _match(self, predicted: np.ndarray, dets: np.ndarray) -> tuple:
+        """``assign`` over cost 1 - IoU, block by block over the pairs that meet (with
+        ``iou_threshold`` > 0 no other pair is allowed): memory grows with the pairs, not
+        predictions x detections; one block, the whole matrix, in ordinary frames."""
+        limit = DENSE_LIMIT if self.iou_threshold > 0 else math.inf
+        parts = blocks(len(predicted), len(dets), lambda: meeting_pairs(predicted, dets),
+                       limit=limit)
+        return assign_in_blocks(parts, lambda r, c: 1.0 - iou_matrix(predicted[r], dets[c]),
+                                1.0 - self.iou_threshold)
+
     def update(
         self, frame: np.ndarray | None, detections: Detections, foreground: np.ndarray | None = None
     ) -> list[Track]:
@@ -83,8 +96,7 @@ class BaselineTracker:
         self._frame += 1
         dets = detections.boxes[detections.scores >= self.min_score]
         predicted = np.array([t.predict() for t in self._tracks]).reshape(-1, 4)
-        iou = iou_matrix(predicted, dets)
-        matches, lost, new = assign(1.0 - iou, 1.0 - self.iou_threshold)
+        matches, lost, new = self._match(predicted, dets)
         for i, j in matches:
             self._tracks[i].correct(dets[j])
         for i in lost:

@@ -7,6 +7,7 @@ the file's time stamp (not on its import name).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numba
 import numpy as np
@@ -114,3 +115,26 @@ def assign_min_cost(
     rows, cols = linear_sum_assignment(full)
     keep = cols < m
     return _split(allowed, rows[keep], cols[keep])
+
+
+def assign_in_blocks(
+    parts: list[tuple[np.ndarray, np.ndarray]],
+    block_cost: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    max_cost: float,
+    solve: Callable = assign,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``solve`` (``assign`` or ``assign_min_cost``) block by block over ``parts`` (rows,
+    cols) from ``spatial.blocks``, whose allowed pairs never cross a block: the optimum
+    of the whole matrix, without building it. ``block_cost(rows, cols)`` gives a block's
+    dense cost matrix. Returns what ``solve`` returns, in global indices (matches sorted
+    by row, unmatched rows and columns ascending)."""
+    matches, free_rows, free_cols = [np.zeros((0, 2), dtype=np.int64)], [], []
+    for rows, cols in parts:
+        m, fr, fc = solve(block_cost(rows, cols), max_cost)
+        matches.append(np.column_stack([rows[m[:, 0]], cols[m[:, 1]]]))
+        free_rows.append(rows[fr])
+        free_cols.append(cols[fc])
+    out = np.concatenate(matches)
+    out = out[np.argsort(out[:, 0], kind="stable")]
+    return (out, np.sort(np.concatenate(free_rows + [np.zeros(0, np.int64)])),
+            np.sort(np.concatenate(free_cols + [np.zeros(0, np.int64)])))

@@ -126,7 +126,7 @@ def _ellipse_spans(x: int, y: int, w: int, h: int, r0: int, r1: int, c0: int, c1
 def region_overlap_pairs(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray,
                          t: np.ndarray, out: np.ndarray) -> None:
     """Eq. 5, delta = 2 |Sa & Sb| / (|Sa| + |Sb|), of the ellipses inscribed in the xywh
-    boxes a[ia[k]] (N, 4) and b[ib[k]] (M, 4) into out[ia[k], ib[k]] (N, M), clipped to
+    boxes a[ia[k]] (N, 4) and b[ib[k]] (M, 4) into out[k] (K,), clipped to
     [0, 1]: |Sa & Sb| is the share of the t x t grid over a's box (t (S,) positions in
     [0, 1]) lying in both ellipses times |Sa| = pi/4 w h, with the arithmetic of the
     definition (``features.region_similarity``), operation for operation: the same bits."""
@@ -181,7 +181,7 @@ def region_overlap_pairs(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.nd
             delta = 0.0
         elif delta > 1.0:
             delta = 1.0
-        out[i, j] = delta
+        out[k] = delta
 
 
 @numba.njit(cache=True)

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from scipy.sparse import csr_array
 
 from occbench.trackers.three_hypothesis._kernels import blend
 
@@ -78,7 +79,7 @@ class MergedMotion:
 
 def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.ndarray,
                hidden: np.ndarray, pred: np.ndarray, dets: np.ndarray,
-               delta: np.ndarray) -> np.ndarray:
+               delta: csr_array) -> np.ndarray:
     """(K,) share of each matched measurement's region that no predicted region of a hidden
     partner covers: 1 - max_m |S_m & S_d| / |S_d| over the nodes m, in O with the row's node,
     of a person with ``hidden`` True (|S_m & S_d| = delta (|S_m| + |S_d|) / 2, eq. 5).
@@ -88,7 +89,7 @@ def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.n
         pairs: O, (K', 2) node rows; owners: (B,) person of each node.
         hidden: (P,) bool, persons unmatched at t that may be inside a measurement.
         pred: (B, 4) predicted regions; dets: (D, 4) measurements.
-        delta: (B, D) region similarity of ``pred`` and ``dets`` (eq. 5).
+        delta: sparse (B, D) region similarity of ``pred`` and ``dets`` (eq. 5).
     """
     own = np.ones(len(rows))
     if not len(pairs) or not hidden.any():
@@ -105,7 +106,7 @@ def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.n
         if not m:
             continue
         area_d = dets[d, 2] * dets[d, 3]
-        inter = delta[m, d] * (area_n[m] + area_d) / 2
+        inter = delta[m][:, [d]].toarray()[:, 0] * (area_n[m] + area_d) / 2
         own[r] = float(np.clip(1.0 - inter.max() / max(area_d, 1e-9), 0.0, 1.0))
     return own
 

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from occbench.trackers.common.spatial import meeting_pairs
 from occbench.trackers.three_hypothesis._kernels import region_overlap_pairs
 
 
@@ -42,12 +43,20 @@ def region_overlaps(
     a = np.asarray(a, dtype=np.float64).reshape(-1, 4)
     b = np.asarray(b, dtype=np.float64).reshape(-1, 4)
     out = np.zeros((len(a), len(b)))
-    if near is None:
-        near = boxes_meet(a, b)
-    ia, ib = np.nonzero(near)
-    if len(ia) == 0:
-        return out
-    region_overlap_pairs(a, b, ia, ib, _grid(samples), out)
+    ia, ib = meeting_pairs(a, b) if near is None else np.nonzero(near)
+    out[ia, ib] = region_overlap_values(a, b, ia, ib, samples)
+    return out
+
+
+def region_overlap_values(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray,
+                          samples: int = 24) -> np.ndarray:
+    """(K,) ``region_overlaps`` of the K pairs (a[ia[k]], b[ib[k]]) alone, the same bits,
+    without an (N, M) matrix (pairs whose boxes do not meet must not be asked: 0)."""
+    a = np.asarray(a, dtype=np.float64).reshape(-1, 4)
+    b = np.asarray(b, dtype=np.float64).reshape(-1, 4)
+    out = np.zeros(len(ia))
+    if len(ia):
+        region_overlap_pairs(a, b, np.asarray(ia), np.asarray(ib), _grid(samples), out)
     return out
 
 
@@ -66,6 +75,14 @@ def boxes_meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     bx1, by1 = b[:, 0], b[:, 1]
     w = np.minimum(ax1 + a[:, 2:3], bx1 + b[:, 2]) - np.maximum(ax1, bx1)
     h = np.minimum(ay1 + a[:, 3:4], by1 + b[:, 3]) - np.maximum(ay1, by1)
+    return (w > 0) & (h > 0)
+
+
+def boxes_meet_pairs(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
+    """(K,) bool: ``boxes_meet`` of the pairs (a[ia[k]], b[ib[k]]) alone."""
+    a, b = a[ia], b[ib]
+    w = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2]) - np.maximum(a[:, 0], b[:, 0])
+    h = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3]) - np.maximum(a[:, 1], b[:, 1])
     return (w > 0) & (h > 0)
 
 
@@ -174,22 +191,29 @@ def depth_order(
 
 
 def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24,
-                     near: np.ndarray | None = None) -> np.ndarray:
+                     pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(N,) largest fraction |S_i & S_v| / |S_i| of each region S_i hidden by one visible
-    region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2).
+    region S_v (from eq. 5: |S_i & S_v| = delta (|S_i| + |S_v|) / 2), integrated over the
+    pairs whose boxes meet only (memory grows with them).
 
     Args:
         boxes: (N, 4) xywh regions S_i; visible: (M, 4) xywh regions S_v.
         samples: integration grid per side (``region_overlaps``).
-        near: optional (N, M) bool restricting the visible regions each S_i is compared
-            with (default: all).
+        pairs: optional (ia, ib) index arrays restricting the visible regions each S_i is
+            compared with (default: all).
     """
+    out = np.zeros(len(boxes))
     if len(boxes) == 0 or len(visible) == 0:
-        return np.zeros(len(boxes))
-    if near is not None:
-        near = near & boxes_meet(boxes, visible)
+        return out
+    if pairs is None:
+        ia, ib = meeting_pairs(boxes, visible)
+    else:
+        ia, ib = (np.asarray(k, dtype=np.int64) for k in pairs)
+        meet = boxes_meet_pairs(boxes, visible, ia, ib)
+        ia, ib = ia[meet], ib[meet]
     area_i = np.pi / 4 * boxes[:, 2] * boxes[:, 3]
     area_v = np.pi / 4 * visible[:, 2] * visible[:, 3]
-    ratio = 0.5 * region_overlaps(boxes, visible, samples, near)  # eq. 2's ratio
-    inter = ratio * (area_i[:, None] + area_v[None, :])
-    return (inter / np.maximum(area_i, 1e-9)[:, None]).max(axis=1)
+    ratio = 0.5 * region_overlap_values(boxes, visible, ia, ib, samples)  # eq. 2's ratio
+    inter = ratio * (area_i[ia] + area_v[ib])
+    np.maximum.at(out, ia, inter / np.maximum(area_i, 1e-9)[ia])
+    return out

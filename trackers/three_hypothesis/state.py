@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.sparse import csr_array
 
 from occbench.trackers.three_hypothesis.association import Matches
 from occbench.trackers.three_hypothesis.graph import Node
@@ -58,7 +59,7 @@ class Person:
 class Frame:
     """What the steps of one frame t share (Alg. 1's variables), filled step by step:
     ``_measure`` sets dets, scores, p, support; ``_predict`` branches .. pred; ``_occlusions`` delta,
-    near, pairs; ``_associate`` matches, matched; ``_sort_occlusions`` in_front;
+    pairs; ``_associate`` matches, matched; ``_sort_occlusions`` in_front;
     ``_update_matched`` visible, visible_dets and absorbed."""
 
     foreground: np.ndarray | None  # (H, W) mask or label image
@@ -75,8 +76,8 @@ class Frame:
     Xp: np.ndarray = None  # (B, 8) predicted states
     Pp: np.ndarray = None  # (B, 8, 8) predicted covariances
     pred: np.ndarray = None  # (B, 4) predicted regions S^{t|t-1}
-    delta: np.ndarray = None  # (B, D) region similarity (eq. 5) of predictions and V
-    near: np.ndarray = None  # (B, B + D) pairs whose boxes meet (node pairs: i < j, two people)
+    delta: csr_array = None  # (B, D) region similarity (eq. 5) of predictions and V, sparse:
+    # stored for the pairs whose boxes meet (0 elsewhere)
     pairs: np.ndarray = None  # O (eq. 2): (K, 2) node index rows (a, b), a < b
     matches: Matches = None
     matched: dict[int, tuple[int, int, int, float]] = None  # person -> (det, node, stage, rho)

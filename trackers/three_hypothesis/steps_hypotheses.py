@@ -134,12 +134,15 @@ class HypothesisSteps:
         cont = src >= 0
         visible = f.visible
         if len(visible) and cont.any():
-            delta = f.delta[src[cont]][:, np.array(f.visible_dets)]
+            delta = f.delta[src[cont]][:, np.array(f.visible_dets)].tocoo()
             pred = f.pred
             area_n = pred[src[cont], 2] * pred[src[cont], 3]
             area_v = visible[:, 2] * visible[:, 3]
-            fraction[cont] = (delta * (area_n[:, None] + area_v[None, :]) / 2
-                              / np.maximum(area_n, 1e-9)[:, None]).max(axis=1)
+            i, v = delta.row, delta.col  # the pairs that meet; the others hide nothing
+            hidden = np.zeros(cont.sum())
+            np.maximum.at(hidden, i, delta.data * (area_n[i] + area_v[v]) / 2
+                          / np.maximum(area_n, 1e-9)[i])
+            fraction[cont] = hidden
         if (~cont).any():
             fraction[~cont] = covered_fraction(boxes[~cont], visible,
                                                self.occlusion.region_samples)

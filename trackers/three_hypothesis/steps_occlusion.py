@@ -4,12 +4,19 @@ two-stage association (eqs. 4-5), and the depth order pi of O's pairs (eq. 3).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
+from typing import NamedTuple
+
 import numpy as np
 
 from occbench.trackers.three_hypothesis._kernels import depth_orders
-from occbench.trackers.three_hypothesis.association import associate
+from scipy.sparse import csr_array
+
+from occbench.trackers.common.spatial import blocks, meeting_pairs
+from occbench.trackers.three_hypothesis.association import Matches, associate
 from occbench.trackers.three_hypothesis.graph import VISIBLE
-from occbench.trackers.three_hypothesis.occlusion import boxes_meet, occlusion_pairs, region_overlaps
+from occbench.trackers.three_hypothesis.occlusion import region_overlap_values
 from occbench.trackers.three_hypothesis.state import Frame
 
 
@@ -20,42 +27,112 @@ class OcclusionSteps:
         """O (3.3.1, eq. 2): pairs of predicted regions of different people whose overlap
         ratio |Si & Sj| / (|Si| + |Sj|) = delta / 2 exceeds lambda (``occlusion_pairs``).
         The region similarity delta (eq. 5) of the predictions against each other and
-        against the measurements comes from one integration per frame
-        (``region_overlaps``); ``f.delta`` keeps the latter for step 4."""
+        against the measurements comes from one integration per frame, over the pairs
+        whose boxes meet (the only ones that can overlap; ``region_overlap_values``);
+        ``f.delta`` keeps the latter, sparse, for step 4."""
         pred, owners = f.pred, f.owners
         nb = len(pred)
         regions = np.concatenate([pred, f.dets])
-        near = boxes_meet(pred, regions)  # only meeting boxes can overlap
+        ia, ib = meeting_pairs(pred, regions)
+        node = ib < nb
         # pairs i < j of nodes of different people: owners is sorted, so owner_i < owner_j
-        near[:, :nb] &= owners[:, None] < owners[None, :]
-        delta = region_overlaps(pred, regions, self.occlusion.region_samples, near)
-        f.near, f.delta = near, delta[:, nb:]
-        f.pairs = occlusion_pairs(pred, owners, self.occlusion.lam, ratio=0.5 * delta[:, :nb])
+        keep = ~node | (owners[ia] < owners[np.where(node, ib, 0)])
+        ia, ib, node = ia[keep], ib[keep], node[keep]
+        delta = region_overlap_values(pred, regions, ia, ib, self.occlusion.region_samples)
+        f.delta = csr_array((delta[~node], (ia[~node], ib[~node] - nb)), shape=(nb, len(f.dets)))
+        ratio = 0.5 * delta[node]  # eq. 2's ratio of the node pairs
+        f.pairs = np.column_stack([ia[node], ib[node]])[ratio > self.occlusion.lam].astype(int)
 
     def _associate(self, f: Frame) -> None:
         """MaxSimilarity (3.3.2): stage 1 over intersecting regions, cost (1 - rho) +
         (1 - delta); stage 2 inside each node's validation gate, cost (1 - rho) + d / mu_g;
         rho = sqrt(q) . sqrt(p) (eq. 4), summed over the measurements' bins only (the other
-        terms are 0)."""
+        terms are 0). Persons x measurements up to ``spatial.DENSE_LIMIT`` (every ordinary
+        frame): one ``associate`` over the frame. Beyond it, memory grows with the pairs:
+        stage 1 is solved block by block (``spatial.blocks``) over the pairs of ``f.delta``
+        (the only ones it may match), then stage 2 block by block over the pairs of its
+        entrants and the measurements left whose distance is within the gate: the same
+        optimum as the whole frame's."""
         persons, support = f.persons, f.support
         sqrt_q = np.sqrt(np.array([person.q[support] for person in persons]).reshape(
             len(persons), len(support)))
         sqrt_p = np.sqrt(np.array([h[support] for h in f.p]).reshape(len(f.dets), len(support)))
         R = np.array([person.R[0, 0] for person in persons])[f.owners]  # R = (sigma_z h)^2 I
-        a, shape = self.association, self.rules.shape
+        rules = self.rules
         seen = (np.array([b.kind == VISIBLE for b in f.branches], dtype=bool)
-                if shape.uses_seen else None)  # visible nodes of t-1, for the shape rule
-        f.matches = m = associate(
-            f.pred, f.owners, sqrt_q, f.dets, sqrt_p, a.mu_rho, a.mu_g, delta=f.delta,
-            gated=self.rules.stage2.entrants(
-                np.array([person.confirmed for person in persons], dtype=bool)),
-            gate=self.rules.gate.radii(f.Pp, R),
-            evidence=self.rules.contact.evidence(self.rules.stage1_appearance.evidence,
-                                                 f.pairs, f.owners),
-            admissible=shape.admissible(f.pred, f.dets, f.owners, f.delta, seen),
-            barred=lambda matched: self.rules.parts.barred(f.dets, matched))
+                if rules.shape.uses_seen else None)  # visible nodes of t-1, for the shape rule
+        entrants = rules.stage2.entrants(np.array([person.confirmed for person in persons],
+                                                  dtype=bool))
+        inp = _Inputs(sqrt_q, sqrt_p, seen, entrants, rules.gate.radii(f.Pp, R),
+                      lambda matched: rules.parts.barred(f.dets, matched))
+        n_p, n_d = len(persons), len(f.dets)
+        parts = blocks(n_p, n_d, lambda: (f.owners[f.delta.tocoo().row], f.delta.tocoo().col))
+        if len(parts) == 1:
+            found = [self._associate_block(f, inp, *parts[0], stages=(1, 2))]
+        else:
+            found = [self._associate_block(f, inp, rows, cols, stages=(1,)) for rows, cols in parts]
+            first = _merge(found, n_p, n_d)
+            left = first.unmatched_persons
+            left = left if entrants is None else left[entrants[left]]
+            free = first.unmatched_measurements
+            matched = np.ones(n_d, dtype=bool)
+            matched[free] = False
+            barred = rules.parts.barred(f.dets, matched)  # as the whole frame's stage 2 sees it
+            inp = inp._replace(barred=None if barred is None else lambda _: barred)
+            found += [self._associate_block(f, inp, left[r], free[c], stages=(2,))
+                      for r, c in blocks(len(left), len(free),
+                                         lambda: self._gate_pairs(f, inp, left, free))]
+        f.matches = m = _merge(found, n_p, n_d)
         f.matched = {pi: (d, n, s, r) for (pi, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())}
+
+    def _associate_block(self, f: Frame, s: _Inputs, rows: np.ndarray, cols: np.ndarray,
+                         stages: tuple[int, ...]) -> tuple:
+        """``associate`` of persons ``rows`` and measurements ``cols`` (sorted frame
+        indices) in ``stages``: (Matches, rows, cols, nodes) in the block's indices. A
+        stage-2 block sees no region term (delta 0: no stage 1); the shape rule judges
+        its pairs among every person meeting its measurements."""
+        rules, a = self.rules, self.association
+        whole = len(rows) == len(f.persons) and len(cols) == len(f.dets)
+        nodes = np.flatnonzero(np.isin(f.owners, rows))
+        owners = np.searchsorted(rows, f.owners[nodes])
+        delta = f.delta.toarray() if whole else f.delta[nodes][:, cols].toarray()
+        pred, dets = f.pred[nodes], f.dets[cols]
+        admissible = rules.shape.admissible(pred, dets, owners, delta,
+                                            None if s.seen is None else s.seen[nodes])
+        if 1 not in stages and admissible is not None:  # rivals: all who meet cols
+            rivals = np.union1d(rows, f.owners[f.delta[:, cols].tocoo().row])
+            wide = np.flatnonzero(np.isin(f.owners, rivals))
+            admissible = rules.shape.admissible(
+                f.pred[wide], dets, np.searchsorted(rivals, f.owners[wide]),
+                f.delta[wide][:, cols].toarray(), s.seen[wide])[np.isin(wide, nodes)]
+        entrants = None if s.entrants is None else s.entrants[rows]
+        if 2 not in stages:
+            entrants = np.zeros(len(rows), dtype=bool)
+        m = associate(
+            pred, owners, s.sqrt_q[rows], dets, s.sqrt_p[cols], a.mu_rho, a.mu_g,
+            delta=delta if 1 in stages else np.zeros_like(delta), gated=entrants,
+            gate=None if s.gate is None else s.gate[nodes],
+            evidence=rules.contact.evidence(rules.stage1_appearance.evidence,
+                                            _local_pairs(f.pairs, nodes), owners),
+            admissible=admissible,
+            barred=None if s.barred is None else partial(_barred, s.barred, cols))
+        return m, rows, cols, nodes
+
+    def _gate_pairs(self, f: Frame, s: _Inputs, left: np.ndarray, free: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """(index into ``left``, index into ``free``) pairs of stage-2 entrants and the
+        measurements left whose box meets the square of side 2 r around one of the
+        person's node centres, r = min(mu_g, gate): a superset of the pairs inside the
+        gate (the distance of centres at most r)."""
+        nodes = np.flatnonzero(np.isin(f.owners, left))
+        r = np.full(len(nodes), self.association.mu_g)
+        if s.gate is not None:
+            r = np.minimum(r, s.gate[nodes])
+        centre = f.pred[nodes, :2] + 0.5 * f.pred[nodes, 2:]
+        square = np.column_stack([centre - r[:, None], 2 * r, 2 * r])
+        ia, ib = meeting_pairs(square, f.dets[free], pad=1.0)
+        return np.searchsorted(left, f.owners[nodes[ia]]), ib
 
     def _sort_occlusions(self, f: Frame) -> None:
         """pi (eq. 3) of every pair in O, from who is visible at t: the visible one is in
@@ -88,3 +165,49 @@ class OcclusionSteps:
                 in_front.setdefault(b, []).append(i)
             else:
                 in_front.setdefault(a, []).append(j)
+
+
+def _local_pairs(pairs: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """The rows of O (``pairs``: (K, 2) node indices) with both nodes among the sorted
+    ``nodes`` of a block, in the block's node indices (a pair across blocks shares no
+    measurement either stage may match)."""
+    if len(nodes) == 0 or len(pairs) == 0:
+        return np.zeros((0, 2), dtype=int)
+    at = np.minimum(np.searchsorted(nodes, pairs), len(nodes) - 1)
+    inside = (nodes[at] == pairs).all(axis=1)
+    return at[inside].astype(int)
+
+
+class _Inputs(NamedTuple):
+    """What every block of a frame's association reads: (P, K) sqrt q, (D, K) sqrt p,
+    (B,) seen or None, (P,) stage-2 entrants or None, (B,) gate radii or None."""
+
+    sqrt_q: np.ndarray
+    sqrt_p: np.ndarray
+    seen: np.ndarray | None
+    entrants: np.ndarray | None
+    gate: np.ndarray | None
+    barred: Callable[[np.ndarray], np.ndarray | None] | None  # the frame's rules.parts
+
+
+def _barred(frame: Callable, cols: np.ndarray, matched: np.ndarray) -> np.ndarray | None:
+    """A block's measurements stage 2 may not match: the frame's verdict (``frame``, of the
+    frame's (D,) matched measurements; the whole frame's block, or stage 2's blocks, whose
+    verdict was taken once after stage 1) on the block's ``cols``."""
+    barred = frame(matched)
+    return None if barred is None else barred[cols]
+
+
+def _merge(found: list, n_persons: int, n_meas: int) -> Matches:
+    """One ``Matches`` in frame indices from each block's (matches, persons, measurements,
+    nodes): as the whole frame's would be, stage 1's rows then stage 2's, each sorted by
+    person, the unmatched ascending."""
+    rows = [np.column_stack([p[m.matches[:, 0]], d[m.matches[:, 1]], n[m.matches[:, 2]]])
+            for m, p, d, n in found]
+    matches = np.concatenate(rows).reshape(-1, 3).astype(int)
+    stages = np.concatenate([m.stages for m, *_ in found]).astype(int)
+    rho = np.concatenate([m.rho for m, *_ in found]).astype(float)
+    order = np.lexsort((matches[:, 0], stages))
+    return Matches(matches[order], stages[order], rho[order],
+                   np.setdiff1d(np.arange(n_persons), matches[:, 0]),
+                   np.setdiff1d(np.arange(n_meas), matches[:, 1]))

@@ -117,9 +117,8 @@ class UpdateSteps:
         if not self.rules.confirm.uses_clear or not tentative:
             return {}
         rows = np.array([d for _, d in tentative])
-        others = f.owners[None, :] != np.array([i for i, _ in tentative])[:, None]
-        return dict(zip(rows.tolist(), clear_measurements(f.dets, rows, f.delta,
-                                                          others).tolist()))
+        return dict(zip(rows.tolist(), clear_measurements(
+            f.dets, rows, f.delta, f.owners, np.array([i for i, _ in tentative])).tolist()))
 
     def _visible_share(self, f: Frame, rows: list, behind: np.ndarray) -> list[float]:
         """Per matched row, the share v of its measured region left visible by the matched
@@ -130,11 +129,13 @@ class UpdateSteps:
         if not self.rules.appearance_behind.uses_visible_share or not behind.any():
             return share
         k = behind.nonzero()[0]
-        near = np.zeros((len(k), len(f.dets)), dtype=bool)
+        ia, ib = [], []  # (row among k, measurement of a matched person in front)
         for a, r in enumerate(k.tolist()):
-            n = rows[r][1][1]
-            near[a, [f.matched[j][0] for j in f.in_front[n] if j in f.matched]] = True
-        covered = covered_fraction(f.visible[k], f.dets, self.occlusion.region_samples, near)
+            fronts = [f.matched[j][0] for j in f.in_front[rows[r][1][1]] if j in f.matched]
+            ia += [a] * len(fronts)
+            ib += fronts
+        covered = covered_fraction(f.visible[k], f.dets, self.occlusion.region_samples,
+                                   (np.array(ia, dtype=np.int64), np.array(ib, dtype=np.int64)))
         for a, r in enumerate(k.tolist()):
             share[r] = 1.0 - float(covered[a])
         return share

@@ -13,7 +13,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from occbench.trackers.three_hypothesis.occlusion import boxes_meet
+from scipy.sparse import csr_array
+
+from occbench.trackers.common.spatial import meeting_pairs
 
 # --------------------------------------------------------------- 3.3.2 steps 5-8: who enters stage 2
 
@@ -51,15 +53,18 @@ class AfterMatches:
         return hits >= confirm_frames
 
 
-def clear_measurements(dets: np.ndarray, rows: np.ndarray, delta: np.ndarray,
-                       others: np.ndarray) -> np.ndarray:
+def clear_measurements(dets: np.ndarray, rows: np.ndarray, delta: csr_array,
+                       owners: np.ndarray, row_owners: np.ndarray) -> np.ndarray:
     """(R,) bool: measurement ``rows[r]`` of (D, 4) xywh ``dets`` meets no other measurement
     (their boxes share no area) and no predicted region of another person (eq. 5 delta 0).
-    ``delta``: (B, D) region similarity of the nodes of t-1 and the measurements;
-    ``others``: (R, B) bool, node b belongs to a person other than row r's."""
-    meet = boxes_meet(dets[rows], dets)
-    meet[np.arange(len(rows)), rows] = False  # a box meets itself
-    crowded = meet.any(axis=1) | ((delta[:, rows].T > 0) & others).any(axis=1)
+    ``delta``: sparse (B, D) region similarity of the nodes of t-1 and the measurements;
+    ``owners``: (B,) person of each node; ``row_owners``: (R,) person of row r (-1: none,
+    every node is another's). Memory grows with the pairs that meet."""
+    crowded = np.zeros(len(rows), dtype=bool)
+    ia, ib = meeting_pairs(dets[rows], dets)
+    crowded[ia[ib != rows[ia]]] = True  # a box meets itself
+    near = delta[:, rows].tocoo()
+    crowded[near.col[(near.data > 0) & (owners[near.row] != row_owners[near.col])]] = True
     return ~crowded
 
 

@@ -5,6 +5,7 @@ hand-derivable cases, the paper's rule beside ours."""
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import csr_array
 
 from occbench.trackers.three_hypothesis import Adaptations
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
@@ -31,9 +32,9 @@ def test_own_share_is_the_measured_region_no_hidden_partner_covers():
     owners, rows, pairs = np.array([0, 1]), [(0, 0, 0)], np.array([[0, 1]])
     hidden = np.array([False, True])
     for delta, own in ((1.0, 0.0), (0.5, 0.5), (0.0, 1.0)):
-        d = np.array([[1.0], [delta]])
+        d = csr_array(np.array([[1.0], [delta]]))
         assert own_shares(rows, pairs, owners, hidden, pred, BOX, d) == [own]
-    d = np.array([[1.0], [1.0]])
+    d = csr_array(np.array([[1.0], [1.0]]))
     assert own_shares(rows, pairs, owners, np.array([False, False]), pred, BOX, d) == [1.0]
     assert own_shares(rows, np.zeros((0, 2), dtype=int), owners, hidden, pred, BOX, d) == [1.0]
     # the pair's order in O does not matter

@@ -5,6 +5,7 @@ lone person is confirmed at once and two people whose boxes meet wait ``confirm_
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import csr_array
 import pytest
 from reta_scenes import RED, ellipse_frame
 
@@ -51,15 +52,15 @@ def test_clear_measurements_by_hand():
     # three boxes: 0 alone, 1 and 2 overlap each other
     dets = np.array([[0.0, 0, 10, 30], [50, 0, 10, 30], [55, 0, 10, 30]])
     # two nodes: node 0 of person 0 meets box 0; node 1 of person 1 meets nothing
-    delta = np.array([[0.7, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    delta = csr_array(np.array([[0.7, 0.0, 0.0], [0.0, 0.0, 0.0]]))
     owners = np.array([0, 1])
     rows = np.array([0, 1])
     # row 0 is person 0's own measurement: its own node does not make it ambiguous
-    assert clear_measurements(dets, rows, delta, owners[None] != np.array([[0], [1]])).tolist() \
+    assert clear_measurements(dets, rows, delta, owners, np.array([0, 1])).tolist() \
         == [True, False]
     # as a new track's measurement (every person another), box 0 meets person 0's node
-    everyone = np.ones((2, 2), dtype=bool)
-    assert clear_measurements(dets, rows, delta, everyone).tolist() == [False, False]
+    assert clear_measurements(dets, rows, delta, owners, np.array([-1, -1])).tolist() \
+        == [False, False]
 
 
 def test_a_lone_person_is_confirmed_at_once_with_the_rule_and_after_three_without():
