@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 from collections.abc import Callable, Sequence
@@ -175,10 +176,25 @@ def usage_error(parser: argparse.ArgumentParser, message: str) -> NoReturn:
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     from occbench.commands.mistakes import verbose_requested
+    from occbench.errors import VERBOSE
 
     argparse.ArgumentParser.error = usage_error  # one form for every command's parser
 
     verbose, args = verbose_requested(list(sys.argv[1:] if argv is None else argv))
+    saved = os.environ.get(VERBOSE)
+    if verbose:  # for what the command starts too (a sweep's jobs)
+        os.environ[VERBOSE] = "1"
+    try:
+        return _dispatch(args, verbose)
+    finally:
+        if saved is None:
+            os.environ.pop(VERBOSE, None)
+        else:
+            os.environ[VERBOSE] = saved
+
+
+def _dispatch(args: list[str], verbose: bool) -> int:
+    """``main`` after ``-v``: the command ``args`` names (``run`` without one)."""
     if args and args[0] in ("-h", "--help", "help"):
         print(usage(), end="")
         return 0

@@ -18,7 +18,9 @@ import sys
 from collections.abc import Iterator, Sequence
 from typing import Any, TextIO
 
-ENV = "OCCBENCH_VERBOSE"
+from occbench.errors import VERBOSE, verbose
+
+ENV = VERBOSE
 HINT = "(occbench -v ... shows the traceback)"
 _OVERRIDE = re.compile(r"Could not (?:override|delete from config\.) '([^']+)'")
 _MISSING = re.compile(r"Could not find '([^']+)'")
@@ -30,7 +32,7 @@ def verbose_requested(args: list[str]) -> tuple[bool, list[str]]:
     flags = ("-v", "--verbose")
     wanted = bool(args) and args[0] in flags
     rest = args[1:] if wanted else args
-    return wanted or os.environ.get(ENV, "") not in ("", "0"), rest
+    return wanted or verbose(), rest
 
 
 def _config_keys(config_name: str, overrides: Sequence[str]) -> list[str]:

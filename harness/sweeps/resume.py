@@ -22,6 +22,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from occbench.errors import verbose
 from occbench.sweeps import outputs
 from occbench.sweeps.jobs import DONE, FAILED, STATUS_FILE, read_status, sweep_id
 
@@ -122,7 +123,8 @@ def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], flo
         value = float(run())
     except Exception as err:  # one job's failure must not stop the sweep
         msg = f"{type(err).__name__}: {err}".strip()
-        log.exception("%s: job failed: %s", job_dir, msg)
+        # one line per job (an input mistake fails every job alike); the traceback with -v
+        log.error("%s: job failed: %s", job_dir, msg, exc_info=verbose())
         write_status(job_dir, FAILED, overrides, error=msg, inputs=fingerprint)
         return float("nan")
     write_status(job_dir, DONE, overrides, objective=value, inputs=fingerprint,

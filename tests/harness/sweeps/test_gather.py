@@ -68,6 +68,25 @@ def test_guarded_records_done_skips_repeats_and_records_failures(tmp_path):
     assert finished(tmp_path / "1", over) is None  # a failed job is run again next time
 
 
+def test_a_failed_job_is_one_line_its_traceback_only_when_verbose(tmp_path, caplog, monkeypatch):
+    """An input mistake fails every job of a sweep alike: one line per job, no traceback
+    (issue 39: a traceback per job); ``occbench -v`` (OCCBENCH_VERBOSE=1) shows it."""
+    def bad() -> float:
+        raise ValueError("max_age must be >= 0, got -1")
+
+    monkeypatch.delenv("OCCBENCH_VERBOSE", raising=False)
+    with caplog.at_level("ERROR"):
+        guarded(tmp_path / "0", ["tracker.max_age=-1"], bad)
+    (record,) = caplog.records
+    assert record.getMessage().endswith("job failed: ValueError: max_age must be >= 0, got -1")
+    assert not record.exc_info and "Traceback" not in caplog.text
+    caplog.clear()
+    monkeypatch.setenv("OCCBENCH_VERBOSE", "1")
+    with caplog.at_level("ERROR"):
+        guarded(tmp_path / "1", ["tracker.max_age=-1"], bad)
+    assert caplog.records[0].exc_info and "Traceback" in caplog.text
+
+
 def _fake_job(root: Path, num: int, overrides: list[str], metrics: dict | None,
               status: str = DONE, error: str | None = None) -> None:
     d = root / str(num)
@@ -243,7 +262,7 @@ def test_failing_job_is_recorded_and_a_rerun_skips_finished_jobs(tiny_mot, tmp_p
            f"hydra.sweep.dir={tmp_path}", "hydra/launcher=basic"]
     proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 1, proc.stderr[-3000:]  # a sweep with a failed job fails
-    assert "1 of 2 sweep jobs not done" in proc.stderr
+    assert "1 of 2 sweep jobs not done" in proc.stderr and "Traceback" not in proc.stderr
     table = (tmp_path / "sweep.csv").read_text()
     frame = pd.read_csv(tmp_path / "sweep.csv", keep_default_na=False)
     first = frame[frame["job"] == 0]
