@@ -119,25 +119,28 @@ def pair_files(gt: Path, results: Path) -> dict[str, tuple[Path, Path | None]]:
     return pairs
 
 
-def _sequence_length(gt_file: Path) -> int | None:
-    """``seqLength`` of the ``seqinfo.ini`` beside a ``<seq>/gt/gt.txt``, else None.
+def _sequence_info(gt_file: Path) -> tuple[int | None, tuple[int, int] | None]:
+    """``seqLength`` and (``imWidth``, ``imHeight``) of the ``seqinfo.ini`` beside a
+    ``<seq>/gt/gt.txt``, each None when absent.
 
     Raises:
-        SeqInfoError: a seqinfo.ini that cannot be read or whose seqLength is not a
-            positive integer (file and key named): rows past it would go unchecked.
+        SeqInfoError: a seqinfo.ini that cannot be read or whose seqLength or frame size is
+            not a positive integer (file and key named): rows past it would go unchecked.
     """
     ini = gt_file.parent.parent / "seqinfo.ini"
     if gt_file.name != "gt.txt" or not ini.is_file():
-        return None
-    return seqinfo_number(read_seqinfo(ini), "seqLength", ini, int)
+        return None, None
+    info = read_seqinfo(ini)
+    size = tuple(seqinfo_number(info, key, ini, int) for key in ("imWidth", "imHeight"))
+    return seqinfo_number(info, "seqLength", ini, int), None if None in size else size
 
 
 def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) -> pd.DataFrame:
     """Score all sequences; returns ``summarize`` of the scores (fractions, COMBINED row)."""
     scores: dict[str, SequenceScore] = {}
     for name, (g, r) in pair_files(Path(gt), Path(results)).items():
-        last_frame = _sequence_length(g)  # gt and result rows past it are errors
-        gt_table = read_mot(g, gt=True, last_frame=last_frame)
+        last_frame, image = _sequence_info(g)  # rows past the last frame are errors
+        gt_table = read_mot(g, gt=True, last_frame=last_frame, image=image)
         if r is None:
             log.warning(
                 "%s: no result file %s; scored as an empty result",
@@ -146,7 +149,7 @@ def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) ->
             )
             res_table = MotTable.empty(str(Path(results) / f"{name}.txt"))
         else:
-            res_table = read_mot(r, kind="result", last_frame=last_frame)
+            res_table = read_mot(r, kind="result", last_frame=last_frame, image=image)
         scores[name] = score_sequence(gt_table, res_table, iou_threshold)
         log.debug(
             "%s: scored %d gt rows against %d result rows", name, len(gt_table), len(res_table)

@@ -162,14 +162,14 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
         ini = {}
     name = ini.get("name", "").strip() or folder.name
     length = seqinfo_number(ini, "seqLength", ini_path, int)
-    gt, det = _annotations(folder, length, occlusion_threshold)
     im_dir = folder / (ini.get("imDir", "").strip() or "img1")
     images = numbered_images(im_dir) if im_dir.is_dir() else {}
     if im_dir.is_dir() and not images:
         log.warning("%s: image folder holds no numbered images", im_dir)
+    width, height = _frame_size(folder, ini, ini_path, images, image_size)
+    gt, det = _annotations(folder, length, occlusion_threshold, (width, height))
     if length is None:
         length = _inferred_length(folder, images, [gt and gt.table, det])
-    width, height = _frame_size(folder, ini, ini_path, images, image_size)
     info = SequenceInfo(name=name, width=int(width), height=int(height),
                         fps=_frame_rate(folder, ini, ini_path, fps), length=int(length))
     if det is not None and len(det) and det.frames.max() > length:
@@ -179,14 +179,15 @@ def load_mot_sequence(folder: str | Path, image_size: list[int] | tuple[int, int
     return ImageSequence(info, paths, gt=gt, public_detections=det, prefetch=prefetch)
 
 
-def _annotations(folder: Path, length: int | None,
-                 occlusion_threshold: float) -> tuple[GroundTruth | None, MotTable | None]:
+def _annotations(folder: Path, length: int | None, occlusion_threshold: float,
+                 image: tuple[int, int]) -> tuple[GroundTruth | None, MotTable | None]:
     """gt/gt.txt (rows up to ``length``, with appearance labels when present) and
-    det/det.txt of a sequence folder, None where absent."""
+    det/det.txt of a sequence folder, None where absent; boxes the (width, height) frame
+    ``image`` refuses are errors (``read_mot``)."""
     gt = None
     gt_path = folder / "gt" / "gt.txt"
     if gt_path.is_file():
-        gt = ground_truth_from_table(read_mot(gt_path, gt=True, last_frame=length),
+        gt = ground_truth_from_table(read_mot(gt_path, gt=True, last_frame=length, image=image),
                                      occlusion_threshold)
         labels_path = folder / "gt" / "gt_caviar_appearance.txt"
         if labels_path.is_file():
@@ -194,7 +195,7 @@ def _annotations(folder: Path, length: int | None,
     det = None
     det_path = folder / "det" / "det.txt"
     if det_path.is_file():
-        det = read_mot(det_path, kind="det")
+        det = read_mot(det_path, kind="det", image=image)
         if len(det) == 0:
             log.warning("%s: empty detection file: no public detections in any frame", det_path)
     return gt, det

@@ -64,12 +64,6 @@ class VideoSequence(Sequence):
             raise FileNotFoundError(f"video file not found: {self.path}")
         if fps is not None and fps <= 0:
             raise ValueError(f"fps must be positive, got {fps}")
-        if isinstance(gt, (str, Path)):
-            gt = ground_truth_from_table(read_mot(gt, gt=True, last_frame=length))
-        self.gt = gt
-        if isinstance(public_detections, (str, Path)):
-            public_detections = read_mot(public_detections, kind="det")
-        self.public_detections = public_detections
         self._cap: cv2.VideoCapture | None = None
         self._next = 1  # frame the capture decodes on the next read()
         self._last: tuple[int, np.ndarray] | None = None
@@ -87,6 +81,13 @@ class VideoSequence(Sequence):
             raise FrameError(f"{self.path}: video holds no decodable frames")
         #: why every frame is refused (the frame size changes mid-stream), or None
         self.refused = frame_size_change(self.path, every_frame=self.exact)
+        if isinstance(gt, (str, Path)):  # boxes the frame refuses are errors (read_mot)
+            gt = ground_truth_from_table(read_mot(gt, gt=True, last_frame=length,
+                                                  image=(width, height)))
+        self.gt = gt
+        if isinstance(public_detections, (str, Path)):
+            public_detections = read_mot(public_detections, kind="det", image=(width, height))
+        self.public_detections = public_detections
         self.info = SequenceInfo(name=name or self.path.stem, width=width, height=height,
                                  fps=rate, length=self._length(length))
 

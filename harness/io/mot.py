@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from occbench.io.columns import read_columns
+from occbench.io.frame_bounds import beyond_frame, why_beyond
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +94,7 @@ def scored_gt_mask(gt: MotTable) -> np.ndarray:
 
 
 def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
-             last_frame: int | None = None) -> MotTable:
+             last_frame: int | None = None, image: tuple[int, int] | None = None) -> MotTable:
     """Read a MOT gt, det or result file, validating every field of every row.
 
     Args:
@@ -108,6 +109,9 @@ def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
         last_frame: the sequence's last frame number (seqinfo.ini's ``seqLength``); a row
             beyond it is an error, in a gt file as in TrackEval, and in a result file (it
             would silently count as a false positive).
+        image: the sequence's frame (width, height) when known: a box wider or taller than
+            100 frames is an error, and so is a gt row to score whose box lies wholly
+            outside the frame (``frame_bounds``: nobody there can be seen, always a miss).
     Raises:
         FileNotFoundError: no such file.
         MotFormatError: naming file and line and what was expected: text that is not
@@ -130,16 +134,17 @@ def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
         raise ValueError(f"kind must be one of {READ_KINDS}, got {kind!r}")
     if not path.is_file():
         raise FileNotFoundError(f"MOT file not found: {path}")
-    return _parse_text(read_utf8(path, MotFormatError), path, kind, last_frame)
+    return _parse_text(read_utf8(path, MotFormatError), path, kind, last_frame, image)
 
 
 def read_mot_text(text: str, path: str | Path, kind: str = "any",
-                  last_frame: int | None = None) -> MotTable:
+                  last_frame: int | None = None, image: tuple[int, int] | None = None
+                  ) -> MotTable:
     """``read_mot`` of the text of a MOT file (``path`` names it in messages): the run
     scores exactly the bytes it writes, even when writing them failed."""
     if kind not in READ_KINDS:
         raise ValueError(f"kind must be one of {READ_KINDS}, got {kind!r}")
-    return _parse_text(text.removeprefix("\ufeff"), Path(path), kind, last_frame)
+    return _parse_text(text.removeprefix("\ufeff"), Path(path), kind, last_frame, image)
 
 
 def read_utf8(path: Path, error: type[ValueError]) -> str:
@@ -159,12 +164,13 @@ def text_lines(path: Path, error: type[ValueError]) -> list[str]:
     return read_utf8(path, error).splitlines()
 
 
-def _parse_text(text: str, path: Path, kind: str, last_frame: int | None) -> MotTable:
+def _parse_text(text: str, path: Path, kind: str, last_frame: int | None,
+                image: tuple[int, int] | None = None) -> MotTable:
     """The rows of a MOT file's text: ``_parse_fast`` when it applies, else line by line;
     a gt with no row to score is an error either way."""
-    table = _parse_fast(text, path, kind, last_frame)
+    table = _parse_fast(text, path, kind, last_frame, image)
     if table is None:
-        table = _parse(text.splitlines(), path, kind, last_frame)
+        table = _parse(text.splitlines(), path, kind, last_frame, image)
     if kind == "gt" and len(table) and not scored_gt_mask(table).any():
         raise MotFormatError(
             f"{path}: nothing to score: none of its {len(table)} rows has conf 1 and class "
@@ -172,7 +178,8 @@ def _parse_text(text: str, path: Path, kind: str, last_frame: int | None) -> Mot
     return table
 
 
-def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> MotTable | None:
+def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None,
+                image: tuple[int, int] | None = None) -> MotTable | None:
     """The common case in one vectorised pass (a C reader, floats parsed as Python parses
     them: ``occbench.io.columns``): comma-separated rows all of one width (6 to 10), no
     comment, every row valid by ``_check_row``'s rules. None for anything else, which
@@ -203,10 +210,24 @@ def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None) -> Mot
             cls, vis = a[:, 7], a[:, 8]
             ok = ok and ((cls == np.floor(cls)) & (cls >= 1) & (cls <= MAX_INT)).all()
             ok = ok and (((vis >= 0) & (vis <= 1)) | (vis == -1)).all()
+    if ok and image is not None:
+        ok = not _beyond_image(a, ncols, kind, image).any()
     return _table(a, ncols, kind == "gt", path) if ok else None
 
 
-def _parse(lines: Iterable[str], path: Path, kind: str, last_frame: int | None) -> MotTable:
+def _beyond_image(a: np.ndarray, ncols: int, kind: str, image: tuple[int, int]) -> np.ndarray:
+    """(R,) bool rows (R, 10) the frame (width, height) refuses (``frame_bounds``); gt rows
+    to score: conf 1, a pedestrian or no class."""
+    boxes = a[:, 2:6] - [1.0, 1.0, 0.0, 0.0]  # 1-based file -> 0-based
+    scored = None
+    if kind == "gt":
+        scored = a[:, 6] != 0 if ncols >= 7 else np.ones(len(a), dtype=bool)
+        scored &= (a[:, 7] == PEDESTRIAN_CLASS) if ncols == 9 else True
+    return beyond_frame(boxes, scored, image)
+
+
+def _parse(lines: Iterable[str], path: Path, kind: str, last_frame: int | None,
+           image: tuple[int, int] | None = None) -> MotTable:
     values: list[list[float]] = []
     skipped = 0
     first: tuple[int, int] | None = None  # (line, fields) of the first row
@@ -232,6 +253,9 @@ def _parse(lines: Iterable[str], path: Path, kind: str, last_frame: int | None) 
             log.warning("%s: skipped box with NaN or non-positive size: %r", where, text)
             skipped += 1
             continue
+        if image is not None and _beyond_image(np.array([row]), first[1], kind, image)[0]:
+            box = np.array(row[2:6]) - [1.0, 1.0, 0.0, 0.0]
+            raise MotFormatError(f"{where}: {why_beyond(box, image)}: {text!r}")
         values.append(row)
     if skipped:
         log.warning("%s: %d rows skipped", path, skipped)

@@ -144,7 +144,8 @@ class RunRecord:
             if seq.gt is None:
                 continue
             try:
-                table = _in_window(read_external(n, folder, sname, _last_frame(seq)), seq)
+                table = _in_window(read_external(n, folder, sname, _last_frame(seq),
+                                                 (seq.info.width, seq.info.height)), seq)
                 self._score(n, seq, table)
             except Exception as err:  # noqa: BLE001 - recorded, the run goes on
                 self.fail(n, sname, "external", err, traceback.format_exc())
@@ -272,18 +273,19 @@ class RunRecord:
             self.publish("finished")  # summary.md counts this failure too
 
 
-def read_external(name: str, folder: Path, sequence: str,
-                  last_frame: int | None = None) -> MotTable:
+def read_external(name: str, folder: Path, sequence: str, last_frame: int | None = None,
+                  image: tuple[int, int] | None = None) -> MotTable:
     """The external tracker's result for ``sequence``; empty (with a warning) when missing.
 
     Raises:
-        MotFormatError: a malformed row, or a row beyond ``last_frame`` (file and line named).
+        MotFormatError: a malformed row, a row beyond ``last_frame`` or a box more than 100
+            (width, height) frames ``image`` wide or tall (file and line named).
     """
     path = folder / f"{sequence}.txt"
     if not path.is_file():
         log.warning("external %s: no result file %s: scored as an empty result", name, path)
         return MotTable.empty(str(path))
-    return read_mot(path, kind="result", last_frame=last_frame)
+    return read_mot(path, kind="result", last_frame=last_frame, image=image)
 
 
 def _last_frame(seq: Sequence) -> int:

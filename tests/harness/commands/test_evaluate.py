@@ -319,3 +319,19 @@ def test_cli_refuses_a_folder_of_tracker_folders_naming_them(tud_dirs, tmp_path,
     assert len(err) == 1 and err[0].startswith(f"occbench: {tracks} holds no result file")
     assert f"(reta): give one, e.g. {tracks / 'reta'}" in err[0]
     assert main([str(nested), str(tracks / "reta")]) == 0
+
+
+def test_cli_refuses_a_box_100_frames_wide_naming_file_and_line(tud_dirs, capsys):
+    """seqinfo.ini's frame size bounds the boxes of gt and results (issue 39)."""
+    nested, _, res = tud_dirs
+    (nested / "TUD-Campus" / "seqinfo.ini").write_text(
+        "[Sequence]\nname=TUD-Campus\nseqLength=71\nimWidth=640\nimHeight=480\n")
+    assert main([str(nested), str(res)]) == 0
+    result = res / "TUD-Campus.txt"
+    lines = result.read_text().splitlines()
+    fields = lines[1].split(",")
+    fields[4] = "70000"
+    result.write_text("\n".join([lines[0], ",".join(fields), *lines[2:]]) + "\n")
+    assert main([str(nested), str(res)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"occbench: {result}:2: box 70000x")

@@ -9,7 +9,7 @@ import pytest
 
 from occbench.io import columns
 from occbench.io.columns import read_columns
-from occbench.io.mot import read_mot
+from occbench.io.mot import MotFormatError, read_mot
 
 
 def _rows(rng: np.random.Generator, n: int, fields: int, gt: bool = False) -> str:
@@ -86,3 +86,30 @@ def test_rows_in_order_and_shuffled_give_one_table(tmp_path):
     a, b = read_mot(tmp_path / "a.txt"), read_mot(tmp_path / "b.txt")
     for name in ("frames", "ids", "boxes", "conf", "classes", "visibility"):
         assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+
+
+def test_a_frame_of_known_size_refuses_absurd_boxes_naming_the_line(tmp_path):
+    """Issue 39: a box 100 frames wide, or a gt box to score wholly outside the frame, was
+    read and scored (the latter as a miss every frame): refused with file and line, on the
+    vectorised path (these files are plain rows) as on the line-by-line one."""
+    rows = [f"{f},1,10,10,20,40,1,1,1" for f in range(1, 40)]
+    path = tmp_path / "gt.txt"
+    path.write_text("\n".join(rows) + "\n")
+    assert len(read_mot(path, gt=True, image=(64, 48))) == 39
+    cases = {"30,1,10,10,6500,40,1,1,1": "more than 100 times the 64x48 frame",
+             "30,1,70,10,20,40,1,1,1": "wholly outside the 64x48 frame",
+             "30,1,-30,10,20,40,1,1,1": "wholly outside"}
+    for bad, why in cases.items():
+        path.write_text("\n".join(rows[:29] + [bad] + rows[30:]) + "\n")
+        with pytest.raises(MotFormatError, match=rf"{path}:30: .*{why}"):
+            read_mot(path, gt=True, image=(64, 48))
+        assert len(read_mot(path, gt=True)) == 39  # the frame unknown: nothing to check
+    # a row not scored (conf 0) may lie outside; detections and results may too, not 100x
+    path.write_text("\n".join(rows[:29] + ["30,2,70,10,20,40,0,1,1"] + rows[30:]) + "\n")
+    assert len(read_mot(path, gt=True, image=(64, 48))) == 39
+    path.write_text("\n".join([f"{f},-1,70,10,20,40,0.9" for f in range(1, 9)]
+                              + ["9,-1,70,10,20,4900,0.9"]) + "\n")
+    with pytest.raises(MotFormatError, match=rf"{path}:9: box 20x4900 is more than 100"):
+        read_mot(path, kind="det", image=(64, 48))
+    path.write_text("\n".join([f"{f},-1,70,10,20,40,0.9" for f in range(1, 9)]) + "\n")
+    assert len(read_mot(path, kind="det", image=(64, 48))) == 8
