@@ -90,7 +90,12 @@ NO_CLASS = -1
 def scored_gt_mask(gt: MotTable) -> np.ndarray:
     """(N,) bool: gt rows that are scored: conf != 0 and class pedestrian or no class (the
     MOTChallenge rule; ``occbench.metrics.frames`` applies it)."""
-    return (gt.conf != 0) & np.isin(gt.classes, (PEDESTRIAN_CLASS, NO_CLASS))
+    return _scored(gt.conf, gt.classes)
+
+
+def _scored(conf: np.ndarray, classes: np.ndarray) -> np.ndarray:
+    """``scored_gt_mask`` of (N,) conf and class columns."""
+    return (conf != 0) & np.isin(classes, (PEDESTRIAN_CLASS, NO_CLASS))
 
 
 def read_mot(path: str | Path, gt: bool = False, kind: str = "any",
@@ -217,12 +222,11 @@ def _parse_fast(text: str, path: Path, kind: str, last_frame: int | None,
 
 def _beyond_image(a: np.ndarray, ncols: int, kind: str, image: tuple[int, int]) -> np.ndarray:
     """(R,) bool rows (R, 10) the frame (width, height) refuses (``frame_bounds``); gt rows
-    to score: conf 1, a pedestrian or no class."""
+    to score by ``scored_gt_mask``'s rule."""
     boxes = a[:, 2:6] - [1.0, 1.0, 0.0, 0.0]  # 1-based file -> 0-based
     scored = None
-    if kind == "gt":
-        scored = a[:, 6] != 0 if ncols >= 7 else np.ones(len(a), dtype=bool)
-        scored &= (a[:, 7] == PEDESTRIAN_CLASS) if ncols == 9 else True
+    if kind == "gt":  # conf: -1 (padding) without the column; class: as _table reads it
+        scored = _scored(a[:, 6], a[:, 7] if ncols == 9 else np.full(len(a), NO_CLASS))
     return beyond_frame(boxes, scored, image)
 
 
