@@ -36,6 +36,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import hydra
@@ -48,7 +49,7 @@ from omegaconf import DictConfig
 
 from occbench.errors import RunError
 from occbench.io.mot import write_atomic, write_mot
-from occbench.progress import bars_wanted
+from occbench.progress import progress_factory
 from occbench.report.overlays import draw_overlay
 from occbench.trackers.common.assignment import assign
 from occbench.trackers.geometry import iou_matrix
@@ -159,8 +160,9 @@ def table_text(table: pd.DataFrame, notes: list[str] | None = None) -> str:
     return "\n".join([text, *(table_notes(table) if notes is None else notes)]) + "\n"
 
 
-def run_detection(cfg: DictConfig, out_dir: Path, progress: bool = False) -> pd.DataFrame:
-    """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays."""
+def run_detection(cfg: DictConfig, out_dir: Path, progress: Any = None) -> pd.DataFrame:
+    """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays;
+    ``progress``: a progress factory (``occbench.progress.progress_factory``) or None."""
     from occbench.config.build import build_source, load_sequences
 
     sequences = load_sequences(cfg.dataset)  # RunError naming the cause
@@ -248,10 +250,12 @@ def _cache_of(source, node: DictConfig) -> tuple | None:
 
 
 def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_detector,
-                     progress: bool, counts: dict[str, DetectionCounts],
+                     progress: Any, counts: dict[str, DetectionCounts],
                      cache: tuple | None = None) -> None:
     """Detect one sequence: its det file, overlays and counts (added to ``counts``); with
-    ``cache`` (store, detector config), its outputs into the front-end cache."""
+    ``cache`` (store, detector config), its outputs into the front-end cache; ``progress``:
+    a progress factory (``occbench.progress.progress_factory``) or None."""
+    from occbench.pipeline.loop import no_progress
     from occbench.sources.cache.source import EntryBuilder, store_outputs
     from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
 
@@ -260,37 +264,37 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
     source.start(seq)
     c = DetectionCounts(labelled=seq.gt is not None)
     frames, boxes, scores = [], [], []
-    it = seq.frames()
-    if progress:
-        from tqdm import tqdm
-
-        it = tqdm(it, total=seq.info.length, desc=name, leave=False)
-    for k, frame in it:
-        t0 = time.perf_counter()
-        dets, fg = source.detect(k, frame)
-        c.seconds += time.perf_counter() - t0
-        c.frames += 1
-        if built is not None:
-            built.add(k, dets, fg)
-        frames.append(np.full(len(dets), k))
-        boxes.append(dets.boxes)
-        scores.append(dets.scores)
-        gt = None
-        c.detections += len(dets)
-        if seq.gt is not None:
-            rows = seq.gt.rows_of(k)
-            rows = rows[seq.gt.table.conf[rows] > 0]
-            gt = seq.gt.table.boxes[rows]
-            c.gt += len(gt)
-            c.tp += match_count(gt, dets.boxes, iou)
-        if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
-            bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
-            if dets.heads is None and head_detector is not None and len(dets):
-                dets = type(dets)(dets.boxes, dets.scores, dets.labels,
-                                  head_detector.detect(frame, fg, dets.boxes))
-            path = out_dir / "overlays" / name / f"{k:06d}.png"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            cv2.imwrite(str(path), draw_overlay(frame, fg, dets, gt, bb))
+    bar = (progress or no_progress)(total=seq.info.length, desc=name)
+    try:
+        for k, frame in seq.frames():
+            bar.update(1)
+            t0 = time.perf_counter()
+            dets, fg = source.detect(k, frame)
+            c.seconds += time.perf_counter() - t0
+            c.frames += 1
+            if built is not None:
+                built.add(k, dets, fg)
+            frames.append(np.full(len(dets), k))
+            boxes.append(dets.boxes)
+            scores.append(dets.scores)
+            gt = None
+            c.detections += len(dets)
+            if seq.gt is not None:
+                rows = seq.gt.rows_of(k)
+                rows = rows[seq.gt.table.conf[rows] > 0]
+                gt = seq.gt.table.boxes[rows]
+                c.gt += len(gt)
+                c.tp += match_count(gt, dets.boxes, iou)
+            if ov_frames and ov_frames[0] <= k <= ov_frames[1] and frame is not None:
+                bb = None if fg is None else blob_boxes(blobs_from_mask(fg, 20, perimeter=False))
+                if dets.heads is None and head_detector is not None and len(dets):
+                    dets = type(dets)(dets.boxes, dets.scores, dets.labels,
+                                      head_detector.detect(frame, fg, dets.boxes))
+                path = out_dir / "overlays" / name / f"{k:06d}.png"
+                path.parent.mkdir(parents=True, exist_ok=True)
+                cv2.imwrite(str(path), draw_overlay(frame, fg, dets, gt, bb))
+    finally:
+        bar.close()
     n = sum(len(f) for f in frames)
     write_mot(out_dir / "det" / f"{name}.txt",
               np.concatenate(frames) if n else np.zeros(0),
@@ -311,7 +315,7 @@ def app(cfg: DictConfig) -> None:
     out_dir = Path(HydraConfig.get().runtime.output_dir)
     failed = None
     try:
-        table = run_detection(cfg, out_dir, progress=bars_wanted(
+        table = run_detection(cfg, out_dir, progress=progress_factory(
             bool(cfg.get("progress", True)), HydraConfig.get().mode == RunMode.MULTIRUN))
     except DetectionFailed as err:
         table, failed = err.table, err

@@ -63,8 +63,23 @@ def test_run_detection_writes_det_files_metrics_and_overlays(tmp_path):
     assert saved.TP.iloc[-1] == table.TP.iloc[-1] and saved.recall.iloc[-1] > 0.3
     assert sorted(p.name for p in (tmp_path / "overlays" / "pair_walk").iterdir()) == [
         "000003.png", "000004.png"]
-    # the same run gives the same bytes
-    run_detection(cfg, tmp_path / "again")
+    # the same run gives the same bytes; its progress goes through the app's factory (log
+    # lines without a terminal: issue 39 item 8), one step per sequence, every frame counted
+    steps = []
+
+    class Step:
+        def __init__(self, total=0, desc="", unit="frame"):
+            self.total, self.desc, self.n, self.closed = total, desc, 0, False
+            steps.append(self)
+
+        def update(self, n=1):
+            self.n += n
+
+        def close(self):
+            self.closed = True
+
+    run_detection(cfg, tmp_path / "again", progress=Step)
+    assert [(s.desc, s.total, s.n, s.closed) for s in steps] == [("pair_walk", 12, 12, True)]
     assert (tmp_path / "again" / "det" / "pair_walk.txt").read_bytes() == (
         tmp_path / "det" / "pair_walk.txt").read_bytes()
 
