@@ -160,3 +160,46 @@ def union_cover(boxes: np.ndarray, others: np.ndarray, samples: int = 12) -> np.
             hit |= ((px - ox - ow / 2) / (ow / 2)) ** 2 + ((py - oy - oh / 2) / (oh / 2)) ** 2 <= 1.0
         out[k] = hit.mean() if len(hit) else 0.0
     return out
+
+
+# --------------------------------------------------------------- 3.3.2 step 2: the region term of a person behind others
+
+
+@dataclass(frozen=True)
+class WholeRegion:
+    """3.3.2 as written: eq. 5 compares a measurement with a node's whole predicted region,
+    whoever stands in front of it."""
+
+    uses_order: ClassVar[bool] = False
+
+    def delta(self, delta: np.ndarray, pairs: np.ndarray, ratio: np.ndarray,
+              fronts: np.ndarray, pred: np.ndarray) -> np.ndarray:
+        return delta
+
+
+@dataclass(frozen=True)
+class VisibleRegion:
+    """``visible_region``: a person behind others (eq. 3's order at t - 1) can only be
+    measured where the people in front leave it visible, so in stage 1 eq. 5's region term
+    of a node behind others is scaled by its visible share, 1 - the largest share of its
+    predicted region one node in front covers (from eq. 2's ratio: |S_a & S_b| = ratio
+    (|S_a| + |S_b|)). A measurement that meets a pair of O is then the front person's
+    unless the colours say otherwise: a measurement merged over two tracked people is an
+    occlusion, its person in front the one measured."""
+
+    uses_order: ClassVar[bool] = True  # reads eq. 3's order of the pairs of O
+
+    def delta(self, delta: np.ndarray, pairs: np.ndarray, ratio: np.ndarray,
+              fronts: np.ndarray, pred: np.ndarray) -> np.ndarray:
+        """(B, D) region terms from (B, D) ``delta``; ``pairs`` (K, 2) node rows of O with
+        eq. 2's ``ratio`` (K,) and ``fronts`` (K,) bool, True when the pair's first node is
+        in front; ``pred`` (B, 4) predicted regions."""
+        if not len(pairs):
+            return delta
+        area = pred[:, 2] * pred[:, 3]  # pi / 4 cancels
+        front = np.where(fronts, pairs[:, 0], pairs[:, 1])
+        back = np.where(fronts, pairs[:, 1], pairs[:, 0])
+        covered = ratio * (area[front] + area[back]) / np.maximum(area[back], 1e-9)
+        hidden = np.zeros(len(pred))
+        np.maximum.at(hidden, back, np.clip(covered, 0.0, 1.0))
+        return delta * (1.0 - hidden)[:, None]

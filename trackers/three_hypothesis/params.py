@@ -216,6 +216,10 @@ class Adaptations:
             the person matched to it in front is corrected with R divided by the share of the
             measured region its unmatched partners in O do not cover
             (``contact.MergedMotion``); False: with R (the paper, 3.3.3).
+        visible_region: in stage 1, eq. 5's region term of a node behind others (eq. 3's
+            order at t - 1) is scaled by the share of its predicted region the nodes in
+            front leave visible (``contact.VisibleRegion``); False: the whole region (the
+            paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -244,6 +248,7 @@ class Adaptations:
     merged_appearance: bool = False
     split_parts: bool = False
     merged_motion: bool = False
+    visible_region: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -255,7 +260,8 @@ class Adaptations:
                       "tentative_stage1_only": bool, "inherit_hidden_id": bool,
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
                       "contact_region": bool, "merged_appearance": bool,
-                      "split_parts": bool, "merged_motion": bool})
+                      "split_parts": bool, "merged_motion": bool,
+                      "visible_region": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -280,7 +286,7 @@ class Adaptations:
                    filter_size=False, shape_gate=0.0, early_confirm=0,
                    early_confirm_score=0.0, report_memory=0.0, contact_region=False,
                    merged_appearance=False, split_parts=False,
-                   merged_motion=False)
+                   merged_motion=False, visible_region=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -24,6 +24,8 @@ from occbench.trackers.three_hypothesis.contact import (
     MergedAppearance,
     MergedMotion,
     SplitParts,
+    VisibleRegion,
+    WholeRegion,
 )
 from occbench.trackers.three_hypothesis.hypotheses import PRIORITY
 from occbench.trackers.three_hypothesis.motion import (
@@ -392,6 +394,7 @@ class Rules(NamedTuple):
     stage1_appearance: AbsoluteAppearance | AppearanceMargin
     contact: AppearanceAtContact | RegionAtContact  # eq. 4 between people in O (3.3.2)
     parts: AnyLeftover | SplitParts  # what stage 2 may match (3.3.2 steps 5-8)
+    region: WholeRegion | VisibleRegion  # eq. 5's region term of a node behind others
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
     motion_front: MeasurementMotion | MergedMotion  # R of a person in front (3.3.3)
@@ -425,6 +428,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         stage1_appearance=AppearanceMargin() if a.appearance_margin else AbsoluteAppearance(),
         contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
+        region=VisibleRegion() if a.visible_region else WholeRegion(),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         motion_front=MergedMotion() if a.merged_motion else MeasurementMotion(),

@@ -79,6 +79,7 @@ class Frame:
     delta: csr_array = None  # (B, D) region similarity (eq. 5) of predictions and V, sparse:
     # stored for the pairs whose boxes meet (0 elsewhere)
     pairs: np.ndarray = None  # O (eq. 2): (K, 2) node index rows (a, b), a < b
+    pair_ratio: np.ndarray = None  # (K,) eq. 2's overlap ratio of each pair
     matches: Matches = None
     matched: dict[int, tuple[int, int, int, float]] = None  # person -> (det, node, stage, rho)
     in_front: dict[int, list[int]] = field(default_factory=dict)  # node -> persons in front

@@ -42,6 +42,7 @@ class OcclusionSteps:
         f.delta = csr_array((delta[~node], (ia[~node], ib[~node] - nb)), shape=(nb, len(f.dets)))
         ratio = 0.5 * delta[node]  # eq. 2's ratio of the node pairs
         f.pairs = np.column_stack([ia[node], ib[node]])[ratio > self.occlusion.lam].astype(int)
+        f.pair_ratio = ratio[ratio > self.occlusion.lam]  # eq. 2's ratio of each pair of O
 
     def _associate(self, f: Frame) -> None:
         """MaxSimilarity (3.3.2): stage 1 over intersecting regions, cost (1 - rho) +
@@ -97,6 +98,11 @@ class OcclusionSteps:
         nodes = np.flatnonzero(np.isin(f.owners, rows))
         owners = np.searchsorted(rows, f.owners[nodes])
         delta = f.delta.toarray() if whole else f.delta[nodes][:, cols].toarray()
+        if 1 in stages and rules.region.uses_order and len(f.pairs) and len(nodes):
+            at = np.minimum(np.searchsorted(nodes, f.pairs), len(nodes) - 1)
+            inside = (nodes[at] == f.pairs).all(axis=1)  # pairs of O within the block
+            delta = rules.region.delta(delta, at[inside], f.pair_ratio[inside],
+                                       self._fronts(f)[inside], f.pred[nodes])
         pred, dets = f.pred[nodes], f.dets[cols]
         admissible = rules.shape.admissible(pred, dets, owners, delta,
                                             None if s.seen is None else s.seen[nodes])
@@ -133,6 +139,18 @@ class OcclusionSteps:
         square = np.column_stack([centre - r[:, None], 2 * r, 2 * r])
         ia, ib = meeting_pairs(square, f.dets[free], pad=1.0)
         return np.searchsorted(left, f.owners[nodes[ia]]), ib
+
+    def _fronts(self, f: Frame) -> np.ndarray:
+        """(K,) bool per pair (a, b) of O: a in front of b by pi^{t-1} (eq. 3), unknown:
+        the lower region in front (``reading:eq3_tie``)."""
+        keys = [person.key for person in f.persons]
+        own, pi = f.owners.tolist(), self._pi
+        bottom = f.pred[:, 1] + f.pred[:, 3]
+        out = np.empty(len(f.pairs), dtype=bool)
+        for k, (a, b) in enumerate(f.pairs.tolist()):
+            order = pi.get((keys[own[a]], keys[own[b]]), 0)
+            out[k] = order > 0 if order else bottom[a] >= bottom[b]
+        return out
 
     def _sort_occlusions(self, f: Frame) -> None:
         """pi (eq. 3) of every pair in O, from who is visible at t: the visible one is in

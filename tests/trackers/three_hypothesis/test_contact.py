@@ -16,6 +16,8 @@ from occbench.trackers.three_hypothesis.contact import (
     MergedAppearance,
     MergedMotion,
     SplitParts,
+    VisibleRegion,
+    WholeRegion,
     own_shares,
     union_cover,
 )
@@ -104,3 +106,22 @@ def test_merged_measurement_corrects_m_by_its_own_share_only():
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).motion_front, MeasurementMotion)
     assert isinstance(build_rules(Adaptations(merged_motion=True), h).motion_front, MergedMotion)
+
+
+def test_region_term_of_a_node_behind_is_scaled_by_its_visible_share():
+    """Two nodes of one size in O; eq. 2's ratio 0.25 means half of either region lies in
+    the other. The node behind keeps half of its region term, the node in front all of it;
+    wholly covered (ratio 0.5), the node behind has none; the paper keeps both whole."""
+    pred = np.array([[0.0, 0, 10, 20], [5.0, 0, 10, 20]])
+    delta = np.array([[0.8, 0.2], [0.6, 0.4]])
+    pairs = np.array([[0, 1]])
+    assert WholeRegion().delta(delta, pairs, np.array([0.25]), np.array([True]), pred) is delta
+    rule = VisibleRegion()
+    assert np.allclose(rule.delta(delta, pairs, np.array([0.25]), np.array([True]), pred),
+                       [[0.8, 0.2], [0.3, 0.2]])
+    assert np.allclose(rule.delta(delta, pairs, np.array([0.25]), np.array([False]), pred),
+                       [[0.4, 0.1], [0.6, 0.4]])
+    assert np.allclose(rule.delta(delta, pairs, np.array([0.5]), np.array([True]), pred)[1], 0)
+    h = EllipseHistogrammer()
+    assert isinstance(build_rules(Adaptations.paper(), h).region, WholeRegion)
+    assert isinstance(build_rules(Adaptations(visible_region=True), h).region, VisibleRegion)
