@@ -245,7 +245,7 @@ class Adaptations:
     early_confirm_score: float = 0.0
     report_memory: float = 1.0
     contact_region: bool = False
-    merged_appearance: bool = False
+    merged_appearance: bool = True
     split_parts: bool = False
     merged_motion: bool = False
     visible_region: bool = False
