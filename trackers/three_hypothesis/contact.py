@@ -1,5 +1,6 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
-says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``),
+says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
+``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``),
 ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
@@ -203,3 +204,43 @@ class VisibleRegion:
         hidden = np.zeros(len(pred))
         np.maximum.at(hidden, back, np.clip(covered, 0.0, 1.0))
         return delta * (1.0 - hidden)[:, None]
+
+
+# --------------------------------------------------------------- 3.3.2 step 2: appearance of a pair of O
+
+
+@dataclass(frozen=True)
+class AppearanceAtContact:
+    """3.3.2 as written: at a contact too, stage 1 weighs the appearance term of each pair
+    (eq. 4) as for any other pair."""
+
+    def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
+        return appearance
+
+
+@dataclass(frozen=True)
+class RegionAtContact:
+    """``contact_region``: a merged measurement is an occlusion. When two people are in O
+    (eq. 2: their predicted regions overlap by more than lambda) and one measurement meets
+    both in stage 1, its histogram p (eq. 1, over the measurement's ellipse) holds both
+    people's pixels, so eq. 4 cannot tell which of them it is: both pairs get the mean of
+    their appearance terms, and the region term (eq. 5, the motion model's prediction)
+    decides between them. Pairs of people not in O keep their appearance term."""
+
+    def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
+        """``appearance`` (rho (P, D), admissible (P, D) bool) -> (P, D) wrapped so that
+        the persons of every pair of O (``pairs``: (K, 2) node rows; ``owners``: (B,)
+        person of each node) share one term on every measurement admissible to both."""
+        if not len(pairs):
+            return appearance
+        persons = np.unique(np.sort(owners[pairs], axis=1), axis=0)  # (K', 2) i < j
+        persons = persons[persons[:, 0] != persons[:, 1]]
+
+        def evidence(rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
+            a = np.array(appearance(rho, admissible), dtype=np.float64)
+            for i, j in persons.tolist():
+                both = admissible[i] & admissible[j]  # (D,) measurements meeting both
+                a[i, both] = a[j, both] = 0.5 * (a[i, both] + a[j, both])
+            return a
+
+        return evidence

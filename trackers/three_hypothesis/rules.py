@@ -19,15 +19,16 @@ from occbench.trackers.three_hypothesis._kernels import blend
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
+    AppearanceAtContact,
     MeasurementAppearance,
     MeasurementMotion,
     MergedAppearance,
     MergedMotion,
+    RegionAtContact,
     SplitParts,
     VisibleRegion,
     WholeRegion,
 )
-from occbench.trackers.three_hypothesis.hypotheses import PRIORITY
 from occbench.trackers.three_hypothesis.motion import (
     BoxState,
     CentreState,
@@ -36,6 +37,7 @@ from occbench.trackers.three_hypothesis.motion import (
     PredictedBehind,
 )
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle
+from occbench.trackers.three_hypothesis.reported import FirstHypothesis, LeastContradicted, ReportRule
 from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
 from occbench.trackers.three_hypothesis.tentative import (
     AfterMatches,
@@ -117,43 +119,6 @@ class AppearanceMargin:
         r = np.where(admissible, rho, 0.0)
         rival = np.maximum(_rival(r, axis=0), _rival(r, axis=1))
         return np.clip(r - rival, 0.0, 1.0)
-
-
-@dataclass(frozen=True)
-class AppearanceAtContact:
-    """3.3.2 as written: at a contact too, stage 1 weighs the appearance term of each pair
-    (eq. 4) as for any other pair."""
-
-    def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
-        return appearance
-
-
-@dataclass(frozen=True)
-class RegionAtContact:
-    """``contact_region``: a merged measurement is an occlusion. When two people are in O
-    (eq. 2: their predicted regions overlap by more than lambda) and one measurement meets
-    both in stage 1, its histogram p (eq. 1, over the measurement's ellipse) holds both
-    people's pixels, so eq. 4 cannot tell which of them it is: both pairs get the mean of
-    their appearance terms, and the region term (eq. 5, the motion model's prediction)
-    decides between them. Pairs of people not in O keep their appearance term."""
-
-    def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
-        """``appearance`` (rho (P, D), admissible (P, D) bool) -> (P, D) wrapped so that
-        the persons of every pair of O (``pairs``: (K, 2) node rows; ``owners``: (B,)
-        person of each node) share one term on every measurement admissible to both."""
-        if not len(pairs):
-            return appearance
-        persons = np.unique(np.sort(owners[pairs], axis=1), axis=0)  # (K', 2) i < j
-        persons = persons[persons[:, 0] != persons[:, 1]]
-
-        def evidence(rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
-            a = np.array(appearance(rho, admissible), dtype=np.float64)
-            for i, j in persons.tolist():
-                both = admissible[i] & admissible[j]  # (D,) measurements meeting both
-                a[i, both] = a[j, both] = 0.5 * (a[i, both] + a[j, both])
-            return a
-
-        return evidence
 
 
 def _rival(x: np.ndarray, axis: int) -> np.ndarray:
@@ -319,70 +284,6 @@ class HiddenIdentity:
             if candidate[i] and iou >= best_iou:
                 best, best_iou = i, iou
         return best
-
-
-# --------------------------------------------------------------- output: which hypothesis is reported
-
-
-@dataclass(frozen=True)
-class LeastContradicted:
-    """Our reading (``life_cycle.reported_hypothesis``; the paper draws every hypothesis,
-    Figs. 3-5): the hypothesis least
-    contradicted by Alg. 1's own pruning criterion: covered by a visible person first (it
-    explains the missing detection), then fewest frames in plain view, then velocity >
-    occluder > still."""
-
-    def choose(self, kinds: list[str], exposed: list[int], covered: list[bool]) -> int:
-        """Index of the reported hypothesis among a hidden person's branches."""
-        return min(range(len(kinds)),
-                   key=lambda i: (not covered[i], exposed[i], PRIORITY.get(kinds[i], 0)))
-
-
-@dataclass(frozen=True)
-class FirstHypothesis:
-    """The other reading (``life_cycle.reported_hypothesis``): hypothesis 1 (velocity, the one Alg. 1 makes for every missing
-    person) while it lives, then occluder, then still."""
-
-    def choose(self, kinds: list[str], exposed: list[int], covered: list[bool]) -> int:
-        return min(range(len(kinds)), key=lambda i: PRIORITY.get(kinds[i], 0))
-
-
-@dataclass(frozen=True)
-class ReportRule:
-    """Whether a hidden person's best hypothesis is reported as OCCLUDED (else only drawn).
-
-    ``exposed``: frames it may stand in plain view (the paper: until pruned); ``spread``:
-    largest standard deviation of its centre, in person widths (0: any, the paper);
-    ``support`` (``report_support``): with a foreground mask, smallest foreground share of
-    its ellipse (0: any, the paper): a hidden person is behind someone, whose pixels are
-    foreground, or undetected in view on its own; an ellipse mostly on bare floor holds
-    nobody."""
-
-    exposed: int
-    spread: float
-    support: float = 0.0
-    memory: float = 0.0  # ``report_memory``: frames unmatched per match, 0: any
-
-    def shares(self, histograms: EllipseHistogrammer, foreground: np.ndarray | None,
-               boxes: np.ndarray) -> np.ndarray | None:
-        """(N,) foreground share of each (N, 4) xywh hypothesis box's ellipse when
-        ``support`` needs it, else None."""
-        if self.support <= 0 or foreground is None:
-            return None
-        return histograms.foreground_share(foreground, boxes)
-
-    def reported(self, hypothesis, hits: int = 1, misses: int = 0) -> bool:
-        """``hypothesis``: a hypothesis branch (``covered``, ``exposed``, ``unseen``,
-        ``share``, Kalman ``x`` (8,) and ``P`` (8, 8)) of a person matched ``hits`` times
-        and unmatched for ``misses`` frames. A region seen empty is never reported; with
-        ``memory``, one nobody covers only while misses <= memory x hits."""
-        h = hypothesis
-        if h.unseen or (not h.covered and h.exposed > self.exposed) or h.share < self.support:
-            return False
-        if self.memory > 0 and not h.covered and misses > self.memory * hits:
-            return False
-        P = h.P
-        return not (self.spread > 0 and max(P[0, 0], P[1, 1]) > (self.spread * h.x[2]) ** 2)
 
 
 class Rules(NamedTuple):
