@@ -17,7 +17,7 @@ VELOCITY = "velocity"
 OCCLUDER = "occluder"
 STILL = "still"
 KINDS = (VELOCITY, OCCLUDER, STILL)
-# preference among equally plausible hypotheses (rules.LeastContradicted, FirstHypothesis)
+# preference among equally plausible hypotheses (reported.LeastContradicted, FirstHypothesis)
 PRIORITY = {VELOCITY: 0, OCCLUDER: 1, STILL: 2}
 
 

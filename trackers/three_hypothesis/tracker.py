@@ -33,7 +33,7 @@ not have are ``params.Adaptations``, applied through ``rules``; ``docs/adaptatio
 lists them all.
 
 Output per person per frame: CONFIRMED (matched), OCCLUDED (one hypothesis of a hidden
-confirmed person, ``rules.choice``; ``rules.ReportRule`` decides whether it is reported),
+confirmed person, ``rules.choice``; ``reported.ReportRule`` decides whether it is reported),
 HYPOTHESIS (its other hypotheses), TENTATIVE. ``Track.extra`` holds {'ellipse',
 'hypothesis', 'occluder', 'depth', 'node'}. Boxes are (N, 4) float64 xywh, 0-based pixels.
 """
