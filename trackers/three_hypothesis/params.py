@@ -220,6 +220,10 @@ class Adaptations:
             order at t - 1) is scaled by the share of its predicted region the nodes in
             front leave visible (``contact.VisibleRegion``); False: the whole region (the
             paper, 3.3.2).
+        measured_hypothesis: hypothesis 1 of a person just missed moves with the velocity of
+            the least-squares line through its last m measured centres when that line has
+            predicted its measurements better than M so far (``measured_line.MeasuredLine``);
+            False: with M's velocity (the paper, 3.3.3 case 1).
     """
 
     gate_sigmas: float = 3.0
@@ -249,6 +253,7 @@ class Adaptations:
     split_parts: bool = False
     merged_motion: bool = False
     visible_region: bool = False
+    measured_hypothesis: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -261,7 +266,7 @@ class Adaptations:
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
                       "contact_region": bool, "merged_appearance": bool,
                       "split_parts": bool, "merged_motion": bool,
-                      "visible_region": bool})
+                      "visible_region": bool, "measured_hypothesis": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -286,7 +291,8 @@ class Adaptations:
                    filter_size=False, shape_gate=0.0, early_confirm=0,
                    early_confirm_score=0.0, report_memory=0.0, contact_region=False,
                    merged_appearance=False, split_parts=False,
-                   merged_motion=False, visible_region=False)
+                   merged_motion=False, visible_region=False,
+                   measured_hypothesis=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

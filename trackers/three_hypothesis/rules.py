@@ -29,6 +29,7 @@ from occbench.trackers.three_hypothesis.contact import (
     VisibleRegion,
     WholeRegion,
 )
+from occbench.trackers.three_hypothesis.measured_line import FilterVelocity, MeasuredLine
 from occbench.trackers.three_hypothesis.motion import (
     BoxState,
     CentreState,
@@ -296,6 +297,7 @@ class Rules(NamedTuple):
     contact: AppearanceAtContact | RegionAtContact  # eq. 4 between people in O (3.3.2)
     parts: AnyLeftover | SplitParts  # what stage 2 may match (3.3.2 steps 5-8)
     region: WholeRegion | VisibleRegion  # eq. 5's region term of a node behind others
+    line: FilterVelocity | MeasuredLine  # hypothesis 1's velocity (3.3.3, case 1)
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
     motion_front: MeasurementMotion | MergedMotion  # R of a person in front (3.3.3)
@@ -330,6 +332,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         region=VisibleRegion() if a.visible_region else WholeRegion(),
+        line=MeasuredLine(life_cycle.m) if a.measured_hypothesis else FilterVelocity(),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         motion_front=MergedMotion() if a.merged_motion else MeasurementMotion(),

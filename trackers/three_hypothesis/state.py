@@ -45,6 +45,8 @@ class Person:
     hits: int = 1
     misses: int = 0
     spawned: bool = False  # occlusion hypotheses created in this hidden streak
+    centres: list = field(default_factory=list)  # (frame, xc, yc) last measured (rules.line)
+    line_errors: list = field(default_factory=lambda: [0.0, 0.0])  # M's, the line's
 
     @property
     def confirmed(self) -> bool:

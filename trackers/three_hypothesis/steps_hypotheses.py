@@ -48,7 +48,9 @@ class HypothesisSteps:
                 fronts = in_front.get(n, [])
                 occluder = old.occluder if kind == hyp.OCCLUDER else (
                     persons[fronts[0]].key if fronts else None)
-                new.append(Branch(kind, f.Xp[n], f.Pp[n], node=old.node, occluder=occluder,
+                x = (self.rules.line.start(person, f.x_prev[n], f.Xp[n]) if old.kind == VISIBLE
+                     else f.Xp[n])  # hypothesis 1's velocity at the first miss
+                new.append(Branch(kind, x, f.Pp[n], node=old.node, occluder=occluder,
                                    exposed=old.exposed, depth=len(fronts)))
                 sources.append(n)
                 seen = [j for j in fronts if j in matched]

@@ -67,6 +67,7 @@ class UpdateSteps:
             if person.confirmed or d not in empty_dets:
                 person.hits += 1
             person.misses = 0
+            rules.line.record(person, self._frame, dbox[r], f.Xp[n])
             person.spawned = False
             if not person.confirmed and rules.confirm.confirms(
                     person.hits, self.life_cycle.confirm_frames, clear.get(d, False),

@@ -1,0 +1,40 @@
+"""Hypothesis 1's velocity (occbench.trackers.three_hypothesis.measured_line): M's, or the
+line through the last measured centres when it has predicted them better; hand cases."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from occbench.trackers.three_hypothesis import Adaptations
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.measured_line import FilterVelocity, MeasuredLine
+from occbench.trackers.three_hypothesis.rules import build_rules
+
+
+def _walker(rule, predicted_vx: float):
+    """A person measured at xc = 10 + 3 t (t = 1..6, boxes 10 x 20) while M predicts each
+    centre with velocity ``predicted_vx`` from the previous one."""
+    person = SimpleNamespace(centres=[], line_errors=[0.0, 0.0])
+    for t in range(1, 7):
+        xc = 10.0 + 3 * t
+        predicted = np.array([xc - 3 + predicted_vx, 10.0, 10, 20, predicted_vx, 0, 0, 0])
+        rule.record(person, t, np.array([xc - 5, 0.0, 10, 20]), predicted)
+    return person
+
+
+def test_hypothesis_1_takes_the_measured_line_when_it_predicted_better():
+    rule = MeasuredLine(window=4)
+    x_prev = np.array([28.0, 10.0, 10, 20, 1.0, 0, 0, 0])  # M's estimate at t = 6, lagging
+    x_pred = x_prev + np.array([1.0, 0, 0, 0, 0, 0, 0, 0])
+    lagging = _walker(rule, 1.0)  # M predicts 1 px/frame, the person walks 3
+    assert len(lagging.centres) == 4 and lagging.line_errors[1] < lagging.line_errors[0]
+    x = rule.start(lagging, x_prev, x_pred)
+    assert np.allclose(x[[0, 4]], [31.0, 3.0]) and np.allclose(x[2:4], x_pred[2:4])
+    exact = _walker(rule, 3.0)  # M predicts exactly: its velocity stays
+    assert rule.start(exact, x_prev, x_pred) is x_pred
+    assert FilterVelocity().start(lagging, x_prev, x_pred) is x_pred
+    h = EllipseHistogrammer()
+    assert isinstance(build_rules(Adaptations.paper(), h).line, FilterVelocity)
+    assert build_rules(Adaptations(measured_hypothesis=True), h).line == MeasuredLine(8)
