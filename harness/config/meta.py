@@ -148,12 +148,6 @@ def run_nodes(run_dir: str | Path, names: Iterable[str]) -> dict[str, Any]:
     return config_nodes(cfg if isinstance(cfg, dict) else {}, list(names))
 
 
-def of_run(run_dir: str | Path, names: Iterable[str]) -> dict[str, TrackerMeta]:
-    """``metas`` of the trackers ``names`` of a finished run folder."""
-    names = list(names)
-    return metas(names, run_nodes(run_dir, names))
-
-
 def first_of_ours(names: Iterable[str], found: Mapping[str, TrackerMeta]) -> str | None:
     """The tracker a view ranks on when none is named: the first of ours, else the first
     in paper mode, else the first that is not the baseline, else the first; None for none."""

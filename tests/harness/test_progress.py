@@ -85,9 +85,10 @@ def test_a_long_step_without_a_terminal_says_where_it_is():
 
     ear = Ear()
     logger = logging.getLogger("occbench.progress")
-    level = logger.level
+    level, propagate = logger.level, logger.propagate
     logger.addHandler(ear)
     logger.setLevel(logging.INFO)
+    logger.propagate = False  # other tests' root handlers (closed streams) hear nothing
     try:
         progress = LogProgress(every=0.05)
         outer = progress.bar(total=8, desc="sequences", unit="seq")
@@ -101,3 +102,4 @@ def test_a_long_step_without_a_terminal_says_where_it_is():
     finally:
         logger.removeHandler(ear)
         logger.setLevel(level)
+        logger.propagate = propagate
