@@ -12,7 +12,7 @@ config.yaml) and prints the COMBINED comparison table. Examples::
     python -m occbench +external.sort=path/to/results   # score another tracker's files too
 
 The job returns the objective for sweepers: the COMBINED ``objective.metric`` of
-``objective.tracker`` (default IDF1 of the first tracker).
+``objective.tracker`` (default IDF1 of the first of our trackers that ran, else the first).
 
 Ctrl-C and SIGTERM (``occbench.errors.Terminated``, raised by ``occbench.commands.cli.run``'s
 handler) stop the run: it marks its metrics and summary interrupted and writes errors.txt on the way
@@ -96,7 +96,7 @@ def run_app(cfg: DictConfig) -> float:
         _stopped(err, out_dir)
     if multirun:  # one line per job; the sweep's summary is printed when the multirun ends
         log.info("job %s [%s]: %s %s = %.4g", hc.job.num, " ".join(hc.overrides.task),
-                 objective.get("tracker") or result.trackers[0],
+                 result.objective_tracker(objective.get("tracker")),
                  objective.get("metric") or "IDF1", value)
     else:
         from occbench.report.tables import comparison, to_text

@@ -68,9 +68,19 @@ class ExperimentResult:
     def ok(self) -> bool:
         return not self.failures
 
+    def objective_tracker(self, tracker: str | None = None) -> str | None:
+        """``tracker``, else the first of ours that ran (``occbench.config.meta.first_of_ours``,
+        the rule of the sweep page's best settings: never the baseline beside one of ours)."""
+        from occbench.config.meta import first_of_ours, metas, run_nodes
+
+        if tracker:
+            return tracker
+        return first_of_ours(self.trackers, metas(self.trackers,
+                                                  run_nodes(self.out_dir, self.trackers)))
+
     def objective(self, tracker: str | None = None, metric: str = "IDF1") -> float:
-        """COMBINED ``metric`` of ``tracker`` (default: the first tracker)."""
-        tracker = tracker or (self.trackers[0] if self.trackers else None)
+        """COMBINED ``metric`` of ``tracker`` (default: ``objective_tracker``)."""
+        tracker = self.objective_tracker(tracker)
         if tracker not in self.trackers:
             raise RunError(f"objective.tracker {tracker!r} is not in this run: {self.trackers}")
         if metric not in self.metrics.columns or metric in ("tracker", "sequence"):

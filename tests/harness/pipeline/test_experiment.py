@@ -43,6 +43,11 @@ def test_experiment_writes_run_directory(tmp_path, mot_root):
     with pytest.raises(RunError, match="not a metric column"):
         result.objective(None, "NOPE")
     assert "dataset:" in (out / "config.yaml").read_text()
+    # with several trackers and no objective.tracker: the first of ours, never the baseline
+    # listed first (the sweep page's rule; issue 39 item 6)
+    result.trackers = ["baseline", "reta"]
+    assert result.objective_tracker() == "reta" and result.objective_tracker("baseline") == \
+        "baseline"
     summary = (out / "summary.md").read_text()
     assert "| baseline |" in summary and "COMBINED" in summary
 
