@@ -28,6 +28,7 @@ from occbench.trackers.layered._kernels import (
     _pair_scores_kernel,
     _scores_kernel,
     box_scores_kernel,
+    survival_bounds,
 )
 from occbench.trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
 
@@ -156,16 +157,42 @@ def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, 
                                _weights(gamma, N_PARTS, "gamma"), _theta(models))
 
 
+def _bounds(models: FeatureModels) -> np.ndarray | None:
+    """``_kernels.survival_bounds`` of the models, made once per models object (about
+    60,000 values of p(x | theta)); None when a mixture has a sigma <= 0 or a non-finite
+    parameter (no bound is then taken)."""
+    w, mu, s = _theta(models)
+    if not (np.isfinite(w).all() and np.isfinite(mu).all() and np.isfinite(s).all()
+            and (s > 0).all()):
+        return None
+    held = _BOUNDS.get(id(models))
+    if held is None or held[0] is not models:
+        if len(_BOUNDS) >= 8:
+            _BOUNDS.clear()
+        held = _BOUNDS[id(models)] = (models, survival_bounds(_theta(models)))
+    return held[1]
+
+
+_BOUNDS: dict[int, tuple] = {}
+"""``_bounds``' tables by ``id`` of their models (which they hold, so the id stays theirs)."""
+
+
 def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatureExtractor,
                boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray,
                misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
-               spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+               spread: float = 1.0, best_of: int = 0, grouped: int = 0
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 of (K, 4) xywh boxes of the extractor's frame (split at alpha, beta (K,)),
     each against the model of its target ti[k]: equal bit for bit to ``pair_scores(models,
     model, extractor.extract(boxes, alpha, beta), ti, arange(K), ...)``, without making the
     boxes' (K, 5, B) histograms (``_kernels.box_scores_kernel``). For the search's boxes
     (PBM 3.1: 25 per searched pair, one kept), whose features are then extracted for the
     kept ones only.
+
+    ``best_of`` > 0: the first ``grouped`` boxes are consecutive groups of ``best_of`` of
+    which only the first maximum of p is used (the search's); a box whose upper bound of
+    p (``_kernels._score_bound``) is below a scored box's p of its group is not scored
+    (p -inf, p_j NaN): it cannot be that maximum, and the others keep their bits.
 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
@@ -177,9 +204,17 @@ def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatur
     if model.hsv.shape[2] != extractor.bins**3 or model.xyz.shape[2] != extractor.bins**3:
         raise ValueError(f"histogram bins differ: model {model.hsv.shape[2]}, "
                          f"extractor {extractor.bins**3}")
+    if best_of < 0 or not 0 <= grouped <= len(b) or (best_of and grouped % best_of):
+        raise ValueError(f"groups of {best_of} must tile the first {grouped} of {len(b)} boxes")
+    table = _bounds(models) if best_of > 0 else None
+    groups = (best_of, grouped, table) if table is not None else (0, 0, _NO_TABLE)
     return box_scores_kernel(b, ti, ratios, sampling, _arrays(model), _misses(misses, len(model)),
                              (float(spread), _weights(omega, N_FEATURES, "omega"),
-                              _weights(gamma, N_PARTS, "gamma")), _theta(models))
+                              _weights(gamma, N_PARTS, "gamma")), _theta(models), groups)
+
+
+_NO_TABLE = np.zeros((0, 0, 0))
+"""``box_scores_kernel``'s table when no box is bounded (never read)."""
 
 
 def ambiguous(scores: np.ndarray, threshold: float, margin: float) -> tuple[int, int, bool]:

@@ -280,8 +280,8 @@ class PBMTracker:
                             align_boxes if len(align_q) else np.zeros((0, 4))])
         tis = np.concatenate([sti.repeat(m), ti[align_q]])
         f, ex = self.features, self._search_extractor  # eqs. 11-13 of box k against target tis[k]
-        pj, p = box_scores(f.models, model, ex, B, alpha_t[tis], beta_t[tis], tis,
-                           self.rules.gap.misses(targets), f.omega, f.gamma, self.adaptations.model_spread)
+        pj, p = box_scores(f.models, model, ex, B, alpha_t[tis], beta_t[tis], tis, self.rules.gap.misses(
+            targets), f.omega, f.gamma, self.adaptations.model_spread, m, len(search_q) * m)  # best of m
         kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q, align_q, m)
         feats = ex.extract(B[k], alpha_t[tis[k]], beta_t[tis[k]])
         return kept, p_h, pj_h, feats, np.arange(len(k)), dof

@@ -11,6 +11,7 @@ from pbm_scenes import random_models
 
 from occbench.trackers.layered._kernels import rho_bins
 from occbench.trackers.layered.association import layered_scores
+from occbench.trackers.layered.feature_models import load_feature_models
 from occbench.trackers.layered.parts import N_FEATURES, N_PARTS
 
 
@@ -151,3 +152,67 @@ def test_box_scores_have_the_bits_of_extract_then_pair_scores(bins, with_fg):
                    omega, gamma, 2.5)
     with pytest.raises(ValueError, match="one per box"):
         box_scores(models, model, ex, boxes, alpha, beta, ti[:-1], misses, omega, gamma, 2.5)
+
+
+def test_survival_bounds_bound_every_x_of_their_cell():
+    """``survival_bounds``' entry for x's cell is >= p(x | theta) (``FeatureModels``' own
+    kernel) at cell edges, just below them, inside cells and beyond x = 1."""
+    from occbench.trackers.layered._kernels import BOUND_CELLS, survival_bounds
+    from occbench.trackers.layered.association import _theta
+
+    rng = np.random.default_rng(5)
+    for models in (random_models(rng), load_feature_models()):
+        table = survival_bounds(_theta(models))
+        edges = np.arange(BOUND_CELLS + 1) / BOUND_CELLS
+        x = np.concatenate([edges, np.nextafter(edges[1:], 0.0), rng.uniform(0, 1, 4000),
+                            [1.5, 7.0, np.inf]])
+        sv = models.match_probability(np.broadcast_to(x[:, None, None], (len(x), N_FEATURES, N_PARTS)))
+        cell = np.minimum(np.floor(x * BOUND_CELLS), BOUND_CELLS).astype(int)
+        assert (table[:, :, cell].transpose(2, 0, 1) >= sv).all()
+
+
+def test_search_groups_keep_the_bits_of_each_groups_first_maximum():
+    """``box_scores(best_of=25, grouped=...)`` (the search: only each group's first maximum
+    counts) leaves unscored (p -inf) only boxes whose full score is below their group's
+    maximum, gives every scored box its bits, hence the same first maximum, and scores
+    boxes past the groups as before; a group with a NaN score and a group of ties are
+    scored whole."""
+    from occbench.trackers.layered.association import box_scores
+    from occbench.trackers.layered.parts import PartFeatureExtractor
+
+    rng = np.random.default_rng(8)
+    frame = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    fg = rng.random((120, 160)) < 0.7
+    ex = PartFeatureExtractor(4, 21, 9)
+    ex.start(frame, fg)
+    G, T, m = 12, 4, 25
+    heads = np.column_stack([rng.uniform(20, 140, G), rng.uniform(0, 60, G)])
+    scale = 1.0 + 0.1 * np.arange(-2, 3)
+    w = (20 * scale)[:, None].repeat(5, 1).ravel()
+    h = (50 * scale)[None, :].repeat(5, 0).ravel()
+    boxes = np.concatenate([np.column_stack([hx - 0.5 * w, np.full(m, hy), w, h])
+                            for hx, hy in heads] + [rng.uniform(10, 60, (7, 4))])
+    boxes[m:2 * m] = boxes[m]  # a group of ties
+    K = len(boxes)
+    ti = np.concatenate([rng.integers(0, T, G).repeat(m), rng.integers(0, T, 7)])
+    ti[2 * m:3 * m] = T  # the NaN model's group
+    alpha, beta = np.full(K, 0.5), np.full(K, 0.5)
+    model = ex.extract(np.vstack([boxes[::m][:T] + rng.normal(0, 2, (T, 4)), boxes[:1]]), 0.5, 0.5)
+    model.hsv[T, 1, :] = np.nan  # every box of group 2 scores NaN
+    misses = np.zeros(T + 1)
+    models, omega, gamma = load_feature_models(), np.ones(N_FEATURES), np.ones(N_PARTS)
+    ref_pj, ref_p = box_scores(models, model, ex, boxes, alpha, beta, ti, misses, omega, gamma, 4.5)
+    pj, p = box_scores(models, model, ex, boxes, alpha, beta, ti, misses, omega, gamma, 4.5, m, G * m)
+    scored = p != -np.inf
+    assert np.isnan(ref_p[2 * m:3 * m]).all() and scored[m:3 * m].all()
+    assert p[scored].tobytes() == ref_p[scored].tobytes()
+    assert pj[scored].tobytes() == ref_pj[scored].tobytes()
+    group_max = np.where(np.isnan(ref_p), -np.inf, ref_p)[:G * m].reshape(G, m).max(axis=1).repeat(m)
+    assert (ref_p[:G * m][~scored[:G * m]] < group_max[~scored[:G * m]]).all()
+    assert np.count_nonzero(~scored) >= G * m // 2  # the bound prunes
+    def first(v):  # carved_rows' choice: the first NaN, else the first maximum
+        return [int(np.argmax(np.nan_to_num(g, nan=np.inf))) for g in v[:G * m].reshape(G, m)]
+
+    assert first(p) == first(ref_p)
+    with pytest.raises(ValueError, match="tile"):
+        box_scores(models, model, ex, boxes, alpha, beta, ti, misses, omega, gamma, 4.5, m, G * m - 1)
