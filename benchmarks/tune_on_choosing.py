@@ -15,12 +15,13 @@ the runs write their scores only (``report=false``). A trial that fails on any s
 recorded failure, a missing score) is told to Optuna as failed, never as a number.
 
 Writes into ``--out``: ``trials.csv`` (every trial's parameters, IDF1 per set and objective,
-after each batch) and each batch's run folders; with ``--write``, the best trial of each
-tracker as ``conf/tracker/<name>_tuned_real.yaml``, with where it came from in its comments
-(``occbench.sweeps.generalisation`` lists it after ``<name>_tuned``).
+after each batch), ``provenance.txt`` (date and commit) and each batch's run folders; with
+``--write`` (or later ``--write-only``, from ``trials.csv``), the best trial of each tracker as
+``conf/tracker/<name>_tuned_real.yaml``, its values exactly the trial's, with where it came
+from in its comments (``occbench.sweeps.generalisation`` lists it after ``<name>_tuned``).
 
     nice -n 10 .venv/bin/python benchmarks/tune_on_choosing.py --trackers norfair motpy \\
-        --out results/tune_on_choosing --write
+        --trials 64 --batches 6 24 24 --within 16 40 --out results/tune_on_choosing --write
     .venv/bin/python benchmarks/tune_on_choosing.py --list     # trackers, spaces and sets
 """
 
@@ -119,6 +120,7 @@ def tune(names: Sequence[str], sets: Sequence[G.EvalSet], trials: int, startup: 
         studies[name] = optuna.create_study(direction="maximize", sampler=sampler)
         studies[name].enqueue_trial(defaults_of(G.compose([f"tracker={name}"]), spaces[name]))
     out.mkdir(parents=True, exist_ok=True)
+    (out / "provenance.txt").write_text(G.provenance() + "\n")
     table: list[dict] = []
     for b, n in enumerate(batch_sizes(trials, startup, batches)):
         batch, asked = {}, {}
@@ -139,46 +141,66 @@ def tune(names: Sequence[str], sets: Sequence[G.EvalSet], trials: int, startup: 
                 study.tell(trial, value)
             table.append({"tracker": batch[label][0], "trial": trial.number, **trial.params,
                           **per_set.to_dict(), "objective": value})
-        pd.DataFrame(table).to_csv(out / "trials.csv", index=False, float_format="%.4f",
-                                   lineterminator="\n")
+        pd.DataFrame(table).to_csv(out / "trials.csv", index=False, lineterminator="\n")
     return studies, pd.DataFrame(table)
 
 
-def best_within(table: pd.DataFrame, name: str, n: int) -> pd.Series:
-    """The row of ``name``'s best trial among its first ``n`` (trial numbers below ``n``)."""
-    rows = table[(table["tracker"] == name) & (table["trial"] < n)]
+def best_within(table: pd.DataFrame, name: str, n: int | None = None) -> pd.Series:
+    """The row of ``name``'s best trial (the first of equal ones) among its first ``n``
+    (trial numbers below ``n``; None = all)."""
+    rows = table[(table["tracker"] == name) & (table["trial"] < (n or math.inf))]
     return rows.loc[rows["objective"].idxmax()]
 
 
-def config_text(name: str, study: Any, table: pd.DataFrame, sets: Sequence[G.EvalSet],
-                startup: int, provenance: str, within: Sequence[int] = ()) -> str:
-    """``conf/tracker/<name>_tuned_real.yaml``: the best trial of ``study`` over ``name``'s
-    defaults, its provenance in comments (sets, trials, objective, sampler, commit; the best
-    of the first ``within`` trials too)."""
-    best = study.best_trial
+def _value(dist: Any, v: Any) -> Any:
+    """A trial's value as the config takes it (an int parameter read back from the csv as
+    a float is an int again)."""
+    return int(v) if "Int" in type(dist).__name__ else float(v)
+
+
+def config_text(name: str, table: pd.DataFrame, sets: Sequence[G.EvalSet], startup: int,
+                provenance: str, within: Sequence[int] = ()) -> str:
+    """``conf/tracker/<name>_tuned_real.yaml``: ``name``'s best trial of ``table`` (the
+    trials' table) over its defaults, with its provenance in comments (sets, trials,
+    objective, sampler, commit; the best of the first ``within`` trials too)."""
+    dists = space(name)
     rows = table[table["tracker"] == name].set_index("trial")
-    first = rows.loc[0]
+    best = best_within(table, name)
     smaller = "".join(f"; best of the first {n}: trial {int(r['trial'])}, {r['objective']:.4f}"
                       for n in within for r in [best_within(table, name, n)])
-    defaults_note = ("" if set(study.trials[0].params) == set(space(name)) else
-                     " (trial 0 held the defaults that lie in the space; the others sampled)")
-    per_set = ", ".join(f"{s.name} {rows.loc[best.number, s.name]:.3f}" for s in sets)
+    full = set(defaults_of(G.compose([f"tracker={name}"]), dists)) == set(dists)
+    defaults_note = "" if full else (" (trial 0 held the defaults that lie in the space; the "
+                                     "others sampled)")
+    per_set = ", ".join(f"{s.name} {best[s.name]:.3f}" for s in sets)
     lines = [
-        f"# {name} at the best of {len(study.trials)} trials on the real choosing sets of issue 35",
+        f"# {name} at the best of {len(rows)} trials on the real choosing sets of issue 35",
         "# (benchmarks/tune_on_choosing.py; docs/generalisation.md). Objective: mean IDF1 over",
         f"# {', '.join(s.name for s in sets)}",
         f"# (each set's mean over its seeds). Optuna TPE, sampler seed 0, {startup} random",
         f"# start-up trials, the defaults first{defaults_note}; the search space of",
         f"# +experiment={EXPERIMENT[name]}. Run {provenance}.",
-        (f"# Best (trial {best.number}): mean IDF1 {best.value:.4f}; trial 0 "
-         f"{first['objective']:.4f}{smaller}."),
+        (f"# Best (trial {int(best['trial'])}): mean IDF1 {best['objective']:.4f}; trial 0 "
+         f"{rows.loc[0, 'objective']:.4f}{smaller}."),
         f"# Per set: {per_set}.",
         "defaults:", f"  - {name}", "  - _self_"]
     node = OmegaConf.create({})
-    for k, v in best.params.items():
-        OmegaConf.update(node, k.removeprefix("tracker."),
-                         round(v, 4) if isinstance(v, float) else v, force_add=True)
+    for k, dist in dists.items():
+        OmegaConf.update(node, k.removeprefix("tracker."), _value(dist, best[k]), force_add=True)
     return "\n".join(lines) + "\n" + OmegaConf.to_yaml(node)
+
+
+def write_configs(out: Path, sets: Sequence[G.EvalSet], startup: int,
+                  within: Sequence[int] = (), folder: Path | None = None) -> list[Path]:
+    """``<name>_tuned_real.yaml`` of every tracker of ``out/trials.csv`` into ``folder``
+    (default ``conf/tracker``), the run's provenance read from ``out/provenance.txt``."""
+    table = pd.read_csv(out / "trials.csv")
+    provenance = (out / "provenance.txt").read_text().strip()
+    paths = []
+    for name in dict.fromkeys(table["tracker"]):
+        path = (folder or G.CONF / "tracker") / f"{name}{SUFFIX}.yaml"
+        path.write_text(config_text(name, table, sets, startup, provenance, within))
+        paths.append(path)
+    return paths
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -195,6 +217,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, help="output folder (trials.csv, run folders)")
     ap.add_argument("--write", action="store_true",
                     help=f"write conf/tracker/<name>{SUFFIX}.yaml (the best trial)")
+    ap.add_argument("--write-only", action="store_true",
+                    help="run nothing: write the configs from --out's trials.csv (a study "
+                    "stopped after a batch, or re-written)")
     ap.add_argument("--list", action="store_true", help="trackers, spaces and sets; run nothing")
     args = ap.parse_args(argv)
     sets = choosing_sets(args.sets)
@@ -205,23 +230,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     if args.out is None:
         ap.error("--out is required")
-    if args.write and args.sets:
+    if (args.write or args.write_only) and args.sets:
         ap.error("--write takes the whole choosing split (no --sets)")
-    data_root = use_shared_data()
-    os.chdir(ROOT)  # the configs' data paths are relative to the repository root
-    print("choosing sets:", [s.name for s in sets], flush=True)
-    provenance = G.provenance()
-    batch_sizes(args.trials, args.startup, args.batches)  # refused before any run
-    studies, table = tune(args.trackers, sets, args.trials, args.startup, args.out, data_root,
-                          args.batches)
-    for name, study in studies.items():
-        best = study.best_trial
-        print(f"{name}: best trial {best.number} of {len(study.trials)}, mean IDF1 "
-              f"{best.value:.4f} (trial 0: {study.trials[0].value}) {best.params}")
-        if args.write:
-            path = G.CONF / "tracker" / f"{name}{SUFFIX}.yaml"
-            path.write_text(config_text(name, study, table, sets, args.startup, provenance,
-                                        args.within))
+    if not args.write_only:
+        data_root = use_shared_data()
+        os.chdir(ROOT)  # the configs' data paths are relative to the repository root
+        print("choosing sets:", [s.name for s in sets], flush=True)
+        batch_sizes(args.trials, args.startup, args.batches)  # refused before any run
+        _, table = tune(args.trackers, sets, args.trials, args.startup, args.out, data_root,
+                        args.batches)
+        for name in args.trackers:
+            best = best_within(table, name)
+            print(f"{name}: best trial {int(best['trial'])}, mean IDF1 {best['objective']:.4f}")
+    if args.write or args.write_only:
+        for path in write_configs(args.out, sets, args.startup, args.within):
             print(f"wrote {path.relative_to(ROOT)}")
     return 0
 

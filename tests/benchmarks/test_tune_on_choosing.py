@@ -36,13 +36,16 @@ def test_two_trials_defaults_first_and_the_best_written_with_its_provenance(tmp_
     assert first["objective"] == pytest.approx(first["tiny"])  # one set: its IDF1
     assert pd.read_csv(tmp_path / "trials.csv")["trial"].tolist() == [0, 1]
     assert not (tmp_path / "batch0" / "tiny" / "seed0" / "report.html").exists()  # scores only
-    text = tuner.config_text("motpy", studies["motpy"], table, [TINY], 1, "2026-01-01, commit x")
-    assert "best of 2 trials" in text and "commit x" in text and "tiny" in text
+    (path,) = tuner.write_configs(tmp_path, [TINY], 1, folder=tmp_path)
+    assert path.name == "motpy_tuned_real.yaml"
+    text = path.read_text()
+    assert "best of 2 trials" in text and "commit" in text and "tiny" in text
     node = OmegaConf.create(text)
     best = studies["motpy"].best_trial
     assert list(node.defaults) == ["motpy", "_self_"]
-    for key, value in best.params.items():
-        assert node[key.removeprefix("tracker.")] == pytest.approx(value, abs=1e-4)
+    for key, value in best.params.items():  # exactly the trial's values, read back from csv
+        assert node[key.removeprefix("tracker.")] == value
+        assert type(node[key.removeprefix("tracker.")]) is type(value)
     assert best.value == pytest.approx(table["objective"].max())
 
 
