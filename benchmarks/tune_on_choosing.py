@@ -31,6 +31,7 @@ import argparse
 import math
 import os
 import sys
+import textwrap
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -169,7 +170,7 @@ def config_text(name: str, table: pd.DataFrame, sets: Sequence[G.EvalSet], start
     smaller = "".join(f"; best of the first {n}: trial {int(r['trial'])}, {r['objective']:.4f}"
                       for n in within for r in [best_within(table, name, n)])
     full = set(defaults_of(G.compose([f"tracker={name}"]), dists)) == set(dists)
-    defaults_note = "" if full else (" (trial 0 held the defaults that lie in the space; the "
+    defaults_note = "" if full else ("\n# (trial 0 held the defaults that lie in the space, the "
                                      "others sampled)")
     per_set = ", ".join(f"{s.name} {best[s.name]:.3f}" for s in sets)
     lines = [
@@ -177,11 +178,12 @@ def config_text(name: str, table: pd.DataFrame, sets: Sequence[G.EvalSet], start
         "# (benchmarks/tune_on_choosing.py; docs/generalisation.md). Objective: mean IDF1 over",
         f"# {', '.join(s.name for s in sets)}",
         f"# (each set's mean over its seeds). Optuna TPE, sampler seed 0, {startup} random",
-        f"# start-up trials, the defaults first{defaults_note}; the search space of",
-        f"# +experiment={EXPERIMENT[name]}. Run {provenance}.",
+        f"# start-up trials, the defaults first; the search space of +experiment="
+        f"{EXPERIMENT[name]}{defaults_note}.", f"# Run {provenance}.",
         (f"# Best (trial {int(best['trial'])}): mean IDF1 {best['objective']:.4f}; trial 0 "
          f"{rows.loc[0, 'objective']:.4f}{smaller}."),
-        f"# Per set: {per_set}.",
+        *textwrap.wrap(f"Per set: {per_set}.", 90, initial_indent="# ",
+                       subsequent_indent="# "),
         "defaults:", f"  - {name}", "  - _self_"]
     node = OmegaConf.create({})
     for k, dist in dists.items():
