@@ -180,8 +180,9 @@ def config_text(name: str, table: pd.DataFrame, sets: Sequence[G.EvalSet], start
         f"# (each set's mean over its seeds). Optuna TPE, sampler seed 0, {startup} random",
         f"# start-up trials, the defaults first; the search space of +experiment="
         f"{EXPERIMENT[name]}{defaults_note}.", f"# Run {provenance}.",
-        (f"# Best (trial {int(best['trial'])}): mean IDF1 {best['objective']:.4f}; trial 0 "
-         f"{rows.loc[0, 'objective']:.4f}{smaller}."),
+        *textwrap.wrap(f"Best (trial {int(best['trial'])}): mean IDF1 {best['objective']:.4f}; "
+                       f"trial 0 {rows.loc[0, 'objective']:.4f}{smaller}.", 90,
+                       initial_indent="# ", subsequent_indent="# "),
         *textwrap.wrap(f"Per set: {per_set}.", 90, initial_indent="# ",
                        subsequent_indent="# "),
         "defaults:", f"  - {name}", "  - _self_"]
