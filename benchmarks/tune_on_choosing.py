@@ -52,6 +52,9 @@ EXPERIMENT = {"norfair": "tune_norfair", "motpy": "tune_motpy", "ocsort": "tune_
               "bytetrack": "tune_bytetrack", "boxmot_boosttrack": "tune_boosttrack",
               "boxmot_botsort": "tune_botsort"}
 SUFFIX = "_tuned_real"
+#: each tuned row's colour in the views (``occbench.config.meta``: distinct from every tracker's)
+COLOURS = {"norfair": "#ce6dbd", "motpy": "#6b6ecf", "ocsort": "#5254a3",
+           "bytetrack": "#e7ba52", "boxmot_boosttrack": "#bd9e39", "boxmot_botsort": "#ad494a"}
 METRIC = "IDF1"
 
 
@@ -186,7 +189,8 @@ def config_text(name: str, table: pd.DataFrame, sets: Sequence[G.EvalSet], start
         *textwrap.wrap(f"Per set: {per_set}.", 90, initial_indent="# ",
                        subsequent_indent="# "),
         "defaults:", f"  - {name}", "  - _self_"]
-    node = OmegaConf.create({})
+    node = OmegaConf.create({"meta": {"label": f"{name}{SUFFIX}", "colour": COLOURS[name],
+                                      "role": "outside", "style": "boxes"}})
     for k, dist in dists.items():
         OmegaConf.update(node, k.removeprefix("tracker."), _value(dist, best[k]), force_add=True)
     return "\n".join(lines) + "\n" + OmegaConf.to_yaml(node)
