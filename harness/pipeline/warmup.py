@@ -71,7 +71,7 @@ def scene(k: int, people: tuple = PEOPLE) -> tuple[np.ndarray, np.ndarray, Detec
     return frame, mask, dets
 
 
-PASSES = 4  # warm_up's passes over the scene: (all, first person) x (mask, none)
+STEPS = 2 * (FRAMES + ALONE_FRAMES)  # frames of warm_up's four passes (all, first person) x (mask, none)
 
 
 def warm_up(tracker: Tracker, bar: Progress | None = None) -> None:
@@ -79,19 +79,18 @@ def warm_up(tracker: Tracker, bar: Progress | None = None) -> None:
     first person alone (one match or none a frame: numba
     compiles a separate kernel for the contiguous one-element index arrays that gives), then
     ``reset`` it: its state afterwards is as built. ``bar`` (a progress bar) advances by one
-    per pass (``PASSES`` in all)."""
+    per frame (``STEPS`` in all), so a compiling warm-up moves as each frame's kernels are
+    ready rather than once a pass."""
     for people, frames in ((PEOPLE, FRAMES), (PEOPLE[:1], ALONE_FRAMES)):
         for with_mask in (True, False):
-            if bar is not None and (people, with_mask) != (PEOPLE, True):
-                bar.update(1)
             tracker.reset()
             bank = TrackerBank({"warm-up": tracker})
             for k in range(frames):
                 frame, mask, dets = scene(k, people)
                 if not bank.step(k, frame, dets, mask if with_mask else None):
                     raise RuntimeError(f"warm-up failed: {bank.outputs['warm-up'].error}")
-    if bar is not None:
-        bar.update(1)
+                if bar is not None:
+                    bar.update(1)
     tracker.reset()
 
 
@@ -126,7 +125,7 @@ class WarmUp:
                         "later runs load them in about a second)")
             return f"warming up {', '.join(todo)} before timing"
 
-        bar = (progress or no_progress)(total=PASSES * len(todo), desc="warm-up", unit="pass")
+        bar = (progress or no_progress)(total=STEPS * len(todo), desc="warm-up", unit="frame")
         with (heartbeat(announce, said, self.first, self.every), _closing(bar),
               _compiles(compiling)):
             for name, tracker in todo.items():

@@ -18,7 +18,7 @@ from omegaconf import OmegaConf
 from occbench.config.meta import without_meta
 from occbench.datasets.synthetic import load_scenario
 from occbench.pipeline.loop import run_sequence
-from occbench.pipeline.warmup import WarmUp, warm_up
+from occbench.pipeline.warmup import STEPS, WarmUp, warm_up
 from occbench.sources.annotations import NoisyGroundTruth
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -131,6 +131,31 @@ def test_a_quick_warm_up_says_nothing_and_a_long_one_keeps_saying_so():
     n = len(said)
     time.sleep(0.05)
     assert len(said) == n  # the heartbeat ended with the warm-up
+
+
+def test_the_warm_up_bar_moves_every_frame():
+    """issue 39 item 8: the bar advanced once a pass (4 a tracker), so a pass compiling for
+    24 s froze it at 42 %; it now moves with every frame and ends full."""
+    seen: list[tuple[int, int]] = []
+
+    class Bar:
+        def __init__(self, total, **_):
+            self.total, self.n = total, 0
+
+        def update(self, n=1):
+            self.n += n
+            seen.append((self.n, _Counting.updates))
+
+        def close(self):
+            pass
+
+    class Other(_Counting):  # a second tracker class: warmed up too
+        pass
+
+    _Counting.updates = 0
+    assert WarmUp()({"a": _Counting, "b": Other}, progress=Bar) == ["a", "b"]
+    assert [n for n, _ in seen] == list(range(1, 2 * STEPS + 1))  # one a frame, to the total
+    assert seen[0][1] == 1  # the first step is shown as soon as the first frame is through
 
 
 def test_the_warm_up_says_it_compiles_only_when_numba_compiles():
