@@ -9,6 +9,7 @@ import io
 import pytest
 from report_scenes import GtSource, Walk
 
+from occbench.pipeline.warmup import STEPS
 from occbench.progress import progress_factory
 from occbench.trackers.baseline import BaselineTracker
 
@@ -40,7 +41,7 @@ def _warm_up(progress) -> None:
 
 CASES = {"bench": (_bench, "bench", "/6"),  # 2 runs x (decode, front end, baseline)
          "render": (_render, "drawing walk", "/12"),  # the 12 frames tracked
-         "warm-up": (_warm_up, "warm-up", "/4")}  # the scene's 4 passes
+         "warm-up": (_warm_up, "warm-up", f"/{STEPS}")}  # the scene's frames
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
