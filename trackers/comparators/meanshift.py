@@ -20,6 +20,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import require
 from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
@@ -121,10 +122,8 @@ class ScaleAdaptiveMeanShift(MeanShiftTracker):
     def __init__(self, step: float = 0.1, gamma: float = 0.1, max_iterations: int = 10,
                  search: float = 1.0, birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
-        if not 0.0 < step < 1.0:
-            raise ValueError(f"step must lie in (0, 1), got {step}")
-        if not 0.0 <= gamma <= 1.0:
-            raise ValueError(f"gamma must lie in [0, 1], got {gamma}")
+        require("step", 0.0 < step < 1.0, "must lie in (0, 1)", step)
+        require("gamma", 0.0 <= gamma <= 1.0, "must lie in [0, 1]", gamma)
         self.step = step
         self.gamma = gamma
         super().__init__(max_iterations, search, birth_iou, loss, restart, max_targets)
