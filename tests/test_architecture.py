@@ -255,7 +255,6 @@ TRACKERS_TOO_LONG_ALLOWED = {
     "trackers/frontend/silhouette.py": "662 lines",
     "trackers/frontend/silhouette.py:__init__": "SilhouetteMatcher's 25 flat arguments",
     "trackers/layered/tracker.py": "409 lines",
-    "trackers/three_hypothesis/association.py:associate": "105 lines",
 }
 
 

@@ -125,52 +125,21 @@ def associate(
         barred: optional map (D,) bool measurements stage 1 matched -> (D,) bool
             measurements stage 2 may not match, or None (e.g. ``contact.SplitParts``).
     """
-    owners = np.asarray(owners, dtype=int)
+    owners = _checked_owners(owners, len(sqrt_q))
     n_persons, n_meas = len(sqrt_q), len(measurement_boxes)
-    steps = owners[1:] - owners[:-1]
-    if len(owners) and not (owners[0] == 0 and owners[-1] == n_persons - 1
-                            and (len(steps) == 0 or (steps.min() >= 0 and steps.max() <= 1))):
-        raise ValueError("associate: owners must be sorted and cover persons 0..P-1")
-    empty = np.zeros(0, dtype=int)
     if n_persons == 0 or n_meas == 0:
-        return Matches(np.zeros((0, 3), dtype=int), empty, np.zeros(0), np.arange(n_persons),
-                           np.arange(n_meas))
-    rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4: sum_u sqrt(q_u p_u)
-    np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)  # clipped to [0, 1]
-    one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
-    rho_nodes = rho if one_node else rho[owners]  # (B, D)
-    appearance_ok = rho_nodes >= mu_rho
-    if admissible is not None:
-        appearance_ok &= admissible
-    starts = np.arange(n_persons) if one_node else np.searchsorted(owners, np.arange(n_persons))
-
-    # stage 1: intersecting regions, cost (1 - rho) + (1 - delta)
-    if delta is None:
-        delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
-    c1 = np.where((delta > 0) & appearance_ok, (1.0 - rho_nodes) + (1.0 - delta), np.inf)
-    cost1, best1 = _person_costs(c1, starts, owners)
-    if evidence is not None:  # (1 - a) in place of (1 - rho); rho is one per person
-        cost1 = cost1 + (rho - evidence(rho, np.isfinite(cost1)))
-    m1 = _hungarian(cost1, 2.0)
-
+        return Matches(np.zeros((0, 3), dtype=int), np.zeros(0, dtype=int), np.zeros(0),
+                       np.arange(n_persons), np.arange(n_meas))
+    pairs = _Pairs.of(node_boxes, owners, sqrt_q, measurement_boxes, sqrt_p, mu_rho, admissible)
+    m1, best1 = _stage1(pairs, delta, evidence)
     matched_p = np.zeros(n_persons, dtype=bool)
     matched_d = np.zeros(n_meas, dtype=bool)
     matched_p[m1[:, 0]] = True
     matched_d[m1[:, 1]] = True
-
-    # stage 2: leftovers inside the gate, cost (1 - rho) + d / mu_g
     eligible = ~matched_p if gated is None else ~matched_p & np.asarray(gated, dtype=bool)
     m2, best2 = np.zeros((0, 2), dtype=int), None
     if eligible.any() and not matched_d.all():
-        d = centre_distance_matrix(node_boxes, measurement_boxes)  # (B, D)
-        free = eligible[owners][:, None] & ~matched_d[None, :]
-        parts = None if barred is None else barred(matched_d)
-        if parts is not None:
-            free &= ~parts[None, :]
-        radius = mu_g if gate is None else np.minimum(mu_g, np.asarray(gate, dtype=float))[:, None]
-        c2 = np.where(free & (d <= radius) & appearance_ok, (1.0 - rho_nodes) + d / mu_g, np.inf)
-        cost2, best2 = _person_costs(c2, starts, owners)
-        m2 = _hungarian(cost2, 2.0)
+        m2, best2 = _stage2(pairs, eligible, matched_d, mu_g, gate, barred)
         matched_p[m2[:, 0]] = True
         matched_d[m2[:, 1]] = True
 
@@ -180,7 +149,80 @@ def associate(
     return Matches(
         _rows(m12[:, 0], m12[:, 1], nodes),
         np.array([1] * len(m1) + [2] * len(m2), dtype=int),
-        rho[m12[:, 0], m12[:, 1]],
+        pairs.rho[m12[:, 0], m12[:, 1]],
         (~matched_p).nonzero()[0],
         (~matched_d).nonzero()[0],
     )
+
+
+@dataclass(frozen=True, slots=True)
+class _Pairs:
+    """What both stages read: the (B, 4) node and (D, 4) measurement boxes, the (B,) owner
+    of each node and the (P,) first node of each person, rho (eq. 4) per (P, D) person and
+    (B, D) node pair, and the (B, D) node pairs either stage may match (rho >= mu_rho,
+    admissible)."""
+
+    nodes: np.ndarray
+    measurements: np.ndarray
+    owners: np.ndarray
+    starts: np.ndarray
+    rho: np.ndarray
+    rho_nodes: np.ndarray
+    ok: np.ndarray
+
+    @classmethod
+    def of(cls, node_boxes: np.ndarray, owners: np.ndarray, sqrt_q: np.ndarray,
+           measurement_boxes: np.ndarray, sqrt_p: np.ndarray, mu_rho: float,
+           admissible: np.ndarray | None) -> _Pairs:
+        """``associate``'s arguments of the same names, rho computed (eq. 4)."""
+        n_persons = len(sqrt_q)
+        rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4: sum_u sqrt(q_u p_u)
+        np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)  # clipped to [0, 1]
+        one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
+        rho_nodes = rho if one_node else rho[owners]  # (B, D)
+        appearance_ok = rho_nodes >= mu_rho
+        if admissible is not None:
+            appearance_ok &= admissible
+        starts = (np.arange(n_persons) if one_node
+                  else np.searchsorted(owners, np.arange(n_persons)))
+        return cls(node_boxes, measurement_boxes, owners, starts, rho, rho_nodes, appearance_ok)
+
+
+def _checked_owners(owners: np.ndarray, n_persons: int) -> np.ndarray:
+    """``owners`` as an int array; ValueError unless sorted and covering 0..n_persons-1."""
+    owners = np.asarray(owners, dtype=int)
+    steps = owners[1:] - owners[:-1]
+    if len(owners) and not (owners[0] == 0 and owners[-1] == n_persons - 1
+                            and (len(steps) == 0 or (steps.min() >= 0 and steps.max() <= 1))):
+        raise ValueError("associate: owners must be sorted and cover persons 0..P-1")
+    return owners
+
+
+def _stage1(s: _Pairs, delta: np.ndarray | None, evidence: Callable | None
+            ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Stage 1 (steps 1-4): intersecting regions, cost (1 - rho) + (1 - delta) (eqs. 4-5),
+    Hungarian method: (K, 2) rows (person, measurement) and ``_person_costs``' best nodes."""
+    if delta is None:
+        delta = region_similarity(s.nodes, s.measurements)  # (B, D) eq. 5
+    c1 = np.where((delta > 0) & s.ok, (1.0 - s.rho_nodes) + (1.0 - delta), np.inf)
+    cost1, best1 = _person_costs(c1, s.starts, s.owners)
+    if evidence is not None:  # (1 - a) in place of (1 - rho); rho is one per person
+        cost1 = cost1 + (s.rho - evidence(s.rho, np.isfinite(cost1)))
+    return _hungarian(cost1, 2.0), best1
+
+
+def _stage2(s: _Pairs, eligible: np.ndarray, matched_d: np.ndarray, mu_g: float,
+            gate: np.ndarray | None, barred: Callable | None
+            ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Stage 2 (steps 5-8): the ``eligible`` persons' nodes and the measurements stage 1
+    left (``matched_d`` False, not ``barred``) inside the gate, cost (1 - rho) + d / mu_g,
+    Hungarian method: (K, 2) rows (person, measurement) and the best nodes."""
+    d = centre_distance_matrix(s.nodes, s.measurements)  # (B, D)
+    free = eligible[s.owners][:, None] & ~matched_d[None, :]
+    parts = None if barred is None else barred(matched_d)
+    if parts is not None:
+        free &= ~parts[None, :]
+    radius = mu_g if gate is None else np.minimum(mu_g, np.asarray(gate, dtype=float))[:, None]
+    c2 = np.where(free & (d <= radius) & s.ok, (1.0 - s.rho_nodes) + d / mu_g, np.inf)
+    cost2, best2 = _person_costs(c2, s.starts, s.owners)
+    return _hungarian(cost2, 2.0), best2
