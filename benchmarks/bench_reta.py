@@ -29,6 +29,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse
+import importlib
 import statistics
 import sys
 from pathlib import Path
@@ -46,6 +47,7 @@ from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, 
 
 from occbench.config.paths import data_path
 from occbench.trackers.baseline import BaselineTracker
+from occbench.trackers import three_hypothesis
 from occbench.trackers.records import Detections
 from occbench.trackers.three_hypothesis import Appearance, RetaTracker
 
@@ -89,13 +91,15 @@ def make_scene(people: int, frames: int, seed: int = 0, size: tuple[int, int] = 
     return out
 
 
-RETA_STAGES = ("_measure", "_predict", "_occlusions", "_associate", "_sort_occlusions",
-               "_update_matched", "_continue_unmatched", "_prune", "_start_tracks", "_outputs",
+RETA_STEPS = {"tracker": ("measure", "predict", "occlusions", "max_similarity", "sort_occlusions")}
+"""RetaTracker's steps of Alg. 1 (its module docstring) by the module that calls them by name,
+timed one by one in ``stages``."""
+RETA_STAGES = ("_update_matched", "_continue_unmatched", "_prune", "_start_tracks", "_outputs",
                "_add_node", "_track", "_place_hidden", "_visible_share", "_hidden_share",
                "_confirm")
-"""RetaTracker's steps of Alg. 1 (its module docstring), timed one by one in ``stages``, and
-the helpers they call per node or per frame (a graph node, a Track, ``rules.velocity``, the
-covered shares, a confirmation): their time is not their callers'."""
+"""RetaTracker's other steps (methods), and the helpers they call per node or per frame (a
+graph node, a Track, ``rules.velocity``, the covered shares, a confirmation): their time is
+not their callers'."""
 TARGETS = {10: 1000, 40: 500, 100: 300}
 """frames/s targets of RetaTracker.update per number of people (640x480)."""
 TARGETS_HD = {150: 50}
@@ -128,9 +132,13 @@ def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
         key = f"reta people={n}" + ("" if size == (WIDTH, HEIGHT) else f" {size[0]}x{size[1]}")
         digests[key] = rows_digest(run(build()))
         clock, tracker = StageClock(), build()
+        for module, names in RETA_STEPS.items():
+            for name in names:
+                clock.wrap(importlib.import_module(f"{three_hypothesis.__name__}.{module}"), name)
         for name in RETA_STAGES:
             clock.wrap(tracker, name)
         total = cpu_seconds(lambda t=tracker: run(t))
+        clock.unwrap()
         stage_tables[n] = clock.table(total, frames)
         tb = statistics.median(cpu_seconds(lambda: run(BaselineTracker())) for _ in range(repeats))
         ref = reference_seconds()

@@ -2,9 +2,10 @@
 tracker's steps, a reference workload timed in the same process, and a digest of the
 reported rows (``--check``: the same tracks byte for byte before and after a speed-up).
 
-The stages are the tracker's own step methods, wrapped on one instance for one extra run
-(never on the runs whose frames/s are quoted); a stage's time excludes the stages it calls,
-so the stages and "other" add up to ``update``.
+The stages are the tracker's own steps (methods wrapped on one instance, or step functions
+wrapped in the modules that call them), for one extra run (never on the runs whose frames/s
+are quoted); a stage's time excludes the stages it calls, so the stages and "other" add up
+to ``update``.
 """
 
 from __future__ import annotations
@@ -20,16 +21,22 @@ from pathlib import Path
 import numpy as np
 
 
+_ABSENT = object()
+
+
 class StageClock:
     """Exclusive CPU time (``time.process_time``) of wrapped methods, per label."""
 
     def __init__(self) -> None:
         self.seconds: dict[str, float] = {}
         self._stack: list[list[float]] = []  # per open stage: [start, time of its children]
+        self._wrapped: list[tuple[object, str, object]] = []  # (owner, attr, original)
 
     def wrap(self, owner: object, attr: str, label: str | None = None) -> None:
-        """Time ``owner.attr`` (a method or callable attribute) under ``label`` from now on."""
+        """Time ``owner.attr`` (a method or callable attribute; a module's function is
+        timed wherever that module calls it by name) under ``label`` until ``unwrap``."""
         fn = getattr(owner, attr)
+        self._wrapped.append((owner, attr, vars(owner).get(attr, _ABSENT)))
         name = label or attr.lstrip("_")
         self.seconds.setdefault(name, 0.0)
 
@@ -45,6 +52,16 @@ class StageClock:
                     self._stack[-1][1] += spent
 
         setattr(owner, attr, timed)
+
+    def unwrap(self) -> None:
+        """Put back every attribute ``wrap`` replaced (a wrapped module's functions are
+        shared by every later run in the process)."""
+        for owner, attr, original in reversed(self._wrapped):
+            if original is _ABSENT:
+                delattr(owner, attr)
+            else:
+                setattr(owner, attr, original)
+        self._wrapped.clear()
 
     def table(self, total: float, frames: int) -> str:
         """One line per stage, ms per frame and share of ``total`` seconds, then 'other'."""

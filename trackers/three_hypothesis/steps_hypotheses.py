@@ -12,7 +12,8 @@ from occbench.trackers.three_hypothesis import hypotheses as hyp
 from occbench.trackers.three_hypothesis.graph import VISIBLE
 from occbench.trackers.three_hypothesis.motion import state_boxes
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
-from occbench.trackers.three_hypothesis.state import Branch, Frame, Person
+from occbench.trackers.three_hypothesis.state import Branch, Person
+from occbench.trackers.three_hypothesis.values import Frame
 
 log = logging.getLogger(__name__)
 
@@ -32,33 +33,33 @@ class HypothesisSteps:
             (person, new branches) per unmatched person, and per new branch the node of
             t-1 it continues (-1 when spawned).
         """
-        persons, matched, in_front = f.persons, f.matched, f.in_front
+        persons, matched, in_front = f.S.persons, f.A.matched, f.D.in_front
         pending: list[tuple[Person, list[Branch]]] = []
         sources: list[int] = []
         # owners is sorted: person i owns nodes bounds[i]:bounds[i + 1]
-        bounds = np.searchsorted(f.owners, np.arange(len(persons) + 1)).tolist()
+        bounds = np.searchsorted(f.S.owners, np.arange(len(persons) + 1)).tolist()
         for i, person in enumerate(persons):
             if i in matched or i in f.absorbed:
                 continue
             person.misses += 1
             new: list[Branch] = []
             for n in range(bounds[i], bounds[i + 1]):
-                old = f.branches[n]
+                old = f.S.branches[n]
                 kind = hyp.VELOCITY if old.kind == VISIBLE else old.kind
                 fronts = in_front.get(n, [])
                 occluder = old.occluder if kind == hyp.OCCLUDER else (
                     persons[fronts[0]].key if fronts else None)
-                x = (self.rules.line.start(person, f.x_prev[n], f.Xp[n]) if old.kind == VISIBLE
-                     else f.Xp[n])  # hypothesis 1's velocity at the first miss
-                new.append(Branch(kind, x, f.Pp[n], node=old.node, occluder=occluder,
+                x = (self.rules.line.start(person, f.S.x_prev[n], f.S.Xp[n]) if old.kind == VISIBLE
+                     else f.S.Xp[n])  # hypothesis 1's velocity at the first miss
+                new.append(Branch(kind, x, f.S.Pp[n], node=old.node, occluder=occluder,
                                    exposed=old.exposed, depth=len(fronts)))
                 sources.append(n)
                 seen = [j for j in fronts if j in matched]
                 if person.confirmed and not person.spawned and seen:
                     occ = persons[seen[0]]
                     velocity = occ.branches[0].x[4:6].copy()  # the occluder's visible node
-                    for kind2, x2 in hyp.spawn(f.x_prev[n], velocity).items():
-                        new.append(Branch(kind2, x2, f.Pp[n].copy(), node=old.node,
+                    for kind2, x2 in hyp.spawn(f.S.x_prev[n], velocity).items():
+                        new.append(Branch(kind2, x2, f.S.Pp[n].copy(), node=old.node,
                                            occluder=occ.key, depth=len(fronts)))
                         sources.append(-1)
                     person.spawned = True
@@ -80,12 +81,12 @@ class HypothesisSteps:
         if not pending:
             return []
         hyp_boxes = state_boxes(np.array([b.x for _, new in pending for b in new]))
-        gone = hyp.outside_image(hyp_boxes, f.width, f.height).tolist()
+        gone = hyp.outside_image(hyp_boxes, f.V.width, f.V.height).tolist()
         cover = (self._hidden_share(f, hyp_boxes, np.array(sources))
                  >= self.life_cycle.cover)
-        empty = self.rules.support.empty(f.foreground, hyp_boxes)
-        held = self.rules.presence.held(f.foreground, hyp_boxes, empty)
-        share = self.rules.report.shares(self.histograms, f.foreground, hyp_boxes)
+        empty = self.rules.support.empty(f.V.foreground, hyp_boxes)
+        held = self.rules.presence.held(f.V.foreground, hyp_boxes, empty)
+        share = self.rules.report.shares(self.histograms, f.V.foreground, hyp_boxes)
         held = [False] * len(cover) if held is None else held.tolist()
         if empty is None:
             unseen = np.zeros(len(cover), dtype=bool)
@@ -136,8 +137,8 @@ class HypothesisSteps:
         cont = src >= 0
         visible = f.visible
         if len(visible) and cont.any():
-            delta = f.delta[src[cont]][:, np.array(f.visible_dets)].tocoo()
-            pred = f.pred
+            delta = f.O.delta[src[cont]][:, np.array(f.visible_dets)].tocoo()
+            pred = f.S.boxes
             area_n = pred[src[cont], 2] * pred[src[cont], 3]
             area_v = visible[:, 2] * visible[:, 3]
             i, v = delta.row, delta.col  # the pairs that meet; the others hide nothing

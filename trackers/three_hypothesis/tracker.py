@@ -1,16 +1,19 @@
 """Three-hypothesis tracking graph (Reta et al., J. Electron. Imaging 24(1) 013015, 2015).
 
-``RetaTracker.update`` is the body of Algorithm 1 for frame t, one method per step (the
-methods live in one module per part of the paper, ``steps_*``, mixed into the class):
+``RetaTracker.update`` is the body of Algorithm 1 for frame t, one call per step (the steps
+live in one module per part of the paper, ``steps_*``; steps 1-5 are functions of the
+values of the steps before them, each returning a frozen value of ``values``; steps 6-9
+are still methods mixed into the class):
 
-1. ``_measure``: V = PeopleDetection(I^t), each measurement's ellipse S and histogram p
-   (3.2, eq. 1);
-2. ``_predict``: S^{t|t-1} of every node of t-1 by its motion model M (Kalman, 3.2),
-   hypotheses moving by their case (3.3.3);
-3. ``_occlusions``: O = Occlusion(N^{t-1}, lambda) (3.3.1, eq. 2);
-4. ``_associate``: MaxSimilarity in two stages (3.3.2, eqs. 4-5, mu_rho, mu_g);
-5. ``_sort_occlusions``: pi = SortOcclusionTargets(O) (eq. 3), once visibility at t is
-   known;
+1. ``measure``: V = PeopleDetection(I^t), each measurement's ellipse S and histogram p
+   (3.2, eq. 1): ``Measurements``;
+2. ``predict``: S^{t|t-1} of every node of t-1 by its motion model M (Kalman, 3.2),
+   hypotheses moving by their case (3.3.3): ``Predictions``;
+3. ``occlusions``: O = Occlusion(N^{t-1}, lambda) (3.3.1, eq. 2): ``Occlusions``;
+4. ``max_similarity``: MaxSimilarity in two stages (3.3.2, eqs. 4-5, mu_rho, mu_g):
+   ``Matching``, a ``Match`` (det, node, stage, rho) per matched person;
+5. ``sort_occlusions``: pi = SortOcclusionTargets(O) (eq. 3), once visibility at t is
+   known: ``DepthOrder``;
 6. ``_update_matched``: UpdateAttributes(N_o^t) (3.3.3);
 7. ``_continue_unmatched``: N_h1 for every unmatched person, N_h2 and N_h3 at its first
    total occlusion (Alg. 1, FirstOcclusion);
@@ -55,15 +58,20 @@ from occbench.trackers.three_hypothesis.params import (
     Occlusion,
 )
 from occbench.trackers.three_hypothesis.rules import build_rules
-from occbench.trackers.three_hypothesis.state import Frame, Person
+from occbench.trackers.three_hypothesis.state import Person
 from occbench.trackers.three_hypothesis.steps_hypotheses import HypothesisSteps
-from occbench.trackers.three_hypothesis.steps_occlusion import OcclusionSteps
+from occbench.trackers.three_hypothesis.steps_occlusion import (
+    max_similarity,
+    occlusions,
+    sort_occlusions,
+)
 from occbench.trackers.three_hypothesis.steps_output import OutputSteps
-from occbench.trackers.three_hypothesis.steps_predict import PredictSteps
+from occbench.trackers.three_hypothesis.steps_predict import measure, predict
 from occbench.trackers.three_hypothesis.steps_update import UpdateSteps
+from occbench.trackers.three_hypothesis.values import Frame
 
 
-class RetaTracker(PredictSteps, OcclusionSteps, UpdateSteps, HypothesisSteps, OutputSteps):
+class RetaTracker(UpdateSteps, HypothesisSteps, OutputSteps):
     """Three-hypothesis tracking graph with occlusion reasoning (Reta et al. 2015).
 
     Args:
@@ -133,18 +141,18 @@ class RetaTracker(PredictSteps, OcclusionSteps, UpdateSteps, HypothesisSteps, Ou
             raise ValueError("RetaTracker needs frame pixels (colour histograms); got frame=None")
         if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
             raise ValueError(f"RetaTracker: frame must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
-        height, width = frame.shape[:2]
-        if foreground is not None and foreground.shape[:2] != (height, width):
-            raise ValueError(f"RetaTracker: foreground shape {foreground.shape} != frame {(height, width)}")
+        if foreground is not None and foreground.shape[:2] != frame.shape[:2]:
+            raise ValueError(f"RetaTracker: foreground shape {foreground.shape} != frame {frame.shape[:2]}")
         self._frame += 1
         self.graph.begin_frame(self._frame)
         self._public = {person.key: person.public_id for person in self._persons}
-        f = Frame(foreground, width, height, self._persons)
-        self._measure(f, frame, detections)
-        self._predict(f)
-        self._occlusions(f)
-        self._associate(f)
-        self._sort_occlusions(f)
+        rules = self.rules
+        V = measure(frame, detections, foreground, self.min_score, self.histograms, rules.pixels)
+        S = predict(self._persons, rules.motion)
+        O = occlusions(S, V, self.occlusion)
+        A = max_similarity(S, V, O, self._pi, rules, self.association)
+        D = sort_occlusions(S, V, O, A, self._pi)
+        f = Frame(V, S, O, A, D)
         survivors = self._update_matched(f)
         survivors += self._prune(f, *self._continue_unmatched(f))
         survivors += self._start_tracks(f)

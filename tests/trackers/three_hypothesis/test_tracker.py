@@ -217,8 +217,8 @@ def test_association_stage2_gate_and_best_hypothesis():
 
 def test_associate_rho_is_the_bhattacharyya_coefficient():
     """Eq. 4 as the tracker runs it: ``associate`` takes square-rooted histograms restricted
-    to the bins some measurement occupies (``RetaTracker._associate``); the rho of each
-    match equals ``bhattacharyya`` (the definition) of the whole histograms."""
+    to the bins some measurement occupies (``steps_occlusion.max_similarity``); the rho of
+    each match equals ``bhattacharyya`` (the definition) of the whole histograms."""
     rng = np.random.default_rng(11)
     for _ in range(20):
         n_p, n_d = rng.integers(1, 6, 2)
