@@ -31,14 +31,14 @@ def bars_wanted(enabled: bool = True, multirun: bool = False, stream: TextIO | N
 def progress_factory(enabled: bool = True, multirun: bool = False,
                      stream: TextIO | None = None):
     """A factory ``(total=, desc=) -> bar`` of tqdm bars when bars are wanted
-    (``bars_wanted``); without a terminal, of ``LogProgress`` bars (one log line when the
-    app has said nothing for ``EVERY`` seconds); None when progress is switched off or in a
-    multirun job (a sweep says one line per job).
+    (``bars_wanted``); otherwise (no terminal, ``progress=false``, a multirun job) of
+    ``LogProgress`` bars: nothing drawn, one log line when the app has said nothing for
+    ``EVERY`` seconds, so a long step is never silent for longer.
 
     Bars go to stderr, one per sequence (frames), and vanish when the sequence is done.
     """
     if not bars_wanted(enabled, multirun, stream):
-        return LOG_PROGRESS.bar if enabled and not multirun else None
+        return LOG_PROGRESS.bar
     from tqdm import tqdm
 
     def make(total: int = 0, desc: str = "", unit: str = "frame", **kwargs: Any):
@@ -72,6 +72,8 @@ class _LogBar:
         self.owner.close(self)
 
     def __str__(self) -> str:
+        if not self.total and not self.n:  # a step without a count: its name
+            return self.desc
         of = f"/{self.total}" if self.total else ""
         return f"{self.desc} {self.n}{of} {self.unit}{'s' if self.unit else ''}".strip()
 

@@ -122,8 +122,8 @@ class NanSource(NoisyGroundTruth):
         return Detections(boxes, np.r_[dets.scores, 1.0, 1.0]), fg
 
 
-def run_experiment(cfg, out_dir, tracker_name=None):
+def run_experiment(cfg, out_dir, tracker_name=None, progress=None):
     """``occbench.pipeline.experiment.run_experiment`` naming a single tracker as the app does (its choice)."""
     if tracker_name is None and "_target_" in cfg.tracker:
         tracker_name = "baseline"
-    return _run_experiment(cfg, out_dir, tracker_name=tracker_name)
+    return _run_experiment(cfg, out_dir, tracker_name=tracker_name, progress=progress)

@@ -139,7 +139,11 @@ def run_experiment(
         raise
     finally:
         overall.close()
-    record.finish()
+    writing = (progress or no_progress)(total=0, desc="scoring and writing the outputs", unit="")
+    try:  # a step of its own: the page and the bootstrap of a large run take a while
+        record.finish()
+    finally:
+        writing.close()
     plan.writer.close()
     import pandas as pd
 

@@ -61,6 +61,7 @@ log = logging.getLogger(__name__)
 
 
 PRELOAD_ENV = "OCCBENCH_PRELOAD"  # the fork server's preload spec (JSON), read by _preload
+WAIT_LINE = 15.0  # seconds a job's start waits on the fork server before a line says so
 
 
 class ProcessLauncher(Launcher):
@@ -68,6 +69,7 @@ class ProcessLauncher(Launcher):
         self.n_jobs = int(n_jobs) if int(n_jobs) > 0 else (os.cpu_count() or 1)
         self.preload = bool(preload)
         self._server_started = False
+        self._preloaded: list[str] = []  # the trackers the fork server warms up
         self.config: DictConfig | None = None
         self.task_function: TaskFunction | None = None
         self.hydra_context: HydraContext | None = None
@@ -140,7 +142,8 @@ class ProcessLauncher(Launcher):
             proc = ctx.Process(target=_child, name=f"occbench-job-{idx}",
                                args=(send, os.getpid(), idx, list(overrides), payload))
             try:
-                proc.start()
+                with self._waiting():  # the first job waits while the fork server warms up
+                    proc.start()
             except (EOFError, OSError) as err:
                 recv.close()
                 send.close()
@@ -154,6 +157,17 @@ class ProcessLauncher(Launcher):
             return proc, recv
         raise AssertionError("unreachable")
 
+    def _waiting(self) -> Any:
+        """Within: a log line after ``WAIT_LINE`` seconds, then one every ``WAIT_LINE``
+        seconds (a sweep's first job waits silently on the fork server's warm-up, which
+        compiles the kernels on the first run after an install: minutes without a line)."""
+        from occbench.pipeline.warmup import heartbeat
+
+        return heartbeat(log.info, "the jobs wait for the fork server to import and warm up "
+                         f"{', '.join(self._preloaded) or 'their modules'} (the first run after "
+                         "an install compiles the kernels: half a minute to a few minutes)",
+                         WAIT_LINE, WAIT_LINE)
+
     def _start_server(self, ctx: Any, overrides: Sequence[str]) -> None:
         """Start the fork server, warm (``preload``) or plain, before the first job."""
         self._server_started = True
@@ -163,6 +177,7 @@ class ProcessLauncher(Launcher):
             ctx.set_forkserver_preload(["__main__"])
             return
         spec = self._preload_spec(overrides)
+        self._preloaded = list(spec["trackers"])
         ctx.set_forkserver_preload(["__main__", "hydra_plugins.occbench_launcher._preload"])
         saved = os.environ.get(PRELOAD_ENV)
         os.environ[PRELOAD_ENV] = json.dumps(spec, default=str)

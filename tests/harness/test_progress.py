@@ -1,6 +1,7 @@
 """Progress on the long waits (harness/progress.py): ``occbench bench``, the report's
 drawing, the trackers' warm-up. On a terminal a bar appears on stderr; on anything else
-(a log file, a pipe) nothing is printed."""
+(a log file, a pipe), with progress=false or in a sweep's job, nothing is drawn and a step
+silent for EVERY seconds logs a line."""
 
 from __future__ import annotations
 
@@ -61,19 +62,27 @@ def test_a_bar_on_a_terminal_nothing_elsewhere(case, tmp_path, monkeypatch):
     assert log.getvalue() == ""
 
 
-def test_no_bar_when_switched_off_or_in_a_multirun_job():
-    assert progress_factory(enabled=False, stream=FakeTerminal()) is None
-    assert progress_factory(multirun=True, stream=FakeTerminal()) is None
+@pytest.mark.parametrize("how", [{"enabled": False}, {"multirun": True}])
+def test_switched_off_or_in_a_multirun_job_no_bar_but_a_long_step_says_where_it_is(
+        how, monkeypatch):
+    """issue 39: a long step without a terminal logs a line at least every EVERY seconds;
+    with progress=false or in a sweep's job the factory was None, so a job's sequence (and
+    its outputs) stayed silent to its end. Even on a terminal nothing is drawn there."""
+    from occbench import progress
+
+    terminal = FakeTerminal()
+    factory = progress.progress_factory(stream=terminal, **how)
+    assert factory is not None
+    lines = _heard(monkeypatch, progress.LOG_PROGRESS, lambda: factory(total=30, desc="walk"))
+    assert "walk 0/30 frames" in lines[0] and terminal.getvalue() == ""
+    assert progress.LOG_PROGRESS.stop is None  # no watcher left running
 
 
-def test_a_long_step_without_a_terminal_says_where_it_is():
-    """issue 39 item 8: +experiment=pbm_table1 printed nothing for 92 s without a terminal.
-    A step that logs nothing for EVERY seconds gets one line with each open step's count;
-    the lines stop when the step ends."""
+def _heard(monkeypatch, logs, open_step) -> list[str]:
+    """The 'still working' lines ``logs`` (a LogProgress, its every made short) logs while
+    the step ``open_step()`` opens is open and silent; the step closed after the first."""
     import logging
     import threading
-
-    from occbench.progress import LogProgress
 
     heard = threading.Event()
     lines: list[str] = []
@@ -84,23 +93,40 @@ def test_a_long_step_without_a_terminal_says_where_it_is():
                 lines.append(record.getMessage())
                 heard.set()
 
-    ear = Ear()
+    monkeypatch.setattr(logs, "every", 0.05)
     logger = logging.getLogger("occbench.progress")
-    level, propagate = logger.level, logger.propagate
+    monkeypatch.setattr(logger, "propagate", False)  # other tests' root handlers: closed
+    monkeypatch.setattr(logger, "level", logging.INFO)
+    ear = Ear()
     logger.addHandler(ear)
-    logger.setLevel(logging.INFO)
-    logger.propagate = False  # other tests' root handlers (closed streams) hear nothing
     try:
-        progress = LogProgress(every=0.05)
-        outer = progress.bar(total=8, desc="sequences", unit="seq")
-        inner = progress.bar(total=150, desc="crossing")
-        inner.update(45)
-        assert heard.wait(30)  # a silent step is never silent for long
-        assert "sequences 0/8 seqs, crossing 45/150 frames" in lines[0]
-        inner.close()
-        outer.close()
-        assert progress.stop is None and not progress.bars  # no watcher left running
+        step = open_step()
+        try:
+            assert heard.wait(30)  # a silent step is never silent for long
+        finally:
+            step.close()
     finally:
         logger.removeHandler(ear)
-        logger.setLevel(level)
-        logger.propagate = propagate
+    return lines
+
+
+def test_a_long_step_without_a_terminal_says_where_it_is(monkeypatch):
+    """issue 39 item 8: +experiment=pbm_table1 printed nothing for 92 s without a terminal.
+    A step that logs nothing for EVERY seconds gets one line with each open step's count;
+    the lines stop when the step ends."""
+    from occbench.progress import LogProgress
+
+    progress = LogProgress(every=0.05)
+    outer = progress.bar(total=8, desc="sequences", unit="seq")
+
+    def inner():
+        bar = progress.bar(total=150, desc="crossing")
+        bar.update(45)
+        return bar
+
+    try:
+        lines = _heard(monkeypatch, progress, inner)
+    finally:
+        outer.close()
+    assert "sequences 0/8 seqs, crossing 45/150 frames" in lines[0]
+    assert progress.stop is None and not progress.bars

@@ -42,3 +42,54 @@ def test_warm_jobs_skip_the_warm_up_and_give_the_same_results(tmp_path):
         for name in ("metrics.csv", "tracks/reta/crossing.txt"):
             assert ((tmp_path / "warm" / str(j) / name).read_bytes()
                     == (tmp_path / "cold" / str(j) / name).read_bytes())
+
+
+def test_a_job_waiting_on_the_fork_server_says_so(monkeypatch):
+    """issue 39: a sweep's first job waits while the fork server warms the trackers up (100 s
+    of compiling after an install, pbm) and nothing was logged meanwhile: the launcher says
+    so every WAIT_LINE seconds while a job's start waits."""
+    import logging
+    import threading
+
+    from hydra_plugins.occbench_launcher import launcher as launcher_module
+
+    lines: list[str] = []
+    heard = threading.Event()
+
+    class Ear(logging.Handler):
+        def emit(self, record):
+            lines.append(record.getMessage())
+            if "still warming up" in record.getMessage():
+                heard.set()
+
+    class Waiting:  # a job's process whose start waits on a fork server still warming up
+        def start(self):
+            heard.wait(30)
+
+    class Conn:
+        def close(self):
+            pass
+
+    class Context:
+        def Pipe(self, duplex):  # noqa: N802 - multiprocessing's name
+            return Conn(), Conn()
+
+        def Process(self, **_):  # noqa: N802
+            return Waiting()
+
+        def get_start_method(self):
+            return "forkserver"
+
+    monkeypatch.setattr(launcher_module, "WAIT_LINE", 0.05)
+    logger = logging.getLogger(launcher_module.__name__)
+    monkeypatch.setattr(logger, "level", logging.INFO)
+    ear = Ear()
+    logger.addHandler(ear)
+    try:
+        launcher = launcher_module.ProcessLauncher(n_jobs=1)
+        launcher._preloaded = ["pbm"]
+        launcher._start_job(Context(), 0, [], (b"", b""))
+    finally:
+        logger.removeHandler(ear)
+    assert heard.is_set(), lines
+    assert "the jobs wait for the fork server to import and warm up pbm" in lines[0]

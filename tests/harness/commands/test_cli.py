@@ -162,7 +162,7 @@ def test_progress_bars_only_on_a_terminal_and_never_in_a_multirun():
     assert not bars_wanted(True, True, _Stream(True))  # a sweep job (joblib, Ray, SLURM)
     assert not bars_wanted(False, False, _Stream(True))
     assert progress_factory(True, False, _Stream(False)) is not None  # log lines instead
-    assert progress_factory(True, True, _Stream(False)) is None  # a sweep: a line per job
+    assert progress_factory(True, True, _Stream(False)) is not None  # a sweep job: likewise
     bar = progress_factory(True, False, _Stream(True))(total=3, desc="s")
     bar.update(1)
     bar.close()

@@ -241,3 +241,30 @@ def test_missing_and_corrupt_frames_fail_only_their_sequence(tmp_path):
 
 
 # ----------------------------------------------------------------------------- tables
+
+
+def test_scoring_and_writing_the_outputs_is_a_step_of_its_own(tmp_path, mot_root):
+    """issue 39: a long step without a terminal logs a line every 15 s (occbench.progress),
+    but the run's scoring, plots and page came after the last step closed: a large run's
+    page and bootstrap were silent to their end. They are a step of their own, opened once
+    the sequences are done and closed when report.html is written."""
+    steps: list[tuple[str, str, bool]] = []
+
+    class Step:
+        def __init__(self, desc):
+            self.desc = desc
+            steps.append((desc, "open", (tmp_path / "run" / "report.html").exists()))
+
+        def update(self, n=1):
+            pass
+
+        def close(self):
+            steps.append((self.desc, "close", (tmp_path / "run" / "report.html").exists()))
+
+    def factory(total=0, desc="", unit="frame"):
+        return Step(desc)
+
+    run_experiment(mot_cfg(mot_root), tmp_path / "run", progress=factory)
+    assert steps[-3:] == [("sequences", "close", False),
+                          ("scoring and writing the outputs", "open", False),
+                          ("scoring and writing the outputs", "close", True)]
