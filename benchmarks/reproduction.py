@@ -30,6 +30,13 @@ from shared_data import use_shared_data
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "reproduction.md"
 
+#: pbm_paper alone, as pbm_single_target follows a person (its one target given, none started),
+#: on the foreground blobs PBM 2 hands its tracker: whole, not split at heads (ours)
+PBM_PAPER_PATH = ["tracker=pbm_paper",
+                  "++tracker.starts._target_=occbench.trackers.layered.GivenTargetOnly",
+                  "detector.detector.split_heads=false",
+                  "+paper_table.our_label=whole blobs as in PBM 2"]
+
 # table -> the `occbench` commands that rebuild it, their `ours:` rows in one table (a multirun
 # writes one paper table per job). reta_paper alone detects with the paper's active-basis
 # detector (conf/experiment/reta_table2.yaml); in the shared run it tracks silhouette boxes.
@@ -41,11 +48,14 @@ TABLES: dict[str, list[list[str]]] = {
                         "detector=active_basis,silhouette,hog"]],
     "pbm_table1": [["+experiment=pbm_table1"]],
     "pbm_segmentation": [["+experiment=pbm_segmentation"]],
-    # the same tables on real PETS pixels (../shared/data/PETS09-S2L1-real, not shipped)
+    # the same tables on real PETS pixels (../shared/data/PETS09-S2L1-real, not shipped);
+    # pbm_paper once more on PBM's own detector path (PBM 2: whole blobs, no split at heads)
     "reta_table3_real": [["+experiment=reta_table3_real"],
                          ["+experiment=reta_table3_real", "tracker=reta_paper"]],
-    "pbm_table1_real": [["+experiment=pbm_table1_real"]],
-    "pbm_segmentation_real": [["+experiment=pbm_segmentation_real"]],
+    "pbm_table1_real": [["+experiment=pbm_table1_real"],
+                        ["+experiment=pbm_table1_real", *PBM_PAPER_PATH]],
+    "pbm_segmentation_real": [["+experiment=pbm_segmentation_real"],
+                              ["+experiment=pbm_segmentation_real", *PBM_PAPER_PATH]],
 }
 
 HEAD = """# Reproducing the papers' tables
@@ -74,8 +84,13 @@ def _args(table: str, args: list[str], shared: str) -> list[str]:
 
 
 def commands(table: str) -> list[str]:
-    return [" ".join(["occbench", *_args(table, args, "$OCCBENCH_SHARED"), "progress=false"])
-            for args in TABLES[table]]
+    return [" ".join(["occbench", *(_quote(a) for a in _args(table, args, "$OCCBENCH_SHARED")),
+                      "progress=false"]) for args in TABLES[table]]
+
+
+def _quote(arg: str) -> str:
+    """``arg`` as a shell reads it (the variable ``$OCCBENCH_SHARED`` left to expand)."""
+    return f'"{arg}"' if " " in arg else arg
 
 
 def run_table(table: str, runs: Path) -> tuple[list[Path], float]:
@@ -109,12 +124,37 @@ def _run(table: str, args: list[str], out: Path) -> tuple[list[Path], float]:
 
 
 def merge(tables: list[Path]) -> str:
-    """One table: the first run's, with the `ours:` rows of the other runs (or jobs)."""
+    """One table: the first run's, with the `ours:` rows of the other runs (or jobs), or
+    their `ours:` columns when the table has one column per method (``layout: columns``)."""
     first = tables[0].read_text().splitlines()
+    rows = [i for i, line in enumerate(first) if line.startswith("|")]
+    if "| ours:" in first[rows[0]]:
+        return _merge_columns(first, rows, tables[1:])
     ours = [line for path in tables[1:] for line in path.read_text().splitlines()
             if line.startswith("| ours:")]
-    last_row = max(i for i, line in enumerate(first) if line.startswith("|"))
-    return "\n".join(first[:last_row + 1] + ours + first[last_row + 1:]).strip() + "\n"
+    return "\n".join(first[:rows[-1] + 1] + ours + first[rows[-1] + 1:]).strip() + "\n"
+
+
+def _cells(line: str) -> list[str]:
+    return [c.strip() for c in line.strip().strip("|").split("|")]
+
+
+def _merge_columns(first: list[str], rows: list[int], others: list[Path]) -> str:
+    """``first``'s table lines (indices ``rows``) widened by every other table's `ours:`
+    columns; the tables must list the same rows in the same order."""
+    merged = [_cells(first[i]) for i in rows]
+    for path in others:
+        lines = [_cells(line) for line in path.read_text().splitlines()
+                 if line.startswith("|")]
+        keep = [j for j, c in enumerate(lines[0]) if c.startswith("ours:")]
+        if [line[0] for line in lines] != [line[0] for line in merged]:
+            raise RuntimeError(f"{path}: its rows differ from {len(merged)} rows of the first "
+                               "table; cannot put its columns beside them")
+        for line, add in zip(merged, lines, strict=True):
+            line += [add[j] for j in keep]
+    table = ["| " + " | ".join(line) + " |" for line in merged]
+    table[1] = "|" + "---|" * len(merged[0])
+    return "\n".join(first[:rows[0]] + table + first[rows[-1] + 1:]).strip() + "\n"
 
 
 def code_commit(doc: Path = DOC) -> str:

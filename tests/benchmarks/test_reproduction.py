@@ -36,6 +36,35 @@ def test_a_multiruns_jobs_give_one_table_with_every_ours_row(tmp_path):
     assert merged.count("reported: paper") == 1 and merged.rstrip().endswith("one sequence.")
 
 
+COLUMNS = """## A title
+
+| PETS 2009 | reported: PBM | {ours} |
+|---|---|{bar}
+| mostly tracked | 10 | {x} |
+| ID switches | 0 | {y} |
+
+Our data: real pixels.
+"""
+
+
+def test_a_column_tables_second_run_adds_its_ours_columns(tmp_path):
+    jobs = []
+    for i, (ours, x, y) in enumerate([("ours: pbm | ours: meanshift", "3 | 1", "0.5 | 2"),
+                                      ("ours: pbm_paper (whole)", "7", "1.8")]):
+        (tmp_path / str(i)).mkdir()
+        jobs.append(tmp_path / str(i) / "paper_table.md")
+        jobs[-1].write_text(COLUMNS.format(ours=ours, x=x, y=y, bar="---|" * (ours.count("|") + 1)))
+    merged = repro.merge(jobs)
+    lines = [line for line in merged.splitlines() if line.startswith("|")]
+    assert lines == ["| PETS 2009 | reported: PBM | ours: pbm | ours: meanshift | "
+                     "ours: pbm_paper (whole) |", "|---|---|---|---|---|",
+                     "| mostly tracked | 10 | 3 | 1 | 7 |", "| ID switches | 0 | 0.5 | 2 | 1.8 |"]
+    assert merged.startswith("## A title") and merged.rstrip().endswith("real pixels.")
+    jobs[1].write_text(jobs[1].read_text().replace("ID switches", "IDS"))
+    with pytest.raises(RuntimeError, match="rows differ"):
+        repro.merge(jobs)
+
+
 def test_writing_one_section_keeps_the_others(tmp_path):
     doc = tmp_path / "reproduction.md"
     repro.write({"reta_table2": repro.section("reta_table2", "## T2\n\nfirst\n", 1.0)}, doc)
