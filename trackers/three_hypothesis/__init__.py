@@ -7,7 +7,8 @@ histograms, fast path), ``motion`` (Kalman M), ``params`` (the constructor's par
 groups), ``rules`` (the paper's rule and ours for each step an adaptation changes),
 ``tracker`` (``RetaTracker``: Alg. 1), its steps by the paper's parts in ``steps_predict``
 (1-2), ``steps_occlusion`` (3-5), ``steps_update`` (6, 9), ``steps_hypotheses`` (7-8) and
-``steps_output`` (graph nodes, tracks), over the records of ``state``.
+``steps_output`` (graph nodes, tracks), each step a function returning a frozen value of
+``values``, over the records of ``state`` (people, the tracker's memory between frames).
 """
 
 from occbench.trackers.three_hypothesis.motion import MotionModel

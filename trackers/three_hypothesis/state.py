@@ -1,5 +1,6 @@
-"""What Reta's tracker keeps between frames: ``Person`` and its ``Branch`` nodes (what one
-frame's steps give each other: ``values``). Boxes are (N, 4) float64 xywh, 0-based pixels.
+"""What Reta's tracker keeps between frames: ``Person`` and its ``Branch`` nodes, the
+``Memory`` steps 6-9 write, and the ``Setting`` every step reads (what one frame's steps give
+each other: ``values``). Boxes are (N, 4) float64 xywh, 0-based pixels.
 """
 
 from __future__ import annotations
@@ -8,7 +9,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from occbench.trackers.three_hypothesis.graph import Node
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.graph import Node, TrackingGraph
+from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle, Occlusion
+from occbench.trackers.three_hypothesis.rules import Rules
 
 
 @dataclass(slots=True)
@@ -50,3 +54,55 @@ class Person:
     @property
     def public_id(self) -> int:
         return self.id if self.id > 0 else -self.key
+
+
+@dataclass
+class Memory:
+    """What the tracker keeps between frames and steps 6-9 write: the frame number t, the
+    graph G, the people N^{t-1} (then N^t), pi (eq. 3) between frames, the next person key
+    and public id, and each person's public id at t (``public``: a confirmation changes it
+    within the frame)."""
+
+    graph: TrackingGraph
+    t: int = 0
+    persons: list[Person] = field(default_factory=list)
+    pi: dict[tuple[int, int], int] = field(default_factory=dict)  # (key i, key j) -> +-1
+    next_key: int = 1
+    next_id: int = 1
+    public: dict[int, int] = field(default_factory=dict)  # person key -> public id at t
+
+    def begin_frame(self) -> None:
+        """t = t + 1: the graph opens frame t; the public ids of N^{t-1}."""
+        self.t += 1
+        self.graph.begin_frame(self.t)
+        self.public = {person.key: person.public_id for person in self.persons}
+
+    def end_frame(self, persons: list[Person]) -> None:
+        """N^t = ``persons``; pi forgets the pairs of people gone once it holds more than
+        4 P^2 + 16 (P people alive)."""
+        alive = {person.key for person in persons}
+        if len(self.pi) > 4 * len(alive) ** 2 + 16:
+            self.pi = {k: v for k, v in self.pi.items() if k[0] in alive and k[1] in alive}
+        self.persons = persons
+
+    def new_key(self) -> int:
+        """A new person's key."""
+        self.next_key += 1
+        return self.next_key - 1
+
+    def new_id(self) -> int:
+        """A new public id for a person confirmed at t."""
+        self.next_id += 1
+        return self.next_id - 1
+
+
+@dataclass(frozen=True, slots=True)
+class Setting:
+    """What the steps read of the tracker and never change: the rules ``adaptations``
+    selects (``rules.build_rules``), the parameter groups, and the histogrammer of eq. 1."""
+
+    rules: Rules
+    occlusion: Occlusion
+    life_cycle: LifeCycle
+    adaptations: Adaptations
+    histograms: EllipseHistogrammer

@@ -1,9 +1,10 @@
 """Three-hypothesis tracking graph (Reta et al., J. Electron. Imaging 24(1) 013015, 2015).
 
-``RetaTracker.update`` is the body of Algorithm 1 for frame t, one call per step (the steps
-live in one module per part of the paper, ``steps_*``; steps 1-5 are functions of the
-values of the steps before them, each returning a frozen value of ``values``; steps 6-9
-are still methods mixed into the class):
+``RetaTracker.update`` is the body of Algorithm 1 for frame t, one line a step. Each step is
+a function (one module per part of the paper, ``steps_*``) of the values the steps before it
+returned, and returns its own frozen value (``values``); the people of N^{t-1} are updated in
+place by steps 6-9 as the paper's UpdateAttributes does, and what lives between frames (the
+graph G, pi, the ids) is the tracker's ``state.Memory``:
 
 1. ``measure``: V = PeopleDetection(I^t), each measurement's ellipse S and histogram p
    (3.2, eq. 1): ``Measurements``;
@@ -14,11 +15,13 @@ are still methods mixed into the class):
    ``Matching``, a ``Match`` (det, node, stage, rho) per matched person;
 5. ``sort_occlusions``: pi = SortOcclusionTargets(O) (eq. 3), once visibility at t is
    known: ``DepthOrder``;
-6. ``_update_matched``: UpdateAttributes(N_o^t) (3.3.3);
-7. ``_continue_unmatched``: N_h1 for every unmatched person, N_h2 and N_h3 at its first
-   total occlusion (Alg. 1, FirstOcclusion);
-8. ``_prune``: PruneHypothesis(G, m);
-9. ``_start_tracks``: an unmatched measurement starts a tentative track (3.3).
+6. ``update_matched``: UpdateAttributes(N_o^t) (3.3.3): ``Updated``;
+7. ``continue_unmatched``: N_h1 for every unmatched person, N_h2 and N_h3 at its first
+   total occlusion (Alg. 1, FirstOcclusion): a ``Continuation`` per unmatched person;
+8. ``prune``: PruneHypothesis(G, m): the people kept;
+9. ``start_tracks``: an unmatched measurement starts a tentative track (3.3);
+
+then ``outputs``: a ``Track`` per node (AddNodeToGraph is ``steps_output.add_node``).
 
 Readings of what the paper leaves open (not switchable; each a row of
 ``docs/adaptations.md``): shapes are the axis-aligned ellipses inscribed in the detection
@@ -58,20 +61,19 @@ from occbench.trackers.three_hypothesis.params import (
     Occlusion,
 )
 from occbench.trackers.three_hypothesis.rules import build_rules
-from occbench.trackers.three_hypothesis.state import Person
-from occbench.trackers.three_hypothesis.steps_hypotheses import HypothesisSteps
+from occbench.trackers.three_hypothesis.state import Memory, Setting
+from occbench.trackers.three_hypothesis.steps_hypotheses import continue_unmatched, prune
 from occbench.trackers.three_hypothesis.steps_occlusion import (
     max_similarity,
     occlusions,
     sort_occlusions,
 )
-from occbench.trackers.three_hypothesis.steps_output import OutputSteps
+from occbench.trackers.three_hypothesis.steps_output import outputs
 from occbench.trackers.three_hypothesis.steps_predict import measure, predict
-from occbench.trackers.three_hypothesis.steps_update import UpdateSteps
-from occbench.trackers.three_hypothesis.values import Frame
+from occbench.trackers.three_hypothesis.steps_update import start_tracks, update_matched
 
 
-class RetaTracker(UpdateSteps, HypothesisSteps, OutputSteps):
+class RetaTracker:
     """Three-hypothesis tracking graph with occlusion reasoning (Reta et al. 2015).
 
     Args:
@@ -108,17 +110,19 @@ class RetaTracker(UpdateSteps, HypothesisSteps, OutputSteps):
                                               min_foreground=self.appearance.min_foreground,
                                               stride=self.appearance.pixel_stride)
         self.rules = build_rules(self.adaptations, self.histograms, self.motion, self.life_cycle)
+        self.setting = Setting(self.rules, self.occlusion, self.life_cycle, self.adaptations,
+                               self.histograms)
         self.reset()
 
     def reset(self) -> None:
         """Forget every person and the graph; ids restart at 1."""
-        self._persons: list[Person] = []
-        self._next_key = 1
-        self._next_id = 1
-        self._frame = 0
-        self._pi: dict[tuple[int, int], int] = {}
-        self.graph = TrackingGraph(window=self.life_cycle.m + 1)
+        self.memory = Memory(TrackingGraph(window=self.life_cycle.m + 1))
         self.rules.velocity.reset()
+
+    @property
+    def graph(self) -> TrackingGraph:
+        """The tracking graph G (the last m + 1 frames)."""
+        return self.memory.graph
 
     def graph_snapshot(self) -> dict:
         """The current frame's graph: {'frame', 'nodes': [records], 'edges': [records]}."""
@@ -143,21 +147,16 @@ class RetaTracker(UpdateSteps, HypothesisSteps, OutputSteps):
             raise ValueError(f"RetaTracker: frame must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
         if foreground is not None and foreground.shape[:2] != frame.shape[:2]:
             raise ValueError(f"RetaTracker: foreground shape {foreground.shape} != frame {frame.shape[:2]}")
-        self._frame += 1
-        self.graph.begin_frame(self._frame)
-        self._public = {person.key: person.public_id for person in self._persons}
-        rules = self.rules
+        m, setting, rules = self.memory, self.setting, self.rules
+        m.begin_frame()
         V = measure(frame, detections, foreground, self.min_score, self.histograms, rules.pixels)
-        S = predict(self._persons, rules.motion)
+        S = predict(m.persons, rules.motion)
         O = occlusions(S, V, self.occlusion)
-        A = max_similarity(S, V, O, self._pi, rules, self.association)
-        D = sort_occlusions(S, V, O, A, self._pi)
-        f = Frame(V, S, O, A, D)
-        survivors = self._update_matched(f)
-        survivors += self._prune(f, *self._continue_unmatched(f))
-        survivors += self._start_tracks(f)
-        alive = {person.key for person in survivors}
-        if len(self._pi) > 4 * len(alive) ** 2 + 16:
-            self._pi = {k: v for k, v in self._pi.items() if k[0] in alive and k[1] in alive}
-        self._persons = survivors
-        return self._outputs()
+        A = max_similarity(S, V, O, m.pi, rules, self.association)
+        D = sort_occlusions(S, V, O, A, m.pi)
+        U = update_matched(S, V, O, A, D, setting, m)
+        H = continue_unmatched(S, A, D, U, rules)
+        kept = prune(S, V, O, U, H, setting, m)
+        new = start_tracks(S, V, O, A, setting, m)
+        m.end_frame(U.persons + kept + new)
+        return outputs(m.persons, m.t, rules)

@@ -10,7 +10,7 @@ measurement its row in ``Measurements``. Boxes are (N, 4) float64 xywh, 0-based 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -86,16 +86,23 @@ class DepthOrder:
     in_front: dict[int, list[int]]
 
 
-@dataclass(slots=True)
-class Frame:
-    """What steps 6-9 of one frame t share: the values of steps 1-5 (``values``), and what
-    ``_update_matched`` fills: visible, visible_dets and absorbed."""
+@dataclass(frozen=True, slots=True)
+class Updated:
+    """Step 6, UpdateAttributes(N_o^t) (3.3.3): the matched people (updated, in person
+    order), their measurements (the front at t: ``visible`` boxes, ``visible_dets`` rows of
+    V), and the hidden people a newly confirmed track took the id of (they end)."""
 
-    V: Measurements
-    S: Predictions
-    O: Occlusions
-    A: Matching
-    D: DepthOrder
-    visible: np.ndarray = None  # (K, 4) measurements of the matched persons (the front)
-    visible_dets: list[int] = field(default_factory=list)  # their measurement indices
-    absorbed: set[int] = field(default_factory=set)  # hidden persons a new track confirmed
+    persons: list[Person]
+    visible: np.ndarray  # (K, 4)
+    visible_dets: list[int]  # (K,)
+    absorbed: frozenset[int]  # person indices
+
+
+@dataclass(frozen=True, slots=True)
+class Continuation:
+    """Step 7 for one unmatched person: its new branches (N_h1, and N_h2, N_h3 at its first
+    total occlusion) and, per branch, the node of t-1 it continues (-1 when spawned)."""
+
+    person: Person
+    branches: list[Branch]
+    sources: list[int]

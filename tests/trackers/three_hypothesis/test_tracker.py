@@ -621,10 +621,10 @@ def test_memory_stays_flat_over_a_long_run():
         dets = Detections(np.array(boxes, float).reshape(-1, 4), np.ones(len(boxes)))
         tracker.update(frame, dets)
         most_nodes = max(most_nodes, tracker.graph.node_count)
-        most_persons = max(most_persons, len(tracker._persons))
+        most_persons = max(most_persons, len(tracker.memory.persons))
     assert most_persons <= 12
     assert most_nodes <= (tracker.life_cycle.m + 1) * 3 * most_persons
-    assert len(tracker._pi) <= 4 * most_persons**2 + 16
+    assert len(tracker.memory.pi) <= 4 * most_persons**2 + 16
 
 
 def test_record_sequence_writes_graph_beside_tracks_and_draws_frames(tmp_path):
