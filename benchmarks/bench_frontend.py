@@ -130,7 +130,7 @@ def speed(n_frames: int) -> None:
         dets = {}
         for name, extra in (("foreground", [f"detector.detector.min_area={80 * k * k}",
                                              f"detector.detector.min_height={20 * k}"]),
-                            ("silhouette", [f"detector.detector.matcher.downscale={2 * k}"]),
+                            ("silhouette", [f"detector.detector.matcher.search.downscale={2 * k}"]),
                             ("hog", [f"detector.detector.min_blob_area={60 * k * k}"])):
             cfg = compose_config([f"detector={name}", *size, *extra], config_name="detect")
             dets[name] = instantiate(cfg.detector).detector

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from occbench.trackers.frontend.silhouette import TEMPLATE_HEIGHT, fit_template
+from occbench.trackers.frontend.silhouette_template import TEMPLATE_HEIGHT, fit_template
 from occbench.trackers.geometry import intersection_matrix
 
 log = logging.getLogger(__name__)

@@ -1,10 +1,10 @@
 """Compiled greedy search of ``SilhouetteMatcher`` (silhouette.py): the same equations as
-``greedy_search`` and ``search_regions`` there, in one pass per fit over the candidates instead of (N, cells) numpy
-temporaries, and skipping candidates whose template box holds too little vacant foreground
-to pass the score test (a bound, so the fits are unchanged). Tested against the numpy
-version (tests/trackers/frontend/test_detectors.py): the same fits on synthetic masks.
-Compiled with numba's ``cache=True``: the cache sits in ``__pycache__`` beside this file, keyed on
-the file's time stamp (not on its import name).
+``greedy_search`` and ``search_regions`` of silhouette_search.py, in one pass per fit over the
+candidates instead of (N, cells) numpy temporaries, and skipping candidates whose template box
+holds too little vacant foreground to pass the score test (a bound, so the fits are
+unchanged). Tested against the numpy version (tests/trackers/frontend/test_detectors.py): the
+same fits on synthetic masks. Compiled with numba's ``cache=True``: the cache sits in
+``__pycache__`` beside this file, keyed on the file's time stamp (not on its import name).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def _integral(img, I, row0):
 @numba.njit(cache=True)
 def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, head, occ,
                   alpha, beta, threshold, min_visible, head_contrast, fits):
-    """See ``silhouette.greedy_search`` (same arguments); returns the number of fits.
+    """See ``silhouette_search.greedy_search`` (same arguments); returns the number of fits.
 
     Every placement is scored once; after a fit only the placements whose box meets the
     fit's box are scored again (the others' sums did not change)."""
@@ -164,7 +164,7 @@ def greedy_kernel(vp, op, py, px, H, W, ids, bands, ys, xs, coef, size, tsum, he
 @numba.njit(cache=True)
 def search_regions_kernel(small, lab, regions, bands, ys, xs, coef, size, tsum, head, occ,
                           alpha, beta, threshold, min_visible, head_contrast, fits, counts):
-    """See ``silhouette.search_regions`` (same arguments): every region of a frame in one call."""
+    """See ``silhouette_search.search_regions`` (same arguments): every region of a frame in one call."""
     for i in range(regions.shape[0]):
         label, x0, y0, x1, y1 = regions[i, 0], regions[i, 1], regions[i, 2], regions[i, 3], regions[i, 4]
         py, px = regions[i, 5], regions[i, 6]

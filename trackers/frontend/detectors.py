@@ -203,9 +203,9 @@ class SilhouetteDetector(_ForegroundPipeline):
     it); the fits not cut by the picture's border, and the isolated person-like blobs, are
     (foot row, height, width) samples of the perspective line ``calibration.Perspective``
     (height = a * foot_row + b), fitted robustly (RANSAC, ``fit_perspective``). The detector
-    then searches only heights within ``matcher.height_tolerance`` of the line at each row.
+    then searches only heights within ``matcher.heights.height_tolerance`` of the line at each row.
     With too little evidence it logs a warning and searches every height (the fallback).
-    A fixed ``matcher.height_model`` (a camera calibration) skips the learning.
+    A fixed ``matcher.heights.height_model`` (a camera calibration) skips the learning.
 
     The live picture (``calibration.active_area``: flat padding strips at the frame's edges
     excluded) is found in the warm-up too; the matcher works on it, so that a person cut
@@ -216,7 +216,7 @@ class SilhouetteDetector(_ForegroundPipeline):
         matcher: the ``SilhouetteMatcher`` (template, scales, alpha, beta, threshold, ...).
         heads: optional head detector to report one head per detection.
         calibration: the ``PerspectiveCalibration`` (None: no learning, the matcher's fixed
-            ``height_model`` or none).
+            ``heights.height_model`` or none).
         calibration_frames: frames sampled over the sequence for the calibration.
         calibration_evidence: "fits" (template fits without a size prior; the line is then
             in the template's own units, as the matcher uses it) or "blobs" (isolated
@@ -373,8 +373,8 @@ class SilhouetteDetector(_ForegroundPipeline):
         inside = ((c[:, None, 0] >= bb[None, :, 0]) & (c[:, None, 0] < bb[None, :, 0] + bb[None, :, 2])
                   & (c[:, None, 1] >= bb[None, :, 1]) & (c[:, None, 1] < bb[None, :, 1] + bb[None, :, 3]))
         H, W = live.shape
-        edge = 2 * self.matcher.downscale
-        lo, hi = (self.matcher._kernels.size[k, 0] * self.matcher.downscale for k in (0, -1))
+        edge = 2 * self.matcher.search.downscale
+        lo, hi = (self.matcher._kernels.size[k, 0] * self.matcher.search.downscale for k in (0, -1))
         for j in np.flatnonzero(inside.sum(axis=0) == 1):
             x, y, w, h = boxes[int(np.flatnonzero(inside[:, j])[0])]
             # fits at the smallest or largest height searched are censored (a fragment or a
@@ -393,13 +393,13 @@ class SilhouetteDetector(_ForegroundPipeline):
         if t <= 0:
             return None
         T = self.matcher.template
-        aspect = self.matcher.aspect or T.shape[1] / T.shape[0]
-        sw, sh = self.matcher.box_scale
+        aspect = self.matcher.person.aspect or T.shape[1] / T.shape[0]
+        sw, sh = self.matcher.report.box_scale
         return aspect * t * sw, t * sh
 
     def _template_boxes(self, boxes: np.ndarray) -> np.ndarray:
         """(N, 4) xywh: the fitted template boxes of reported ``boxes`` (``box_scale`` undone)."""
-        sw, sh = self.matcher.box_scale
+        sw, sh = self.matcher.report.box_scale
         out = np.asarray(boxes, np.float64).reshape(-1, 4).copy()
         tw = out[:, 2] / sw
         out[:, 0] -= (tw - out[:, 2]) / 2
@@ -416,7 +416,7 @@ class SilhouetteDetector(_ForegroundPipeline):
             vacant = self.verifier.vacant(fg, self._template_boxes(boxes), self.area)
             extra, _ = self.verifier.propose(frame, vacant, lambda top: self._person_size(top - r0))
             boxes = np.vstack([boxes, extra])
-            scores = np.r_[scores, np.full(len(extra), self.matcher.threshold)]
+            scores = np.r_[scores, np.full(len(extra), self.matcher.score.threshold)]
         if len(boxes) == 0:
             return Detections.empty()
         heads = None if self.heads is None else self.heads.detect(frame, fg, boxes)

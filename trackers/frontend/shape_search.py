@@ -45,7 +45,7 @@ import numpy as np
 from occbench.trackers.frontend.active_basis import GRID, TAU, ActiveBasis, shift_offsets
 from occbench.trackers.frontend.calibration import Perspective
 from occbench.trackers.frontend.detectors import SilhouetteDetector, _labels_from_boxes
-from occbench.trackers.frontend.silhouette import load_template
+from occbench.trackers.frontend.silhouette_template import load_template
 from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
@@ -325,7 +325,7 @@ class ActiveBasisDetector(SilhouetteDetector):
         """The learnt perspective in reported-box units (None: none learnt)."""
         if self.perspective is None:
             return None
-        sh = float(self.matcher.box_scale[1])
+        sh = float(self.matcher.report.box_scale[1])
         p = self.perspective
         return Perspective(p.a * sh, p.b * sh, p.width_ratio, p.samples, p.bins, p.spread)
 

@@ -26,6 +26,9 @@ def _one_line(capsys, *args: str) -> str:
       "'tracker.association.mu_g'?")),
     (["dataset.lenght=30"], ("occbench: unknown key 'dataset.lenght': did you mean "
                              "'dataset.length'?")),
+    (["detector=silhouette", "detector.detector.matcher.min_height=0.2"],  # moved into a group
+     ("occbench: unknown key 'detector.detector.matcher.min_height': did you mean "
+      "'detector.detector.matcher.heights.min_height'?")),
 ])
 def test_a_typo_is_one_line_with_did_you_mean(capsys, args, line):
     assert _one_line(capsys, *args) == line

@@ -96,7 +96,7 @@ def test_fit_silhouette_and_heads_commands(tmp_path):
     from occbench.fit.heads import main as fit_heads
     from occbench.fit.silhouette import main as fit_silhouette
     from occbench.trackers.frontend.heads import ColourMixtures
-    from occbench.trackers.frontend.silhouette import load_template
+    from occbench.trackers.frontend.silhouette_template import load_template
 
     assert fit_silhouette([*TINY, "--step", "3", "--out", str(tmp_path / "t.npy")]) == 0
     t = load_template(tmp_path / "t.npy")

@@ -16,7 +16,8 @@ def _detector():
     from hydra.utils import instantiate
 
     # synthetic gt boxes are the rendered people's own boxes: no annotation convention
-    cfg = compose_config(["detector=silhouette", "detector.detector.matcher.box_scale=[1.0,1.0]"],
+    cfg = compose_config(["detector=silhouette",
+                          "detector.detector.matcher.report.box_scale=[1.0,1.0]"],
                          config_name="detect")
     return instantiate(cfg.detector).detector
 

@@ -14,14 +14,34 @@ from occbench.trackers.frontend.detectors import (
     nms,
 )
 from occbench.trackers.frontend.heads import HeadDetector
-from occbench.trackers.frontend.silhouette import (
-    SilhouetteMatcher,
+from occbench.trackers.frontend.silhouette import SilhouetteMatcher, fit_height_model
+from occbench.trackers.frontend.silhouette_params import (
+    MOVED,
+    Heights,
+    Person,
+    Report,
+    Score,
+    Search,
+)
+from occbench.trackers.frontend.silhouette_search import _integral
+from occbench.trackers.frontend.silhouette_template import (
     analytic_template,
-    fit_height_model,
     fit_template,
     load_template,
 )
 from occbench.trackers.geometry import iou_matrix
+
+
+GROUPS = {"person": Person, "heights": Heights, "score": Score, "search": Search,
+          "report": Report}
+
+
+def _matcher(**flat) -> SilhouetteMatcher:
+    """A matcher from flat keys, each put in its group (``silhouette_params.MOVED``)."""
+    groups: dict[str, dict] = {}
+    for key, value in flat.items():
+        groups.setdefault(MOVED[key], {})[key] = value
+    return SilhouetteMatcher(**{g: GROUPS[g](**kw) for g, kw in groups.items()})
 
 
 def _person_mask(shape, box):
@@ -34,7 +54,7 @@ def _person_mask(shape, box):
 
 def test_silhouette_finds_one_person_at_its_place():
     box = (50, 100, 34, 84)
-    boxes, scores = SilhouetteMatcher(min_height=40, max_height=120, n_scales=10,
+    boxes, scores = _matcher(min_height=40, max_height=120, n_scales=10,
                                       downscale=1).fit(_person_mask((288, 384), box))
     assert len(boxes) == 1
     assert iou_matrix(boxes, np.array([box]))[0, 0] > 0.8 and scores[0] > 0.5
@@ -45,14 +65,14 @@ def test_silhouette_separates_two_touching_people():
     mask = _person_mask((240, 320), a) | _person_mask((240, 320), b)
     n, _ = cv2.connectedComponents(mask)
     assert n - 1 == 1  # one blob
-    boxes, _ = SilhouetteMatcher(min_height=40, max_height=120, n_scales=10, downscale=1).fit(mask)
+    boxes, _ = _matcher(min_height=40, max_height=120, n_scales=10, downscale=1).fit(mask)
     assert len(boxes) == 2
     iou = iou_matrix(np.array([a, b]), boxes)
     assert (iou.max(axis=1) > 0.6).all()
 
 
 def test_silhouette_ignores_specks_and_empty_masks():
-    m = SilhouetteMatcher(min_height=40, max_height=120)
+    m = _matcher(min_height=40, max_height=120)
     mask = np.zeros((200, 200), dtype=np.uint8)
     assert len(m.fit(mask)[0]) == 0
     mask[10:13, 10:13] = 1
@@ -60,7 +80,7 @@ def test_silhouette_ignores_specks_and_empty_masks():
 
 
 def test_height_prior_restricts_scales():
-    m = SilhouetteMatcher(min_height=30, max_height=120, n_scales=10, downscale=1)
+    m = _matcher(min_height=30, max_height=120, n_scales=10, downscale=1)
     mask = _person_mask((288, 384), (50, 100, 34, 84))
     m.set_height_model((0.0, 40.0))  # people here are 40 pixels high
     boxes, _ = m.fit(mask)
@@ -138,7 +158,7 @@ def test_silhouette_detector_end_to_end():
     people = [(40, 50, 30, 80), (200, 100, 40, 100)]
     bg, frame = _scene(people, seed=1)
     det = SilhouetteDetector(BackgroundModel(history=50),
-                             SilhouetteMatcher(min_height=50, max_height=130, downscale=1))
+                             _matcher(min_height=50, max_height=130, downscale=1))
     for _ in range(20):
         det.detect(bg)
     dets, _ = det.detect(frame)
@@ -174,16 +194,33 @@ def test_detector_arguments_validated():
         ForegroundDetector(min_aspect=0.9, max_aspect=0.5)
     with pytest.raises(ValueError, match="scale"):
         HogDetector(scale=1.0)
-    with pytest.raises(ValueError, match="min_height"):
-        SilhouetteMatcher(min_height=100, max_height=50)
+    with pytest.raises(ValueError, match="heights.max_height"):
+        Heights(min_height=100, max_height=50)
+
+
+@pytest.mark.parametrize(("kind", "field"), [
+    (Person, "aspect"), (Person, "occupy_level"), (Heights, "min_height"),
+    (Heights, "max_height"), (Heights, "n_scales"), (Heights, "height_tolerance"),
+    (Score, "min_visible"), (Score, "head_contrast"), (Search, "downscale"),
+    (Search, "group_gap"), (Report, "max_overlap")])
+def test_matcher_groups_refuse_nan(kind, field):
+    """Every checked number refuses NaN (through ``trackers.common.checks``); before the
+    groups ``height_tolerance`` and ``group_gap`` (written ``x < 1``, ``x < 0``) let it in."""
+    with pytest.raises(ValueError, match=f"{field} .*got nan"):
+        kind(**{field: float("nan")})
+
+
+def test_matcher_names_the_group_of_a_flat_key():
+    with pytest.raises(TypeError, match=r"matcher.min_height: moved to matcher.heights.min_height"):
+        SilhouetteMatcher(min_height=40)
+    with pytest.raises(TypeError, match="heights: expected a Heights"):
+        SilhouetteMatcher(heights={"min_height": 40})
 
 
 def test_template_cells_sum_like_the_piecewise_constant_template():
     """sum_{a,b} coef I[Y + ys[a], X + xs[b]] (the cells' corners on an integral image) is the
     correlation of the image with T~, the template averaged over each cell; sum T~ = sum T."""
-    from occbench.trackers.frontend.silhouette import _integral
-
-    m = SilhouetteMatcher(min_height=12, max_height=90, n_scales=5, downscale=1)
+    m = _matcher(min_height=12, max_height=90, n_scales=5, downscale=1)
     sc = m._kernels_for(200)
     rng = np.random.default_rng(3)
     img = (rng.random((120, 100)) < 0.5).astype(np.uint8)
@@ -218,7 +255,7 @@ def test_compiled_greedy_search_equals_the_numpy_equations():
     cases = [(-1.0, None), (0.2, None), (0.2, (0.5, 10.0))]  # head rule, height model
     for compiled in (True, False):
         for head, model in cases:
-            m = SilhouetteMatcher(min_height=30, max_height=100, n_scales=6, downscale=1,
+            m = _matcher(min_height=30, max_height=100, n_scales=6, downscale=1,
                                   max_overlap=1.0, head_contrast=head, frame_border=True,
                                   height_model=model, compiled=compiled)
             got[compiled, head, model] = m.candidates(mask.copy())
@@ -237,8 +274,8 @@ def test_frame_border_finds_a_person_cut_by_the_bottom_edge():
     full = _person_mask((340, 320), (140, 180, 40, 100))
     mask = full[:240]
     kw = {"min_height": 60, "max_height": 120, "n_scales": 12, "downscale": 1}
-    plain = SilhouetteMatcher(**kw).fit(mask)[0]
-    cut = SilhouetteMatcher(**kw, frame_border=True).fit(mask)[0]
+    plain = _matcher(**kw).fit(mask)[0]
+    cut = _matcher(**kw, frame_border=True).fit(mask)[0]
     visible = np.array([[140, 180, 40, 60]], float)  # the annotation convention: clipped box
     assert len(cut) == 1
     assert (cut[:, 1] + cut[:, 3] <= 240).all()  # clipped to the frame
@@ -251,26 +288,26 @@ def test_box_scale_aspect_and_fixed_height_model():
     box = (50, 100, 34, 84)
     mask = _person_mask((288, 384), box)
     kw = {"min_height": 40, "max_height": 120, "n_scales": 10, "downscale": 1}
-    ref = SilhouetteMatcher(**kw).fit(mask)[0]
-    scaled = SilhouetteMatcher(**kw, box_scale=(0.8, 0.9)).fit(mask)[0]
+    ref = _matcher(**kw).fit(mask)[0]
+    scaled = _matcher(**kw, box_scale=(0.8, 0.9)).fit(mask)[0]
     assert len(ref) == 1 and len(scaled) == 1
     np.testing.assert_allclose(scaled[0, 2:], ref[0, 2:] * [0.8, 0.9])
     np.testing.assert_allclose(scaled[0, 0] + scaled[0, 2] / 2, ref[0, 0] + ref[0, 2] / 2)  # same centre
     assert scaled[0, 1] == ref[0, 1]  # same top
-    narrow = SilhouetteMatcher(**kw, aspect=0.3)
+    narrow = _matcher(**kw, aspect=0.3)
     narrow._kernels_for(288)
     assert all(abs(t.shape[1] / t.shape[0] - 0.3) < 0.1 for t in narrow._cache[0].templates)
     # a fixed prior (camera calibration) survives set_height_model(None), e.g. a detector reset
-    fixed = SilhouetteMatcher(**kw, height_model=(0.0, 40.0))
+    fixed = _matcher(**kw, height_model=(0.0, 40.0))
     fixed.set_height_model(None)
     assert fixed.height_model == (0.0, 40.0)
     b = fixed.fit(mask)[0]
     assert len(b) and (b[:, 3] <= 40 * 1.4 + 1).all()
     fixed.set_height_model((0.0, 84.0))  # a learnt prior overrides it
     assert fixed.height_model == (0.0, 84.0)
-    with pytest.raises(ValueError, match="box_scale"):
-        SilhouetteMatcher(box_scale=(0.0, 1.0))
-    with pytest.raises(ValueError, match="aspect"):
-        SilhouetteMatcher(aspect=5.0)
-    with pytest.raises(ValueError, match="height_model"):
-        SilhouetteMatcher(height_model=(1.0,))
+    with pytest.raises(ValueError, match="report.box_scale"):
+        Report(box_scale=(0.0, 1.0))
+    with pytest.raises(ValueError, match="person.aspect"):
+        Person(aspect=5.0)
+    with pytest.raises(ValueError, match="heights.height_model"):
+        Heights(height_model=(1.0,))

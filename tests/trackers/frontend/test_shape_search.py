@@ -11,7 +11,7 @@ from occbench.fit.active_basis import load
 from occbench.trackers.frontend.active_basis import crop_patch
 from occbench.trackers.frontend.calibration import Perspective
 from occbench.trackers.frontend.shape_search import ActiveBasisDetector, ShapeSearch, shape_filter_map
-from occbench.trackers.frontend.silhouette import load_template
+from occbench.trackers.frontend.silhouette_template import load_template
 from occbench.trackers.geometry import iou_matrix
 
 
