@@ -10,12 +10,15 @@ xywh, 0-based pixels.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from scipy.sparse import csr_array
 
 from occbench.trackers.three_hypothesis._kernels import blend
+
+if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
+    from occbench.trackers.three_hypothesis.values import Match
 
 # --------------------------------------------------------------- 3.3.3: q of a person in front
 
@@ -78,7 +81,7 @@ class MergedMotion:
         return R / np.maximum(own, 1e-3)[:, None, None]
 
 
-def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.ndarray,
+def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
                hidden: np.ndarray, pred: np.ndarray, dets: np.ndarray,
                delta: csr_array) -> np.ndarray:
     """(K,) share of each matched measurement's region that no predicted region of a hidden
@@ -86,13 +89,13 @@ def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.n
     of a person with ``hidden`` True (|S_m & S_d| = delta (|S_m| + |S_d|) / 2, eq. 5).
 
     Args:
-        rows: (person, measurement d, node n) of each matched row.
+        matches: the ``Match`` (measurement d, node n) of each matched person.
         pairs: O, (K', 2) node rows; owners: (B,) person of each node.
         hidden: (P,) bool, persons unmatched at t that may be inside a measurement.
         pred: (B, 4) predicted regions; dets: (D, 4) measurements.
         delta: sparse (B, D) region similarity of ``pred`` and ``dets`` (eq. 5).
     """
-    own = np.ones(len(rows))
+    own = np.ones(len(matches))
     if not len(pairs) or not hidden.any():
         return own
     partners: dict[int, list[int]] = {}
@@ -102,8 +105,8 @@ def own_shares(rows: list[tuple[int, int, int]], pairs: np.ndarray, owners: np.n
         if hidden[owners[a]]:
             partners.setdefault(b, []).append(a)
     area_n = pred[:, 2] * pred[:, 3]  # pi / 4 cancels in the ratio
-    for r, (_, d, n) in enumerate(rows):
-        m = partners.get(n)
+    for r, match in enumerate(matches):
+        d, m = match.det, partners.get(match.node)
         if not m:
             continue
         area_d = dets[d, 2] * dets[d, 3]

@@ -50,7 +50,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     dbox = V.boxes[visible_dets]
     behind = np.array([m.node in in_front for m in matches])
     z = box_measurements(dbox)
-    own = _own_share(S, V, O, A, rules, keys, matches)
+    own = _own_share(S, V, O, A, rules, matches)
     Rs = rules.motion_front.noise(np.array([persons[i].R for i in keys]),
                                   np.where(behind, 1.0, own))
     predicted = S.Xp[idx], S.Pp[idx]
@@ -157,16 +157,15 @@ def _visible_share(V: Measurements, A: Matching, D: DepthOrder, matches: list[Ma
 
 
 def _own_share(S: Predictions, V: Measurements, O: Occlusions, A: Matching, rules: Rules,
-               keys: list[int], matches: list[Match]) -> np.ndarray:
-    """Per matched person (``keys``, ``matches``), the share of its measured region no
+               matches: list[Match]) -> np.ndarray:
+    """Per matched person (``matches``), the share of its measured region no
     hidden confirmed partner in O covers (``contact.own_shares``); 1 everywhere unless a
     front rule reads it."""
     if not (rules.appearance_front.uses_shares or rules.motion_front.uses_shares):
         return np.ones(len(matches))
     hidden = np.array([person.confirmed and i not in A.matched
                        for i, person in enumerate(S.persons)], dtype=bool)
-    return own_shares([(i, m.det, m.node) for i, m in zip(keys, matches)], O.pairs, S.owners,
-                      hidden, S.boxes, V.boxes, O.delta)
+    return own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta)
 
 
 def _confirm(S: Predictions, A: Matching, absorbed: set[int], person: Person,

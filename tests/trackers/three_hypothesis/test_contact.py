@@ -22,6 +22,7 @@ from occbench.trackers.three_hypothesis.contact import (
     union_cover,
 )
 from occbench.trackers.three_hypothesis.rules import build_rules
+from occbench.trackers.three_hypothesis.values import Match
 
 BOX = np.array([[0.0, 0.0, 10.0, 20.0]])
 
@@ -31,7 +32,8 @@ def test_own_share_is_the_measured_region_no_hidden_partner_covers():
     Same sizes: delta 1 (person 1 wholly inside) leaves 0 of the region to person 0, delta
     0.5 half of it; matched, or not in O, person 1 leaves all of it."""
     pred = np.concatenate([BOX, BOX])
-    owners, rows, pairs = np.array([0, 1]), [(0, 0, 0)], np.array([[0, 1]])
+    owners, pairs = np.array([0, 1]), np.array([[0, 1]])
+    rows = [Match(det=0, node=0, stage=1, rho=1.0)]
     hidden = np.array([False, True])
     for delta, own in ((1.0, 0.0), (0.5, 0.5), (0.0, 1.0)):
         d = csr_array(np.array([[1.0], [delta]]))
