@@ -9,6 +9,7 @@ far ahead seeks (``CAP_PROP_POS_FRAMES``), a short jump ahead decodes through th
 from __future__ import annotations
 
 import logging
+import os
 from pathlib import Path
 
 import cv2
@@ -17,6 +18,7 @@ import numpy as np
 from occbench.datasets.base import GroundTruth, Sequence, window
 from occbench.datasets.images import FrameError
 from occbench.datasets.mot import ground_truth_from_table
+from occbench.errors import verbose
 from occbench.io.mot import MotTable, read_mot
 from occbench.trackers.records import SequenceInfo
 
@@ -32,6 +34,16 @@ GRAB_AHEAD = 32
 #: reports 293, and seeking to frame 290 returns frame 288): their frames are counted by
 #: decoding once, and a jump back reopens the file and decodes forward (exact, slower).
 UNRELIABLE_SEEK = (".mpg", ".mpeg", ".mpe", ".m1v", ".m2v", ".vob", ".ts", ".m2ts")
+
+
+def quiet_libav() -> None:
+    """OpenCV's FFmpeg says nothing on stderr unless ``occbench -v``: a broken video's
+    FFmpeg lines ('moov atom not found', 'error while decoding MB') came before the one line
+    ``occbench: ...`` that names the file and the frame (``FrameError``). OpenCV reads
+    ``OPENCV_FFMPEG_LOGLEVEL`` when it first opens a video in the process; a value the user
+    set is kept."""
+    if not verbose():
+        os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET
 
 
 class VideoSequence(Sequence):
@@ -122,6 +134,7 @@ class VideoSequence(Sequence):
 
     def _capture(self) -> cv2.VideoCapture:
         if self._cap is None:
+            quiet_libav()
             cap = cv2.VideoCapture(str(self.path))
             if not cap.isOpened():
                 raise FrameError(f"cannot open video (corrupt or unsupported codec): {self.path}")

@@ -366,7 +366,8 @@ def _is_int(v: float, low: int, high: int) -> bool:
 
 
 def _shown(v: float) -> str:
-    return str(int(v)) if math.isfinite(v) and v == int(v) else repr(v)
+    """``v`` as written: a whole number as an integer, a huge one as 1e+308 (not 309 digits)."""
+    return str(int(v)) if math.isfinite(v) and v == int(v) and abs(v) <= 1e20 else repr(v)
 
 
 def format_mot(frames: np.ndarray, ids: np.ndarray, boxes: np.ndarray,

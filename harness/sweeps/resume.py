@@ -122,7 +122,7 @@ def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], flo
     try:
         value = float(run())
     except Exception as err:  # one job's failure must not stop the sweep
-        msg = f"{type(err).__name__}: {err}".strip()
+        msg = _cause(err)
         # one line per job (an input mistake fails every job alike); the traceback with -v
         log.error("%s: job failed: %s", job_dir, msg, exc_info=verbose())
         write_status(job_dir, FAILED, overrides, error=msg, inputs=fingerprint)
@@ -130,3 +130,12 @@ def guarded(job_dir: str | Path, overrides: Sequence[str], run: Callable[[], flo
     write_status(job_dir, DONE, overrides, objective=value, inputs=fingerprint,
                  files=outputs.record(job_dir))
     return value
+
+
+def _cause(err: BaseException) -> str:
+    """A failed job's cause in one line: the app's own refusal as it says it (its
+    ``occbench: `` prefix dropped: the sweep's line has one), anything else with its type."""
+    text = str(err).strip()
+    if text.startswith("occbench: "):  # AppError: already the one line of a refused input
+        return text.removeprefix("occbench: ")
+    return f"{type(err).__name__}: {text}".strip()

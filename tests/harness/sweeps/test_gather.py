@@ -87,6 +87,23 @@ def test_a_failed_job_is_one_line_its_traceback_only_when_verbose(tmp_path, capl
     assert caplog.records[0].exc_info and "Traceback" in caplog.text
 
 
+def test_a_job_refused_by_the_app_says_its_cause_once(tmp_path, caplog, monkeypatch):
+    """The app's refusal is already one line 'occbench: <cause>': a sweep's line says the
+    cause, not 'job failed: AppError: occbench: tracker ...' (two prefixes, a class name)."""
+    from occbench.commands.run import AppError
+
+    def refused() -> float:
+        raise AppError("occbench: tracker 'baseline': ValueError: max_age must be >= 0")
+
+    monkeypatch.delenv("OCCBENCH_VERBOSE", raising=False)
+    with caplog.at_level("ERROR"):
+        guarded(tmp_path / "0", ["tracker.max_age=-1"], refused)
+    assert caplog.records[0].getMessage().endswith(
+        "job failed: tracker 'baseline': ValueError: max_age must be >= 0")
+    status = json.loads((tmp_path / "0" / "status.json").read_text())
+    assert status["error"] == "tracker 'baseline': ValueError: max_age must be >= 0"
+
+
 def _fake_job(root: Path, num: int, overrides: list[str], metrics: dict | None,
               status: str = DONE, error: str | None = None) -> None:
     d = root / str(num)
