@@ -10,6 +10,8 @@ import threading
 import time
 from typing import Any, TextIO
 
+from tqdm import tqdm
+
 log = logging.getLogger(__name__)
 EVERY = 15.0  # seconds of silence after which a step without a terminal says where it is
 
@@ -39,7 +41,6 @@ def progress_factory(enabled: bool = True, multirun: bool = False,
     """
     if not bars_wanted(enabled, multirun, stream):
         return LOG_PROGRESS.bar
-    from tqdm import tqdm
 
     def make(total: int = 0, desc: str = "", unit: str = "frame", **kwargs: Any):
         return tqdm(total=total, desc=desc, unit=unit, leave=False, dynamic_ncols=True,

@@ -14,12 +14,14 @@ package-dir), so nothing here relies on that scan.
 
 from __future__ import annotations
 
+from hydra.core.plugins import Plugins
+
+from occbench.config import choose, paths, rundir
+
 
 def register_resolvers() -> None:
     """Register ``${occbench.data:...}``, ``${occbench.choose:...}`` and
     ``${occbench.unique_dir:...}`` with OmegaConf (idempotent)."""
-    from occbench.config import choose, paths, rundir
-
     paths.register_resolver()
     choose.register()
     rundir.register()
@@ -28,10 +30,10 @@ def register_resolvers() -> None:
 def register() -> None:
     """Register the resolvers and the project's Hydra launcher (config
     ``hydra/launcher=processes`` and its class). Idempotent."""
-    from hydra.core.plugins import Plugins
-
     register_resolvers()
-    plugins = Plugins.instance()  # Hydra's scan first, so that it never replaces our class
+    plugins = Plugins.instance()
+    # order: Hydra's scan (above) re-executes every hydra_plugins module: ours after it, so
+    # that the class registered is the one the scan leaves
     from hydra_plugins.occbench_launcher import config  # noqa: F401 - the ConfigStore node
     from hydra_plugins.occbench_launcher.launcher import ProcessLauncher
 

@@ -14,9 +14,18 @@ from collections.abc import Sequence as Seq
 from pathlib import Path
 from typing import Any
 
+from hydra import compose, initialize_config_dir
+from hydra.core.hydra_config import HydraConfig
+from hydra.utils import instantiate
+from omegaconf import DictConfig, ListConfig, OmegaConf
+
+from occbench.config import register
+from occbench.config.check import check_target
+from occbench.config.meta import declared, without_meta
 from occbench.datasets.base import Sequence
 from occbench.errors import ConfigError, RunError
 from occbench.sources.base import DetectionSource
+from occbench.sources.cache import cached
 from occbench.trackers.protocol import Tracker
 
 CONF_DIR = Path(__file__).resolve().parents[2] / "conf"
@@ -26,17 +35,12 @@ def compose_config(overrides: Seq[str], run_dir: Path | None = None,
                    config_name: str = "config") -> Any:
     """The app's config (``conf/<config_name>.yaml``) composed with ``overrides``, or, with
     ``run_dir``, a finished run's saved ``config.yaml`` with ``overrides`` merged in."""
-    from omegaconf import OmegaConf
-
     if run_dir is not None:
         path = Path(run_dir) / "config.yaml"
         if not path.is_file():
             raise FileNotFoundError(f"{path} not found (a run directory of python -m occbench)")
         cfg = OmegaConf.load(path)
         return OmegaConf.merge(cfg, OmegaConf.from_dotlist(list(overrides)))
-    from hydra import compose, initialize_config_dir
-
-    from occbench.config import register
 
     register()
     with initialize_config_dir(str(CONF_DIR), version_base="1.3"):
@@ -63,8 +67,6 @@ def cfg_get(cfg: Any, key: str, default: Any = None) -> Any:
 
 def container(node: Any) -> Any:
     """A config node as plain Python (resolved); any other value as it is."""
-    from omegaconf import DictConfig, ListConfig, OmegaConf
-
     if isinstance(node, DictConfig | ListConfig):
         return OmegaConf.to_container(node, resolve=True)
     return node
@@ -94,8 +96,6 @@ def _locate_target(target: str) -> Any:
 
 def hydra_choice(group: str) -> str | None:
     """The config choice of ``group`` in a running Hydra app, else None."""
-    from hydra.core.hydra_config import HydraConfig
-
     if not HydraConfig.initialized():
         return None
     choice = HydraConfig.get().runtime.choices.get(group)
@@ -129,6 +129,7 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
 def missing_library(err: BaseException):
     """The outside tracker's missing optional library behind ``err``
     (``occbench.trackers.outside.MissingLibrary``, found along its causes), else None."""
+    # start-up: occbench.trackers.outside's wrappers (~10 ms), wanted only when a build fails
     from occbench.trackers.outside import MissingLibrary
 
     seen = set()
@@ -143,8 +144,6 @@ def missing_library(err: BaseException):
 def check_node(node: Any, key: str, target: Any) -> None:
     """Type-check a ``_target_`` config against ``target``'s signature
     (``occbench.config.check.check_target``); RunError naming ``key.<argument>``."""
-    from occbench.config.check import check_target
-
     try:
         check_target(dict(container(node)), key, target)
     except ConfigError as err:
@@ -156,8 +155,6 @@ def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
 
     ``key`` is the config path of ``node`` for messages (default ``tracker.<name>``); its
     ``meta:`` block (``occbench.config.meta``, for the views) is checked, never passed on."""
-    from occbench.config.meta import declared, without_meta
-
     key = key or f"tracker.{name}"
     try:
         declared(node, key)
@@ -178,8 +175,6 @@ def build_tracker(name: str, node: Any, key: str | None = None) -> Tracker:
 
 def _instantiate(node: Any, label: str) -> Any:
     """``instantiate(node)``; a RunError ``<label> (<target>): <error>`` when it fails."""
-    from hydra.utils import instantiate
-
     try:
         return instantiate(node, _convert_="all")
     except Exception as err:
@@ -227,14 +222,11 @@ def build_source(node: Any, cache: bool = True) -> DetectionSource:
     source = _instantiate(node, "detector")
     if not cache:
         return source
-    from occbench.sources.cache import cached
 
     return cached(source, container(node))
 
 
 def dataset_sequences(overrides: list[str]) -> list[Sequence]:
     """The sequences of ``dataset=...`` (and its keys) given as Hydra overrides."""
-    from hydra.utils import instantiate
-
     cfg = compose_config(overrides)
     return list(instantiate(cfg.dataset))

@@ -29,7 +29,11 @@ from collections.abc import Callable, Mapping
 from pathlib import PurePath
 from typing import Any
 
+from hydra.utils import get_object
+
 from occbench.errors import ConfigError
+from occbench.metrics import COLUMNS
+from occbench.metrics.occlusion import EXTRA_COLUMNS
 
 HYDRA_KEYS = frozenset({"_target_", "_convert_", "_recursive_", "_partial_", "_args_"})
 
@@ -140,8 +144,6 @@ def _hints(func: Callable[..., Any]) -> dict[str, Any]:
 def _located(target: str) -> Any:
     """The object a nested ``_target_`` names, or None when it cannot be imported (building
     it reports that)."""
-    from hydra.utils import get_object
-
     try:
         return get_object(target)
     except Exception:  # noqa: BLE001 - reported by instantiate, with the full message
@@ -192,9 +194,6 @@ def check_target(node: Mapping[str, Any], key: str, target: Any) -> None:
 
 def metric_names() -> list[str]:
     """Every column of metrics.csv besides tracker and sequence."""
-    from occbench.metrics import COLUMNS
-    from occbench.metrics.occlusion import EXTRA_COLUMNS
-
     return list(dict.fromkeys([*COLUMNS, *EXTRA_COLUMNS]))
 
 

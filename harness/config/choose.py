@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from omegaconf import OmegaConf
+
 RESOLVER = "occbench.choose"
 
 
@@ -26,7 +28,5 @@ def choose(key: Any, table: Any, default: Any) -> Any:
 
 def register() -> None:
     """Register ``${occbench.choose:...}`` with OmegaConf (idempotent)."""
-    from omegaconf import OmegaConf
-
     if not OmegaConf.has_resolver(RESOLVER):
         OmegaConf.register_new_resolver(RESOLVER, choose)

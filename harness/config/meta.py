@@ -23,6 +23,9 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+import yaml
+from omegaconf import OmegaConf, open_dict
+
 from occbench.errors import ConfigError
 
 CONF_TRACKERS = Path(__file__).resolve().parents[2] / "conf" / "tracker"
@@ -78,7 +81,6 @@ def without_meta(node: Any) -> Any:
     """``node`` without its ``meta:`` block (a copy; ``node`` itself when it has none)."""
     if not hasattr(node, "keys") or KEY not in node:
         return node
-    from omegaconf import OmegaConf, open_dict
 
     if OmegaConf.is_config(node):
         out = node.copy()
@@ -91,8 +93,6 @@ def without_meta(node: Any) -> Any:
 @cache
 def shipped(name: str) -> TrackerMeta | None:
     """The metadata of the shipped ``conf/tracker/<name>.yaml``, None when there is none."""
-    import yaml
-
     path = CONF_TRACKERS / f"{name}.yaml"
     if not path.is_file():
         return None
@@ -139,8 +139,6 @@ def run_nodes(run_dir: str | Path, names: Iterable[str]) -> dict[str, Any]:
     """``config_nodes`` of a finished run folder's ``config.yaml``; none when the file is
     missing or unreadable (the shipped metadata then: a view never fails for want of
     colours)."""
-    import yaml
-
     try:
         cfg = yaml.safe_load((Path(run_dir) / "config.yaml").read_text()) or {}
     except (OSError, yaml.YAMLError):

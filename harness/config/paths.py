@@ -19,6 +19,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
+
 #: The one environment variable that moves the data root.
 DATA_ENV = "OCCBENCH_DATA"
 
@@ -51,8 +53,6 @@ def _resolve(relative: str = "") -> str:
 
 def register_resolver() -> None:
     """Register ``${occbench.data:...}`` with OmegaConf (idempotent)."""
-    from omegaconf import OmegaConf
-
     if not OmegaConf.has_resolver(RESOLVER):
         OmegaConf.register_new_resolver(RESOLVER, _resolve)
 
@@ -67,8 +67,6 @@ def absolute_paths(node) -> int:
     names its data from anywhere (``occbench report RUN``). Interpolations (the
     ``occbench.data`` resolver's paths are absolute) and absolute paths are left as they are.
     Returns how many were changed."""
-    from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
-
     changed = 0
     if isinstance(node, DictConfig):
         for key in list(node.keys()):

@@ -32,7 +32,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from hydra.utils import instantiate
 
+from occbench.config.build import compose_config
 from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch, learn
 from occbench.trackers.geometry import intersection_matrix
 
@@ -122,10 +124,6 @@ def fit(synthetic_seed: int | None = 0, caviar: bool = True, step: int = 5, cavi
         seed: int = 0) -> ActiveBasis:
     """Learn the template from the renderer (seed ``synthetic_seed``, None: none) and CAVIAR
     OneLeaveShop1cor frames 1-150 (``caviar``)."""
-    from hydra.utils import instantiate
-
-    from occbench.config.build import compose_config
-
     bank = GaborBank()
     b1, b2 = 2, 1
     pad = b1 + bank.ksize // 2

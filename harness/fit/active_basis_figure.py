@@ -13,8 +13,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
 
+from occbench.datasets.synthetic import load_scenario
+from occbench.fit.active_basis import load
+from occbench.report.figures import save_figure
 from occbench.trackers.frontend.active_basis import ActiveBasis, crop_patch, shift_offsets
 
 
@@ -41,8 +48,6 @@ def deformed(template: ActiveBasis, patch: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def _bars(ax, template: ActiveBasis, rows, cols, orient, colour=None) -> None:
-    import matplotlib.pyplot as plt
-
     t = template
     half = 0.75 * t.bank.sigma / t.bank.gamma  # half-length of an element: its envelope along the edge
     cmap = plt.get_cmap("viridis")
@@ -57,14 +62,7 @@ def _bars(ax, template: ActiveBasis, rows, cols, orient, colour=None) -> None:
 
 def draw(template: ActiveBasis, person: np.ndarray, background: np.ndarray, path: str | Path) -> Path:
     """Write the three-panel picture; ``person`` and ``background`` are template patches."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
-
-    from occbench.report.figures import save_figure
 
     t = template
     H, W = t.size
@@ -97,8 +95,6 @@ def draw(template: ActiveBasis, person: np.ndarray, background: np.ndarray, path
 def example_patches(template: ActiveBasis, seed: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """A rendered person (the first fully visible, isolated one of the ``crossing`` scene)
     and a background patch of the same size beside it in the first frame without people there."""
-    from occbench.datasets.synthetic import load_scenario
-
     seq = load_scenario("crossing", seed=seed, width=384, height=288)
     for k in seq.frame_numbers():
         rows = seq.gt.rows_of(k)
@@ -119,8 +115,6 @@ def example_patches(template: ActiveBasis, seed: int = 3) -> tuple[np.ndarray, n
 
 
 def main(argv: list[str] | None = None) -> int:
-    from occbench.fit.active_basis import load
-
     ap = argparse.ArgumentParser(prog="python -m occbench.fit.active_basis_figure", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--template", type=Path, default=None, help="template .npz (default: shipped)")

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occbench.config.build import dataset_sequences
 from occbench.trackers.frontend.heads import (
     HAIR,
     SKIN,
@@ -100,8 +101,6 @@ def main(argv: list[str] | None = None) -> int:
             ),
         )
     else:
-        from occbench.config.build import dataset_sequences
-
         sequences = dataset_sequences(args.overrides)
         pixels = head_pixels_of(sequences, step=args.step)
         if len(pixels) == 0:

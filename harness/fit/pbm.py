@@ -78,9 +78,18 @@ import logging
 from collections.abc import Mapping
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 import yaml
+from hydra import compose, initialize_config_dir
+from omegaconf import OmegaConf
 
+from occbench.config import register
+from occbench.datasets.base import window
+from occbench.datasets.caviar import load_caviar
+from occbench.datasets.mot import load_mot
+from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
 from occbench.fit.pbm_pairs import collect_pairs, positive_differences
 from occbench.fit.pbm_weights import WeightFit, search_weights
 from occbench.trackers.layered.feature_models import (
@@ -174,10 +183,7 @@ def plot_models(models: FeatureModels, diffs: dict[str, np.ndarray], path: str |
     """Histograms of the differences with the fitted densities (Fig. 3), 6 x 5 panels; with
     ``reference``, its densities dashed beside them, a legend and each model's spread
     (``spread``) in the panel titles."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(len(FEATURES), N_PARTS, figsize=(3.0 * N_PARTS, 2.2 * len(FEATURES)))
     for i, f in enumerate(FEATURES):
@@ -236,10 +242,6 @@ def _tracker_settings(path: str | Path) -> dict:
 
 def _composed_tracker(name: str) -> dict:
     """``conf/tracker/<name>.yaml`` composed by Hydra (its defaults list applied), as a dict."""
-    from hydra import compose, initialize_config_dir
-    from omegaconf import OmegaConf
-    from occbench.config import register
-
     register()  # the project's resolvers and launcher
     with initialize_config_dir(config_dir=str(ROOT / "conf"), version_base=None):
         cfg = compose(config_name="config", overrides=[f"tracker={name}"])
@@ -284,20 +286,12 @@ def _sequences(args: argparse.Namespace) -> tuple[list, list[str]]:
     sequences = []
     sources = []
     if args.synthetic is not None:
-        from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
-
         names = args.synthetic or list(DEFAULT_SCENARIOS)
         sequences += load_suite(names, seed=args.seed, length=args.length)
         sources.append(f"synthetic scenarios {', '.join(names)} (seed {args.seed}, {args.length} frames)")
-    for kind, roots in (("MOT", args.mot), ("CAVIAR", args.caviar)):
+    for kind, roots, load in (("MOT", args.mot, load_mot), ("CAVIAR", args.caviar, load_caviar)):
         for spec in roots:
             root, frames = _window_spec(spec)
-            if kind == "MOT":
-                from occbench.datasets.mot import load_mot as load
-            else:
-                from occbench.datasets.caviar import load_caviar as load
-            from occbench.datasets.base import window
-
             try:
                 sequences += window(load(root), frames)
             except (OSError, ValueError) as exc:

@@ -19,6 +19,7 @@ import numpy as np
 from occbench.pipeline.loop import ForegroundProvider
 from occbench.trackers.layered.association import feature_differences
 from occbench.trackers.layered.parts import FEATURES, N_PARTS, PartFeatureExtractor, centroid_ratios
+from occbench.trackers.layered.search import region_centroid
 
 log = logging.getLogger(__name__)
 
@@ -215,6 +216,4 @@ def positive_differences(samples: PairSamples) -> dict[str, np.ndarray]:
 
 
 def _centroid(fg: np.ndarray | None, box: np.ndarray) -> np.ndarray:
-    from occbench.trackers.layered.search import region_centroid
-
     return region_centroid(fg, box)

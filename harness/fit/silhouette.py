@@ -21,7 +21,9 @@ import logging
 from pathlib import Path
 
 import numpy as np
+from hydra.utils import instantiate
 
+from occbench.config.build import compose_config
 from occbench.trackers.frontend.silhouette_template import TEMPLATE_HEIGHT, fit_template
 from occbench.trackers.geometry import intersection_matrix
 
@@ -95,9 +97,6 @@ def main(argv: list[str] | None = None) -> int:
                          "dataset has no label images")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from hydra.utils import instantiate
-
-    from occbench.config.build import compose_config
 
     overrides = list(args.overrides) or ["dataset=synthetic"]
     cfg = compose_config([*overrides, f"detector={args.detector}"])

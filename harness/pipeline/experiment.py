@@ -25,11 +25,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from hydra.core.hydra_config import HydraConfig
+
 from occbench.datasets.base import Sequence
 from occbench.errors import RunError
 from occbench.metrics import COMBINED
 from occbench.pipeline.bank import TrackerOutput
 from occbench.config.build import build_source
+from occbench.config.meta import first_of_ours, metas, run_nodes
 from occbench.pipeline.loop import ProgressFactory, no_progress, run_sequence
 from occbench.pipeline.plan import RunPlan, plan_run
 from occbench.pipeline.record import RunRecord
@@ -71,8 +74,6 @@ class ExperimentResult:
     def objective_tracker(self, tracker: str | None = None) -> str | None:
         """``tracker``, else the first of ours that ran (``occbench.config.meta.first_of_ours``,
         the rule of the sweep page's best settings: never the baseline beside one of ours)."""
-        from occbench.config.meta import first_of_ours, metas, run_nodes
-
         if tracker:
             return tracker
         return first_of_ours(self.trackers, metas(self.trackers,
@@ -145,7 +146,7 @@ def run_experiment(
     finally:
         writing.close()
     plan.writer.close()
-    import pandas as pd
+    import pandas as pd  # start-up: pandas, ~0.7 s (loaded after the first frames)
 
     return ExperimentResult(record.metrics, record.failures, pd.DataFrame(record.timings),
                             plan.writer.out_dir, plan.names, record.paired, plan.title,
@@ -163,6 +164,7 @@ def track_sequence(plan: RunPlan, seq: Sequence,
     plan.writer.ground_truth(seq)
     source = build_source(plan.detector)
     if plan.protocol == "single_target":
+        # start-up: occbench.pipeline.protocols (~8 ms), for protocol=single_target only
         from occbench.pipeline.protocols import run_single_target
 
         builders = {n: (lambda n=n: plan.build(n)) for n in plan.configs}
@@ -180,7 +182,6 @@ def _out_dir(out_dir: str | Path | None) -> str | Path:
     """``out_dir``, or the output directory of the running Hydra app."""
     if out_dir is not None:
         return out_dir
-    from hydra.core.hydra_config import HydraConfig
 
     if not HydraConfig.initialized():
         raise RunError("run_experiment needs out_dir outside a Hydra app")

@@ -15,8 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from omegaconf import OmegaConf
+
 from occbench.datasets.base import Sequence
-from occbench.errors import RunError
+from occbench.errors import ConfigError, RunError
 from occbench.metrics import COMBINED
 from occbench.config.meta import TrackerMeta, metas
 from occbench.config.paths import absolute_paths
@@ -30,7 +32,9 @@ from occbench.config.build import (
     missing_library,
     tracker_configs,
 )
+from occbench.config.check import APP_SCHEMA, check_app
 from occbench.pipeline.loop import FOREGROUND_MODES, ProgressFactory
+from occbench.pipeline.warmup import warm_up_once
 from occbench.pipeline.writer import RunWriter
 from occbench.report.bars import DEFAULT_METRICS
 from occbench.report.graph import GraphExport
@@ -99,8 +103,6 @@ def plan_run(cfg: Any, out_dir: str | Path, tracker_name: str | None = None,
     Raises:
         RunError: the run cannot start (no such dataset, tracker not built, bad config).
     """
-    from omegaconf import OmegaConf
-
     check_config(cfg)
     writer = RunWriter(out_dir)
     if OmegaConf.is_config(cfg):
@@ -191,9 +193,6 @@ def left_out_line(missing: Mapping[str, Any]) -> str:
 def check_config(cfg: Any) -> None:
     """Type- and range-check the app's own keys (``occbench.config.check.check_app``)
     before anything is built or written; RunError naming the key."""
-    from occbench.errors import ConfigError
-    from occbench.config.check import APP_SCHEMA, check_app
-
     plain: dict[str, Any] = {}
     for top in dict.fromkeys(k.split(".")[0] for k in APP_SCHEMA):
         try:
@@ -213,8 +212,6 @@ def prepare_trackers(configs: Mapping[str, Any], sequences: Iterable[Sequence],
     """Before anything is timed (``occbench.pipeline.warmup``): reject a tracker that needs
     frames when a sequence has none, then warm every tracker class up once per process
     (a ``progress`` bar over the warm-up's passes)."""
-    from occbench.pipeline.warmup import warm_up_once
-
     frameless = [s.info.name for s in sequences if not s.has_pixels]
     if frameless:
         for name, node in configs.items():

@@ -31,7 +31,10 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
+from numba.core import event
+from omegaconf import OmegaConf
 
+from occbench.config.build import build_tracker, tracker_configs
 from occbench.pipeline.bank import TrackerBank
 from occbench.pipeline.loop import Progress, ProgressFactory, no_progress
 from occbench.trackers.protocol import Tracker
@@ -150,8 +153,6 @@ def _closing(bar: Progress):
 def _compiles(seen: threading.Event):
     """Within: ``seen`` is set when numba compiles a kernel (its ``numba:compile`` event; a
     kernel loaded from the cache fires none)."""
-    from numba.core import event  # the trackers' kernels import numba anyway
-
     class Listener(event.Listener):
         def on_start(self, ev: Any) -> None:
             seen.set()
@@ -207,10 +208,6 @@ def preload_spec(cfg: Any, choice: str | None = None) -> dict[str, Any]:
     """What ``preload`` imports and warms up ahead of a run of ``cfg`` (composed, its
     ``hydra`` node removed; ``choice``: its ``tracker`` choice): the modules of the project's
     ``_target_``s and the resolved configs of the project's trackers."""
-    from omegaconf import OmegaConf
-
-    from occbench.config.build import tracker_configs
-
     targets = config_targets(OmegaConf.to_container(cfg, resolve=False))
     return {"modules": sorted({t.rsplit(".", 1)[0] for t in targets if t.startswith(OURS)}),
             "trackers": {name: OmegaConf.to_container(node, resolve=True)
@@ -235,7 +232,7 @@ def preload(spec: Mapping[str, Any]) -> list[str]:
     ``WarmUp``); returns the trackers warmed up. Nothing here may stop the caller: a module
     that does not import or a tracker that does not build is left to the job, which reports
     it as it always does (logged here at debug level)."""
-    import matplotlib
+    import matplotlib  # start-up: matplotlib, ~0.3 s (the server's preload)
 
     matplotlib.use("Agg", force=False)  # as occbench.report's plots do
     importlib.import_module("matplotlib.pyplot")
@@ -244,7 +241,6 @@ def preload(spec: Mapping[str, Any]) -> list[str]:
             importlib.import_module(name)
         except Exception as err:  # noqa: BLE001 - the job imports it again and says why
             log.debug("preload: %s not imported: %s: %s", name, type(err).__name__, err)
-    from occbench.config.build import build_tracker
 
     builders = {n: (lambda n=n, node=node: build_tracker(n, node))
                 for n, node in dict(spec.get("trackers", {})).items()}

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from occbench.config.rundir import busy
 from occbench.datasets.base import Sequence
 from occbench.errors import RunError
 from occbench.io.mot import (
@@ -71,8 +72,6 @@ class RunWriter:
              "paper_table.md", "paper_table.csv", "report.html")
 
     def __init__(self, out_dir: str | Path) -> None:
-        from occbench.config.rundir import busy
-
         self.out_dir = Path(out_dir)
         owner = busy(self.out_dir)
         if owner is not None:

@@ -22,9 +22,13 @@ import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
+from occbench.config.build import compose_config, load_sequences
 from occbench.datasets.base import GroundTruth
+from occbench.errors import REFUSED, refusal
 from occbench.io.mot import MotTable, read_mot
 from occbench.metrics.occlusion import row_visibility
 from occbench.metrics.paper import considered, match_rows
@@ -90,10 +94,7 @@ def plot_person(gt: GroundTruth | MotTable, results: Mapping[str, MotTable], per
                 path: str | Path, iou_threshold: float = 0.5, hidden_below: float = 0.05,
                 title: str = "") -> Path:
     """Write the figure (PNG) for GT ``person``; returns its path."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     table = gt.table if isinstance(gt, GroundTruth) else gt
     occluded = gt.occluded if isinstance(gt, GroundTruth) else None
@@ -159,7 +160,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--iou", type=float, default=0.5)
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from occbench.config.build import compose_config, load_sequences
 
     try:
         tracks = args.run_dir / "tracks"
@@ -180,8 +180,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = args.out or args.run_dir / "plots" / f"trajectory_{name}_{person}.png"
         plot_person(seq.gt, results, person, out, args.iou)
     except (OSError, ValueError) as err:
-        from occbench.errors import REFUSED, refusal
-
         print(refusal(err), file=sys.stderr)
         return REFUSED
     print(out)

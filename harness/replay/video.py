@@ -35,13 +35,26 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import imageio_ffmpeg
 import numpy as np
+import yaml
 
 from occbench.datasets.base import Sequence as DataSequence
 from occbench.pipeline.bank import TrackerBank, start_trackers
-from occbench.config.build import compose_config, tracker_choice
+from occbench.config.build import (
+    build_source,
+    build_tracker,
+    compose_config,
+    load_sequences,
+    tracker_choice,
+    tracker_configs,
+)
+from occbench.config.meta import metas
+from occbench.errors import REFUSED, refusal
 from occbench.pipeline.loop import frames, no_progress
+from occbench.progress import progress_factory
 from occbench.report.draw import draw_tracks, grid, legend, with_legend
+from occbench.report.graph import draw_graph
 from occbench.sources.base import DetectionSource
 from occbench.trackers.protocol import KeepsGraph
 from occbench.trackers.records import Track
@@ -62,8 +75,6 @@ class H264Writer:
     """
 
     def __init__(self, path: str | Path, fps: float, size: tuple[int, int], crf: int = 18) -> None:
-        import imageio_ffmpeg
-
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         w, h = int(size[0]), int(size[1])
@@ -133,10 +144,6 @@ class _GraphDrawing:
     @classmethod
     def of(cls, tracker: Any) -> _GraphDrawing | None:
         if not isinstance(tracker, KeepsGraph):
-            return None
-        try:
-            from occbench.report.graph import draw_graph
-        except ImportError:
             return None
         return cls(tracker, draw_graph)
 
@@ -279,8 +286,6 @@ def render(trackers: Mapping[str, Any], sequence: DataSequence, source: Detectio
 def run_choice(run_dir: Path, group: str) -> str | None:
     """The config choice of ``group`` a finished run was started with (Hydra's
     ``.hydra/hydra.yaml``), None when unknown."""
-    import yaml
-
     path = Path(run_dir) / ".hydra" / "hydra.yaml"
     if not path.is_file():
         return None
@@ -306,9 +311,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
-    from occbench.config.build import build_source, build_tracker, load_sequences, tracker_configs
-    from occbench.config.meta import metas
-    from occbench.progress import progress_factory
 
     try:
         cfg = compose_config(args.overrides, args.run)
@@ -335,8 +337,6 @@ def main(argv: Sequence[str] | None = None) -> int:
                          else None, args.columns, args.scale, str(cfg.get("foreground", "auto")),
                          cfg.get("background") or {}, progress_factory(), styles)
     except (OSError, ValueError, RuntimeError) as err:
-        from occbench.errors import REFUSED, refusal
-
         print(refusal(err), file=sys.stderr)
         return REFUSED
     for kind, path in written.items():

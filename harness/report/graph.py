@@ -25,6 +25,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from occbench.report.primitives import _label
 from occbench.trackers.protocol import KeepsGraph
 
 log = logging.getLogger(__name__)
@@ -202,8 +203,6 @@ def draw_graph(frame: np.ndarray, snapshot: dict, previous: dict | None = None,
     as a thin line from the predecessor's centre to the node's centre. Labels are moved
     off each other (``taken``: rectangles of labels already drawn; ``primitives._label``).
     """
-    from occbench.report.primitives import _label
-
     taken = [] if taken is None else taken
     img = frame.copy()
     before = {n["node"]: n for n in (previous or {}).get("nodes", [])}

@@ -11,6 +11,8 @@ import logging
 from collections.abc import Mapping
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import pandas as pd
 
 from occbench.config.meta import TrackerMeta, metas
@@ -33,10 +35,8 @@ def hota_alpha_plot(table: pd.DataFrame, path: str | Path, title: str | None = N
     if rows.empty:
         log.info("no COMBINED rows: %s not written", path)
         return None
-    import matplotlib
 
     matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(METRICS), figsize=(4.0 * len(METRICS), 3.8), dpi=110,
                              sharey=True, squeeze=False)

@@ -49,6 +49,9 @@ from typing import Any
 
 import pandas as pd
 import yaml
+from hydra.utils import get_method
+
+from occbench.errors import REFUSED, refusal
 
 log = logging.getLogger(__name__)
 
@@ -68,8 +71,6 @@ def combined_dataset(target: str, extra: Mapping[str, Sequence[Any]] | None = No
     ``_target_`` to this function; ``extra`` maps a label to another dataset config, which
     Hydra instantiates first (so its value arrives as a list of sequences).
     """
-    from hydra.utils import get_method
-
     out = list(get_method(target)(**kwargs))
     for label, seqs in (extra or {}).items():
         if seqs is None:
@@ -228,8 +229,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise PaperTableError(f"{config}: no paper_table node (run with +experiment=...)")
         path = write_paper_table(args.run_dir, spec)
     except (OSError, ValueError, yaml.YAMLError) as err:
-        from occbench.errors import REFUSED, refusal
-
         print(refusal(err), file=sys.stderr)
         return REFUSED
     print(path.read_text(), end="")

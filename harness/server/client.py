@@ -20,6 +20,7 @@ and the installed sources' fingerprint on every request (``occbench.server.trust
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import signal
@@ -63,8 +64,6 @@ def folder() -> str:
 
 def key(ident: dict) -> str:
     """16 hex digits naming the server of ``ident``."""
-    import hashlib
-
     text = json.dumps(ident, sort_keys=True).encode()
     return hashlib.blake2b(text, digest_size=8).hexdigest()
 
@@ -198,7 +197,7 @@ def _die_as(signum: int, saved: dict) -> int:
 def start_server(ident: dict) -> None:
     """Start this identity's server in the background (own session, no terminal, output to
     its log); it exits at once when another one is starting or running."""
-    import subprocess
+    import subprocess  # start-up: ~10 ms on every command's fast path (--version 0.08 s)
 
     path = socket_path(ident)
     os.makedirs(os.path.dirname(path), mode=0o700, exist_ok=True)

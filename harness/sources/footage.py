@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from occbench.datasets.images import IMAGE_EXTENSIONS, FrameError, read_image
+from occbench.datasets.video import VideoSequence
 from occbench.trackers.frontend.footage import CameraBackground, clip_median, pool_clips
 
 log = logging.getLogger(__name__)
@@ -48,8 +49,6 @@ def clip_frames(path: str | Path, count: int) -> list[np.ndarray]:
 
 
 def _video_frames(path: Path, count: int) -> list[np.ndarray]:
-    from occbench.datasets.video import VideoSequence
-
     try:
         video = VideoSequence(path)
         n = video.info.length

@@ -18,6 +18,8 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
+from occbench.sweeps.tune import is_optuna, plot_study
+
 log = logging.getLogger(__name__)
 
 
@@ -40,7 +42,7 @@ class GatherSweep(Callback):
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         """Mark the sweep folder as this multirun's (``sweep.json``), so that the job folders
         an earlier sweep left in it are never gathered as this one's."""
-        from occbench.sweeps.jobs import begin_sweep
+        from occbench.sweeps.jobs import begin_sweep  # start-up: ~6 ms, for a multirun only
 
         sweep_dir = Path(str(config.hydra.sweep.dir))
         try:
@@ -49,6 +51,7 @@ class GatherSweep(Callback):
             _exit_failed(f"occbench: cannot use the sweep folder {sweep_dir}: {err}")
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        # start-up: the gathering's pandas, tables and pages (~1.5 s), when a multirun ends
         from occbench.sweeps.gather import (
             DEFAULT_METRICS,
             failed_summary,
@@ -62,7 +65,6 @@ class GatherSweep(Callback):
         if not sweep_dir.is_dir():
             log.warning("sweep directory %s does not exist: nothing gathered", sweep_dir)
             return
-        from occbench.sweeps.tune import is_optuna
 
         optuna = is_optuna(config)
         try:  # an Optuna study is drawn with Optuna's own views, not as parameter lines
@@ -74,8 +76,6 @@ class GatherSweep(Callback):
             return
         if self.plots and optuna:
             try:
-                from occbench.sweeps.tune import plot_study
-
                 metric = OmegaConf.select(config, "objective.metric", default=None) or "objective"
                 plot_study(sweep_dir, config, metric=str(metric))
             except Exception:  # a plot is not worth losing the table for
@@ -102,8 +102,7 @@ class PaperTable(Callback):
     stderr). ``occbench.report.paper_tables`` documents the node."""
 
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
-        from omegaconf import OmegaConf
-
+        # start-up: occbench.report.paper_tables (pandas, ~0.7 s), after the job
         from occbench.report.paper_tables import write_paper_table
 
         spec = config.get("paper_table")

@@ -27,8 +27,11 @@ import hashlib
 import os
 from collections.abc import Iterable, Iterator
 from functools import lru_cache
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
+
+from omegaconf import OmegaConf
 
 HASH_BYTES = 8 << 20  # files up to this size are hashed by content
 ROOT = Path(__file__).resolve().parents[2]
@@ -44,8 +47,6 @@ class FingerprintError(ValueError):
 
 def inputs(cfg: Any) -> dict[str, str]:
     """``{"config": ..., "code": ..., "data": ...}`` hex digests of a composed config."""
-    from omegaconf import OmegaConf
-
     plain = OmegaConf.to_container(cfg, resolve=True) if OmegaConf.is_config(cfg) else cfg
     text = OmegaConf.to_yaml(OmegaConf.create(plain), sort_keys=True)
     paths = [p for node in DATA_NODES
@@ -57,8 +58,6 @@ def inputs(cfg: Any) -> dict[str, str]:
 @lru_cache(maxsize=1)
 def code_version() -> str:
     """Digest of the package version and the source files (computed once per process)."""
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         ver = version("occbench")
     except PackageNotFoundError:

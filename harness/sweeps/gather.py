@@ -25,6 +25,8 @@ is not done (failed, damaged, missing).
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import logging
 import sys
 from collections.abc import Sequence
@@ -32,7 +34,10 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+from omegaconf import OmegaConf
 
+from occbench.errors import REFUSED, refusal
+from occbench.io.mot import write_atomic
 from occbench.sweeps.jobs import (  # noqa: F401 - re-exported: occbench.sweeps.gather's names
     DAMAGED,
     DONE,
@@ -46,6 +51,7 @@ from occbench.sweeps.jobs import (  # noqa: F401 - re-exported: occbench.sweeps.
     read_status,
     sweep_metas,
 )
+from occbench.sweeps.page import write_sweep_report
 from occbench.sweeps.plots import plot_sweep
 from occbench.sweeps.resume import (  # noqa: F401 - re-exported
     changed_inputs,
@@ -69,6 +75,7 @@ from occbench.sweeps.tables import (  # noqa: F401 - re-exported
     swept,
     tick,
 )
+from occbench.sweeps.tune import is_optuna, plot_study
 
 log = logging.getLogger(__name__)
 
@@ -85,8 +92,6 @@ def read_metrics(path: Path) -> tuple[pd.DataFrame, str]:
         return pd.DataFrame(), f"{path}: empty file (the job did not finish writing it)"
     if not text.endswith("\n"):
         return pd.DataFrame(), f"{path}: truncated (no final newline)"
-    import csv
-    import io
 
     rows = list(csv.reader(io.StringIO(text)))
     width = len(rows[0])
@@ -202,7 +207,6 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
                 plots: bool = True) -> pd.DataFrame:
     """Gather a sweep and write ``sweep.csv``, ``sweep.md`` and ``plots/`` into it."""
     sweep_dir = Path(sweep_dir)
-    from occbench.io.mot import write_atomic
 
     frame = gather(sweep_dir)
     write_atomic(sweep_dir / "sweep.csv",
@@ -218,8 +222,6 @@ def write_sweep(sweep_dir: str | Path, metrics: Sequence[str] = DEFAULT_METRICS,
         except Exception:  # a plot is not worth losing the table for
             log.exception("sweep plots failed")
     try:  # the sweep's page (occbench.report.html); the tables above stand without it
-        from occbench.sweeps.page import write_sweep_report
-
         write_sweep_report(sweep_dir, frame, metrics, shown)
     except Exception:
         log.exception("report.html of the sweep failed")
@@ -237,9 +239,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-plots", action="store_true")
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from omegaconf import OmegaConf
-
-    from occbench.sweeps.tune import is_optuna
 
     config = None  # Hydra's copy of a job's config (with hydra.sweeper): an Optuna study?
     found = sorted(args.sweep_dir.glob("*/.hydra/hydra.yaml"))
@@ -255,13 +254,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         frame = write_sweep(args.sweep_dir, args.metrics, not args.no_plots and not optuna)
     except (OSError, ValueError, TypeError) as err:
-        from occbench.errors import REFUSED, refusal
-
         print(refusal(err), file=sys.stderr)
         return REFUSED
     if optuna and not args.no_plots:
-        from occbench.sweeps.tune import plot_study
-
         try:
             plot_study(args.sweep_dir, config,
                        metric=str(OmegaConf.select(config, "objective.metric") or "objective"))

@@ -30,6 +30,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
+from hydra import compose as _compose
+from hydra import initialize_config_dir
+from omegaconf import OmegaConf, open_dict
+
+from occbench.config import register
+from occbench.config.build import build_tracker
+from occbench.errors import RunError
+from occbench.metrics import COMBINED
+from occbench.pipeline.experiment import run_experiment
 
 log = logging.getLogger(__name__)
 
@@ -182,10 +191,6 @@ SETS: tuple[EvalSet, ...] = (
 
 def compose(overrides: Sequence[str]):
     """The project's config composed with ``overrides`` (no Hydra app needed)."""
-    from hydra import compose as _compose
-    from hydra import initialize_config_dir
-    from occbench.config import register
-
     register()
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         return _compose("config", overrides=list(overrides))
@@ -238,9 +243,6 @@ def available_trackers(names: Iterable[str] | None = None) -> tuple[dict, dict[s
     ``names`` None = ``TRACKERS`` plus every ``conf/tracker/*_tuned.yaml`` (after the
     tracker it tunes).
     """
-    from occbench.errors import RunError
-    from occbench.config.build import build_tracker
-
     if names is None:
         names = ordered_trackers()
     configs, skipped = {}, {}
@@ -267,11 +269,6 @@ def run_set(s: EvalSet, trackers: dict, out_dir: Path, trajectories: Path,
     """Run every tracker on set ``s`` at each of its seeds; one row per tracker with the
     mean COMBINED metrics over the seeds (``n_seeds``, ``failures`` too). ``extra``: further
     overrides of every run (e.g. ``report=false``: the scores only)."""
-    from omegaconf import OmegaConf, open_dict
-
-    from occbench.metrics import COMBINED
-    from occbench.pipeline.experiment import run_experiment
-
     rows = []
     for seed in s.seeds:
         overrides = _resolve(s.overrides, trajectories, data_root) + [

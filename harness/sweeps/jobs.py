@@ -19,6 +19,9 @@ from typing import Any
 
 import yaml
 
+from occbench.config.meta import metas, run_nodes
+from occbench.io.mot import write_atomic
+
 log = logging.getLogger(__name__)
 
 STATUS_FILE = "status.json"
@@ -87,8 +90,6 @@ def job_dirs(sweep_dir: str | Path) -> list[Path]:
 def begin_sweep(sweep_dir: str | Path, overrides: Sequence[str]) -> str:
     """Mark ``sweep_dir`` as used by a new multirun (``sweep.json``: a fresh id and the
     multirun's overrides); returns the id."""
-    from occbench.io.mot import write_atomic
-
     ident = uuid.uuid4().hex[:16]
     body = {"id": ident, "overrides": [str(o) for o in overrides]}
     write_atomic(Path(sweep_dir) / SWEEP_FILE, json.dumps(body, indent=1) + "\n")
@@ -134,8 +135,6 @@ def members(sweep_dir: str | Path) -> tuple[list[Path], list[tuple[Path, str]]]:
 def sweep_metas(sweep_dir: str | Path, frame: Any) -> dict[str, Any]:
     """Tracker -> how the views show it (``occbench.config.meta``) for every tracker of a
     gathered sweep ``frame``: the ``meta:`` block of the first job's config that runs it."""
-    from occbench.config.meta import metas, run_nodes
-
     if "tracker" not in getattr(frame, "columns", ()):
         return {}
     nodes: dict[str, Any] = {}

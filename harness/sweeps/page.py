@@ -13,18 +13,22 @@ sequences are strata of the block bootstrap (``occbench.metrics.paired``).
 from __future__ import annotations
 
 import logging
+import shlex
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import yaml
 
 from occbench.config.meta import TrackerMeta, first_of_ours
 from occbench.metrics.paired import Bootstrap, PairedDifference
 from occbench.report.html import charts
 from occbench.report.html.page import Page, esc, table_html
+from occbench.report.html.run import read_frame_counts
 from occbench.report.paired import NOT_DISTINGUISHABLE, cell
+from occbench.report.tables import direction
 from occbench.sweeps.jobs import sweep_metas
 from occbench.sweeps.tables import (BOUNDS, COMBINED, DONE, aggregate, parameters, plot_axes,
                                     setting_table, swept)
@@ -38,8 +42,6 @@ def objective_of(sweep_dir: Path, frame: pd.DataFrame,
     """(tracker, metric) the sweep optimises: its jobs' ``objective`` (config.yaml); with no
     tracker named there, the first of ours (``first_of_ours``: never the baseline when one of
     ours ran)."""
-    import yaml
-
     tracker, metric = None, "IDF1"
     for job in sorted(sweep_dir.glob("*/config.yaml")):
         obj = (yaml.safe_load(job.read_text()) or {}).get("objective") or {}
@@ -52,8 +54,6 @@ def objective_of(sweep_dir: Path, frame: pd.DataFrame,
 
 def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFrame:
     """``aggregate`` of the swept settings of ``tracker``, best ``metric`` first."""
-    from occbench.report.tables import direction
-
     by = [p for p in swept(frame) if p != "tracker_choice" and not p.endswith("seed")]
     agg = aggregate(frame, by, [metric])
     if agg.empty or metric not in agg:
@@ -73,8 +73,6 @@ def best_table(best: pd.DataFrame, metric: str, rows: int = 10) -> pd.DataFrame:
 def paired_best(sweep_dir: Path, frame: pd.DataFrame, best: pd.DataFrame,
                 tracker: str) -> list[PairedDifference]:
     """The best setting minus the second best, on the frames of jobs paired by seed."""
-    from occbench.report.html.run import read_frame_counts
-
     if len(best) < 2:
         return []
     params = [p for p in swept(frame) if p in best.columns]
@@ -155,10 +153,6 @@ def write_sweep_report(sweep_dir: str | Path, frame: pd.DataFrame, metrics: Sequ
 
 def _command(sweep_dir: Path) -> str:
     """The multirun's command line (Hydra's ``multirun.yaml``), else a hint."""
-    import shlex
-
-    import yaml
-
     path = sweep_dir / "multirun.yaml"
     if not path.is_file():
         return "occbench -m ... (multirun.yaml not found)"

@@ -8,6 +8,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -24,8 +26,6 @@ def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str],
     """Metric-vs-parameter line plots (mean, 95% bootstrap interval) and pairwise heatmaps;
     ``looks``: tracker -> its label and colour (``occbench.config.meta``; default: the
     shipped configs' by name)."""
-    import matplotlib
-
     matplotlib.use("Agg")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -59,8 +59,6 @@ def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path,
     """Each metric of ``shown`` against parameter ``p``, one line per tracker (``aggregate``:
     the mean over the finished jobs' COMBINED rows and its 95% bootstrap interval), one panel
     per metric in a grid and one legend, into ``path``."""
-    import matplotlib.pyplot as plt
-
     rows = frame[(frame["status"] == DONE) & (frame["sequence"] == COMBINED)]
     numeric = pd.to_numeric(rows[p], errors="coerce").notna().all()
     labels = list(dict.fromkeys(rows[p].astype(str)))
@@ -108,8 +106,6 @@ def _line_plot(frame: pd.DataFrame, p: str, shown: Sequence[str], path: Path,
 def _heatmap(agg: pd.DataFrame, a: str, b: str, m: str, path: Path) -> Path:
     """Metric ``m`` over parameters ``a`` (rows) and ``b`` (columns), mean over the rest, one
     panel per tracker, into ``path``."""
-    import matplotlib.pyplot as plt
-
     trackers = list(dict.fromkeys(agg["tracker"])) if "tracker" in agg else [None]
     fig, axes = plt.subplots(1, len(trackers), figsize=(4 * len(trackers), 3.4), squeeze=False)
     for ax, t in zip(axes[0], trackers):

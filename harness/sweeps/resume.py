@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from occbench.errors import verbose
+from occbench.io.mot import write_atomic
 from occbench.sweeps import outputs
 from occbench.sweeps.jobs import DONE, FAILED, STATUS_FILE, read_status, sweep_id
 
@@ -37,8 +38,6 @@ def write_status(job_dir: str | Path, status: str, overrides: Sequence[str],
     fingerprint of the job's inputs (``inputs``: config, code, data), the outputs of a done
     job (``files``: ``occbench.sweeps.outputs.record``) and the id of the sweep that ran it
     (``sweep.json`` of the parent folder: ``occbench.sweeps.jobs.members``)."""
-    from occbench.io.mot import write_atomic
-
     path = Path(job_dir) / STATUS_FILE
     obj = None if objective is None or not math.isfinite(objective) else float(objective)
     body = {"status": status, "overrides": list(overrides), "objective": obj, "error": error,

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from occbench.sweeps.jobs import DONE
 
@@ -81,8 +82,6 @@ def interval(values: np.ndarray, seed: int = 0) -> tuple[float, float, float]:
     stays inside the values seen, so inside each metric's range (a t-interval of 3 jobs
     reached HOTA 1.2, and IDs 12.67 +/- 17 ran below 0). One value: the interval is that
     value. The one interval of a sweep: its table, page and plots all read ``aggregate``."""
-    from scipy import stats
-
     v = np.asarray(values, dtype=np.float64)
     v = v[np.isfinite(v)]
     if v.size == 0:

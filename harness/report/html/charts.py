@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import altair as alt
 import numpy as np
 import pandas as pd
 
@@ -29,8 +30,6 @@ def _spec(chart: Any) -> dict[str, Any]:
     """The Vega-Lite dict of an Altair chart, with readable fonts. Every row goes in: Altair
     refuses data over 5,000 rows by default (a guard against huge notebooks), which a long
     sequence's timeline of twenty trackers passes; the page is self-contained by design."""
-    import altair as alt
-
     with alt.data_transformers.disable_max_rows():
         return chart.configure_axis(**FONT).configure_legend(**FONT).configure_title(
             fontSize=14, anchor="start").to_dict()
@@ -56,8 +55,6 @@ def timeline(sequence: str, counts: Mapping[str, FrameCounts],
     without errors too; with ``video``, a click on a mark seeks the sequence's video to its
     ``frame`` (the title says so only then). Runs of equal counts are one bar
     (``segments``), to keep the page small."""
-    import altair as alt
-
     rows = []
     for tracker, c in counts.items():
         for attr, label, _ in KINDS:
@@ -87,8 +84,6 @@ def timeline(sequence: str, counts: Mapping[str, FrameCounts],
 
 def paired_forest(diffs: Sequence[PairedDifference]) -> dict[str, Any]:
     """Each pair's difference with its interval, one panel per metric, a rule at 0."""
-    import altair as alt
-
     data = pd.DataFrame([{"pair": f"{d.a} - {d.b}", "metric": d.metric,
                           "difference": d.difference, "low": d.low, "high": d.high,
                           "verdict": "distinguishable" if d.distinguishable
@@ -118,8 +113,6 @@ def metric_lines(agg: pd.DataFrame, parameter: str, metric: str,
     columns, the numbers of the sweep's PNG and sweep.md)
     against one ``parameter``, one line per tracker in its label and colour (``looks``,
     default: the shipped configs' by name)."""
-    import altair as alt
-
     data = agg[[parameter, "tracker", metric, f"{metric}_low", f"{metric}_high", "n"]].copy()
     data.columns = ["value", "tracker", "mean", "low", "high", "n"]
     looks = metas(dict.fromkeys(data["tracker"].astype(str)), known=looks)

@@ -19,6 +19,10 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import vl_convert
+
+from occbench.io.mot import write_atomic
+from occbench.sources.cache import cache_root
 
 BUNDLE_MARK = "window.vegaEmbed="  # vl-convert's bundle sets it: the kept copy is one
 CSS = """
@@ -119,8 +123,6 @@ class Page:
             f'</video><span class="frame" id="frame-{s}">frame {int(first)}</span></div>')
 
     def write(self, path: Path) -> Path:
-        from occbench.io.mot import write_atomic
-
         nav = " ".join(f'<a href="#{esc(a)}">{esc(h)}</a>' for a, h in self.toc)
         bundle = vega_bundle().replace("</script", "<\\/script")
         text = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
@@ -137,11 +139,6 @@ def vega_bundle() -> str:
     bundle, kept in the occbench cache folder (``occbench.sources.cache.cache_root``) per
     vl-convert version, since making it costs seconds of CPU in every process (each job of a
     sweep); made again when the kept copy is missing or not whole."""
-    import vl_convert
-
-    from occbench.io.mot import write_atomic
-    from occbench.sources.cache import cache_root
-
     root = cache_root()
     path = None if root is None else root / f"vega-bundle-{vl_convert.__version__}.js"
     if path is not None and path.is_file():

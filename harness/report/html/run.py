@@ -16,13 +16,16 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import yaml
 
+from occbench.io.mot import read_mot
 from occbench.metrics import COMBINED
 from occbench.metrics.paired import Bootstrap, PairedDifference, all_pairs
-from occbench.metrics.timeline import FrameCounts
+from occbench.metrics.timeline import FrameCounts, frame_counts
 from occbench.report.html import charts
 from occbench.report.html.page import Page, esc, table_html
 from occbench.report.paired import NOT_DISTINGUISHABLE, by_pair, cell
+from occbench.report.tables import direction
 from occbench.report.tracks import EXPLAINED, counted
 
 log = logging.getLogger(__name__)
@@ -38,9 +41,6 @@ def read_frame_counts(run_dir: Path, iou_threshold: float = 0.5
     files the run scored), each tracker's sequences in the order the run tracked them
     (``gt/seqmap.txt``): the bootstrap draws sequence by sequence, so that order is part of
     the paired intervals, which must come out as the run's own."""
-    from occbench.io.mot import read_mot
-    from occbench.metrics.timeline import frame_counts
-
     out: dict[str, dict[str, FrameCounts]] = {}
     for folder in sorted(p for p in (run_dir / "tracks").glob("*") if p.is_dir()):
         for path in sorted(folder.glob("*.txt"), key=run_order(run_dir)):
@@ -68,8 +68,6 @@ def _order(counts: Mapping[str, Any], metrics: pd.DataFrame) -> dict[str, Any]:
 
 def reproduce(run_dir: Path) -> str:
     """The command line that runs this run again (from Hydra's record of it)."""
-    import yaml
-
     hydra = run_dir / ".hydra"
     task = yaml.safe_load((hydra / "overrides.yaml").read_text()) if (
         hydra / "overrides.yaml").is_file() else []
@@ -92,12 +90,10 @@ def videos(run_dir: Path, first: Mapping[str, int] | None = None) -> dict[str, t
     start = 1
     cfg = run_dir / "config.yaml"
     if cfg.is_file():
-        import yaml
-
         window = ((yaml.safe_load(cfg.read_text()) or {}).get("dataset") or {}).get("frames")
         start = int(window[0]) if window else 1
     for path in sorted((run_dir / "report").glob("*.mp4")):
-        import av
+        import av  # start-up: PyAV, ~0.25 s; only a run with videos reads one
 
         with av.open(str(path)) as box:
             fps = float(box.streams.video[0].average_rate or 25)
@@ -149,8 +145,6 @@ def _tables(page: Page, metrics: pd.DataFrame, tracks: pd.DataFrame) -> None:
 
 
 def _metric_tables(page: Page, metrics: pd.DataFrame) -> None:
-    from occbench.report.tables import direction
-
     combined = metrics[metrics["sequence"] == COMBINED]
     cols = ["tracker", *[c for c in SHOWN if c in metrics.columns]]
     page.add("<h3>COMBINED (click a header to sort; best per column marked)</h3>")

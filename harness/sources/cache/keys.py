@@ -21,12 +21,16 @@ import hashlib
 import json
 import re
 from functools import lru_cache
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from occbench.datasets.base import FrameWindow, Sequence
+from occbench.datasets.images import ImageSequence
+from occbench.datasets.synthetic.sequence import SyntheticSequence
+from occbench.datasets.video import VideoSequence
 
 ROOT = Path(__file__).resolve().parents[3]
 #: source folders whose every file counts (relative to the checkout)
@@ -77,10 +81,6 @@ def _synthetic_state(seq: Any) -> dict[str, Any]:
 def frames_digest(sequence: Sequence) -> str | None:
     """Digest of what ``sequence``'s frames in its window are decoded or rendered from, or
     None when its kind is not known here (it is then not cached)."""
-    from occbench.datasets.images import ImageSequence
-    from occbench.datasets.synthetic.sequence import SyntheticSequence
-    from occbench.datasets.video import VideoSequence
-
     inner = sequence.inner if isinstance(sequence, FrameWindow) else sequence
     numbers = sequence.frame_numbers()
     h = hashlib.sha256(f"{type(inner).__name__} {numbers.start} {numbers.stop}".encode())
@@ -150,8 +150,6 @@ def _imported_trackers_modules(files: list[Path]) -> set[Path]:
 @lru_cache(maxsize=1)
 def code_version() -> str:
     """Digest of the front end's code and library versions (once per process)."""
-    from importlib.metadata import PackageNotFoundError, version
-
     files = {p for d in CODE_FOLDERS for p in (ROOT / d).rglob("*")
              if p.is_file() and "__pycache__" not in p.parts}
     files |= _imported_trackers_modules([p for p in files if p.suffix == ".py"])
