@@ -9,7 +9,9 @@ For each table it runs the table's harness commands (``TABLES`` below: the exper
 holds the paper's rows, our data note and every reason the figures can differ), reads the
 ``paper_table.md`` each run writes (``occbench.report.paper_tables``) and replaces that table's
 section of ``docs/reproduction.md`` with them (one table: every run's ``ours:`` rows), headed by
-the exact commands, the commit and the date; the other sections are left as they are. Every
+the exact commands, the commit and the date; the other sections are left as they are, and the
+list of differences from the papers' figures is rebuilt from the tables
+(benchmarks/paper_differences.py). Every
 number in the document therefore comes from a command printed above it. The run folders go under ``--runs`` (default
 ``results/reproduction/<table>``). A failed run leaves the document untouched and prints the
 end of its log.
@@ -25,6 +27,8 @@ import sys
 import time
 from pathlib import Path
 
+import yaml
+from paper_differences import refresh
 from shared_data import use_shared_data
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -73,6 +77,11 @@ printed in the section and copies the run's `paper_table.md` here: no number is 
 
 BEGIN, END = "<!-- begin {} -->", "<!-- end {} -->"
 
+#: tables whose runs are another table's when both are made: the same commands but for the
+#: experiment's name, whose configs differ in nothing but ``paper_table`` (checked before each
+#: use, ``same_runs``); each of that table's runs is then tabled again with this table's spec
+SAME_RUNS = {"pbm_segmentation": "pbm_table1", "pbm_segmentation_real": "pbm_table1_real"}
+
 
 #: the real-PETS tables read frames the project does not ship: the developers' copy, given
 #: to each run as dataset.root (shown with the variable's name, its value set by use_shared_data)
@@ -101,6 +110,56 @@ def run_table(table: str, runs: Path) -> tuple[list[Path], float]:
         found += tables
         seconds += took
     return found, seconds
+
+
+def _config(table: str, args: list[str]) -> dict:
+    """The composed config of one of the table's commands (``--cfg job``, not resolved)."""
+    argv = [sys.executable, "-m", "occbench", *_args(table, args, str(use_shared_data())),
+            "--cfg", "job"]
+    done = subprocess.run(argv, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{table}: `occbench {' '.join(args)} --cfg job` failed:\n"
+                           f"{done.stderr[-2000:]}")
+    return yaml.safe_load(done.stdout)
+
+
+def same_runs(table: str, source: str) -> list[dict] | None:
+    """``table``'s paper_table specs, one per command, when its commands are ``source``'s
+    with the experiment renamed and their configs differ in ``paper_table`` alone; else None."""
+    mine, theirs = TABLES[table], TABLES[source]
+    renamed = [[a.replace(f"+experiment={table}", f"+experiment={source}") for a in args]
+               for args in mine]
+    if renamed != theirs:
+        return None
+    specs = []
+    for args, other in zip(mine, theirs, strict=True):
+        a, b = _config(table, args), _config(source, other)
+        spec = a.pop("paper_table", None)
+        b.pop("paper_table", None)
+        if a != b or not spec:
+            return None
+        specs.append(spec)
+    return specs
+
+
+def table_again(table: str, source: str, runs: Path) -> list[Path] | None:
+    """``table``'s paper tables from ``source``'s finished runs (``SAME_RUNS``): each run's
+    metrics tabled with ``table``'s spec into ``runs/<table>/<i>``; None when not allowed."""
+    specs = same_runs(table, source)
+    if specs is None:
+        return None
+    from occbench.report.paper_tables import write_paper_table
+
+    out = []
+    for i, spec in enumerate(specs):
+        folder = runs / table / str(i)
+        folder.mkdir(parents=True, exist_ok=True)
+        made = runs / source / str(i)
+        (folder / "metrics.csv").write_bytes((made / "metrics.csv").read_bytes())
+        (folder / "SOURCE").write_text(f"the runs of {made} (benchmarks/reproduction.py "
+                                       f"SAME_RUNS), tabled with {table}'s paper_table\n")
+        out.append(write_paper_table(folder, spec))
+    return out
 
 
 def _run(table: str, args: list[str], out: Path) -> tuple[list[Path], float]:
@@ -171,12 +230,14 @@ def code_commit(doc: Path = DOC) -> str:
     return head + ("-dirty" if changed else "")
 
 
-def section(table: str, body: str, seconds: float) -> str:
+def section(table: str, body: str, seconds: float, source: str | None = None) -> str:
     commit = code_commit()
     title, _, rest = body.partition("\n")
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    took = (f"the runs of `{source}`, whose configs differ from these in the table alone"
+            if source else f"{seconds:.0f} s")
     made = (f"{' and '.join(f'`{c}`' for c in commands(table))} (commit {commit}, {stamp}, "
-            f"{seconds:.0f} s; regenerate: `python benchmarks/reproduction.py {table}`)")
+            f"{took}; regenerate: `python benchmarks/reproduction.py {table}`)")
     return "\n".join([BEGIN.format(table), title, "", made, rest.rstrip(), END.format(table)])
 
 
@@ -197,7 +258,7 @@ def write(sections: dict[str, str], doc: Path) -> None:
         found = block.search(text)
         text = (text[:found.start()] + new + text[found.end():] if found
                 else text.rstrip() + "\n\n" + new + "\n")
-    doc.write_text(text)
+    doc.write_text(refresh(text))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -219,10 +280,18 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [t for t in chosen if t not in TABLES]
     if unknown:
         p.error(f"unknown table {unknown[0]!r}; the tables: {', '.join(TABLES)}")
+    chosen = sorted(set(chosen), key=list(TABLES).index)   # a SAME_RUNS source first
     sections, failed = {}, 0
     for table in chosen:
         print(f"{table}: {' ; '.join(commands(table))} ...", flush=True)
+        source = SAME_RUNS.get(table)
         try:
+            tables = (table_again(table, source, args.runs.resolve())
+                      if source in sections else None)
+            if tables is not None:
+                sections[table] = section(table, merge(tables), 0.0, source)
+                print(f"{table}: from the runs of {source}", flush=True)
+                continue
             tables, seconds = run_table(table, args.runs.resolve())
         except RuntimeError as err:
             print(f"error: {err}", file=sys.stderr)

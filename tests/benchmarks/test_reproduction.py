@@ -56,8 +56,8 @@ def test_a_column_tables_second_run_adds_its_ours_columns(tmp_path):
         jobs[-1].write_text(COLUMNS.format(ours=ours, x=x, y=y, bar="---|" * (ours.count("|") + 1)))
     merged = repro.merge(jobs)
     lines = [line for line in merged.splitlines() if line.startswith("|")]
-    assert lines == ["| PETS 2009 | reported: PBM | ours: pbm | ours: meanshift | "
-                     "ours: pbm_paper (whole) |", "|---|---|---|---|---|",
+    assert lines == [("| PETS 2009 | reported: PBM | ours: pbm | ours: meanshift | "
+                      "ours: pbm_paper (whole) |"), "|---|---|---|---|---|",
                      "| mostly tracked | 10 | 3 | 1 | 7 |", "| ID switches | 0 | 0.5 | 2 | 1.8 |"]
     assert merged.startswith("## A title") and merged.rstrip().endswith("real pixels.")
     jobs[1].write_text(jobs[1].read_text().replace("ID switches", "IDS"))
@@ -84,3 +84,15 @@ def test_an_unknown_table_is_named(capsys):
     with pytest.raises(SystemExit):
         repro.main(["reta_tabel2"])
     assert "unknown table 'reta_tabel2'" in capsys.readouterr().err
+
+
+def test_a_table_reuses_another_tables_runs_only_when_nothing_but_the_table_differs(monkeypatch):
+    configs = {"pbm_table1_real": {"tracker": "t", "paper_table": {"name": "a"}},
+               "pbm_segmentation_real": {"tracker": "t", "paper_table": {"name": "b"}}}
+    monkeypatch.setattr(repro, "_config", lambda table, args: dict(configs[table]))
+    specs = repro.same_runs("pbm_segmentation_real", "pbm_table1_real")
+    assert [s["name"] for s in specs] == ["b"] * len(repro.TABLES["pbm_table1_real"])
+    configs["pbm_segmentation_real"] = {"tracker": "other", "paper_table": {"name": "b"}}
+    assert repro.same_runs("pbm_segmentation_real", "pbm_table1_real") is None
+    monkeypatch.setitem(repro.TABLES, "pbm_segmentation_real", [["+experiment=x"]])
+    assert repro.same_runs("pbm_segmentation_real", "pbm_table1_real") is None
