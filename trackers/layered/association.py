@@ -10,8 +10,8 @@ Global layer (eq. 13): p = sum_j gamma_j p_j.
 The layers run in small numba kernels over the scored (target, candidate) pairs with no
 (pairs, 6, 5, components) temporaries; ``pair_scores`` chains eqs. 11-13 for the
 selected pairs in one call (the models indexed, not copied per pair). The plain-numpy
-equations they compute are ``occbench.trackers.layered.equations.differences`` (eq. 11),
-``part_scores`` (eq. 12) and ``global_score`` (eq. 13); the kernels equal them to
+equations they compute are ``differences.differences`` (eq. 11),
+``scores.part_scores`` (eq. 12) and ``scores.global_score`` (eq. 13); the kernels equal them to
 rounding (rtol 1e-9, ``tests/trackers/layered/test_equations.py``).
 """
 
@@ -21,16 +21,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from occbench.trackers.layered._kernels import (
+from occbench.trackers.layered.differences import _differences_kernel
+from occbench.trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
+from occbench.trackers.layered.scores import (
     _ambiguous_kernel,
     _ambiguous_rows_kernel,
-    _differences_kernel,
     _pair_scores_kernel,
     _scores_kernel,
     box_scores_kernel,
     survival_bounds,
 )
-from occbench.trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
 
 if TYPE_CHECKING:  # annotations only
     from occbench.trackers.layered.feature_models import FeatureModels
@@ -158,7 +158,7 @@ def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, 
 
 
 def _bounds(models: FeatureModels) -> np.ndarray | None:
-    """``_kernels.survival_bounds`` of the models, made once per models object (about
+    """``scores.survival_bounds`` of the models, made once per models object (about
     60,000 values of p(x | theta)); None when a mixture has a sigma <= 0 or a non-finite
     parameter (no bound is then taken)."""
     w, mu, s = _theta(models)
@@ -185,13 +185,13 @@ def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatur
     """Eqs. 11-13 of (K, 4) xywh boxes of the extractor's frame (split at alpha, beta (K,)),
     each against the model of its target ti[k]: equal bit for bit to ``pair_scores(models,
     model, extractor.extract(boxes, alpha, beta), ti, arange(K), ...)``, without making the
-    boxes' (K, 5, B) histograms (``_kernels.box_scores_kernel``). For the search's boxes
+    boxes' (K, 5, B) histograms (``scores.box_scores_kernel``). For the search's boxes
     (PBM 3.1: 25 per searched pair, one kept), whose features are then extracted for the
     kept ones only.
 
     ``best_of`` > 0: the first ``grouped`` boxes are consecutive groups of ``best_of`` of
     which only the first maximum of p is used (the search's); a box whose upper bound of
-    p (``_kernels._score_bound``) is below a scored box's p of its group is not scored
+    p (``scores._score_bound``) is below a scored box's p of its group is not scored
     (p -inf, p_j NaN): it cannot be that maximum, and the others keep their bits.
 
     Returns:

@@ -18,11 +18,127 @@ test (PBM 3.1) and as the centre of the head-anchored size search (eqs. 9-10).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
-from occbench.trackers.layered import _kernels
+from occbench.trackers.layered import kernel_cache  # noqa: F401 (before any kernel: one stamp for all)
+
+# ----------------------------------------------------------------------------- PBM 3, eqs. 7-8, plain numpy
+
+
+def kf1_z(dof: np.ndarray) -> np.ndarray:
+    """Eq. 7, KF1: Z1 = (xc, yc) of (..., 6) DOF; its state is X1 = (xc, yc, xc', yc')."""
+    return np.asarray(dof)[..., [2, 3]]                                      # eq. 7
+
+
+def kf2_z(dof: np.ndarray) -> np.ndarray:
+    """Eq. 8, KF2: Z2 = (h, w) of (..., 6) DOF; its state is X2 = (h, w, h', w')."""
+    return np.asarray(dof)[..., [5, 4]]                                      # eq. 8
+
+
+_F = np.block([[np.eye(2), np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
+
+
+_H = np.hstack([np.eye(2), np.zeros((2, 2))])
+
+
+def cv_predicted(x: np.ndarray, P: np.ndarray, q_p: float, q_v: float
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Predict step of KF1 (eq. 7) and KF2 (eq. 8), constant velocity, unit time step:
+    x (4,) = (a, b, a', b'), P (4, 4), Q = diag(q_p, q_p, q_v, q_v) (variances)."""
+    Q = np.diag([q_p, q_p, q_v, q_v])
+    x = _F @ x                                                               # x = F x
+    P = _F @ P @ _F.T + Q                                                    # P = F P F' + Q
+    return x, P
+
+
+def cv_updated(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Update step of KF1 (eq. 7, z = Z1) and KF2 (eq. 8, z = Z2): measurement z (2,),
+    R = r I (variance)."""
+    y = z - _H @ x                                                           # y = z - H x
+    S = _H @ P @ _H.T + r * np.eye(2)                                        # S = H P H' + R
+    K = P @ _H.T @ np.linalg.inv(S)                                          # K = P H' S^-1
+    x = x + K @ y                                                            # x = x + K y
+    P = (np.eye(4) - K @ _H) @ P                                             # P = (I - K H) P
+    return x, P
+
+
+# ----------------------------------------------------------------------------- PBM 3, eqs. 7-8 and the gate, compiled
+
+
+@numba.njit(cache=True)
+def cv_predict_inplace(x: np.ndarray, p: np.ndarray, qp: np.ndarray, qv: np.ndarray) -> None:
+    """Predict step of KF1 (eq. 7) and KF2 (eq. 8) (``cv_predicted``: x = F x,
+    P = F P F' + Q) of every row, in place: x (T, 4) = (a, b, a', b'); P kept per axis i
+    as its 2 x 2 block p[:, i] = (A, B, C, D) = (P[a, a], P[a, a'], P[a', a], P[a', a'])
+    (diagonal P0, Q and R never couple the axes); qp, qv (T,) the noise variances."""
+    for n in range(x.shape[0]):
+        for i in range(2):
+            x[n, i] = x[n, i] + x[n, i + 2]                                  # x = F x
+            A, B, C, D = p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3]
+            p[n, i, 0] = A + B + C + D + qp[n]                               # P = F P F' + Q
+            p[n, i, 1] = B + D
+            p[n, i, 2] = C + D
+            p[n, i, 3] = D + qv[n]
+
+
+@numba.njit(cache=True)
+def cv_update_inplace(x: np.ndarray, p: np.ndarray, r: np.ndarray, rows: np.ndarray,
+                      z: np.ndarray) -> None:
+    """Update step of KF1 (eq. 7, z = (xc, yc)) and KF2 (eq. 8, z = (h, w))
+    (``cv_updated``) of the filters at ``rows`` with measurements z (M, 2), in
+    place (layout as ``cv_predict_inplace``; r (T,) the measurement variance)."""
+    for q in range(rows.shape[0]):
+        n = rows[q]
+        for i in range(2):
+            s = p[n, i, 0] + r[n]                                            # S = H P H' + R
+            y = z[q, i] - x[n, i]                                            # y = z - H x
+            A, B, C, D = p[n, i, 0], p[n, i, 1], p[n, i, 2], p[n, i, 3]
+            kp, kv = A / s, C / s                                            # K = P H' S^-1
+            x[n, i] += kp * y                                                # x = x + K y
+            x[n, i + 2] += kv * y
+            p[n, i, 0], p[n, i, 1] = A - kp * A, B - kp * B                  # P = (I - K H) P
+            p[n, i, 2], p[n, i, 3] = C - kv * A, D - kv * B
+
+
+@numba.njit(cache=True)
+def gate_boxes(centres: np.ndarray, rates: np.ndarray, size_wh: np.ndarray, misses: np.ndarray,
+               rule: tuple, out: np.ndarray) -> None:
+    """The gate (PBM 3, Fig. 5; ``dynamics.Gate``) of every row into out (T, 4) xywh:
+    centred on ``centres`` (zero-order prediction), half-sizes h = speed_factor |v| +
+    min_fraction size (|v| KF1's speed, eq. 7), after m > 0 misses h miss_factor
+    growth^(m - 1), capped at max_fraction max(size, 1). ``rule``: (speed_factor,
+    min_fraction, miss_factor, growth, max_fraction)."""
+    speed_factor, min_fraction, miss_factor, growth, max_fraction = rule
+    for n in range(size_wh.shape[0]):
+        sp = speed_factor * math.hypot(rates[n, 0], rates[n, 1])
+        for i in range(2):
+            h = sp + min_fraction * size_wh[n, i]
+            if misses[n] > 0:
+                h = h * miss_factor * growth ** (misses[n] - 1.0)
+            h = min(h, max_fraction * max(size_wh[n, i], 1.0))
+            out[n, i] = centres[n, i] - h
+            out[n, 2 + i] = 2 * h
+
+
+@numba.njit(cache=True)
+def targets_predict(kf1: tuple, kf2: tuple) -> None:
+    """KF1 (eq. 7) and KF2 (eq. 8) predict (``cv_predict_inplace``) of every target; KF2's
+    rates are zeroed first where a step would take h or w below 2 pixels. ``kf1``, ``kf2``:
+    (x, p, qp, qv) of ``ConstantVelocity2D``."""
+    x2 = kf2[0]
+    for n in range(x2.shape[0]):
+        if x2[n, 0] + x2[n, 2] < 2 or x2[n, 1] + x2[n, 3] < 2:
+            x2[n, 2] = 0.0
+            x2[n, 3] = 0.0
+    cv_predict_inplace(kf1[0], kf1[1], kf1[2], kf1[3])
+    cv_predict_inplace(kf2[0], kf2[1], kf2[2], kf2[3])
+
+
 
 
 class ConstantVelocity2D:
@@ -37,8 +153,8 @@ class ConstantVelocity2D:
     x += K y, P = (I - K H) P. With diagonal P0, Q and R the two axes never couple, so P
     is kept as one 2 x 2 block per axis, ``p[:, axis] = (P[a, a], P[a, a'], P[a', a],
     P[a', a'])``, and the arithmetic is written out element-wise, in place
-    (``_kernels.cv_predict_inplace``, ``cv_update_inplace``); they equal the matrix form of
-    ``equations.cv_predicted`` / ``cv_updated`` (eqs. 7-8) to rounding
+    (``cv_predict_inplace``, ``cv_update_inplace``); they equal the matrix form of
+    ``cv_predicted`` / ``cv_updated`` (eqs. 7-8, above) to rounding
     (tests/trackers/layered/test_equations.py; tests/trackers/layered/test_dynamics.py checks
     agreement with filterpy's KalmanFilter).
 
@@ -101,12 +217,12 @@ class ConstantVelocity2D:
 
     def predict(self) -> None:
         """x = F x; P = F P F' + Q, for every filter."""
-        _kernels.cv_predict_inplace(self.x, self.p, self.qp, self.qv)
+        cv_predict_inplace(self.x, self.p, self.qp, self.qv)
 
     def update(self, rows: np.ndarray, z: np.ndarray) -> None:
         """y = z - H x; S = H P H' + R; K = P H' S^-1; x += K y; P = (I - K H) P, for the
         filters at ``rows`` (unique) with measurements z (M, 2)."""
-        _kernels.cv_update_inplace(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
+        cv_update_inplace(self.x, self.p, self.r, np.asarray(rows, dtype=np.int64),
                        np.asarray(z, dtype=np.float64))
 
 
@@ -136,7 +252,7 @@ class Gate:
               misses: np.ndarray) -> np.ndarray:
         """(T, 4) xywh gates centred on ``centres`` (T, 2): (centre - half, 2 half)."""
         out = np.empty((len(size_wh), 4))
-        _kernels.gate_boxes(np.asarray(centres, dtype=np.float64),
+        gate_boxes(np.asarray(centres, dtype=np.float64),
                             np.asarray(rates, dtype=np.float64),
                             np.asarray(size_wh, dtype=np.float64), np.asarray(misses, dtype=np.int64),
                             (float(self.speed_factor), float(self.min_fraction),

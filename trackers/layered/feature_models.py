@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from scipy.special import ndtr
 
-from occbench.trackers.layered._kernels import survival_kernel
 from occbench.trackers.layered.parts import FEATURES, N_PARTS, PART_NAMES
+from occbench.trackers.layered.scores import survival_kernel
+from scipy.special import ndtr
 
 logger = logging.getLogger(__name__)
 

@@ -11,7 +11,7 @@ the centroid ratios of PBM eqs. 1-2,
     yc = ytl + h / 7 + beta * (h - h / 7)          (eq. 2, sign-corrected)
 
 so a box plus (alpha, beta) gives the five rectangles (``part_boxes``; both equations
-are in ``occbench.trackers.layered.equations``, re-exported here).
+are in ``occbench.trackers.layered.split``, re-exported here).
 
 PBM 2.2 describes each part by area, perimeter, HSV and XYZ colour histograms,
 displacement and overlap. ``PartFeatureExtractor.extract`` measures the first four (plus
@@ -39,8 +39,8 @@ import cv2
 import numpy as np
 
 from occbench.trackers.geometry import iou_matrix
-from occbench.trackers.layered import _kernels
-from occbench.trackers.layered.equations import (  # eqs. 1-2, re-exported here
+from occbench.trackers.layered import sampling_kernels
+from occbench.trackers.layered.split import (  # eqs. 1-2, re-exported here
     HEAD_FRACTION,
     centroid_ratios,  # noqa: F401
     part_boxes,  # noqa: F401
@@ -180,18 +180,18 @@ def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 @functools.lru_cache(maxsize=1)
 def _check_colour_formulas() -> None:
     """Raise RuntimeError unless the kernels' HSV and XYZ values (OpenCV's integer
-    formulas, ``_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
+    formulas, ``sampling_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
     once per process (tests/trackers/layered/test_parts.py checks all 2**24)."""
     v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
     got = np.empty((len(pixels), 6), np.uint8)
-    _kernels.convert(pixels, got)
+    sampling_kernels.convert(pixels, got)
     want = np.concatenate([cv2.cvtColor(pixels[None], cv2.COLOR_BGR2HSV)[0],
                            cv2.cvtColor(pixels[None], cv2.COLOR_BGR2XYZ)[0]], axis=1)
     if not np.array_equal(got, want):
         raise RuntimeError(
             f"OpenCV {cv2.__version__} converts BGR to 8-bit HSV or XYZ differently from "
-            "trackers/layered/_kernels._hsv_xyz: update it")
+            "trackers/layered/sampling_kernels._hsv_xyz: update it")
 
 
 class PartFeatureExtractor:
@@ -199,7 +199,7 @@ class PartFeatureExtractor:
 
     Each box is measured on a fixed grid of ``grid_rows x grid_cols`` sample points (the
     pixel under each cell centre, i.e. the box resized to the grid by nearest neighbour).
-    One kernel call (``occbench.trackers.layered._kernels.part_features``) walks the samples of every box
+    One kernel call (``occbench.trackers.layered.sampling_kernels.part_features``) walks the samples of every box
     once: foreground test, part label, counts, centroid sums, outline test, and the joint
     HSV and XYZ bins of each foreground sample by OpenCV's own integer formulas (equal to
     ``cv2.cvtColor`` for every colour); the features equal a per-box numpy reference
@@ -280,7 +280,7 @@ class PartFeatureExtractor:
         if n == 0:
             return np.zeros((0, 2))
         out = np.empty((n, 2))
-        _kernels.grid_centroids(b, (self._fr, self._fc), self._image(), out)
+        sampling_kernels.grid_centroids(b, (self._fr, self._fc), self._image(), out)
         return out
 
     def extract_at_centroids(self, boxes: np.ndarray) -> tuple[np.ndarray, PartFeatures]:
@@ -341,7 +341,7 @@ class PartFeatureExtractor:
         hsv, xyz = np.empty((n, N_PARTS, nb)), np.empty((n, N_PARTS, nb))
         centroid = np.empty((n, N_PARTS, 2))
         at_centroids = centres is not None
-        _kernels.part_features(b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
+        sampling_kernels.part_features(b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
                                (self._fr, self._fc), self._image(), self._colour_luts(),
                                (parts, area, perimeter, hsv, xyz, centroid),
                                (self._pixel_bins, self._stamp))

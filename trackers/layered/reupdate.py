@@ -31,8 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from occbench.trackers.layered import _kernels
-from occbench.trackers.layered.dynamics import ConstantVelocity2D
+from occbench.trackers.layered.dynamics import (
+    ConstantVelocity2D,
+    cv_predict_inplace,
+    cv_update_inplace,
+)
 from occbench.trackers.layered.targets import Targets
 
 _ROW0 = np.zeros(1, dtype=np.int64)
@@ -83,6 +86,6 @@ def re_run(kf: ConstantVelocity2D, rows: np.ndarray, z: np.ndarray, steps: np.nd
         x, p = kf.seen_x[n:n + 1].copy(), kf.seen_p[n:n + 1].copy()
         z1 = kf.seen_z[n]
         for i in range(1, g + 1):
-            _kernels.cv_predict_inplace(x, p, kf.qp[n:n + 1], kf.qv[n:n + 1])
-            _kernels.cv_update_inplace(x, p, kf.r[n:n + 1], _ROW0, (z1 + (i / g) * (z2 - z1))[None])
+            cv_predict_inplace(x, p, kf.qp[n:n + 1], kf.qv[n:n + 1])
+            cv_update_inplace(x, p, kf.r[n:n + 1], _ROW0, (z1 + (i / g) * (z2 - z1))[None])
         kf.x[n], kf.p[n] = x[0], p[0]

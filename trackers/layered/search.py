@@ -28,13 +28,13 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.ndimage import minimum_filter1d
 
 from occbench.trackers.layered._search_kernels import (
     band_heads,
     covered_count,
 )
-from occbench.trackers.layered.equations import HEAD_FRACTION, search_boxes  # noqa: F401 (re-exported)
+from occbench.trackers.layered.split import HEAD_FRACTION
+from scipy.ndimage import minimum_filter1d
 
 
 def _floats(v: np.ndarray) -> list[float]:
@@ -246,6 +246,23 @@ def occlusion_kinds(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: 
            / np.maximum(predicted_wh, 1.0)[:, None, :])                 # (T, N, 2)
     larger, smaller = (rel > threshold).any(axis=2), (rel < -threshold).any(axis=2)
     return np.where(larger, 1, np.where(smaller, -1, 0)).astype(np.int64)
+
+
+def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step: float,
+                 search_range: int) -> np.ndarray:
+    """Eqs. 9-10, the head-anchored boxes: ((2 r + 1)^2, 4) xywh, box i (2 r + 1) + k of
+    width w_i and height h_k.
+
+    w_i = w (1 + step i), h_k = h (1 + step k), i, k = -r..r (the paper's delta = 0.05 is
+    taken relative to the predicted size); each box hangs from the head top (y = head
+    top) with its centroid column on the head (x = head x - alpha w_i, eq. 1).
+    """
+    i = np.arange(-search_range, search_range + 1, dtype=np.float64)
+    ws = predicted_wh[0] * (1.0 + step * i)                                  # eq. 9
+    hs = predicted_wh[1] * (1.0 + step * i)                                  # eq. 10
+    W, Hh = np.meshgrid(ws, hs, indexing="ij")
+    W, Hh = W.ravel(), Hh.ravel()
+    return np.column_stack([head[0] - alpha * W, np.full_like(W, head[1]), W, Hh])
 
 
 def search_boxes_many(heads: np.ndarray, predicted_wh: np.ndarray, alpha: np.ndarray,

@@ -23,13 +23,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from occbench.trackers.layered import _kernels
-from occbench.trackers.layered.dynamics import ConstantVelocity2D, Gate
-from occbench.trackers.layered.equations import dof_from_head as dofs_from_heads
+from occbench.trackers.layered import model_update
+from occbench.trackers.layered.dynamics import ConstantVelocity2D, Gate, targets_predict
 from occbench.trackers.layered.parts import (
     N_PARTS,
     PartFeatures,
 )
+from occbench.trackers.layered.split import dof_from_head as dofs_from_heads
 
 
 def dof_from_box(box: np.ndarray, centroid: np.ndarray) -> np.ndarray:
@@ -150,7 +150,7 @@ class Targets:
         """Advance KF1 and KF2 one frame; returns the predicted (w, h) (T, 2) (KF2), floored
         at 2 pixels (KF2's rates are zeroed where they would shrink it below)."""
         kf1, kf2 = self.kf1, self.kf2
-        _kernels.targets_predict((kf1.x, kf1.p, kf1.qp, kf1.qv), (kf2.x, kf2.p, kf2.qp, kf2.qv))
+        targets_predict((kf1.x, kf1.p, kf1.qp, kf1.qv), (kf2.x, kf2.p, kf2.qp, kf2.qv))
         return self.predicted_size()
 
     def predicted_size(self) -> np.ndarray:
@@ -191,7 +191,7 @@ class Targets:
         rows = np.asarray(rows, dtype=np.int64)
         shift = np.empty((len(rows), 2))
         kf1, kf2 = self.kf1, self.kf2
-        _kernels.targets_update(
+        model_update.targets_update(
             (self.dof, self._history, self._n_history, self._ratios, self._n_ratios, self.alpha,
              self.beta, self.part_scores, self.occluded_parts, self.occluded, self.hits,
              self.misses),
@@ -222,7 +222,7 @@ def stale_parts(targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.n
     """
     relearn = np.zeros((len(rows), N_PARTS), dtype=np.bool_)
     W, H = image_size
-    _kernels.stale_parts(
+    model_update.stale_parts(
         (targets.stale, targets.occluded_parts, targets.parts.area), targets.dof, targets.misses,
         np.asarray(rows, dtype=np.int64), (cand.parts, cand.area), np.asarray(ks, dtype=np.int64),
         np.asarray(part_scores, dtype=np.float64).reshape(-1, N_PARTS),
@@ -253,7 +253,7 @@ def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: 
     """
     if relearn is None:
         relearn = np.zeros((len(rows), N_PARTS), dtype=bool)
-    _kernels.update_parts(
+    model_update.update_parts_kernel(
         (model.parts, model.area, model.perimeter, model.hsv, model.xyz, model.centroid,
          model.height), np.asarray(rows, dtype=np.int64),
         (cand.parts, cand.area, cand.perimeter, cand.hsv, cand.xyz, cand.centroid, cand.height),

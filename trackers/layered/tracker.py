@@ -45,12 +45,19 @@ import numpy as np
 
 from occbench.trackers.common.checks import parameter_group
 from occbench.trackers.geometry import iou_matrix
-from occbench.trackers.layered._kernels import alive_rows, carved_rows, gated_pairs, matched_rows
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import box_scores, pair_scores
-from occbench.trackers.layered.candidates import (CandidateFinder, DetectorHeads, HeldDetections,
-                                                  NoHeldDetections, ProfileHeads, checked_inputs)
+from occbench.trackers.layered.candidates import (
+    CandidateFinder,
+    DetectorHeads,
+    HeldDetections,
+    NoHeldDetections,
+    ProfileHeads,
+    checked_inputs,
+)
 from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.gating import carved_rows, gated_pairs
+from occbench.trackers.layered.model_update import alive_rows, matched_rows
 from occbench.trackers.layered.params import (
     CandidateParams,
     FeatureParams,

@@ -1,6 +1,6 @@
 """PBM layered-association scoring (eqs. 11-13): the compiled kernels of
-``occbench.trackers.layered.association`` against the plain-numpy equations of
-``occbench.trackers.layered.equations``, equal to rounding (rtol 1e-9: the kernels sum in their own
+``occbench.trackers.layered.association`` against the plain-numpy equations
+(``differences``, ``scores``), equal to rounding (rtol 1e-9: the kernels sum in their own
 order and take the normal CDF from ``math.erfc``), on mixtures of 1-3 components, empty
 parts, degenerate rectangles and any histogram size; and the best/runner-up rule.
 """
@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pbm_scenes import random_features, random_models
 
-from occbench.trackers.layered import equations as E
 from occbench.trackers.layered.association import (
     ambiguous,
     ambiguous_rows,
@@ -20,8 +18,11 @@ from occbench.trackers.layered.association import (
     pair_scores,
     selected_differences,
 )
+from occbench.trackers.layered.differences import differences
 from occbench.trackers.layered.feature_models import FeatureModels
 from occbench.trackers.layered.parts import FEATURES, N_PARTS
+from occbench.trackers.layered.scores import global_score, match_probability, part_scores
+from pbm_scenes import random_features, random_models
 
 NF = len(FEATURES)
 RTOL, ATOL = 1e-9, 1e-12  # rounding: the kernels' summation order and erfc against numpy's
@@ -60,11 +61,11 @@ def test_match_probability_equals_numpy_for_1_2_and_3_components(rng):
                                                                    (400, NF, N_PARTS))
     d[::7] = 0.0
     d[1::11] *= -1.0  # negative differences count as 0
-    np.testing.assert_allclose(models.match_probability(d), E.match_probability(models, d),
+    np.testing.assert_allclose(models.match_probability(d), match_probability(models, d),
                                rtol=RTOL, atol=ATOL)
     assert models.match_probability(d[0]).shape == (NF, N_PARTS)
     default = FeatureModels.default()
-    np.testing.assert_allclose(default.match_probability(d), E.match_probability(default, d),
+    np.testing.assert_allclose(default.match_probability(d), match_probability(default, d),
                                rtol=RTOL, atol=ATOL)
 
 
@@ -74,7 +75,7 @@ def test_selected_and_all_pairs_differences_equal_numpy(rng, with_misses):
     misses = rng.integers(0, 4, 7) if with_misses else None
     ti, n = np.nonzero(rng.random((7, 9)) < 0.5)
     got = selected_differences(model, cand, ti, n, misses)
-    np.testing.assert_allclose(got, E.differences(model, cand, ti, n, misses), rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(got, differences(model, cand, ti, n, misses), rtol=RTOL, atol=ATOL)
     np.testing.assert_array_equal(got, feature_differences(model, cand, misses)[ti, n])
     assert (got[:, 2:4][cand.area[n][:, None, :].repeat(2, 1) <= 0] == 1.0).all()  # empty parts
     assert feature_differences(model, cand.take([]), misses).shape == (7, 0, NF, N_PARTS)
@@ -101,7 +102,7 @@ def test_histogram_term_for_any_bins(rng, bins):
     model, cand = random_features(rng, 3, bins), random_features(rng, 4, bins)
     ti, n = np.nonzero(np.ones((3, 4), bool))
     np.testing.assert_allclose(selected_differences(model, cand, ti, n),
-                               E.differences(model, cand, ti, n, None), rtol=RTOL, atol=ATOL)
+                               differences(model, cand, ti, n, None), rtol=RTOL, atol=ATOL)
 
 
 def test_layered_scores_equal_numpy(rng):
@@ -111,8 +112,8 @@ def test_layered_scores_equal_numpy(rng):
     omega = rng.uniform(0.1, 1, NF)
     gamma = rng.uniform(0.1, 1, N_PARTS)
     pj, p = layered_scores(models, d, omega, gamma, 3.0)
-    np.testing.assert_allclose(pj, E.part_scores(models, d, omega, 3.0), rtol=RTOL, atol=ATOL)
-    np.testing.assert_allclose(p, E.global_score(pj, gamma), rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(pj, part_scores(models, d, omega, 3.0), rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(p, global_score(pj, gamma), rtol=RTOL, atol=ATOL)
     assert pj.shape == (5, 8, N_PARTS) and p.shape == (5, 8)
     pj1, p1 = layered_scores(models, d[0, 0], omega, gamma)
     assert pj1.shape == (N_PARTS,) and p1.shape == ()
@@ -135,7 +136,7 @@ def test_pair_scores_fuse_the_three_layers(rng):
     tis = rng.integers(0, 6, 40)
     cand.parts[:5] = model.parts[tis[:5]]  # identical rectangles: IoU 1
     pj, p = pair_scores(models, model, cand, tis, np.arange(40), misses, omega, gamma, 2.5)
-    d_ref = E.differences(model.take(tis), cand, np.arange(40), np.arange(40), misses[tis])
+    d_ref = differences(model.take(tis), cand, np.arange(40), np.arange(40), misses[tis])
     pj_ref, p_ref = layered_scores(models, d_ref, omega, gamma, 2.5)
     np.testing.assert_allclose(pj, pj_ref, rtol=RTOL, atol=ATOL)
     np.testing.assert_allclose(p, p_ref, rtol=RTOL, atol=ATOL)

@@ -1,16 +1,20 @@
-"""The compiled PBM kernels against the plain-numpy equations of
-``occbench.trackers.layered.equations`` (eqs. 1-2, 7, 8, 9-10, 11, 12, 13 and the section 4.2
-update), to a tolerance (rtol 1e-9), not bit for bit."""
+"""The compiled PBM kernels against the plain-numpy equations beside them (eqs. 1-2,
+``split``; 7, 8, ``dynamics``; 9-10, ``search``; 11, ``differences``; 12, 13, ``scores``;
+the section 4.2 update, ``model_update``), to a tolerance (rtol 1e-9), not bit for bit."""
 
 from __future__ import annotations
 
 import numpy as np
-from pbm_scenes import random_features, random_models
 
-from occbench.trackers.layered import equations as E
 from occbench.trackers.layered.association import pair_scores, selected_differences
+from occbench.trackers.layered.differences import differences
+from occbench.trackers.layered.dynamics import cv_predicted, cv_updated, kf1_z, kf2_z
+from occbench.trackers.layered.model_update import update_global, update_parts
 from occbench.trackers.layered.parts import N_PARTS, PartFeatureExtractor
-from occbench.trackers.layered.search import search_boxes_many
+from occbench.trackers.layered.scores import global_score, part_scores
+from occbench.trackers.layered.search import search_boxes, search_boxes_many
+from occbench.trackers.layered.split import centroid_ratios, dof_from_head, part_boxes
+from pbm_scenes import random_features, random_models
 
 RTOL, ATOL = 1e-9, 1e-12
 
@@ -22,11 +26,11 @@ def test_eq11_to_13_kernels_equal_the_equations():
     misses = rng.integers(0, 4, 6)
     omega, gamma = rng.uniform(0.1, 1, 6), rng.uniform(0.1, 1, N_PARTS)
     ti, n = np.nonzero(rng.random((6, 30)) < 0.4)
-    d = E.differences(model, cand, ti, n, misses)  # eq. 11
+    d = differences(model, cand, ti, n, misses)  # eq. 11
     np.testing.assert_allclose(selected_differences(model, cand, ti, n, misses), d,
                                rtol=RTOL, atol=ATOL)
-    pj_ref = E.part_scores(models, d, omega, 2.5)                       # eq. 12
-    p_ref = E.global_score(pj_ref, gamma)                               # eq. 13
+    pj_ref = part_scores(models, d, omega, 2.5)                       # eq. 12
+    p_ref = global_score(pj_ref, gamma)                               # eq. 13
     pj, p = pair_scores(models, model, cand, ti, n, misses, omega, gamma, 2.5)
     np.testing.assert_allclose(pj, pj_ref, rtol=RTOL, atol=ATOL)
     np.testing.assert_allclose(p, p_ref, rtol=RTOL, atol=ATOL)
@@ -40,7 +44,7 @@ def test_eq9_10_batch_equals_the_equation():
     alpha = rng.uniform(0.3, 0.7, 5)
     got = search_boxes_many(heads, wh, alpha, 0.05, 2)
     for s in range(5):
-        np.testing.assert_allclose(got[s], E.search_boxes(heads[s], wh[s], alpha[s], 0.05, 2),
+        np.testing.assert_allclose(got[s], search_boxes(heads[s], wh[s], alpha[s], 0.05, 2),
                                    rtol=RTOL, atol=ATOL)
 
 
@@ -54,7 +58,7 @@ def test_eq1_2_ratios_of_the_extractor_equal_the_equation():
     ex = PartFeatureExtractor()
     ex.start(frame, fg)
     cents, feats = ex.extract_at_centroids(boxes)
-    alpha, beta = E.centroid_ratios(boxes, cents)                       # eqs. 1-2
+    alpha, beta = centroid_ratios(boxes, cents)                       # eqs. 1-2
     ref = ex.extract(boxes, alpha, beta)
     np.testing.assert_allclose(feats.parts, ref.parts, rtol=RTOL, atol=ATOL)
     np.testing.assert_allclose(feats.hsv, ref.hsv, rtol=RTOL, atol=ATOL)
@@ -62,7 +66,7 @@ def test_eq1_2_ratios_of_the_extractor_equal_the_equation():
 
 def test_eq7_8_filter_kernels_equal_the_equations():
     """KF1 (eq. 7) and KF2 (eq. 8): the per-axis compiled steps of ``ConstantVelocity2D``
-    against the matrix form of ``equations.cv_predicted`` / ``cv_updated``."""
+    against the matrix form of ``dynamics.cv_predicted`` / ``cv_updated``."""
     from occbench.trackers.layered.dynamics import ConstantVelocity2D
 
     rng = np.random.default_rng(10)
@@ -72,29 +76,29 @@ def test_eq7_8_filter_kernels_equal_the_equations():
     x, P = kf.state(1)
     for _ in range(30):
         kf.predict()
-        x, P = E.cv_predicted(x, P, kf.qp[1], kf.qv[1])
+        x, P = cv_predicted(x, P, kf.qp[1], kf.qv[1])
         np.testing.assert_allclose(kf.state(1)[0], x, rtol=RTOL, atol=ATOL)
         np.testing.assert_allclose(kf.state(1)[1], P, rtol=RTOL, atol=ATOL)
         dof = np.r_[0.0, 0.0, x[:2] + rng.normal(0, 3, 2), 30.0, 80.0]
-        z = E.kf1_z(dof)  # eq. 7
+        z = kf1_z(dof)  # eq. 7
         kf.update(np.array([1]), z[None])
-        x, P = E.cv_updated(x, P, z, kf.r[1])
+        x, P = cv_updated(x, P, z, kf.r[1])
         np.testing.assert_allclose(kf.state(1)[0], x, rtol=RTOL, atol=ATOL)
         np.testing.assert_allclose(kf.state(1)[1], P, rtol=RTOL, atol=ATOL)
-    assert np.array_equal(E.kf2_z(np.arange(6.0)), [5.0, 4.0])  # eq. 8: (h, w)
+    assert np.array_equal(kf2_z(np.arange(6.0)), [5.0, 4.0])  # eq. 8: (h, w)
 
 
 def test_section_4_2_update_kernels_equal_the_equations():
     """The model update (PBM 4.2): ``Targets.update`` (global DOF, ratios, eqs. 1-2) and
     ``update_parts`` (running averages, frozen parts, rectangles) against
-    ``equations.update_global`` and ``equations.update_parts``."""
+    ``model_update.update_global`` and ``model_update.update_parts``."""
     from occbench.trackers.layered.dynamics import Gate
-    from occbench.trackers.layered.targets import Targets, update_parts
+    from occbench.trackers.layered import targets as T
 
     rng = np.random.default_rng(12)
     ex = PartFeatureExtractor()
     ex.start(rng.integers(0, 255, (160, 200, 3), dtype=np.uint8), rng.random((160, 200)) < 0.6)
-    tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 4.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
+    tg = T.Targets(Gate(3.0, 0.5, 2.0, 1.15, 4.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     box = np.array([50.0, 20.0, 40.0, 110.0])
     tg.add(1, np.r_[box[:2], box[:2] + [20.0, 50.0], box[2:]], 0.5, 0.5, ex.extract(box[None]), None)
     window, ratio_window = [tg.dof[0].copy()], [[0.5, 0.5]]
@@ -102,12 +106,12 @@ def test_section_4_2_update_kernels_equal_the_equations():
         occluded = k in (3, 4)
         dof = tg.dof[0] + np.r_[rng.normal(0, 2, 4), rng.normal(0, 1, 2)]
         window = (window + [dof])[-3:]
-        want, ab = E.update_global(np.array(window), dof, occluded, np.array(ratio_window[-3:]))
+        want, ab = update_global(np.array(window), dof, occluded, np.array(ratio_window[-3:]))
         tg.predict()
         tg.update([0], [dof], [True], [occluded], np.ones((1, N_PARTS)), 0.4)
         np.testing.assert_allclose(tg.dof[0], want, rtol=RTOL, atol=ATOL)
         if ab is not None:
-            a, b = E.centroid_ratios(want[[0, 1, 4, 5]], want[2:4])    # eqs. 1-2
+            a, b = centroid_ratios(want[[0, 1, 4, 5]], want[2:4])    # eqs. 1-2
             ratio_window.append([a[0], b[0]])
             np.testing.assert_allclose([tg.alpha[0], tg.beta[0]], ab, rtol=RTOL, atol=ATOL)
     boxes = np.column_stack([rng.uniform(0, 150, 7), rng.uniform(0, 60, 7), rng.uniform(10, 50, 7),
@@ -119,10 +123,10 @@ def test_section_4_2_update_kernels_equal_the_equations():
     relearn[1, 2] = True
     shift, new_boxes = rng.normal(0, 2, (2, 2)), boxes[[1, 5]] + 1.0
     alpha, beta = rng.uniform(0.3, 0.7, 2), rng.uniform(0.3, 0.7, 2)
-    want = [E.update_parts(model.take(r), cand.take(k), pj[q], 0.4, 0.3, shift[q], new_boxes[q],
+    want = [update_parts(model.take(r), cand.take(k), pj[q], 0.4, 0.3, shift[q], new_boxes[q],
                            alpha[q], beta[q], relearn[q], 0.8)
             for q, (r, k) in enumerate(zip(rows, ks))]
-    update_parts(model, rows, cand, ks, pj, 0.4, 0.3, shift, new_boxes, alpha, beta, relearn, 0.8)
+    T.update_parts(model, rows, cand, ks, pj, 0.4, 0.3, shift, new_boxes, alpha, beta, relearn, 0.8)
     for q, r in enumerate(rows):
         for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid", "height"):
             np.testing.assert_allclose(getattr(model, name)[r], getattr(want[q], name)[0],
@@ -133,7 +137,7 @@ def test_section_4_2_update_kernels_equal_the_equations():
 def test_eq1_2_kernels_equal_the_equations():
     """The part split (``_part_rects``), the ratios (``_centroid_ratios``) and the DOF
     under occlusion (``_dof_from_head``, in ``carved_rows``) against eqs. 1-2."""
-    from occbench.trackers.layered._kernels import carved_rows
+    from occbench.trackers.layered.gating import carved_rows
 
     rng = np.random.default_rng(13)
     frame = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)
@@ -143,12 +147,12 @@ def test_eq1_2_kernels_equal_the_equations():
     ex = PartFeatureExtractor()
     ex.start(frame, None)
     np.testing.assert_allclose(ex.extract(boxes, alpha, beta).parts,
-                               E.part_boxes(boxes, alpha, beta), rtol=RTOL, atol=ATOL)  # eqs. 1-2
+                               part_boxes(boxes, alpha, beta), rtol=RTOL, atol=ATOL)  # eqs. 1-2
     heads = np.column_stack([rng.uniform(0, 150, 6), rng.uniform(0, 50, 6), np.full(6, 8.0)])
     p, pj = rng.random(6), rng.random((6, N_PARTS))
     ti = np.arange(6)
     kept, _, _, k, dof = carved_rows(p, pj, boxes, heads, ti, alpha, beta, np.zeros(0, np.intp),
                                      np.arange(6), 1)
     assert kept.all() and np.array_equal(k, np.arange(6))
-    np.testing.assert_allclose(dof, E.dof_from_head(heads, boxes[:, 2], boxes[:, 3], alpha, beta),
+    np.testing.assert_allclose(dof, dof_from_head(heads, boxes[:, 2], boxes[:, 3], alpha, beta),
                                rtol=RTOL, atol=ATOL)

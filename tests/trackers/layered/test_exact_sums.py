@@ -1,5 +1,5 @@
 """The shortcuts of the eq. 11-12 kernels give the bits of the plain sums, not only values
-within a tolerance: rho summed over the occupied bins only (``_kernels.rho_bins``), eq. 12
+within a tolerance: rho summed over the occupied bins only (``differences.rho_bins``), eq. 12
 with p(x | theta) recalled for a repeated x (``layered_scores``), and the search's boxes
 scored as they are measured (``association.box_scores``)."""
 
@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pbm_scenes import random_models
 
-from occbench.trackers.layered._kernels import rho_bins
 from occbench.trackers.layered.association import layered_scores
+from occbench.trackers.layered.differences import rho_bins
 from occbench.trackers.layered.feature_models import load_feature_models
 from occbench.trackers.layered.parts import N_FEATURES, N_PARTS
+from pbm_scenes import random_models
 
 
 def _plain_rho(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -157,8 +157,8 @@ def test_box_scores_have_the_bits_of_extract_then_pair_scores(bins, with_fg):
 def test_survival_bounds_bound_every_x_of_their_cell():
     """``survival_bounds``' entry for x's cell is >= p(x | theta) (``FeatureModels``' own
     kernel) at cell edges, just below them, inside cells and beyond x = 1."""
-    from occbench.trackers.layered._kernels import BOUND_CELLS, survival_bounds
     from occbench.trackers.layered.association import _theta
+    from occbench.trackers.layered.scores import BOUND_CELLS, survival_bounds
 
     rng = np.random.default_rng(5)
     for models in (random_models(rng), load_feature_models()):

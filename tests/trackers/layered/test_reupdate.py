@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from occbench.trackers.layered import Adaptations
-from occbench.trackers.layered.dynamics import Gate
-from occbench.trackers.layered.equations import cv_predicted, cv_updated
+from occbench.trackers.layered.dynamics import Gate, cv_predicted, cv_updated
 from occbench.trackers.layered.parts import PartFeatureExtractor
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.rules import build_rules

@@ -11,8 +11,8 @@ import pbm_scenes as S
 import pytest
 import yaml
 from hydra.utils import instantiate
-from omegaconf import OmegaConf
 
+from occbench.config.meta import without_meta
 from occbench.trackers.baseline import BaselineTracker
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered import (
@@ -45,7 +45,7 @@ from occbench.trackers.layered.search import (
 )
 from occbench.trackers.layered.targets import Targets
 from occbench.trackers.records import Detections, TrackState
-from occbench.config.meta import without_meta
+from omegaconf import OmegaConf
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -406,7 +406,6 @@ def test_blobs_equal_opencv_default_labelling():
 
 def test_constant_velocity_filter_equals_matrix_form_and_filterpy():
     from filterpy.kalman import KalmanFilter
-
     from occbench.trackers.layered.dynamics import ConstantVelocity2D
 
     rng = np.random.default_rng(6)
@@ -543,7 +542,7 @@ def test_gated_pairs_equal_the_numpy_gating():
     """The compiled gating (PBM 3), occlusion-test pairs (PBM 3.1) and lone growth against
     numpy expressions, on random scenes with many boundary cases."""
     from occbench.trackers.geometry import overlap_ratio_matrix
-    from occbench.trackers.layered._kernels import gated_pairs
+    from occbench.trackers.layered.gating import gated_pairs
     from occbench.trackers.layered.search import occlusion_kinds
 
     rng = np.random.default_rng(11)
@@ -596,9 +595,8 @@ def test_gated_pairs_equal_the_numpy_gating():
 def test_assign_equals_the_numpy_gated_hungarian():
     """``assign``'s compiled gating against the numpy form it replaces (PBM's one-to-one
     step), on random matrices with ties, +-inf, NaN and every kind of gate."""
-    from scipy.optimize import linear_sum_assignment
-
     from occbench.trackers.common.assignment import assign
+    from scipy.optimize import linear_sum_assignment
 
     def reference(cost, max_cost):
         n, m = cost.shape
@@ -663,7 +661,7 @@ def test_the_tracker_accepts_every_foreground_dtype():
 
 
 def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
-    from occbench.trackers.layered._kernels import alive_rows, matched_rows
+    from occbench.trackers.layered.model_update import alive_rows, matched_rows
 
     rng = np.random.default_rng(9)
     T, N, P = 6, 8, 5
@@ -698,7 +696,7 @@ def test_matched_rows_and_alive_rows_equal_the_numpy_forms():
 
 
 def test_carved_rows_equal_the_numpy_selection_of_searched_and_aligned_boxes():
-    from occbench.trackers.layered._kernels import carved_rows
+    from occbench.trackers.layered.gating import carved_rows
     from occbench.trackers.layered.targets import dofs_from_heads
 
     rng = np.random.default_rng(12)
