@@ -126,9 +126,10 @@ def _stopped(err: BaseException, out_dir: Path) -> NoReturn:
 
     how, status = (("terminated (SIGTERM)", EXIT_SIGTERM) if isinstance(err, Terminated)
                    else ("interrupted (Ctrl-C)", EXIT_SIGINT))
-    kept = (f"what was scored before is in {out_dir} (summary.md says interrupted, "
-            "errors.txt where)" if (out_dir / "summary.md").is_file()
-            else f"nothing was scored ({out_dir})")
+    said = ("summary.md and report.html say" if (out_dir / "report.html").is_file()
+            else "summary.md says")
+    kept = (f"what was scored before is in {out_dir} ({said} interrupted, errors.txt where)"
+            if (out_dir / "summary.md").is_file() else f"nothing was scored ({out_dir})")
     print(f"occbench: {how}: {kept}", file=sys.stderr)
     raise SystemExit(status)
 

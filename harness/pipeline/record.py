@@ -77,7 +77,10 @@ class RunRecord:
         f = Failure(tracker, sequence, stage, msg, trace)
         self.failures.append(f)
         self.writer.failure(f)
-        log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
+        if stage == "interrupted":  # not a failure of the run's: the user stopped it
+            log.warning("%s", msg)
+        else:
+            log.error("%s failed (tracker=%s, sequence=%s): %s", stage, tracker, sequence, msg)
 
     def current(self, state: str) -> pd.DataFrame:
         """The rows of every sequence scored so far, with the ``complete`` column for
@@ -216,6 +219,8 @@ class RunRecord:
             self.publish("interrupted", sname or "*")
         except Exception:
             log.exception("could not mark %s as interrupted", self.writer.out_dir)
+            return
+        self.page("interrupted", sname or "*")  # a second Ctrl-C stops it: the rest stands
 
     def finish(self) -> None:
         """summary.tex, the plots and hota_alpha.csv, then the final metrics.csv and
@@ -262,15 +267,21 @@ class RunRecord:
             self.publish("finished")
         except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
             self.fail("*", "*", "metrics", err, traceback.format_exc())
-        if not plan.report:
+        self.page()
+
+    def page(self, state: str = "finished", sname: str = "*") -> None:
+        """report.html, last: it shows every output above (``report: false``: none). A
+        failure is recorded and summary.md (of ``state``) written again to count it."""
+        if not self.plan.report:
             return
-        try:  # the page of the run, last: it shows every output above
+        try:
             from occbench.report.html import write_run_report
 
-            write_run_report(writer.out_dir, self.frames, plan.title, paired=self.paired)
+            write_run_report(self.writer.out_dir, self.frames, self.plan.title,
+                             paired=self.paired)
         except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
             self.fail("*", "*", "report.html", err, traceback.format_exc())
-            self.publish("finished")  # summary.md counts this failure too
+            self.publish(state, sname)  # summary.md counts this failure too
 
 
 def read_external(name: str, folder: Path, sequence: str, last_frame: int | None = None,

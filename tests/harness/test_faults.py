@@ -540,6 +540,10 @@ def test_an_interrupted_run_says_so(tmp_path, monkeypatch):
     assert "[interrupted]" in (out / "errors.txt").read_text()
     assert "**Incomplete run**: interrupted after 1 of 3 sequences" in (
         out / "summary.md").read_text()
+    # issue 39 item 10: an interrupted run got no report.html; its page says what summary.md
+    # says, over the sequences scored
+    page = (out / "report.html").read_text()
+    assert "<strong>Incomplete run</strong>: interrupted after 1 of 3 sequences" in page
 
 
 def test_a_complete_run_says_so(tmp_path):
@@ -549,6 +553,7 @@ def test_a_complete_run_says_so(tmp_path):
     result = run(mot_cfg(data), out)
     assert result.ok and pd.read_csv(out / "metrics.csv")["complete"].all()
     assert "Incomplete" not in (out / "summary.md").read_text()
+    assert "Incomplete" not in (out / "report.html").read_text()
 
 
 @pytest.mark.parametrize("errno_name", ["ENOSPC", "EACCES"])

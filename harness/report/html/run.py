@@ -35,6 +35,19 @@ SHOWN = ("HOTA", "DetA", "AssA", "IDF1", "MOTA", "MOTP", "Recall", "Precision", 
 PER_SEQUENCE = ("HOTA", "IDF1", "MOTA", "FP", "FN", "IDs")
 
 
+def run_status_line(run_dir: Path) -> tuple[str, str] | None:
+    """summary.md's opening status (``occbench.pipeline.summary.run_status``: an
+    interrupted or partly failed run) as (its bold words, the rest); None for a complete run.
+    Read from summary.md, written before the page, so the page says what summary.md says."""
+    path = run_dir / "summary.md"
+    text = path.read_text(encoding="utf-8") if path.is_file() else ""
+    for line in text.split("\n## ", 1)[0].splitlines():
+        if line.startswith(("**Incomplete run**", "**Partly failed run**")):
+            bold, _, rest = line[2:].partition("**")
+            return bold, rest
+    return None
+
+
 def read_frame_counts(run_dir: Path, iou_threshold: float = 0.5
                       ) -> dict[str, dict[str, FrameCounts]]:
     """tracker -> sequence -> ``FrameCounts`` from the run folder's gt/ and tracks/ (the
@@ -114,6 +127,9 @@ def write_run_report(run_dir: str | Path, frames: Mapping[str, Mapping[str, Fram
     counts = _order(read_frame_counts(run_dir) if frames is None else frames, metrics)
     page = Page(f"occbench run {run_dir.name}" + (f": {title}" if title else ""))
     page.text(f"Run folder: {run_dir.resolve()}")
+    status = run_status_line(run_dir)
+    if status:
+        page.add(f'<p class="status"><strong>{esc(status[0])}</strong>{esc(status[1])}</p>')
     _tables(page, metrics, counted(run_dir, unscored=True))
     diffs = list(paired) if paired is not None else all_pairs(counts)
     if diffs:
