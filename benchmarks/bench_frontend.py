@@ -54,8 +54,8 @@ QUALITY = [
     ("ORACLE: silhouette + gt calibration (1-150)", "silhouette_caviar", []),
     ("foreground blobs + head split", "foreground", []),
     ("HOG+SVM on foreground, person box", "hog", []),
-    ("HOG+SVM on foreground, raw 64x128 window", "hog", ["detector.detector.box_scale=[1.0,1.0]"]),
-    ("HOG+SVM whole frame, person box", "hog", ["detector.detector.full_frame=true"]),
+    ("HOG+SVM on foreground, raw 64x128 window", "hog", ["detector.detector.boxes.box_scale=[1.0,1.0]"]),
+    ("HOG+SVM whole frame, person box", "hog", ["detector.detector.crops.full_frame=true"]),
 ]
 PAPER = [("Reta et al. 2015 detector (paper)", 0.87, 0.62), ("HOG-SVM (paper)", 0.51, 0.43)]
 
@@ -128,10 +128,10 @@ def speed(n_frames: int) -> None:
         size: list[str] = []
         k = scale  # detector sizes scale with the frame
         dets = {}
-        for name, extra in (("foreground", [f"detector.detector.min_area={80 * k * k}",
-                                             f"detector.detector.min_height={20 * k}"]),
+        for name, extra in (("foreground", [f"detector.detector.blobs.min_area={80 * k * k}",
+                                             f"detector.detector.blobs.min_height={20 * k}"]),
                             ("silhouette", [f"detector.detector.matcher.search.downscale={2 * k}"]),
-                            ("hog", [f"detector.detector.min_blob_area={60 * k * k}"])):
+                            ("hog", [f"detector.detector.crops.min_blob_area={60 * k * k}"])):
             cfg = compose_config([f"detector={name}", *size, *extra], config_name="detect")
             dets[name] = instantiate(cfg.detector).detector
         bg = dets["foreground"].background
@@ -151,7 +151,7 @@ def speed(n_frames: int) -> None:
             clean, dt = _timed(bg.clean, raw)
             t["morphology"] += dt
             fg = clean > 0
-            blobs, dt = _timed(blobs_from_mask, fg, dets["foreground"].min_area)
+            blobs, dt = _timed(blobs_from_mask, fg, dets["foreground"].blobs.min_area)
             t["blobs"] += dt
             _d, dt = _timed(dets["foreground"].detect_on, frame, fg, blobs)
             t["foreground det"] += dt

@@ -1,4 +1,6 @@
-"""Person detectors on the foreground: ``foreground`` blobs, ``silhouette`` template, ``hog``.
+"""The silhouette person detector (``SilhouetteDetector``) and what every front-end detector
+shares (``_ForegroundPipeline``); the others: ``foreground.ForegroundDetector`` (blobs),
+``hog.HogDetector`` (HOG + SVM), ``shape_search.ActiveBasisDetector``.
 
 Every detector has ``reset()``, ``warm_up_sequence(length, frame_fn)`` and
 ``detect(frame) -> (Detections, foreground)`` where ``frame`` is (H, W, 3) uint8 BGR and
@@ -12,37 +14,20 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
-import cv2
 import numpy as np
 
 from occbench.trackers.frontend.active_basis import ShapeVerifier
 from occbench.trackers.frontend.background import BackgroundModel
-from occbench.trackers.frontend.blobs import Blob, blobs_from_mask
+from occbench.trackers.frontend.blobs import blobs_from_mask
 from occbench.trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
 from occbench.trackers.frontend.fallback import CameraFitCheck, FitEvidence, RegionDetector
 from occbench.trackers.frontend.heads import HeadDetector
 from occbench.trackers.frontend.silhouette import SilhouetteMatcher
-from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections
 
 log = logging.getLogger(__name__)
-
-
-def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float) -> np.ndarray:
-    """Greedy non-maximum suppression: indices kept, by decreasing score."""
-    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    order = np.argsort(-np.asarray(scores), kind="stable")
-    iou = iou_matrix(boxes, boxes)
-    keep: list[int] = []
-    suppressed = np.zeros(len(boxes), dtype=bool)
-    for i in order:
-        if suppressed[i]:
-            continue
-        keep.append(int(i))
-        suppressed |= iou[i] > iou_threshold
-    return np.array(keep, dtype=np.int64)
 
 
 def _labels_from_boxes(boxes: np.ndarray, fg: np.ndarray) -> np.ndarray:
@@ -88,109 +73,6 @@ class _ForegroundPipeline:
 
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
         raise NotImplementedError
-
-
-class ForegroundDetector(_ForegroundPipeline):
-    """Foreground blobs as people: size and aspect filtered, groups split at heads.
-
-    Args:
-        background: the background model.
-        min_area: smallest blob area, pixels.
-        min_height: smallest person height, pixels.
-        min_aspect: smallest width / height of a person box.
-        max_aspect: largest width / height of a single person; wider blobs are split at the
-            heads found in them (``heads``, when ``split_heads``); a wide blob without two
-            heads stays whole.
-        heads: head detector used to split groups and to report heads (None: no splitting).
-        split_heads: split wide blobs at their heads (ours, ``detector.split_heads``: PBM 2
-            hands blobs to the tracker whole and resolves merges itself, PBM 3.1); false:
-            every blob is one detection.
-        report_heads: attach one head box per detection (``Detections.heads``).
-        person_aspect: typical person width / height, bounds the number of heads searched.
-    """
-
-    def __init__(
-        self,
-        background: BackgroundModel | None = None,
-        min_area: int = 80,
-        min_height: float = 20.0,
-        min_aspect: float = 0.15,
-        max_aspect: float = 0.8,
-        heads: HeadDetector | None = None,
-        report_heads: bool = False,
-        person_aspect: float = 0.4,
-        split_heads: bool = True,
-    ) -> None:
-        super().__init__(background)
-        self.split_heads = bool(split_heads)
-        if min_area < 1 or min_height <= 0:
-            raise ValueError(f"min_area and min_height must be positive, got {min_area}, {min_height}")
-        if not 0 < min_aspect < max_aspect:
-            raise ValueError(f"need 0 < min_aspect < max_aspect, got {min_aspect}, {max_aspect}")
-        self.min_area, self.min_height = int(min_area), float(min_height)
-        self.min_aspect, self.max_aspect = float(min_aspect), float(max_aspect)
-        self.heads, self.report_heads = heads, bool(report_heads)
-        self.person_aspect = float(person_aspect)
-
-    def blobs(self, fg: np.ndarray) -> list[Blob]:
-        return blobs_from_mask(fg, self.min_area, perimeter=False)
-
-    def detect_on(self, frame: np.ndarray, fg: np.ndarray, blobs: list[Blob] | None = None) -> Detections:
-        blobs = self.blobs(fg) if blobs is None else blobs
-        if not blobs:
-            return Detections.empty()
-        labels_in = blobs[0].labels
-        boxes: list[np.ndarray] = []
-        heads: list[np.ndarray] = []
-        labels = np.zeros(fg.shape, dtype=np.int32)
-        for b in blobs:
-            _x, _y, w, h = b.box
-            if h < self.min_height or w / h < self.min_aspect:
-                continue
-            parts = [(b.box, None, None)]
-            if w / h > self.max_aspect and self.heads is not None and self.split_heads:
-                n = int(np.ceil(w / (self.person_aspect * h))) + 1
-                hb = self.heads.heads_in(frame, labels_in == b.label, b.box, max_heads=n)
-                if len(hb) >= 2:
-                    parts = self._split(b, hb)
-            for box, head, (r0, c0, m) in ((p[0], p[1], p[2] or (None, None, None)) for p in parts):
-                k = len(boxes) + 1
-                boxes.append(box)
-                heads.append(np.full(4, np.nan) if head is None else head)
-                if m is None:
-                    labels[labels_in == b.label] = k
-                else:
-                    sub = labels[r0 : r0 + m.shape[0], c0 : c0 + m.shape[1]]
-                    sub[m] = k
-        if not boxes:
-            return Detections.empty()
-        B = np.asarray(boxes, dtype=np.float64)
-        Hd = np.asarray(heads, dtype=np.float64)
-        if self.report_heads and self.heads is not None:
-            missing = ~np.isfinite(Hd).all(axis=1)
-            if missing.any():
-                Hd[missing] = self.heads.detect(frame, fg, B[missing])
-        return Detections(B, np.ones(len(B)), labels, Hd if self.report_heads else None)
-
-    @staticmethod
-    def _split(b: Blob, heads: np.ndarray) -> list:
-        """Split a blob into vertical strips between consecutive head centres."""
-        x, y, w, _h = (int(v) for v in b.box)
-        crop = b.crop_mask()
-        hx = np.sort(heads[:, 0] + heads[:, 2] / 2) - x
-        order = np.argsort(heads[:, 0] + heads[:, 2] / 2)
-        cuts = np.r_[0, np.round((hx[1:] + hx[:-1]) / 2).astype(int), w]
-        parts = []
-        for i in range(len(hx)):
-            m = np.zeros_like(crop)
-            m[:, cuts[i] : cuts[i + 1]] = crop[:, cuts[i] : cuts[i + 1]]
-            rows, cols = np.flatnonzero(m.any(axis=1)), np.flatnonzero(m.any(axis=0))
-            if len(rows) == 0:
-                continue
-            box = np.array([x + cols[0], y + rows[0], cols[-1] - cols[0] + 1, rows[-1] - rows[0] + 1],
-                           dtype=np.float64)
-            parts.append((box, heads[order[i]], (y, x, m)))
-        return parts
 
 
 class SilhouetteDetector(_ForegroundPipeline):
@@ -421,121 +303,3 @@ class SilhouetteDetector(_ForegroundPipeline):
             return Detections.empty()
         heads = None if self.heads is None else self.heads.detect(frame, fg, boxes)
         return Detections(boxes, np.clip(scores, 0.0, 1.0), _labels_from_boxes(boxes, fg), heads)
-
-
-class HogDetector(_ForegroundPipeline):
-    """OpenCV's default HOG + linear SVM people detector (Dalal and Triggs; Reta's baseline),
-    run only on crops around foreground blobs.
-
-    Args:
-        background: the background model.
-        full_frame: ignore the foreground and scan the whole frame.
-        min_blob_area: smallest foreground blob that gets a crop, pixels.
-        margin: crop margin around a blob as a fraction of its height (plus 8 pixels).
-        target_height: crops are resized so that their blob is this many pixels high
-            (HOG's 64x128 window holds a ~96-pixel person; the pyramid then searches larger
-            sizes), by a factor in [``min_scale``, ``max_upscale``].
-        max_upscale: largest resize factor (small people).
-        min_scale: smallest resize factor (large people).
-        hit_threshold: SVM decision threshold (``detectMultiScale`` hitThreshold).
-        win_stride: window stride in pixels of the (upscaled) crop.
-        scale: pyramid scale step.
-        nms_iou: IoU above which overlapping detections (from overlapping crops) are merged.
-        box_scale: [width, height] factors shrinking HOG's window around its centre to the
-            person ([1, 1] keeps the raw 64x128 window).
-        min_foreground: smallest fraction of a (shrunk) box that is foreground.
-    """
-
-    def __init__(
-        self,
-        background: BackgroundModel | None = None,
-        full_frame: bool = False,
-        min_blob_area: int = 60,
-        margin: float = 0.25,
-        target_height: float = 100.0,
-        max_upscale: float = 4.0,
-        min_scale: float = 0.25,
-        hit_threshold: float = 0.0,
-        win_stride: int = 8,
-        scale: float = 1.05,
-        nms_iou: float = 0.4,
-        box_scale: Sequence[float] = (1.0, 1.0),
-        min_foreground: float = 0.0,
-    ) -> None:
-        super().__init__(background)
-        if max_upscale < 1 or target_height <= 0:
-            raise ValueError(f"need max_upscale >= 1 and target_height > 0, got {max_upscale}, {target_height}")
-        if scale <= 1.0:
-            raise ValueError(f"scale must be > 1, got {scale}")
-        self.full_frame = bool(full_frame)
-        self.min_blob_area, self.margin = int(min_blob_area), float(margin)
-        self.target_height, self.max_upscale = float(target_height), float(max_upscale)
-        if not 0 < min_scale <= 1:
-            raise ValueError(f"min_scale must be in (0, 1], got {min_scale}")
-        self.min_scale = float(min_scale)
-        self.hit_threshold, self.win_stride = float(hit_threshold), int(win_stride)
-        self.scale, self.nms_iou = float(scale), float(nms_iou)
-        self.box_scale = np.asarray(box_scale, dtype=np.float64).reshape(2)
-        self.min_foreground = float(min_foreground)
-        self._hog = cv2.HOGDescriptor()
-        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
-
-    def detect(self, frame: np.ndarray) -> tuple[Detections, np.ndarray]:
-        if self.full_frame:
-            fg = np.ones(frame.shape[:2], dtype=bool)
-            return self.detect_on(frame, fg), fg
-        return super().detect(frame)
-
-    def _run(self, img: np.ndarray, upscale: float) -> tuple[np.ndarray, np.ndarray]:
-        if upscale != 1.0:
-            img = cv2.resize(img, None, fx=upscale, fy=upscale, interpolation=cv2.INTER_LINEAR)
-        ph, pw = max(0, 136 - img.shape[0]), max(0, 72 - img.shape[1])
-        if ph or pw:  # the crop must hold at least one 64x128 window
-            img = cv2.copyMakeBorder(img, ph // 2, ph - ph // 2, pw // 2, pw - pw // 2,
-                                     cv2.BORDER_REPLICATE)
-        rects, weights = self._hog.detectMultiScale(
-            img, hitThreshold=self.hit_threshold, winStride=(self.win_stride, self.win_stride),
-            padding=(8, 8), scale=self.scale,
-        )
-        if len(rects) == 0:
-            return np.zeros((0, 4)), np.zeros(0)
-        r = np.asarray(rects, dtype=np.float64).reshape(-1, 4)
-        r[:, 0] -= pw // 2
-        r[:, 1] -= ph // 2
-        return r / upscale, np.asarray(weights, dtype=np.float64).reshape(-1)
-
-    def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
-        H, W = frame.shape[:2]
-        if self.full_frame:
-            regions = [(0, 0, W, H, 1.0)]
-        else:
-            blobs = blobs_from_mask(fg, self.min_blob_area, perimeter=False)
-            regions = []
-            for b in blobs:
-                x, y, w, h = b.box
-                mg = self.margin * h + 8
-                x0, y0 = int(max(x - mg, 0)), int(max(y - mg, 0))
-                x1, y1 = int(min(x + w + mg, W)), int(min(y + h + mg, H))
-                up = float(np.clip(self.target_height / max(h, 1.0), self.min_scale, self.max_upscale))
-                regions.append((x0, y0, x1, y1, up))
-        boxes, scores = [], []
-        for x0, y0, x1, y1, up in regions:
-            r, w = self._run(frame[y0:y1, x0:x1], up)
-            if len(r):
-                r[:, 0] += x0
-                r[:, 1] += y0
-                boxes.append(r)
-                scores.append(w)
-        if not boxes:
-            return Detections.empty()
-        B, S = np.concatenate(boxes), np.concatenate(scores)
-        c = B[:, :2] + B[:, 2:] / 2
-        B = np.column_stack([c - B[:, 2:] * self.box_scale / 2, B[:, 2:] * self.box_scale])
-        keep = nms(B, S, self.nms_iou)
-        B, S = B[keep], S[keep]
-        if self.min_foreground > 0 and not self.full_frame:
-            frac = np.array([fg[max(int(y), 0):int(y + h), max(int(x), 0):int(x + w)].mean()
-                             if w >= 1 and h >= 1 else 0.0 for x, y, w, h in B])
-            B, S = B[frac >= self.min_foreground], S[frac >= self.min_foreground]
-        scores01 = 1.0 / (1.0 + np.exp(-S))
-        return Detections(B, scores01, _labels_from_boxes(B, fg))

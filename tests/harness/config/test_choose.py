@@ -23,7 +23,7 @@ def test_choose_picks_by_key_else_the_default():
     (["tracker=reta_paper"], ACTIVE_BASIS),             # the paper, detector and all
     ([], SILHOUETTE),                                   # tracker=papers: one shared source
     (["tracker=reta"], SILHOUETTE),
-    (["tracker=reta_paper", "detector=hog"], "occbench.trackers.frontend.detectors.HogDetector"),
+    (["tracker=reta_paper", "detector=hog"], "occbench.trackers.frontend.hog.HogDetector"),
 ])
 def test_reta_table2_detector_follows_the_tracker(overrides, target):
     cfg = compose_config(["+experiment=reta_table2", *overrides])

@@ -115,7 +115,7 @@ def test_label_says_when_detections_used_future_frames():
     """issue 37 item 4: summary and report name the source by its label, which says so."""
     from occbench.sources.frontend import FrontendSource
     from occbench.trackers.frontend.background import BackgroundModel
-    from occbench.trackers.frontend.detectors import ForegroundDetector
+    from occbench.trackers.frontend.foreground import ForegroundDetector
 
     offline = FrontendSource(ForegroundDetector(BackgroundModel(warmup_span="sequence")))
     online = FrontendSource(ForegroundDetector(BackgroundModel(warmup_span="online")))

@@ -7,13 +7,10 @@ import numpy as np
 import pytest
 
 from occbench.trackers.frontend.background import BackgroundModel
-from occbench.trackers.frontend.detectors import (
-    ForegroundDetector,
-    HogDetector,
-    SilhouetteDetector,
-    nms,
-)
+from occbench.trackers.frontend.detectors import SilhouetteDetector
+from occbench.trackers.frontend.foreground import Blobs, ForegroundDetector
 from occbench.trackers.frontend.heads import HeadDetector
+from occbench.trackers.frontend.hog import Boxes, Crops, HogDetector, Scan, nms
 from occbench.trackers.frontend.silhouette import SilhouetteMatcher, fit_height_model
 from occbench.trackers.frontend.silhouette_params import (
     MOVED,
@@ -139,16 +136,16 @@ def test_foreground_detector_splits_a_group_at_its_heads():
         cv2.rectangle(fg, (int(cx - 0.14 * h), int(top + hh)), (int(cx + 0.14 * h), top + h), 1, -1)
         cv2.ellipse(img, (cx, int(top + hh / 2)), (int(hh * 0.4), int(hh / 2)), 0, 0, 360, (130, 160, 210), -1)
         cv2.ellipse(fg, (cx, int(top + hh / 2)), (int(hh * 0.4), int(hh / 2)), 0, 0, 360, 1, -1)
-    det = ForegroundDetector(max_aspect=0.5, heads=HeadDetector(), report_heads=True)
+    det = ForegroundDetector(blobs=Blobs(max_aspect=0.5), heads=HeadDetector(), report_heads=True)
     dets = det.detect_on(img, fg.astype(bool))
     assert len(dets) == 2
     centres = np.sort(dets.boxes[:, 0] + dets.boxes[:, 2] / 2)
     np.testing.assert_allclose(centres, [120, 160], atol=6)
     assert np.isfinite(dets.heads).all()
-    whole = ForegroundDetector(max_aspect=0.5, heads=None).detect_on(img, fg.astype(bool))
+    whole = ForegroundDetector(blobs=Blobs(max_aspect=0.5)).detect_on(img, fg.astype(bool))
     assert len(whole) == 1
     # split_heads off (PBM 2: a blob is one candidate): one box, the head still reported
-    unsplit = ForegroundDetector(max_aspect=0.5, heads=HeadDetector(), report_heads=True,
+    unsplit = ForegroundDetector(blobs=Blobs(max_aspect=0.5), heads=HeadDetector(), report_heads=True,
                                  split_heads=False).detect_on(img, fg.astype(bool))
     assert len(unsplit) == 1 and np.isfinite(unsplit.heads).all()
     np.testing.assert_allclose(unsplit.boxes[0], whole.boxes[0])
@@ -178,22 +175,27 @@ def test_hog_runs_and_returns_frame_coordinates():
     frame, labels = seq.frame(5), seq.foreground(5)
     gt = seq.gt.table.boxes[seq.gt.rows_of(5)]
     big = gt[np.argmax(gt[:, 3])]
-    full = HogDetector(full_frame=True).detect(frame)[0]
-    crop = HogDetector(target_height=128).detect_on(frame, labels > 0)
+    full = HogDetector(crops=Crops(full_frame=True)).detect(frame)[0]
+    crop = HogDetector(crops=Crops(target_height=128)).detect_on(frame, labels > 0)
     assert len(full) >= 1 and len(crop) >= 1
     # the person is found in the crop path at the same frame position as in the full frame
     assert iou_matrix(big[None], crop.boxes).max() > 0.4
     assert iou_matrix(full.boxes, crop.boxes).max() > 0.6
     assert ((crop.scores > 0) & (crop.scores < 1)).all()
-    shrunk = HogDetector(target_height=128, box_scale=(0.5, 0.5)).detect_on(frame, labels > 0)
+    shrunk = HogDetector(crops=Crops(target_height=128),
+                         boxes=Boxes(box_scale=(0.5, 0.5))).detect_on(frame, labels > 0)
     np.testing.assert_allclose(shrunk.boxes[0, 2:], crop.boxes[0, 2:] * 0.5)
 
 
 def test_detector_arguments_validated():
-    with pytest.raises(ValueError, match="min_aspect"):
-        ForegroundDetector(min_aspect=0.9, max_aspect=0.5)
-    with pytest.raises(ValueError, match="scale"):
-        HogDetector(scale=1.0)
+    with pytest.raises(ValueError, match="blobs.max_aspect"):
+        Blobs(min_aspect=0.9, max_aspect=0.5)
+    with pytest.raises(ValueError, match="scan.scale"):
+        Scan(scale=1.0)
+    with pytest.raises(ValueError, match="boxes.box_scale"):
+        Boxes(box_scale=(1.0,))
+    with pytest.raises(TypeError, match="crops: expected a Crops"):
+        HogDetector(crops={"full_frame": True})
     with pytest.raises(ValueError, match="heights.max_height"):
         Heights(min_height=100, max_height=50)
 
@@ -202,10 +204,13 @@ def test_detector_arguments_validated():
     (Person, "aspect"), (Person, "occupy_level"), (Heights, "min_height"),
     (Heights, "max_height"), (Heights, "n_scales"), (Heights, "height_tolerance"),
     (Score, "min_visible"), (Score, "head_contrast"), (Search, "downscale"),
-    (Search, "group_gap"), (Report, "max_overlap")])
-def test_matcher_groups_refuse_nan(kind, field):
+    (Search, "group_gap"), (Report, "max_overlap"), (Blobs, "min_area"), (Blobs, "min_height"),
+    (Blobs, "min_aspect"), (Blobs, "max_aspect"), (Crops, "target_height"),
+    (Crops, "max_upscale"), (Crops, "min_scale"), (Scan, "scale")])
+def test_detector_groups_refuse_nan(kind, field):
     """Every checked number refuses NaN (through ``trackers.common.checks``); before the
-    groups ``height_tolerance`` and ``group_gap`` (written ``x < 1``, ``x < 0``) let it in."""
+    groups ``height_tolerance``, ``group_gap``, ``min_height`` (of blobs), ``target_height``,
+    ``max_upscale`` and ``scale`` (written ``x < 1``, ``x <= 0``, ...) let it in."""
     with pytest.raises(ValueError, match=f"{field} .*got nan"):
         kind(**{field: float("nan")})
 
