@@ -169,19 +169,29 @@ def heartbeat(announce: Callable[[str], None] | None, said: str | Callable[[], s
               first: float, every: float):
     """Within: ``announce(said)`` (``said()`` when callable, asked then) once the block has
     run ``first`` seconds, then a line "still ..." every ``every`` seconds (from a daemon
-    thread) until it ends; nothing said for a block that ends sooner."""
+    thread; ``said()`` again when it has changed) until it ends; nothing said for a block
+    that ends sooner."""
     if announce is None:
         yield
         return
     done = threading.Event()
     start = time.monotonic()
 
+    def now() -> str:
+        return said() if callable(said) else said
+
     def speak() -> None:
         if done.wait(first):
             return
-        announce(said() if callable(said) else said)
+        text = now()
+        announce(text)
         while not done.wait(every):
-            announce(f"still warming up ({time.monotonic() - start:.0f} s)")
+            seconds = time.monotonic() - start
+            if now() != text:  # learnt since (numba began compiling after the first line)
+                text = now()
+                announce(f"still {text} ({seconds:.0f} s)")
+            else:
+                announce(f"still warming up ({seconds:.0f} s)")
 
     thread = threading.Thread(target=speak, name="warm-up heartbeat", daemon=True)
     thread.start()

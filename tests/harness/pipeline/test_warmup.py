@@ -187,6 +187,34 @@ def test_the_warm_up_says_it_compiles_only_when_numba_compiles():
     WarmUp(first=0.05, every=600.0)({"compiles": Compiles}, said.append)
     assert said and "compiling their kernels" in said[0]
 
+    @numba.njit(cache=False)
+    def later(x):
+        return x + 2
+
+    announced, compiled = threading.Event(), threading.Event()
+
+    def heard(text: str) -> None:
+        said.append(text)
+        announced.set()
+        if "compil" in text:
+            compiled.set()
+
+    class CompilesLater(_Counting):  # starts compiling after the first line was said
+        tried = False
+
+        def update(self, frame, detections, foreground=None):
+            if not CompilesLater.tried and announced.wait(60):
+                CompilesLater.tried = True
+                later(1)
+                compiled.wait(10)  # until a line says it compiles (or gives up)
+            return []
+
+    said.clear()
+    WarmUp(first=0.0, every=0.01)({"later": CompilesLater}, heard)
+    assert "compil" not in said[0]  # the first line: nothing compiled yet
+    assert any(t.startswith("still warming up later before timing: compiling their kernels")
+               for t in said[1:]), said  # said once known, not left at 'still warming up'
+
 
 def test_a_tracker_failing_in_the_warm_up_is_left_to_the_run():
     class Failing(_Counting):
