@@ -108,7 +108,8 @@ class VideoSequence(Sequence):
         if self.exact:
             reported, length = length, self._count_frames()
             if reported != length:
-                log.info("%s: %d frames (the container estimates %d)", self.path, length, reported)
+                log.info("%s: %d frames, counted by decoding (its container reports %d, an "
+                         "estimate in this format)", self.path, length, reported)
         elif length <= 0:
             length = self._count_frames()
             log.warning("%s: the container reports no frame count; counted %d frames",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import os
 import pickle
+import re
 from pathlib import Path
 
 import cv2
@@ -324,8 +325,12 @@ def test_caviar_labels_match_appearance_file():
     assert np.array_equal(mot.gt.occluded, seq.gt.occluded)
 
 
-def test_caviar_frames():
-    (seq,) = load_caviar(CAVIAR)
+def test_caviar_frames(caplog):
+    with caplog.at_level("INFO", logger="occbench.datasets.video"):
+        (seq,) = load_caviar(CAVIAR)
+    # issue 39 item 10: '295 frames (the container estimates 3)' read as if 3 were frames
+    assert re.search(r"295 frames, counted by decoding \(its container reports \d+, an "
+                     "estimate in this format\)", caplog.text), caplog.text
     assert (seq.info.width, seq.info.height, seq.info.fps, seq.info.length) == (384, 288, 25.0, 295)
     assert isinstance(seq, VideoSequence) and seq.exact  # the shipped MPEG, counted by decoding
     assert seq.has_pixels
