@@ -16,15 +16,8 @@ from occbench.trackers.three_hypothesis.rules import Rules
 from occbench.trackers.three_hypothesis.state import Branch, Memory, Person, Setting
 from occbench.trackers.three_hypothesis.steps_output import add_node
 from occbench.trackers.three_hypothesis.tentative import clear_measurements
-from occbench.trackers.three_hypothesis.values import (
-    DepthOrder,
-    Match,
-    Matching,
-    Measurements,
-    Occlusions,
-    Predictions,
-    Updated,
-)
+from occbench.trackers.three_hypothesis.values import DepthOrder, Match, Matching, Measurements
+from occbench.trackers.three_hypothesis.values import Occlusions, Predictions, Updated
 
 log = logging.getLogger(__name__)
 
