@@ -13,7 +13,7 @@ from two sources, each optional:
 
 Each patch also gives its mirror image. Background statistics q(r) pool ``--background``
 random boxes (seeded; sizes and places uniform over the frames' person heights) from the
-same frames. The template is learnt by the shared sketch (``active_basis.learn``) and saved
+same frames. The template is learnt by the shared sketch (``active_basis_learn.learn``) and saved
 as ``.npz`` (``ActiveBasis.to_arrays``). The same options give the same bytes.
 
 The shipped ``trackers/frontend/data/active_basis.npz`` was made by
@@ -35,7 +35,8 @@ import numpy as np
 from hydra.utils import instantiate
 
 from occbench.config.build import compose_config
-from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch, learn
+from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch
+from occbench.trackers.frontend.active_basis_learn import learn
 from occbench.trackers.geometry import intersection_matrix
 
 log = logging.getLogger(__name__)

@@ -22,9 +22,9 @@ q(r) (natural-image patches pooled, sect. 3.2):
     score(I) = sum_i [lambda_i MAX_i(I) - log Z(lambda_i)]                     (eq. 22, the sum map)
     Z(lambda) = E_q[exp(lambda h(r))]                                          (eq. 10)
 
-Learning is the shared sketch algorithm (sect. 3.3, Algorithm 1; a matching pursuit over M
-aligned training patches at once): repeatedly pick the element maximising
-sum_m MAX(I_m) at (x, alpha), record each image's own perturbed copy (its local argmax),
+Learning (``active_basis_learn.learn``) is the shared sketch algorithm (sect. 3.3, Algorithm
+1; a matching pursuit over M aligned training patches at once): repeatedly pick the element
+maximising sum_m MAX(I_m) at (x, alpha), record each image's own perturbed copy (its local argmax),
 inhibit in every image the responses of elements overlapping that copy (|<B, B'>|^2 > eps,
 the explaining-away step), and fit lambda_i by maximum likelihood:
 E_{lambda_i}[h] = mean_m h(r_{m,i}) (eq. 16), with Z from the background histogram of h.
@@ -38,11 +38,12 @@ whole response maps (cv2.filter2D) and the max map, which ``score`` equals to fl
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+
+from occbench.trackers.common.checks import at_least, require
 
 TAU = 6.0  # saturation level of the sigmoid h (Wu et al. sect. 3.5)
 H_BINS = 64  # bins of the background histogram of h on [0, TAU]
@@ -64,9 +65,9 @@ class GaborBank:
     gamma: float = 0.5
 
     def __post_init__(self) -> None:
-        if self.n_orient < 2 or self.ksize < 3 or self.ksize % 2 == 0:
-            raise ValueError(f"GaborBank: need n_orient >= 2 and an odd ksize >= 3, got "
-                             f"{self.n_orient}, {self.ksize}")
+        at_least("bank", 2, n_orient=self.n_orient)
+        require("bank.ksize", self.ksize >= 3 and self.ksize % 2 == 1, "must be odd and >= 3",
+                self.ksize)
 
     @property
     def angles(self) -> np.ndarray:
@@ -287,240 +288,3 @@ def crop_patch(grey: np.ndarray, box, size: tuple[int, int], pad: int) -> np.nda
     if out.ndim == 3:  # BGR: grey levels of the patch only, never of the whole frame
         out = cv2.cvtColor(out, cv2.COLOR_BGR2GRAY)
     return out.astype(np.float32)
-
-
-# ---------------------------------------------------------------------- learning
-def background_histogram(patches: list[np.ndarray], bank: GaborBank, size: tuple[int, int],
-                         pad: int) -> np.ndarray:
-    """(H_BINS,) q: histogram (probabilities) of h(r) over every position and orientation of
-    background patches (sect. 3.2: pooled natural-image statistics)."""
-    counts = np.zeros(H_BINS, np.float64)
-    for p in patches:
-        h = sigmoid(response_maps(p, bank, size, pad))
-        counts += np.histogram(h, bins=H_BINS, range=(0.0, TAU))[0]
-    if counts.sum() == 0:
-        raise ValueError("background_histogram: no background patches")
-    return counts / counts.sum()
-
-
-def fit_lambda(mean_h: float, q: np.ndarray) -> tuple[float, float]:
-    """(lambda, log Z(lambda)) with E_lambda[h] = mean_h (eq. 16), E and Z under q (eq. 10)."""
-    centres = (np.arange(H_BINS) + 0.5) * TAU / H_BINS
-    lams = np.linspace(0.0, 20.0, 4001)
-    w = q[None, :] * np.exp(lams[:, None] * centres[None, :])
-    z = w.sum(axis=1)
-    expect = (w * centres[None, :]).sum(axis=1) / z  # increasing in lambda
-    lam = float(np.interp(mean_h, expect, lams))
-    log_z = float(np.log((q * np.exp(lam * centres)).sum()))
-    return lam, log_z
-
-
-def inhibition_masks(bank: GaborBank, eps: float) -> np.ndarray:
-    """(A, A, 2k - 1, 2k - 1) bool: element (0, a) inhibits (offset, a') when the squared
-    correlation of the normalised pairs, |<B_a, B_a',offset>|^2, exceeds ``eps`` (Algorithm 1)."""
-    K = bank.kernels().astype(np.float64)
-    A, k = bank.n_orient, bank.ksize
-    out = np.zeros((A, A, 2 * k - 1, 2 * k - 1), bool)
-    for a in range(A):
-        za = K[a, 0] + 1j * K[a, 1]
-        pa = np.pad(za, k - 1)
-        for b in range(A):
-            zb = K[b, 0] + 1j * K[b, 1]
-            win = np.lib.stride_tricks.sliding_window_view(pa, (k, k))  # (2k-1, 2k-1, k, k)
-            corr = np.abs(np.einsum("ijkl,kl->ij", win, np.conj(zb))) ** 2 / 4.0  # |za|^2 |zb|^2 = 4
-            out[a, b] = corr > eps
-    return out
-
-
-def learn(
-    patches: list[np.ndarray],
-    background: list[np.ndarray],
-    size: tuple[int, int] = (48, 20),
-    n_elements: int = 30,
-    bank: GaborBank | None = None,
-    b1: int = 2,
-    b2: int = 1,
-    eps: float = 0.1,
-) -> ActiveBasis:
-    """Shared sketch (Wu et al. Algorithm 1) over aligned person patches.
-
-    Args:
-        patches: M (H + 2 pad, W + 2 pad) grey patches (``crop_patch`` of people's boxes).
-        background: grey patches of the same shape for the background statistics q.
-        size: (H, W) template box.
-        n_elements: n, elements selected.
-        bank: Gabor scale and orientations.
-        b1, b2: shift (pixels along the normal) and turn (orientation steps) ranges.
-        eps: correlation above which a selected element inhibits others (explaining away).
-    Returns:
-        the template; deterministic for the same inputs.
-    """
-    bank = bank or GaborBank()
-    pad = b1 + bank.ksize // 2
-    if not patches:
-        raise ValueError("learn: no training patches")
-    q = background_histogram(background, bank, size, pad)
-    A = bank.n_orient
-    # r_m: (M, A, H + 2 b1, W + 2 b1) normalised energies of every training image
-    R = np.stack([response_maps(np.asarray(p, np.float32), bank, size, pad) for p in patches])
-    hR = sigmoid(R)
-    off = shift_offsets(bank, b1)
-    inhibit = inhibition_masks(bank, eps)
-    k1 = bank.ksize - 1
-    rows, cols, orient, lam, log_z = [], [], [], [], []
-    M = len(patches)
-    for _ in range(n_elements):
-        mx = max_map(hR, bank, b1, b2)  # (M, A, H, W) eq. 25
-        total = mx.sum(axis=0)  # sum_m MAX(I_m) at (x, alpha)
-        a, y, x = np.unravel_index(int(np.argmax(total)), total.shape)
-        rows.append(int(y)), cols.append(int(x)), orient.append(int(a))
-        # each image's own perturbed copy: the argmax over shifts and turns
-        cand = [((a + t) % A, b1 + y + dy, b1 + x + dx) for dy, dx in off[a] for t in range(-b2, b2 + 1)]
-        ca, cy, cx = (np.asarray(v) for v in zip(*cand))
-        vals = hR[:, ca, cy, cx]  # (M, candidates)
-        best = vals.argmax(axis=1)
-        mean_h = float(vals[np.arange(M), best].mean())
-        lm, lz = fit_lambda(mean_h, q)  # eq. 16
-        lam.append(lm), log_z.append(lz)
-        # explaining away: inhibit what overlaps each image's chosen copy
-        Hm, Wm = hR.shape[-2:]
-        for m in range(M):
-            am, ym, xm = int(ca[best[m]]), int(cy[best[m]]), int(cx[best[m]])
-            r0, c0 = ym - k1, xm - k1
-            rs = slice(max(r0, 0), min(ym + k1 + 1, Hm))
-            cs = slice(max(c0, 0), min(xm + k1 + 1, Wm))
-            mrs = slice(rs.start - r0, rs.stop - r0)
-            mcs = slice(cs.start - c0, cs.stop - c0)
-            for b in range(A):
-                sub = hR[m, b, rs, cs]
-                sub[inhibit[am, b][mrs, mcs]] = 0.0
-    return ActiveBasis(size, np.asarray(rows), np.asarray(cols), np.asarray(orient), np.asarray(lam),
-                       np.asarray(log_z), bank, b1, b2, q)
-
-
-class ShapeVerifier:
-    """Candidate boxes scored by an active-basis template (Reta 3.1's shape filter).
-
-    A candidate is kept when its log-likelihood ratio (eq. 22) is at least ``threshold``.
-    A candidate wider than ``split_width`` times a person of its height (the template box's
-    aspect) is also tried as two people of that width at its left and right edges: when
-    both score at least ``threshold`` and together more than the wide box, the two replace
-    it (a merged group split by shape evidence).
-
-    ``propose`` searches the foreground no kept box explains (Reta 3.1: the search repeats
-    on the vacant foreground): each of its components large enough gets the box of a person
-    whose head is at the component's top, of the size the scene's calibration expects
-    there, kept when its score is at least ``propose_above`` (a person whose blob merged
-    with another's, e.g. a far person above a near one).
-
-    Args:
-        template: the learnt ``ActiveBasis`` (built by the harness from a file).
-        threshold: smallest score of a candidate kept (None: keep every candidate).
-        split_width: width / (template aspect x height) above which a split is tried
-            (None: never).
-        propose_above: smallest score of a proposed box (None: no proposals).
-        propose_fill: smallest foreground area of a component searched, as a fraction of
-            the expected person box's area at its row.
-    """
-
-    def __init__(self, template: ActiveBasis, threshold: float | None = 0.0,
-                 split_width: float | None = None, propose_above: float | None = None,
-                 propose_fill: float = 0.15) -> None:
-        if not isinstance(template, ActiveBasis):
-            raise TypeError(f"template must be an ActiveBasis, got {type(template).__name__}")
-        if split_width is not None and not split_width > 1.0:
-            raise ValueError(f"split_width must be > 1 or None, got {split_width}")
-        if not 0.0 < propose_fill <= 1.0:
-            raise ValueError(f"propose_fill must be in (0, 1], got {propose_fill}")
-        self.template = template
-        self.threshold = -np.inf if threshold is None else float(threshold)
-        self.split_width = np.inf if split_width is None else float(split_width)
-        self.propose_above = None if propose_above is None else float(propose_above)
-        self.propose_fill = float(propose_fill)
-
-    def scores(self, grey: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-        """(N,) scores of (N, 4) xywh boxes in a (rows, cols) grey or BGR image."""
-        t = self.template
-        boxes = np.asarray(boxes).reshape(-1, 4)
-        if not len(boxes):
-            return np.zeros(0)
-        return t.scores(np.stack([crop_patch(grey, b, t.size, t.pad) for b in boxes])).astype(np.float64)
-
-    def __call__(self, frame: np.ndarray, boxes: np.ndarray, scores: np.ndarray,
-                 ) -> tuple[np.ndarray, np.ndarray]:
-        """Kept (and split) boxes (K, 4) xywh and their detector scores (K,) (a split box's
-        halves keep the wide box's) of one (H, W, 3) BGR or (H, W) grey frame."""
-        boxes = np.asarray(boxes, np.float64).reshape(-1, 4)
-        if not len(boxes) or (self.threshold == -np.inf and self.split_width == np.inf):
-            return boxes, np.asarray(scores, np.float64).reshape(-1)  # nothing to decide
-        grey = frame  # grey or BGR: crop_patch converts the patches only
-        s = self.scores(grey, boxes)
-        H, W = self.template.size
-        aspect = W / H
-        out, out_s = [], []
-        for b, sc, ls in zip(boxes, scores, s):
-            x, y, w, h = b
-            wp = aspect * h
-            if w > self.split_width * wp:
-                halves = np.array([[x, y, wp, h], [x + w - wp, y, wp, h]])
-                hs = self.scores(grey, halves)
-                if (hs >= self.threshold).all() and hs.sum() > ls:
-                    out.extend(halves), out_s.extend([sc, sc])
-                    continue
-            if ls >= self.threshold:
-                out.append(b), out_s.append(sc)
-        if not out:
-            return np.zeros((0, 4)), np.zeros(0)
-        return np.asarray(out, np.float64), np.asarray(out_s, np.float64)
-
-    def vacant(self, fg: np.ndarray, boxes: np.ndarray,
-               area: tuple[int, int, int, int] | None = None) -> np.ndarray:
-        """(H, W) bool: foreground of the (H, W) mask ``fg`` outside the xywh ``boxes`` (the
-        people found), opened by 3x3; only inside ``area`` (rows r0:r1, cols c0:c1) if given.
-        Empty without ``propose_above`` (nothing is proposed)."""
-        if self.propose_above is None:
-            return np.zeros(fg.shape, bool)
-        out = np.zeros(fg.shape, np.uint8)
-        r0, r1, c0, c1 = area if area is not None else (0, fg.shape[0], 0, fg.shape[1])
-        out[r0:r1, c0:c1] = fg[r0:r1, c0:c1]
-        for x, y, w, h in np.asarray(boxes, np.float64).reshape(-1, 4):
-            out[max(int(y), 0) : max(int(np.ceil(y + h)), 0), max(int(x), 0) : max(int(np.ceil(x + w)), 0)] = 0
-        return cv2.morphologyEx(out, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8)) > 0
-
-    def propose(self, frame: np.ndarray, vacant: np.ndarray,
-                person_size: Callable[[float], tuple[float, float] | None],
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """Boxes (K, 4) xywh and shape scores (K,) of people on the (H, W) bool ``vacant``
-        foreground (none without ``propose_above``). ``person_size(top_row)`` gives the
-        (width, height) of a person's box whose top is at that row (None: nobody fits),
-        growing down the picture (a camera above the floor)."""
-        if self.propose_above is None or not vacant.any():
-            return np.zeros((0, 4)), np.zeros(0)
-        # components on every second row and column (4x fewer pixels; sizes scaled back),
-        # inside the bounding box of what is left
-        half = vacant[::2, ::2]
-        rows, cols = np.flatnonzero(half.any(axis=1)), np.flatnonzero(half.any(axis=0))
-        if not len(rows):
-            return np.zeros((0, 4)), np.zeros(0)
-        r0, c0 = int(rows[0]), int(cols[0])
-        _, lab, stats, _ = cv2.connectedComponentsWithStats(
-            np.ascontiguousarray(half[r0 : rows[-1] + 1, c0 : cols[-1] + 1], dtype=np.uint8), connectivity=8)
-        smallest = person_size(0.0)  # people are smallest at the top of the picture
-        min_area = self.propose_fill * smallest[0] * smallest[1] / 4 if smallest is not None else 0.0
-        cands = []
-        for i in np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= min_area):
-            if i == 0:
-                continue
-            x, top, w, _h, area = (int(v) for v in stats[i])  # in the crop of ``half``
-            size = person_size(2.0 * (top + r0))
-            if size is None or 4 * area < self.propose_fill * size[0] * size[1]:
-                continue
-            head = lab[top : top + max(int(size[1] * 0.15 / 2), 1), x : x + w] == i  # top 1/7: the head
-            cx = 2.0 * (c0 + x + float(np.nonzero(head)[1].mean())) + 0.5
-            cands.append([cx - size[0] / 2, 2.0 * (top + r0), size[0], size[1]])
-        if not cands:
-            return np.zeros((0, 4)), np.zeros(0)
-        boxes = np.asarray(cands, np.float64)
-        s = self.scores(frame, boxes)
-        keep = s >= self.propose_above
-        return boxes[keep], s[keep]

@@ -18,12 +18,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from occbench.trackers.frontend.active_basis import ShapeVerifier
+from occbench.trackers.common.checks import at_least, require
 from occbench.trackers.frontend.background import BackgroundModel
 from occbench.trackers.frontend.blobs import blobs_from_mask
 from occbench.trackers.frontend.calibration import Perspective, PerspectiveCalibration, active_area
 from occbench.trackers.frontend.fallback import CameraFitCheck, FitEvidence, RegionDetector
 from occbench.trackers.frontend.heads import HeadDetector
+from occbench.trackers.frontend.shape_verifier import ShapeVerifier
 from occbench.trackers.frontend.silhouette import SilhouetteMatcher
 from occbench.trackers.records import Detections
 
@@ -103,7 +104,7 @@ class SilhouetteDetector(_ForegroundPipeline):
         calibration_evidence: "fits" (template fits without a size prior; the line is then
             in the template's own units, as the matcher uses it) or "blobs" (isolated
             person-like blobs).
-        verifier: optional shape verifier (``active_basis.ShapeVerifier``: Reta 3.1's
+        verifier: optional shape verifier (``shape_verifier.ShapeVerifier``: Reta 3.1's
             active-basis template of Gabor elements on the frame's grey levels) that keeps,
             drops or splits the matcher's boxes.
         fit_check: the ``fallback.CameraFitCheck`` judging, after the calibration, whether
@@ -132,11 +133,10 @@ class SilhouetteDetector(_ForegroundPipeline):
         self.verifier = verifier
         self.heads = heads
         self.calibration = calibration
-        if calibration_frames < 0:
-            raise ValueError(f"calibration_frames must be >= 0, got {calibration_frames}")
+        at_least("detector", 0, calibration_frames=calibration_frames)
         self.calibration_frames = int(calibration_frames)
-        if calibration_evidence not in ("fits", "blobs"):
-            raise ValueError(f"calibration_evidence must be 'fits' or 'blobs', got {calibration_evidence!r}")
+        require("detector.calibration_evidence", calibration_evidence in ("fits", "blobs"),
+                "must be 'fits' or 'blobs'", calibration_evidence)
         self.calibration_evidence = calibration_evidence
         self.reset()
 

@@ -11,8 +11,10 @@ from hydra.utils import instantiate
 from occbench.datasets.synthetic import load_scenario
 from occbench.fit.active_basis import collect, load, save
 from occbench.config.build import compose_config
-from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, ShapeVerifier, crop_patch, learn
+from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch
+from occbench.trackers.frontend.active_basis_learn import learn
 from occbench.trackers.frontend.detectors import SilhouetteDetector
+from occbench.trackers.frontend.shape_verifier import ShapeVerifier
 
 SIZE = (48, 20)
 PAD = 2 + GaborBank().ksize // 2
@@ -86,8 +88,14 @@ def test_crop_patch_shape_and_border():
 def test_bad_inputs_are_named(tmp_path):
     with pytest.raises(FileNotFoundError, match="nothere.npz"):
         load(tmp_path / "nothere.npz")
-    with pytest.raises(ValueError, match="split_width"):
+    with pytest.raises(ValueError, match="verifier.split_width"):
         ShapeVerifier(load(), split_width=0.5)
+    with pytest.raises(ValueError, match="verifier.propose_fill"):
+        ShapeVerifier(load(), propose_fill=float("nan"))
+    with pytest.raises(ValueError, match="bank.ksize"):
+        GaborBank(ksize=10)
+    with pytest.raises(ValueError, match="bank.n_orient"):
+        GaborBank(n_orient=1)
     with pytest.raises(TypeError, match="template"):
         ShapeVerifier("not a template")  # type: ignore[arg-type]
     t = load()

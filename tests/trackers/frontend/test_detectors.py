@@ -196,6 +196,10 @@ def test_detector_arguments_validated():
         Boxes(box_scale=(1.0,))
     with pytest.raises(TypeError, match="crops: expected a Crops"):
         HogDetector(crops={"full_frame": True})
+    with pytest.raises(ValueError, match="detector.calibration_frames"):
+        SilhouetteDetector(calibration_frames=-1)
+    with pytest.raises(ValueError, match="detector.calibration_evidence"):
+        SilhouetteDetector(calibration_evidence="boxes")
     with pytest.raises(ValueError, match="heights.max_height"):
         Heights(min_height=100, max_height=50)
 
