@@ -101,7 +101,13 @@ class Adaptations:
         lone_shrink: a detection smaller than a target's prediction (PBM 3.1's size test)
             is the target at its own size, not partly occluded, unless another live
             target's box covers this share of its aligned predicted-size box
-            (``rules.LoneShrink``; 0: off, the paper's partial occlusion).
+            (``smaller.LoneShrink``; 0: off, the paper's partial occlusion).
+        lone_shrink_shape: with ``lone_shrink``, the detection is the target at its own
+            size only when its height / width is at least this x the prediction's (a whole
+            person, not a piece of one; 0: any shape).
+        border_exit: an unfound target whose last match was occluded (PBM 3.1) with its box
+            at an image border is gone after ``exit_misses`` frames (``exits.BorderExit``;
+            paper: never, only after ``life_cycle.max_misses``).
         held_detections: a blob holding a detection (``search.overlap`` of its box inside)
             whose head is none of the blob's is never one target grown (``lone_growth``),
             ``candidates.HeldDetections`` (paper: off; lone growth is ours).
@@ -152,6 +158,8 @@ class Adaptations:
     profile_heads: bool = True
     held_detections: bool = False
     lone_shrink: float = 0.0
+    lone_shrink_shape: float = 0.0
+    border_exit: bool = False
     one_to_one: bool = True
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
@@ -170,6 +178,11 @@ class Adaptations:
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
                  reupdate=self.reupdate)
+        require("adaptations.lone_shrink_shape", self.lone_shrink_shape >= 0, "must be >= 0",
+                self.lone_shrink_shape)
+        require("adaptations.lone_shrink_shape",
+                self.lone_shrink_shape == 0 or self.lone_shrink > 0,
+                "needs adaptations.lone_shrink > 0", self.lone_shrink_shape)
         require("adaptations.contested_template",
                 self.contested_template == 0 or self.contested_template >= 1,
                 "must be 0 (off) or >= 1", self.contested_template)
@@ -184,12 +197,12 @@ class Adaptations:
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support", "rival_match", "contested_template",
-                                       "lone_shrink"),
+                                       "lone_shrink", "lone_shrink_shape"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
-                                       "one_to_one"),
+                                       "one_to_one", "border_exit"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int})
@@ -203,6 +216,7 @@ class Adaptations:
                    exit_margin=float(UNBOUNDED), report_predicted=False, gap_division=False,
                    hold_size=False, blob_box_ratio=False, several_heads_merge=False,
                    profile_heads=False, held_detections=False, lone_shrink=0.0,
+                   lone_shrink_shape=0.0, border_exit=False,
                    one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0)

@@ -4,7 +4,8 @@
 constructor, so ``PBMTracker.update`` calls a rule instead of testing a flag. Each pair
 names the step of PBM it replaces; ``docs/adaptations.md`` gives the evidence. (Stale
 parts are ``adaptations.StaleParts`` or None; the pruning adaptations live in
-``selection.MultipleResponsePruning``, the blob-head ones in ``candidates``.) Boxes are
+``selection.MultipleResponsePruning``, the blob-head ones in ``candidates``, PBM 3.1's
+smaller region in ``smaller``, the exits in ``exits``.) Boxes are
 (N, 4) float64 xywh pixels.
 """
 
@@ -19,9 +20,11 @@ from occbench.trackers.common.assignment import assign
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.evidence import HiddenEvidence, box_foreground
+from occbench.trackers.layered.exits import BorderExit, PredictedExit
 from occbench.trackers.layered.parts import PartFeatures
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
+from occbench.trackers.layered.smaller import LoneShrink, OccludedSmaller
 from occbench.trackers.layered.targets import Targets
 
 # --------------------------------------------------------------- eq. 11: the model compared
@@ -316,52 +319,6 @@ class TemplateContest:
             S[[t for j, t in enumerate(fresh) if j != k], n] = -np.inf
 
 
-# --------------------------------------------------------------- PBM 3.1: a smaller region
-
-
-class OccludedSmaller:
-    """PBM 3.1 as written: a region smaller than the prediction by more than the occlusion
-    threshold is the target partly occluded; its predicted-size box is aligned on the head."""
-
-    def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, pred_wh: np.ndarray,
-              present: np.ndarray) -> None:
-        """Leaves ``kinds`` (T, N) as the size test set them."""
-
-
-@dataclass(frozen=True)
-class LoneShrink:
-    """``lone_shrink``: a detection smaller than target t's prediction (kind -1) is t
-    partly occluded only when an occluder is there: another ``present`` target whose box
-    covers at least ``cover`` of t's predicted-size box aligned on the detection's head;
-    without one it is t at its own size (kind 0, taken as measured), the mirror of
-    ``lone_growth``. A target whose size grew wrongly (a blob spanning two people taken as
-    one) otherwise keeps that size on every later detection of its person. Blobs keep
-    PBM 3.1's reading (their foreground may lack a person's legs)."""
-
-    cover: float
-
-    def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, pred_wh: np.ndarray,
-              present: np.ndarray) -> None:
-        """Sets kinds[t, n] = 0 in place where the smaller detection n has no occluder of t."""
-        ti, n = np.nonzero((kinds < 0) & ~cand.blob[None, :])
-        if not len(ti):
-            return
-        w, h = pred_wh[ti, 0], pred_wh[ti, 1]
-        head = cand.head[n]
-        aligned = np.column_stack([head[:, 0] - targets.alpha[ti] * w, head[:, 1], w, h])
-        boxes = targets.dof[:, [0, 1, 4, 5]]
-        x0 = np.maximum(aligned[:, None, 0], boxes[None, :, 0])
-        x1 = np.minimum(aligned[:, None, 0] + w[:, None], (boxes[:, 0] + boxes[:, 2])[None])
-        y0 = np.maximum(aligned[:, None, 1], boxes[None, :, 1])
-        y1 = np.minimum(aligned[:, None, 1] + h[:, None], (boxes[:, 1] + boxes[:, 3])[None])
-        inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)  # (P, T)
-        share = inter / np.maximum(w * h, 1e-9)[:, None]
-        share[np.arange(len(ti)), ti] = 0.0  # not its own occluder
-        share[:, ~present] = 0.0
-        lone = share.max(axis=1) < self.cover
-        kinds[ti[lone], n[lone]] = 0
-
-
 class Rules(NamedTuple):
     """One strategy per step an adaptation changes."""
 
@@ -377,6 +334,7 @@ class Rules(NamedTuple):
     reupdate: AfterPrediction | ReUpdate
     contest: NoContest | TemplateContest  # a candidate several targets may take (PBM 4.1)
     smaller: OccludedSmaller | LoneShrink  # a region smaller than predicted (PBM 3.1)
+    exit: PredictedExit | BorderExit  # an unfound target that left the picture (ours)
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -396,5 +354,7 @@ def build_rules(a: Adaptations) -> Rules:
         reupdate=ReUpdate(a.reupdate) if a.reupdate > 0 else AfterPrediction(),
         contest=(TemplateContest(a.contested_template, a.prune_max_misses)
                  if a.contested_template > 0 else NoContest()),
-        smaller=LoneShrink(a.lone_shrink) if a.lone_shrink > 0 else OccludedSmaller(),
+        smaller=(LoneShrink(a.lone_shrink, a.lone_shrink_shape) if a.lone_shrink > 0
+                 else OccludedSmaller()),
+        exit=BorderExit() if a.border_exit else PredictedExit(),
     )

@@ -353,6 +353,9 @@ class PBMTracker:
         alive = alive_rows(targets.dof, targets.predicted_shift(), targets.misses,
                            targets.confirmed, W, H, a.exit_margin, self.life_cycle.max_misses,
                            a.exit_misses)
+        gone = self.rules.exit.gone(targets, W, H)  # adaptations.border_exit
+        if gone is not None:
+            alive &= ~(gone & (targets.misses >= max(a.exit_misses, 1)))
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
 

@@ -5,9 +5,11 @@ target at its own size unless another live target covers its aligned predicted b
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from occbench.trackers.layered.adaptations import Adaptations
-from occbench.trackers.layered.rules import LoneShrink, OccludedSmaller, build_rules
+from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.layered.smaller import LoneShrink, OccludedSmaller
 from occbench.trackers.layered.search import Candidates
 
 
@@ -49,3 +51,27 @@ def test_blobs_and_the_paper_keep_pbm_31():
     assert isinstance(build_rules(Adaptations.paper()).smaller, OccludedSmaller)
     assert isinstance(build_rules(Adaptations()).smaller, OccludedSmaller)  # off by default
     assert isinstance(build_rules(Adaptations(lone_shrink=0.3)).smaller, LoneShrink)
+
+
+def test_shape_keeps_pbm_31_for_a_piece_of_a_person():
+    """With ``lone_shrink_shape``, a smaller detection as wide as it is tall (a head-high
+    sliver) is not the target at its own size; a whole person's shape (20 x 60 against a
+    40 x 160 prediction: h/w 3 against 4) still is."""
+    kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+    LoneShrink(0.3, shape=0.5).apply(kinds, cand, targets, pred, np.array([True, True]))
+    assert kinds.tolist() == [[0], [0]]
+    kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+    sliver = np.array([[105.0, 50.0, 12.0, 12.0]])
+    cand = Candidates(sliver, sliver.copy(), cand.head, cand.blob, np.array([1]))
+    LoneShrink(0.3, shape=0.5).apply(kinds, cand, targets, pred, np.array([True, True]))
+    assert kinds.tolist() == [[-1], [0]]
+    kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+    cand = Candidates(sliver, sliver.copy(), cand.head, cand.blob, np.array([1]))
+    LoneShrink(0.3).apply(kinds, cand, targets, pred, np.array([True, True]))  # any shape
+    assert kinds.tolist() == [[0], [0]]
+    assert build_rules(Adaptations(lone_shrink=0.3, lone_shrink_shape=0.5)).smaller.shape == 0.5
+
+
+def test_shape_needs_lone_shrink():
+    with pytest.raises(ValueError, match="lone_shrink_shape"):
+        Adaptations(lone_shrink_shape=0.5)
