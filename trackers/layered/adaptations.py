@@ -157,9 +157,9 @@ class Adaptations:
     several_heads_merge: bool = True
     profile_heads: bool = True
     held_detections: bool = False
-    lone_shrink: float = 0.0
-    lone_shrink_shape: float = 0.0
-    border_exit: bool = False
+    lone_shrink: float = 0.3
+    lone_shrink_shape: float = 0.7
+    border_exit: bool = True
     one_to_one: bool = True
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)

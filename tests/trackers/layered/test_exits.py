@@ -25,7 +25,7 @@ def test_an_occluded_last_match_at_the_border_is_gone():
     assert PredictedExit().gone(_targets(), 320, 240) is None
 
 
-def test_paper_and_default_keep_the_predicted_exit():
+def test_paper_keeps_the_predicted_exit_and_the_default_adds_the_border():
     assert isinstance(build_rules(Adaptations.paper()).exit, PredictedExit)
-    assert isinstance(build_rules(Adaptations()).exit, PredictedExit)
-    assert isinstance(build_rules(Adaptations(border_exit=True)).exit, BorderExit)
+    assert isinstance(build_rules(Adaptations(border_exit=False)).exit, PredictedExit)
+    assert isinstance(build_rules(Adaptations()).exit, BorderExit)  # the default

@@ -49,7 +49,9 @@ def test_blobs_and_the_paper_keep_pbm_31():
     OccludedSmaller().apply(kinds, cand, targets, pred, np.array([True, True]))
     assert kinds.tolist() == [[-1], [0]]
     assert isinstance(build_rules(Adaptations.paper()).smaller, OccludedSmaller)
-    assert isinstance(build_rules(Adaptations()).smaller, OccludedSmaller)  # off by default
+    assert isinstance(build_rules(Adaptations(lone_shrink=0.0, lone_shrink_shape=0.0)).smaller,
+                      OccludedSmaller)
+    assert build_rules(Adaptations()).smaller == LoneShrink(0.3, 0.7)  # the default
     assert isinstance(build_rules(Adaptations(lone_shrink=0.3)).smaller, LoneShrink)
 
 
@@ -74,4 +76,4 @@ def test_shape_keeps_pbm_31_for_a_piece_of_a_person():
 
 def test_shape_needs_lone_shrink():
     with pytest.raises(ValueError, match="lone_shrink_shape"):
-        Adaptations(lone_shrink_shape=0.5)
+        Adaptations(lone_shrink=0.0, lone_shrink_shape=0.5)
