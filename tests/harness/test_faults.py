@@ -409,9 +409,16 @@ import os, time
 from pathlib import Path
 from occbench.trackers.baseline import BaselineTracker
 
+HOLD = os.environ.get("SLOW_HOLD")
+
+
 class Slow(BaselineTracker):
-    """A tracker slow enough to be stopped mid-run (a sequence of 12 frames takes 6 s)."""
+    """A tracker slow enough to be stopped mid-run (a sequence of 12 frames takes 6 s) that
+    never ends the run by itself: once the file SLOW_HOLD exists (the run's metrics.csv,
+    written when the first sequence is scored) it waits until the run is stopped."""
     def update(self, *args):
+        while HOLD and os.path.exists(HOLD):
+            time.sleep(0.1)
         time.sleep(0.5)
         return super().update(*args)
 '''
@@ -424,7 +431,9 @@ def _slow_run(tmp_path: Path, folder: Path, names: str = "abcdefghij") -> subpro
             mot_folder(data, name, frames=False)
     (tmp_path / "helpers").mkdir(exist_ok=True)
     (tmp_path / "helpers" / "slow_tracker.py").write_text(SLOW)
-    env = {**os.environ, "OMP_NUM_THREADS": "1",
+    # the run is held after its first sequence until the test stops it: under load the
+    # second run took longer to be refused than the ten slow sequences took to finish
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "SLOW_HOLD": str(folder / "metrics.csv"),
            "PYTHONPATH": f"{tmp_path / 'helpers'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
     return subprocess.Popen(
         [sys.executable, "-m", "occbench", "dataset=mot", "detector=noisy_gt",
