@@ -54,7 +54,6 @@ def build(name: str):
 
 PBM_STAGES = (("_find_candidates", "candidates + features"), ("_score_in_gates", "gating"),
               ("_search_occluded", "search (3.1; its boxes' 2.2, 11-13)"),
-              ("_scores", "scores (eqs. 11-13)"),
               ("_pruning", "response pruning (4.1)"), ("_update_models", "model update (4.2)"),
               ("_end_targets", "end targets"), ("_start_targets", "start targets"),
               ("_report", "report"))
@@ -99,6 +98,7 @@ def speed(frames: int, people: int, seed: int, repeats: int = 3,
         for attr, name in PBM_STAGES:
             clock.wrap(tracker, attr, name)
         clock.wrap(tracker.targets, "predict", "predict (eqs. 7-8)")
+        clock.wrap(tracker._scores, "pairs", "scores (eqs. 11-13)")
         clock.wrap(tracker._search_extractor, "extract", "search: best boxes' features")
         stages[label] = clock.table(cpu_seconds(lambda t=tracker: run(t)), frames)
         med = statistics.median(times)

@@ -17,6 +17,7 @@ rounding (rtol 1e-9, ``tests/trackers/layered/test_equations.py``).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -247,3 +248,29 @@ def ambiguous_rows(scores: np.ndarray, threshold: float, margin: float
     best, runner, amb = np.empty(T, dtype=np.intp), np.empty(T, dtype=np.intp), np.empty(T, bool)
     _ambiguous_rows_kernel(scores, threshold, margin, best, runner, amb)
     return best, runner, amb
+
+
+@dataclass
+class LayeredScores:
+    """Eqs. 11-13 with one tracker's feature-difference models theta, weights omega and
+    gamma (``FeatureParams``) and model spread: of selected (target, candidate) pairs
+    (``pairs``, as ``pair_scores``) and of boxes measured where they lie (``boxes``, as
+    ``box_scores``)."""
+
+    models: FeatureModels
+    omega: np.ndarray
+    gamma: np.ndarray
+    spread: float
+
+    def pairs(self, model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
+              misses: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """``pair_scores`` of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
+        return pair_scores(self.models, model, cand, ti, n, misses, self.omega, self.gamma,
+                           self.spread)
+
+    def boxes(self, model: PartFeatures, extractor: PartFeatureExtractor, boxes: np.ndarray,
+              alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray, misses: np.ndarray | None,
+              best_of: int = 0, grouped: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """``box_scores`` of (K, 4) boxes against their targets ti (K,): p_j (K, 5), p (K,)."""
+        return box_scores(self.models, model, extractor, boxes, alpha, beta, ti, misses,
+                          self.omega, self.gamma, self.spread, best_of, grouped)

@@ -1,15 +1,27 @@
-"""PBM 3 and 3.1, compiled: which (target, candidate) pairs a frame scores (the KF1 gate
-and the occlusion test's pairs, ``gated_pairs``) and the occluded candidates the search
-carves (``carved_rows``; the DOF of eqs. 1-2 under occlusion, ``split.dof_from_head``).
+"""PBM 3 and 3.1: which (target, candidate) pairs a frame scores (the KF1 gate and the
+occlusion test's pairs: ``pairs_in_gates``, compiled ``gated_pairs``) and the search of the
+occluded ones (``OcclusionSearch``: the head-anchored boxes of eqs. 9-10 or the aligned box,
+scored by eqs. 11-13; the carved candidates, compiled ``carved_rows``, with the DOF of eqs.
+1-2 under occlusion, ``split.dof_from_head``).
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
 
 from occbench.trackers.layered import kernel_cache  # noqa: F401 (before any kernel: one stamp for all)
+from occbench.trackers.layered.search import head_fill, search_boxes_many
 from occbench.trackers.layered.split import _dof_from_head
+
+if TYPE_CHECKING:  # annotations only
+    from occbench.trackers.layered.association import LayeredScores
+    from occbench.trackers.layered.params import SearchParams
+    from occbench.trackers.layered.parts import PartFeatureExtractor, PartFeatures
+    from occbench.trackers.layered.search import Candidates
+    from occbench.trackers.layered.targets import Targets
 
 # ----------------------------------------------------------------------------- PBM 3, 3.1
 
@@ -163,3 +175,97 @@ def carved_rows(p: np.ndarray, pj: np.ndarray, boxes: np.ndarray, heads: np.ndar
         _dof_from_head(heads[q, 0], heads[q, 1], boxes[b, 2], boxes[b, 3], alpha[t], beta[t],
                        dof[q])                                               # eqs. 1-2
     return kept, p_out, pj_out, k, dof
+
+
+# ----------------------------------------------------------------------------- the tracker's steps
+
+
+class Gated(NamedTuple):
+    """The pairs (target, candidate) of a frame (PBM 3): ``ti``, ``n`` unoccluded, scored
+    as measured; ``search_ti``, ``search_n``, ``kind`` occluded (PBM 3.1; kind +1 larger,
+    -1 smaller region), searched or aligned. Each in row-major order."""
+
+    ti: np.ndarray
+    n: np.ndarray
+    search_ti: np.ndarray
+    search_n: np.ndarray
+    kind: np.ndarray
+
+
+def pairs_in_gates(targets: Targets, cand: Candidates, gates: np.ndarray, pred_wh: np.ndarray,
+                   kinds: np.ndarray, present: np.ndarray, overlap: float,
+                   several_heads_merge: bool) -> Gated:
+    """``gated_pairs`` of the frame's targets (their KF1 ``gates`` and KF2 ``pred_wh``) and
+    candidates, ``kinds`` (T, N) the occlusion test's (changed in place); lone growth counts
+    a blob's held detections among its heads."""
+    grown_heads = cand.heads_in_region if cand.held is None else cand.heads_in_region + cand.held
+    return Gated(*gated_pairs(cand.box, cand.region, cand.head, cand.heads_in_region, grown_heads,
+                              gates, pred_wh, kinds, targets.dof, targets.misses, overlap, present,
+                              several_heads_merge))
+
+
+class Carved(NamedTuple):
+    """The occluded candidates of P searched pairs (``OcclusionSearch``): ``kept`` (P,) bool
+    (False: dismissed), score ``p`` (P,), part scores ``pj`` (P, 5), the features ``feats``
+    of each pair's best box (row q: pair q's, ``k`` = arange(P)), and its ``dof`` (P, 6)."""
+
+    kept: np.ndarray
+    p: np.ndarray
+    pj: np.ndarray
+    feats: PartFeatures
+    k: np.ndarray
+    dof: np.ndarray
+
+
+class OcclusionSearch:
+    """Head-anchored search (larger region) or alignment (smaller) of PBM 3.1 for the
+    occluded pairs of a frame, all boxes scored in one call (``LayeredScores.boxes``): the
+    (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the aligned box (the
+    predicted size on the head, ``search.aligned_box``) of every smaller candidate whose
+    head is supported by foreground (``search.head_min_fill``; else dismissed).
+
+    Args:
+        search: the occlusion test's and the search's settings. scores: eqs. 11-13.
+        extractor: the features of the search's boxes (its grid), started on the frame.
+    """
+
+    def __init__(self, search: SearchParams, scores: LayeredScores,
+                 extractor: PartFeatureExtractor) -> None:
+        self.search = search
+        self.scores = scores
+        self.extractor = extractor
+
+    def __call__(self, targets: Targets, cand: Candidates, pairs: Gated, fg: np.ndarray | None,
+                 pred_wh: np.ndarray, model: PartFeatures, misses: np.ndarray | None
+                 ) -> Carved | None:
+        """The carved candidates of ``pairs``' occluded ones against the targets' parts
+        ``model`` (eq. 11's ``misses``), or None when every pair is dismissed."""
+        ti, n, kind = pairs.search_ti, pairs.search_n, pairs.kind
+        alpha_t, beta_t = targets.alpha, targets.beta
+        heads = cand.head[n]
+        search_q = (kind > 0).nonzero()[0]
+        align_q = (kind <= 0).nonzero()[0]
+        if len(align_q):
+            # the predicted-size box aligned on the head (``search.aligned_box``)
+            at = ti[align_q]
+            w, h = pred_wh[at, 0], pred_wh[at, 1]
+            ha = heads[align_q]
+            align_boxes = np.column_stack([ha[:, 0] - alpha_t[at] * w, ha[:, 1], w, h])
+            if fg is not None:
+                fill = np.array([head_fill(fg, b) for b in align_boxes])
+                supported = fill >= self.search.head_min_fill
+                align_q, align_boxes = align_q[supported], align_boxes[supported]
+        if not len(search_q) and not len(align_q):
+            return None
+        m, sti = (2 * self.search.range + 1) ** 2, ti[search_q]  # boxes per searched pair
+        B = np.concatenate([search_boxes_many(heads[search_q], pred_wh[sti], alpha_t[sti],
+                                              self.search.step, self.search.range).reshape(-1, 4),
+                            align_boxes if len(align_q) else np.zeros((0, 4))])
+        tis = np.concatenate([sti.repeat(m), ti[align_q]])
+        ex = self.extractor  # eqs. 11-13 of box k against target tis[k], best of m
+        pj, p = self.scores.boxes(model, ex, B, alpha_t[tis], beta_t[tis], tis, misses, m,
+                                  len(search_q) * m)
+        kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q,
+                                              align_q, m)
+        feats = ex.extract(B[k], alpha_t[tis[k]], beta_t[tis[k]])
+        return Carved(kept, p_h, pj_h, feats, np.arange(len(k)), dof)

@@ -10,7 +10,7 @@ cycle's survivors (ours: ``alive_rows``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
@@ -25,7 +25,11 @@ from occbench.trackers.layered.split import (
 )
 
 if TYPE_CHECKING:  # annotations only
+    from occbench.trackers.layered.adaptations import Adaptations
     from occbench.trackers.layered.parts import PartFeatures
+    from occbench.trackers.layered.search import Candidates
+    from occbench.trackers.layered.selection import FrameScores
+    from occbench.trackers.layered.targets import Targets
 
 
 # ----------------------------------------------------------------------------- PBM 4.2, plain numpy
@@ -301,3 +305,32 @@ def alive_rows(dof: np.ndarray, shift: np.ndarray, misses: np.ndarray, confirmed
         alive[t] = misses[t] == 0 or (confirmed[t] and misses[t] <= max_misses
                                       and not (gone and misses[t] >= exit_misses))
     return alive
+
+
+# ----------------------------------------------------------------------------- the tracker's steps
+
+
+class Chosen(NamedTuple):
+    """The chosen candidates of M matches as PBM 4.2 updates from them (``matched_rows``):
+    ``dof`` (M, 6), ``pj`` (M, 5), ``occluded`` (M,) bool (a carved candidate), ``k`` (M,)
+    its row in the features it was measured in (the frame's or the search's)."""
+
+    dof: np.ndarray
+    pj: np.ndarray
+    occluded: np.ndarray
+    k: np.ndarray
+
+
+def chosen_candidates(matches: np.ndarray, scores: FrameScores, cand: Candidates,
+                      targets: Targets, pred_wh: np.ndarray) -> Chosen:
+    """``matched_rows`` of the (M, 2) matched (target, candidate) pairs of a frame."""
+    return Chosen(*matched_rows(matches[:, 0], matches[:, 1], scores.hyp, cand.box,
+                                cand.centroid, cand.blob, pred_wh, targets.alpha, scores.pj,
+                                scores.dof_h, scores.pj_h, scores.k_h))
+
+
+def survivors(targets: Targets, width: int, height: int, a: Adaptations, max_misses: int
+              ) -> np.ndarray:
+    """``alive_rows`` of the targets in a (width, height) image: (T,) bool."""
+    return alive_rows(targets.dof, targets.predicted_shift(), targets.misses, targets.confirmed,
+                      width, height, a.exit_margin, max_misses, a.exit_misses)

@@ -9,7 +9,7 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
 2. ``Targets.predict`` (PBM 3, eqs. 7-8): KF1 (the gate's size) and KF2 (the size).
 3. ``_score_in_gates`` (PBM 3, 3.1, 4.1, eqs. 11-13): each target scores the candidates in
    its gate; a candidate whose size differs from the prediction by > 50% is occluded, and
-   ``_search_occluded`` searches it (larger: head-anchored boxes of eqs. 9-10; smaller:
+   ``gating.OcclusionSearch`` searches it (larger: head-anchored boxes of eqs. 9-10; smaller:
    aligned on its head, or dismissed).
 4. ``selection.MultipleResponsePruning`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
@@ -46,7 +46,7 @@ import numpy as np
 from occbench.trackers.common.checks import parameter_group
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
-from occbench.trackers.layered.association import box_scores, pair_scores
+from occbench.trackers.layered.association import LayeredScores
 from occbench.trackers.layered.candidates import (
     CandidateFinder,
     DetectorHeads,
@@ -56,8 +56,8 @@ from occbench.trackers.layered.candidates import (
     checked_inputs,
 )
 from occbench.trackers.layered.dynamics import Gate
-from occbench.trackers.layered.gating import carved_rows, gated_pairs
-from occbench.trackers.layered.model_update import alive_rows, matched_rows
+from occbench.trackers.layered.gating import OcclusionSearch, pairs_in_gates
+from occbench.trackers.layered.model_update import chosen_candidates, survivors
 from occbench.trackers.layered.params import (
     CandidateParams,
     FeatureParams,
@@ -72,14 +72,7 @@ from occbench.trackers.layered.params import (
 )
 from occbench.trackers.layered.parts import PartFeatureExtractor, PartFeatures, centroid_ratios
 from occbench.trackers.layered.rules import build_rules
-from occbench.trackers.layered.search import (
-    Candidates,
-    head_fill,
-    head_patch,
-    head_patches,
-    occlusion_kinds,
-    search_boxes_many,
-)
+from occbench.trackers.layered.search import Candidates, head_patch, head_patches, occlusion_kinds
 from occbench.trackers.layered.selection import FrameScores, MultipleResponsePruning
 from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
 from occbench.trackers.layered.targets import Targets, dof_from_box, update_parts
@@ -152,6 +145,8 @@ class PBMTracker:
         held = HeldDetections(self.search.overlap) if a.held_detections else NoHeldDetections()
         self._finder = CandidateFinder(self.candidates, blob_heads, a.blob_box_ratio, held)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
+        self._scores = LayeredScores(f.models, f.omega, f.gamma, a.model_spread)  # eqs. 11-13
+        self._search_occluded = OcclusionSearch(self.search, self._scores, self._search_extractor)
         self.rules = build_rules(self.adaptations)
         self.starts = AutoStarts() if starts is None else starts
         self.reset()
@@ -220,7 +215,7 @@ class PBMTracker:
         (head-anchored) candidate lies in the gate too (its centre hangs half a predicted
         height below the head) and, for a larger region, that holds the target ("the target
         needs to be located within the blob": a found target's last box lies at least
-        ``search.overlap`` inside it) are searched (``_search_occluded``). A blob holding
+        ``search.overlap`` inside it) are searched (``gating.OcclusionSearch``). A blob holding
         several heads is a merge, searched (``adaptations.several_heads_merge``). With
         ``adaptations.lone_growth``, a larger
         region holding only this target is the target grown: unoccluded.
@@ -233,72 +228,18 @@ class PBMTracker:
         live = targets.misses <= self.reporting.max_misses
         self.rules.smaller.apply(kinds, cand, targets, pred_wh, live)
         present = live & self.adaptations.lone_growth
-        grown_heads = cand.heads_in_region if cand.held is None else cand.heads_in_region + cand.held
-        ti_in, n_in, ti_s, n_s, kind_s = gated_pairs(
-            cand.box, cand.region, cand.head, cand.heads_in_region, grown_heads, gates,
-            pred_wh, kinds, targets.dof, targets.misses, self.search.overlap, present,
-            self.adaptations.several_heads_merge)
-        pj_in, p_in = self._scores(model, feats, ti_in, n_in)
-        scores.pj[ti_in, n_in] = pj_in
-        scores.S[ti_in, n_in] = p_in
-        found = self._search_occluded(ti_s, n_s, kind_s, cand, fg, pred_wh, model) if len(ti_s) else None
+        pairs = pairs_in_gates(targets, cand, gates, pred_wh, kinds, present, self.search.overlap,
+                               self.adaptations.several_heads_merge)
+        misses = self.rules.gap.misses(targets)  # eq. 11 after a gap
+        scores.pj[pairs.ti, pairs.n], scores.S[pairs.ti, pairs.n] = self._scores.pairs(
+            model, feats, pairs.ti, pairs.n, misses)
+        found = self._search_occluded(targets, cand, pairs, fg, pred_wh, model, misses) if len(
+            pairs.search_ti) else None  # PBM 3.1
         if found is not None:
-            kept, p_h, scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found
-            scores.S[ti_s[kept], n_s[kept]] = p_h[kept]
-            scores.hyp[ti_s[kept], n_s[kept]] = kept.nonzero()[0]
-
-    # ------------------------------------------------------------------ search (PBM 3.1)
-    def _search_occluded(self, ti: np.ndarray, n: np.ndarray, kind: np.ndarray,
-                             cand: Candidates, fg: np.ndarray | None, pred_wh: np.ndarray,
-                             model: PartFeatures) -> tuple:
-        """Head-anchored search (larger) or alignment (smaller) of PBM 3.1 for the P
-        (target ti, candidate n, kind) pairs of the frame, all boxes scored in one call
-        (``box_scores``): the (2 r + 1)^2 boxes of eqs. 9-10 of every searched pair, then the
-        aligned box of every smaller candidate whose head is supported by foreground.
-
-        Args:
-            ti, n, kind: (P,) the pairs (kind +1 larger, -1 smaller region).
-            model: the parts models of all targets (``PartFeatures``, target order).
-        Returns:
-            (kept (P,) bool (False: dismissed), score p (P,), part scores p_j (P, 5), the
-            features of each pair's best box (row q: pair q's), their rows arange(P), dof
-            (P, 6)), or None when every pair is dismissed.
-        """
-        targets = self.targets
-        alpha_t, beta_t = targets.alpha, targets.beta
-        heads = cand.head[n]
-        search_q = (kind > 0).nonzero()[0]
-        align_q = (kind <= 0).nonzero()[0]
-        if len(align_q):
-            # the predicted-size box aligned on the head (``search.aligned_box``)
-            at = ti[align_q]
-            w, h = pred_wh[at, 0], pred_wh[at, 1]
-            ha = heads[align_q]
-            align_boxes = np.column_stack([ha[:, 0] - alpha_t[at] * w, ha[:, 1], w, h])
-            if fg is not None:
-                fill = np.array([head_fill(fg, b) for b in align_boxes])
-                supported = fill >= self.search.head_min_fill
-                align_q, align_boxes = align_q[supported], align_boxes[supported]
-        if not len(search_q) and not len(align_q):
-            return None
-        m, sti = (2 * self.search.range + 1) ** 2, ti[search_q]  # boxes per searched pair
-        B = np.concatenate([search_boxes_many(heads[search_q], pred_wh[sti], alpha_t[sti],
-                                              self.search.step, self.search.range).reshape(-1, 4),
-                            align_boxes if len(align_q) else np.zeros((0, 4))])
-        tis = np.concatenate([sti.repeat(m), ti[align_q]])
-        f, ex = self.features, self._search_extractor  # eqs. 11-13 of box k against target tis[k]
-        pj, p = box_scores(f.models, model, ex, B, alpha_t[tis], beta_t[tis], tis, self.rules.gap.misses(
-            targets), f.omega, f.gamma, self.adaptations.model_spread, m, len(search_q) * m)  # best of m
-        kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q, align_q, m)
-        feats = ex.extract(B[k], alpha_t[tis[k]], beta_t[tis[k]])
-        return kept, p_h, pj_h, feats, np.arange(len(k)), dof
-
-    def _scores(self, model: PartFeatures, feats: PartFeatures, ti: np.ndarray,
-                n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Eqs. 11-13 of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
-        return pair_scores(self.features.models, model, feats, ti, n,
-                           self.rules.gap.misses(self.targets),
-                           self.features.omega, self.features.gamma, self.adaptations.model_spread)
+            ti_s, n_s = pairs.search_ti[found.kept], pairs.search_n[found.kept]
+            scores.S[ti_s, n_s] = found.p[found.kept]
+            scores.hyp[ti_s, n_s] = found.kept.nonzero()[0]
+            scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found.pj, found.feats, found.k, found.dof
 
     # ------------------------------------------------------------------ model update (PBM 4.2)
     def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: FrameScores,
@@ -313,9 +254,7 @@ class PBMTracker:
         confirmation after ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
         targets, u = self.targets, self.model_update
         mt, mn = matches[:, 0], matches[:, 1]
-        dof, pj, occl, ks = matched_rows(mt, mn, scores.hyp, cand.box, cand.centroid, cand.blob,
-                                         pred_wh, targets.alpha, scores.pj, scores.dof_h,
-                                         scores.pj_h, scores.k_h)
+        dof, pj, occl, ks = chosen_candidates(matches, scores, cand, targets, pred_wh)
         measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
         shift = self.rules.reupdate.update(targets, mt, dof, measured, occl, pj, u.part_threshold)
         # then the parts models, from the feature arrays the candidates were measured in
@@ -350,9 +289,7 @@ class PBMTracker:
         ``life_cycle.max_misses`` frames, and (``adaptations.exit_margin``) those unfound
         for ``adaptations.exit_misses`` frames whose predicted box left the (W, H) image."""
         targets, a = self.targets, self.adaptations
-        alive = alive_rows(targets.dof, targets.predicted_shift(), targets.misses,
-                           targets.confirmed, W, H, a.exit_margin, self.life_cycle.max_misses,
-                           a.exit_misses)
+        alive = survivors(targets, W, H, a, self.life_cycle.max_misses)
         gone = self.rules.exit.gone(targets, W, H)  # adaptations.border_exit
         if gone is not None:
             alive &= ~(gone & (targets.misses >= max(a.exit_misses, 1)))
