@@ -1,7 +1,7 @@
 """Memory per frame grows with the detections, not with their square: 5,000 detections in
 one frame (a 4K frame of small, scattered people) stay under a bound linear in the
-detections for each tracker (issue 39: reta took 2.2 GB and the baseline 0.8 GB for
-5,000 detections, in (N, M) matrices)."""
+detections for each tracker (issue 39: reta took 2.2 GB, the baseline 0.8 GB and pbm 2.2
+GB for 5,000 detections, in (N, M) matrices)."""
 
 from __future__ import annotations
 
@@ -43,6 +43,15 @@ def _reta_bound() -> int:
     return N * (4 * 8 * bins ** 3 + 40_000)
 
 
-@pytest.mark.parametrize("name, bound", [("baseline", lambda: N * 20_000), ("reta", _reta_bound)])
+def _pbm_bound() -> int:
+    """A candidate's and a target's five parts (HSV and XYZ histograms of bins^3 float64
+    each) several times over, 20 kB besides, per detection, and 64 MB for one block of the
+    association (``frame_blocks``: at most 2^18 pairs with their part scores)."""
+    bins = compose_config(["tracker=pbm"]).tracker.features.histogram_bins
+    return N * (8 * 2 * 5 * 8 * bins ** 3 + 20_000) + 64 * 2**20
+
+
+@pytest.mark.parametrize("name, bound", [("baseline", lambda: N * 20_000), ("reta", _reta_bound),
+                                         ("pbm", _pbm_bound)])
 def test_5000_detections_in_one_frame_stay_under_a_linear_memory_bound(name, bound):
     assert _peak_bytes(name) <= bound()

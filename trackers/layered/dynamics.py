@@ -183,17 +183,28 @@ class ConstantVelocity2D:
 
     def add(self, z: np.ndarray, scale: float) -> None:
         """Append a filter at the first measurement z (2,), noise scaled by ``scale``."""
+        self.extend(np.asarray(z, dtype=np.float64)[None], [scale])
+
+    def extend(self, z: np.ndarray, scale) -> None:
+        """Append K filters at their first measurements z (K, 2), noise scaled by ``scale``
+        (K,) (``add`` of each, in order, with one copy of the arrays)."""
         qp, qv, r, v0 = self.noise
-        s2 = max(float(scale), 1e-3) ** 2
-        pp, pv = r**2 * s2, v0**2 * s2
-        self.x = np.vstack([self.x, [float(z[0]), float(z[1]), 0.0, 0.0]])
-        self.p = np.concatenate([self.p, [[[pp, 0.0, 0.0, pv], [pp, 0.0, 0.0, pv]]]])
-        self.qp = np.append(self.qp, qp**2 * s2)
-        self.qv = np.append(self.qv, qv**2 * s2)
-        self.r = np.append(self.r, r**2 * s2)
-        self.seen_x = np.vstack([self.seen_x, self.x[-1:]])
-        self.seen_p = np.concatenate([self.seen_p, self.p[-1:]])
-        self.seen_z = np.vstack([self.seen_z, self.x[-1:, :2]])
+        x, p, q = [], [], []
+        for (a, b), sc in zip(np.asarray(z, dtype=np.float64).tolist(), scale, strict=True):
+            s2 = max(float(sc), 1e-3) ** 2
+            pp, pv = r**2 * s2, v0**2 * s2
+            x.append([a, b, 0.0, 0.0])
+            p.append([[pp, 0.0, 0.0, pv], [pp, 0.0, 0.0, pv]])
+            q.append([qp**2 * s2, qv**2 * s2, r**2 * s2])
+        x, p, q = np.array(x).reshape(-1, 4), np.array(p).reshape(-1, 2, 4), np.array(q).reshape(-1, 3)
+        self.x = np.vstack([self.x, x])
+        self.p = np.concatenate([self.p, p])
+        self.qp = np.append(self.qp, q[:, 0])
+        self.qv = np.append(self.qv, q[:, 1])
+        self.r = np.append(self.r, q[:, 2])
+        self.seen_x = np.vstack([self.seen_x, x])
+        self.seen_p = np.concatenate([self.seen_p, p])
+        self.seen_z = np.vstack([self.seen_z, x[:, :2]])
 
     def take(self, rows) -> None:
         """Keep only the filters at ``rows`` (in that order)."""

@@ -69,6 +69,12 @@ class Candidates:
     def __len__(self) -> int:
         return len(self.box)
 
+    def take(self, rows: np.ndarray) -> Candidates:
+        """The candidates at ``rows`` (copies), in that order."""
+        return Candidates(*(None if v is None else v[rows] for v in (
+            self.box, self.region, self.head, self.blob, self.heads_in_region, self.centroid,
+            self.held)))
+
 
 def blobs_boxes(fg: np.ndarray, min_area: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Connected components of a bool mask (PBM 2).

@@ -21,6 +21,8 @@ it is re-learned (step ``relearn_rate``). A hidden part is never re-learned.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from occbench.trackers.layered import model_update
@@ -107,32 +109,41 @@ class Targets:
     def add(self, track_id: int, dof: np.ndarray, alpha: float, beta: float,
             parts: PartFeatures, head_template: np.ndarray | None) -> None:
         """Append a new target (its first match: hits 1, unconfirmed)."""
-        dof = np.asarray(dof, dtype=np.float64)
-        self.kf1.add(dof[2:4], dof[5] / 10.0)
-        self.kf2.add(dof[[5, 4]], dof[5] / 10.0)
-        self.id = np.append(self.id, track_id)
+        self.extend([track_id], np.asarray(dof, dtype=np.float64)[None], [alpha], [beta], parts,
+                     [head_template])
+
+    def extend(self, track_ids: list[int], dof: np.ndarray, alpha: list[float],
+               beta: list[float], parts: PartFeatures, head_templates: list[np.ndarray | None]
+               ) -> None:
+        """Append K new targets (``add`` of each, in order, with one copy of the arrays):
+        ids, DOF (K, 6), ratios, parts (K rows) and head templates."""
+        K = len(track_ids)
+        dof = np.asarray(dof, dtype=np.float64).reshape(K, 6)
+        self.kf1.extend(dof[:, 2:4], dof[:, 5] / 10.0)
+        self.kf2.extend(dof[:, [5, 4]], dof[:, 5] / 10.0)
+        self.id = np.append(self.id, np.asarray(track_ids, dtype=np.int64))
         self.dof = np.vstack([self.dof, dof])
-        r = np.zeros((1,) + self._ratios.shape[1:])
-        r[0, -1] = alpha, beta
+        r = np.zeros((K,) + self._ratios.shape[1:])
+        r[:, -1, 0], r[:, -1, 1] = [float(a) for a in alpha], [float(b) for b in beta]
         self._ratios = np.concatenate([self._ratios, r])
-        self._n_ratios = np.append(self._n_ratios, 1)
-        self.alpha = np.append(self.alpha, float(alpha))
-        self.beta = np.append(self.beta, float(beta))
-        h = np.zeros((1,) + self._history.shape[1:])
-        h[0, -1] = dof
+        self._n_ratios = np.append(self._n_ratios, np.ones(K, dtype=np.int64))
+        self.alpha = np.append(self.alpha, [float(a) for a in alpha])
+        self.beta = np.append(self.beta, [float(b) for b in beta])
+        h = np.zeros((K,) + self._history.shape[1:])
+        h[:, -1] = dof
         self._history = np.concatenate([self._history, h])
-        self._n_history = np.append(self._n_history, 1)
+        self._n_history = np.append(self._n_history, np.ones(K, dtype=np.int64))
         self.parts = PartFeatures.concatenate([self.parts, parts], self._bins)
-        self.hits = np.append(self.hits, 1)
-        self.misses = np.append(self.misses, 0)
-        self.confirmed = np.append(self.confirmed, False)
-        self.occluded = np.append(self.occluded, False)
-        self.occluded_parts = np.vstack([self.occluded_parts, np.zeros(N_PARTS, dtype=bool)])
-        self.part_scores = np.vstack([self.part_scores, np.ones(N_PARTS)])
-        self.stale = np.vstack([self.stale, np.zeros(N_PARTS, dtype=np.int64)])
-        self.score = np.append(self.score, 0.0)
-        self.last_gate = np.vstack([self.last_gate, np.full(4, np.nan)])
-        self.head_template.append(head_template)
+        self.hits = np.append(self.hits, np.ones(K, dtype=np.int64))
+        self.misses = np.append(self.misses, np.zeros(K, dtype=np.int64))
+        self.confirmed = np.append(self.confirmed, np.zeros(K, dtype=bool))
+        self.occluded = np.append(self.occluded, np.zeros(K, dtype=bool))
+        self.occluded_parts = np.vstack([self.occluded_parts, np.zeros((K, N_PARTS), dtype=bool)])
+        self.part_scores = np.vstack([self.part_scores, np.ones((K, N_PARTS))])
+        self.stale = np.vstack([self.stale, np.zeros((K, N_PARTS), dtype=np.int64)])
+        self.score = np.append(self.score, np.zeros(K))
+        self.last_gate = np.vstack([self.last_gate, np.full((K, 4), np.nan)])
+        self.head_template.extend(head_templates)
 
     def take(self, rows) -> None:
         """Keep only the targets at ``rows`` (in that order)."""
@@ -145,6 +156,14 @@ class Targets:
             setattr(self, name, getattr(self, name)[rows])
         self.parts = self.parts.take(rows)
         self.head_template = [self.head_template[i] for i in rows]
+
+    def subset(self, rows: np.ndarray) -> Targets:
+        """A new ``Targets`` of copies of the targets at ``rows`` (one block of a large frame,
+        ``frame_blocks``); this one is left as it was."""
+        out = copy.copy(self)
+        out.kf1, out.kf2 = copy.copy(self.kf1), copy.copy(self.kf2)
+        out.take(rows)
+        return out
 
     def predict(self) -> np.ndarray:
         """Advance KF1 and KF2 one frame; returns the predicted (w, h) (T, 2) (KF2), floored

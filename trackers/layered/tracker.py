@@ -7,10 +7,11 @@ Paper: "Tracking People under Heavy Occlusions by Layered Data Association" (PBM
    foreground blobs no detection explains (``candidates.CandidateFinder``), and each
    candidate's five parts and features on one sample grid.
 2. ``Targets.predict`` (PBM 3, eqs. 7-8): KF1 (the gate's size) and KF2 (the size).
-3. ``_score_in_gates`` (PBM 3, 3.1, 4.1, eqs. 11-13): each target scores the candidates in
-   its gate; a candidate whose size differs from the prediction by > 50% is occluded, and
-   ``gating.OcclusionSearch`` searches it (larger: head-anchored boxes of eqs. 9-10; smaller:
-   aligned on its head, or dismissed).
+3. ``_associate`` (PBM 3, 3.1, 4, 4.1; a large frame in independent blocks,
+   ``frame_blocks``), first ``_score_in_gates`` (eqs. 11-13): each target scores the
+   candidates in its gate; a candidate whose size differs from the prediction by > 50% is
+   occluded, and ``gating.OcclusionSearch`` searches it (larger: head-anchored boxes of
+   eqs. 9-10; smaller: aligned on its head, or dismissed).
 4. ``selection.MultipleResponsePruning`` (PBM 4 steps 4-5, 4.1): the best candidate must pass
    ``matching.match_threshold`` and beat the runner-up by ``matching.margin_ratio``; an
    ambiguous or weak choice is settled by the target's head template (``rules.match`` may
@@ -44,6 +45,7 @@ import logging
 import numpy as np
 
 from occbench.trackers.common.checks import parameter_group
+from occbench.trackers.common.spatial import blocks
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import LayeredScores
@@ -56,6 +58,7 @@ from occbench.trackers.layered.candidates import (
     checked_inputs,
 )
 from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.frame_blocks import Association, interacting_pairs, merged
 from occbench.trackers.layered.gating import OcclusionSearch, pairs_in_gates
 from occbench.trackers.layered.model_update import chosen_candidates, survivors
 from occbench.trackers.layered.params import (
@@ -178,22 +181,13 @@ class PBMTracker:
         H, W = frame.shape[:2]
         cand, feats = self._find_candidates(frame, detections, fg)  # PBM 2
         pred_wh = self.targets.predict()  # PBM 3, eqs. 7-8
-        scores = FrameScores.empty(len(self.targets), len(cand))
-        if len(self.targets) and len(cand):
-            self._score_in_gates(scores, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
-            self._pruning(scores, cand, self.targets, frame)  # PBM 4, 4.1
-            self.rules.contest.settle(scores.S, cand, self.targets, frame,  # 4.1, by column
-                                      self.matching.match_threshold,
-                                      self.pruning.template_threshold)
-        withheld = self.rules.match.withhold(scores.S, self.targets, self.matching.match_threshold)
-        cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
-        matches, lost, free = self.rules.sharing.assign(cost, 1.0 - self.matching.match_threshold)
-        if len(matches):
-            self._update_models(frame, matches, scores, cand, feats, fg, pred_wh, (W, H))  # PBM 4.2
-        if len(lost):
-            self.rules.unfound_size.missed(self.targets, lost)
+        found = self._associate(frame, cand, feats, fg, pred_wh)  # PBM 3, 3.1, 4, 4.1
+        if len(found.matches):
+            self._update_models(frame, found, feats, fg, (W, H))  # PBM 4.2
+        if len(found.lost):
+            self.rules.unfound_size.missed(self.targets, found.lost)
         self._end_targets(W, H)
-        self._start_targets(frame, free, cand, feats, fg, withheld)
+        self._start_targets(frame, found.free, cand, feats, fg, found.withheld)
         return self._report(fg)
 
     def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None
@@ -206,8 +200,42 @@ class PBMTracker:
         cand.centroid, feats = self._extractor.extract_at_centroids(cand.box)
         return cand, feats
 
-    def _score_in_gates(self, scores: FrameScores, cand: Candidates, feats: PartFeatures,
-                        fg: np.ndarray | None, pred_wh: np.ndarray) -> None:
+    def _associate(self, frame: np.ndarray, cand: Candidates, feats: PartFeatures,
+                   fg: np.ndarray | None, pred_wh: np.ndarray) -> Association:
+        """PBM 3, 3.1, 4, 4.1 on the frame's targets and candidates, in the independent
+        blocks of a large frame (``frame_blocks``; one block, the whole frame, while T x N
+        is at most ``spatial.DENSE_LIMIT``)."""
+        targets = self.targets
+        parts = blocks(len(targets), len(cand), lambda: interacting_pairs(targets, cand, pred_wh))
+        if len(parts) == 1:
+            return self._associate_block(frame, targets, cand, feats, fg, pred_wh)
+        targets.last_gate = targets.gate_boxes()  # as _score_in_gates sets it
+        return merged([(rows, cols, self._associate_block(
+            frame, targets.subset(rows), cand.take(cols), feats.take(cols), fg, pred_wh[rows]))
+            for rows, cols in parts], self._extractor.bins)
+
+    def _associate_block(self, frame: np.ndarray, targets: Targets, cand: Candidates,
+                         feats: PartFeatures, fg: np.ndarray | None, pred_wh: np.ndarray
+                         ) -> Association:
+        """One frame's (or block's) scores (``_score_in_gates``), multiple-response pruning
+        and contest (PBM 4.1), the matches ``rules.match`` withholds and the sharing of
+        candidates by 1 - p (``rules.sharing``, PBM 4 step 4)."""
+        m = self.matching
+        scores = FrameScores.empty(len(targets), len(cand))
+        if len(targets) and len(cand):
+            self._score_in_gates(scores, targets, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
+            self._pruning(scores, cand, targets, frame)  # PBM 4, 4.1
+            self.rules.contest.settle(scores.S, cand, targets, frame,  # 4.1, by column
+                                      m.match_threshold, self.pruning.template_threshold)
+        withheld = self.rules.match.withhold(scores.S, targets, m.match_threshold)
+        cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
+        matches, lost, free = self.rules.sharing.assign(cost, 1.0 - m.match_threshold)
+        chosen = chosen_candidates(matches, scores, cand, targets, pred_wh) if len(matches) else None
+        return Association(matches, lost, free, withheld, chosen,
+                           scores.S[matches[:, 0], matches[:, 1]], scores.feats_h)
+
+    def _score_in_gates(self, scores: FrameScores, targets: Targets, cand: Candidates,
+                        feats: PartFeatures, fg: np.ndarray | None, pred_wh: np.ndarray) -> None:
         """PBM 3, 3.1, eqs. 11-13: each target scores the candidates in its KF1 gate.
 
         The unoccluded pairs are scored as measured; the occluded ones (PBM 3.1: size off
@@ -220,7 +248,6 @@ class PBMTracker:
         ``adaptations.lone_growth``, a larger
         region holding only this target is the target grown: unoccluded.
         """
-        targets = self.targets
         model = self.rules.compared.models(targets)  # eq. 11: the model compared with
         gates = targets.gate_boxes()
         targets.last_gate = gates  # the gates this frame's candidates were validated in
@@ -242,10 +269,9 @@ class PBMTracker:
             scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found.pj, found.feats, found.k, found.dof
 
     # ------------------------------------------------------------------ model update (PBM 4.2)
-    def _update_models(self, frame: np.ndarray, matches: np.ndarray, scores: FrameScores,
-                       cand: Candidates, feats: PartFeatures, fg: np.ndarray | None,
-                       pred_wh: np.ndarray, image_size: tuple[int, int]) -> None:
-        """PBM 4.2 for the (M, 2) matched (target, candidate) pairs, all at once: the global
+    def _update_models(self, frame: np.ndarray, found: Association, feats: PartFeatures,
+                       fg: np.ndarray | None, image_size: tuple[int, int]) -> None:
+        """PBM 4.2 for the frame's matches (``found``), all at once: the global
         models and filters (``Targets.update``: DOF measured when unoccluded, window-averaged
         when occluded; after a gap ``rules.reupdate``), then each part by a running average
         weighted by p_j, frozen below ``model_update.part_threshold`` (``update_parts``; with
@@ -253,8 +279,8 @@ class PBMTracker:
         scores, the head templates of unoccluded targets whose head matched (PBM 4.1), and
         confirmation after ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
         targets, u = self.targets, self.model_update
-        mt, mn = matches[:, 0], matches[:, 1]
-        dof, pj, occl, ks = chosen_candidates(matches, scores, cand, targets, pred_wh)
+        mt = found.matches[:, 0]
+        dof, pj, occl, ks = found.chosen
         measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
         shift = self.rules.reupdate.update(targets, mt, dof, measured, occl, pj, u.part_threshold)
         # then the parts models, from the feature arrays the candidates were measured in
@@ -262,7 +288,7 @@ class PBMTracker:
         n_occl = np.count_nonzero(occl)
         groups = [(~occl, feats)] if n_occl < len(mt) else []
         if n_occl:
-            groups.append((occl, scores.feats_h))
+            groups.append((occl, found.searched))
         relearn, stale = None, self.adaptations.stale
         if stale is not None and n_occl < len(mt):
             # among unoccluded matches, before the update (the model's foreground area is
@@ -276,7 +302,7 @@ class PBMTracker:
             update_parts(targets.parts, r, f, ks[rows], pj[rows], u.part_threshold, u.rate,
                          shift[rows], dof_t[r[:, None], _BOX_COLUMNS], targets.alpha[r],
                          targets.beta[r], relearn if g == 0 else None, relearn_rate)
-        targets.score[mt] = scores.S[mt, mn]
+        targets.score[mt] = found.score
         fresh = mt[~occl & (pj[:, 0] >= u.part_threshold)]
         for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):
             if tpl is not None:
@@ -306,6 +332,7 @@ class PBMTracker:
         confirmed at once (people present from the start)."""
         targets, lc = self.targets, self.life_cycle
         live_boxes = targets.boxes if len(free) else None
+        new: list[tuple] = []  # (id, dof, alpha, beta, candidate, head template), in order
         for n in free.tolist():  # (the assignment leaves exactly the untaken candidates free)
             if not self.starts.may_start(self._frame, self._next_id - 1):
                 break
@@ -323,12 +350,16 @@ class PBMTracker:
             centroid = cand.centroid[n]
             al_n, be_n = centroid_ratios(box[None], centroid[None])
             dof = dof_from_box(box, centroid)
-            targets.add(self._next_id, dof, float(al_n[0]), float(be_n[0]), feats.take(n),
-                        head_patch(frame, dof[[0, 1, 4, 5]]))
+            new.append((self._next_id, dof, float(al_n[0]), float(be_n[0]), n,
+                        head_patch(frame, dof[[0, 1, 4, 5]])))
             self._next_id += 1
-            if self._frame <= lc.min_hits:
-                targets.confirmed[-1] = True
             live_boxes = np.vstack([live_boxes, box[None]])
+        if new:  # added at once (one copy of the state arrays)
+            ids, dofs, alphas, betas, ns, templates = zip(*new, strict=True)
+            targets.extend(list(ids), np.array(dofs), list(alphas), list(betas),
+                           feats.take(list(ns)), list(templates))
+            if self._frame <= lc.min_hits:
+                targets.confirmed[-len(new):] = True
 
     # ------------------------------------------------------------------ report
     def _report(self, fg: np.ndarray | None) -> list[Track]:

@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+from pathlib import Path
 
 from numba.core.registry import CPUDispatcher
 
-import occbench.trackers.layered as layered
+from occbench.trackers import layered
 from occbench.trackers.layered.kernel_cache import KERNEL_MODULES, stamp
 
 
@@ -44,7 +45,7 @@ def test_the_stamp_covers_the_text_of_every_listed_module(tmp_path, monkeypatch)
     copies = []
     for name in sorted(kernel_cache._FILES):
         copy = tmp_path / name.rsplit("/", 1)[-1]
-        copy.write_text(open(name).read())
+        copy.write_text(Path(name).read_text())
         copies.append(str(copy))
     monkeypatch.setattr(kernel_cache, "_FILES", frozenset(copies))
     kernel_cache.stamp.cache_clear()
