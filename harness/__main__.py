@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import sys
 
+from occbench.server.client import served
+
 
 def main() -> None:
     """Console-script entry point ``occbench`` (same as ``python -m occbench``)."""
-    from occbench.server.client import served
-
     status = served(sys.argv[1:])
     if status is None:
+        # start-up: ~6 ms CPU that the served path (occbench.server.client alone) saves
         from occbench.commands.cli import run
 
         status = run(sys.argv[1:])

@@ -8,7 +8,10 @@
 - ``harness/``'s rooms: at most 8 top modules, only the rooms; no library room imports a
   command; no module over 400 lines and no function over 80 (kernel files excepted); no
   private name (``_x``, or a ``_x`` module) imported from another package; only the tracker
-  bank (``harness/pipeline/bank.py``) calls a tracker's ``update``.
+  bank (``harness/pipeline/bank.py``) calls a tracker's ``update``; no import inside a
+  function without its reason in a comment (``IMPORT_MARKER``); the config room registers
+  its resolvers by an explicit call, not on import; ``report/`` imports no room that runs
+  something.
 
 Run as a script (``python tests/test_architecture.py``) to print every circle found.
 """
@@ -16,6 +19,9 @@ Run as a script (``python tests/test_architecture.py``) to print every circle fo
 from __future__ import annotations
 
 import ast
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -212,11 +218,8 @@ def test_library_rooms_never_import_a_command() -> None:
 MAX_MODULE_LINES = 400
 MAX_FUNCTION_LINES = 80
 KERNEL_FILES = ("_kernels.py", "_kernel.py")  # compiled forms of named equations: exempt
-# over the limits today, each in another engineer's room (issue 27); remove an entry when
-# its room is split: the test then guards it like everything else
-TOO_LONG_ALLOWED = {
-    "harness/io/mot.py": "inputs",  # 436 lines
-}
+# over the limits (none since io/mot.py's writers became io/write.py); nothing joins the list
+TOO_LONG_ALLOWED: dict[str, str] = {}
 
 
 def _harness_files() -> list[Path]:
@@ -323,6 +326,99 @@ def update_calls(paths: list[Path]) -> list[str]:
 def test_only_the_tracker_bank_feeds_trackers() -> None:
     calls = update_calls(_harness_files())
     assert [c.split(":")[0] for c in calls] == ["harness/pipeline/bank.py"], calls
+
+
+# an import inside a function says why it is not at the top of its module, in a comment on
+# its line or the comment lines right above it: "# optional: <library>" (not a core
+# dependency of pyproject.toml), "# start-up: <what, measured cost>" (kept off the path to a
+# run's first frame, benchmarks/bench_startup.py), "# cycle: <modules>" (an import circle it
+# breaks) or "# order: <why>" (it must run after a call, e.g. Hydra's plugin scan)
+IMPORT_MARKER = re.compile(r"#\s*(optional|start-up|cycle|order):\s*\S")
+
+
+def unmarked_function_imports(src: str, name: str) -> list[str]:
+    """``name:line`` of every import inside a function (not under ``if TYPE_CHECKING:``)
+    without an ``IMPORT_MARKER`` on its lines or in the comment lines right above it (other
+    imports between them allowed, so one comment may cover a block)."""
+    lines = src.splitlines()
+    tree = ast.parse(src)
+    spans = [(n.lineno, n.end_lineno) for n in ast.walk(tree)
+             if isinstance(n, ast.Import | ast.ImportFrom)]
+    in_import = {i for a, b in spans for i in range(a, b + 1)}
+    found = set()
+    for fn in ast.walk(tree):
+        if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        for node in _runtime_nodes(fn):
+            if not isinstance(node, ast.Import | ast.ImportFrom):
+                continue
+            own = lines[node.lineno - 1:node.end_lineno]
+            above = []
+            i = node.lineno - 1
+            while i >= 1 and (lines[i - 1].lstrip().startswith("#") or i in in_import):
+                above.append(lines[i - 1])
+                i -= 1
+            if not any(IMPORT_MARKER.search(x) for x in [*own, *above]):
+                found.add(f"{name}:{node.lineno}")
+    return sorted(found)
+
+
+def test_function_import_checker_reads_the_markers() -> None:
+    src = ("def f():\n"
+           "    import os\n"  # unmarked
+           "    import ray  # optional: ray\n"
+           "    # start-up: pandas, ~0.7 s\n"
+           "    import pandas as pd\n"
+           "    from matplotlib import (  # start-up: matplotlib\n"
+           "        pyplot,\n"
+           "    )\n"
+           "    x = 1\n"
+           "    import json  # the comment says nothing\n"
+           "    if TYPE_CHECKING:\n"
+           "        import numpy\n"
+           "import sys\n")
+    assert unmarked_function_imports(src, "m.py") == ["m.py:10", "m.py:2"]
+
+
+def test_every_function_level_import_says_why() -> None:
+    """Issue 36 item 1: no import inside a function except for an optional dependency, a
+    measured start-up cost or an import circle, named in a comment (``IMPORT_MARKER``)."""
+    paths = [*_harness_files(), *sorted((ROOT / "trackers").rglob("*.py"))]
+    found = [f for path in paths for f in unmarked_function_imports(
+        path.read_text(), path.relative_to(ROOT).as_posix())]
+    assert found == [], "imports inside functions without a reason: " + ", ".join(found)
+
+
+def test_importing_the_rooms_registers_no_resolver() -> None:
+    """Issue 36 item 1: the config room registers its OmegaConf resolvers by an explicit
+    call (``occbench.config.register_resolvers``), never on import."""
+    code = ("import importlib, sys\n"
+            "from omegaconf import OmegaConf\n"
+            "for m in sys.argv[1:]:\n"
+            "    importlib.import_module(m)\n"
+            "names = ['occbench.data', 'occbench.choose', 'occbench.unique_dir']\n"
+            "before = [OmegaConf.has_resolver(n) for n in names]\n"
+            "from occbench.config import register_resolvers\n"
+            "register_resolvers()\n"
+            "print(before, [OmegaConf.has_resolver(n) for n in names])\n")
+    modules = ["occbench.config", "occbench.config.build", "occbench.config.check",
+               "occbench.config.choose", "occbench.config.paths", "occbench.config.rundir",
+               "occbench.pipeline.experiment", "occbench.commands.run"]
+    out = subprocess.run([sys.executable, "-c", code, *modules], capture_output=True,
+                         text=True, check=True, cwd=ROOT).stdout
+    assert out.split("\n")[0] == "[False, False, False] [True, True, True]"
+
+
+# the rooms that run something (a run, a replay, a sweep, a command, the server, a fit):
+# report/ only reads finished run folders, so it imports none of them
+RUNNING_ROOMS = {"pipeline", "replay", "sweeps", "commands", "server", "fit"}
+
+
+def test_report_reads_run_folders_and_runs_nothing() -> None:
+    graph = _graph()
+    bad = {m: sorted(t for t in ts if room(t) in RUNNING_ROOMS)
+           for m, ts in graph.items() if room(m) == "report"}
+    assert {m: ts for m, ts in bad.items() if ts} == {}
 
 
 if __name__ == "__main__":

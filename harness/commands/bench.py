@@ -47,6 +47,25 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import cv2
+import pandas as pd
+from hydra.errors import HydraException
+
+from occbench.commands.mistakes import explain, refuse
+from occbench.config.build import (
+    build_source,
+    build_tracker,
+    compose_config,
+    load_sequences,
+    tracker_choice,
+    tracker_configs,
+)
+from occbench.pipeline.bank import TrackerBank
+from occbench.pipeline.loop import ForegroundProvider, clean_detections, frames as frame_loop
+from occbench.pipeline.warmup import warm_up_once
+from occbench.progress import progress_factory
+from occbench.trackers.frontend.blobs import blobs_from_mask
+
 log = logging.getLogger(__name__)
 
 
@@ -121,9 +140,6 @@ def bench_frontend_stages(sequence: Any, make_source: Callable[[], Any], images:
     """Stage-by-stage timings of a front-end detector on ``images`` (frames 1..n), and the
     warm-up seconds of each run (empty lists when the source has no timed stages); ``bar``
     (a progress bar) advances by one after each run, outside the timed code."""
-    from occbench.pipeline.loop import ForegroundProvider, clean_detections
-    from occbench.trackers.frontend.blobs import blobs_from_mask
-
     if _staged_detector(make_source()) is None:
         return [], []
     names = ("background", "cleaning", "detector", "hand-off", "blobs")
@@ -215,8 +231,6 @@ def _bench_stages(sequence: Any, make_source: Callable[[], Any],
                   foreground: str, background: Mapping[str, Any] | None,
                   bar: Any) -> list[StageTiming]:
     """``bench_sequence``'s stages in order, ``bar`` advanced after each run."""
-    from occbench.pipeline.loop import frames as frame_loop
-
     global _clock
     clock, _clock = _clock, (time.process_time if _clock is time.thread_time else _clock)
     decode_s = []
@@ -263,8 +277,6 @@ def bench_tracker(name: str, tracker: Any, images: Sequence[Any],
     Raises:
         RuntimeError: the tracker failed (its error in the message).
     """
-    from occbench.pipeline.bank import TrackerBank
-
     bank = TrackerBank({name: tracker}, clock=_clock)
     for k, (img, (dets, fg)) in enumerate(zip(images, inputs), 1):
         bank.step(k, img, dets, fg)
@@ -290,22 +302,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     _clock = CLOCKS[args.clock]
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
 
-    import cv2
-    import pandas as pd
-
     cv2.setNumThreads(1)
-    from occbench.config.build import (
-        build_source,
-        build_tracker,
-        compose_config,
-        load_sequences,
-        tracker_choice,
-        tracker_configs,
-    )
-
-    from hydra.errors import HydraException
-
-    from occbench.commands.mistakes import explain, refuse
 
     try:
         cfg = compose_config(args.overrides)
@@ -319,9 +316,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"no sequence {args.sequence!r}; have {sorted(by_name)}")
         seq = by_name[args.sequence] if args.sequence else sequences[0]
         configs = tracker_configs(cfg.tracker, tracker_choice(args.overrides))
-        from occbench.pipeline.warmup import warm_up_once  # compile kernels before timing
-        from occbench.progress import progress_factory
-
         progress = progress_factory()  # on stderr when it is a terminal, else nothing
         warm_up_once({n: (lambda n=n, node=node: build_tracker(n, node))
                       for n, node in configs.items()}, lambda text: print(text, file=sys.stderr),

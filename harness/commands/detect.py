@@ -4,7 +4,7 @@ Same config tree as the main app (``conf/``, top config ``conf/detect.yaml``) wi
 ``dataset=`` and ``detector=`` groups. Writes into the Hydra run directory:
 
 * ``det/<sequence>.txt``: MOTChallenge detection rows ``frame,-1,left,top,w,h,score,-1,-1,-1``
-  (written by ``occbench.io.mot.write_mot``, the one place converting to 1-based boxes);
+  (written by ``occbench.io.write.write_mot``, the one place converting to 1-based boxes);
 * ``front_end.txt``: one line per sequence on which the front end fell back to another
   detector (which, and why; also printed);
 * ``detection_metrics.csv``: detections (and per frame), TP, FP, FN, precision, recall and
@@ -42,16 +42,23 @@ import cv2
 import hydra
 import numpy as np
 import pandas as pd
+import yaml
 from hydra.core.hydra_config import HydraConfig
 from hydra.experimental.callback import Callback
 from hydra.types import RunMode
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
+from occbench.config.build import build_source, load_sequences
 from occbench.errors import RunError
-from occbench.io.mot import write_atomic, write_mot
+from occbench.io.write import write_atomic, write_mot
+from occbench.pipeline.loop import no_progress
 from occbench.progress import progress_factory
 from occbench.report.overlays import draw_overlay
+from occbench.sources.cache import Store, cache_root, worth_caching
+from occbench.sources.cache.source import EntryBuilder, store_outputs
 from occbench.trackers.common.assignment import assign
+from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
+from occbench.trackers.frontend.heads import HeadDetector
 from occbench.trackers.geometry import iou_matrix
 
 log = logging.getLogger("occbench.commands.detect")
@@ -163,8 +170,6 @@ def table_text(table: pd.DataFrame, notes: list[str] | None = None) -> str:
 def run_detection(cfg: DictConfig, out_dir: Path, progress: Any = None) -> pd.DataFrame:
     """Run ``cfg.detector`` over ``cfg.dataset``; write det files, metrics and overlays;
     ``progress``: a progress factory (``occbench.progress.progress_factory``) or None."""
-    from occbench.config.build import build_source, load_sequences
-
     sequences = load_sequences(cfg.dataset)  # RunError naming the cause
     source = build_source(cfg.detector, cache=False)  # RunError naming what cannot be built
     cache = _cache_of(source, cfg.detector)
@@ -180,8 +185,6 @@ def run_detection(cfg: DictConfig, out_dir: Path, progress: Any = None) -> pd.Da
         ov_frames = (int(ov_frames[0]), int(ov_frames[1]))
     head_detector = None
     if ov_frames is not None and ov.get("heads", True):
-        from occbench.trackers.frontend.heads import HeadDetector
-
         head_detector = HeadDetector()
     counts: dict[str, DetectionCounts] = {}
     front_end_notes: dict[str, str] = {}
@@ -239,10 +242,6 @@ class DetectionFailed(RuntimeError):
 
 def _cache_of(source, node: DictConfig) -> tuple | None:
     """(store, resolved config) when ``source`` is a front-end one and the cache is on."""
-    from omegaconf import OmegaConf
-
-    from occbench.sources.cache import Store, cache_root, worth_caching
-
     root = cache_root()
     if root is None or not worth_caching(source):
         return None
@@ -255,10 +254,6 @@ def _detect_sequence(seq, source, out_dir: Path, iou: float, ov_frames, head_det
     """Detect one sequence: its det file, overlays and counts (added to ``counts``); with
     ``cache`` (store, detector config), its outputs into the front-end cache; ``progress``:
     a progress factory (``occbench.progress.progress_factory``) or None."""
-    from occbench.pipeline.loop import no_progress
-    from occbench.sources.cache.source import EntryBuilder, store_outputs
-    from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
-
     name = seq.info.name
     built = EntryBuilder() if cache is not None else None
     source.start(seq)
@@ -368,8 +363,6 @@ class GatherDetections(Callback):
         self.started = time.time()
 
     def on_multirun_end(self, config: DictConfig, **kwargs) -> None:
-        import yaml
-
         sweep_dir = Path(str(config.hydra.sweep.dir))
         rows = []
         for job in sorted((p for p in sweep_dir.glob("*") if p.name.isdigit()),

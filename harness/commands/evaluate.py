@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from occbench.commands.mistakes import refuse
 from occbench.datasets.mot import read_seqinfo, seqinfo_number
 from occbench.io.mot import MotTable, read_mot
 from occbench.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
@@ -187,7 +188,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         table = evaluate(args.gt, args.results, args.iou)
     except (FileNotFoundError, ValueError) as err:  # MotFormatError is a ValueError
-        from occbench.commands.mistakes import refuse
 
         return refuse(err)
     print(f"IoU threshold {args.iou:g}; ratios as fractions")

@@ -16,9 +16,10 @@ import os
 import re
 import sys
 from collections.abc import Iterator, Sequence
+from pathlib import Path
 from typing import Any, TextIO
 
-from occbench.errors import VERBOSE, verbose
+from occbench.errors import RunError, VERBOSE, refusal, verbose
 
 ENV = VERBOSE
 HINT = "(occbench -v ... shows the traceback)"
@@ -39,13 +40,14 @@ def _config_keys(config_name: str, overrides: Sequence[str]) -> list[str]:
     """Every dotted key of the config composed with the config group choices among
     ``overrides`` (no dotted key, no sweep, no hydra/), or [] when even that does not
     compose."""
+    # start-up: hydra and omegaconf (~0.1 s CPU), not loaded for --version, --help, eval...
     from hydra import compose, initialize_config_dir
     from hydra.core.global_hydra import GlobalHydra
     from hydra.core.override_parser.overrides_parser import OverridesParser
     from omegaconf import OmegaConf
 
-    from occbench.commands.run import CONF_DIR
-    from occbench.config import register
+    from occbench.commands.run import CONF_DIR  # start-up: imports hydra, as above
+    from occbench.config import register  # start-up: imports hydra, as above
 
     kept = []
     for text in overrides:
@@ -79,11 +81,10 @@ def _config_keys(config_name: str, overrides: Sequence[str]) -> list[str]:
 
 
 def _top_level(config_name: str) -> list[str]:
-    from pathlib import Path
-
+    # start-up: hydra and omegaconf (~0.1 s CPU), not loaded for --version, --help, eval...
     from omegaconf import OmegaConf
 
-    from occbench.commands.run import CONF_DIR
+    from occbench.commands.run import CONF_DIR  # start-up: imports hydra, as above
 
     conf = Path(CONF_DIR)
     keys = [k for k in OmegaConf.load(conf / f"{config_name}.yaml") if k != "defaults"]
@@ -106,6 +107,7 @@ def suggest(word: str, known: Sequence[str]) -> str | None:
 
 def explain(err: BaseException, config_name: str, overrides: Sequence[str]) -> str:
     """One line saying what is wrong with the command line (no traceback)."""
+    # start-up: hydra and omegaconf (~0.1 s CPU), not loaded for --version, --help, eval...
     from hydra.errors import CompactHydraException, MissingConfigException
 
     text = str(err).strip()
@@ -126,7 +128,6 @@ def explain(err: BaseException, config_name: str, overrides: Sequence[str]) -> s
         best = suggest(key, known)
         hint = f": did you mean '{best}'?" if best else " (add a new key with +key=value)"
         return f"occbench: unknown key '{key}'{hint}"
-    from occbench.errors import RunError
 
     if isinstance(err, CompactHydraException | RunError):  # a message made to be read
         first = text.splitlines()[0] if text else type(err).__name__
@@ -137,8 +138,6 @@ def explain(err: BaseException, config_name: str, overrides: Sequence[str]) -> s
 def refuse(err: object, status: int = 1) -> int:
     """Print ``occbench: <err>`` on stderr (``occbench.errors.refusal``), the one prefix of
     every mistake of every command, and return ``status`` (1: a refused input)."""
-    from occbench.errors import refusal
-
     print(refusal(err), file=sys.stderr)
     return status
 

@@ -23,6 +23,11 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from occbench.commands.mistakes import refuse
+from occbench.replay import trajectories, video
+from occbench.report.html import write_run_report
+from occbench.report.tracks import counted, tracks_text
+
 
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(
@@ -37,9 +42,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-video", action="store_true", help="skip the video and contact sheet")
     p.add_argument("--no-trajectories", action="store_true", help="skip the trajectory plot")
     args = p.parse_args(argv)
-    from occbench.report.tracks import counted, tracks_text
-
-    from occbench.commands.mistakes import refuse
 
     if not (args.run_dir / "config.yaml").is_file():
         return refuse(f"{args.run_dir / 'config.yaml'} not found (a run directory of "
@@ -51,18 +53,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     common = ["--sequence", args.sequence] if args.sequence else []
     status = 0
     if not args.no_video:
-        from occbench.replay import video
-
         extra = [*common, *(["--no-gt"] if args.no_gt else [])]
         if args.frames:
             extra += ["--frames", *map(str, args.frames)]
         status = max(status, video.main(["--run", str(args.run_dir), *extra]))
     if not args.no_trajectories:
-        from occbench.replay import trajectories
-
         status = max(status, trajectories.main([str(args.run_dir), *common]))
     if (args.run_dir / "metrics.csv").is_file():  # the page again, with the video and plots
-        from occbench.report.html import write_run_report
 
         seq = args.sequence or _first_sequence(args.run_dir)
         first = {seq: args.frames[0]} if args.frames else None

@@ -33,8 +33,13 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.errors import CompactHydraException
 from hydra.types import RunMode
 from omegaconf import DictConfig
+from tqdm.contrib.logging import logging_redirect_tqdm
 
-from occbench.errors import Terminated
+from occbench.errors import EXIT_SIGINT, EXIT_SIGTERM, RunError, Terminated
+from occbench.pipeline.experiment import run_experiment
+from occbench.progress import bars_wanted, progress_factory
+from occbench.report.tracks import tracks_text
+from occbench.sweeps.fingerprint import inputs
 
 log = logging.getLogger("occbench")
 
@@ -63,8 +68,7 @@ def app(cfg: DictConfig) -> float:
     """
     hc = HydraConfig.get()
     if hc.mode == RunMode.MULTIRUN:
-        from occbench.sweeps.fingerprint import inputs
-        from occbench.sweeps.gather import guarded
+        from occbench.sweeps.gather import guarded  # start-up: pandas, tables (~0.25 s CPU)
 
         return guarded(hc.runtime.output_dir, list(hc.overrides.task), lambda: run_app(cfg),
                        inputs=lambda: inputs(cfg))
@@ -73,12 +77,6 @@ def app(cfg: DictConfig) -> float:
 
 def run_app(cfg: DictConfig) -> float:
     """One run: the experiment, the printed table, the objective (raises AppError on failure)."""
-    from tqdm.contrib.logging import logging_redirect_tqdm
-
-    from occbench.errors import RunError
-    from occbench.pipeline.experiment import run_experiment
-    from occbench.progress import bars_wanted, progress_factory
-
     hc = HydraConfig.get()
     out_dir = Path(hc.runtime.output_dir)
     choice = hc.runtime.choices.get("tracker")
@@ -99,17 +97,15 @@ def run_app(cfg: DictConfig) -> float:
                  result.objective_tracker(objective.get("tracker")),
                  objective.get("metric") or "IDF1", value)
     else:
-        from occbench.report.tables import comparison, to_text
+        from occbench.report.tables import comparison, to_text  # start-up: pandas, ~0.25 s CPU
 
         if not result.metrics.empty:
-            from occbench.report.paired import paired_footer
+            from occbench.report.paired import paired_footer  # start-up: ~6 ms CPU
 
             print(f"{result.title} (COMBINED)")
             print(to_text(comparison(result.metrics, PRINTED)), end="")
             print(paired_footer(result.paired), end="")
         if result.tracks is not None:
-            from occbench.report.tracks import tracks_text
-
             print(f"{result.title}: tracks counted, not scored (no ground truth)")
             print(tracks_text(result.tracks), end="")
         print(f"results: {out_dir}")
@@ -122,8 +118,6 @@ def run_app(cfg: DictConfig) -> float:
 
 def _stopped(err: BaseException, out_dir: Path) -> NoReturn:
     """One line for a run stopped by Ctrl-C or SIGTERM, then exit 130 or 143."""
-    from occbench.errors import EXIT_SIGINT, EXIT_SIGTERM
-
     how, status = (("terminated (SIGTERM)", EXIT_SIGTERM) if isinstance(err, Terminated)
                    else ("interrupted (Ctrl-C)", EXIT_SIGINT))
     said = ("summary.md and report.html say" if (out_dir / "report.html").is_file()

@@ -26,6 +26,9 @@ import sys
 import time
 from collections.abc import Sequence
 
+from occbench.commands.cli import run
+from occbench.config.build import compose_config
+from occbench.pipeline.warmup import preload as warm, preload_spec
 from occbench.server import client
 from occbench.server.serve import Server, lock_path
 
@@ -34,17 +37,11 @@ PROG = "occbench server"
 
 def preload() -> None:
     """Warm this process up for the commands it will fork: see the module docstring."""
-    from occbench.config.build import compose_config
-    from occbench.pipeline.warmup import preload as warm
-    from occbench.pipeline.warmup import preload_spec
-
     warm(preload_spec(compose_config([])))  # tracker=all: every tracker by its name
 
 
 def serve(path: str) -> int:
     """Run the server of this process's identity on ``path`` until it exits."""
-    from occbench.commands.cli import run
-
     return Server(path, run, preload).serve()
 
 

@@ -129,7 +129,7 @@ def tracker_configs(node: Any, name: str | None = None) -> dict[str, Any]:
 def missing_library(err: BaseException):
     """The outside tracker's missing optional library behind ``err``
     (``occbench.trackers.outside.MissingLibrary``, found along its causes), else None."""
-    # start-up: occbench.trackers.outside's wrappers (~10 ms), wanted only when a build fails
+    # start-up: occbench.trackers.outside's wrappers (~7 ms CPU), wanted when a build fails
     from occbench.trackers.outside import MissingLibrary
 
     seen = set()

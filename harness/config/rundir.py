@@ -215,6 +215,3 @@ def register() -> None:
     """Register the resolver (once per process)."""
     if not OmegaConf.has_resolver(RESOLVER):
         OmegaConf.register_new_resolver(RESOLVER, unique_dir, use_cache=True)
-
-
-register()

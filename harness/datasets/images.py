@@ -14,6 +14,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import simplejpeg
 
 from occbench.datasets.base import GroundTruth, Sequence
 from occbench.io.mot import MotTable
@@ -69,8 +70,6 @@ def _decode_jpeg(data: bytes, path: Path) -> np.ndarray | None:
     Raises:
         FrameError: the file is damaged (libjpeg reports an error or a warning).
     """
-    import simplejpeg  # start-up: simplejpeg, ~15 ms; a synthetic run decodes no JPEG
-
     if not data.startswith(b"\xff\xd8"):
         raise FrameError(f"not a JPEG file (no start-of-image marker): {path}")
     try:

@@ -146,7 +146,7 @@ def run_experiment(
     finally:
         writing.close()
     plan.writer.close()
-    import pandas as pd  # start-up: pandas, ~0.7 s (loaded after the first frames)
+    import pandas as pd  # start-up: pandas, ~0.25 s CPU
 
     return ExperimentResult(record.metrics, record.failures, pd.DataFrame(record.timings),
                             plan.writer.out_dir, plan.names, record.paired, plan.title,
@@ -164,7 +164,7 @@ def track_sequence(plan: RunPlan, seq: Sequence,
     plan.writer.ground_truth(seq)
     source = build_source(plan.detector)
     if plan.protocol == "single_target":
-        # start-up: occbench.pipeline.protocols (~8 ms), for protocol=single_target only
+        # start-up: occbench.pipeline.protocols (~3 ms CPU), for protocol=single_target
         from occbench.pipeline.protocols import run_single_target
 
         builders = {n: (lambda n=n: plan.build(n)) for n in plan.configs}

@@ -81,7 +81,7 @@ class ForegroundProvider:
         self._model = None
         if mode == "mog2":
             try:
-                # start-up: the front end (~30 ms), for foreground=mog2 only
+                # start-up: the front end (~7 ms CPU), for foreground=mog2 only
                 from occbench.trackers.frontend import BackgroundModel
             except ImportError as err:  # the front end is an optional part of the build
                 raise RunError(f"foreground=mog2 needs occbench.trackers.frontend ({err})") from err

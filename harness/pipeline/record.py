@@ -13,13 +13,19 @@ import logging
 import math
 import traceback
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from occbench.datasets.base import Sequence
-from occbench.io.mot import MotTable, format_mot, read_mot, read_mot_text, write_atomic
+from occbench.io.mot import MotTable, read_mot, read_mot_text
+from occbench.io.write import format_mot, write_atomic
+from occbench.metrics import SequenceScore, score_sequence
+from occbench.metrics.occlusion import extra_score
+from occbench.metrics.timeline import frame_counts
 from occbench.pipeline.bank import TrackerOutput
 from occbench.pipeline.plan import RunPlan
 from occbench.pipeline.summary import (
+    empty_metrics,
     hota_alpha_frame,
     mark_complete,
     metrics_frame,
@@ -28,20 +34,26 @@ from occbench.pipeline.summary import (
     with_extras,
 )
 from occbench.pipeline.writer import Failure
+from occbench.report.tracks import track_rows, track_stats
 
-if TYPE_CHECKING:  # pandas, the metrics and the reports are imported after the first frames
+if TYPE_CHECKING:  # pandas and the report room are imported after the first frames
     import pandas as pd
-
-    from occbench.metrics import SequenceScore
 
 log = logging.getLogger(__name__)
 
 
 def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScore:
     """``occbench.metrics.score_sequence`` of ``result`` against a sequence's GroundTruth."""
-    from occbench.metrics import score_sequence
-
     return score_sequence(gt.table, result, iou_threshold=iou_threshold)
+
+
+def pages() -> ModuleType:
+    """``occbench.report.publish``, the report room's door: imported when the first
+    sequence's summary is written, not before the first frames."""
+    # start-up: the report room's pandas, matplotlib and altair (~1 s CPU)
+    from occbench.report import publish
+
+    return publish
 
 
 class RunRecord:
@@ -87,13 +99,7 @@ class RunRecord:
         ``state`` (``running``, ``finished`` or ``interrupted``), whatever could be written."""
         frame = with_extras(metrics_frame(self.scores), self.extras)
         frame = mark_complete(frame, self.expected, state == "finished")
-        if frame.empty:
-            import pandas as pd
-
-            from occbench.metrics import COLUMNS
-
-            frame = pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
-        return frame
+        return empty_metrics() if frame.empty else frame
 
     def publish(self, state: str, sname: str = "*") -> pd.DataFrame:
         """Write metrics.csv and summary.md for ``state``; a write that fails is recorded
@@ -107,19 +113,15 @@ class RunRecord:
         status = run_status(state, done, len(self.plan.sequences), self.failures)
         try:  # the paired differences (summary.md's section, the printed footer) once the
             # run has ended: 1000 resamples per pair are not redone after every sequence
-            from occbench.metrics.paired import all_pairs
-
             done = state != "running" and self.plan.report  # report: false skips them
-            self.paired = all_pairs(self.frames) if done else []
+            self.paired = pages().paired_differences(self.frames) if done else []
         except Exception as err:  # noqa: BLE001 - recorded, the summary is written without
             self.paired = []
             self.fail("*", sname, "paired", err, traceback.format_exc())
         try:
-            from occbench.report.paired import paired_markdown
-
             self.writer.text("summary.md", summary_markdown(
                 frame, self.failures, self.plan.table_columns, self.plan.title, status,
-                paired_markdown(self.paired), self.track_rows()))
+                pages().paired_section(self.paired), self.track_rows()))
         except OSError as err:
             self.fail("*", sname, "summary", err)
         return frame
@@ -128,8 +130,6 @@ class RunRecord:
         """Tracks counted on the sequences without ground truth (None: every sequence has)."""
         if not self.unscored:
             return None
-        from occbench.report.tracks import track_rows
-
         return track_rows(self.unscored, self.timings)
 
     def sequence(self, seq: Sequence, outputs: dict[str, TrackerOutput]) -> None:
@@ -171,8 +171,6 @@ class RunRecord:
             return
         log.info("%s on %s: %d frames, %.1f frames/s", n, sname, out.frames, out.fps)
         if seq.gt is None:
-            from occbench.report.tracks import track_stats
-
             log.info("%s has no ground truth: %s's tracks counted, not scored", sname, n)
             self.unscored.setdefault(n, {})[sname] = track_stats(out.table.ids)
             return
@@ -184,17 +182,13 @@ class RunRecord:
 
     def _score(self, n: str, seq: Sequence, table: MotTable,
                followers: dict[int, int] | None = None) -> None:
-        from occbench.metrics.occlusion import extra_score
-
         plan, sname = self.plan, seq.info.name
         self.scores[n][sname] = score(seq.gt, table, plan.iou_threshold)
         self.extras[n][sname] = extra_score(seq.gt, table, plan.iou_threshold,
                                             plan.hidden_below, followers)
         if not plan.report:  # the per-frame counts serve only the page and the paired bootstrap
             return
-        from occbench.metrics.timeline import frame_counts  # the report's timeline, paired
-
-        try:
+        try:  # the report's timeline, and the paired differences' counts
             self.frames[n][sname] = frame_counts(seq.gt.table, table, plan.iou_threshold)
         except Exception as err:  # noqa: BLE001 - recorded, the scores stand
             self.fail(n, sname, "timeline", err, traceback.format_exc())
@@ -225,63 +219,30 @@ class RunRecord:
     def finish(self) -> None:
         """summary.tex, the plots and hota_alpha.csv, then the final metrics.csv and
         summary.md (so that summary.md counts every failure the run reports), then
-        report.html (summary.md written again if the page fails); a failing
-        one is recorded and the others are still written. ``metrics`` keeps every scored
-        sequence whatever could be written (disk full...). With ``report: false`` the plots
-        and report.html are not made (nor the paired differences: ``publish``)."""
-        from occbench.report.bars import metric_bars
-        from occbench.report.hota_alpha import hota_alpha_plot
-        from occbench.report.tables import comparison, to_latex
-
-        plan, writer = self.plan, self.writer
+        report.html (summary.md written again if the page fails): one call to the report
+        room (``occbench.report.publish.end_of_run``); a failing page is recorded and the
+        others are still written. ``metrics`` keeps every scored sequence whatever could be
+        written (disk full...). With ``report: false`` the plots and report.html are not
+        made (nor the paired differences: ``publish``)."""
+        plan = self.plan
         self.metrics = self.current("finished")
-        if self.metrics.empty:
-            log.warning("no sequence was scored: metrics.csv has no rows")
-        try:
-            if not self.metrics.empty:
-                self.writer.text("summary.tex", to_latex(
-                    comparison(self.metrics, plan.table_columns),
-                    caption=f"occbench: {plan.title} (COMBINED)"))
-        except Exception as err:  # noqa: BLE001 - recorded
-            self.fail("*", "*", "summary", err, traceback.format_exc())
-        try:
-            if plan.report:
-                metric_bars(self.metrics, writer.path("plots/metrics.png"), plan.plot_metrics,
-                            plan.title, plan.metas)
-        except Exception as err:  # noqa: BLE001 - a plot is not worth losing the run for
-            self.fail("*", "*", "plot", _naming("plots/metrics.png", err),
-                      traceback.format_exc())
-        target = "hota_alpha.csv"  # the file being made when a failure comes, for its message
-        try:  # HOTA and its sub-metrics at each alpha, and plots/hota_alpha.png
-            alpha = hota_alpha_frame(self.scores)
-            if not alpha.empty:
-                self.writer.text("hota_alpha.csv", alpha.to_csv(
-                    index=False, float_format="%.6f", lineterminator="\n"))
-                target = "plots/hota_alpha.png"
-                if plan.report:
-                    hota_alpha_plot(alpha, writer.path("plots/hota_alpha.png"), plan.title,
-                                    plan.metas)
-        except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
-            self.fail("*", "*", "hota_alpha", _naming(target, err), traceback.format_exc())
-        try:
-            self.publish("finished")
-        except Exception as err:  # noqa: BLE001 - recorded, the run ends failed
-            self.fail("*", "*", "metrics", err, traceback.format_exc())
-        self.page()
+        door = pages()
+        door.end_of_run(self._folder(), door.RunPages(
+            self.metrics, lambda: hota_alpha_frame(self.scores), self.frames, lambda: self.paired,
+            lambda: self.publish("finished"), plan.title, plan.table_columns,
+            plan.plot_metrics, plan.metas, plan.report))
 
     def page(self, state: str = "finished", sname: str = "*") -> None:
         """report.html, last: it shows every output above (``report: false``: none). A
         failure is recorded and summary.md (of ``state``) written again to count it."""
-        if not self.plan.report:
-            return
-        try:
-            from occbench.report.html import write_run_report
+        if self.plan.report:
+            pages().run_page(self._folder(), self.frames, self.plan.title, self.paired,
+                             lambda: self.publish(state, sname))
 
-            write_run_report(self.writer.out_dir, self.frames, self.plan.title,
-                             paired=self.paired)
-        except Exception as err:  # noqa: BLE001 - recorded, the run's other outputs stand
-            self.fail("*", "*", "report.html", err, traceback.format_exc())
-            self.publish(state, sname)  # summary.md counts this failure too
+    def _folder(self) -> Any:
+        """The run folder as the report room writes into it (``occbench.report.publish``)."""
+        return pages().Folder(self.writer.out_dir, self.writer.text, self.writer.path,
+                              lambda stage, err, trace: self.fail("*", "*", stage, err, trace))
 
 
 def read_external(name: str, folder: Path, sequence: str, last_frame: int | None = None,
@@ -309,9 +270,3 @@ def _in_window(table: MotTable, seq: Sequence) -> MotTable:
     frames = seq.frame_numbers()
     keep = (table.frames >= frames.start) & (table.frames < frames.stop)
     return table if keep.all() else table.rows(keep)
-
-
-def _naming(name: str, err: BaseException) -> str:
-    """A failure's message naming the output file ``name`` that could not be made (an
-    ``OSError`` such as a full disk says only ``[Errno 28] No space left on device``)."""
-    return f"{name}: {type(err).__name__}: {err}"

@@ -7,9 +7,10 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from occbench.errors import RunError
-from occbench.metrics import COMBINED, hota_alpha_table, summarize
+from occbench.metrics import COLUMNS, COMBINED, hota_alpha_table, summarize
 from occbench.metrics.occlusion import extra_rows
 from occbench.pipeline.writer import Failure
+from occbench.report.legend import column_legend
 from occbench.report.tracks import tracks_markdown
 
 if TYPE_CHECKING:  # pandas and the tables are imported where used (start-up time)
@@ -63,7 +64,7 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
     ``status`` (``run_status``) when the run is incomplete or partly failed; ``tracks``
     (``occbench.report.tracks.track_rows``) counts the tracks of sequences without ground
     truth."""
-    # start-up: report.tables imports pandas (~0.7 s)
+    # start-up: report.tables imports pandas (~0.25 s CPU)
     from occbench.report.tables import comparison, direction, per_sequence, to_markdown
 
     lines = ["# occbench results", ""]
@@ -96,7 +97,6 @@ def summary_markdown(metrics: pd.DataFrame, failures: list[Failure],
                       to_markdown(per_sequence(metrics, metric, seqs), sense=direction(metric))]
         if paired:
             lines += [paired]
-        from occbench.report.legend import column_legend  # start-up: ~15 ms
 
         lines += column_legend(c for table in shown for c in table.columns)
     if failures:
@@ -117,7 +117,7 @@ def with_extras(metrics: pd.DataFrame, extras: Mapping[str, Mapping[str, Any]]) 
 
 def hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     """``hota_alpha.csv``: ``tracker`` + ``occbench.metrics.hota_alpha_table`` per tracker."""
-    import pandas as pd  # start-up: pandas, ~0.7 s (loaded after the first frames)
+    import pandas as pd  # start-up: pandas, ~0.25 s CPU
 
     parts = []
     for name, s in scores.items():
@@ -128,8 +128,15 @@ def hota_alpha_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
 
 
+def empty_metrics() -> pd.DataFrame:
+    """metrics.csv's columns without a row (no sequence scored yet)."""
+    import pandas as pd  # start-up: pandas, ~0.25 s CPU
+
+    return pd.DataFrame(columns=["tracker", "sequence", *COLUMNS, "complete"])
+
+
 def metrics_frame(scores: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
-    import pandas as pd  # start-up: pandas, ~0.7 s (loaded after the first frames)
+    import pandas as pd  # start-up: pandas, ~0.25 s CPU
 
     """``summary_rows`` of every tracker with scores, one frame (empty when none)."""
     parts = [summary_rows(n, s) for n, s in scores.items() if s]

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 from occbench.config.rundir import busy
 from occbench.datasets.base import Sequence
 from occbench.errors import RunError
-from occbench.io.mot import (
-    MotTable,
+from occbench.io.mot import MotTable
+from occbench.io.write import (
     WriteError,
     write_atomic,
     write_mot,

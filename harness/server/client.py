@@ -197,7 +197,7 @@ def _die_as(signum: int, saved: dict) -> int:
 def start_server(ident: dict) -> None:
     """Start this identity's server in the background (own session, no terminal, output to
     its log); it exits at once when another one is starting or running."""
-    import subprocess  # start-up: ~10 ms on every command's fast path (--version 0.08 s)
+    import subprocess  # start-up: ~1.5 ms CPU, 2 % of occbench --version
 
     path = socket_path(ident)
     os.makedirs(os.path.dirname(path), mode=0o700, exist_ok=True)

@@ -37,7 +37,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from occbench.errors import REFUSED, refusal
-from occbench.io.mot import write_atomic
+from occbench.io.write import write_atomic
 from occbench.sweeps.jobs import (  # noqa: F401 - re-exported: occbench.sweeps.gather's names
     DAMAGED,
     DONE,

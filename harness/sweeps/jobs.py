@@ -20,7 +20,7 @@ from typing import Any
 import yaml
 
 from occbench.config.meta import metas, run_nodes
-from occbench.io.mot import write_atomic
+from occbench.io.write import write_atomic
 
 log = logging.getLogger(__name__)
 

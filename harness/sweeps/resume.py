@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from occbench.errors import verbose
-from occbench.io.mot import write_atomic
+from occbench.io.write import write_atomic
 from occbench.sweeps import outputs
 from occbench.sweeps.jobs import DONE, FAILED, STATUS_FILE, read_status, sweep_id
 

@@ -28,7 +28,8 @@ from hydra import compose, initialize_config_dir
 
 from occbench.datasets.images import FrameError, read_image
 from occbench.errors import RunError
-from occbench.io.mot import MotFormatError, WriteError, read_mot, write_atomic
+from occbench.io.mot import MotFormatError, read_mot
+from occbench.io.write import WriteError, write_atomic
 from occbench.pipeline.experiment import run_experiment
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -573,7 +574,7 @@ def test_disk_full_or_unwritable_tracks_are_named_in_one_line(tmp_path, monkeypa
     data = tmp_path / "data"
     mot_folder(data, "a", frames=False)
     out = tmp_path / "run"
-    import occbench.io.mot as M
+    import occbench.io.write as M
 
     def faulty_open(path, mode="r", *args, **kwargs):
         if "tracks" in str(path) and str(path).endswith(".part"):
@@ -607,7 +608,7 @@ def test_a_disk_full_after_one_sequence_keeps_its_metrics_and_every_error(tmp_pa
     empty or partial file is left."""
     import matplotlib.figure
 
-    import occbench.io.mot as M
+    import occbench.io.write as M
 
     data = tmp_path / "data"
     for name in "abc":

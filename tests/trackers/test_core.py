@@ -5,7 +5,8 @@ import itertools
 import numpy as np
 import pytest
 
-from occbench.io.mot import MotFormatError, read_mot, write_mot
+from occbench.io.mot import MotFormatError, read_mot
+from occbench.io.write import write_mot
 from occbench.trackers.common.assignment import assign, assign_min_cost
 from occbench.trackers.geometry import (
     box_ellipses,

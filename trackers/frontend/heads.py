@@ -31,6 +31,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
+
 log = logging.getLogger(__name__)
 
 HAIR = ("black", "blond", "brown", "red")
@@ -272,8 +274,6 @@ class HeadDetector:
             With ``boxes``: (N, 4) xywh head box per box (rows of NaN where none, the best
             one when ``max_heads`` == 1). Without: (M, 4) xywh of all heads found.
         """
-        from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
-
         h, w = frame.shape[:2]
         per_box = boxes is not None
         if boxes is None:

@@ -44,6 +44,7 @@ from occbench.trackers.common.checks import parameter_group
 from occbench.trackers.frontend.silhouette_params import MOVED, Heights, Person, Report, Score, Search
 from occbench.trackers.frontend.silhouette_search import _Scales, search_regions
 from occbench.trackers.frontend.silhouette_template import load_template
+from occbench.trackers.geometry import intersection_matrix
 
 log = logging.getLogger(__name__)
 
@@ -223,6 +224,7 @@ class SilhouetteMatcher:
         fits = np.zeros((len(label), self.search.max_people, 9))
         counts = np.zeros(len(label), dtype=np.int64)
         if self.search.compiled:
+            # start-up: the numba kernels (~9 ms CPU), for the compiled search only
             from occbench.trackers.frontend._silhouette_kernel import search_regions_kernel as search
         else:
             search = search_regions
@@ -265,8 +267,6 @@ class SilhouetteMatcher:
         search but it is not reported. This is the step a verifier of candidate boxes plugs
         into.
         """
-        from occbench.trackers.geometry import intersection_matrix
-
         keep = np.ones(len(c), dtype=bool)
         for k in range(1, len(c)):
             earlier = np.flatnonzero(keep[:k] & (c.region[:k] == c.region[k]))

@@ -177,6 +177,7 @@ class TextureColourMixture:
         H, W = frame.shape[:2]
         alpha = 1.0 / self.history if learningRate < 0 else float(learningRate)
         if self.compiled and self._mu is not None and self._shape == (H, W):
+            # start-up: the numba kernels (~8 ms CPU), for the compiled model only
             from occbench.trackers.frontend._texture_colour_kernel import apply_kernel
 
             label = np.empty((H, W), dtype=np.uint8)

@@ -21,7 +21,7 @@ from typing import Any
 import pandas as pd
 import vl_convert
 
-from occbench.io.mot import write_atomic
+from occbench.io.write import write_atomic
 from occbench.sources.cache import cache_root
 
 BUNDLE_MARK = "window.vegaEmbed="  # vl-convert's bundle sets it: the kept copy is one

@@ -106,7 +106,7 @@ def videos(run_dir: Path, first: Mapping[str, int] | None = None) -> dict[str, t
         window = ((yaml.safe_load(cfg.read_text()) or {}).get("dataset") or {}).get("frames")
         start = int(window[0]) if window else 1
     for path in sorted((run_dir / "report").glob("*.mp4")):
-        import av  # start-up: PyAV, ~0.25 s; only a run with videos reads one
+        import av  # start-up: PyAV, ~50 ms CPU; only a run with videos reads one
 
         with av.open(str(path)) as box:
             fps = float(box.streams.video[0].average_rate or 25)

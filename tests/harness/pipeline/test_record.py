@@ -53,15 +53,14 @@ def _full_disk(*args, **kwargs):
 
 def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, mot_root, monkeypatch):
     # issue 39: "plot failed ... OSError: [Errno 28]" said nothing of which file
-    import occbench.report.bars as bars
-    import occbench.report.hota_alpha as hota_alpha
+    import occbench.report.publish as publish
 
     record = _record(tmp_path, mot_root)
     for seq in record.plan.sequences:
         record.sequence(seq, {"baseline": TrackerOutput(seq.gt.table, frames=30, seconds=0.5)})
         record.sequence_done(seq.info.name)
-    monkeypatch.setattr(bars, "metric_bars", _full_disk)
-    monkeypatch.setattr(hota_alpha, "hota_alpha_plot", _full_disk)
+    monkeypatch.setattr(publish, "metric_bars", _full_disk)
+    monkeypatch.setattr(publish, "hota_alpha_plot", _full_disk)
     record.finish()
     messages = {f.stage: f.message for f in record.failures}
     assert messages["plot"].startswith("plots/metrics.png: OSError: [Errno 28]")
