@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from occbench.trackers.common.checks import at_least, require
 from occbench.trackers.frontend.blobs import Blob
 
 log = logging.getLogger(__name__)
@@ -224,20 +225,17 @@ class PerspectiveCalibration:
                  min_span: float = 0.15, min_height: float = 16.0, horizon_above: float = 0.5,
                  seed: int = 0) -> None:
         lo, hi = (float(v) for v in aspect)
-        if not 0 < lo < hi:
-            raise ValueError(f"aspect must be [min, max] with 0 < min < max, got {list(aspect)}")
-        if not 0 < min_fill <= 1 or not 0 < head_ratio <= 1:
-            raise ValueError(f"min_fill and head_ratio must be in (0, 1], got {min_fill}, {head_ratio}")
-        if not 0 < tolerance < 1:
-            raise ValueError(f"tolerance must be in (0, 1), got {tolerance}")
-        if min_bins < 2:
-            raise ValueError(f"min_bins must be >= 2, got {min_bins}")
+        require("calibration.aspect", 0 < lo < hi, "must be [min, max] with 0 < min < max",
+                list(aspect))
+        require("calibration.min_fill", 0 < min_fill <= 1, "must lie in (0, 1]", min_fill)
+        require("calibration.head_ratio", 0 < head_ratio <= 1, "must lie in (0, 1]", head_ratio)
+        require("calibration.tolerance", 0 < tolerance < 1, "must lie in (0, 1)", tolerance)
+        at_least("calibration", 2, min_bins=min_bins)
         self.aspect = (lo, hi)
         self.min_fill, self.head_ratio = float(min_fill), float(head_ratio)
         self.tolerance, self.min_bins = float(tolerance), int(min_bins)
         self.min_span, self.min_height, self.seed = float(min_span), float(min_height), int(seed)
-        if horizon_above <= 0:
-            raise ValueError(f"horizon_above must be > 0, got {horizon_above}")
+        require("calibration.horizon_above", horizon_above > 0, "must be > 0", horizon_above)
         self.horizon_above = float(horizon_above)
         self.reset()
 

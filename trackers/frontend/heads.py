@@ -31,6 +31,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import require, unit
 from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
 
 log = logging.getLogger(__name__)
@@ -156,13 +157,11 @@ class HeadDetector:
         search_fraction: float = 0.35,
         min_head_height: int = 5,
     ) -> None:
-        for name, v in (("w1", w1), ("w2", w2)):
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must be in [0, 1], got {v}")
-        if not 0.0 < min_occupancy <= 1.0:
-            raise ValueError(f"min_occupancy must be in (0, 1], got {min_occupancy}")
-        if not 0.0 < head_fraction < 1.0:
-            raise ValueError(f"head_fraction must be in (0, 1), got {head_fraction}")
+        unit("heads", w1=w1, w2=w2)
+        require("heads.min_occupancy", 0.0 < min_occupancy <= 1.0, "must lie in (0, 1]",
+                min_occupancy)
+        require("heads.head_fraction", 0.0 < head_fraction < 1.0, "must lie in (0, 1)",
+                head_fraction)
         self.mixtures = ColourMixtures.load(mixtures)
         self._tables = self.mixtures.tables()
         names = self.mixtures.names

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import at_least, require
 from occbench.trackers.frontend.active_basis import GRID, TAU, ActiveBasis, shift_offsets
 from occbench.trackers.frontend.calibration import Perspective
 from occbench.trackers.frontend.detectors import SilhouetteDetector, _labels_from_boxes
@@ -167,17 +168,12 @@ class ShapeSearch:
                  height_tolerance: float = 1.1, max_people: int = 20, stride: int = 1) -> None:
         if not isinstance(template, ActiveBasis):
             raise TypeError(f"template must be an ActiveBasis, got {type(template).__name__}")
-        if not 0 < min_height <= max_height <= 1:
-            raise ValueError(f"need 0 < min_height <= max_height <= 1, got {min_height}, {max_height}")
-        if n_scales < 1 or max_people < 1 or stride < 1:
-            raise ValueError(f"n_scales, max_people and stride must be >= 1, got {n_scales}, "
-                             f"{max_people}, {stride}")
-        if not 0 < min_vacant <= 1:
-            raise ValueError(f"min_vacant must be in (0, 1], got {min_vacant}")
-        if not 0 <= occupy_level < 1:
-            raise ValueError(f"occupy_level must be in [0, 1), got {occupy_level}")
-        if height_tolerance < 1:
-            raise ValueError(f"height_tolerance must be >= 1, got {height_tolerance}")
+        require("search.min_height", 0 < min_height <= max_height <= 1,
+                f"must satisfy 0 < min_height <= max_height {max_height} <= 1", min_height)
+        at_least("search", 1, n_scales=n_scales, max_people=max_people, stride=stride,
+                 height_tolerance=height_tolerance)
+        require("search.min_vacant", 0 < min_vacant <= 1, "must lie in (0, 1]", min_vacant)
+        require("search.occupy_level", 0 <= occupy_level < 1, "must lie in [0, 1)", occupy_level)
         self.template = template
         sil = load_template(silhouette)
         H, W = template.size

@@ -111,5 +111,7 @@ def test_active_area_drops_flat_padding():
 def test_calibration_arguments_are_validated():
     with pytest.raises(ValueError, match="aspect"):
         PerspectiveCalibration(aspect=(0.6, 0.2))
-    with pytest.raises(ValueError, match="horizon_above"):
+    with pytest.raises(ValueError, match="calibration.horizon_above"):
         PerspectiveCalibration(horizon_above=0.0)
+    with pytest.raises(ValueError, match="calibration.horizon_above"):  # NaN: let in before
+        PerspectiveCalibration(horizon_above=float("nan"))

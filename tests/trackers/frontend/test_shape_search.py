@@ -95,8 +95,10 @@ def test_the_calibrated_scales_only(template):
 
 
 def test_arguments_are_checked(template):
-    with pytest.raises(ValueError, match="min_vacant"):
+    with pytest.raises(ValueError, match="search.min_vacant"):
         ShapeSearch(template, min_vacant=0.0)
+    with pytest.raises(ValueError, match="search.height_tolerance"):  # NaN: let in before
+        ShapeSearch(template, height_tolerance=float("nan"))
     with pytest.raises(ValueError, match="min_height"):
         ShapeSearch(template, min_height=0.7, max_height=0.6)
     with pytest.raises(TypeError, match="ActiveBasis"):
