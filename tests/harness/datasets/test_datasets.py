@@ -330,7 +330,7 @@ def test_caviar_frames(caplog):
         (seq,) = load_caviar(CAVIAR)
     # issue 39 item 10: '295 frames (the container estimates 3)' read as if 3 were frames
     assert re.search(r"295 frames, counted by decoding \(its container reports \d+, an "
-                     "estimate in this format\)", caplog.text), caplog.text
+                     r"estimate in this format\)", caplog.text), caplog.text
     assert (seq.info.width, seq.info.height, seq.info.fps, seq.info.length) == (384, 288, 25.0, 295)
     assert isinstance(seq, VideoSequence) and seq.exact  # the shipped MPEG, counted by decoding
     assert seq.has_pixels
