@@ -113,9 +113,10 @@ def run_table(table: str, runs: Path) -> tuple[list[Path], float]:
 
 
 def _config(table: str, args: list[str]) -> dict:
-    """The composed config of one of the table's commands (``--cfg job``, not resolved)."""
+    """The composed config of one of the table's commands (``--cfg job --resolve``: a spec's
+    ``${hydra:runtime.choices.X}`` is written as the run would write it)."""
     argv = [sys.executable, "-m", "occbench", *_args(table, args, str(use_shared_data())),
-            "--cfg", "job"]
+            "--cfg", "job", "--resolve"]
     done = subprocess.run(argv, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{table}: `occbench {' '.join(args)} --cfg job` failed:\n"
