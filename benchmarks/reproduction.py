@@ -119,7 +119,7 @@ def _config(table: str, args: list[str]) -> dict:
             "--cfg", "job", "--resolve"]
     done = subprocess.run(argv, capture_output=True, text=True, check=False)
     if done.returncode != 0:
-        raise RuntimeError(f"{table}: `occbench {' '.join(args)} --cfg job` failed:\n"
+        raise RuntimeError(f"{table}: `occbench {' '.join(args)} --cfg job --resolve` failed:\n"
                            f"{done.stderr[-2000:]}")
     return yaml.safe_load(done.stdout)
 
