@@ -4,10 +4,13 @@ hand-derivable cases, the paper's rule beside ours."""
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from scipy.sparse import csr_array
 
-from occbench.trackers.three_hypothesis import Adaptations
+from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.records import Detections
+from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
@@ -108,6 +111,46 @@ def test_merged_measurement_corrects_m_by_its_own_share_only():
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).motion_front, MeasurementMotion)
     assert isinstance(build_rules(Adaptations(merged_motion=True), h).motion_front, MergedMotion)
+
+
+def _walker_past_a_standing_person(merged_motion: bool) -> list[tuple[int, float]]:
+    """A red walker P (28 x 80, 2 px/frame right, nearer: lower bottom edge) passes in
+    front of a blue person Q standing (24 x 64 at x 100). Both are detected until frame 29;
+    Q, covered, is missed from frame 30 on; at frames 32-35 the detector keeps one small
+    box on Q's place, all of it inside Q's predicted region and filled with P's red (the
+    pair's box); then P is detected again. Returns, per frame 30-41, the id and centre x of
+    the reported box nearest P's."""
+    tracker = RetaTracker(adaptations=Adaptations(merged_motion=merged_motion))
+    q_box = np.array([100.0, 30, 24, 64])
+    out = []
+    for t in range(42):
+        p_box = np.array([40.0 + 2.0 * t, 40, 28, 80])
+        img = np.full((140, 200, 3), 90, np.uint8)
+        for (x, y, w, h), colour in ((q_box, (200, 60, 40)), (p_box, (60, 60, 200))):
+            cv2.ellipse(img, ((int(x + w / 2), int(y + h / 2)), (int(w), int(h)), 0), colour, -1)
+        dets = ([p_box, q_box] if t < 30 else [p_box] if t < 32
+                else [np.array([106.0, 44, 18, 50])] if t < 36 else [p_box])
+        tracks = tracker.update(img, Detections(np.array(dets), np.ones(len(dets))))
+        if t >= 30:
+            shown = [x for x in tracks if x.state.reported]
+            p = shown[int(np.argmax(iou_matrix(p_box[None], np.array([x.box for x in shown]))))]
+            out.append((p.id, p.box[0] + p.box[2] / 2))  # the reported box nearest P
+    return out
+
+
+def test_a_box_on_a_hidden_partner_does_not_drag_the_walker_and_its_id():
+    """``merged_motion``: the walker matched at frame 32 to a box its hidden partner's
+    region holds (own share near 0) keeps M's motion, so the box goes to the partner from
+    frame 33 on and the walker's own box, back at frame 36, to the walker's id; the paper's
+    correction drags the walker's M onto the box, it keeps the box for 4 frames, and its
+    own box goes to the partner's id: the two ids are exchanged."""
+    paper, ours = (_walker_past_a_standing_person(m) for m in (False, True))
+    p_id = ours[0][0]
+    assert p_id > 0 and paper[0][0] == p_id
+    assert [i for i, _ in paper[3:6]] == [p_id] * 3  # the paper: P keeps the box
+    assert p_id not in [i for i, _ in ours[3:6]]  # ours: the box is the partner's
+    assert [i for i, _ in ours[6:]] == [p_id] * 6
+    assert p_id not in [i for i, _ in paper[6:]]  # the paper's exchange at frame 36
 
 
 def test_region_term_of_a_node_behind_is_scaled_by_its_visible_share():
