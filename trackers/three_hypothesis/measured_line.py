@@ -31,12 +31,22 @@ class FilterVelocity:
 def _line(centres: list[tuple[float, float, float]]) -> tuple[float, float, float, float, float]:
     """Least-squares line (t0, x0, y0, vx, vy) through (frame, xc, yc) rows: the centre at
     the mean frame t0 and the velocity."""
+    return _fit(centres)[:5]
+
+
+def _fit(centres: list[tuple[float, float, float]]) -> tuple[float, ...]:
+    """``_line``'s (t0, x0, y0, vx, vy) and the standard errors (se_x, se_y) of the two
+    slopes: sqrt(sum of squared residuals / (n - 2) / sum (t - t0)^2) (n >= 3 rows)."""
     c = np.asarray(centres, dtype=np.float64)
     t = c[:, 0] - c[:, 0].mean()
     tt = float((t * t).sum())
-    vx = float((t * (c[:, 1] - c[:, 1].mean())).sum()) / tt
-    vy = float((t * (c[:, 2] - c[:, 2].mean())).sum()) / tt
-    return float(c[:, 0].mean()), float(c[:, 1].mean()), float(c[:, 2].mean()), vx, vy
+    x, y = c[:, 1] - c[:, 1].mean(), c[:, 2] - c[:, 2].mean()
+    vx, vy = float((t * x).sum()) / tt, float((t * y).sum()) / tt
+    dof = max(len(c) - 2, 1)
+    se_x = float(np.sqrt(((x - vx * t) ** 2).sum() / dof / tt))
+    se_y = float(np.sqrt(((y - vy * t) ** 2).sum() / dof / tt))
+    return (float(c[:, 0].mean()), float(c[:, 1].mean()), float(c[:, 2].mean()), vx, vy,
+            se_x, se_y)
 
 
 @dataclass(frozen=True)
@@ -45,9 +55,13 @@ class MeasuredLine:
     of the least-squares line through its last ``window`` measured centres (Alg. 1's m), from
     its last estimate, when that line has predicted the person's measurements better than M
     so far (summed squared errors in box heights, each measurement predicted from the ones
-    before it: the person's own track record chooses, no parameter); else M's, as the paper."""
+    before it: the person's own track record chooses); else M's, as the paper. With
+    ``sigmas`` > 0 the line is taken only where it is measured to differ from M's velocity,
+    by more than ``sigmas`` standard errors of its slope in x or in y (a standing person's
+    jitter draws a line that predicts as well as M by chance)."""
 
     window: int
+    sigmas: float = 0.0
     records: ClassVar[bool] = True
 
     def record(self, person, frame: int, box: np.ndarray, predicted: np.ndarray) -> None:
@@ -70,7 +84,10 @@ class MeasuredLine:
         errors = person.line_errors
         if len(person.centres) < 3 or errors[1] >= errors[0]:
             return x_pred
-        _, _, _, vx, vy = _line(person.centres)
+        _, _, _, vx, vy, se_x, se_y = _fit(person.centres)
+        if self.sigmas > 0 and (abs(vx - x_pred[4]) <= self.sigmas * se_x
+                                and abs(vy - x_pred[5]) <= self.sigmas * se_y):
+            return x_pred  # the line's velocity is M's within its own error
         x = x_pred.copy()
         x[0], x[1], x[4], x[5] = x_prev[0] + vx, x_prev[1] + vy, vx, vy
         return x

@@ -224,6 +224,10 @@ class Adaptations:
             the least-squares line through its last m measured centres when that line has
             predicted its measurements better than M so far (``measured_line.MeasuredLine``);
             False: with M's velocity (the paper, 3.3.3 case 1).
+        measured_hypothesis_sigmas: with ``measured_hypothesis``, the line's velocity is
+            taken only where it is measured to differ from M's: by more than this many
+            standard errors of the line's slope, in x or in y (a standing person's jitter
+            gives a line no better than M's); 0: whenever the line predicted better.
     """
 
     gate_sigmas: float = 3.0
@@ -254,10 +258,12 @@ class Adaptations:
     merged_motion: bool = False
     visible_region: bool = False
     measured_hypothesis: bool = False
+    measured_hypothesis_sigmas: float = 0.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
                       "shape_gate": float, "early_confirm_score": float,
+                      "measured_hypothesis_sigmas": float,
                       "report_memory": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
@@ -271,7 +277,8 @@ class Adaptations:
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
                  tentative_misses=self.tentative_misses,
-                 early_confirm=self.early_confirm, report_memory=self.report_memory)
+                 early_confirm=self.early_confirm, report_memory=self.report_memory,
+                 measured_hypothesis_sigmas=self.measured_hypothesis_sigmas)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
              early_confirm_score=self.early_confirm_score)
@@ -292,7 +299,7 @@ class Adaptations:
                    early_confirm_score=0.0, report_memory=0.0, contact_region=False,
                    merged_appearance=False, split_parts=False,
                    merged_motion=False, visible_region=False,
-                   measured_hypothesis=False)
+                   measured_hypothesis=False, measured_hypothesis_sigmas=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

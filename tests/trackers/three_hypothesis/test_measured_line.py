@@ -38,3 +38,32 @@ def test_hypothesis_1_takes_the_measured_line_when_it_predicted_better():
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).line, FilterVelocity)
     assert build_rules(Adaptations(measured_hypothesis=True), h).line == MeasuredLine(8)
+
+
+def test_the_line_is_taken_only_where_it_differs_from_m_beyond_its_error():
+    """``measured_hypothesis_sigmas``: a standing person measured with 1 px jitter (M
+    predicting velocity 0) draws through its last 8 centres a line of slope 0.18 px/frame,
+    standard error 0.10: it predicted the jitter better than M by chance (0.0198 against
+    0.0200), and moved its hypothesis anyway (sigmas 0); within two standard errors of M's
+    velocity it is not taken. The lagging walker's
+    line (exact, standard error 0) is taken at any sigmas."""
+    rule, guarded = MeasuredLine(window=8), MeasuredLine(window=8, sigmas=2.0)
+    standing = SimpleNamespace(centres=[], line_errors=[0.0, 0.0])
+    jitter = [0.0, 0.0, 0.0, 1.0, -1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0]
+    for t, dx in enumerate(jitter, start=1):
+        rule.record(standing, t, np.array([45.0 + dx, 0.0, 10, 20]),
+                    np.array([50.0, 10.0, 10, 20, 0, 0, 0, 0]))
+    x_prev = np.array([50.0, 10.0, 10, 20, 0, 0, 0, 0])
+    x_pred = x_prev.copy()
+    assert standing.line_errors[1] < standing.line_errors[0]  # the line won by chance
+    moved = rule.start(standing, x_prev, x_pred)
+    assert moved is not x_pred and np.isclose(moved[4], 0.17857, atol=1e-4)
+    assert guarded.start(standing, x_prev, x_pred) is x_pred
+    lagging = _walker(MeasuredLine(window=4), 1.0)
+    x_prev, x_pred = (np.array([28.0 + k, 10.0, 10, 20, 1.0, 0, 0, 0]) for k in (0, 1))
+    walker = MeasuredLine(window=4, sigmas=2.0).start(lagging, x_prev, x_pred)
+    assert np.allclose(walker[[0, 4]], [31.0, 3.0])
+    h = EllipseHistogrammer()
+    built = build_rules(Adaptations(measured_hypothesis=True, measured_hypothesis_sigmas=2), h)
+    assert built.line == MeasuredLine(8, 2.0)
+    assert "measured_hypothesis_sigmas" not in Adaptations().changed()
