@@ -43,16 +43,20 @@ Usage: ``python benchmarks/bench_startup.py [--runs 5] [--tracker reta] [--no-sw
 from __future__ import annotations
 
 import argparse
+import atexit
+import functools
 import itertools
 import json
 import math
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
@@ -139,11 +143,72 @@ def _child_cpu() -> float:
     return use.ru_utime + use.ru_stime
 
 
+# ``sitecustomize`` of the processes ``tree_env`` starts: the import packages of the checkout
+# named in $BENCH_PACKAGES are imported from it, before the editable install's own finder
+# (PYTHONPATH=CHECKOUT alone does not do it: ``occbench`` is the folder harness/, so
+# PYTHONPATH found nothing and the install mapped every import to the installed checkout)
+SHIM = """
+import os, sys
+from _frozen_importlib_external import spec_from_file_location  # loaded already: no import cost
+_PACKAGES = dict(line.split("=", 1) for line in os.environ.get("BENCH_PACKAGES", "").splitlines())
+class _Checkout:
+    @classmethod
+    def find_spec(cls, fullname, path=None, target=None):
+        folder = _PACKAGES.get(fullname)
+        if folder is None:
+            return None
+        return spec_from_file_location(fullname, os.path.join(folder, "__init__.py"),
+                                       submodule_search_locations=[folder])
+sys.meta_path.insert(0, _Checkout)
+"""
+
+
+@functools.cache
+def shim_dir() -> Path:
+    """A folder holding ``SHIM`` as ``sitecustomize.py``, removed when this process ends."""
+    folder = Path(tempfile.mkdtemp(prefix="bench_startup_shim."))
+    (folder / "sitecustomize.py").write_text(SHIM)
+    atexit.register(shutil.rmtree, folder, True)
+    return folder
+
+
+# where each import package of a checkout is, and a module whose file says it was imported
+IMPORTED = ("import json, occbench, occbench.trackers, hydra_plugins.occbench_launcher as h; "
+            "print(json.dumps([m.__file__ for m in (occbench, occbench.trackers, h)]))")
+
+
+def packages(root: Path) -> dict[str, str]:
+    """Import package -> its folder in ``root``, from ``root``'s pyproject.toml (package-dir;
+    a namespace folder, hydra_plugins/, gives each of its packages)."""
+    dirs = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
+    out = {}
+    for name, folder in dirs.items():
+        path = root / folder
+        if (path / "__init__.py").exists():
+            out[name] = str(path)
+        else:
+            out |= {f"{name}.{p.parent.name}": str(p.parent) for p in path.glob("*/__init__.py")}
+    return out
+
+
 def tree_env(root: Path) -> dict[str, str]:
-    """The environment of a process running the code of the checkout ``root``, cold (no
-    warm server: ``ServedRuns`` sets its own)."""
+    """The environment of a process running the code of the checkout ``root`` (``SHIM``),
+    cold (no warm server: ``ServedRuns`` sets its own)."""
+    path = [str(shim_dir()), *filter(None, [os.environ.get("PYTHONPATH")])]
+    mapped = "\n".join(f"{name}={folder}" for name, folder in packages(root).items())
     return {**os.environ, "OMP_NUM_THREADS": "1", "OCCBENCH_SERVER": "off",
-            "PYTHONPATH": os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")])}
+            "BENCH_PACKAGES": mapped, "PYTHONPATH": os.pathsep.join(path)}
+
+
+def imported_from(root: Path) -> list[Path]:
+    """The files of ``occbench``, ``occbench.trackers`` and the launcher plugin as a process of
+    ``tree_env(root)`` imports them; raises ``SystemExit`` naming any outside ``root``."""
+    files = [Path(f) for f in json.loads(run([sys.executable, "-c", IMPORTED], root)[1])]
+    outside = [f for f in files if not f.resolve().is_relative_to(root.resolve())]
+    if outside:
+        raise SystemExit(f"occbench: the processes timed for {root} import "
+                         f"{', '.join(map(str, outside))}: not that checkout's code")
+    return files
 
 
 def run(cmd: list[str], root: Path = ROOT,
@@ -254,7 +319,8 @@ def main(argv: list[str] | None = None) -> int:
     roots = [ROOT, *([args.vs.resolve()] if args.vs else [])]
     print(f"load average {os.getloadavg()[0]:.2f} / {os.cpu_count()} cores; median of "
           f"{args.runs} runs; {' vs '.join(map(str, roots))}", flush=True)
-    for root in roots:  # numba's cache filled, files in the page cache
+    for root in roots:  # which code each is; numba's cache filled, files in the page cache
+        print(f"{root} imports " + ", ".join(map(str, imported_from(root))), flush=True)
         run([sys.executable, "-c", BUILD, *trackers], root)
     times: list[dict[str, list[list[float]]]] = [{} for _ in roots]
     with tempfile.TemporaryDirectory(prefix="obb", dir="/tmp") as tmp:
