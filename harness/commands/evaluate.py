@@ -24,6 +24,7 @@ from occbench.commands.mistakes import refuse
 from occbench.datasets.mot import read_seqinfo, seqinfo_number
 from occbench.io.mot import MotTable, read_mot
 from occbench.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
+from occbench.report.tables import number
 
 log = logging.getLogger(__name__)
 
@@ -161,7 +162,7 @@ def evaluate(gt: str | Path, results: str | Path, iou_threshold: float = 0.5) ->
 def format_table(table: pd.DataFrame) -> str:
     """The table as text: ratios as fractions with 3 decimals, counts as integers."""
     ratios = [c for c in COLUMNS if c not in COUNT_COLUMNS]
-    formatters = {c: "{:.3f}".format for c in ratios}
+    formatters = {c: number for c in ratios}  # the tables' one rule
     return table.to_string(index=False, formatters=formatters, na_rep="-")
 
 

@@ -37,6 +37,8 @@ LOWER_PREFIXES = ("IDs_", "FP_", "FN_", "Frag_")  # per-bin error counts, e.g. I
 NEUTRAL: frozenset[str] = frozenset({
     "PT", "GT", "Song_GT", "Song_PT%", "PBM_GT", "ReID_n", "frames", "num_frames",
 })
+#: Decimals of every figure a table shows that is not a count (``number``).
+DIGITS = 3
 # Columns written as whole numbers (when their values are whole).
 COUNTS: frozenset[str] = frozenset({
     "GT", "MT", "PT", "ML", "FP", "FN", "IDs", "Frag", "TP", "IDTP", "IDFP", "IDFN",
@@ -72,13 +74,27 @@ def comparison(
     return rows
 
 
-def _is_count(df: pd.DataFrame, column: str) -> bool:
-    values = pd.to_numeric(df[column], errors="coerce").to_numpy(dtype=float)
-    finite = values[np.isfinite(values)]
-    if pd.api.types.is_integer_dtype(df[column].dtype):
+def is_count(column: str, values: pd.Series) -> bool:
+    """Whether ``column``'s ``values`` are shown as whole numbers: an integer column, or a
+    count (``COUNTS``, per-bin errors) whose finite values are all whole."""
+    finite = pd.to_numeric(values, errors="coerce").to_numpy(dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if pd.api.types.is_integer_dtype(values.dtype):
         return True
     counted = column in COUNTS or column.startswith(LOWER_PREFIXES)
     return counted and bool(np.all(finite == np.round(finite)))
+
+
+def _is_count(df: pd.DataFrame, column: str) -> bool:
+    return is_count(str(column), df[column])
+
+
+def number(value: float, count: bool = False, digits: int = DIGITS) -> str:
+    """A figure as every table shows it (run and sweep tables, their pages, ``occbench
+    eval``): a count as a whole number, any other number with ``digits`` decimals, NaN '-'."""
+    if math.isnan(value):
+        return "-"
+    return str(round(float(value))) if count else f"{float(value):.{digits}f}"
 
 
 def _rounded(df: pd.DataFrame, digits: int) -> pd.DataFrame:
@@ -89,7 +105,7 @@ def _rounded(df: pd.DataFrame, digits: int) -> pd.DataFrame:
     return out
 
 
-def best_mask(df: pd.DataFrame, digits: int = 3, sense: int | None = None) -> pd.DataFrame:
+def best_mask(df: pd.DataFrame, digits: int = DIGITS, sense: int | None = None) -> pd.DataFrame:
     """Boolean frame, True where a cell holds its column's best value (ties all True, but a
     column where every value ties is not marked).
 
@@ -113,7 +129,7 @@ def best_mask(df: pd.DataFrame, digits: int = 3, sense: int | None = None) -> pd
     return mask
 
 
-def format_values(df: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
+def format_values(df: pd.DataFrame, digits: int = DIGITS) -> pd.DataFrame:
     """Cells as strings: counts as integers, other numbers with ``digits`` decimals, NaN as '-'."""
     out = pd.DataFrame(index=df.index, columns=df.columns, dtype=object)
     for c in df.columns:
@@ -123,10 +139,8 @@ def format_values(df: pd.DataFrame, digits: int = 3) -> pd.DataFrame:
                 out.loc[i, c] = v
             elif v is None or (isinstance(v, float) and math.isnan(v)):
                 out.loc[i, c] = "-"
-            elif count:
-                out.loc[i, c] = str(round(float(v)))
             else:
-                out.loc[i, c] = f"{float(v):.{digits}f}"
+                out.loc[i, c] = number(float(v), count, digits)
     return out
 
 
@@ -150,7 +164,7 @@ def _header(df: pd.DataFrame) -> list[str]:
     return [str(df.index.name or "")] + [str(c) for c in df.columns]
 
 
-def to_markdown(df: pd.DataFrame, digits: int = 3, mark_best: bool = True,
+def to_markdown(df: pd.DataFrame, digits: int = DIGITS, mark_best: bool = True,
                 sense: int | None = None) -> str:
     """GitHub Markdown table, index as the first column, best values in ``**bold**``."""
     header = _header(df)
@@ -171,7 +185,7 @@ def latex_escape(text: str) -> str:
     return "".join(_LATEX_SPECIAL.get(ch, ch) for ch in text)
 
 
-def to_latex(df: pd.DataFrame, digits: int = 3, mark_best: bool = True,
+def to_latex(df: pd.DataFrame, digits: int = DIGITS, mark_best: bool = True,
              caption: str | None = None, sense: int | None = None) -> str:
     """A booktabs ``tabular`` (inside a ``table`` when ``caption``), best values in \\textbf."""
     header = [latex_escape(h) for h in _header(df)]
@@ -194,7 +208,7 @@ def to_latex(df: pd.DataFrame, digits: int = 3, mark_best: bool = True,
     return "\n".join(lines) + "\n"
 
 
-def to_text(df: pd.DataFrame, digits: int = 3, mark_best: bool = True,
+def to_text(df: pd.DataFrame, digits: int = DIGITS, mark_best: bool = True,
             sense: int | None = None) -> str:
     """Aligned plain-text table for a terminal; best values followed by ``*``."""
     header = _header(df)

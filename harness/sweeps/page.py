@@ -32,7 +32,7 @@ from occbench.report.tables import direction
 from occbench.sweeps.jobs import sweep_metas
 from occbench.sweeps.tables import (BOUNDS, COMBINED, DONE, aggregate, parameters, plot_axes,
                                     setting_table, swept)
-from occbench.sweeps.tables import cell as interval_cell
+from occbench.sweeps.tables import cells as interval_cells
 
 log = logging.getLogger(__name__)
 
@@ -65,8 +65,7 @@ def best_settings(frame: pd.DataFrame, tracker: str, metric: str) -> pd.DataFram
 def best_table(best: pd.DataFrame, metric: str, rows: int = 10) -> pd.DataFrame:
     """The first ``rows`` of ``best_settings`` as shown: ``metric`` as ``mean [low, high]``."""
     top = best.head(rows).reset_index(drop=True)
-    top[metric] = [interval_cell(a, lo, hi) for a, lo, hi in zip(top[metric], top[f"{metric}_low"],
-                                                         top[f"{metric}_high"])]
+    top[metric] = interval_cells(top, metric)
     return top.drop(columns=[f"{metric}{b}" for b in BOUNDS])
 
 

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from occbench.report.tables import is_count, number
 from occbench.sweeps.jobs import DONE
 
 COMBINED = "COMBINED"
@@ -131,13 +132,12 @@ def _sort_values(frame: pd.DataFrame, cols: list[str]) -> pd.DataFrame:
 # --------------------------------------------------------------------------- writing
 
 
-def _fmt(v: Any) -> str:
+def _fmt(v: Any, count: bool = False) -> str:
+    """A cell: a figure by the tables' one rule (``occbench.report.tables.number``)."""
     if v is None or v is pd.NA:
         return "-"
     if isinstance(v, float):
-        if math.isnan(v):
-            return "-"
-        return f"{v:.4g}"
+        return number(v, count)
     return str(v).replace("|", "\\|").replace("\n", " ")
 
 
@@ -145,9 +145,10 @@ def markdown_table(frame: pd.DataFrame) -> str:
     if frame.empty:
         return "(no rows)\n"
     cols = list(frame.columns)
+    counts = [is_count(str(c), frame[c]) for c in cols]
     lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for rec in frame.itertuples(index=False):
-        lines.append("| " + " | ".join(_fmt(v) for v in rec) + " |")
+        lines.append("| " + " | ".join(_fmt(v, n) for v, n in zip(rec, counts)) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -212,17 +213,24 @@ def setting_table(frame: pd.DataFrame, metrics: Sequence[str]) -> pd.DataFrame:
         table[c] = table[c].map(tick)
     for m in shown:
         if m in agg.columns:
-            table[m] = [cell(a, lo, hi) for a, lo, hi in zip(agg[m], agg[f"{m}_low"],
-                                                               agg[f"{m}_high"])]
+            table[m] = cells(agg, m)
     return table
 
 
-def cell(mean: float, low: float, high: float) -> str:
-    """``mean [low, high]`` (4 significant digits), the mean alone when the interval is a
-    point (one job, or equal values)."""
+def cells(agg: pd.DataFrame, metric: str) -> list[str]:
+    """``metric``'s ``cell`` on each row of ``aggregate``'s frame, a count whole when its
+    means and bounds all are (the tables' one rule)."""
+    bounds = [agg[metric], *(agg[f"{metric}{b}"] for b in BOUNDS)]
+    count = is_count(metric, pd.concat(bounds, ignore_index=True))
+    return [cell(a, lo, hi, count) for a, lo, hi in zip(*bounds)]
+
+
+def cell(mean: float, low: float, high: float, count: bool = False) -> str:
+    """``mean [low, high]`` (``number``: 3 decimals, a count whole), the mean alone when the
+    interval is a point (one job, or equal values)."""
     if not (np.isfinite(mean) and np.isfinite(low) and np.isfinite(high)) or low == high:
-        return _fmt(mean)
-    return f"{mean:.4g} [{low:.4g}, {high:.4g}]"
+        return _fmt(float(mean), count)
+    return f"{number(mean, count)} [{number(low, count)}, {number(high, count)}]"
 
 
 def summary_text(frame: pd.DataFrame, metrics: Sequence[str] = DEFAULT_METRICS,

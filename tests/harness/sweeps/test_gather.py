@@ -18,6 +18,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from occbench.report.tables import comparison, to_markdown
 from occbench.sweeps.gather import (
     DONE,
     FAILED,
@@ -36,6 +37,7 @@ from occbench.sweeps.gather import (
     write_sweep,
 )
 from occbench.sweeps.gather import main as sweep_main
+from occbench.sweeps.tables import markdown_table
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -191,7 +193,7 @@ def test_a_seed_in_any_group_gives_mean_and_interval_never_an_axis(tmp_path, see
     assert table["tracker.max_age"].tolist() == ["1", "3"] and table["n"].tolist() == [3, 3]
     assert seed_key not in table.columns
     # mean of 0.6, 0.61, 0.62 and its bootstrap interval, inside the values seen
-    assert table.loc[0, "IDF1"] == "0.61 [0.6, 0.62]"
+    assert table.loc[0, "IDF1"] == "0.610 [0.600, 0.620]"
     names = sorted(p.name for p in plot_sweep(frame, tmp_path / "plots", ["IDF1", "HOTA"]))
     assert names == ["sweep_tracker_max_age.png"]  # no seed axis, no heatmap over seeds
     md = write_sweep(tmp_path, ["IDF1"]) is not None and (tmp_path / "sweep.md").read_text()
@@ -210,11 +212,30 @@ def test_no_heatmap_over_the_tracker_choice(tmp_path):
     assert names == ["sweep_tracker_max_age.png"]
 
 
+def test_a_sweep_table_shows_a_figure_as_a_run_table_does(tmp_path):
+    """One rounding rule (occbench.report.tables.number): 3 decimals, counts whole; sweep.md's
+    tables and the printed summary showed 4 significant digits (0.8123, 12.67)."""
+    for num, (idf1, ids) in enumerate([(0.81234, 12), (0.81234, 13), (0.70001, 4)]):
+        _fake_job(tmp_path, num, ["tracker=baseline", f"tracker.max_age={1 + (num > 1)}",
+                                  f"seed={num}"], {"IDF1": idf1, "IDs": ids})
+    frame = gather(tmp_path)
+    run = to_markdown(comparison(frame[frame["job"] == "0"].drop(columns=["job"]),
+                                 ["IDF1", "IDs"]))
+    assert "| baseline | 0.812 | 12 |" in run
+    md = markdown_table(frame[frame["sequence"] == "COMBINED"][["job", "IDF1", "IDs"]])
+    assert "| 0 | 0.812 | 12 |" in md and "| 2 | 0.700 | 4 |" in md
+    table = setting_table(frame, ["IDF1", "IDs"])
+    assert table.loc[0, "IDF1"] == "0.812" and table.loc[1, "IDF1"] == "0.700"
+    assert table.loc[0, "IDs"] == "12.500 [12.000, 13.000]" and table.loc[1, "IDs"] == "4.000"
+    text = summary_text(frame, ["IDF1", "IDs"])
+    assert "0.812" in text and "0.8123" not in text and "12.500 [12.000, 13.000]" in text
+
+
 def test_summary_shows_settings_and_every_jobs_overrides(tmp_path):
     _seed_sweep(tmp_path)
     text = summary_text(gather(tmp_path), ["IDF1"], "demo")
     assert text.startswith("sweep demo: 6 jobs, 6 done, 0 failed or missing")
-    assert "mean [95% interval] over dataset.seed" in text and "0.81 [0.8, 0.82]" in text
+    assert "mean [95% interval] over dataset.seed" in text and "0.810 [0.800, 0.820]" in text
     assert "\n    5  tracker.max_age=3 dataset.seed=2  [done]\n" in text
     assert "jobs (all with tracker=baseline):" in text
 

@@ -50,7 +50,7 @@ def test_the_page_reads_the_plots_intervals_colours_and_ranks_on_ours(tmp_path):
     agg = aggregate(gather(tmp_path), ["detector.miss_rate"], ["IDs"])
     assert (agg["IDs_low"] >= 0).all()  # inside the values seen: counts never below 0
     reta = agg[(agg["tracker"] == "reta") & (agg["detector.miss_rate"] == "0.1")].iloc[0]
-    shown = f"{reta['IDs']:.4g} [{reta['IDs_low']:.4g}, {reta['IDs_high']:.4g}]"
+    shown = f"{reta['IDs']:.3f} [{reta['IDs_low']:.3f}, {reta['IDs_high']:.3f}]"
     assert shown in md and reta["IDs_low"] == 0  # sweep.md shows aggregate's interval
     spec = json.dumps(charts.metric_lines(agg, "detector.miss_rate", "IDs"))
     assert '"#ff7f0e"' in spec and '"#1f77b4"' in spec  # reta's and the baseline's colours
