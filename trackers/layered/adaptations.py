@@ -137,6 +137,10 @@ class Adaptations:
             of the best) goes to the target whose head template matches at its head best
             (PBM 4.1's template, applied to a candidate's column; ``rules.TemplateContest``);
             0: left to the assignment (the paper's pruning looks along a target's row only).
+        rival_claims: PBM 4.1's multiple-response pruning of a target passes over the
+            candidates another target claims (its best at p >= ``matching.match_threshold``,
+            scored higher than this target scores it) and leaves them to the assignment
+            (``selection.RivalClaims``; paper: false, a target's row alone).
     """
 
     model_spread: float = 4.5
@@ -167,6 +171,7 @@ class Adaptations:
     early_confirm: int = 2
     reupdate: int = 0
     contested_template: float = 0.0
+    rival_claims: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -202,7 +207,7 @@ class Adaptations:
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
-                                       "one_to_one", "border_exit"),
+                                       "one_to_one", "border_exit", "rival_claims"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int})
@@ -219,7 +224,7 @@ class Adaptations:
                    lone_shrink_shape=0.0, border_exit=False,
                    one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
-                   contested_template=0.0)
+                   contested_template=0.0, rival_claims=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from occbench.trackers.layered.adaptations import Adaptations
-from occbench.trackers.layered.association import ambiguous_rows
+from occbench.trackers.layered.association import ambiguous, ambiguous_rows
 from occbench.trackers.layered.params import MatchParams, PruneParams
 from occbench.trackers.layered.parts import N_PARTS, PartFeatures
 from occbench.trackers.layered.search import Candidates, match_head_template
@@ -57,19 +57,51 @@ class FrameScores:
                    np.zeros(0, np.intp), np.zeros((0, 6)))
 
 
+class OwnRow:
+    """PBM 4.1 as written: a target's responses are the candidates along its own row of S,
+    whatever the other targets score them."""
+
+    def claimed(self, S: np.ndarray, match_threshold: float) -> None:
+        return None
+
+
+class RivalClaims:
+    """``rival_claims``: a candidate another target claims (its best, at p >= the match
+    threshold, eq. 13, scored higher than this target scores it) is that target's response,
+    not this one's: a target's pruning passes over it and leaves it to the one-to-one
+    assignment (two people one in front of the other give two detections whose heads
+    nearly coincide; they are not two responses of each target)."""
+
+    def claimed(self, S: np.ndarray, match_threshold: float) -> np.ndarray | None:
+        """(T, N) bool: candidate n is claimed against target t, read before any row is
+        pruned; None when no target claims any."""
+        if not S.size:
+            return None
+        best = np.argmax(S, axis=1)
+        rows = np.flatnonzero(S[np.arange(len(S)), best] >= match_threshold)
+        if not len(rows):
+            return None
+        out = np.zeros(S.shape, dtype=bool)
+        for r in rows.tolist():
+            n = int(best[r])
+            out[:, n] |= S[:, n] < S[r, n]  # never against r itself
+        return out
+
+
 class MultipleResponsePruning:
     """PBM 4 steps 4-5 and 4.1 on one frame's scores (``__call__``).
 
     Args:
         matching: thresholds and margin of a match. pruning: the template's threshold and
-            the radius of "nearby". adaptations: ``duplicate_radius`` and
-            ``prune_max_misses``.
+            the radius of "nearby". adaptations: ``duplicate_radius``,
+            ``prune_max_misses`` and ``rival_claims`` (``RivalClaims`` / ``OwnRow``).
     """
 
     def __init__(self, matching: MatchParams, pruning: PruneParams, adaptations: Adaptations) -> None:
         self.matching = matching
         self.pruning = pruning
         self.adaptations = adaptations
+        self.claims = RivalClaims() if adaptations.rival_claims else OwnRow()
 
     def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray) -> None:
         """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
@@ -90,9 +122,18 @@ class MultipleResponsePruning:
         bests, _, ambs = ambiguous_rows(S, m.match_threshold, m.margin_ratio)
         weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= m.weak_threshold)
         heads_xy = cand.head[:, :2]
+        claimed = self.claims.claimed(S, m.match_threshold) if (ambs | weaks).any() else None
         for ti in (ambs | weaks).nonzero()[0].tolist():  # changes only row ti, after reading it
             row = S[ti]
             best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
+            if claimed is not None and claimed[ti].any():
+                row = np.where(claimed[ti], -np.inf, row)  # the pruning's view of the row
+                if amb:  # still ambiguous among its own candidates, else left as it is
+                    best, _, amb = ambiguous(row, m.match_threshold, m.margin_ratio)
+                else:
+                    weak = bool(row.max() >= m.weak_threshold)
+                if not (amb or weak):
+                    continue
             lo = m.match_threshold if amb else m.weak_threshold
             cands = (row >= lo).nonzero()[0]
             r = best if best >= 0 else int(np.argmax(row))

@@ -13,7 +13,8 @@ from occbench.trackers.common import spatial
 from occbench.trackers.layered import tracker as pbm
 
 ACROSS = ["tracker.adaptations.lone_shrink=0.3", "tracker.adaptations.contested_template=1.2",
-          "tracker.adaptations.rival_match=0.8"]  # rules reading more than one pair
+          "tracker.adaptations.rival_match=0.8",
+          "tracker.adaptations.rival_claims=true"]  # rules reading more than one pair
 
 
 def _crowd(frames: int = 10, people: int = 16) -> list[tuple]:
