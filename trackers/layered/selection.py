@@ -68,9 +68,12 @@ class OwnRow:
 class RivalClaims:
     """``rival_claims``: a candidate another target claims (its best, at p >= the match
     threshold, eq. 13, scored higher than this target scores it) is that target's response,
-    not this one's: a target's pruning passes over it and leaves it to the one-to-one
-    assignment (two people one in front of the other give two detections whose heads
-    nearly coincide; they are not two responses of each target)."""
+    not this one's. Where the pruning of an ambiguous target would keep its best without
+    its head template (the template stale, or the near candidates' heads within
+    ``duplicate_radius``: "one response"), it passes over the claimed candidates and leaves
+    them to the one-to-one assignment (two people one in front of the other give two
+    detections whose heads nearly coincide; they are not one response of each target).
+    Where the template decides, it still decides."""
 
     def claimed(self, S: np.ndarray, match_threshold: float) -> np.ndarray | None:
         """(T, N) bool: candidate n is claimed against target t, read before any row is
@@ -126,13 +129,11 @@ class MultipleResponsePruning:
         for ti in (ambs | weaks).nonzero()[0].tolist():  # changes only row ti, after reading it
             row = S[ti]
             best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
-            if claimed is not None and claimed[ti].any():
+            if (amb and claimed is not None and claimed[ti].any()
+                    and self._untemplated(row, best, cand.head, int(targets.misses[ti]))):
                 row = np.where(claimed[ti], -np.inf, row)  # the pruning's view of the row
-                if amb:  # still ambiguous among its own candidates, else left as it is
-                    best, _, amb = ambiguous(row, m.match_threshold, m.margin_ratio)
-                else:
-                    weak = bool(row.max() >= m.weak_threshold)
-                if not (amb or weak):
+                best, _, amb = ambiguous(row, m.match_threshold, m.margin_ratio)
+                if not amb:  # one candidate of its own left: the assignment decides
                     continue
             lo = m.match_threshold if amb else m.weak_threshold
             cands = (row >= lo).nonzero()[0]
@@ -166,6 +167,19 @@ class MultipleResponsePruning:
             keep = row[chosen]
             S[ti, cands] = -np.inf
             S[ti, chosen] = max(keep, m.match_threshold)
+
+    def _untemplated(self, row: np.ndarray, best: int, heads: np.ndarray, misses: int) -> bool:
+        """Whether the pruning keeps an ambiguous row's ``best`` without its head template:
+        the template is stale (unfound > ``adaptations.prune_max_misses`` frames) or the
+        near candidates' heads (N, 3) coincide (``adaptations.duplicate_radius``)."""
+        cands = (row >= self.matching.match_threshold).nonzero()[0]
+        hw = max(heads[best, 2], 1.0)
+        dist = _norms(heads[cands, :2] - heads[best, :2])
+        dist = dist[dist <= self.pruning.radius * hw]
+        if len(dist) < 2:
+            return False
+        return misses > self.adaptations.prune_max_misses or bool(
+            dist.max() <= self.adaptations.duplicate_radius * hw)
 
     def match_template(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
                        frame: np.ndarray) -> tuple[int, np.ndarray | None]:

@@ -19,15 +19,21 @@ from occbench.trackers.layered.selection import (
 )
 
 
-def _matches(rival_claims: bool, S: np.ndarray) -> list[tuple[int, int]]:
-    """Pruning of two targets (found last frame, no head templates) with candidates whose
-    heads lie 1 px apart, then the one-to-one assignment."""
+def _matches(rival_claims: bool, S: np.ndarray, heads: list | None = None,
+             templates: bool = False) -> list[tuple[int, int]]:
+    """Pruning of two targets found last frame (by default without head templates, with
+    candidates whose heads lie 1 px apart), then the one-to-one assignment. With
+    ``templates`` target 0's head template is the frame's patch at candidate 1's head."""
     scores = FrameScores.empty(*S.shape)
     scores.S[:] = S
-    cand = SimpleNamespace(head=np.array([[112.0, 47.5, 11.5], [113.0, 48.5, 11.0]]))
-    targets = SimpleNamespace(misses=np.array([0, 0]), head_template=[None, None])
+    heads = [[112.0, 47.5, 11.5], [113.0, 48.5, 11.0]] if heads is None else heads
+    cand = SimpleNamespace(head=np.array(heads))
+    frame = np.random.default_rng(0).integers(0, 256, (200, 200, 3), dtype=np.uint8)
+    hx, hy = int(heads[1][0]), int(heads[1][1])
+    own = frame[hy:hy + 8, hx - 4:hx + 4].copy() if templates else None
+    targets = SimpleNamespace(misses=np.array([0, 0]), head_template=[own, None])
     MultipleResponsePruning(MatchParams(), PruneParams(), Adaptations(rival_claims=rival_claims))(
-        scores, cand, targets, np.zeros((200, 200, 3), dtype=np.uint8))
+        scores, cand, targets, frame)
     cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
     matches, _, _ = OneToOne().assign(cost, 1.0 - MatchParams().match_threshold)
     return sorted(map(tuple, matches.tolist()))
@@ -44,6 +50,16 @@ def test_a_candidate_a_rival_claims_is_not_one_of_this_targets_responses():
     assert _matches(False, S) == [(0, 0)]
     # the standing person's target claims its detection: the walker keeps its own
     assert _matches(True, S) == [(0, 0), (1, 1)]
+
+
+def test_where_the_head_template_decides_claims_do_not():
+    # cav1-150 gt seed 1000, frame 39: heads 4 px apart (more than duplicate_radius), the
+    # walker's (target 0's) template finds its own detection (1); the standing person's
+    # target prefers that detection too (0.802 against its own 0.66)
+    S = np.array([[0.516, 0.475], [0.66, 0.802]])
+    heads = [[111.0, 47.0, 11.0], [115.0, 48.0, 9.5]]
+    assert _matches(False, S, heads, templates=True) == [(0, 1), (1, 0)]
+    assert _matches(True, S, heads, templates=True) == [(0, 1), (1, 0)]
 
 
 def test_claims_are_a_rivals_best_scored_higher():
