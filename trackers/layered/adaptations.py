@@ -141,6 +141,10 @@ class Adaptations:
             candidates another target claims (its best at p >= ``matching.match_threshold``,
             scored higher than this target scores it) and leaves them to the assignment
             (``selection.RivalClaims``; paper: false, a target's row alone).
+        leaving_unreported: an unfound target moving towards an image border whose
+            reported box lies within this x its width (height) of it, or beyond, is not
+            reported (``exits.LeavingUnreported``; negative: off, reported as the other
+            reporting rules say; reporting is ours).
     """
 
     model_spread: float = 4.5
@@ -172,6 +176,7 @@ class Adaptations:
     reupdate: int = 0
     contested_template: float = 0.0
     rival_claims: bool = False
+    leaving_unreported: float = -1.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -202,7 +207,7 @@ class Adaptations:
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support", "rival_match", "contested_template",
-                                       "lone_shrink", "lone_shrink_shape"),
+                                       "lone_shrink", "lone_shrink_shape", "leaving_unreported"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -224,7 +229,8 @@ class Adaptations:
                    lone_shrink_shape=0.0, border_exit=False,
                    one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
-                   contested_template=0.0, rival_claims=False)
+                   contested_template=0.0, rival_claims=False,
+                   leaving_unreported=-1.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

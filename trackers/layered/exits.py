@@ -42,3 +42,36 @@ class BorderExit:
         at_border = ((x <= self.touch) | (y <= self.touch) | (x + w >= width - self.touch)
                      | (y + h >= height - self.touch))
         return targets.occluded & at_border
+
+
+class ReportAnywhere:
+    """An unfound target is reported wherever its box lies (the reporting rules of
+    ``rules.report_shown`` alone decide)."""
+
+    def shown(self, boxes: np.ndarray, velocity: np.ndarray, found: np.ndarray, width: int,
+              height: int, keep: np.ndarray | None) -> np.ndarray | None:
+        return keep
+
+
+@dataclass(frozen=True)
+class LeavingUnreported:
+    """``leaving_unreported``: an unfound target moving towards an image border (KF1's
+    velocity) whose reported box lies within ``margin`` x its width (height) of that border,
+    or beyond it, is not reported: unseen where the picture ends, a person walking out has
+    left rather than hidden behind someone. Reporting only: the target lives on as before
+    (``exit_margin``, ``border_exit``)."""
+
+    margin: float
+
+    def shown(self, boxes: np.ndarray, velocity: np.ndarray, found: np.ndarray, width: int,
+              height: int, keep: np.ndarray | None) -> np.ndarray:
+        """(R,) bool for the reported (R, 4) xywh ``boxes`` with KF1 velocities (R, 2) and
+        found (R,) bool, within ``keep`` (``rules.report_shown``'s, None: all)."""
+        x, y, w, h = boxes.T
+        vx, vy = velocity.T
+        leaving = (((x <= self.margin * w) & (vx < 0))
+                   | ((width - (x + w) <= self.margin * w) & (vx > 0))
+                   | ((y <= self.margin * h) & (vy < 0))
+                   | ((height - (y + h) <= self.margin * h) & (vy > 0)))
+        out = found | ~leaving
+        return out if keep is None else keep & out

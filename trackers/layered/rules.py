@@ -20,7 +20,12 @@ from occbench.trackers.common.assignment import assign
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.evidence import HiddenEvidence, box_foreground
-from occbench.trackers.layered.exits import BorderExit, PredictedExit
+from occbench.trackers.layered.exits import (
+    BorderExit,
+    LeavingUnreported,
+    PredictedExit,
+    ReportAnywhere,
+)
 from occbench.trackers.layered.parts import PartFeatures
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
@@ -335,6 +340,7 @@ class Rules(NamedTuple):
     contest: NoContest | TemplateContest  # a candidate several targets may take (PBM 4.1)
     smaller: OccludedSmaller | LoneShrink  # a region smaller than predicted (PBM 3.1)
     exit: PredictedExit | BorderExit  # an unfound target that left the picture (ours)
+    leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -357,4 +363,6 @@ def build_rules(a: Adaptations) -> Rules:
         smaller=(LoneShrink(a.lone_shrink, a.lone_shrink_shape) if a.lone_shrink > 0
                  else OccludedSmaller()),
         exit=BorderExit() if a.border_exit else PredictedExit(),
+        leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0
+                 else ReportAnywhere()),
     )

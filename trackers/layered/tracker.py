@@ -188,7 +188,7 @@ class PBMTracker:
             self.rules.unfound_size.missed(self.targets, found.lost)
         self._end_targets(W, H)
         self._start_targets(frame, found.free, cand, feats, fg, found.withheld)
-        return self._report(fg)
+        return self._report(fg, W, H)
 
     def _find_candidates(self, frame: np.ndarray, detections: Detections, fg: np.ndarray | None
                          ) -> tuple[Candidates, PartFeatures]:
@@ -362,11 +362,12 @@ class PBMTracker:
                 targets.confirmed[-len(new):] = True
 
     # ------------------------------------------------------------------ report
-    def _report(self, fg: np.ndarray | None) -> list[Track]:
+    def _report(self, fg: np.ndarray | None, W: int, H: int) -> list[Track]:
         """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
         and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
         last box or where KF1 predicts it (``rules.report_box``), while ``rules.report_shown``
-        finds evidence of it there."""
+        finds evidence of it there and ``rules.leaving`` does not see it walk out of the
+        (W, H) image."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -377,6 +378,7 @@ class PBMTracker:
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
         keep = self.rules.report_shown.shown(boxes, fg, tg.hits[rows], tg.misses[rows])
+        keep = self.rules.leaving.shown(boxes, tg.kf1.x[rows, 2:], found[rows], W, H, keep)
         if keep is not None:
             rows, boxes = rows[keep], boxes[keep]
         rects = tg.parts.parts[rows]
