@@ -137,10 +137,12 @@ class Adaptations:
             of the best) goes to the target whose head template matches at its head best
             (PBM 4.1's template, applied to a candidate's column; ``rules.TemplateContest``);
             0: left to the assignment (the paper's pruning looks along a target's row only).
-        rival_claims: PBM 4.1's multiple-response pruning of a target passes over the
-            candidates another target claims (its best at p >= ``matching.match_threshold``,
-            scored higher than this target scores it) and leaves them to the assignment
-            (``selection.RivalClaims``; paper: false, a target's row alone).
+        rival_claims: where PBM 4.1's multiple-response pruning would keep an ambiguous
+            target's best without its head template (stale, or the near heads within
+            ``duplicate_radius``), it passes over the candidates another target claims (its
+            best at p >= ``matching.match_threshold``, scored higher than this target scores
+            it) and leaves them to the assignment (``selection.RivalClaims``; paper: false,
+            a target's row alone).
         leaving_unreported: an unfound target moving towards an image border whose
             reported box lies within this x its width (height) of it, or beyond, is not
             reported (``exits.LeavingUnreported``; negative: off, reported as the other
