@@ -13,7 +13,16 @@ from typing import Any, TextIO
 from tqdm import tqdm
 
 log = logging.getLogger(__name__)
+#: The one form of every command's log lines: a run's and a sweep's (Hydra's job_logging and
+#: hydra_logging, conf/config.yaml and conf/detect.yaml, checked by tests/test_configs.py)
+#: and the argparse commands' (``log_to_stderr``).
+LOG_FORMAT = "[%(asctime)s][%(name)s][%(levelname)s] - %(message)s"
 EVERY = 15.0  # seconds of silence after which a step without a terminal says where it is
+
+
+def log_to_stderr(level: int = logging.INFO) -> None:
+    """An argparse command's log lines on stderr, in ``LOG_FORMAT``."""
+    logging.basicConfig(level=level, format=LOG_FORMAT)
 
 
 def bars_wanted(enabled: bool = True, multirun: bool = False, stream: TextIO | None = None) -> bool:

@@ -23,6 +23,7 @@ from omegaconf import DictConfig, OmegaConf
 from occbench.config.meta import ROLES, declared, without_meta
 from occbench.datasets.base import Sequence
 from occbench.pipeline.warmup import config_targets
+from occbench.progress import LOG_FORMAT
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = ROOT / "conf"
@@ -230,6 +231,16 @@ def test_experiment_config_instantiates(name, fixtures):
         for sub in nodes:
             _skip_unbuilt(sub)
             _instantiate_or_skip_extra(sub, f"{name}: {group}")
+
+
+@pytest.mark.parametrize("primary", _primaries())
+def test_hydra_logs_in_the_one_form_of_every_command(primary):
+    """A run's lines (job_logging) and a sweep's own (hydra_logging, Hydra's default
+    '[time][HYDRA] message') are in ``LOG_FORMAT``, as the argparse commands' are."""
+    cfg = _compose(primary, [], hydra=True)
+    for node in (cfg.hydra.job_logging, cfg.hydra.hydra_logging):
+        assert node.handlers.console.formatter == "simple"
+        assert node.formatters.simple.format == LOG_FORMAT
 
 
 @pytest.mark.parametrize("group,name", [

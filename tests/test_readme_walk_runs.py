@@ -14,6 +14,13 @@ import pandas as pd
 from test_readme_walk import _mp4, occbench
 
 CELL = r"[+-]\d\.\d{3} \[[+-]\d\.\d{3}, [+-]\d\.\d{3}\]"  # a paired difference and interval
+# every command's log line (occbench.progress.LOG_FORMAT): '[time][logger][LEVEL] - message'
+LOG_LINE = re.compile(r"\[\d{4}-\d\d-\d\d \d\d:\d\d:\d\d,\d{3}\]\[[\w.]+\]\[[A-Z]+\] - ")
+
+
+def _logged_in_one_form(stderr: str) -> None:
+    logged = [line for line in stderr.splitlines() if line.startswith("[")]
+    assert logged and not [line for line in logged if not LOG_LINE.match(line)], stderr
 
 
 def test_a_video_cut_short_fails_its_sequence_naming_the_frame(tmp_path):
@@ -46,6 +53,10 @@ def test_a_sweep_with_failing_jobs_says_each_cause_once_and_one_set_of_figures(t
     cause = "tracker 'baseline' (occbench.trackers.baseline.BaselineTracker): ValueError: "
     assert proc.stderr.count(f"job failed: {cause}max_age must be >= 0") == 2
     assert f"occbench: 2 of 4 sweep jobs not done" in proc.stderr
+    _logged_in_one_form(proc.stderr)  # the sweep's own lines as a run's ('[HYDRA] ...' before)
+    gathered = occbench("sweep", "sweep", cwd=tmp_path)  # gathered again: argparse's logging
+    assert gathered.returncode == 1 and "occbench: 2 of 4 sweep jobs not done" in gathered.stderr
+    _logged_in_one_form(gathered.stderr)
     # the summary printed, sweep.md's and the page's: one computation (mean [low, high])
     printed = next(line.split() for line in proc.stdout.splitlines()
                    if line.split()[:2] == ["3", "baseline"])

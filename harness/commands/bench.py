@@ -63,7 +63,7 @@ from occbench.config.build import (
 from occbench.pipeline.bank import TrackerBank
 from occbench.pipeline.loop import ForegroundProvider, clean_detections, frames as frame_loop
 from occbench.pipeline.warmup import warm_up_once
-from occbench.progress import progress_factory
+from occbench.progress import log_to_stderr, progress_factory
 from occbench.trackers.frontend.blobs import blobs_from_mask
 
 log = logging.getLogger(__name__)
@@ -300,7 +300,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = p.parse_args(argv)
     global _clock
     _clock = CLOCKS[args.clock]
-    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr(logging.WARNING)
 
     cv2.setNumThreads(1)
 

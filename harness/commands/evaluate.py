@@ -24,6 +24,7 @@ from occbench.commands.mistakes import refuse
 from occbench.datasets.mot import read_seqinfo, seqinfo_number
 from occbench.io.mot import MotTable, read_mot
 from occbench.metrics import COLUMNS, COUNT_COLUMNS, SequenceScore, score_sequence, summarize
+from occbench.progress import log_to_stderr
 from occbench.report.tables import number
 
 log = logging.getLogger(__name__)
@@ -185,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
     try:
         table = evaluate(args.gt, args.results, args.iou)
     except (FileNotFoundError, ValueError) as err:  # MotFormatError is a ValueError

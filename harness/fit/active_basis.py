@@ -35,6 +35,7 @@ import numpy as np
 from hydra.utils import instantiate
 
 from occbench.config.build import compose_config
+from occbench.progress import log_to_stderr
 from occbench.trackers.frontend.active_basis import ActiveBasis, GaborBank, crop_patch
 from occbench.trackers.frontend.active_basis_learn import learn
 from occbench.trackers.geometry import intersection_matrix
@@ -181,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--elements", type=int, default=30, help="n, Gabor elements of the template")
     ap.add_argument("--seed", type=int, default=0, help="seed of the background patches")
     args = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
     template = fit(None if args.synthetic_seed < 0 else args.synthetic_seed, not args.no_caviar,
                    args.step, args.caviar_step, args.min_height, args.background, args.elements, seed=args.seed)
     out = args.out

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from occbench.config.build import dataset_sequences
+from occbench.progress import log_to_stderr
 from occbench.trackers.frontend.heads import (
     HAIR,
     SKIN,
@@ -89,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--min-pixels", type=int, default=200)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
     out = args.out
     if args.references or not args.overrides:
         mix = fit_colour_mixtures(

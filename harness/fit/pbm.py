@@ -92,6 +92,7 @@ from occbench.datasets.mot import load_mot
 from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_suite
 from occbench.fit.pbm_pairs import collect_pairs, positive_differences
 from occbench.fit.pbm_weights import WeightFit, search_weights
+from occbench.progress import log_to_stderr
 from occbench.trackers.layered.feature_models import (
     FeatureModels,
     FoldedMixture,
@@ -346,7 +347,7 @@ def _print_fit(args: argparse.Namespace, fit: WeightFit) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = _parser()
     args = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
     sequences, sources = _sequences(args)
     if not sequences:
         ap.error("give --synthetic, --mot and/or --caviar")

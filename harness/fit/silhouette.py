@@ -24,6 +24,7 @@ import numpy as np
 from hydra.utils import instantiate
 
 from occbench.config.build import compose_config
+from occbench.progress import log_to_stderr
 from occbench.trackers.frontend.silhouette_template import TEMPLATE_HEIGHT, fit_template
 from occbench.trackers.geometry import intersection_matrix
 
@@ -96,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="detector config whose background model makes masks where the "
                          "dataset has no label images")
     args = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
 
     overrides = list(args.overrides) or ["dataset=synthetic"]
     cfg = compose_config([*overrides, f"detector={args.detector}"])

@@ -32,6 +32,7 @@ from occbench.errors import REFUSED, refusal
 from occbench.io.mot import MotTable, read_mot
 from occbench.metrics.occlusion import row_visibility
 from occbench.metrics.paper import considered, match_rows
+from occbench.progress import log_to_stderr
 
 log = logging.getLogger(__name__)
 
@@ -159,7 +160,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", type=Path, help="PNG path (default RUN_DIR/plots/trajectory_...)")
     p.add_argument("--iou", type=float, default=0.5)
     args = p.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
 
     try:
         tracks = args.run_dir / "tracks"

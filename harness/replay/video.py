@@ -52,7 +52,7 @@ from occbench.config.build import (
 from occbench.config.meta import metas
 from occbench.errors import REFUSED, refusal
 from occbench.pipeline.loop import frames, no_progress
-from occbench.progress import progress_factory
+from occbench.progress import log_to_stderr, progress_factory
 from occbench.report.draw import draw_tracks, grid, legend, with_legend
 from occbench.report.graph import draw_graph
 from occbench.sources.base import DetectionSource
@@ -308,7 +308,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--scale", type=float, default=1.0)
     p.add_argument("--columns", type=int, default=None)
     args = p.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
     if args.out is None and args.sheet is None and args.run is None:
         p.error("give --out and/or --sheet, or --run RUN_DIR (writes both into RUN_DIR/report/)")
 

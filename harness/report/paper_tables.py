@@ -52,6 +52,7 @@ import yaml
 from hydra.utils import get_method
 
 from occbench.errors import REFUSED, refusal
+from occbench.progress import log_to_stderr
 
 log = logging.getLogger(__name__)
 
@@ -218,7 +219,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="Rebuild paper_table.md of a finished `+experiment=...` run.")
     p.add_argument("run_dir", type=Path, help="run directory holding config.yaml and metrics")
     args = p.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
     config = args.run_dir / "config.yaml"
     if not config.is_file():
         config = args.run_dir / ".hydra" / "config.yaml"

@@ -38,6 +38,7 @@ from omegaconf import OmegaConf
 
 from occbench.errors import REFUSED, refusal
 from occbench.io.write import write_atomic
+from occbench.progress import log_to_stderr
 from occbench.sweeps.jobs import (  # noqa: F401 - re-exported: occbench.sweeps.gather's names
     DAMAGED,
     DONE,
@@ -238,7 +239,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--metrics", nargs="+", default=list(DEFAULT_METRICS))
     p.add_argument("--no-plots", action="store_true")
     args = p.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    log_to_stderr()
 
     config = None  # Hydra's copy of a job's config (with hydra.sweeper): an Optuna study?
     found = sorted(args.sweep_dir.glob("*/.hydra/hydra.yaml"))
