@@ -143,6 +143,10 @@ class Adaptations:
             best at p >= ``matching.match_threshold``, scored higher than this target scores
             it) and leaves them to the assignment (``selection.RivalClaims``; paper: false,
             a target's row alone).
+        weak_ranked: a weak candidate the head template validates (PBM 4.1) enters the
+            assignment at ``matching.match_threshold`` plus 1e-6 x its own score, so two
+            targets validated for one candidate are ranked by their scores
+            (``selection.RankedAtThreshold``; paper: false, at the threshold, a tie).
         leaving_unreported: an unfound target moving towards an image border whose
             reported box lies within this x its width (height) of it, or beyond, is not
             reported (``exits.LeavingUnreported``; negative: off, reported as the other
@@ -179,6 +183,7 @@ class Adaptations:
     contested_template: float = 0.0
     rival_claims: bool = False
     leaving_unreported: float = -1.0
+    weak_ranked: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -214,7 +219,7 @@ class Adaptations:
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
-                                       "one_to_one", "border_exit", "rival_claims"),
+                                       "one_to_one", "border_exit", "rival_claims", "weak_ranked"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int})
@@ -232,7 +237,7 @@ class Adaptations:
                    one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
-                   leaving_unreported=-1.0)
+                   leaving_unreported=-1.0, weak_ranked=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -91,6 +91,27 @@ class RivalClaims:
         return out
 
 
+class AtThreshold:
+    """A weak candidate (p in [weak_threshold, match_threshold)) the head template validates
+    (PBM 4.1) enters the assignment at ``match_threshold``: two targets so validated for one
+    candidate tie, whatever their own scores."""
+
+    def value(self, p: float, match_threshold: float) -> float:
+        return max(p, match_threshold)
+
+
+class RankedAtThreshold:
+    """``weak_ranked``: as ``AtThreshold``, plus ``RANK`` x its own score p (eq. 13), so that
+    two targets validated for one candidate are ranked by their scores (the assignment, on
+    1 - p, gives it to the one that scores it higher), still below every candidate matched
+    above the threshold by more than ``RANK``."""
+
+    RANK = 1e-6
+
+    def value(self, p: float, match_threshold: float) -> float:
+        return p if p >= match_threshold else match_threshold + self.RANK * p
+
+
 class MultipleResponsePruning:
     """PBM 4 steps 4-5 and 4.1 on one frame's scores (``__call__``).
 
@@ -105,6 +126,7 @@ class MultipleResponsePruning:
         self.pruning = pruning
         self.adaptations = adaptations
         self.claims = RivalClaims() if adaptations.rival_claims else OwnRow()
+        self.weak = RankedAtThreshold() if adaptations.weak_ranked else AtThreshold()
 
     def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray) -> None:
         """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
@@ -166,7 +188,7 @@ class MultipleResponsePruning:
                                          targets.beta[ti])
             keep = row[chosen]
             S[ti, cands] = -np.inf
-            S[ti, chosen] = max(keep, m.match_threshold)
+            S[ti, chosen] = self.weak.value(keep, m.match_threshold)
 
     def _untemplated(self, row: np.ndarray, best: int, heads: np.ndarray, misses: int) -> bool:
         """Whether the pruning keeps an ambiguous row's ``best`` without its head template:
