@@ -203,17 +203,23 @@ def start(name: str, tag: str, folder: Path, extra: list[str]) -> tuple[subproce
     return proc, xml
 
 
-def finish(proc: subprocess.Popen, xml: Path, outcome: Outcome, t0: float,
-           deadline: float) -> None:
-    """Wait for a run until ``deadline`` (then kill its process group), read its xml."""
-    try:
-        proc.wait(timeout=max(deadline - time.monotonic(), 1))
-    except subprocess.TimeoutExpired:
-        outcome.timed_out = True
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-    outcome.seconds, outcome.code = time.monotonic() - t0, proc.returncode
-    read_junit(xml, outcome)
+def finish(runs: list[tuple[subprocess.Popen, Path, Outcome, float]], deadline: float) -> None:
+    """Wait for the runs (proc, xml, outcome, start), each timed to its own end, until
+    ``deadline`` (then kill the process groups left), and read their xml."""
+    waiting = list(runs)
+    while waiting:
+        for run in list(waiting):
+            proc, xml, outcome, t0 = run
+            if proc.poll() is None and time.monotonic() < deadline:
+                continue
+            if proc.returncode is None:
+                outcome.timed_out = True
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+            outcome.seconds, outcome.code = time.monotonic() - t0, proc.returncode
+            read_junit(xml, outcome)
+            waiting.remove(run)
+        time.sleep(1)
 
 
 @dataclass
@@ -242,8 +248,7 @@ def one_round(number: int, out: Path, workers: int, timeout: float, extra: list[
     t_fg = time.monotonic()
     fg_proc, fg_xml = start("foreground", tag, folder, ["-n", str(workers), *extra])
     fg, bg = Outcome("foreground"), Outcome("background")
-    finish(fg_proc, fg_xml, fg, t_fg, deadline)
-    finish(bg_proc, bg_xml, bg, t_bg, deadline)
+    finish([(fg_proc, fg_xml, fg, t_fg), (bg_proc, bg_xml, bg, t_bg)], deadline)
     sampler.done.set()
     time.sleep(GRACE)
     left = orphans(tag, {fg_proc.pid, bg_proc.pid})
