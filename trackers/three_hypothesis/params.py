@@ -257,8 +257,8 @@ class Adaptations:
     split_parts: bool = False
     merged_motion: bool = False
     visible_region: bool = False
-    measured_hypothesis: bool = False
-    measured_hypothesis_sigmas: float = 0.0
+    measured_hypothesis: bool = True
+    measured_hypothesis_sigmas: float = 2.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,

@@ -37,7 +37,7 @@ def test_hypothesis_1_takes_the_measured_line_when_it_predicted_better():
     assert FilterVelocity().start(lagging, x_prev, x_pred) is x_pred
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).line, FilterVelocity)
-    assert build_rules(Adaptations(measured_hypothesis=True), h).line == MeasuredLine(8)
+    assert build_rules(Adaptations(measured_hypothesis=True), h).line == MeasuredLine(8, 2.0)
 
 
 def test_the_line_is_taken_only_where_it_differs_from_m_beyond_its_error():
@@ -66,4 +66,5 @@ def test_the_line_is_taken_only_where_it_differs_from_m_beyond_its_error():
     h = EllipseHistogrammer()
     built = build_rules(Adaptations(measured_hypothesis=True, measured_hypothesis_sigmas=2), h)
     assert built.line == MeasuredLine(8, 2.0)
-    assert "measured_hypothesis_sigmas" not in Adaptations().changed()
+    assert Adaptations().measured_hypothesis and Adaptations().measured_hypothesis_sigmas == 2.0
+    assert "measured_hypothesis_sigmas" not in Adaptations.paper().changed()
