@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from occbench.trackers.common.assignment import assign_in_blocks
+from occbench.trackers.common.checks import at_least, unit
 from occbench.trackers.common.spatial import DENSE_LIMIT, blocks, meeting_pairs
 from occbench.trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
 from occbench.trackers.geometry import iou_matrix
@@ -60,12 +61,9 @@ class BaselineTracker:
         min_score: float = 0.0,
         report_coasting: bool = False,
     ) -> None:
-        if not 0.0 <= iou_threshold <= 1.0:
-            raise ValueError(f"iou_threshold must lie in [0, 1], got {iou_threshold}")
-        if min_hits < 1:
-            raise ValueError(f"min_hits must be >= 1, got {min_hits}")
-        if max_age < 0:
-            raise ValueError(f"max_age must be >= 0, got {max_age}")
+        unit("", iou_threshold=iou_threshold)
+        at_least("", 1, min_hits=min_hits)
+        at_least("", 0, max_age=max_age)
         self.iou_threshold = iou_threshold
         self.min_hits = min_hits
         self.max_age = max_age

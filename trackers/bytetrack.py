@@ -33,6 +33,7 @@ from enum import Enum
 import numpy as np
 
 from occbench.trackers.common.assignment import assign
+from occbench.trackers.common.checks import at_least, require, unit
 from occbench.trackers.common.kalman import box_measurement, constant_velocity_box_filter, state_box
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections, Track, TrackState
@@ -120,24 +121,13 @@ class ByteTrackTracker:
         measurement_noise: float = 1.0,
         initial_velocity_variance: float = 100.0,
     ) -> None:
-        for name, value in (
-            ("track_thresh", track_thresh),
-            ("low_thresh", low_thresh),
-            ("new_track_thresh", new_track_thresh),
-            ("match_thresh", match_thresh),
-            ("second_match_thresh", second_match_thresh),
-            ("unconfirmed_match_thresh", unconfirmed_match_thresh),
-        ):
-            if not 0.0 <= value <= 1.0:
-                raise ValueError(f"{name} must lie in [0, 1], got {value}")
-        if low_thresh > track_thresh:
-            raise ValueError(
-                f"low_thresh ({low_thresh}) must not exceed track_thresh ({track_thresh})"
-            )
-        if track_buffer < 0:
-            raise ValueError(f"track_buffer must be >= 0, got {track_buffer}")
-        if report_lost < 0:
-            raise ValueError(f"report_lost must be >= 0, got {report_lost}")
+        unit("", track_thresh=track_thresh, low_thresh=low_thresh,
+             new_track_thresh=new_track_thresh, match_thresh=match_thresh,
+             second_match_thresh=second_match_thresh,
+             unconfirmed_match_thresh=unconfirmed_match_thresh)
+        require("low_thresh", low_thresh <= track_thresh,
+                f"must not exceed track_thresh {track_thresh}", low_thresh)
+        at_least("", 0, track_buffer=track_buffer, report_lost=report_lost)
         self.track_thresh = float(track_thresh)
         self.low_thresh = float(low_thresh)
         self.new_track_thresh = float(new_track_thresh)

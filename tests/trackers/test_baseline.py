@@ -46,3 +46,5 @@ def test_bad_arguments_are_named():
         BaselineTracker(iou_threshold=2)
     with pytest.raises(ValueError, match="min_hits"):
         BaselineTracker(min_hits=0)
+    with pytest.raises(ValueError, match=r"^iou_threshold must lie in \[0, 1\], got nan"):
+        BaselineTracker(iou_threshold=float("nan"))  # the message format of common.checks

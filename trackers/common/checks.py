@@ -1,6 +1,8 @@
 """Range checks of the trackers' parameter groups, one error format for all of them:
 ``ValueError("<group>.<field> <rule>, got <value>")``, where ``<group>.<field>`` is the key
-under ``tracker.`` in the config (``matching.match_threshold``, ``association.mu_rho``)."""
+under ``tracker.`` (or ``detector.detector.``) in the config (``matching.match_threshold``,
+``association.mu_rho``, ``calibration.min_fill``); a tracker without groups names the bare
+key (group ""): ``iou_threshold``."""
 
 from __future__ import annotations
 
@@ -25,16 +27,20 @@ def require(key: str, ok: bool, rule: str, value: object) -> None:
         raise ValueError(f"{key} {rule}, got {value!r}")
 
 
+def _key(group: str, name: str) -> str:
+    return f"{group}.{name}" if group else name
+
+
 def unit(group: str, **values: float) -> None:
     """ValueError naming ``group.name`` unless each value lies in [0, 1] (NaN does not)."""
     for name, v in values.items():
-        require(f"{group}.{name}", 0.0 <= v <= 1.0, "must lie in [0, 1]", v)
+        require(_key(group, name), 0.0 <= v <= 1.0, "must lie in [0, 1]", v)
 
 
 def at_least(group: str, low: float, **values: float) -> None:
     """ValueError naming ``group.name`` unless each value is >= ``low`` (NaN is not)."""
     for name, v in values.items():
-        require(f"{group}.{name}", v >= low, f"must be >= {low}", v)
+        require(_key(group, name), v >= low, f"must be >= {low}", v)
 
 
 def coerce(group: object, kinds: dict[str, type]) -> None:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import require, unit
 from occbench.trackers.comparators.loss import AnyDetection, MostSimilar, NeverLost, SimilarityBelow
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections, Track, TrackState
@@ -99,10 +100,9 @@ class ColourTrackerBase:
 
     def __init__(self, birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
-        if not 0.0 <= birth_iou <= 1.0:
-            raise ValueError(f"birth_iou must lie in [0, 1], got {birth_iou}")
-        if max_targets is not None and max_targets < 1:
-            raise ValueError(f"max_targets must be >= 1 or None, got {max_targets}")
+        unit("", birth_iou=birth_iou)
+        require("max_targets", max_targets is None or max_targets >= 1, "must be >= 1 or None",
+                max_targets)
         self.max_targets = max_targets
         self.birth_iou = birth_iou
         self.loss = SimilarityBelow() if loss is None else loss

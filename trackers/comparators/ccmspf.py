@@ -29,6 +29,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import at_least
 from occbench.trackers.comparators.appearance import ColourTarget, Loss, Restart, clip_box
 from occbench.trackers.comparators.meanshift import mean_shift, similarity
 from occbench.trackers.comparators.particle_filter import ParticleTrackerBase
@@ -89,8 +90,7 @@ class ConnectedComponentMeanShiftPF(ParticleTrackerBase):
                  component_lambda: float = 1.0, seed: int = 0,
                  birth_iou: float = 0.3, loss: Loss | None = None,
                  restart: Restart | None = None, max_targets: int | None = None) -> None:
-        if mean_shift_iterations < 0:
-            raise ValueError(f"mean_shift_iterations must be >= 0, got {mean_shift_iterations}")
+        at_least("", 0, mean_shift_iterations=mean_shift_iterations)
         self.position_noise = position_noise
         self.scale_noise = scale_noise
         self.mean_shift_iterations = mean_shift_iterations

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from occbench.trackers.common.checks import at_least, unit
+
 
 @dataclass(frozen=True)
 class NeverLost:
@@ -56,10 +58,8 @@ class SimilarityBelow:
     frames: int = 11
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.threshold <= 1.0:
-            raise ValueError(f"threshold must lie in [0, 1], got {self.threshold}")
-        if self.frames < 1:
-            raise ValueError(f"frames must be >= 1, got {self.frames}")
+        unit("loss", threshold=self.threshold)
+        at_least("loss", 1, frames=self.frames)
 
     def missed(self, similarity: float) -> bool:
         """Whether a frame whose followed box has Bhattacharyya ``similarity`` is a miss."""
@@ -98,8 +98,7 @@ class MostSimilar:
     min_similarity: float = 0.0
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.min_similarity <= 1.0:
-            raise ValueError(f"min_similarity must lie in [0, 1], got {self.min_similarity}")
+        unit("restart", min_similarity=self.min_similarity)
 
     def order(self, models: np.ndarray, lost: np.ndarray | None) -> np.ndarray:
         """As ``AnyDetection.order``; with ``lost`` given, the indices with rho >=

@@ -20,7 +20,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import require
+from occbench.trackers.common.checks import at_least, require
 from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
@@ -90,10 +90,8 @@ class MeanShiftTracker(ColourTrackerBase):
     def __init__(self, max_iterations: int = 10, search: float = 1.0, birth_iou: float = 0.3,
                  loss: Loss | None = None, restart: Restart | None = None,
                  max_targets: int | None = None) -> None:
-        if max_iterations < 1:
-            raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
-        if search <= 0:
-            raise ValueError(f"search must be > 0, got {search}")
+        at_least("", 1, max_iterations=max_iterations)
+        require("search", search > 0, "must be > 0", search)
         self.max_iterations = max_iterations
         self.search = search
         super().__init__(birth_iou, loss, restart, max_targets)

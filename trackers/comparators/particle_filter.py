@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from occbench.trackers.common.checks import at_least
 from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
@@ -46,11 +47,8 @@ class ParticleTrackerBase(ColourTrackerBase):
     def __init__(self, particles: int, seed: int, birth_iou: float, loss: Loss | None,
                  restart: Restart | None, max_targets: int | None,
                  **non_negative: float) -> None:
-        if particles < 1:
-            raise ValueError(f"particles must be >= 1, got {particles}")
-        for name, v in non_negative.items():
-            if v < 0:
-                raise ValueError(f"{name} must be >= 0, got {v}")
+        at_least("", 1, particles=particles)
+        at_least("", 0, **non_negative)
         self.particles = particles
         self.seed = seed
         super().__init__(birth_iou, loss, restart, max_targets)

@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import at_least, require
 from occbench.trackers.frontend.texture_colour import TextureColourMixture
 
 log = logging.getLogger(__name__)
@@ -29,8 +30,7 @@ def _kernel(size: int | Sequence[int], name: str) -> np.ndarray | None:
     if isinstance(size, int | np.integer):
         size = (int(size), int(size))
     kw, kh = (int(v) for v in size)
-    if kw < 0 or kh < 0:
-        raise ValueError(f"{name} kernel size must be >= 0, got {size}")
+    require(f"background.{name}", kw >= 0 and kh >= 0, "must be >= 0 (a kernel size)", size)
     if kw <= 1 and kh <= 1:
         return None
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(kw, 1), max(kh, 1)))
@@ -176,25 +176,22 @@ class BackgroundModel:
         gain_compensation: bool = True,
         mixture: TextureColourMixture | None = None,
     ) -> None:
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-        if history < 1:
-            raise ValueError(f"history must be >= 1, got {history}")
-        if var_threshold <= 0:
-            raise ValueError(f"var_threshold must be > 0, got {var_threshold}")
-        if not (learning_rate == -1 or 0.0 <= learning_rate <= 1.0):
-            raise ValueError(f"learning_rate must be -1 or in [0, 1], got {learning_rate}")
-        if background_ratio is not None and not 0.0 < background_ratio <= 1.0:
-            raise ValueError(f"background_ratio must be in (0, 1], got {background_ratio}")
-        if warmup not in WARMUPS:
-            raise ValueError(f"warmup must be one of {WARMUPS}, got {warmup!r}")
-        if warmup_span not in SPANS:
-            raise ValueError(f"warmup_span must be one of {SPANS}, got {warmup_span!r}")
-        if warmup_frames < 0 or warmup_passes < 1:
-            raise ValueError(
-                f"warmup_frames must be >= 0 and warmup_passes >= 1, got "
-                f"{warmup_frames}, {warmup_passes}"
-            )
+        require("background.method", method in METHODS, f"must be one of {METHODS}", method)
+        at_least("background", 1, history=history, warmup_passes=warmup_passes)
+        at_least("background", 0, warmup_frames=warmup_frames)
+        require("background.var_threshold", var_threshold > 0, "must be > 0", var_threshold)
+        require("background.learning_rate", learning_rate == -1 or 0.0 <= learning_rate <= 1.0,
+                "must be -1 or lie in [0, 1]", learning_rate)
+        require("background.background_ratio",
+                background_ratio is None or 0.0 < background_ratio <= 1.0,
+                "must lie in (0, 1] or be None", background_ratio)
+        require("background.warmup", warmup in WARMUPS, f"must be one of {WARMUPS}", warmup)
+        require("background.warmup_span", warmup_span in SPANS, f"must be one of {SPANS}",
+                warmup_span)
+        require("background.shadow_threshold", 0.0 < shadow_threshold < 1.0, "must lie in (0, 1)",
+                shadow_threshold)
+        require("background.work_scale", 0.0 < work_scale <= 1.0, "must lie in (0, 1]",
+                work_scale)
         self.method = method
         self.history = int(history)
         self.var_threshold = float(var_threshold)
@@ -209,11 +206,7 @@ class BackgroundModel:
         self.warmup_passes = int(warmup_passes)
         self.warmup_span = warmup_span
         self.spread_threshold = float(spread_threshold)
-        if not 0.0 < shadow_threshold < 1.0:
-            raise ValueError(f"shadow_threshold must be in (0, 1), got {shadow_threshold}")
         self.shadow_threshold = float(shadow_threshold)
-        if not 0.0 < work_scale <= 1.0:
-            raise ValueError(f"work_scale must be in (0, 1], got {work_scale}")
         self.work_scale = float(work_scale)
         self.gain_compensation = bool(gain_compensation)
         if method == "texture_colour" and mixture is None:

@@ -49,6 +49,7 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import at_least, require, unit
 from occbench.trackers.frontend.footage import CameraBackground, start_with
 from occbench.trackers.frontend.regions import merge_near, split_kmeans
 from occbench.trackers.records import Detections
@@ -112,10 +113,9 @@ class CameraFitCheck:
     """
 
     def __init__(self, min_explained: float = 0.5, min_busy_frames: int = 10) -> None:
-        if not 0.0 < min_explained <= 1.0:
-            raise ValueError(f"min_explained must be in (0, 1], got {min_explained}")
-        if min_busy_frames < 1:
-            raise ValueError(f"min_busy_frames must be >= 1, got {min_busy_frames}")
+        require("fit_check.min_explained", 0.0 < min_explained <= 1.0, "must lie in (0, 1]",
+                min_explained)
+        at_least("fit_check", 1, min_busy_frames=min_busy_frames)
         self.min_explained = float(min_explained)
         self.min_busy_frames = int(min_busy_frames)
 
@@ -161,22 +161,20 @@ class MedianBackground:
                  chroma_tolerance: float = 0.0, blur: int = 3, open_kernel: int = 3,
                  close_kernel: int = 7, footage: CameraBackground | None = None,
                  steady_spread: float = 8.0) -> None:
-        if init_frames < 1:
-            raise ValueError(f"init_frames must be >= 1, got {init_frames}")
-        if not 0.0 <= slow_rate <= fast_rate <= 1.0:
-            raise ValueError(f"need 0 <= slow_rate <= fast_rate <= 1, got {slow_rate}, {fast_rate}")
-        if k_sigma <= 0 or min_difference < 0:
-            raise ValueError(f"k_sigma must be > 0 and min_difference >= 0, got {k_sigma}, {min_difference}")
-        if blur > 1 and blur % 2 == 0:
-            raise ValueError(f"blur must be odd, got {blur}")
+        g = "fallback.background"
+        at_least(g, 1, init_frames=init_frames)
+        unit(g, fast_rate=fast_rate)
+        require(f"{g}.slow_rate", 0.0 <= slow_rate <= fast_rate,
+                f"must lie in [0, fast_rate {fast_rate}]", slow_rate)
+        require(f"{g}.k_sigma", k_sigma > 0, "must be > 0", k_sigma)
+        at_least(g, 0, min_difference=min_difference, steady_spread=steady_spread)
+        require(f"{g}.blur", blur <= 1 or blur % 2 == 1, "must be odd (or 0/1: none)", blur)
         self.init_frames, self.fast_rate, self.slow_rate = int(init_frames), float(fast_rate), float(slow_rate)
         self.k_sigma, self.min_difference = float(k_sigma), float(min_difference)
         self.saturation, self.chroma_tolerance = int(saturation), float(chroma_tolerance)
         self.blur = int(blur)
-        self._open = _ellipse(open_kernel)
-        self._close = _ellipse(close_kernel)
-        if steady_spread < 0:
-            raise ValueError(f"steady_spread must be >= 0, got {steady_spread}")
+        self._open = _ellipse(open_kernel, f"{g}.open_kernel")
+        self._close = _ellipse(close_kernel, f"{g}.close_kernel")
         self.footage, self.steady_spread = footage, float(steady_spread)
         self.reset()
 
@@ -248,9 +246,8 @@ class MedianBackground:
         return fgm
 
 
-def _ellipse(size: int) -> np.ndarray | None:
-    if size < 0:
-        raise ValueError(f"kernel size must be >= 0, got {size}")
+def _ellipse(size: int, key: str = "kernel") -> np.ndarray | None:
+    at_least("", 0, **{key: size})
     return None if size <= 1 else cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
 
 
@@ -301,18 +298,18 @@ class RegionDetector:
     def __init__(self, background: MedianBackground | None = None, min_area: int = 40,
                  min_share: float = 0.0, merge_gap: float = 0.3, split_ratio: float | None = None,
                  initial_area: float = 600.0, seed: int = 0, max_unsteady: float = 1.0) -> None:
-        if min_area < 1 or not 0 <= min_share < 1:
-            raise ValueError(f"need min_area >= 1 and 0 <= min_share < 1, got {min_area}, {min_share}")
-        if merge_gap < 0 or (split_ratio is not None and split_ratio <= 1) or initial_area <= 0:
-            raise ValueError(f"need merge_gap >= 0, split_ratio > 1, initial_area > 0, got "
-                             f"{merge_gap}, {split_ratio}, {initial_area}")
+        at_least("fallback", 1, min_area=min_area)
+        require("fallback.min_share", 0 <= min_share < 1, "must lie in [0, 1)", min_share)
+        at_least("fallback", 0, merge_gap=merge_gap)
+        require("fallback.split_ratio", split_ratio is None or split_ratio > 1,
+                "must be > 1 or None", split_ratio)
+        require("fallback.initial_area", initial_area > 0, "must be > 0", initial_area)
+        unit("fallback", max_unsteady=max_unsteady)
         self.background = background if background is not None else MedianBackground()
         self.min_area, self.min_share = int(min_area), float(min_share)
         self.merge_gap = float(merge_gap)
         self.split_ratio = None if split_ratio is None else float(split_ratio)
         self.initial_area, self.seed = float(initial_area), int(seed)
-        if not 0.0 <= max_unsteady <= 1.0:
-            raise ValueError(f"max_unsteady must be in [0, 1], got {max_unsteady}")
         self.max_unsteady = float(max_unsteady)
         self.reset()
 

@@ -310,10 +310,11 @@ class ActiveBasisDetector(SilhouetteDetector):
     """
 
     def __init__(self, search: ShapeSearch | None = None, **kwargs) -> None:
-        if search is None:
-            raise ValueError("search: an ActiveBasisDetector needs a ShapeSearch (its template)")
-        if kwargs.get("verifier") is not None:
-            raise ValueError("verifier: the active-basis detector has none (it is the shape model)")
+        require("search", search is not None, "must be a ShapeSearch (the detector's template)",
+                search)
+        require("verifier", kwargs.get("verifier") is None,
+                "must be null: the active-basis detector has none (it is the shape model)",
+                kwargs.get("verifier"))
         super().__init__(**kwargs)
         self.search = search
 

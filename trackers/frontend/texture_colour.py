@@ -39,6 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from occbench.trackers.common.checks import at_least, require, unit
+
 #: (dy, dx) of the 8 neighbours, clockwise from the top-left
 _NEIGHBOURS = ((-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1))
 
@@ -100,26 +102,17 @@ class TextureColourMixture:
         noise: float = 12.0,
         compiled: bool = True,
     ) -> None:
-        if modes < 1:
-            raise ValueError(f"modes must be >= 1, got {modes}")
-        if history < 1:
-            raise ValueError(f"history must be >= 1, got {history}")
-        if not 0.0 <= texture_weight <= 1.0:
-            raise ValueError(f"texture_weight must be in [0, 1], got {texture_weight}")
-        if not 0.0 < threshold <= 1.0:
-            raise ValueError(f"threshold must be in (0, 1], got {threshold}")
-        if not 0.0 < background_weight < 1.0:
-            raise ValueError(f"background_weight must be in (0, 1), got {background_weight}")
-        if not 0.0 < texture_tau < 1.0 or texture_radius < 1:
-            raise ValueError(f"need 0 < texture_tau < 1 and texture_radius >= 1, got "
-                             f"{texture_tau}, {texture_radius}")
-        if chroma_tolerance <= 0:
-            raise ValueError(f"chroma_tolerance must be > 0, got {chroma_tolerance}")
-        if not 0.0 < shadow_ratio <= 1.0 <= highlight_ratio:
-            raise ValueError(f"need 0 < shadow_ratio <= 1 <= highlight_ratio, got "
-                             f"{shadow_ratio}, {highlight_ratio}")
-        if noise < 0:
-            raise ValueError(f"noise must be >= 0, got {noise}")
+        g = "background.mixture"
+        at_least(g, 1, modes=modes, history=history, texture_radius=texture_radius,
+                 highlight_ratio=highlight_ratio)
+        at_least(g, 0, noise=noise)
+        unit(g, texture_weight=texture_weight)
+        require(f"{g}.threshold", 0.0 < threshold <= 1.0, "must lie in (0, 1]", threshold)
+        for key, v in (("background_weight", background_weight), ("texture_tau", texture_tau)):
+            require(f"{g}.{key}", 0.0 < v < 1.0, "must lie in (0, 1)", v)
+        require(f"{g}.chroma_tolerance", chroma_tolerance > 0, "must be > 0", chroma_tolerance)
+        require(f"{g}.shadow_ratio", 0.0 < shadow_ratio <= 1.0, "must lie in (0, 1]",
+                shadow_ratio)
         self.modes, self.history = int(modes), int(history)
         self.texture_weight, self.threshold = float(texture_weight), float(threshold)
         self.background_weight = float(background_weight)

@@ -7,6 +7,8 @@ from types import ModuleType
 
 import numpy as np
 
+from occbench.trackers.common.checks import unit
+
 EXTRA = "outside"
 # libraries whose metadata pins numpy<2 / old scipy but whose code runs on numpy 2: they
 # cannot be in the extra (pip would downgrade numpy, OpenCV and pandas) and are installed
@@ -79,6 +81,5 @@ def xyxy_to_xywh(box) -> np.ndarray:
 
 
 def check_min_score(min_score: float) -> float:
-    if not 0.0 <= min_score <= 1.0:
-        raise ValueError(f"min_score must lie in [0, 1], got {min_score}")
+    unit("", min_score=min_score)
     return float(min_score)

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from occbench.trackers.common import checks
 from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
 from occbench.trackers.records import Detections, SequenceInfo, Track, TrackState
 
@@ -82,17 +83,17 @@ class BoxmotTracker:
     def __init__(self, tracker: str, params: Mapping[str, Any] | None = None,
                  frame_rate: float | None = None, min_score: float = 0.0) -> None:
         require("boxmot", INSTALL, type(self).__name__, f"pip install {INSTALL}")
-        if tracker not in CLASSES:
-            raise ValueError(f"tracker must be one of {sorted(CLASSES)}, got {tracker!r}")
+        checks.require("tracker", tracker in CLASSES, f"must be one of {sorted(CLASSES)}",
+                       tracker)
         params = dict(params or {})
         forbidden = sorted(set(params) & (set(MOTION_ONLY[tracker]) | {
             "reid_model", "reid_weights", "device", "half", "frame_rate", "frame_width",
             "frame_height"}))
-        if forbidden:
-            raise ValueError(f"boxmot {tracker}: {forbidden} are set by the adapter (motion "
-                             "only, frame rate and size from the sequence)")
-        if frame_rate is not None and not frame_rate > 0:
-            raise ValueError(f"frame_rate must be > 0, got {frame_rate}")
+        checks.require("params", not forbidden, f"of boxmot {tracker} must not set {forbidden}: "
+                       "the adapter sets them (motion only, frame rate and size from the "
+                       "sequence)", sorted(params))
+        checks.require("frame_rate", frame_rate is None or frame_rate > 0, "must be > 0 or None",
+                       frame_rate)
         module, name = CLASSES[tracker]
         self._cls = getattr(importlib.import_module(module), name)
         self.tracker = tracker

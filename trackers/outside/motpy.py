@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from occbench.trackers.common import checks
 from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
 from occbench.trackers.records import Detections, Track, TrackState
 
@@ -57,14 +58,10 @@ class MotpyTracker:
         min_score: float = 0.0,
     ) -> None:
         self._mp = require("motpy", "motpy==0.0.10", type(self).__name__)
-        if dt <= 0:
-            raise ValueError(f"dt must be > 0, got {dt}")
-        if not 0.0 <= min_iou <= 1.0:
-            raise ValueError(f"min_iou must lie in [0, 1], got {min_iou}")
-        if order_pos not in (0, 1, 2) or order_size not in (0, 1, 2):
-            raise ValueError(
-                f"order_pos and order_size must be 0, 1 or 2, got {order_pos}, {order_size}"
-            )
+        checks.require("dt", dt > 0, "must be > 0", dt)
+        checks.unit("", min_iou=min_iou)
+        for key, order in (("order_pos", order_pos), ("order_size", order_size)):
+            checks.require(key, order in (0, 1, 2), "must be 0, 1 or 2", order)
         self.dt = float(dt)
         self.model_spec = {
             "order_pos": int(order_pos),

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from occbench.trackers.common import checks
 from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy
 from occbench.trackers.records import Detections, Track, TrackState
 
@@ -49,14 +50,13 @@ class NorfairTracker:
         min_score: float = 0.0,
     ) -> None:
         self._nf = require("norfair", "--no-deps norfair==2.3.0", type(self).__name__)
-        if distance_threshold <= 0:
-            raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
-        if hit_counter_max < 1:
-            raise ValueError(f"hit_counter_max must be >= 1, got {hit_counter_max}")
-        if initialization_delay is not None and not 0 <= initialization_delay < hit_counter_max:
-            raise ValueError(
-                f"initialization_delay must lie in [0, hit_counter_max), got {initialization_delay}"
-            )
+        checks.require("distance_threshold", distance_threshold > 0, "must be > 0",
+                       distance_threshold)
+        checks.at_least("", 1, hit_counter_max=hit_counter_max)
+        checks.require("initialization_delay", initialization_delay is None
+                       or 0 <= initialization_delay < hit_counter_max,
+                       f"must lie in [0, hit_counter_max {hit_counter_max}) or be None",
+                       initialization_delay)
         self.distance_function = distance_function
         self.distance_threshold = float(distance_threshold)
         self.hit_counter_max = int(hit_counter_max)

@@ -25,6 +25,7 @@ import importlib
 
 import numpy as np
 
+from occbench.trackers.common import checks
 from occbench.trackers.outside._common import IdMap, check_min_score, require, xywh_to_xyxy, xyxy_to_xywh
 from occbench.trackers.records import Detections, Track, TrackState
 
@@ -81,16 +82,11 @@ class OCSortTracker:
         self._oc = require("ocsort", "--no-deps ocsort==0.0.2", type(self).__name__)
         kalman_module = importlib.import_module("ocsort.kalmanfilter")
         kalman_module.float = _size_one_float  # numpy-2 shim for ORU (see module docstring)
-        if asso_func not in ASSOCIATION_COSTS:
-            raise ValueError(f"asso_func must be one of {ASSOCIATION_COSTS}, got {asso_func!r}")
-        if max_age < 0:
-            raise ValueError(f"max_age must be >= 0, got {max_age}")
-        if min_hits < 0:
-            raise ValueError(f"min_hits must be >= 0, got {min_hits}")
-        if delta_t < 1:
-            raise ValueError(f"delta_t must be >= 1, got {delta_t}")
-        if not 0.0 <= iou_threshold <= 1.0:
-            raise ValueError(f"iou_threshold must lie in [0, 1], got {iou_threshold}")
+        checks.require("asso_func", asso_func in ASSOCIATION_COSTS,
+                       f"must be one of {ASSOCIATION_COSTS}", asso_func)
+        checks.at_least("", 0, max_age=max_age, min_hits=min_hits)
+        checks.at_least("", 1, delta_t=delta_t)
+        checks.unit("", iou_threshold=iou_threshold)
         self.det_thresh = float(det_thresh)
         self.max_age = int(max_age)
         self.min_hits = int(min_hits)

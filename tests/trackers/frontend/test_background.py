@@ -41,10 +41,15 @@ def test_mixture_labels_a_shadow_127_and_an_object_255():
 def test_mixture_arguments_validated():
     for kw in ({"modes": 0}, {"threshold": 0.0}, {"background_weight": 1.0},
                {"shadow_ratio": 1.2}, {"texture_tau": 0.0}, {"noise": -1.0}):
-        with pytest.raises(ValueError):
+        (key,) = kw
+        with pytest.raises(ValueError, match=rf"^background\.mixture\.{key} "):  # config key
             TextureColourMixture(**kw)
-    with pytest.raises(ValueError, match="method"):
+    with pytest.raises(ValueError, match=r"^background\.method "):
         BackgroundModel(method="vibe")
+    with pytest.raises(ValueError, match=r"^background\.var_threshold .*got nan"):  # let in before
+        BackgroundModel(var_threshold=float("nan"))
+    with pytest.raises(ValueError, match=r"^background\.close_kernel "):
+        BackgroundModel(close_kernel=(3, -1))
 
 
 def test_renderer_draws_a_mirrored_reflection_below_the_feet():

@@ -152,9 +152,13 @@ def test_region_detector_merges_fragments_and_splits_when_asked():
 
 
 def test_fallback_arguments_are_validated():
-    with pytest.raises(ValueError, match="min_explained"):
+    with pytest.raises(ValueError, match=r"^fit_check\.min_explained "):
         CameraFitCheck(min_explained=0.0)
-    with pytest.raises(ValueError, match="slow_rate"):
+    with pytest.raises(ValueError, match=r"^fallback\.background\.slow_rate "):
         MedianBackground(fast_rate=0.01, slow_rate=0.1)
-    with pytest.raises(ValueError, match="split_ratio"):
+    with pytest.raises(ValueError, match=r"^fallback\.background\.steady_spread .*nan"):
+        MedianBackground(steady_spread=float("nan"))  # let in before
+    with pytest.raises(ValueError, match=r"^fallback\.background\.open_kernel "):
+        MedianBackground(open_kernel=-1)
+    with pytest.raises(ValueError, match=r"^fallback\.split_ratio "):
         RegionDetector(split_ratio=1.0)
