@@ -12,7 +12,7 @@ only shrink while the maps stay), so the detections at a threshold T are the fit
 of one run at a lower threshold: ``--thresholds`` scores several from one run (exact).
 
 Run: ``python benchmarks/bench_active_basis.py [--thresholds 8 10 12] [--report]
-[--set search.min_vacant=0.6 ...]``. Reads the not-shipped data (``shared_data.use_shared_data()``,
+[--set search.placements.min_vacant=0.6 ...]``. Reads the not-shipped data (``shared_data.use_shared_data()``,
 $OCCBENCH_SHARED) for
 EnterExitCrossingPaths1cor; exits with a message when a sequence is absent.
 """

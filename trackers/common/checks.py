@@ -1,11 +1,13 @@
 """Range checks of the trackers' parameter groups, one error format for all of them:
 ``ValueError("<group>.<field> <rule>, got <value>")``, where ``<group>.<field>`` is the key
 under ``tracker.`` (or ``detector.detector.``) in the config (``matching.match_threshold``,
-``association.mu_rho``, ``calibration.min_fill``); a tracker without groups names the bare
+``association.mu_rho``, ``calibration.people.min_fill``); a tracker without groups names the bare
 key (group ""): ``iou_threshold``."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import fields
 from typing import TypeVar
 
 G = TypeVar("G")
@@ -48,3 +50,16 @@ def coerce(group: object, kinds: dict[str, type]) -> None:
     gives 3 for 3.0 and a tracker compares types in its hot loop)."""
     for name, kind in kinds.items():
         object.__setattr__(group, name, kind(getattr(group, name)))
+
+
+def refuse_moved(owner: str, moved: Mapping[str, object], groups: Mapping[str, type]) -> None:
+    """TypeError for the first key of ``moved`` (flat keyword arguments a constructor took
+    before its parameter groups): ``<owner>.<key>: moved to <owner>.<group>.<key>``, the
+    group being the one of ``groups`` (name -> frozen dataclass) with that field."""
+    home = {f.name: name for name, kind in groups.items() for f in fields(kind)}
+    for key in moved:
+        if key not in home:
+            raise TypeError(f"{owner}.{key}: not a key of the {owner} (its groups: "
+                            f"{', '.join(groups)})")
+        raise TypeError(f"{owner}.{key}: moved to {owner}.{home[key]}.{key} (issue 36: "
+                        "parameter groups)")

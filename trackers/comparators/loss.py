@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from occbench.trackers.common.checks import at_least, unit
 
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from occbench.trackers.common.checks import at_least, require
+from occbench.trackers.common.checks import at_least, coerce, parameter_group, refuse_moved, require
 from occbench.trackers.frontend.blobs import Blob
 
 log = logging.getLogger(__name__)
@@ -205,38 +205,82 @@ def fit_perspective(feet: np.ndarray, heights: np.ndarray, widths: np.ndarray,
                        int(keep.sum()), nbins, spread)
 
 
-class PerspectiveCalibration:
-    """Collects person-like blob samples frame by frame and fits the perspective (eq. 1).
+@dataclass(frozen=True)
+class PersonBlobs:
+    """Which foreground blobs are sampled as one well-segmented person (``blob_sample``).
 
     Args:
-        aspect: [min, max] width / height of a single person (``blob_sample``).
+        aspect: [min, max] width / height of a single person.
         min_fill: smallest blob area / box area.
         head_ratio: head rows narrower than this times the shoulder rows.
-        tolerance: RANSAC inlier band, relative height.
-        min_bins: fewest inliers for a calibration (else: none, the fallback).
-        min_span: smallest foot-row span of the inliers, fraction of the frame height.
         min_height: smallest blob height sampled, pixels.
+    """
+
+    aspect: tuple[float, float] = (0.25, 0.65)
+    min_fill: float = 0.5
+    head_ratio: float = 0.75
+    min_height: float = 16.0
+
+    def __post_init__(self) -> None:
+        lo, hi = (float(v) for v in self.aspect)
+        require("calibration.people.aspect", 0 < lo < hi, "must be [min, max] with 0 < min < max",
+                list(self.aspect))
+        require("calibration.people.min_fill", 0 < self.min_fill <= 1, "must lie in (0, 1]",
+                self.min_fill)
+        require("calibration.people.head_ratio", 0 < self.head_ratio <= 1, "must lie in (0, 1]",
+                self.head_ratio)
+        object.__setattr__(self, "aspect", (lo, hi))
+        coerce(self, {"min_fill": float, "head_ratio": float, "min_height": float})
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """The robust line through the samples and when it is accepted (``fit_perspective``).
+
+    Args:
+        tolerance: RANSAC inlier band, relative height.
+        min_bins: fewest foot-row bins with inliers for a calibration (else: none, the
+            fallback).
+        min_span: smallest foot-row span of the inliers, fraction of the frame height.
         horizon_above: see ``fit_perspective``.
         seed: RANSAC seed.
     """
 
-    def __init__(self, aspect: tuple[float, float] = (0.25, 0.65), min_fill: float = 0.5,
-                 head_ratio: float = 0.75, tolerance: float = 0.15, min_bins: int = 6,
-                 min_span: float = 0.15, min_height: float = 16.0, horizon_above: float = 0.5,
-                 seed: int = 0) -> None:
-        lo, hi = (float(v) for v in aspect)
-        require("calibration.aspect", 0 < lo < hi, "must be [min, max] with 0 < min < max",
-                list(aspect))
-        require("calibration.min_fill", 0 < min_fill <= 1, "must lie in (0, 1]", min_fill)
-        require("calibration.head_ratio", 0 < head_ratio <= 1, "must lie in (0, 1]", head_ratio)
-        require("calibration.tolerance", 0 < tolerance < 1, "must lie in (0, 1)", tolerance)
-        at_least("calibration", 2, min_bins=min_bins)
-        self.aspect = (lo, hi)
-        self.min_fill, self.head_ratio = float(min_fill), float(head_ratio)
-        self.tolerance, self.min_bins = float(tolerance), int(min_bins)
-        self.min_span, self.min_height, self.seed = float(min_span), float(min_height), int(seed)
-        require("calibration.horizon_above", horizon_above > 0, "must be > 0", horizon_above)
-        self.horizon_above = float(horizon_above)
+    tolerance: float = 0.15
+    min_bins: int = 6
+    min_span: float = 0.15
+    horizon_above: float = 0.5
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        require("calibration.line.tolerance", 0 < self.tolerance < 1, "must lie in (0, 1)",
+                self.tolerance)
+        at_least("calibration.line", 2, min_bins=self.min_bins)
+        require("calibration.line.horizon_above", self.horizon_above > 0, "must be > 0",
+                self.horizon_above)
+        coerce(self, {"tolerance": float, "min_bins": int, "min_span": float,
+                      "horizon_above": float, "seed": int})
+
+
+#: the calibration's groups: its argument -> the group's class
+GROUPS = {"people": PersonBlobs, "line": LineFit}
+
+
+class PerspectiveCalibration:
+    """Collects person-like blob samples frame by frame and fits the perspective (eq. 1).
+
+    Args:
+        people: which blobs are sampled as people (``PersonBlobs``; None: its defaults).
+        line: the line through them and its acceptance (``LineFit``; None: its defaults).
+        A key of the flat arguments before the groups is refused with a TypeError naming
+        its group.
+    """
+
+    def __init__(self, people: PersonBlobs | None = None, line: LineFit | None = None,
+                 **moved: object) -> None:
+        refuse_moved("calibration", moved, GROUPS)
+        self.people = parameter_group("people", people, PersonBlobs)
+        self.line = parameter_group("line", line, LineFit)
         self.reset()
 
     def reset(self) -> None:
@@ -247,9 +291,10 @@ class PerspectiveCalibration:
         """Add the person-like blobs of one frame; returns how many were added."""
         self.frame_height = int(frame_shape[0])
         n0 = len(self.samples)
+        p = self.people
         for b in blobs:
-            s = blob_sample(b, frame_shape, self.aspect, self.min_fill, self.head_ratio,
-                            min_height=self.min_height)
+            s = blob_sample(b, frame_shape, p.aspect, p.min_fill, p.head_ratio,
+                            min_height=p.min_height)
             if s is not None:
                 self.samples.append(s)
         return len(self.samples) - n0
@@ -259,9 +304,10 @@ class PerspectiveCalibration:
         if not self.samples:
             return None
         s = np.asarray(self.samples, dtype=np.float64)
-        return fit_perspective(s[:, 0], s[:, 1], s[:, 2], self.frame_height, self.tolerance,
-                               self.min_bins, self.min_span, seed=self.seed,
-                               horizon_above=self.horizon_above)
+        f = self.line
+        return fit_perspective(s[:, 0], s[:, 1], s[:, 2], self.frame_height, f.tolerance,
+                               f.min_bins, f.min_span, seed=f.seed,
+                               horizon_above=f.horizon_above)
 
 
 def active_area(frames: list[np.ndarray], flat: float = 2.0) -> tuple[int, int, int, int]:

@@ -49,7 +49,8 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import at_least, require, unit
+from occbench.trackers.common.checks import at_least, parameter_group, refuse_moved, require, unit
+from occbench.trackers.frontend.fallback_params import GROUPS, RegionFilter, RegionGrouping
 from occbench.trackers.frontend.footage import CameraBackground, start_with
 from occbench.trackers.frontend.regions import merge_near, split_kmeans
 from occbench.trackers.records import Detections
@@ -278,16 +279,10 @@ class RegionDetector:
 
     Args:
         background: the ``MedianBackground`` (None: its defaults).
-        min_area: smallest region, pixels (smaller components are dropped first).
-        min_share: smallest region, as a share of the typical person area.
-        merge_gap: fragments whose boxes are closer than this times the typical person's
-            side (square root of its area) are merged.
-        split_ratio: a region larger than this times the typical area is split (None: never).
-        initial_area: typical person area before the scene has shown any, pixels.
-        seed: k-means seed of the splits.
-        max_unsteady: a region with more than this share of its pixels where the background
-            footage's clips disagree (``MedianBackground.unsteady``: glare, plants) is dropped
-            (1: never; without footage: never).
+        regions: which regions are kept (``fallback_params.RegionFilter``).
+        grouping: how they become person-sized boxes (``fallback_params.RegionGrouping``).
+        Each group is its defaults when None; a key of the flat arguments before the groups
+        is refused with a TypeError naming its group.
     """
 
     @property
@@ -295,27 +290,18 @@ class RegionDetector:
         return (f"foreground regions (occbench.trackers.frontend.fallback.RegionDetector) on "
                 f"{self.background.describe()}")
 
-    def __init__(self, background: MedianBackground | None = None, min_area: int = 40,
-                 min_share: float = 0.0, merge_gap: float = 0.3, split_ratio: float | None = None,
-                 initial_area: float = 600.0, seed: int = 0, max_unsteady: float = 1.0) -> None:
-        at_least("fallback", 1, min_area=min_area)
-        require("fallback.min_share", 0 <= min_share < 1, "must lie in [0, 1)", min_share)
-        at_least("fallback", 0, merge_gap=merge_gap)
-        require("fallback.split_ratio", split_ratio is None or split_ratio > 1,
-                "must be > 1 or None", split_ratio)
-        require("fallback.initial_area", initial_area > 0, "must be > 0", initial_area)
-        unit("fallback", max_unsteady=max_unsteady)
+    def __init__(self, background: MedianBackground | None = None,
+                 regions: RegionFilter | None = None, grouping: RegionGrouping | None = None,
+                 **moved: object) -> None:
+        refuse_moved("fallback", moved, GROUPS)
         self.background = background if background is not None else MedianBackground()
-        self.min_area, self.min_share = int(min_area), float(min_share)
-        self.merge_gap = float(merge_gap)
-        self.split_ratio = None if split_ratio is None else float(split_ratio)
-        self.initial_area, self.seed = float(initial_area), int(seed)
-        self.max_unsteady = float(max_unsteady)
+        self.regions = parameter_group("regions", regions, RegionFilter)
+        self.grouping = parameter_group("grouping", grouping, RegionGrouping)
         self.reset()
 
     def reset(self) -> None:
         self.background.reset()
-        self.sizes = RegionSizes(self.initial_area)
+        self.sizes = RegionSizes(self.grouping.initial_area)
 
     def warm_up_sequence(self, length: int, frame: Callable[[int], np.ndarray | None]) -> None:
         """Start the background from frames 1..min(init_frames, length) (1-based)."""
@@ -330,15 +316,16 @@ class RegionDetector:
 
     def _unsteady(self, mask: np.ndarray) -> bool:
         """The region lies mostly where the footage's clips disagree (glare, plants)."""
-        zone = self.background.unsteady
-        return self.max_unsteady < 1.0 and zone is not None and zone[mask].mean() > self.max_unsteady
+        zone, most = self.background.unsteady, self.regions.max_unsteady
+        return most < 1.0 and zone is not None and zone[mask].mean() > most
 
     def detect_on(self, frame: np.ndarray, fg: np.ndarray) -> Detections:
         n, lab, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), 8)
         typical = self.sizes.typical()
-        floor = max(self.min_area, self.min_share * typical)
-        keep = [i for i in range(1, n) if stats[i, cv2.CC_STAT_AREA] >= self.min_area]
-        groups = merge_near(stats, keep, self.merge_gap * np.sqrt(typical))
+        kept, grouping = self.regions, self.grouping
+        floor = max(kept.min_area, kept.min_share * typical)
+        keep = [i for i in range(1, n) if stats[i, cv2.CC_STAT_AREA] >= kept.min_area]
+        groups = merge_near(stats, keep, grouping.merge_gap * np.sqrt(typical))
         boxes: list[np.ndarray] = []
         labels = np.zeros(fg.shape, dtype=np.int32)
         for g in groups:
@@ -348,9 +335,9 @@ class RegionDetector:
             mask = np.isin(lab, g)
             if self._unsteady(mask):
                 continue
-            big = self.split_ratio is not None and area > self.split_ratio * typical
+            big = grouping.split_ratio is not None and area > grouping.split_ratio * typical
             parts = max(round(area / typical), 1) if big else 1
-            for part in split_kmeans(mask, parts, self.seed):
+            for part in split_kmeans(mask, parts, grouping.seed):
                 rows, cols = np.nonzero(part)
                 boxes.append(np.array([cols.min(), rows.min(), np.ptp(cols) + 1, np.ptp(rows) + 1],
                                       dtype=np.float64))

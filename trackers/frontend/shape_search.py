@@ -42,10 +42,16 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import at_least, require
+from occbench.trackers.common.checks import parameter_group, refuse_moved, require
 from occbench.trackers.frontend.active_basis import GRID, TAU, ActiveBasis, shift_offsets
 from occbench.trackers.frontend.calibration import Perspective
 from occbench.trackers.frontend.detectors import SilhouetteDetector, _labels_from_boxes
+from occbench.trackers.frontend.shape_search_params import (
+    GROUPS,
+    ShapeAcceptance,
+    ShapeHeights,
+    ShapePlacements,
+)
 from occbench.trackers.frontend.silhouette_template import load_template
 from occbench.trackers.records import Detections
 
@@ -149,55 +155,44 @@ class ShapeSearch:
 
     Args:
         template: the learnt ``ActiveBasis`` (built by the harness from a file).
-        silhouette: ``.npy`` mean person mask in [0, 1] marking what a fit occupies
-            (``silhouette.load_template``; None: the shipped one).
-        min_height, max_height: person heights searched, fractions of the frame height.
-        n_scales: heights, geometrically spaced.
-        threshold: smallest log-likelihood ratio (eq. 22) of an accepted person.
-        min_vacant: smallest share of a placement's silhouette on vacant foreground.
-        occupy_level: silhouette values above which a fit's pixels are marked occupied.
-        height_tolerance: with a perspective, a scale is searched where its height is within
-            this factor of the expected person height.
-        max_people: bound on the people accepted per frame.
-        stride: placements searched every ``stride`` template pixels (1: every one).
+        heights: the person heights searched (``shape_search_params.ShapeHeights``).
+        placements: where a person may be placed, what a fit occupies (``ShapePlacements``).
+        acceptance: which fits are accepted (``ShapeAcceptance``).
+        Each is its group's defaults when None; a key of the flat arguments before the
+        groups is refused with a TypeError naming its group.
     """
 
-    def __init__(self, template: ActiveBasis, silhouette: str | None = None,
-                 min_height: float = 0.1, max_height: float = 0.6, n_scales: int = 12,
-                 threshold: float = 10.0, min_vacant: float = 0.7, occupy_level: float = 0.2,
-                 height_tolerance: float = 1.1, max_people: int = 20, stride: int = 1) -> None:
+    def __init__(self, template: ActiveBasis, heights: ShapeHeights | None = None,
+                 placements: ShapePlacements | None = None,
+                 acceptance: ShapeAcceptance | None = None, **moved: object) -> None:
         if not isinstance(template, ActiveBasis):
             raise TypeError(f"template must be an ActiveBasis, got {type(template).__name__}")
-        require("search.min_height", 0 < min_height <= max_height <= 1,
-                f"must satisfy 0 < min_height <= max_height {max_height} <= 1", min_height)
-        at_least("search", 1, n_scales=n_scales, max_people=max_people, stride=stride,
-                 height_tolerance=height_tolerance)
-        require("search.min_vacant", 0 < min_vacant <= 1, "must lie in (0, 1]", min_vacant)
-        require("search.occupy_level", 0 <= occupy_level < 1, "must lie in [0, 1)", occupy_level)
+        refuse_moved("search", moved, GROUPS)
         self.template = template
-        sil = load_template(silhouette)
+        self.heights = parameter_group("heights", heights, ShapeHeights)
+        self.placements = parameter_group("placements", placements, ShapePlacements)
+        self.acceptance = parameter_group("acceptance", acceptance, ShapeAcceptance)
+        sil = load_template(self.placements.silhouette)
         H, W = template.size
-        self.silhouette = cv2.resize(sil, (W, H), interpolation=cv2.INTER_AREA) > occupy_level
-        self.min_height, self.max_height = float(min_height), float(max_height)
-        self.n_scales, self.threshold = int(n_scales), float(threshold)
-        self.min_vacant, self.occupy_level = float(min_vacant), float(occupy_level)
-        self.height_tolerance, self.max_people = float(height_tolerance), int(max_people)
-        self.stride = int(stride)
+        self.silhouette = (cv2.resize(sil, (W, H), interpolation=cv2.INTER_AREA)
+                           > self.placements.occupy_level)
         self._kernels = template.bank.kernels()
         self._sil = self.silhouette.astype(np.float32)
         self._sil_sum = float(self._sil.sum())
 
-    def heights(self, frame_rows: int) -> np.ndarray:
+    def pixel_heights(self, frame_rows: int) -> np.ndarray:
         """(n_scales,) person heights searched in a frame ``frame_rows`` high, pixels."""
-        return np.geomspace(self.min_height, self.max_height, self.n_scales) * frame_rows
+        h = self.heights
+        return np.geomspace(h.min_height, h.max_height, h.n_scales) * frame_rows
 
     def _top_band(self, h: float, rows: int, perspective: Perspective | None) -> tuple[int, int] | None:
         """Box-top rows [t0, t1) where a person ``h`` high fits the perspective (None: nowhere)."""
         if perspective is None:
             return 0, max(rows - round(h) + 1, 1)
         a, b = perspective.a, perspective.b
-        lo = (h / self.height_tolerance - b) / a - h  # foot row = top + h
-        hi = (h * self.height_tolerance - b) / a - h
+        tol = self.heights.height_tolerance
+        lo = (h / tol - b) / a - h  # foot row = top + h
+        hi = (h * tol - b) / a - h
         t0, t1 = max(int(np.floor(lo)), 0), min(int(np.ceil(hi)) + 1, rows - round(h) + 1)
         return (t0, t1) if t1 > t0 else None
 
@@ -220,7 +215,7 @@ class ShapeSearch:
             return []
         Ht, Wt = self.template.size
         out = []
-        for h in self.heights(rows):
+        for h in self.pixel_heights(rows):
             band = self._top_band(h, rows, perspective)
             if band is None:
                 continue
@@ -237,7 +232,8 @@ class ShapeSearch:
                         np.zeros((size[1] - Ht + 1, size[0] - Wt + 1)), np.zeros(0))
             sc.cover = self._cover(fg, sc)
             ys = r0 + np.arange(sc.S.shape[0]) / fy  # placements' box tops (frame rows)
-            where = (sc.cover >= self.min_vacant) & ((ys >= band[0]) & (ys < band[1]))[:, None]
+            where = ((sc.cover >= self.placements.min_vacant)
+                     & ((ys >= band[0]) & (ys < band[1]))[:, None])
             if not where.any():
                 continue
             interp = cv2.INTER_AREA if f < 1 else cv2.INTER_LINEAR
@@ -254,15 +250,16 @@ class ShapeSearch:
         scales = self.maps(np.asarray(grey, np.float32), vacant, perspective)
         Ht, Wt = self.template.size
         boxes, scores = [], []
-        for _ in range(self.max_people):
-            best, best_s = None, self.threshold
+        stride, min_vacant = self.placements.stride, self.placements.min_vacant
+        for _ in range(self.acceptance.max_people):
+            best, best_s = None, self.acceptance.threshold
             for sc in scales:
-                S = np.where(sc.cover >= self.min_vacant, sc.S, -np.inf)
-                if self.stride > 1:
-                    S = S[:: self.stride, :: self.stride]
+                S = np.where(sc.cover >= min_vacant, sc.S, -np.inf)
+                if stride > 1:
+                    S = S[::stride, ::stride]
                 y, x = np.unravel_index(int(np.argmax(S)), S.shape)
                 if S[y, x] >= best_s:
-                    best, best_s = (sc, y * self.stride, x * self.stride), float(S[y, x])
+                    best, best_s = (sc, y * stride, x * stride), float(S[y, x])
             if best is None:
                 break
             sc, y, x = best

@@ -40,8 +40,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import parameter_group
-from occbench.trackers.frontend.silhouette_params import MOVED, Heights, Person, Report, Score, Search
+from occbench.trackers.common.checks import parameter_group, refuse_moved
+from occbench.trackers.frontend.silhouette_params import GROUPS, Heights, Person, Report, Score, Search
 from occbench.trackers.frontend.silhouette_search import _Scales, search_regions
 from occbench.trackers.frontend.silhouette_template import load_template
 from occbench.trackers.geometry import intersection_matrix
@@ -79,7 +79,7 @@ class SilhouetteMatcher:
         search: how the foreground is searched (``Search``).
         report: which fits are reported, with which box (``Report``).
         Each is its group's defaults when None; a key of the flat arguments before the
-        groups is refused with a TypeError naming its group (``silhouette_params.MOVED``).
+        groups is refused with a TypeError naming its group (``silhouette_params.GROUPS``).
     Attributes:
         template: (h, w) float32 the template as loaded (mirrored when ``symmetric``).
         height_model: the height prior in use, (a, b) or None: ``heights.height_model``
@@ -89,9 +89,7 @@ class SilhouetteMatcher:
     def __init__(self, person: Person | None = None, heights: Heights | None = None,
                  score: Score | None = None, search: Search | None = None,
                  report: Report | None = None, **moved: object) -> None:
-        for key in moved:
-            where = f"matcher.{MOVED[key]}.{key}" if key in MOVED else "no key of the matcher"
-            raise TypeError(f"matcher.{key}: moved to {where} (issue 36: parameter groups)")
+        refuse_moved("matcher", moved, GROUPS)
         self.person = parameter_group("person", person, Person)
         self.heights = parameter_group("heights", heights, Heights)
         self.score = parameter_group("score", score, Score)

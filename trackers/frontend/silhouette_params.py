@@ -13,7 +13,7 @@ from dataclasses import dataclass, fields
 
 from occbench.trackers.common.checks import at_least, coerce, require
 
-__all__ = ["MOVED", "Heights", "Person", "Report", "Score", "Search"]
+__all__ = ["GROUPS", "MOVED", "Heights", "Person", "Report", "Score", "Search"]
 
 
 @dataclass(frozen=True)
@@ -186,9 +186,9 @@ class Report:
         coerce(self, {"max_overlap": float, "part_height": float})
 
 
+#: the matcher's groups: its argument -> the group's class
+GROUPS = {"person": Person, "heights": Heights, "score": Score, "search": Search,
+          "report": Report}
 #: a flat key of the matcher before the groups -> its group (``SilhouetteMatcher`` names the
 #: new place of a moved key)
-MOVED = {f.name: group for group, kind in (("person", Person), ("heights", Heights),
-                                           ("score", Score), ("search", Search),
-                                           ("report", Report))
-         for f in fields(kind)}
+MOVED = {f.name: group for group, kind in GROUPS.items() for f in fields(kind)}

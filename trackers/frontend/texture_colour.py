@@ -38,7 +38,6 @@ reference; ``compiled`` runs the same equations as one numba pass.
 from __future__ import annotations
 
 import numpy as np
-
 from occbench.trackers.common.checks import at_least, require, unit
 
 #: (dy, dx) of the 8 neighbours, clockwise from the top-left

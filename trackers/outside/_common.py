@@ -6,7 +6,6 @@ import importlib
 from types import ModuleType
 
 import numpy as np
-
 from occbench.trackers.common.checks import unit
 
 EXTRA = "outside"

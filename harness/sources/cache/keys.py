@@ -7,7 +7,7 @@
 * the frame window (first frame and length: the warm-up samples frames over it);
 * the detector's whole config, resolved, with the bytes of every existing file it names
   (a template, a mixture file) and of every file in every folder it names (the background
-  footage's frames), and so its seeds (``calibration.seed``);
+  footage's frames), and so its seeds (``calibration.line.seed``);
 * the code (``code_version``): every file of ``trackers/frontend`` and the ``trackers``
   modules it imports, ``harness/sources`` and ``harness/datasets`` (decoding), and the
   versions of the libraries computing or decoding pixels. Editing a tracker does not

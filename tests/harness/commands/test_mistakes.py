@@ -29,6 +29,9 @@ def _one_line(capsys, *args: str) -> str:
     (["detector=silhouette", "detector.detector.matcher.min_height=0.2"],  # moved into a group
      ("occbench: unknown key 'detector.detector.matcher.min_height': did you mean "
       "'detector.detector.matcher.heights.min_height'?")),
+    (["detector=silhouette", "detector.detector.calibration.min_fill=0.4"],  # issue 36 item 6
+     ("occbench: unknown key 'detector.detector.calibration.min_fill': did you mean "
+      "'detector.detector.calibration.people.min_fill'?")),
 ])
 def test_a_typo_is_one_line_with_did_you_mean(capsys, args, line):
     assert _one_line(capsys, *args) == line

@@ -9,7 +9,13 @@ import pytest
 from occbench.commands.detect import match_count
 from occbench.datasets.synthetic import load_scenario
 from occbench.config.build import compose_config
-from occbench.trackers.frontend.calibration import PerspectiveCalibration, active_area, fit_perspective
+from occbench.trackers.frontend.calibration import (
+    LineFit,
+    PerspectiveCalibration,
+    PersonBlobs,
+    active_area,
+    fit_perspective,
+)
 
 
 def _detector():
@@ -109,9 +115,23 @@ def test_active_area_drops_flat_padding():
 
 
 def test_calibration_arguments_are_validated():
-    with pytest.raises(ValueError, match="aspect"):
-        PerspectiveCalibration(aspect=(0.6, 0.2))
-    with pytest.raises(ValueError, match="calibration.horizon_above"):
-        PerspectiveCalibration(horizon_above=0.0)
-    with pytest.raises(ValueError, match="calibration.horizon_above"):  # NaN: let in before
-        PerspectiveCalibration(horizon_above=float("nan"))
+    with pytest.raises(ValueError, match=r"^calibration\.people\.aspect "):
+        PersonBlobs(aspect=(0.6, 0.2))
+    with pytest.raises(ValueError, match=r"^calibration\.line\.horizon_above "):
+        LineFit(horizon_above=0.0)
+    with pytest.raises(ValueError, match=r"^calibration\.line\.horizon_above "):  # NaN
+        LineFit(horizon_above=float("nan"))
+    with pytest.raises(TypeError, match="people"):
+        PerspectiveCalibration(people=LineFit())
+
+
+def test_a_flat_key_names_its_group():
+    """The arguments before the groups (issue 36) are refused with their new place."""
+    with pytest.raises(TypeError, match=r"calibration.min_fill: moved to calibration.people"):
+        PerspectiveCalibration(min_fill=0.4)
+    with pytest.raises(TypeError, match=r"calibration.seed: moved to calibration.line.seed"):
+        PerspectiveCalibration(seed=1)
+    with pytest.raises(TypeError, match=r"calibration.min_fil: not a key"):
+        PerspectiveCalibration(min_fil=0.4)
+    cal = PerspectiveCalibration(PersonBlobs(min_fill=0.4), LineFit(seed=3))
+    assert (cal.people.min_fill, cal.line.seed, cal.line.min_bins) == (0.4, 3, 6)

@@ -19,6 +19,7 @@ from occbench.trackers.frontend.fallback import (
     MedianBackground,
     RegionDetector,
 )
+from occbench.trackers.frontend.fallback_params import RegionFilter, RegionGrouping
 
 H, W, LENGTH = 288, 384, 90
 
@@ -142,13 +143,14 @@ def test_region_detector_merges_fragments_and_splits_when_asked():
     fg = np.zeros((100, 100), dtype=bool)
     fg[10:30, 10:20] = True
     fg[10:30, 22:30] = True  # a fragment 2 px away: one person
-    d = RegionDetector(initial_area=400.0).detect_on(None, fg)
+    d = RegionDetector(grouping=RegionGrouping(initial_area=400.0)).detect_on(None, fg)
     assert len(d) == 1 and d.boxes[0].tolist() == [10, 10, 20, 20]
     big = np.zeros((100, 100), dtype=bool)
     big[40:60, 10:90] = True  # 1600 px: four typical people side by side
-    d = RegionDetector(initial_area=400.0, split_ratio=2.5).detect_on(None, big)
+    split = RegionGrouping(initial_area=400.0, split_ratio=2.5)
+    d = RegionDetector(grouping=split).detect_on(None, big)
     assert len(d) == 4 and np.allclose(np.sort(d.boxes[:, 2]), 20, atol=3)
-    assert len(RegionDetector(initial_area=400.0).detect_on(None, big)) == 1
+    assert len(RegionDetector(grouping=RegionGrouping(initial_area=400.0)).detect_on(None, big)) == 1
 
 
 def test_fallback_arguments_are_validated():
@@ -160,5 +162,9 @@ def test_fallback_arguments_are_validated():
         MedianBackground(steady_spread=float("nan"))  # let in before
     with pytest.raises(ValueError, match=r"^fallback\.background\.open_kernel "):
         MedianBackground(open_kernel=-1)
-    with pytest.raises(ValueError, match=r"^fallback\.split_ratio "):
-        RegionDetector(split_ratio=1.0)
+    with pytest.raises(ValueError, match=r"^fallback\.grouping\.split_ratio "):
+        RegionGrouping(split_ratio=1.0)
+    with pytest.raises(ValueError, match=r"^fallback\.regions\.min_area "):
+        RegionFilter(min_area=0)
+    with pytest.raises(TypeError, match=r"fallback.split_ratio: moved to fallback.grouping"):
+        RegionDetector(split_ratio=2.0)  # a flat key before the groups (issue 36)

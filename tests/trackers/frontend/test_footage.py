@@ -9,10 +9,12 @@ import pytest
 
 from occbench.commands.detect import match_count
 from occbench.trackers.frontend.fallback import MedianBackground, RegionDetector
+from occbench.trackers.frontend.fallback_params import RegionFilter, RegionGrouping
 from occbench.trackers.frontend.footage import CameraBackground, clip_median, pool_clips, start_with
 
 H, W = 120, 160
 FLOOR = (140 + np.random.default_rng(7).normal(0, 8, (H, W, 1)) + np.zeros((1, 1, 3))).clip(0, 255)
+AREA_250 = RegionGrouping(initial_area=250.0)
 
 
 def _clip(standing: list[tuple[int, int]], gain: float, length: int, seed: int,
@@ -63,10 +65,10 @@ def test_pooled_background_is_the_empty_floor_at_each_clips_brightness():
 
 def test_people_standing_still_from_the_first_frame_are_found_only_with_other_footage():
     frames, boxes = _clip([(60, 50), (110, 75)], 1.05, 60, 11)
-    without = _recall(RegionDetector(MedianBackground(init_frames=30), initial_area=250.0),
+    without = _recall(RegionDetector(MedianBackground(init_frames=30), grouping=AREA_250),
                       frames, boxes)
     bg = MedianBackground(init_frames=30, footage=_footage())
-    with_footage = _recall(RegionDetector(bg, initial_area=250.0), frames, boxes)
+    with_footage = _recall(RegionDetector(bg, grouping=AREA_250), frames, boxes)
     assert without[0] < 0.1  # the clip's own median holds them
     assert with_footage[0] > 0.9 and with_footage[1] > 0.9
     assert 0 < bg.from_footage < 0.1  # only where they stand
@@ -76,7 +78,7 @@ def test_people_standing_still_from_the_first_frame_are_found_only_with_other_fo
 def test_a_walker_is_found_either_way_and_the_glare_never():
     frames, boxes = _clip([], 1.0, 50, 12, walker=True)
     bg = MedianBackground(init_frames=30, footage=_footage())
-    det = RegionDetector(bg, initial_area=250.0)
+    det = RegionDetector(bg, grouping=AREA_250)
     assert _recall(det, frames, boxes)[0] > 0.9
     assert not det.background.apply(frames[0])[90:115, 5:40].any()
 
@@ -96,8 +98,9 @@ def test_regions_where_the_footage_disagrees_are_dropped():
     zone = np.zeros((60, 80), dtype=bool)
     zone[0:25, 0:30] = True
     for max_unsteady, boxes in ((0.5, [[40, 35, 20, 15]]), (1.0, [[5, 5, 20, 15], [40, 35, 20, 15]])):
-        det = RegionDetector(MedianBackground(), initial_area=300.0, max_unsteady=max_unsteady)
+        det = RegionDetector(MedianBackground(), RegionFilter(max_unsteady=max_unsteady),
+                             RegionGrouping(initial_area=300.0))
         det.background.unsteady = zone  # as MedianBackground.start sets it from the footage
         assert det.detect_on(None, fg).boxes.tolist() == boxes
-    with pytest.raises(ValueError, match="max_unsteady"):
-        RegionDetector(max_unsteady=1.5)
+    with pytest.raises(ValueError, match=r"^fallback\.regions\.max_unsteady "):
+        RegionFilter(max_unsteady=1.5)

@@ -11,8 +11,14 @@ from occbench.fit.active_basis import load
 from occbench.trackers.frontend.active_basis import crop_patch
 from occbench.trackers.frontend.calibration import Perspective
 from occbench.trackers.frontend.shape_search import ActiveBasisDetector, ShapeSearch, shape_filter_map
+from occbench.trackers.frontend.shape_search_params import ShapeAcceptance, ShapeHeights, ShapePlacements
 from occbench.trackers.frontend.silhouette_template import load_template
 from occbench.trackers.geometry import iou_matrix
+
+
+def _search(template, lo: float, hi: float, n: int, threshold: float) -> ShapeSearch:
+    return ShapeSearch(template, ShapeHeights(min_height=lo, max_height=hi, n_scales=n),
+                       acceptance=ShapeAcceptance(threshold=threshold))
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +67,7 @@ def test_where_computes_only_its_components_with_the_same_values(template):
 def test_greedy_search_finds_each_person_once_and_stops_when_the_foreground_is_explained(template):
     # two people apart, two overlapping (the one at 240 in front of the one at 262)
     grey, fg, gt = _scene(template, [(40, 120), (150, 110), (262, 100), (240, 100)])
-    search = ShapeSearch(template, min_height=0.30, max_height=0.38, n_scales=3, threshold=-1e9)
+    search = _search(template, 0.30, 0.38, 3, threshold=-1e9)
     boxes, scores = search.search(grey, fg)
     # no threshold: only the explained foreground stops it, after the four people
     assert len(boxes) == 4
@@ -70,22 +76,20 @@ def test_greedy_search_finds_each_person_once_and_stops_when_the_foreground_is_e
     assert sorted(iou.argmax(axis=1).tolist()) == [0, 1, 2, 3]  # ... once
     assert (np.diff(scores) <= 1e-9).all()  # greedy: each fit scores at most the previous one
     # a threshold above every fit's score accepts none; between fits, keeps the prefix
-    assert len(search.__class__(template, min_height=0.30, max_height=0.38, n_scales=3,
-                                threshold=scores[0] + 1).search(grey, fg)[0]) == 0
-    mid = ShapeSearch(template, min_height=0.30, max_height=0.38, n_scales=3,
-                      threshold=(scores[1] + scores[2]) / 2).search(grey, fg)
+    assert len(_search(template, 0.30, 0.38, 3, threshold=scores[0] + 1).search(grey, fg)[0]) == 0
+    mid = _search(template, 0.30, 0.38, 3, threshold=(scores[1] + scores[2]) / 2).search(grey, fg)
     np.testing.assert_allclose(mid[0], boxes[:2])
 
 
 def test_on_background_only_nothing_is_searched(template):
     grey, fg, _ = _scene(template, [(40, 120)])
-    search = ShapeSearch(template, min_height=0.30, max_height=0.38, n_scales=3, threshold=-1e9)
+    search = _search(template, 0.30, 0.38, 3, threshold=-1e9)
     assert len(search.search(grey, np.zeros_like(fg))[0]) == 0
 
 
 def test_the_calibrated_scales_only(template):
     grey, fg, gt = _scene(template, [(40, 120), (150, 110)])
-    search = ShapeSearch(template, min_height=0.1, max_height=0.6, n_scales=12, threshold=0.0)
+    search = _search(template, 0.1, 0.6, 12, threshold=0.0)
     # feet at rows 216 and 206; a perspective expecting 96-pixel people there: both found
     boxes, _ = search.search(grey, fg, Perspective(a=0.4, b=12.0, width_ratio=0.42))
     assert len(boxes) == 2 and (iou_matrix(gt, boxes).max(axis=1) >= 0.7).all()
@@ -95,12 +99,18 @@ def test_the_calibrated_scales_only(template):
 
 
 def test_arguments_are_checked(template):
-    with pytest.raises(ValueError, match="search.min_vacant"):
-        ShapeSearch(template, min_vacant=0.0)
-    with pytest.raises(ValueError, match="search.height_tolerance"):  # NaN: let in before
-        ShapeSearch(template, height_tolerance=float("nan"))
-    with pytest.raises(ValueError, match="min_height"):
-        ShapeSearch(template, min_height=0.7, max_height=0.6)
+    with pytest.raises(ValueError, match=r"^search\.placements\.min_vacant "):
+        ShapePlacements(min_vacant=0.0)
+    with pytest.raises(ValueError, match=r"^search\.heights\.height_tolerance "):  # NaN
+        ShapeHeights(height_tolerance=float("nan"))
+    with pytest.raises(ValueError, match=r"^search\.heights\.min_height "):
+        ShapeHeights(min_height=0.7, max_height=0.6)
+    with pytest.raises(ValueError, match=r"^search\.acceptance\.max_people "):
+        ShapeAcceptance(max_people=0)
+    with pytest.raises(TypeError, match="search.min_vacant: moved to search.placements.min_vacant"):
+        ShapeSearch(template, min_vacant=0.5)  # a flat key before the groups (issue 36)
+    with pytest.raises(TypeError, match="heights"):
+        ShapeSearch(template, heights=ShapeAcceptance())
     with pytest.raises(TypeError, match="ActiveBasis"):
         ShapeSearch("template.npz")
     with pytest.raises(ValueError, match="search"):
