@@ -151,6 +151,10 @@ class Adaptations:
             reported box lies within this x its width (height) of it, or beyond, is not
             reported (``exits.LeavingUnreported``; negative: off, reported as the other
             reporting rules say; reporting is ours).
+        coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
+            to fine (every other width and height, then the neighbours of the best of
+            those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
+            9-10). A shortcut for speed (issue 38), not exact.
     """
 
     model_spread: float = 4.5
@@ -184,6 +188,7 @@ class Adaptations:
     rival_claims: bool = False
     leaving_unreported: float = -1.0
     weak_ranked: bool = False
+    coarse_search: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -219,7 +224,8 @@ class Adaptations:
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
-                                       "one_to_one", "border_exit", "rival_claims", "weak_ranked"),
+                                       "one_to_one", "border_exit", "rival_claims", "weak_ranked",
+                                       "coarse_search"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int})
@@ -237,7 +243,8 @@ class Adaptations:
                    one_to_one=False, report_support=0.0,
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
-                   leaving_unreported=-1.0, weak_ranked=False)
+                   leaving_unreported=-1.0, weak_ranked=False,
+                   coarse_search=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from occbench.trackers.layered.box_search import box_scores_kernel, survival_bounds
 from occbench.trackers.layered.differences import _differences_kernel
 from occbench.trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
 from occbench.trackers.layered.scores import (
@@ -29,8 +30,6 @@ from occbench.trackers.layered.scores import (
     _ambiguous_rows_kernel,
     _pair_scores_kernel,
     _scores_kernel,
-    box_scores_kernel,
-    survival_bounds,
 )
 
 if TYPE_CHECKING:  # annotations only
@@ -159,7 +158,7 @@ def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, 
 
 
 def _bounds(models: FeatureModels) -> np.ndarray | None:
-    """``scores.survival_bounds`` of the models, made once per models object (about
+    """``box_search.survival_bounds`` of the models, made once per models object (about
     60,000 values of p(x | theta)); None when a mixture has a sigma <= 0 or a non-finite
     parameter (no bound is then taken)."""
     w, mu, s = _theta(models)
@@ -181,19 +180,21 @@ _BOUNDS: dict[int, tuple] = {}
 def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatureExtractor,
                boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray,
                misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
-               spread: float = 1.0, best_of: int = 0, grouped: int = 0
+               spread: float = 1.0, best_of: int = 0, grouped: int = 0, coarse: bool = False
                ) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 of (K, 4) xywh boxes of the extractor's frame (split at alpha, beta (K,)),
     each against the model of its target ti[k]: equal bit for bit to ``pair_scores(models,
     model, extractor.extract(boxes, alpha, beta), ti, arange(K), ...)``, without making the
-    boxes' (K, 5, B) histograms (``scores.box_scores_kernel``). For the search's boxes
+    boxes' (K, 5, B) histograms (``box_search.box_scores_kernel``). For the search's boxes
     (PBM 3.1: 25 per searched pair, one kept), whose features are then extracted for the
     kept ones only.
 
     ``best_of`` > 0: the first ``grouped`` boxes are consecutive groups of ``best_of`` of
     which only the first maximum of p is used (the search's); a box whose upper bound of
-    p (``scores._score_bound``) is below a scored box's p of its group is not scored
+    p (``box_search._score_bound``) is below a scored box's p of its group is not scored
     (p -inf, p_j NaN): it cannot be that maximum, and the others keep their bits.
+    ``coarse`` (``adaptations.coarse_search``): each group is searched coarse to fine
+    (``box_search._coarse_group``), not exact.
 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
@@ -208,7 +209,7 @@ def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatur
     if best_of < 0 or not 0 <= grouped <= len(b) or (best_of and grouped % best_of):
         raise ValueError(f"groups of {best_of} must tile the first {grouped} of {len(b)} boxes")
     table = _bounds(models) if best_of > 0 else None
-    groups = (best_of, grouped, table) if table is not None else (0, 0, _NO_TABLE)
+    groups = (best_of, grouped, table, bool(coarse)) if table is not None else (0, 0, _NO_TABLE, False)
     return box_scores_kernel(b, ti, ratios, sampling, _arrays(model), _misses(misses, len(model)),
                              (float(spread), _weights(omega, N_FEATURES, "omega"),
                               _weights(gamma, N_PARTS, "gamma")), _theta(models), groups)
@@ -270,7 +271,8 @@ class LayeredScores:
 
     def boxes(self, model: PartFeatures, extractor: PartFeatureExtractor, boxes: np.ndarray,
               alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray, misses: np.ndarray | None,
-              best_of: int = 0, grouped: int = 0) -> tuple[np.ndarray, np.ndarray]:
+              best_of: int = 0, grouped: int = 0, coarse: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
         """``box_scores`` of (K, 4) boxes against their targets ti (K,): p_j (K, 5), p (K,)."""
         return box_scores(self.models, model, extractor, boxes, alpha, beta, ti, misses,
-                          self.omega, self.gamma, self.spread, best_of, grouped)
+                          self.omega, self.gamma, self.spread, best_of, grouped, coarse)

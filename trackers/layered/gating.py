@@ -227,13 +227,15 @@ class OcclusionSearch:
     Args:
         search: the occlusion test's and the search's settings. scores: eqs. 11-13.
         extractor: the features of the search's boxes (its grid), started on the frame.
+        coarse: each pair's boxes searched coarse to fine (``adaptations.coarse_search``).
     """
 
     def __init__(self, search: SearchParams, scores: LayeredScores,
-                 extractor: PartFeatureExtractor) -> None:
+                 extractor: PartFeatureExtractor, coarse: bool = False) -> None:
         self.search = search
         self.scores = scores
         self.extractor = extractor
+        self.coarse = coarse
 
     def __call__(self, targets: Targets, cand: Candidates, pairs: Gated, fg: np.ndarray | None,
                  pred_wh: np.ndarray, model: PartFeatures, misses: np.ndarray | None
@@ -264,7 +266,7 @@ class OcclusionSearch:
         tis = np.concatenate([sti.repeat(m), ti[align_q]])
         ex = self.extractor  # eqs. 11-13 of box k against target tis[k], best of m
         pj, p = self.scores.boxes(model, ex, B, alpha_t[tis], beta_t[tis], tis, misses, m,
-                                  len(search_q) * m)
+                                  len(search_q) * m, self.coarse)
         kept, p_h, pj_h, k, dof = carved_rows(p, pj, B, heads, ti, alpha_t, beta_t, search_q,
                                               align_q, m)
         feats = ex.extract(B[k], alpha_t[tis[k]], beta_t[tis[k]])

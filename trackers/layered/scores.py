@@ -2,7 +2,7 @@
 global score p = sum_j gamma_j p_j, in plain numpy (the definitions: ``match_probability``,
 ``part_scores``, ``global_score``) and compiled (``_survival``, ``_score_row``,
 ``_pair_scores_kernel`` with eq. 11's ``differences._differences_kernel``; the search's
-boxes measured and scored in one pass, ``box_scores_kernel``), held equal to rtol 1e-9 by
+boxes measured, bounded and scored in ``box_search``), held equal to rtol 1e-9 by
 ``tests/trackers/layered/test_equations.py``; and PBM 4 step 4's best and runner-up
 (``_ambiguous_kernel``).
 
@@ -20,8 +20,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from occbench.trackers.layered import kernel_cache  # noqa: F401 (before any kernel: one stamp for all)
-from occbench.trackers.layered.differences import _differences_kernel, _pair_differences
-from occbench.trackers.layered.sampling_kernels import _NO_CENTRES, _box_counts, _box_features, _box_scratch
+from occbench.trackers.layered.differences import _differences_kernel
 
 if TYPE_CHECKING:  # annotations only
     from occbench.trackers.layered.feature_models import FeatureModels
@@ -175,138 +174,6 @@ def _pair_scores_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misse
     _differences_kernel(m, c, ti, n, misses, d)
     pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
     _scores_kernel(d, spread, omega, gamma, theta, pj, p)
-    return pj, p
-
-
-BOUND_CELLS = 2048
-"""Cells per unit of x of ``survival_bounds``' table (a power of two: x * 2048 is exact)."""
-
-
-BOUND_SLACK = 1e-12
-"""Added to each bound: covers erfc's rounding (about 1e-16 on p(x | theta) <= 1)."""
-
-
-@numba.njit(cache=True)
-def survival_bounds(theta: tuple) -> np.ndarray:
-    """(6, 5, BOUND_CELLS + 1) upper bounds of p(x | theta_ij) (``_survival``): entry m
-    bounds every x in [m, m + 1) / BOUND_CELLS, the last every x >= 1. A survival function
-    P(D >= x) does not increase with x, so the value at the cell's left end, plus
-    ``BOUND_SLACK``, bounds the cell (``_score_bound``)."""
-    w, mu, s = theta
-    out = np.empty((w.shape[0], w.shape[1], BOUND_CELLS + 1))
-    for i in range(w.shape[0]):
-        for j in range(w.shape[1]):
-            for c in range(BOUND_CELLS + 1):
-                out[i, j, c] = _survival(c / BOUND_CELLS, w, mu, s, i, j) + BOUND_SLACK
-    return out
-
-
-@numba.njit(cache=True, inline="always")
-def _score_bound(d: np.ndarray, k: int, spread: float, weights: tuple, table: np.ndarray) -> float:
-    """An upper bound of ``_score_row``'s p of differences d[k] (6, 5): the same sums in the
-    same order with each p(x | theta_ij) replaced by its bound in ``table``
-    (``survival_bounds``); rounding to nearest never decreases a sum or a product by a
-    weight >= 0 when an operand grows, so the bound holds for the computed p, bit for bit.
-    NaN when a difference is NaN."""
-    omega, gamma = weights
-    total = 0.0
-    for j in range(d.shape[2]):
-        acc = 0.0
-        for i in range(d.shape[1]):
-            x = d[k, i, j] / spread
-            if np.isnan(x):
-                return np.nan
-            v = x * BOUND_CELLS if x > 0.0 else 0.0
-            acc += omega[i] * table[i, j, int(v) if v < BOUND_CELLS else BOUND_CELLS]
-        total += gamma[j] * acc
-    return total
-
-
-@numba.njit(cache=True, inline="always")
-def _score_group(d: np.ndarray, g0: int, size: int, spread: float, weights: tuple,
-                 theta: tuple, memo: tuple, table: np.ndarray, pj: np.ndarray,
-                 p: np.ndarray) -> None:
-    """``_score_row`` of the boxes g0 .. g0 + size - 1 of which only the first maximum of p
-    counts (``carved_rows``): scored in order of their bounds (``_score_bound``), highest
-    first; once a bound is below the best p scored, that box and the rest cannot reach
-    it and are left unscored (p -inf, p_j NaN). Every box is scored when a bound is not
-    finite. The scored boxes have their own bits, so the first maximum is the same box."""
-    ub = np.empty(size)
-    for q in range(size):
-        ub[q] = _score_bound(d, g0 + q, spread, weights, table)
-    if not np.isfinite(ub).all():
-        for q in range(size):
-            _score_row(d, g0 + q, spread, weights, theta, memo, pj, p, g0 + q)
-        return
-    best = -np.inf
-    for q in np.argsort(-ub):
-        k = g0 + q
-        if ub[q] < best:
-            p[k] = -np.inf
-            pj[k, :] = np.nan
-            continue
-        _score_row(d, k, spread, weights, theta, memo, pj, p, k)
-        if p[k] > best:  # noqa: PLR1730 (p is finite here)
-            best = p[k]
-
-
-@numba.njit(cache=True)
-def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple, m: tuple,
-               misses: np.ndarray, rule: tuple, theta: tuple, groups: tuple
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Eqs. 11-13 of K boxes of the frame, each measured as ``part_features`` measures it
-    (PBM 2.1-2.2), against the model of target ti[k]: p_j (K, 5) and p (K,), bit for bit
-    ``part_features`` then ``_pair_scores_kernel(m, features, ti, arange(K), ...)``, with
-    no (K, 5, B) histograms: each box's features are made in a one-row scratch, compared
-    and dropped, and rho sums the occupied bins only (``_rho_listed``) where the model's
-    histogram is finite. The search's boxes (PBM 3.1, eqs. 9-10): 25 per searched pair, of
-    which the tracker keeps one.
-
-    Args:
-        boxes: (K, 4) xywh. ti: (K,) target rows (IndexError when out of range).
-        ratios: (alpha, beta), each (K,), of the boxes' split (eqs. 1-2).
-        sampling: (grid, image, luts, pixel_bins) as ``part_features``'.
-        m: the targets' models (a feature set). misses: (T,) float64, g = 1 / (1 + misses).
-        rule: (spread, omega (6,), gamma (5,)) as ``_pair_scores_kernel``'s.
-        groups: (size, grouped, table): boxes 0 .. grouped - 1 are consecutive groups of
-            ``size`` of which only the first maximum of p counts, scored by
-            ``_score_group`` (``table``: ``survival_bounds(theta)``); size 0: none.
-    """
-    grid, image, luts, pixel_bins = sampling
-    spread, omega, gamma = rule
-    K, T, nb = boxes.shape[0], m[1].shape[0], m[3].shape[2]
-    for k in range(K):
-        if not 0 <= ti[k] < T:
-            raise IndexError("selected pair index out of range")
-    finite = np.empty((T, 2, 5), np.bool_)
-    for t in range(T):
-        for j in range(5):
-            finite[t, 0, j] = np.isfinite(m[3][t, j]).all()
-            finite[t, 1, j] = np.isfinite(m[4][t, j]).all()
-    s = _box_scratch(grid[0].shape[0], grid[1].shape[0], nb)
-    one = (np.empty((1, 5, 4)), np.empty((1, 5)), np.empty((1, 5)), np.empty((1, 5, nb)),
-           np.empty((1, 5, nb)), np.empty((1, 5, 2)), np.empty(1))
-    listed = (nb <= 64, s[13], finite)
-    weights = (omega / omega.sum(), gamma / gamma.sum())
-    memo = _memo(theta[0].shape[0], m[1].shape[1])
-    d = np.empty((K, theta[0].shape[0], m[1].shape[1]))
-    idx = np.empty(max(nb, m[4].shape[2]), np.int64)
-    for k in range(K):
-        bands = _box_counts(boxes, k, ratios[0], ratios[1], False, _NO_CENTRES, grid, image,
-                            luts, pixel_bins, s, one[0][0])
-        _box_features(s, bands, one[0][0], 0, one[1:6])
-        one[6][0] = boxes[k, 3]
-        t = ti[k]
-        _pair_differences(m, one, t, 0, 1.0 / (1.0 + misses[t]), d, k, idx, listed)  # eq. 11
-    pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
-    size, grouped, table = groups
-    first = 0
-    if size > 0:
-        for g0 in range(0, grouped, size):
-            _score_group(d, g0, size, spread, weights, theta, memo, table, pj, p)
-        first = grouped
-    for k in range(first, K):
-        _score_row(d, k, spread, weights, theta, memo, pj, p, k)                      # eqs. 12-13
     return pj, p
 
 

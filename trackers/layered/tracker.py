@@ -149,7 +149,8 @@ class PBMTracker:
         self._finder = CandidateFinder(self.candidates, blob_heads, a.blob_box_ratio, held)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
         self._scores = LayeredScores(f.models, f.omega, f.gamma, a.model_spread)  # eqs. 11-13
-        self._search_occluded = OcclusionSearch(self.search, self._scores, self._search_extractor)
+        self._search_occluded = OcclusionSearch(self.search, self._scores, self._search_extractor,
+                                                a.coarse_search)
         self.rules = build_rules(self.adaptations)
         self.starts = AutoStarts() if starts is None else starts
         self.reset()

@@ -158,7 +158,7 @@ def test_survival_bounds_bound_every_x_of_their_cell():
     """``survival_bounds``' entry for x's cell is >= p(x | theta) (``FeatureModels``' own
     kernel) at cell edges, just below them, inside cells and beyond x = 1."""
     from occbench.trackers.layered.association import _theta
-    from occbench.trackers.layered.scores import BOUND_CELLS, survival_bounds
+    from occbench.trackers.layered.box_search import BOUND_CELLS, survival_bounds
 
     rng = np.random.default_rng(5)
     for models in (random_models(rng), load_feature_models()):
