@@ -39,6 +39,7 @@ from occbench.config.build import build_tracker
 from occbench.errors import RunError
 from occbench.metrics import COMBINED
 from occbench.pipeline.experiment import run_experiment
+from occbench.report.tables import number
 
 log = logging.getLogger(__name__)
 
@@ -334,7 +335,7 @@ def _cell(r) -> str:
     vals = [r[m] for m in METRICS]
     if all(isinstance(v, float) and math.isnan(v) for v in vals):
         return "failed"
-    text = " / ".join("-" if math.isnan(v) else f"{v:.3f}" for v in vals)
+    text = " / ".join(number(float(v)) for v in vals)
     return text + (" (!)" if r["failures"] else "")
 
 
