@@ -12,11 +12,13 @@ be two trackers), as the acceptance asks to beat every one of them.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import pandas as pd
 
 from occbench.config.meta import metas
+from occbench.report.tables import number
 from occbench.sweeps.generalisation import METRICS, TUNING, EvalSet
 
 
@@ -51,7 +53,10 @@ def versus_outside(table: pd.DataFrame, ours: Sequence[str] | None = None) -> pd
 
 def verdict(row: pd.Series) -> str:
     """"ahead" when IDF1 and HOTA both beat the best outside tracker's at three decimals
-    (the table's precision); else which are level and which behind, by how much."""
+    (the table's precision); else which are level and which behind, by how much; "no score"
+    when either side of IDF1 or HOTA is missing (NaN), never a verdict on a missing figure."""
+    if any(math.isnan(row[k]) for m in ("IDF1", "HOTA") for k in (m, f"best_{m}")):
+        return "no score"
     level, behind = [], []
     for m in ("IDF1", "HOTA"):
         gap = round(round(row[m], 3) - round(row[f"best_{m}"], 3), 3)
@@ -78,7 +83,7 @@ def markdown(versus: pd.DataFrame, sets: Sequence[EvalSet]) -> str:
              "|---|---|---|---|---|"]
     for _, r in v.iterrows():
         mark = "T" if r["role"] == TUNING else "U"
-        ours = " / ".join(f"{r[m]:.3f}" for m in METRICS)
-        best = "; ".join(f"{r[f'best_{m}_by']} {r[f'best_{m}']:.3f}" for m in METRICS)
+        ours = " / ".join(number(r[m]) for m in METRICS)
+        best = "; ".join(f"{r[f'best_{m}_by']} {number(r[f'best_{m}'])}" for m in METRICS)
         lines.append(f"| {r['set']} ({mark}) | {r['tracker']} | {ours} | {best} | {verdict(r)} |")
     return "\n".join(lines) + "\n"

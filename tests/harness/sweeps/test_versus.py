@@ -45,6 +45,18 @@ def test_verdicts_ahead_level_behind_at_the_tables_precision():
     assert V.verdict(ahead) == "ahead"
 
 
+def test_a_missing_score_is_no_verdict_and_shows_as_a_dash():
+    """A tracker that failed on a set has NaN scores: `round(nan)` compared neither equal nor
+    below, so the verdict read "ahead"."""
+    t = _table()
+    t.loc[(t["set"] == "synth") & (t["tracker"] == "pbm"), ["IDF1", "HOTA", "MOTA"]] = float("nan")
+    v = V.versus_outside(t).set_index(["set", "tracker"])
+    assert V.verdict(v.loc[("synth", "pbm")]) == "no score"
+    line = next(ln for ln in V.markdown(V.versus_outside(t), G.SETS).splitlines()
+                if ln.startswith("| synth (U) | pbm"))
+    assert "| - / - / - |" in line and line.endswith("| no score |")
+
+
 def test_markdown_follows_the_sets_order_and_marks_roles():
     text = V.markdown(V.versus_outside(_table()), G.SETS)
     lines = [ln for ln in text.splitlines() if ln.startswith("| synth")]
