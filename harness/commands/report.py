@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from occbench.commands.mistakes import refuse
+from occbench.progress import log_to_stderr
 from occbench.replay import trajectories, video
 from occbench.report.html import write_run_report
 from occbench.report.tracks import counted, tracks_text
@@ -42,6 +43,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-video", action="store_true", help="skip the video and contact sheet")
     p.add_argument("--no-trajectories", action="store_true", help="skip the trajectory plot")
     args = p.parse_args(argv)
+    log_to_stderr()  # the page's own lines (e.g. a failed paired comparison) in LOG_FORMAT
 
     if not (args.run_dir / "config.yaml").is_file():
         return refuse(f"{args.run_dir / 'config.yaml'} not found (a run directory of "
