@@ -98,20 +98,24 @@ def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
     own = np.ones(len(matches))
     if not len(pairs) or not hidden.any():
         return own
-    partners: dict[int, list[int]] = {}
-    for a, b in pairs.tolist():
-        if hidden[owners[b]]:
-            partners.setdefault(a, []).append(b)
-        if hidden[owners[a]]:
-            partners.setdefault(b, []).append(a)
+    a, b = pairs[:, 0], pairs[:, 1]
+    # O's pairs both ways, (node n, partner m), where m's person is hidden
+    n = np.concatenate([a[hidden[owners[b]]], b[hidden[owners[a]]]])
+    m = np.concatenate([b[hidden[owners[b]]], a[hidden[owners[a]]]])
+    row = np.full(len(owners), -1)  # node -> its matched row, -1: not matched
+    row[[match.node for match in matches]] = np.arange(len(matches))
+    r = row[n]
+    r, m = r[r >= 0], m[r >= 0]
+    if not len(r):
+        return own
+    d = np.array([match.det for match in matches], dtype=np.int64)
     area_n = pred[:, 2] * pred[:, 3]  # pi / 4 cancels in the ratio
-    for r, match in enumerate(matches):
-        d, m = match.det, partners.get(match.node)
-        if not m:
-            continue
-        area_d = dets[d, 2] * dets[d, 3]
-        inter = delta[m][:, [d]].toarray()[:, 0] * (area_n[m] + area_d) / 2
-        own[r] = float(np.clip(1.0 - inter.max() / max(area_d, 1e-9), 0.0, 1.0))
+    area_d = dets[d, 2] * dets[d, 3]
+    inter = delta[m, d[r]] * (area_n[m] + area_d[r]) / 2  # |S_m & S_d| (eq. 5)
+    biggest = np.full(len(matches), -np.inf)
+    np.maximum.at(biggest, r, inter)  # max over the row's partners
+    k = np.unique(r)
+    own[k] = np.clip(1.0 - biggest[k] / np.maximum(area_d[k], 1e-9), 0.0, 1.0)
     return own
 
 

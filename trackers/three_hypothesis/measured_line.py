@@ -9,6 +9,7 @@ next contact. ``docs/adaptations.md`` gives the evidence. States are (8,) Kalman
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -21,7 +22,8 @@ class FilterVelocity:
 
     records: ClassVar[bool] = False
 
-    def record(self, person, frame: int, box: np.ndarray, predicted: np.ndarray) -> None:
+    def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray
+               ) -> None:
         return None
 
     def start(self, person, x_prev: np.ndarray, x_pred: np.ndarray) -> np.ndarray:
@@ -49,6 +51,23 @@ def _fit(centres: list[tuple[float, float, float]]) -> tuple[float, ...]:
             se_x, se_y)
 
 
+def _lines(centres: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``_line`` of G histories at once, (G, n, 3) (frame, xc, yc) rows: (G,) t0, x0, y0, vx,
+    vy. Each sum runs along a row's n terms in memory order, as ``_line``'s 1-D sums do
+    (numpy's pairwise order): the same bits."""
+    c = np.ascontiguousarray(centres.transpose(2, 0, 1))  # (3, G, n): frames, xc, yc
+    t0, x0, y0 = c.mean(axis=2)
+    t, x, y = c[0] - t0[:, None], c[1] - x0[:, None], c[2] - y0[:, None]
+    tt = (t * t).sum(axis=1)
+    return t0, x0, y0, (t * x).sum(axis=1) / tt, (t * y).sum(axis=1) / tt
+
+
+def _squares(a: np.ndarray) -> np.ndarray:
+    """a ** 2 by the C library's pow, as Python's and numpy's scalar ``** 2`` round it
+    (numpy's array ``** 2`` is a * a, which differs in the last bit now and then)."""
+    return np.array([math.pow(v, 2) for v in a.tolist()])
+
+
 @dataclass(frozen=True)
 class MeasuredLine:
     """``measured_hypothesis``: hypothesis 1 of a person just missed moves with the velocity
@@ -64,19 +83,28 @@ class MeasuredLine:
     sigmas: float = 0.0
     records: ClassVar[bool] = True
 
-    def record(self, person, frame: int, box: np.ndarray, predicted: np.ndarray) -> None:
-        """Score both predictors on this measured (4,) xywh ``box`` (M's: ``predicted``
-        (8,) state), then keep its centre."""
-        cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
-        centres = person.centres
-        if len(centres) >= 3:
-            t0, x0, y0, vx, vy = _line(centres)
-            h2 = max(float(box[3]), 1.0) ** 2
-            person.line_errors[0] += ((predicted[0] - cx) ** 2 + (predicted[1] - cy) ** 2) / h2
-            person.line_errors[1] += ((x0 + vx * (frame - t0) - cx) ** 2
-                                      + (y0 + vy * (frame - t0) - cy) ** 2) / h2
-        centres.append((frame, cx, cy))
-        del centres[:-self.window]
+    def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray
+               ) -> None:
+        """Score both predictors on each person's measured box at ``frame`` (``boxes`` (K, 4)
+        xywh; M's prediction: ``predicted`` (K, 8) states), then keep its centre. A person
+        with at least 3 centres adds, to M's error and to the line's, the squared distance of
+        the predicted centre from the measured one over the box height squared; the people
+        are scored a group of equal history length at a time (``_lines``)."""
+        cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
+        sizes = np.array([len(person.centres) for person in persons], dtype=np.int64)
+        for n in np.unique(sizes[sizes >= 3]).tolist():
+            k = np.flatnonzero(sizes == n)
+            t0, x0, y0, vx, vy = _lines(np.array([persons[r].centres for r in k.tolist()]))
+            h2 = _squares(np.maximum(boxes[k, 3], 1.0))
+            mine = (_squares(predicted[k, 0] - cx[k]) + _squares(predicted[k, 1] - cy[k])) / h2
+            line = (_squares(x0 + vx * (frame - t0) - cx[k])
+                    + _squares(y0 + vy * (frame - t0) - cy[k])) / h2
+            for r, e_m, e_l in zip(k.tolist(), mine.tolist(), line.tolist()):
+                persons[r].line_errors[0] += e_m
+                persons[r].line_errors[1] += e_l
+        for person, x, y in zip(persons, cx.tolist(), cy.tolist()):
+            person.centres.append((frame, x, y))
+            del person.centres[:-self.window]
 
     def start(self, person, x_prev: np.ndarray, x_pred: np.ndarray) -> np.ndarray:
         """(8,) state of hypothesis 1 at a person's first miss, from its last estimate

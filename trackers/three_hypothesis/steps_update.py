@@ -57,6 +57,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     visible_share = _visible_share(V, A, D, matches, behind, dbox, setting)
     asked = [r for r, m in enumerate(matches) if m.det in tent and m.det not in empty_dets]
     clear = _clear(S, V, O, rules, [keys[r] for r in asked], [matches[r].det for r in asked])
+    rules.line.record([persons[i] for i in keys], memory.t, dbox, S.Xp[idx])
     absorbed: set[int] = set()
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
@@ -69,7 +70,6 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         if person.confirmed or d not in empty_dets:
             person.hits += 1
         person.misses = 0
-        rules.line.record(person, memory.t, dbox[r], S.Xp[n])
         person.spawned = False
         if not person.confirmed and rules.confirm.confirms(
                 person.hits, setting.life_cycle.confirm_frames, clear.get(d, False),

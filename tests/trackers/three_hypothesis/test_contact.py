@@ -170,3 +170,32 @@ def test_region_term_of_a_node_behind_is_scaled_by_its_visible_share():
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).region, WholeRegion)
     assert isinstance(build_rules(Adaptations(visible_region=True), h).region, VisibleRegion)
+
+
+def test_own_shares_equal_the_per_row_definition_bit_for_bit():
+    """Random frames: each row's share, 1 - max over its hidden partners in O of
+    |S_m & S_d| / |S_d|, computed row by row over the dense delta, equals own_shares's
+    whole-frame arrays bit for bit (ties, rows with no partner, no hidden partner)."""
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        nodes, dets, people = rng.integers(2, 12), rng.integers(1, 6), rng.integers(2, 8)
+        owners = np.sort(rng.integers(0, people, nodes))
+        pred = rng.uniform(1, 40, (nodes, 4))
+        boxes = rng.uniform(1, 40, (dets, 4))
+        dense = np.where(rng.random((nodes, dets)) < 0.5,
+                         rng.choice([0.25, 0.5, 0.7], (nodes, dets)), 0.0)
+        pairs = rng.integers(0, nodes, (rng.integers(0, 15), 2))
+        hidden = rng.random(people) < 0.5
+        matched = rng.permutation(nodes)[: rng.integers(1, nodes)]
+        matches = [Match(det=int(rng.integers(dets)), node=int(n), stage=1, rho=1.0)
+                   for n in matched]
+        want = []
+        for match in matches:
+            area = boxes[match.det, 2] * boxes[match.det, 3]
+            inter = [dense[m, match.det] * (pred[m, 2] * pred[m, 3] + area) / 2
+                     for a, b in pairs.tolist() for n, m in ((a, b), (b, a))
+                     if n == match.node and hidden[owners[m]]]
+            share = 1.0 - max(inter) / max(area, 1e-9) if inter else 1.0
+            want.append(float(np.clip(share, 0.0, 1.0)))
+        got = own_shares(matches, pairs, owners, hidden, pred, boxes, csr_array(dense))
+        assert got.tolist() == want
