@@ -151,6 +151,13 @@ class Adaptations:
             reported box lies within this x its width (height) of it, or beyond, is not
             reported (``exits.LeavingUnreported``; negative: off, reported as the other
             reporting rules say; reporting is ours).
+        fold_twins: a confirmed target standing on an older one's box (IoU >= 0.5) for this
+            many frames in a row, never found in the same frame as it and with less than
+            ``fold_twins_own`` foreground of its own (outside the older box), is the older
+            one's twin and is ended when the older one is found (``stacked.FoldTwins``;
+            0: off, each target kept until lost, PBM 3). Stands aside without a mask.
+        fold_twins_own: with ``fold_twins``, the foreground share of the younger box lying
+            outside the older box below which the younger has no region of its own.
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -189,6 +196,8 @@ class Adaptations:
     leaving_unreported: float = -1.0
     weak_ranked: bool = False
     coarse_search: bool = False
+    fold_twins: int = 0
+    fold_twins_own: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -199,7 +208,10 @@ class Adaptations:
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
-                 reupdate=self.reupdate)
+                 reupdate=self.reupdate, fold_twins=self.fold_twins)
+        unit("adaptations", fold_twins_own=self.fold_twins_own)
+        require("adaptations.fold_twins_own", self.fold_twins_own == 0 or self.fold_twins > 0,
+                "needs adaptations.fold_twins > 0", self.fold_twins_own)
         require("adaptations.lone_shrink_shape", self.lone_shrink_shape >= 0, "must be >= 0",
                 self.lone_shrink_shape)
         require("adaptations.lone_shrink_shape",
@@ -219,7 +231,8 @@ class Adaptations:
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support", "rival_match", "contested_template",
-                                       "lone_shrink", "lone_shrink_shape", "leaving_unreported"),
+                                       "lone_shrink", "lone_shrink_shape", "leaving_unreported",
+                                       "fold_twins_own"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -228,7 +241,7 @@ class Adaptations:
                                        "coarse_search"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
-                      "reupdate": int})
+                      "reupdate": int, "fold_twins": int})
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -244,7 +257,7 @@ class Adaptations:
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
-                   coarse_search=False)
+                   coarse_search=False, fold_twins=0, fold_twins_own=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

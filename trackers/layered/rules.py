@@ -30,6 +30,7 @@ from occbench.trackers.layered.parts import PartFeatures
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
 from occbench.trackers.layered.smaller import LoneShrink, OccludedSmaller
+from occbench.trackers.layered.stacked import FoldTwins, KeepStacked
 from occbench.trackers.layered.targets import Targets
 
 # --------------------------------------------------------------- eq. 11: the model compared
@@ -341,6 +342,7 @@ class Rules(NamedTuple):
     smaller: OccludedSmaller | LoneShrink  # a region smaller than predicted (PBM 3.1)
     exit: PredictedExit | BorderExit  # an unfound target that left the picture (ours)
     leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
+    twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -365,4 +367,5 @@ def build_rules(a: Adaptations) -> Rules:
         exit=BorderExit() if a.border_exit else PredictedExit(),
         leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0
                  else ReportAnywhere()),
+        twins=FoldTwins(a.fold_twins, a.fold_twins_own) if a.fold_twins > 0 else KeepStacked(),
     )

@@ -163,6 +163,7 @@ class PBMTracker:
         self._finder.reset()
         self._next_id = 1
         self._frame = 0
+        self._stacked: dict[tuple[int, int], int] = {}  # adaptations.fold_twins' evidence
 
     # ------------------------------------------------------------------ update (PBM Fig. 1)
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -187,7 +188,7 @@ class PBMTracker:
             self._update_models(frame, found, feats, fg, (W, H))  # PBM 4.2
         if len(found.lost):
             self.rules.unfound_size.missed(self.targets, found.lost)
-        self._end_targets(W, H)
+        self._end_targets(W, H, fg)
         self._start_targets(frame, found.free, cand, feats, fg, found.withheld)
         return self._report(fg, W, H)
 
@@ -311,15 +312,18 @@ class PBMTracker:
         self.rules.confirmation.confirm(targets, mt, self.life_cycle.min_hits)
 
     # ------------------------------------------------------------------ life cycle (ours)
-    def _end_targets(self, W: int, H: int) -> None:
+    def _end_targets(self, W: int, H: int, fg: np.ndarray | None) -> None:
         """Drop tentative targets that missed, confirmed ones unfound for more than
-        ``life_cycle.max_misses`` frames, and (``adaptations.exit_margin``) those unfound
-        for ``adaptations.exit_misses`` frames whose predicted box left the (W, H) image."""
+        ``life_cycle.max_misses`` frames, (``adaptations.exit_margin``) those unfound for
+        ``adaptations.exit_misses`` frames whose predicted box left the (W, H) image, and
+        (``adaptations.fold_twins``) twins standing on an older target's person."""
         targets, a = self.targets, self.adaptations
         alive = survivors(targets, W, H, a, self.life_cycle.max_misses)
         gone = self.rules.exit.gone(targets, W, H)  # adaptations.border_exit
         if gone is not None:
             alive &= ~(gone & (targets.misses >= max(a.exit_misses, 1)))
+        alive &= ~self.rules.twins.folded(targets, self.rules.report_box, fg,  # fold_twins
+                                          self.reporting.max_misses, self._stacked)
         if np.count_nonzero(alive) < len(alive):
             targets.take(alive.nonzero()[0])
 
