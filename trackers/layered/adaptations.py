@@ -152,9 +152,10 @@ class Adaptations:
             reported (``exits.LeavingUnreported``; negative: off, reported as the other
             reporting rules say; reporting is ours).
         fold_twins: a confirmed target standing on an older one's box (IoU >= 0.5) for this
-            many frames in a row, never found in the same frame as it and with less than
-            ``fold_twins_own`` foreground of its own (outside the older box), is the older
-            one's twin and is ended when the older one is found (``stacked.FoldTwins``;
+            many frames in a row, never found in the same frame as it but found in turn with
+            it at least once, and with less than ``fold_twins_own`` foreground of its own
+            (outside the older box), is the older one's twin and is ended when the older one
+            is found (``stacked.FoldTwins``;
             0: off, each target kept until lost, PBM 3). Stands aside without a mask.
         fold_twins_own: with ``fold_twins``, the foreground share of the younger box lying
             outside the older box below which the younger has no region of its own.

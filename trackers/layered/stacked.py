@@ -51,10 +51,12 @@ class KeepStacked:
 class FoldTwins:
     """``fold_twins``: a confirmed target whose reported box has stood on an older one's
     (IoU >= ``STACK_IOU``) for ``frames`` frames in a row without ever being found in the
-    same frame as it (never a detection of its own) and without foreground of its own (its
-    box holds < ``own`` foreground outside the older one's box, every one of those frames)
-    is the older target's twin: it is ended at the first such frame in which the older one
-    is found. Without a mask it stands aside (no evidence of the second half).
+    same frame as it (never a detection of its own) but found in turn with it at least once
+    (it took the detection the older one takes: a person wholly hidden behind another is
+    never found while covered) and without foreground of its own (its box holds < ``own``
+    foreground outside the older one's box, every one of those frames) is the older
+    target's twin: it is ended at the first such frame in which the older one is found.
+    Without a mask it stands aside (no evidence of the last half).
 
     Args:
         frames: frames in a row the evidence must hold (>= 1).
@@ -70,7 +72,7 @@ class FoldTwins:
         """(T,) bool: which targets are folded this frame, among the confirmed ones
         reported (unfound for at most ``max_misses`` frames) at the boxes ``place``
         (``rules.report_box``) puts them. ``runs`` maps a pair (older id, younger id) to its
-        frames of evidence so far; it is updated in place (a pair missing from this frame's
+        frames of evidence so far and whether the younger was found in them; it is updated in place (a pair missing from this frame's
         evidence is forgotten)."""
         rows = (targets.confirmed & (targets.misses <= max_misses)).nonzero()[0]
         out = np.zeros(len(targets.id), dtype=bool)
@@ -83,7 +85,7 @@ class FoldTwins:
         place.place(boxes, targets, rows, all_found)
         found = all_found[rows]
         near = np.triu(iou_matrix(boxes, boxes) >= STACK_IOU, 1)
-        seen: dict[tuple[int, int], int] = {}
+        seen: dict[tuple[int, int], tuple[int, bool]] = {}
         fold = np.zeros(len(ids), dtype=bool)
         for a, b in zip(*np.nonzero(near), strict=True):
             key = (int(ids[a]), int(ids[b]))
@@ -91,8 +93,9 @@ class FoldTwins:
                 continue  # each found: two detections, two people
             if own_foreground(boxes[b], boxes[a], fg) >= self.own:
                 continue  # the younger explains pixels the older does not
-            seen[key] = runs.get(key, 0) + 1
-            if seen[key] >= self.frames and found[a]:
+            frames, took = runs.get(key, (0, False))
+            seen[key] = frames + 1, took or bool(found[b])  # found in turn: the older's detection
+            if seen[key][0] >= self.frames and seen[key][1] and found[a]:
                 fold[b] = True
         runs.clear()
         runs.update(seen)

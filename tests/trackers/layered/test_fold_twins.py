@@ -1,7 +1,8 @@
 """``adaptations.fold_twins`` (``stacked.FoldTwins``): a younger target standing on an older
-one's box for N frames, never found with it and without foreground of its own, is ended when
-the older one is found; a pair found together once, a younger box holding a person of its
-own, or a frame without a mask keep both (``stacked.KeepStacked``: the paper's life cycle)."""
+one's box for N frames, never found with it but in turn with it, and without foreground of its
+own, is ended when the older one is found; a pair found together once, a younger target never
+found (a person hidden behind), a younger box holding a person of its own, or a frame without a
+mask keep both (``stacked.KeepStacked``: the paper's life cycle)."""
 
 from types import SimpleNamespace
 
@@ -59,7 +60,10 @@ def test_two_people_are_kept():
     assert own_foreground(np.array(young), np.array(BOX), _mask(BOX, young)) > 0.2
     assert not np.any(_fold(FoldTwins(3, 0.1), TURNS, _mask(BOX, young), young))
     assert np.any(_fold(FoldTwins(3, 0.1), TURNS, _mask(BOX), young))  # ... but not alone
-    # no mask: no evidence of the second half, both kept
+    # a person wholly hidden behind the older one's: never found while covered, kept
+    hidden = [(True, False)] * 6
+    assert not np.any(_fold(FoldTwins(3, 0.1), hidden, fg))
+    # no mask: no evidence of the last half, both kept
     assert not np.any(_fold(FoldTwins(3, 0.1), TURNS, None))
 
 
