@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from scipy.sparse import csr_array
 
+from occbench.trackers.common.spatial import row_entries
 from occbench.trackers.three_hypothesis._kernels import blend
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
@@ -93,7 +94,8 @@ def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
         pairs: O, (K', 2) node rows; owners: (B,) person of each node.
         hidden: (P,) bool, persons unmatched at t that may be inside a measurement.
         pred: (B, 4) predicted regions; dets: (D, 4) measurements.
-        delta: sparse (B, D) region similarity of ``pred`` and ``dets`` (eq. 5).
+        delta: sparse (B, D) region similarity of ``pred`` and ``dets`` (eq. 5), canonical
+            (sorted, no duplicates: as ``steps_occlusion.occlusions`` builds it).
     """
     own = np.ones(len(matches))
     if not len(pairs) or not hidden.any():
@@ -109,9 +111,13 @@ def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
     if not len(r):
         return own
     d = np.array([match.det for match in matches], dtype=np.int64)
+    e, col, value = row_entries(delta, m)  # delta of the partners' nodes, where stored
+    at = col == d[r[e]]
+    delta_md = np.zeros(len(m))
+    delta_md[e[at]] = value[at]  # (m, d) once at most: a canonical CSR
     area_n = pred[:, 2] * pred[:, 3]  # pi / 4 cancels in the ratio
     area_d = dets[d, 2] * dets[d, 3]
-    inter = delta[m, d[r]] * (area_n[m] + area_d[r]) / 2  # |S_m & S_d| (eq. 5)
+    inter = delta_md * (area_n[m] + area_d[r]) / 2  # |S_m & S_d| (eq. 5)
     biggest = np.full(len(matches), -np.inf)
     np.maximum.at(biggest, r, inter)  # max over the row's partners
     k = np.unique(r)

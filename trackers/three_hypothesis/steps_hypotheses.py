@@ -8,6 +8,7 @@ import logging
 
 import numpy as np
 
+from occbench.trackers.common.spatial import row_entries
 from occbench.trackers.three_hypothesis import hypotheses as hyp
 from occbench.trackers.three_hypothesis.graph import VISIBLE
 from occbench.trackers.three_hypothesis.motion import state_boxes
@@ -150,13 +151,16 @@ def _hidden_share(S: Predictions, O: Occlusions, U: Updated, boxes: np.ndarray,
     cont = src >= 0
     visible = U.visible
     if len(visible) and cont.any():
-        delta = O.delta[src[cont]][:, np.array(U.visible_dets)].tocoo()
+        column = np.full(O.delta.shape[1], -1)  # measurement -> its row of U.visible
+        column[U.visible_dets] = np.arange(len(U.visible_dets))
+        i, d, delta = row_entries(O.delta, src[cont])  # the pairs that meet
+        v = column[d]
+        i, v, delta = i[v >= 0], v[v >= 0], delta[v >= 0]  # the others hide nothing
         pred = S.boxes
         area_n = pred[src[cont], 2] * pred[src[cont], 3]
         area_v = visible[:, 2] * visible[:, 3]
-        i, v = delta.row, delta.col  # the pairs that meet; the others hide nothing
         hidden = np.zeros(cont.sum())
-        np.maximum.at(hidden, i, delta.data * (area_n[i] + area_v[v]) / 2
+        np.maximum.at(hidden, i, delta * (area_n[i] + area_v[v]) / 2
                       / np.maximum(area_n, 1e-9)[i])
         fraction[cont] = hidden
     if (~cont).any():

@@ -15,7 +15,7 @@ import numpy as np
 
 from scipy.sparse import csr_array
 
-from occbench.trackers.common.spatial import meeting_pairs
+from occbench.trackers.common.spatial import meeting_pairs, row_entries
 
 # --------------------------------------------------------------- 3.3.2 steps 5-8: who enters stage 2
 
@@ -55,16 +55,21 @@ class AfterMatches:
 
 def clear_measurements(dets: np.ndarray, rows: np.ndarray, delta: csr_array,
                        owners: np.ndarray, row_owners: np.ndarray) -> np.ndarray:
-    """(R,) bool: measurement ``rows[r]`` of (D, 4) xywh ``dets`` meets no other measurement
-    (their boxes share no area) and no predicted region of another person (eq. 5 delta 0).
-    ``delta``: sparse (B, D) region similarity of the nodes of t-1 and the measurements;
+    """(R,) bool: measurement ``rows[r]`` (distinct rows) of (D, 4) xywh ``dets`` meets no
+    other measurement (their boxes share no area) and no predicted region of another person
+    (eq. 5 delta 0). ``delta``: sparse (B, D) region similarity of the nodes of t-1 and the
+    measurements;
     ``owners``: (B,) person of each node; ``row_owners``: (R,) person of row r (-1: none,
     every node is another's). Memory grows with the pairs that meet."""
     crowded = np.zeros(len(rows), dtype=bool)
     ia, ib = meeting_pairs(dets[rows], dets)
     crowded[ia[ib != rows[ia]]] = True  # a box meets itself
-    near = delta[:, rows].tocoo()
-    crowded[near.col[(near.data > 0) & (owners[near.row] != row_owners[near.col])]] = True
+    column = np.full(delta.shape[1], -1)  # measurement -> its index in rows
+    column[rows] = np.arange(len(rows))
+    node, d, value = row_entries(delta, np.arange(delta.shape[0]))
+    r = column[d]
+    near = (r >= 0) & (value > 0)
+    crowded[r[near][owners[node[near]] != row_owners[r[near]]]] = True
     return ~crowded
 
 
