@@ -1,6 +1,7 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
-``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``),
+``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
+``split_appearance``),
 ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
@@ -257,3 +258,57 @@ class RegionAtContact:
             return a
 
         return evidence
+
+
+# --------------------------------------------------------------- 3.3.2 step 2: the region term where a merged pair parts
+
+
+@dataclass(frozen=True)
+class RegionAtSplit:
+    """3.3.2 as written: when two people a measurement held together are measured apart
+    again, eq. 5 weighs each pair's region as for any other pair."""
+
+    uses_merged: ClassVar[bool] = False
+
+    def delta(self, delta: np.ndarray, pairs: np.ndarray, owners: np.ndarray,
+              merged: np.ndarray, hidden: np.ndarray) -> np.ndarray:
+        return delta
+
+
+@dataclass(frozen=True)
+class AppearanceAtSplit:
+    """``split_appearance``: a merged measurement is an occlusion, so the position it gave
+    the person matched to it was the pair's, and the hidden partner's regions are
+    hypotheses. When person i's measurement at t - 1 held a hidden partner j (i's own share
+    below 1, ``own_shares``), i and j are in O, and at t two or more measurements meet both
+    (the pair seen apart again), eq. 5 cannot say which is whose: on those measurements each
+    of the two gets the region term of the one it meets least (its nodes' terms scaled so
+    that its best node has that term on each), and the appearance q (eq. 4), which the
+    occlusion did not take from the hidden person, decides between them. No pair gains a
+    region term: a third person meeting those measurements keeps its claim."""
+
+    uses_merged: ClassVar[bool] = True
+
+    def delta(self, delta: np.ndarray, pairs: np.ndarray, owners: np.ndarray,
+              merged: np.ndarray, hidden: np.ndarray) -> np.ndarray:
+        """(B, D) region terms from (B, D) ``delta``; ``pairs`` (K, 2) node rows of O,
+        ``owners`` (B,) person of each node; per person (P,) bool ``merged`` (matched at
+        t - 1 to a measurement that held a hidden partner) and ``hidden`` (confirmed,
+        unmatched at t - 1)."""
+        out, done = delta, set()
+        for a, b in pairs.tolist():
+            i, j = sorted((int(owners[a]), int(owners[b])))
+            if (i, j) in done or not (merged[i] and hidden[j] or merged[j] and hidden[i]):
+                continue
+            done.add((i, j))
+            ni, nj = owners == i, owners == j
+            common = (out[ni] > 0).any(axis=0) & (out[nj] > 0).any(axis=0)
+            if common.sum() < 2:
+                continue  # one measurement (still merged) or none: the regions decide
+            if out is delta:
+                out = delta.copy()
+            for rows in (ni, nj):
+                cells = np.ix_(rows, common)
+                best = out[cells].max(axis=0)  # (C,) > 0: the person's term on each
+                out[cells] *= best.min() / best
+        return out

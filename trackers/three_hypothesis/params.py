@@ -228,6 +228,12 @@ class Adaptations:
             taken only where it is measured to differ from M's: by more than this many
             standard errors of the line's slope, in x or in y (a standing person's jitter
             gives a line no better than M's); 0: whenever the line predicted better.
+        split_appearance: a merged measurement is an occlusion: when a person's measurement
+            at t - 1 held a hidden partner in O and at t two or more measurements meet both,
+            each of the two has on those measurements the region term (eq. 5) of the one it
+            meets least, so the appearance (eq. 4) decides who is whose
+            (``contact.AppearanceAtSplit``);
+            False: eq. 5 weighs each pair (the paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -259,6 +265,7 @@ class Adaptations:
     visible_region: bool = False
     measured_hypothesis: bool = True
     measured_hypothesis_sigmas: float = 2.0
+    split_appearance: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -272,7 +279,8 @@ class Adaptations:
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
                       "contact_region": bool, "merged_appearance": bool,
                       "split_parts": bool, "merged_motion": bool,
-                      "visible_region": bool, "measured_hypothesis": bool})
+                      "visible_region": bool, "measured_hypothesis": bool,
+                      "split_appearance": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -299,7 +307,8 @@ class Adaptations:
                    early_confirm_score=0.0, report_memory=0.0, contact_region=False,
                    merged_appearance=False, split_parts=False,
                    merged_motion=False, visible_region=False,
-                   measured_hypothesis=False, measured_hypothesis_sigmas=0.0)
+                   measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
+                   split_appearance=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

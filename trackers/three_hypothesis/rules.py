@@ -20,11 +20,13 @@ from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
     AppearanceAtContact,
+    AppearanceAtSplit,
     MeasurementAppearance,
     MeasurementMotion,
     MergedAppearance,
     MergedMotion,
     RegionAtContact,
+    RegionAtSplit,
     SplitParts,
     VisibleRegion,
     WholeRegion,
@@ -297,6 +299,7 @@ class Rules(NamedTuple):
     contact: AppearanceAtContact | RegionAtContact  # eq. 4 between people in O (3.3.2)
     parts: AnyLeftover | SplitParts  # what stage 2 may match (3.3.2 steps 5-8)
     region: WholeRegion | VisibleRegion  # eq. 5's region term of a node behind others
+    split: RegionAtSplit | AppearanceAtSplit  # eq. 5 where a merged pair parts (3.3.2)
     line: FilterVelocity | MeasuredLine  # hypothesis 1's velocity (3.3.3, case 1)
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
@@ -332,6 +335,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         region=VisibleRegion() if a.visible_region else WholeRegion(),
+        split=AppearanceAtSplit() if a.split_appearance else RegionAtSplit(),
         line=(MeasuredLine(life_cycle.m, a.measured_hypothesis_sigmas)
               if a.measured_hypothesis else FilterVelocity()),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),

@@ -46,6 +46,7 @@ class Person:
     spawned: bool = False  # occlusion hypotheses created in this hidden streak
     centres: list = field(default_factory=list)  # (frame, xc, yc) last measured (rules.line)
     line_errors: list = field(default_factory=lambda: [0.0, 0.0])  # M's, the line's
+    merged: bool = False  # its last measurement held a hidden partner (rules.split)
 
     @property
     def confirmed(self) -> bool:

@@ -124,6 +124,8 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
         admissible = rules.shape.admissible(
             S.boxes[wide], dets, np.searchsorted(rivals, S.owners[wide]),
             O.delta[wide][:, cols].toarray(), s.seen[wide])[np.isin(wide, nodes)]
+    if 1 in stages and rules.split.uses_merged and len(O.pairs) and len(nodes):
+        delta = _split(S, rules, rows, nodes, owners, delta, _local_pairs(O.pairs, nodes))
     entrants = None if s.entrants is None else s.entrants[rows]
     if 2 not in stages:
         entrants = np.zeros(len(rows), dtype=bool)
@@ -136,6 +138,19 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
         admissible=admissible,
         barred=None if s.barred is None else partial(_barred, s.barred, cols))
     return _Block(m, rows, cols, nodes)
+
+
+def _split(S: Predictions, rules: Rules, rows: np.ndarray, nodes: np.ndarray,
+           owners: np.ndarray, delta: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """``rules.split``'s region terms of a block (persons ``rows``, their ``nodes``, the
+    block's ``owners`` and O's ``pairs`` in block indices): a person seen at t - 1 (a
+    visible node) is ``merged`` when its measurement held a hidden partner, ``hidden``
+    when confirmed and seen at t - 1 nowhere."""
+    seen = np.zeros(len(rows), dtype=bool)
+    np.logical_or.at(seen, owners, [S.branches[n].kind == VISIBLE for n in nodes.tolist()])
+    merged = np.array([S.persons[i].merged for i in rows.tolist()], dtype=bool) & seen
+    confirmed = np.array([S.persons[i].confirmed for i in rows.tolist()], dtype=bool)
+    return rules.split.delta(delta, pairs, owners, merged, confirmed & ~seen)
 
 
 def _gate_pairs(s: _Inputs, left: np.ndarray, free: np.ndarray

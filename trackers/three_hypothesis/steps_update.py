@@ -67,6 +67,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
             person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
+        person.merged = bool(own[r] < 1.0)  # read by rules.split at t + 1
         if person.confirmed or d not in empty_dets:
             person.hits += 1
         person.misses = 0
@@ -154,7 +155,8 @@ def _own_share(S: Predictions, V: Measurements, O: Occlusions, A: Matching, rule
     """Per matched person (``matches``), the share of its measured region no
     hidden confirmed partner in O covers (``contact.own_shares``); 1 everywhere unless a
     front rule reads it."""
-    if not (rules.appearance_front.uses_shares or rules.motion_front.uses_shares):
+    if not (rules.appearance_front.uses_shares or rules.motion_front.uses_shares
+            or rules.split.uses_merged):
         return np.ones(len(matches))
     hidden = np.array([person.confirmed and i not in A.matched
                        for i, person in enumerate(S.persons)], dtype=bool)
