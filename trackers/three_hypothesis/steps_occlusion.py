@@ -107,8 +107,11 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
     its measurements."""
     S, V, O, rules, a = s.S, s.V, s.O, s.rules, s.association
     whole = len(rows) == len(S.persons) and len(cols) == len(V.boxes)
-    nodes = np.flatnonzero(np.isin(S.owners, rows))
-    owners = np.searchsorted(rows, S.owners[nodes])
+    if whole:  # every node, the persons' own indices
+        nodes, owners = np.arange(len(S.owners)), S.owners
+    else:
+        nodes = np.flatnonzero(np.isin(S.owners, rows))
+        owners = np.searchsorted(rows, S.owners[nodes])
     delta = O.delta.toarray() if whole else O.delta[nodes][:, cols].toarray()
     if 1 in stages and rules.region.uses_order and len(O.pairs) and len(nodes):
         at = np.minimum(np.searchsorted(nodes, O.pairs), len(nodes) - 1)
@@ -279,5 +282,11 @@ def _merge(found: list[_Block], n_persons: int, n_meas: int) -> Matches:
     rho = np.concatenate([b.matches.rho for b in found]).astype(float)
     order = np.lexsort((matches[:, 0], stages))
     return Matches(matches[order], stages[order], rho[order],
-                   np.setdiff1d(np.arange(n_persons), matches[:, 0]),
-                   np.setdiff1d(np.arange(n_meas), matches[:, 1]))
+                   _left(n_persons, matches[:, 0]), _left(n_meas, matches[:, 1]))
+
+
+def _left(n: int, taken: np.ndarray) -> np.ndarray:
+    """0..n-1 without ``taken``, ascending."""
+    left = np.ones(n, dtype=bool)
+    left[taken] = False
+    return np.flatnonzero(left)
