@@ -10,6 +10,7 @@ xywh, 0-based pixels.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
@@ -266,13 +267,14 @@ class RegionAtContact:
 @dataclass(frozen=True)
 class RegionAtSplit:
     """3.3.2 as written: when two people a measurement held together are measured apart
-    again, eq. 5 weighs each pair's region as for any other pair."""
+    again, stage 1's cost (eqs. 4-5) decides who takes which, as for any other pair."""
 
     uses_merged: ClassVar[bool] = False
 
-    def delta(self, delta: np.ndarray, pairs: np.ndarray, owners: np.ndarray,
-              merged: np.ndarray, hidden: np.ndarray) -> np.ndarray:
-        return delta
+    def matches(self, rows: np.ndarray, stages: np.ndarray, rho: Callable,
+                pairs: np.ndarray, owners: np.ndarray, delta: csr_array,
+                merged: np.ndarray, hidden: np.ndarray, mu_rho: float) -> np.ndarray:
+        return rows
 
 
 @dataclass(frozen=True)
@@ -280,35 +282,44 @@ class AppearanceAtSplit:
     """``split_appearance``: a merged measurement is an occlusion, so the position it gave
     the person matched to it was the pair's, and the hidden partner's regions are
     hypotheses. When person i's measurement at t - 1 held a hidden partner j (i's own share
-    below 1, ``own_shares``), i and j are in O, and at t two or more measurements meet both
-    (the pair seen apart again), eq. 5 cannot say which is whose: on those measurements each
-    of the two gets the region term of the one it meets least (its nodes' terms scaled so
-    that its best node has that term on each), and the appearance q (eq. 4), which the
-    occlusion did not take from the hidden person, decides between them. No pair gains a
-    region term: a third person meeting those measurements keeps its claim."""
+    below 1, ``own_shares``), i and j are in O, and stage 1 gives each one of two
+    measurements that both could take (rho >= mu_rho, each meeting the other's
+    measurement), eq. 5 has said that the pair is measured but cannot say which is whose:
+    the appearance (eq. 4), which the occlusion did not take from the hidden person, decides
+    (the two measurements exchanged when rho_ib + rho_ja > rho_ia + rho_jb). Nobody else's
+    match changes."""
 
     uses_merged: ClassVar[bool] = True
 
-    def delta(self, delta: np.ndarray, pairs: np.ndarray, owners: np.ndarray,
-              merged: np.ndarray, hidden: np.ndarray) -> np.ndarray:
-        """(B, D) region terms from (B, D) ``delta``; ``pairs`` (K, 2) node rows of O,
-        ``owners`` (B,) person of each node; per person (P,) bool ``merged`` (matched at
-        t - 1 to a measurement that held a hidden partner) and ``hidden`` (confirmed,
-        unmatched at t - 1)."""
-        out, done = delta, set()
+    def matches(self, rows: np.ndarray, stages: np.ndarray, rho: Callable,
+                pairs: np.ndarray, owners: np.ndarray, delta: csr_array,
+                merged: np.ndarray, hidden: np.ndarray, mu_rho: float) -> np.ndarray:
+        """(K, 3) rows (person, measurement, node) of a frame's matches, with ``stages``
+        (K,); ``rho`` (person, measurement) -> eq. 4; ``pairs`` (K', 2) node rows of O,
+        ``owners`` (B,); ``delta`` sparse (B, D) eq. 5; per person (P,) bool ``merged``
+        (matched at t - 1 to a measurement that held a hidden partner) and ``hidden``
+        (confirmed, unmatched at t - 1). Returns the rows, a pair's two measurements
+        exchanged where the colours say so (a new array; ``rows`` when none is)."""
+        out = rows
+        at = {int(p): k for k, p in enumerate(rows[:, 0].tolist()) if stages[k] == 1}
+        done = set()
         for a, b in pairs.tolist():
             i, j = sorted((int(owners[a]), int(owners[b])))
-            if (i, j) in done or not (merged[i] and hidden[j] or merged[j] and hidden[i]):
+            if (i, j) in done or i not in at or j not in at:
+                continue
+            if not (merged[i] and hidden[j] or merged[j] and hidden[i]):
                 continue
             done.add((i, j))
-            ni, nj = owners == i, owners == j
-            common = (out[ni] > 0).any(axis=0) & (out[nj] > 0).any(axis=0)
-            if common.sum() < 2:
-                continue  # one measurement (still merged) or none: the regions decide
-            if out is delta:
-                out = delta.copy()
-            for rows in (ni, nj):
-                cells = np.ix_(rows, common)
-                best = out[cells].max(axis=0)  # (C,) > 0: the person's term on each
-                out[cells] *= best.min() / best
+            di, dj = int(out[at[i], 1]), int(out[at[j], 1])
+            ni, nj = np.flatnonzero(owners == i), np.flatnonzero(owners == j)
+            to_j = delta[ni][:, [dj]].toarray()[:, 0]  # i's nodes on j's measurement
+            to_i = delta[nj][:, [di]].toarray()[:, 0]
+            own, other = rho(i, di) + rho(j, dj), rho(i, dj) + rho(j, di)
+            if (di == dj or min(rho(i, dj), rho(j, di)) < mu_rho or not to_j.max() > 0
+                    or not to_i.max() > 0 or other <= own):
+                continue
+            if out is rows:
+                out = rows.copy()
+            out[at[i]] = (i, dj, ni[np.argmax(to_j)])  # the node stage 1 would take
+            out[at[j]] = (j, di, nj[np.argmax(to_i)])
         return out

@@ -229,11 +229,10 @@ class Adaptations:
             standard errors of the line's slope, in x or in y (a standing person's jitter
             gives a line no better than M's); 0: whenever the line predicted better.
         split_appearance: a merged measurement is an occlusion: when a person's measurement
-            at t - 1 held a hidden partner in O and at t two or more measurements meet both,
-            each of the two has on those measurements the region term (eq. 5) of the one it
-            meets least, so the appearance (eq. 4) decides who is whose
-            (``contact.AppearanceAtSplit``);
-            False: eq. 5 weighs each pair (the paper, 3.3.2).
+            at t - 1 held a hidden partner in O and stage 1 gives the two of them two
+            measurements each could take, the appearance (eq. 4) says which is whose: they
+            are exchanged when the colours fit the exchange better
+            (``contact.AppearanceAtSplit``); False: stage 1's cost decides (the paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0

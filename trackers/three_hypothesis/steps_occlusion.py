@@ -94,6 +94,8 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
                   for r, c in blocks(len(left), len(free),
                                      lambda: _gate_pairs(inp, left, free))]
     m = _merge(found, n_p, n_d)
+    if rules.split.uses_merged and len(O.pairs) and len(m.matches):
+        _split(S, O, rules, m, sqrt_q, sqrt_p, association.mu_rho)
     return Matching({i: Match(d, n, s, r) for (i, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())},
                     m.unmatched_measurements)
@@ -127,8 +129,6 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
         admissible = rules.shape.admissible(
             S.boxes[wide], dets, np.searchsorted(rivals, S.owners[wide]),
             O.delta[wide][:, cols].toarray(), s.seen[wide])[np.isin(wide, nodes)]
-    if 1 in stages and rules.split.uses_merged and len(O.pairs) and len(nodes):
-        delta = _split(S, rules, rows, nodes, owners, delta, _local_pairs(O.pairs, nodes))
     entrants = None if s.entrants is None else s.entrants[rows]
     if 2 not in stages:
         entrants = np.zeros(len(rows), dtype=bool)
@@ -143,17 +143,25 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
     return _Block(m, rows, cols, nodes)
 
 
-def _split(S: Predictions, rules: Rules, rows: np.ndarray, nodes: np.ndarray,
-           owners: np.ndarray, delta: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-    """``rules.split``'s region terms of a block (persons ``rows``, their ``nodes``, the
-    block's ``owners`` and O's ``pairs`` in block indices): a person seen at t - 1 (a
-    visible node) is ``merged`` when its measurement held a hidden partner, ``hidden``
-    when confirmed and seen at t - 1 nowhere."""
-    seen = np.zeros(len(rows), dtype=bool)
-    np.logical_or.at(seen, owners, [S.branches[n].kind == VISIBLE for n in nodes.tolist()])
-    merged = np.array([S.persons[i].merged for i in rows.tolist()], dtype=bool) & seen
-    confirmed = np.array([S.persons[i].confirmed for i in rows.tolist()], dtype=bool)
-    return rules.split.delta(delta, pairs, owners, merged, confirmed & ~seen)
+def _split(S: Predictions, O: Occlusions, rules: Rules, m: Matches, sqrt_q: np.ndarray,
+           sqrt_p: np.ndarray, mu_rho: float) -> None:
+    """``rules.split`` on the frame's matches ``m`` (its rows and rho, in place): a person
+    seen at t - 1 (a visible node) is ``merged`` when its measurement held a hidden
+    partner, ``hidden`` when confirmed and seen at t - 1 nowhere."""
+    persons = S.persons
+    seen = np.zeros(len(persons), dtype=bool)
+    seen[S.owners[[b.kind == VISIBLE for b in S.branches]]] = True
+    merged = np.array([p.merged for p in persons], dtype=bool) & seen
+    hidden = np.array([p.confirmed for p in persons], dtype=bool) & ~seen
+
+    def rho(i: int, d: int) -> float:  # eq. 4, clipped to [0, 1] as stage 1's
+        return float(np.clip(sqrt_q[i] @ sqrt_p[d], 0.0, 1.0))
+
+    rows = rules.split.matches(m.matches, m.stages, rho, O.pairs, S.owners, O.delta,
+                               merged, hidden, mu_rho)
+    for k in np.flatnonzero((rows != m.matches).any(axis=1)).tolist():
+        m.rho[k] = rho(int(rows[k, 0]), int(rows[k, 1]))
+    m.matches = rows
 
 
 def _gate_pairs(s: _Inputs, left: np.ndarray, free: np.ndarray

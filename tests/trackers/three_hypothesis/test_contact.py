@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-import pytest
 from scipy.sparse import csr_array
 
 from occbench.trackers.geometry import iou_matrix
@@ -204,45 +203,46 @@ def test_own_shares_equal_the_per_row_definition_bit_for_bit():
         assert got.tolist() == want
 
 
-def _split_takers(rule, merged: list[bool], hidden: list[bool], margin: bool) -> list[int]:
+def _split_takers(rule, merged: list[bool], hidden: list[bool], stage: int = 1,
+                  delta: list | None = None) -> list[int]:
     """pets1-400 sil frame 166 in miniature: persons 0 and 1 in O, two measurements meet
     both. Colours: person 0 rho 0.6 for both, person 1 0.7 for measurement 0 and 0.5 for 1;
     regions: person 0 delta 0.49 / 0.76, person 1 0.24 / 0.83 (person 0's M dragged by the
-    merged box, person 1's hypothesis lagging). Returns the measurement each person takes."""
+    merged box, person 1's hypothesis lagging). Stage 1 (the paper's cost) gives each the
+    other's measurement; returns the measurement each person takes after ``rule``."""
     from occbench.trackers.three_hypothesis.association import associate
-    from occbench.trackers.three_hypothesis.rules import AbsoluteAppearance, AppearanceMargin
 
     sqrt_q = np.array([[0.6, 0.6, np.sqrt(0.28)], [0.7, 0.5, np.sqrt(0.26)]])
     sqrt_p = np.eye(3)[:2]  # rho = sqrt_q's first two columns
     boxes = np.array([[100.0, 50, 20, 60], [104.0, 50, 20, 60]])
     owners, pairs = np.array([0, 1]), np.array([[0, 1]])
-    delta = rule.delta(np.array([[0.49, 0.76], [0.24, 0.83]]), pairs, owners,
-                       np.array(merged), np.array(hidden))
-    m = associate(boxes, owners, sqrt_q, boxes, sqrt_p, 0.3, 50.0, delta=delta,
-                  evidence=(AppearanceMargin() if margin else AbsoluteAppearance()).evidence)
-    return m.matches[np.argsort(m.matches[:, 0]), 1].tolist()
+    delta = np.array([[0.49, 0.76], [0.24, 0.83]] if delta is None else delta)
+    m = associate(boxes, owners, sqrt_q, boxes, sqrt_p, 0.3, 50.0, delta=delta)
+    assert m.matches[:, :2].tolist() == [[0, 0], [1, 1]]  # the regions' pairs
+
+    def rho(i, d):
+        return float(sqrt_q[i] @ sqrt_p[d])
+
+    rows = rule.matches(m.matches, np.full(2, stage), rho, pairs, owners, csr_array(delta),
+                        np.array(merged), np.array(hidden), 0.3)
+    return rows[np.argsort(rows[:, 0]), 1].tolist()
 
 
-@pytest.mark.parametrize("margin", [False, True])
-def test_where_a_merged_pair_parts_the_colours_decide(margin):
-    """``split_appearance``: person 0's last measurement held person 1, hidden: the paper's
-    regions give the pair each other's measurement; the rule gives each person its least
-    region term on both (0.49 and 0.24, its nodes scaled), and the colours give each its
-    own; with person 0 not merged, or person 1 not hidden, the regions decide as in the
-    paper; one measurement (still merged) is left to the regions."""
+def test_where_a_merged_pair_parts_the_colours_say_who_is_whose():
+    """``split_appearance``: person 0's last measurement held person 1, hidden; stage 1
+    gave the pair each other's measurement by the regions, the rule exchanges them because
+    the colours fit the exchange better (0.6 + 0.7 against 0.6 + 0.5). The paper keeps stage
+    1's; so does the rule when person 0 was not merged, person 1 not hidden, the matches
+    came from stage 2, or a person's nodes do not meet the other measurement."""
     paper, ours = RegionAtSplit(), AppearanceAtSplit()
-    assert _split_takers(paper, [True, False], [False, True], margin) == [0, 1]
-    assert _split_takers(ours, [True, False], [False, True], margin) == [1, 0]
-    assert _split_takers(ours, [False, False], [False, True], margin) == [0, 1]
-    assert _split_takers(ours, [True, False], [False, False], margin) == [0, 1]
-    two = np.array([[0.49, 0.76], [0.3, 0.6], [0.24, 0.83], [0.0, 0.4]])  # 2 nodes each
-    out = ours.delta(two, np.array([[1, 2]]), np.array([0, 0, 1, 1]), np.array([True, False]),
-                     np.array([False, True]))
-    assert np.allclose(out, [[0.49, 0.49], [0.3, 0.6 * 0.49 / 0.76], [0.24, 0.24],
-                             [0.0, 0.4 * 0.24 / 0.83]])
-    d = np.array([[0.49], [0.24]])
-    assert ours.delta(d, np.array([[0, 1]]), np.array([0, 1]), np.array([True, False]),
-                      np.array([False, True])) is d
+    assert _split_takers(paper, [True, False], [False, True]) == [0, 1]
+    assert _split_takers(ours, [True, False], [False, True]) == [1, 0]
+    assert _split_takers(ours, [False, True], [True, False]) == [1, 0]  # either way round
+    assert _split_takers(ours, [False, False], [False, True]) == [0, 1]
+    assert _split_takers(ours, [True, False], [False, False]) == [0, 1]
+    assert _split_takers(ours, [True, False], [False, True], stage=2) == [0, 1]
+    assert _split_takers(ours, [True, False], [False, True],
+                         delta=[[0.49, 0.76], [0.0, 0.83]]) == [0, 1]
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).split, RegionAtSplit)
     assert isinstance(build_rules(Adaptations(split_appearance=True), h).split,
