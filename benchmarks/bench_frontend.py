@@ -136,7 +136,7 @@ def speed(n_frames: int) -> None:
             dets[name] = instantiate(cfg.detector).detector
         bg = dets["foreground"].background
         half = instantiate(compose_config(
-            ["detector=foreground", *size, "detector.detector.background.work_scale=0.5"],
+            ["detector=foreground", *size, "detector.detector.background.frames.work_scale=0.5"],
             config_name="detect").detector).detector.background
         for model in (bg, half):  # learn the background first (not timed)
             model.warm_up_sequence(len(frames), lambda i, fr=frames: fr[i - 1])
@@ -175,7 +175,7 @@ def speed(n_frames: int) -> None:
             f"{1.0 / max(rows[c][s], 1e-9):>12.0f} ({1000 * rows[c][s]:5.2f} ms)" for c in cols))
     print("targets, foreground path (decode, background, morphology, blobs): 250 frames/s at "
           "384x288, 80 at 768x576; 'background x0.5' runs the model at half resolution "
-          "(detector.detector.background.work_scale=0.5)")
+          "(detector.detector.background.frames.work_scale=0.5)")
 
 
 def main() -> int:

@@ -56,6 +56,30 @@ def no_progress(total: int = 0, desc: str = "", unit: str = "frame") -> Progress
 # --------------------------------------------------------------------------- foreground
 
 
+def background_model(settings: Mapping[str, Any]) -> Any:
+    """The ``BackgroundModel`` of ``foreground=mog2`` from config.yaml's ``background``: its
+    ``method`` and ``mixture``, and each parameter group as a mapping of its fields
+    (``background.model.history``, ``background.start.warmup_span``; ``background_params``).
+
+    Raises:
+        RunError: the front end is not installed, or a key or value is refused (a flat key
+            of the model before its groups names its group's key).
+    """
+    try:
+        # start-up: the front end (~7 ms CPU), for foreground=mog2 only
+        from occbench.trackers.frontend import BackgroundModel
+        from occbench.trackers.frontend.background_params import GROUPS
+    except ImportError as err:  # the front end is an optional part of the build
+        raise RunError(f"foreground=mog2 needs occbench.trackers.frontend ({err})") from err
+    try:
+        groups = {k: GROUPS[k](**v) for k, v in settings.items()
+                  if k in GROUPS and isinstance(v, Mapping)}
+        return BackgroundModel(**{**settings, **groups})
+    except (TypeError, ValueError) as err:  # the model's own messages name the key
+        text = str(err)
+        raise RunError(text if text.startswith("background.") else f"background: {text}") from err
+
+
 class ForegroundProvider:
     """The foreground image handed to the trackers, by mode.
 
@@ -68,7 +92,7 @@ class ForegroundProvider:
     nonzero pixels as a bool mask, never the ids (which would leak the ground truth).
         none: always None.
         mog2: a background-subtraction mask (``occbench.trackers.frontend.BackgroundModel``, one
-            model per sequence, built with ``background`` as keyword arguments), unless
+            model per sequence, built from ``background`` by ``background_model``), unless
             the detection source computes its own mask, which then takes precedence.
     """
 
@@ -80,12 +104,7 @@ class ForegroundProvider:
         self.sequence = sequence
         self._model = None
         if mode == "mog2":
-            try:
-                # start-up: the front end (~7 ms CPU), for foreground=mog2 only
-                from occbench.trackers.frontend import BackgroundModel
-            except ImportError as err:  # the front end is an optional part of the build
-                raise RunError(f"foreground=mog2 needs occbench.trackers.frontend ({err})") from err
-            self._model = BackgroundModel(**dict(background or {}))
+            self._model = background_model(background or {})
             warm = getattr(self._model, "warm_up_sequence", None)
             if warm is not None:
                 warm(sequence.info.length, sequence.nth_frame)

@@ -160,7 +160,7 @@ class SilhouetteDetector(_ForegroundPipeline):
             self.area = active_area(frames)
         if self.calibration is None or self.matcher.fixed_height_model is not None:
             return
-        if self.background.warmup_span == "online":  # calibrated as the frames arrive
+        if self.background.start.warmup_span == "online":  # calibrated as the frames arrive
             self._online_frames = 0
             return
         n = min(self.calibration_frames, length)
@@ -201,7 +201,7 @@ class SilhouetteDetector(_ForegroundPipeline):
         warm-up, and the calibration's frames sampled over the sequence, when
         ``warmup_span`` is "sequence"."""
         return self.background.uses_future_frames or (
-            self.background.warmup_span == "sequence" and self.calibration is not None
+            self.background.start.warmup_span == "sequence" and self.calibration is not None
             and self.calibration_frames > 0 and self.matcher.fixed_height_model is None)
 
     def detect(self, frame: np.ndarray) -> tuple[Detections, np.ndarray]:

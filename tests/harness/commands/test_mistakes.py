@@ -32,6 +32,9 @@ def _one_line(capsys, *args: str) -> str:
     (["detector=silhouette", "detector.detector.calibration.min_fill=0.4"],  # issue 36 item 6
      ("occbench: unknown key 'detector.detector.calibration.min_fill': did you mean "
       "'detector.detector.calibration.people.min_fill'?")),
+    (["detector=foreground", "detector.detector.background.warmup_span=online"],
+     ("occbench: unknown key 'detector.detector.background.warmup_span': did you mean "
+      "'detector.detector.background.start.warmup_span'?")),
 ])
 def test_a_typo_is_one_line_with_did_you_mean(capsys, args, line):
     assert _one_line(capsys, *args) == line

@@ -15,7 +15,7 @@ from run_scenes import (
 
 from occbench.errors import RunError
 from occbench.io.mot import MotTable
-from occbench.pipeline.loop import clean_detections, run_sequence, run_tracker
+from occbench.pipeline.loop import background_model, clean_detections, run_sequence, run_tracker
 from occbench.sources.annotations import NoisyGroundTruth
 from occbench.trackers.baseline import BaselineTracker
 from occbench.trackers.records import Detections, Track
@@ -139,3 +139,19 @@ def test_foreground_reaches_the_tracker(mode):
     rec = Recorder()
     run_tracker(rec, seq, MaskSource(), foreground="auto")  # the detector's own mask wins
     assert all(fg.dtype == bool and fg.all() for fg in rec.seen)
+
+
+def test_the_background_block_builds_the_model_from_its_groups():
+    """config.yaml's ``background`` (foreground=mog2): nested group keys build the groups; a
+    flat key before the groups and a refused value are one RunError naming the key."""
+    model = background_model({"method": "texture_colour", "model": {"history": 80},
+                              "start": {"warmup_span": "online"}})
+    assert (model.model.history, model.mixture.history, model.start.warmup_span) == (
+        80, 80, "online")
+    assert model.model.var_threshold == 25.0 and model.cleanup.close_kernel == 7  # defaults
+    with pytest.raises(RunError, match=r"^background\.history: moved to background\.model\.history"):
+        background_model({"history": 80})
+    with pytest.raises(RunError, match=r"^background\.model\.var_threshold must be > 0"):
+        background_model({"model": {"var_threshold": 0}})
+    with pytest.raises(RunError, match=r"^background: .*histry"):
+        background_model({"model": {"histry": 80}})

@@ -54,7 +54,7 @@ def test_metrics_table_sums_counts():
 
 def test_run_detection_writes_det_files_metrics_and_overlays(tmp_path):
     cfg = compose_config([*TINY, "detector=foreground", "overlays.frames=[3,4]",
-                          "detector.detector.background.warmup_frames=6"], config_name="detect")
+                          "detector.detector.background.start.warmup_frames=6"], config_name="detect")
     table = run_detection(cfg, tmp_path)
     assert list(table.sequence) == ["pair_walk", "COMBINED"]
     det = read_mot(tmp_path / "det" / "pair_walk.txt")
@@ -115,13 +115,16 @@ def test_label_says_when_detections_used_future_frames():
     """issue 37 item 4: summary and report name the source by its label, which says so."""
     from occbench.sources.frontend import FrontendSource
     from occbench.trackers.frontend.background import BackgroundModel
+    from occbench.trackers.frontend.background_params import WarmUp
     from occbench.trackers.frontend.foreground import ForegroundDetector
 
-    offline = FrontendSource(ForegroundDetector(BackgroundModel(warmup_span="sequence")))
-    online = FrontendSource(ForegroundDetector(BackgroundModel(warmup_span="online")))
+    def source(**warm_up: object) -> FrontendSource:
+        return FrontendSource(ForegroundDetector(BackgroundModel(start=WarmUp(**warm_up))))
+
+    offline, online = source(warmup_span="sequence"), source(warmup_span="online")
     assert offline.label == "foreground front end (warm-up on the whole sequence: future frames)"
     assert online.label == "foreground front end"
-    no_warm_up = FrontendSource(ForegroundDetector(BackgroundModel(warmup_frames=0)))
+    no_warm_up = source(warmup_frames=0)
     assert no_warm_up.label == "foreground front end"
 
 

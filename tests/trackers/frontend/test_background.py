@@ -8,6 +8,7 @@ import pytest
 
 from occbench.datasets.synthetic import load_scenario
 from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.background_params import MaskCleanup, PixelModel, WarmUp
 from occbench.trackers.frontend.texture_colour import TextureColourMixture, siltp
 
 
@@ -46,10 +47,12 @@ def test_mixture_arguments_validated():
             TextureColourMixture(**kw)
     with pytest.raises(ValueError, match=r"^background\.method "):
         BackgroundModel(method="vibe")
-    with pytest.raises(ValueError, match=r"^background\.var_threshold .*got nan"):  # let in before
-        BackgroundModel(var_threshold=float("nan"))
-    with pytest.raises(ValueError, match=r"^background\.close_kernel "):
-        BackgroundModel(close_kernel=(3, -1))
+    with pytest.raises(ValueError, match=r"^background\.model\.var_threshold .*got nan"):  # let in before
+        BackgroundModel(model=PixelModel(var_threshold=float("nan")))
+    with pytest.raises(ValueError, match=r"^background\.cleanup\.close_kernel "):
+        BackgroundModel(cleanup=MaskCleanup(close_kernel=(3, -1)))
+    with pytest.raises(TypeError, match=r"background.warmup_span: moved to background.start"):
+        BackgroundModel(warmup_span="online")  # a flat key before the groups (issue 36)
 
 
 def test_renderer_draws_a_mirrored_reflection_below_the_feet():
@@ -131,7 +134,7 @@ def test_online_warm_up_never_reads_a_frame_after_the_current_one(method):
     masks = {}
     for span in ("online", "sequence"):
         for name, frames in (("a", a), ("b", b)):
-            bg = BackgroundModel(method=method, warmup_frames=8, warmup_span=span)
+            bg = BackgroundModel(method=method, start=WarmUp(warmup_frames=8, warmup_span=span))
             asked: list[int] = []
 
             def frame(k: int, frames=frames, asked=asked) -> np.ndarray:
@@ -150,7 +153,7 @@ def test_online_warm_up_never_reads_a_frame_after_the_current_one(method):
 
 
 def test_online_warm_up_keeps_an_even_sample_of_the_past():
-    bg = BackgroundModel(warmup_frames=4, warmup_span="online")
+    bg = BackgroundModel(start=WarmUp(warmup_frames=4, warmup_span="online"))
     frames = _walker_frames(20, 1)
     bg.warm_up_sequence(20, lambda k: frames[k - 1])
     for f in frames[:13]:
@@ -158,4 +161,4 @@ def test_online_warm_up_keeps_an_even_sample_of_the_past():
     kept = [next(i for i, g in enumerate(frames) if g is s) + 1 for s in bg._sample]
     assert kept == [1, 5, 9, 13]
     with pytest.raises(ValueError, match="warmup_span"):
-        BackgroundModel(warmup_span="future")
+        BackgroundModel(start=WarmUp(warmup_span="future"))

@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.background_params import FrameInput, MaskCleanup, PixelModel, WarmUp
 from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
+
+RAW = MaskCleanup(open_kernel=0, close_kernel=0)  # the model's mask, no morphology
 
 
 def test_blobs_of_known_mask():
@@ -50,7 +53,7 @@ def _scene(person_value: int, shadow: bool) -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_shadow_pixels_removed_and_person_kept():
-    model = BackgroundModel(method="mog2", history=50, open_kernel=0, close_kernel=0)
+    model = BackgroundModel(method="mog2", model=PixelModel(history=50), cleanup=RAW)
     bg, f = _scene(230, shadow=True)
     for _ in range(40):
         model.apply(bg)
@@ -65,7 +68,7 @@ def test_shadow_pixels_removed_and_person_kept():
 
 
 def test_opening_removes_specks_and_closing_fills_holes():
-    model = BackgroundModel(open_kernel=3, close_kernel=5)
+    model = BackgroundModel(cleanup=MaskCleanup(open_kernel=3, close_kernel=5))
     raw = np.zeros((60, 60), dtype=np.uint8)
     raw[10:40, 10:30] = 255
     raw[20, 20] = 0  # hole
@@ -83,17 +86,19 @@ def test_warm_up_learns_background_behind_standing_person():
         x = 2 + 2 * k
         f[5:30, x : x + 6] = 250  # a person walking across the view
         frames.append(f)
-    model = BackgroundModel(history=100, warmup_frames=10, open_kernel=0, close_kernel=0)
+    model = BackgroundModel(model=PixelModel(history=100), start=WarmUp(warmup_frames=10),
+                            cleanup=RAW)
     model.warm_up_sequence(len(frames), lambda k: frames[k - 1])
     mask = model.apply(frames[0])
     assert mask[6:29, 3:7].mean() > 0.9  # the person at the start is foreground
     assert mask[:, 20:].mean() < 0.02  # the rest is background
-    cold = BackgroundModel(history=100, open_kernel=0, close_kernel=0)
+    cold = BackgroundModel(model=PixelModel(history=100), cleanup=RAW)
     assert cold.apply(frames[0]).sum() == 0  # without warm-up the first frame is background
 
 
 def test_work_scale_gives_full_size_mask():
-    model = BackgroundModel(history=50, open_kernel=0, close_kernel=0, work_scale=0.5)
+    model = BackgroundModel(model=PixelModel(history=50), cleanup=RAW,
+                            frames=FrameInput(work_scale=0.5))
     bg, f = _scene(230, shadow=False)
     for _ in range(30):
         model.apply(bg)
@@ -101,7 +106,7 @@ def test_work_scale_gives_full_size_mask():
     assert mask.shape == f.shape[:2]
     assert mask[12:38, 22:28].all() and mask.sum() < 1.3 * 300
     with pytest.raises(ValueError, match="work_scale"):
-        BackgroundModel(work_scale=0)
+        BackgroundModel(frames=FrameInput(work_scale=0))
 
 
 def test_empty_mask_has_no_blobs():
@@ -131,8 +136,8 @@ def test_inpainted_estimate_removes_a_person_who_never_leaves():
 def test_gain_compensation_ignores_global_brightening(compensate):
     rng = np.random.default_rng(2)
     bg = rng.integers(50, 150, size=(60, 80, 3), dtype=np.uint8)
-    model = BackgroundModel(history=50, open_kernel=0, close_kernel=0,
-                            gain_compensation=compensate)
+    model = BackgroundModel(model=PixelModel(history=50), cleanup=RAW,
+                            frames=FrameInput(gain_compensation=compensate))
     for _ in range(30):
         model.apply(bg)
     bright = (bg * 1.4).astype(np.uint8)  # (a darker scene would pass as shadow)

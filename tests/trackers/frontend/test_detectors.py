@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from occbench.trackers.frontend.background import BackgroundModel
+from occbench.trackers.frontend.background_params import MaskCleanup, PixelModel
 from occbench.trackers.frontend.detectors import SilhouetteDetector
 from occbench.trackers.frontend.foreground import Blobs, ForegroundDetector
 from occbench.trackers.frontend.heads import HeadDetector
@@ -112,7 +113,8 @@ def _scene(people: list[tuple[int, int, int, int]], seed: int = 0):
 def test_foreground_detector_boxes_of_moving_people():
     people = [(40, 50, 30, 80), (200, 100, 40, 100)]
     bg, frame = _scene(people)
-    det = ForegroundDetector(BackgroundModel(history=50, open_kernel=3, close_kernel=5))
+    det = ForegroundDetector(BackgroundModel(model=PixelModel(history=50),
+                                             cleanup=MaskCleanup(open_kernel=3, close_kernel=5)))
     for _ in range(20):
         det.detect(bg)
     dets, fg = det.detect(frame)
@@ -154,7 +156,7 @@ def test_foreground_detector_splits_a_group_at_its_heads():
 def test_silhouette_detector_end_to_end():
     people = [(40, 50, 30, 80), (200, 100, 40, 100)]
     bg, frame = _scene(people, seed=1)
-    det = SilhouetteDetector(BackgroundModel(history=50),
+    det = SilhouetteDetector(BackgroundModel(model=PixelModel(history=50)),
                              _matcher(min_height=50, max_height=130, downscale=1))
     for _ in range(20):
         det.detect(bg)
