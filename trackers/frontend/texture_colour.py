@@ -37,8 +37,17 @@ reference; ``compiled`` runs the same equations as one numba pass.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
-from occbench.trackers.common.checks import at_least, require, unit
+from occbench.trackers.common.checks import (
+    at_least,
+    coerce,
+    parameter_group,
+    refuse_moved,
+    require,
+    unit,
+)
 
 #: (dy, dx) of the 8 neighbours, clockwise from the top-left
 _NEIGHBOURS = ((-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1))
@@ -63,6 +72,82 @@ def siltp(grey: np.ndarray, tau: float, radius: int = 1, floor: float = 0.0) -> 
     return out
 
 
+@dataclass(frozen=True)
+class Texture:
+    """The texture term: SILTP and its share of the distance D.
+
+    Args:
+        texture_weight: lambda, share of the texture distance in D.
+        texture_tau: SILTP's relative tolerance tau.
+        texture_radius: SILTP neighbour distance, pixels of the working image.
+    """
+
+    texture_weight: float = 0.5
+    texture_tau: float = 0.08
+    texture_radius: int = 1
+
+    def __post_init__(self) -> None:
+        g = "background.mixture.texture"
+        unit(g, texture_weight=self.texture_weight)
+        require(f"{g}.texture_tau", 0.0 < self.texture_tau < 1.0, "must lie in (0, 1)",
+                self.texture_tau)
+        at_least(g, 1, texture_radius=self.texture_radius)
+        coerce(self, {"texture_weight": float, "texture_tau": float, "texture_radius": int})
+
+
+@dataclass(frozen=True)
+class Colour:
+    """The invariant-colour term D_col.
+
+    Args:
+        chroma_tolerance: chromatic distortion at which D_col reaches 1.
+        shadow_ratio: darkest brightness ratio a still matched (cast shadows).
+        highlight_ratio: brightest ratio a still matched.
+        noise: grey levels of |I - mu| under which the colour always matches.
+    """
+
+    chroma_tolerance: float = 0.12
+    shadow_ratio: float = 0.5
+    highlight_ratio: float = 1.15
+    noise: float = 12.0
+
+    def __post_init__(self) -> None:
+        g = "background.mixture.colour"
+        require(f"{g}.chroma_tolerance", self.chroma_tolerance > 0, "must be > 0",
+                self.chroma_tolerance)
+        require(f"{g}.shadow_ratio", 0.0 < self.shadow_ratio <= 1.0, "must lie in (0, 1]",
+                self.shadow_ratio)
+        at_least(g, 1, highlight_ratio=self.highlight_ratio)
+        at_least(g, 0, noise=self.noise)
+        coerce(self, {"chroma_tolerance": float, "shadow_ratio": float,
+                      "highlight_ratio": float, "noise": float})
+
+
+@dataclass(frozen=True)
+class ModeMatch:
+    """When an observation matches a mode, and when that mode is background.
+
+    Args:
+        threshold: largest D of a match.
+        background_weight: smallest weight of a background mode.
+    """
+
+    threshold: float = 0.4
+    background_weight: float = 0.3
+
+    def __post_init__(self) -> None:
+        g = "background.mixture.matching"
+        require(f"{g}.threshold", 0.0 < self.threshold <= 1.0, "must lie in (0, 1]",
+                self.threshold)
+        require(f"{g}.background_weight", 0.0 < self.background_weight < 1.0,
+                "must lie in (0, 1)", self.background_weight)
+        coerce(self, {"threshold": float, "background_weight": float})
+
+
+#: the mixture's groups: its argument -> the group's class
+GROUPS = {"texture": Texture, "colour": Colour, "matching": ModeMatch}
+
+
 class TextureColourMixture:
     """Per-pixel K-mode mixture over SILTP texture and invariant colour (see module docstring).
 
@@ -73,52 +158,24 @@ class TextureColourMixture:
     Args:
         modes: K, modes per pixel.
         history: frames of memory; the default rate alpha is 1 / history.
-        texture_weight: lambda, share of the texture distance in D.
-        threshold: largest D of a match.
-        background_weight: smallest weight of a background mode.
-        texture_tau: SILTP's relative tolerance tau.
-        texture_radius: SILTP neighbour distance, pixels of the working image.
-        chroma_tolerance: chromatic distortion at which D_col reaches 1.
-        shadow_ratio: darkest brightness ratio a still matched (cast shadows).
-        highlight_ratio: brightest ratio a still matched.
-        noise: grey levels of |I - mu| under which the colour always matches.
+        texture: the texture term (``Texture``).
+        colour: the invariant-colour term (``Colour``).
+        matching: a match and a background mode (``ModeMatch``).
         compiled: run ``apply`` as one compiled pass (``_texture_colour_kernel``, tested
             against this numpy code); False runs the numpy equations below.
+        Each group is its defaults when None; a key of the flat arguments before the groups
+        is refused with a TypeError naming its group.
     """
 
-    def __init__(
-        self,
-        modes: int = 3,
-        history: int = 500,
-        texture_weight: float = 0.5,
-        threshold: float = 0.4,
-        background_weight: float = 0.3,
-        texture_tau: float = 0.08,
-        texture_radius: int = 1,
-        chroma_tolerance: float = 0.12,
-        shadow_ratio: float = 0.5,
-        highlight_ratio: float = 1.15,
-        noise: float = 12.0,
-        compiled: bool = True,
-    ) -> None:
-        g = "background.mixture"
-        at_least(g, 1, modes=modes, history=history, texture_radius=texture_radius,
-                 highlight_ratio=highlight_ratio)
-        at_least(g, 0, noise=noise)
-        unit(g, texture_weight=texture_weight)
-        require(f"{g}.threshold", 0.0 < threshold <= 1.0, "must lie in (0, 1]", threshold)
-        for key, v in (("background_weight", background_weight), ("texture_tau", texture_tau)):
-            require(f"{g}.{key}", 0.0 < v < 1.0, "must lie in (0, 1)", v)
-        require(f"{g}.chroma_tolerance", chroma_tolerance > 0, "must be > 0", chroma_tolerance)
-        require(f"{g}.shadow_ratio", 0.0 < shadow_ratio <= 1.0, "must lie in (0, 1]",
-                shadow_ratio)
+    def __init__(self, modes: int = 3, history: int = 500, texture: Texture | None = None,
+                 colour: Colour | None = None, matching: ModeMatch | None = None,
+                 compiled: bool = True, **moved: object) -> None:
+        refuse_moved("background.mixture", moved, GROUPS)
+        at_least("background.mixture", 1, modes=modes, history=history)
         self.modes, self.history = int(modes), int(history)
-        self.texture_weight, self.threshold = float(texture_weight), float(threshold)
-        self.background_weight = float(background_weight)
-        self.texture_tau, self.texture_radius = float(texture_tau), int(texture_radius)
-        self.chroma_tolerance = float(chroma_tolerance)
-        self.shadow_ratio, self.highlight_ratio = float(shadow_ratio), float(highlight_ratio)
-        self.noise = float(noise)
+        self.texture = parameter_group("texture", texture, Texture)
+        self.colour = parameter_group("colour", colour, Colour)
+        self.matching = parameter_group("matching", matching, ModeMatch)
         self.compiled = bool(compiled)
         # pixel-major, as the compiled pass reads them; the numpy code below works on their
         # (K, N, ...) transposed views
@@ -156,11 +213,12 @@ class TextureColourMixture:
         diff = colour[None] - a[..., None] * mu
         c = np.sqrt(np.einsum("knc,knc->kn", diff, diff) / (a * a * mu2 + 1e-6))
         plain = colour[None] - mu
-        far = np.einsum("knc,knc->kn", plain, plain) > 3.0 * self.noise**2
-        d_col = np.minimum(c / self.chroma_tolerance, 1.0)
-        d_col[(a < self.shadow_ratio) | (a > self.highlight_ratio)] = 1.0
+        col = self.colour
+        far = np.einsum("knc,knc->kn", plain, plain) > 3.0 * col.noise**2
+        d_col = np.minimum(c / col.chroma_tolerance, 1.0)
+        d_col[(a < col.shadow_ratio) | (a > col.highlight_ratio)] = 1.0
         d_col[~far] = 0.0
-        lam = self.texture_weight
+        lam = self.texture.texture_weight
         return lam * d_tex + (1.0 - lam) * d_col, far
 
     def apply(self, frame: np.ndarray, learningRate: float = -1.0) -> np.ndarray:  # noqa: N803
@@ -168,20 +226,21 @@ class TextureColourMixture:
         update the model with rate ``learningRate`` (-1: 1 / history; 0: no update)."""
         H, W = frame.shape[:2]
         alpha = 1.0 / self.history if learningRate < 0 else float(learningRate)
+        tx, col, match = self.texture, self.colour, self.matching
         if self.compiled and self._mu is not None and self._shape == (H, W):
             # start-up: the numba kernels (~8 ms CPU), for the compiled model only
             from occbench.trackers.frontend._texture_colour_kernel import apply_kernel
 
             label = np.empty((H, W), dtype=np.uint8)
             apply_kernel(np.ascontiguousarray(frame), self._mu, self._t, self._w, alpha,
-                         self.texture_tau, self.texture_radius, 0.5 * self.noise,
-                         self.texture_weight, self.threshold, self.background_weight,
-                         self.chroma_tolerance, self.shadow_ratio, self.highlight_ratio,
-                         self.noise, label)
+                         tx.texture_tau, tx.texture_radius, 0.5 * col.noise,
+                         tx.texture_weight, match.threshold, match.background_weight,
+                         col.chroma_tolerance, col.shadow_ratio, col.highlight_ratio,
+                         col.noise, label)
             return label
         colour = frame.reshape(-1, 3).astype(np.float32)
         grey = colour.mean(axis=1).reshape(H, W) + 1.0
-        tex = siltp(grey, self.texture_tau, self.texture_radius, 0.5 * self.noise).reshape(8, -1)
+        tex = siltp(grey, tx.texture_tau, tx.texture_radius, 0.5 * col.noise).reshape(8, -1)
         if self._mu is None or self._shape != (H, W):
             self._init(colour, tex, (H, W))
             return np.zeros((H, W), dtype=np.uint8)
@@ -189,10 +248,10 @@ class TextureColourMixture:
         N = colour.shape[0]
         cols = np.arange(N)
         mu, t, w = self._modes()
-        ok = d < self.threshold
+        ok = d < match.threshold
         k = np.argmax(np.where(ok, w, -1.0), axis=0)  # the strongest matching mode
         matched = ok[k, cols]
-        is_bg = matched & (w[k, cols] >= self.background_weight)
+        is_bg = matched & (w[k, cols] >= match.background_weight)
         label = np.where(is_bg, np.where(far[k, cols], 127, 0), 255).astype(np.uint8)
         if alpha > 0:
             w *= 1.0 - alpha

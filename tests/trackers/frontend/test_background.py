@@ -9,7 +9,13 @@ import pytest
 from occbench.datasets.synthetic import load_scenario
 from occbench.trackers.frontend.background import BackgroundModel
 from occbench.trackers.frontend.background_params import MaskCleanup, PixelModel, WarmUp
-from occbench.trackers.frontend.texture_colour import TextureColourMixture, siltp
+from occbench.trackers.frontend.texture_colour import (
+    Colour,
+    ModeMatch,
+    Texture,
+    TextureColourMixture,
+    siltp,
+)
 
 
 def test_siltp_is_scale_invariant_and_ignores_faint_patterns():
@@ -40,11 +46,15 @@ def test_mixture_labels_a_shadow_127_and_an_object_255():
 
 
 def test_mixture_arguments_validated():
-    for kw in ({"modes": 0}, {"threshold": 0.0}, {"background_weight": 1.0},
-               {"shadow_ratio": 1.2}, {"texture_tau": 0.0}, {"noise": -1.0}):
+    for group, kw in ((TextureColourMixture, {"modes": 0}), (ModeMatch, {"threshold": 0.0}),
+                      (ModeMatch, {"background_weight": 1.0}), (Colour, {"shadow_ratio": 1.2}),
+                      (Texture, {"texture_tau": 0.0}), (Colour, {"noise": -1.0})):
         (key,) = kw
-        with pytest.raises(ValueError, match=rf"^background\.mixture\.{key} "):  # config key
-            TextureColourMixture(**kw)
+        where = {ModeMatch: "matching.", Colour: "colour.", Texture: "texture."}.get(group, "")
+        with pytest.raises(ValueError, match=rf"^background\.mixture\.{where}{key} "):  # its key
+            group(**kw)
+    with pytest.raises(TypeError, match=r"mixture.noise: moved to background.mixture.colour"):
+        TextureColourMixture(noise=5.0)  # a flat key before the groups (issue 36)
     with pytest.raises(ValueError, match=r"^background\.method "):
         BackgroundModel(method="vibe")
     with pytest.raises(ValueError, match=r"^background\.model\.var_threshold .*got nan"):  # let in before
