@@ -31,8 +31,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import require, unit
+from occbench.trackers.common.checks import parameter_group, refuse_moved
 from occbench.trackers.frontend.blobs import blob_boxes, blobs_from_mask
+from occbench.trackers.frontend.heads_params import GROUPS, HeadEllipses, HeadPixels
 
 log = logging.getLogger(__name__)
 
@@ -129,67 +130,34 @@ class HeadDetector:
 
     Args:
         mixtures: path of an ``.npz`` of ``ColourMixtures`` (None: the shipped default).
-        w1: weight of the XYZ likelihood (PBM eq. 5, w1).
-        w2: weight of the HSV likelihood (PBM eq. 5, w2).
-        threshold_hair: th_hair on p_hair (PBM 2.3.1).
-        threshold_skin: threshold on p_skin (PBM 2.3.2).
-        close_kernel: size of the elliptic closing applied to head pixels (PBM 2.3.3).
-        head_fraction: head height as a fraction of person height (PBM 2.1: 1/7).
-        size_factors: head-height multipliers tried around ``head_fraction * height``.
-        aspects: ellipse width / height ratios tried.
-        min_occupancy: smallest occupancy ratio accepted as a head.
-        search_fraction: fraction of a box's height (from its top) searched for the head.
-        min_head_height: smallest head height in pixels searched.
+        pixels: which pixels are head pixels (``heads_params.HeadPixels``).
+        ellipses: which ellipses of them are heads (``heads_params.HeadEllipses``).
+        Each group is its defaults when None; a key of the flat arguments before the groups
+        is refused with a TypeError naming its group.
     """
 
-    def __init__(
-        self,
-        mixtures: str | None = None,
-        w1: float = 0.5,
-        w2: float = 0.5,
-        threshold_hair: float = 10.0,
-        threshold_skin: float = 10.0,
-        close_kernel: int = 3,
-        head_fraction: float = 1 / 7,
-        size_factors: tuple[float, ...] = (0.8, 1.0, 1.25),
-        aspects: tuple[float, ...] = (0.75, 0.9),
-        min_occupancy: float = 0.5,
-        search_fraction: float = 0.35,
-        min_head_height: int = 5,
-    ) -> None:
-        unit("heads", w1=w1, w2=w2)
-        require("heads.min_occupancy", 0.0 < min_occupancy <= 1.0, "must lie in (0, 1]",
-                min_occupancy)
-        require("heads.head_fraction", 0.0 < head_fraction < 1.0, "must lie in (0, 1)",
-                head_fraction)
+    def __init__(self, mixtures: str | None = None, pixels: HeadPixels | None = None,
+                 ellipses: HeadEllipses | None = None, **moved: object) -> None:
+        refuse_moved("heads", moved, GROUPS)
+        self.pixels = parameter_group("pixels", pixels, HeadPixels)
+        self.ellipses = parameter_group("ellipses", ellipses, HeadEllipses)
         self.mixtures = ColourMixtures.load(mixtures)
         self._tables = self.mixtures.tables()
         names = self.mixtures.names
         self._hair = np.array([n in HAIR for n in names])
         self._skin = np.array([n in SKIN for n in names])
-        self.w1, self.w2 = float(w1), float(w2)
-        self.threshold_hair = float(threshold_hair)
-        self.threshold_skin = float(threshold_skin)
-        self._close = (
-            cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_kernel, close_kernel))
-            if close_kernel > 1 else None
-        )
-        self.head_fraction = float(head_fraction)
-        self.size_factors = tuple(float(f) for f in size_factors)
-        self.aspects = tuple(float(a) for a in aspects)
-        self.min_occupancy = float(min_occupancy)
-        self.search_fraction = float(search_fraction)
-        self.min_head_height = int(min_head_height)
+        k = self.pixels.close_kernel
+        self._close = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)) if k > 1 else None
 
     def likelihoods(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(H, W) p_hair and p_skin (PBM eq. 6: max over categories)."""
-        p = category_likelihoods(frame, self._tables, self.w1, self.w2)
+        p = category_likelihoods(frame, self._tables, self.pixels.w1, self.pixels.w2)
         return p[self._hair].max(axis=0), p[self._skin].max(axis=0)
 
     def head_pixels(self, frame: np.ndarray, foreground: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool head-pixel mask (hair or skin above threshold, within foreground, closed)."""
         ph, ps = self.likelihoods(frame)
-        m = (ph > self.threshold_hair) | (ps > self.threshold_skin)
+        m = (ph > self.pixels.threshold_hair) | (ps > self.pixels.threshold_skin)
         if foreground is not None:
             m &= np.asarray(foreground) != 0
         m = m.astype(np.uint8)
@@ -201,17 +169,18 @@ class HeadDetector:
         """Greedy top-registered ellipse fit in a (h, w) head-pixel crop; xywh in crop coords."""
         heads: list[np.ndarray] = []
         pix = pix.astype(np.float32)
-        hh0 = self.head_fraction * height
+        shape = self.ellipses
+        hh0 = shape.head_fraction * height
         for _ in range(max_heads):
             if not pix.any():
                 break
             cols = pix.any(axis=0)
             top = np.where(cols, pix.argmax(axis=0), -1)  # topmost head pixel per column
             cands: list[tuple[int, float, tuple[int, int, int, int]]] = []
-            for f in self.size_factors:
-                hh = max(hh0 * f, self.min_head_height)
+            for f in shape.size_factors:
+                hh = max(hh0 * f, shape.min_head_height)
                 ry = max(round(hh / 2), 2)
-                for a in self.aspects:
+                for a in shape.aspects:
                     rx = max(round(a * hh / 2), 2)
                     occ = cv2.filter2D(pix, cv2.CV_32F, _ellipse_kernel(rx, ry),
                                        borderType=cv2.BORDER_CONSTANT)
@@ -220,7 +189,7 @@ class HeadDetector:
                     ok = r < pix.shape[0]
                     c, r = c[ok], r[ok]
                     vals = occ[r, c]
-                    good = vals >= self.min_occupancy
+                    good = vals >= shape.min_occupancy
                     if good.any():
                         # the topmost registration wins; among those, the highest occupancy
                         t = r[good] - ry
@@ -243,7 +212,7 @@ class HeadDetector:
         h, w = frame.shape[:2]
         x0, y0 = max(int(np.floor(box[0])), 0), max(int(np.floor(box[1])), 0)
         x1 = min(int(np.ceil(box[0] + box[2])), w)
-        y1 = min(int(np.ceil(box[1] + box[3] * self.search_fraction)), h)
+        y1 = min(int(np.ceil(box[1] + box[3] * self.ellipses.search_fraction)), h)
         if x1 - x0 < 3 or y1 - y0 < 3:
             return np.zeros((0, 4))
         fg = None if foreground is None else foreground[y0:y1, x0:x1]

@@ -35,6 +35,9 @@ def _one_line(capsys, *args: str) -> str:
     (["detector=foreground", "detector.detector.background.warmup_span=online"],
      ("occbench: unknown key 'detector.detector.background.warmup_span': did you mean "
       "'detector.detector.background.start.warmup_span'?")),
+    (["detector=foreground", "detector.detector.heads.threshold_hair=5"],
+     ("occbench: unknown key 'detector.detector.heads.threshold_hair': did you mean "
+      "'detector.detector.heads.pixels.threshold_hair'?")),
 ])
 def test_a_typo_is_one_line_with_did_you_mean(capsys, args, line):
     assert _one_line(capsys, *args) == line

@@ -16,6 +16,7 @@ from occbench.trackers.frontend.heads import (
     fit_colour_mixtures,
     reference_samples,
 )
+from occbench.trackers.frontend.heads_params import HeadEllipses, HeadPixels
 from occbench.trackers.geometry import iou_matrix
 
 
@@ -76,7 +77,7 @@ def test_finds_drawn_heads_at_their_place():
     _draw_people(img, fg, [(80, 40, 140, (130, 160, 210), (20, 25, 30), (160, 60, 40)),
                            (200, 50, 120, (60, 85, 125), (40, 60, 95), (150, 40, 40))])
     truth = np.array([[80 - 8, 40, 16, 20], [200 - 7, 50, 14, 17]], dtype=float)
-    hd = HeadDetector(threshold_hair=10, threshold_skin=10)
+    hd = HeadDetector(pixels=HeadPixels(threshold_hair=10, threshold_skin=10))
     heads = hd.detect(img, fg)
     assert len(heads) == 2
     assert (iou_matrix(truth, heads).max(axis=1) > 0.5).all()
@@ -90,7 +91,7 @@ def test_finds_drawn_heads_at_their_place():
 def test_finds_rendered_heads():
     synthetic = pytest.importorskip("occbench.datasets.synthetic")
     seq = synthetic.load_scenario("pair_walk", length=30)
-    hd = HeadDetector(threshold_hair=10, threshold_skin=10)
+    hd = HeadDetector(pixels=HeadPixels(threshold_hair=10, threshold_skin=10))
     hits = total = 0
     for k in (5, 15, 25):
         rows = seq.gt.rows_of(k)
@@ -104,7 +105,9 @@ def test_finds_rendered_heads():
 
 
 def test_bad_arguments():
-    with pytest.raises(ValueError, match="w1"):
-        HeadDetector(w1=1.5)
-    with pytest.raises(ValueError, match="min_occupancy"):
-        HeadDetector(min_occupancy=0)
+    with pytest.raises(ValueError, match=r"^heads\.pixels\.w1 "):
+        HeadPixels(w1=1.5)
+    with pytest.raises(ValueError, match=r"^heads\.ellipses\.min_occupancy "):
+        HeadEllipses(min_occupancy=0)
+    with pytest.raises(TypeError, match=r"heads.w1: moved to heads.pixels.w1"):
+        HeadDetector(w1=0.4)  # a flat key before the groups (issue 36)
