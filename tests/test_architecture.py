@@ -454,7 +454,6 @@ LOOSE_PARAMETERS_ALLOWED = {
     "trackers/outside/norfair.py:NorfairTracker": "norfair's own keywords",
     "trackers/bytetrack.py:ByteTrackTracker": "ByteTrack's own keywords",
     # to group
-    "trackers/frontend/fallback.py:MedianBackground": "to group",
     "trackers/comparators/ccmspf.py:ConnectedComponentMeanShiftPF": "to group",
     "trackers/comparators/particle_filter.py:ColourParticleFilter": "to group",
     "trackers/comparators/meanshift.py:ScaleAdaptiveMeanShift": "to group",

@@ -49,8 +49,17 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import at_least, parameter_group, refuse_moved, require, unit
-from occbench.trackers.frontend.fallback_params import GROUPS, RegionFilter, RegionGrouping
+from occbench.trackers.common.checks import at_least, parameter_group, refuse_moved, require
+from occbench.trackers.frontend.fallback_params import (
+    BACKGROUND_GROUPS,
+    GROUPS,
+    DifferenceThreshold,
+    Glare,
+    MaskMorphology,
+    RegionFilter,
+    RegionGrouping,
+    UpdateRates,
+)
 from occbench.trackers.frontend.footage import CameraBackground, start_with
 from occbench.trackers.frontend.regions import merge_near, split_kmeans
 from occbench.trackers.records import Detections
@@ -141,41 +150,36 @@ class MedianBackground:
 
     Args:
         init_frames: frames whose per-pixel median starts the background.
-        fast_rate, slow_rate: update rates where the frame is background / foreground.
-        k_sigma: threshold in units of each pixel's noise (1.4826 MAD of the first frames).
-        min_difference: smallest threshold, grey levels (max over the channels).
-        saturation: a channel value at or above which a pixel is glare.
-        chroma_tolerance: largest chromaticity change of a brightening counted as glare
-            (0: off).
-        blur: Gaussian kernel (odd) applied to every frame before differencing (0/1: none).
-        open_kernel, close_kernel: elliptic opening and closing of the mask (0/1: none).
+        rates: how fast it learns (``fallback_params.UpdateRates``).
+        threshold: when a pixel differs from it (``DifferenceThreshold``).
+        glare: which pixels are glare, never foreground (``Glare``).
+        morphology: the mask's opening and closing (``MaskMorphology``).
         footage: the camera's background learnt from its other footage
             (``footage.CameraBackground``; None: the clip's own median only). With it the
             clip starts from ``footage.start_with``: the footage's background where the clip's
             own median differs from it on steady floor (someone standing still).
         steady_spread: the footage's spread (grey levels) above which the clip's own median
             is kept (glare and lighting the other clips disagree on).
+        Each group is its defaults when None; a key of the flat arguments before the groups
+        is refused with a TypeError naming its group.
     """
 
-    def __init__(self, init_frames: int = 100, fast_rate: float = 0.02, slow_rate: float = 0.002,
-                 k_sigma: float = 4.0, min_difference: float = 20.0, saturation: int = 245,
-                 chroma_tolerance: float = 0.0, blur: int = 3, open_kernel: int = 3,
-                 close_kernel: int = 7, footage: CameraBackground | None = None,
-                 steady_spread: float = 8.0) -> None:
+    def __init__(self, init_frames: int = 100, rates: UpdateRates | None = None,
+                 threshold: DifferenceThreshold | None = None, glare: Glare | None = None,
+                 morphology: MaskMorphology | None = None,
+                 footage: CameraBackground | None = None, steady_spread: float = 8.0,
+                 **moved: object) -> None:
         g = "fallback.background"
+        refuse_moved(g, moved, BACKGROUND_GROUPS)
         at_least(g, 1, init_frames=init_frames)
-        unit(g, fast_rate=fast_rate)
-        require(f"{g}.slow_rate", 0.0 <= slow_rate <= fast_rate,
-                f"must lie in [0, fast_rate {fast_rate}]", slow_rate)
-        require(f"{g}.k_sigma", k_sigma > 0, "must be > 0", k_sigma)
-        at_least(g, 0, min_difference=min_difference, steady_spread=steady_spread)
-        require(f"{g}.blur", blur <= 1 or blur % 2 == 1, "must be odd (or 0/1: none)", blur)
-        self.init_frames, self.fast_rate, self.slow_rate = int(init_frames), float(fast_rate), float(slow_rate)
-        self.k_sigma, self.min_difference = float(k_sigma), float(min_difference)
-        self.saturation, self.chroma_tolerance = int(saturation), float(chroma_tolerance)
-        self.blur = int(blur)
-        self._open = _ellipse(open_kernel, f"{g}.open_kernel")
-        self._close = _ellipse(close_kernel, f"{g}.close_kernel")
+        at_least(g, 0, steady_spread=steady_spread)
+        self.init_frames = int(init_frames)
+        self.rates = parameter_group("rates", rates, UpdateRates)
+        self.threshold = parameter_group("threshold", threshold, DifferenceThreshold)
+        self.glare = parameter_group("glare", glare, Glare)
+        self.morphology = parameter_group("morphology", morphology, MaskMorphology)
+        self._open = _ellipse(self.morphology.open_kernel)
+        self._close = _ellipse(self.morphology.close_kernel)
         self.footage, self.steady_spread = footage, float(steady_spread)
         self.reset()
 
@@ -193,7 +197,8 @@ class MedianBackground:
                 f"and the clip's own first {self.init_frames} frames")
 
     def _smooth(self, frame: np.ndarray) -> np.ndarray:
-        f = cv2.GaussianBlur(frame, (self.blur, self.blur), 0) if self.blur > 1 else frame
+        b = self.threshold.blur
+        f = cv2.GaussianBlur(frame, (b, b), 0) if b > 1 else frame
         return f.astype(np.float32)
 
     def start(self, frames: list[np.ndarray]) -> None:
@@ -207,10 +212,10 @@ class MedianBackground:
         mad = np.median(np.abs(grey - np.median(grey, axis=0)), axis=0)
         self.noise = np.maximum(1.4826 * mad, 1.0).astype(np.float32)
         if self.footage is not None:
-            img = self.footage.image
-            pooled = replace(self.footage, image=cv2.GaussianBlur(img, (self.blur, self.blur), 0)
-                             if self.blur > 1 else img)
-            threshold = np.maximum(self.k_sigma * self.noise, self.min_difference)
+            img, t = self.footage.image, self.threshold
+            pooled = replace(self.footage, image=cv2.GaussianBlur(img, (t.blur, t.blur), 0)
+                             if t.blur > 1 else img)
+            threshold = np.maximum(t.k_sigma * self.noise, t.min_difference)
             self.background, taken = start_with(pooled, self.background, threshold,
                                                 self.steady_spread)
             self.from_footage = float(taken.mean())
@@ -224,31 +229,31 @@ class MedianBackground:
         if self.background is None:
             self.start([frame])
         img = self._smooth(frame)
-        B = self.background
+        B, t, sat = self.background, self.threshold, self.glare.saturation
         diff = np.abs(img - B).max(axis=2)
-        fg = diff > np.maximum(self.k_sigma * self.noise, self.min_difference)
-        glare = (frame.max(axis=2) >= self.saturation) | (B.max(axis=2) >= self.saturation)
-        if self.chroma_tolerance > 0:
+        fg = diff > np.maximum(t.k_sigma * self.noise, t.min_difference)
+        glare = (frame.max(axis=2) >= sat) | (B.max(axis=2) >= sat)
+        if self.glare.chroma_tolerance > 0:
             s_img, s_bg = img.sum(axis=2) + 1.0, B.sum(axis=2) + 1.0
             chroma = np.abs(img / s_img[..., None] - B / s_bg[..., None]).max(axis=2)
-            glare |= (s_img > s_bg) & (chroma <= self.chroma_tolerance)
-        if self.blur > 1:  # the blur spreads glare onto its neighbours
-            glare = cv2.dilate(glare.view(np.uint8), _ellipse(self.blur)).view(bool)
+            glare |= (s_img > s_bg) & (chroma <= self.glare.chroma_tolerance)
+        if t.blur > 1:  # the blur spreads glare onto its neighbours
+            glare = cv2.dilate(glare.view(np.uint8), _ellipse(t.blur)).view(bool)
         mask = (fg & ~glare).astype(np.uint8)
         if self._open is not None:
             mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open)
         if self._close is not None:
             mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)
         fgm = mask.astype(bool) & ~glare  # the closing must not bridge into glare
-        rate = np.where(fgm, self.slow_rate, self.fast_rate).astype(np.float32)
+        rate = np.where(fgm, self.rates.slow_rate, self.rates.fast_rate).astype(np.float32)
         rate[glare] = 0.0  # glare teaches the background nothing
         rate = rate[..., None]
         B += rate * (img - B)
         return fgm
 
 
-def _ellipse(size: int, key: str = "kernel") -> np.ndarray | None:
-    at_least("", 0, **{key: size})
+def _ellipse(size: int) -> np.ndarray | None:
+    """The elliptic kernel of ``size`` (None: 0/1, no morphology)."""
     return None if size <= 1 else cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
 
 

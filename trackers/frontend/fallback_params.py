@@ -1,9 +1,12 @@
-"""``RegionDetector``'s settings in groups (``fallback``'s module docstring, "regions").
+"""The fallback's settings in groups (``fallback``'s module docstring): ``RegionDetector``'s
+("regions") and its ``MedianBackground``'s ("background").
 
 Each group is a frozen dataclass that checks itself when built (``ValueError`` naming
-``fallback.<group>.<field>`` and the value, through ``occbench.trackers.common.checks``); the
-detector takes one of each, and Hydra builds them as nested ``_target_`` nodes of
-``conf/detector/silhouette.yaml`` (``detector.detector.fallback.<group>.<field>``).
+``fallback.<group>.<field>`` or ``fallback.background.<group>.<field>`` and the value,
+through ``occbench.trackers.common.checks``); the detector and the background take one of
+each, and Hydra builds them as nested ``_target_`` nodes of ``conf/detector/silhouette.yaml``
+(``detector.detector.fallback.<group>.<field>``,
+``detector.detector.fallback.background.<group>.<field>``).
 """
 
 from __future__ import annotations
@@ -12,7 +15,8 @@ from dataclasses import dataclass
 
 from occbench.trackers.common.checks import at_least, coerce, require, unit
 
-__all__ = ["GROUPS", "RegionFilter", "RegionGrouping"]
+__all__ = ["BACKGROUND_GROUPS", "GROUPS", "DifferenceThreshold", "Glare", "MaskMorphology",
+           "RegionFilter", "RegionGrouping", "UpdateRates"]
 
 
 @dataclass(frozen=True)
@@ -69,3 +73,84 @@ class RegionGrouping:
 
 #: the detector's groups: its argument -> the group's class
 GROUPS = {"regions": RegionFilter, "grouping": RegionGrouping}
+
+
+@dataclass(frozen=True)
+class UpdateRates:
+    """How fast the median background learns from each frame.
+
+    Args:
+        fast_rate, slow_rate: update rates where the frame is background / foreground.
+    """
+
+    fast_rate: float = 0.02
+    slow_rate: float = 0.002
+
+    def __post_init__(self) -> None:
+        unit("fallback.background.rates", fast_rate=self.fast_rate)
+        require("fallback.background.rates.slow_rate", 0.0 <= self.slow_rate <= self.fast_rate,
+                f"must lie in [0, fast_rate {self.fast_rate}]", self.slow_rate)
+        coerce(self, {"fast_rate": float, "slow_rate": float})
+
+
+@dataclass(frozen=True)
+class DifferenceThreshold:
+    """When a pixel differs from the background: the difference of the blurred frames
+    against a per-pixel threshold.
+
+    Args:
+        k_sigma: threshold in units of each pixel's noise (1.4826 MAD of the first frames).
+        min_difference: smallest threshold, grey levels (max over the channels).
+        blur: Gaussian kernel (odd) applied to every frame before differencing (0/1: none).
+    """
+
+    k_sigma: float = 4.0
+    min_difference: float = 20.0
+    blur: int = 3
+
+    def __post_init__(self) -> None:
+        g = "fallback.background.threshold"
+        require(f"{g}.k_sigma", self.k_sigma > 0, "must be > 0", self.k_sigma)
+        at_least(g, 0, min_difference=self.min_difference)
+        require(f"{g}.blur", self.blur <= 1 or self.blur % 2 == 1, "must be odd (or 0/1: none)",
+                self.blur)
+        coerce(self, {"k_sigma": float, "min_difference": float, "blur": int})
+
+
+@dataclass(frozen=True)
+class Glare:
+    """Which pixels are glare, never foreground.
+
+    Args:
+        saturation: a channel value at or above which a pixel is glare.
+        chroma_tolerance: largest chromaticity change of a brightening counted as glare
+            (0: off).
+    """
+
+    saturation: int = 245
+    chroma_tolerance: float = 0.0
+
+    def __post_init__(self) -> None:
+        coerce(self, {"saturation": int, "chroma_tolerance": float})
+
+
+@dataclass(frozen=True)
+class MaskMorphology:
+    """The morphology of the foreground mask.
+
+    Args:
+        open_kernel, close_kernel: elliptic opening and closing of the mask (0/1: none).
+    """
+
+    open_kernel: int = 3
+    close_kernel: int = 7
+
+    def __post_init__(self) -> None:
+        at_least("fallback.background.morphology", 0, open_kernel=self.open_kernel,
+                 close_kernel=self.close_kernel)
+        coerce(self, {"open_kernel": int, "close_kernel": int})
+
+
+#: the median background's groups: its argument -> the group's class
+BACKGROUND_GROUPS = {"rates": UpdateRates, "threshold": DifferenceThreshold, "glare": Glare,
+                     "morphology": MaskMorphology}

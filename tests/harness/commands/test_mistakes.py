@@ -38,6 +38,9 @@ def _one_line(capsys, *args: str) -> str:
     (["detector=foreground", "detector.detector.heads.threshold_hair=5"],
      ("occbench: unknown key 'detector.detector.heads.threshold_hair': did you mean "
       "'detector.detector.heads.pixels.threshold_hair'?")),
+    (["detector=silhouette", "detector.detector.fallback.background.k_sigma=3"],
+     ("occbench: unknown key 'detector.detector.fallback.background.k_sigma': did you mean "
+      "'detector.detector.fallback.background.threshold.k_sigma'?")),
 ])
 def test_a_typo_is_one_line_with_did_you_mean(capsys, args, line):
     assert _one_line(capsys, *args) == line

@@ -19,7 +19,13 @@ from occbench.trackers.frontend.fallback import (
     MedianBackground,
     RegionDetector,
 )
-from occbench.trackers.frontend.fallback_params import RegionFilter, RegionGrouping
+from occbench.trackers.frontend.fallback_params import (
+    DifferenceThreshold,
+    MaskMorphology,
+    RegionFilter,
+    RegionGrouping,
+    UpdateRates,
+)
 
 H, W, LENGTH = 288, 384, 90
 
@@ -156,12 +162,16 @@ def test_region_detector_merges_fragments_and_splits_when_asked():
 def test_fallback_arguments_are_validated():
     with pytest.raises(ValueError, match=r"^fit_check\.min_explained "):
         CameraFitCheck(min_explained=0.0)
-    with pytest.raises(ValueError, match=r"^fallback\.background\.slow_rate "):
-        MedianBackground(fast_rate=0.01, slow_rate=0.1)
+    with pytest.raises(ValueError, match=r"^fallback\.background\.rates\.slow_rate "):
+        UpdateRates(fast_rate=0.01, slow_rate=0.1)
     with pytest.raises(ValueError, match=r"^fallback\.background\.steady_spread .*nan"):
         MedianBackground(steady_spread=float("nan"))  # let in before
-    with pytest.raises(ValueError, match=r"^fallback\.background\.open_kernel "):
-        MedianBackground(open_kernel=-1)
+    with pytest.raises(ValueError, match=r"^fallback\.background\.morphology\.open_kernel "):
+        MaskMorphology(open_kernel=-1)
+    with pytest.raises(ValueError, match=r"^fallback\.background\.threshold\.blur "):
+        DifferenceThreshold(blur=4)
+    with pytest.raises(TypeError, match=r"background.k_sigma: moved to fallback.background.thr"):
+        MedianBackground(k_sigma=3.0)  # a flat key before the groups (issue 36)
     with pytest.raises(ValueError, match=r"^fallback\.grouping\.split_ratio "):
         RegionGrouping(split_ratio=1.0)
     with pytest.raises(ValueError, match=r"^fallback\.regions\.min_area "):
