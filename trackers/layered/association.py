@@ -22,7 +22,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from occbench.trackers.layered.box_search import box_scores_kernel, survival_bounds
+from occbench.trackers.layered.box_search import (
+    box_scores_kernel,
+    coarse_box_scores_kernel,
+    survival_bounds,
+)
 from occbench.trackers.layered.differences import _differences_kernel
 from occbench.trackers.layered.parts import N_FEATURES, N_PARTS, PartFeatureExtractor, PartFeatures
 from occbench.trackers.layered.scores import (
@@ -194,7 +198,7 @@ def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatur
     p (``box_search._score_bound``) is below a scored box's p of its group is not scored
     (p -inf, p_j NaN): it cannot be that maximum, and the others keep their bits.
     ``coarse`` (``adaptations.coarse_search``): each group is searched coarse to fine
-    (``box_search._coarse_group``), not exact.
+    (``box_search.coarse_box_scores_kernel``, compiled only when called), not exact.
 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
@@ -209,10 +213,11 @@ def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatur
     if best_of < 0 or not 0 <= grouped <= len(b) or (best_of and grouped % best_of):
         raise ValueError(f"groups of {best_of} must tile the first {grouped} of {len(b)} boxes")
     table = _bounds(models) if best_of > 0 else None
-    groups = (best_of, grouped, table, bool(coarse)) if table is not None else (0, 0, _NO_TABLE, False)
-    return box_scores_kernel(b, ti, ratios, sampling, _arrays(model), _misses(misses, len(model)),
-                             (float(spread), _weights(omega, N_FEATURES, "omega"),
-                              _weights(gamma, N_PARTS, "gamma")), _theta(models), groups)
+    groups = (best_of, grouped, table) if table is not None else (0, 0, _NO_TABLE)
+    kernel = coarse_box_scores_kernel if coarse and table is not None else box_scores_kernel
+    return kernel(b, ti, ratios, sampling, _arrays(model), _misses(misses, len(model)),
+                  (float(spread), _weights(omega, N_FEATURES, "omega"),
+                   _weights(gamma, N_PARTS, "gamma")), _theta(models), groups)
 
 
 _NO_TABLE = np.zeros((0, 0, 0))

@@ -8,7 +8,8 @@ branch and bound over the boxes of a searched pair (only the first maximum of p 
 ``coarse`` (``adaptations.coarse_search``, ours; off in the paper's mode): a pair's boxes
 are searched coarse to fine (``_coarse_group``) instead of all measured: every other width
 and height first, then the neighbours of the best of those; the boxes never measured
-are left unscored. Not exact: the chosen box is the best of the boxes visited.
+are left unscored. Not exact: the chosen box is the best of the boxes visited. Its own
+kernel (``coarse_box_scores_kernel``), so a run with the switch off never compiles it.
 
 The mixture models are ``(w, mu, s)``; a feature set is ``(parts, area, perimeter, hsv,
 xyz, centroid, height)`` (``PartFeatures``' arrays).
@@ -179,30 +180,13 @@ def _score_group(d: np.ndarray, g0: int, size: int, spread: float, weights: tupl
 
 
 @numba.njit(cache=True)
-def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple, m: tuple,
-               misses: np.ndarray, rule: tuple, theta: tuple, groups: tuple
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Eqs. 11-13 of K boxes of the frame, each measured as ``part_features`` measures it
-    (PBM 2.1-2.2), against the model of target ti[k]: p_j (K, 5) and p (K,), bit for bit
-    ``part_features`` then ``_pair_scores_kernel(m, features, ti, arange(K), ...)``, with
-    no (K, 5, B) histograms: each box's features are made in a one-row scratch, compared
-    and dropped, and rho sums the occupied bins only (``_rho_listed``) where the model's
-    histogram is finite. The search's boxes (PBM 3.1, eqs. 9-10): 25 per searched pair, of
-    which the tracker keeps one.
-
-    Args:
-        boxes: (K, 4) xywh. ti: (K,) target rows (IndexError when out of range).
-        ratios: (alpha, beta), each (K,), of the boxes' split (eqs. 1-2).
-        sampling: (grid, image, luts, pixel_bins) as ``part_features``'.
-        m: the targets' models (a feature set). misses: (T,) float64, g = 1 / (1 + misses).
-        rule: (spread, omega (6,), gamma (5,)) as ``_pair_scores_kernel``'s.
-        groups: (size, grouped, table, coarse): boxes 0 .. grouped - 1 are consecutive
-            groups of ``size`` of which only the first maximum of p counts, scored by
-            ``_score_group`` (``table``: ``survival_bounds(theta)``), or searched coarse to
-            fine when ``coarse`` (``_coarse_group``); size 0: none.
-    """
+def _kernel_state(boxes: np.ndarray, ti: np.ndarray, sampling: tuple, m: tuple, rule: tuple,
+                  theta: tuple) -> tuple:
+    """The checks and scratch of ``box_scores_kernel`` and ``coarse_box_scores_kernel``:
+    ((``_box_scratch``, the one-row features, ``_rho``'s index scratch, ``listed``),
+    the normalised (omega, gamma), ``_memo``, d (K, 6, 5), p_j (K, 5), p (K,))."""
     grid = sampling[0]
-    spread, omega, gamma = rule
+    omega, gamma = rule[1], rule[2]
     K, T, nb = boxes.shape[0], m[1].shape[0], m[3].shape[2]
     for k in range(K):
         if not 0 <= ti[k] < T:
@@ -220,23 +204,61 @@ def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling
     weights = (omega / omega.sum(), gamma / gamma.sum())
     memo = _memo(theta[0].shape[0], m[1].shape[1])
     d = np.empty((K, theta[0].shape[0], m[1].shape[1]))
-    pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
-    size, grouped, table, coarse = groups
-    coarse = coarse and size > 0
-    if coarse:  # the groups measure their own boxes
-        measure = (boxes, ti, ratios, sampling, m, misses, scratch, d)
-        for g0 in range(0, grouped, size):
-            _coarse_group(g0, size, measure, (spread, weights, theta), memo, table, pj, p)
-    for k in range(grouped if coarse else 0, K):
+    return scratch, weights, memo, d, np.empty((K, m[1].shape[1])), np.empty(K)
+
+
+@numba.njit(cache=True)
+def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple, m: tuple,
+               misses: np.ndarray, rule: tuple, theta: tuple, groups: tuple
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 11-13 of K boxes of the frame, each measured as ``part_features`` measures it
+    (PBM 2.1-2.2), against the model of target ti[k]: p_j (K, 5) and p (K,), bit for bit
+    ``part_features`` then ``_pair_scores_kernel(m, features, ti, arange(K), ...)``, with
+    no (K, 5, B) histograms: each box's features are made in a one-row scratch, compared
+    and dropped, and rho sums the occupied bins only (``_rho_listed``) where the model's
+    histogram is finite. The search's boxes (PBM 3.1, eqs. 9-10): 25 per searched pair, of
+    which the tracker keeps one.
+
+    Args:
+        boxes: (K, 4) xywh. ti: (K,) target rows (IndexError when out of range).
+        ratios: (alpha, beta), each (K,), of the boxes' split (eqs. 1-2).
+        sampling: (grid, image, luts, pixel_bins) as ``part_features``'.
+        m: the targets' models (a feature set). misses: (T,) float64, g = 1 / (1 + misses).
+        rule: (spread, omega (6,), gamma (5,)) as ``_pair_scores_kernel``'s.
+        groups: (size, grouped, table): boxes 0 .. grouped - 1 are consecutive groups of
+            ``size`` of which only the first maximum of p counts, scored by
+            ``_score_group`` (``table``: ``survival_bounds(theta)``); size 0: none.
+    """
+    scratch, weights, memo, d, pj, p = _kernel_state(boxes, ti, sampling, m, rule, theta)
+    spread = rule[0]
+    for k in range(boxes.shape[0]):
         _measure(k, boxes, ti, ratios, sampling, m, misses, scratch, d)
+    size, grouped, table = groups
     first = 0
     if size > 0:
-        if not coarse:
-            for g0 in range(0, grouped, size):
-                _score_group(d, g0, size, spread, weights, theta, memo, table, pj, p)
+        for g0 in range(0, grouped, size):
+            _score_group(d, g0, size, spread, weights, theta, memo, table, pj, p)
         first = grouped
-    for k in range(first, K):
+    for k in range(first, boxes.shape[0]):
         _score_row(d, k, spread, weights, theta, memo, pj, p, k)                      # eqs. 12-13
     return pj, p
 
 
+@numba.njit(cache=True)
+def coarse_box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple,
+                             m: tuple, misses: np.ndarray, rule: tuple, theta: tuple,
+                             groups: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """``box_scores_kernel`` with each group of ``groups`` (size > 0) searched coarse to fine
+    (``_coarse_group``, ``adaptations.coarse_search``); the boxes past the groups are
+    measured and scored as there. Its own kernel: a run with the switch off never compiles
+    it."""
+    scratch, weights, memo, d, pj, p = _kernel_state(boxes, ti, sampling, m, rule, theta)
+    spread = rule[0]
+    size, grouped, table = groups
+    measure = (boxes, ti, ratios, sampling, m, misses, scratch, d)
+    for g0 in range(0, grouped, size):
+        _coarse_group(g0, size, measure, (spread, weights, theta), memo, table, pj, p)
+    for k in range(grouped, boxes.shape[0]):
+        _measure(k, boxes, ti, ratios, sampling, m, misses, scratch, d)
+        _score_row(d, k, spread, weights, theta, memo, pj, p, k)                      # eqs. 12-13
+    return pj, p

@@ -5,6 +5,7 @@ neighbours of the best of those; the boxes it scores keep the exact search's bit
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import box_scores
@@ -77,3 +78,26 @@ def test_coarse_search_is_an_adaptation_off_in_paper_mode():
     assert Adaptations.paper().coarse_search is False and Adaptations().coarse_search is False
     assert Adaptations(coarse_search=True).changed()[-1] == "coarse_search"
     assert Adaptations.paper().changed() == []
+
+
+def test_the_exact_search_never_calls_the_coarse_kernel(monkeypatch):
+    """The switch off: ``box_scores`` runs ``box_scores_kernel`` only, so a default run never
+    compiles ``coarse_box_scores_kernel`` (a cold numba cache compiles what is called)."""
+    from occbench.trackers.layered import association
+
+    def called(*_args):
+        raise AssertionError("coarse_box_scores_kernel called with coarse_search off")
+
+    monkeypatch.setattr(association, "coarse_box_scores_kernel", called)
+    rng = np.random.default_rng(3)
+    ex = PartFeatureExtractor(4, 21, 9)
+    ex.start(rng.integers(0, 256, (60, 80, 3), dtype=np.uint8), rng.random((60, 80)) < 0.7)
+    boxes = np.column_stack([rng.uniform(5, 30, M), rng.uniform(0, 10, M),
+                             np.full(M, 20.0), np.full(M, 40.0)])
+    model = ex.extract(boxes[:1], 0.5, 0.5)
+    args = (load_feature_models(), model, ex, boxes, np.full(M, 0.5), np.full(M, 0.5),
+            np.zeros(M, int), np.zeros(1), np.ones(N_FEATURES), np.ones(N_PARTS), 4.5)
+    _, p = box_scores(*args, M, M, False)
+    assert np.isfinite(p).any()
+    with pytest.raises(AssertionError, match="coarse_search off"):
+        box_scores(*args, M, M, True)
