@@ -453,10 +453,6 @@ LOOSE_PARAMETERS_ALLOWED = {
     "trackers/outside/ocsort.py:OCSortTracker": "OC-SORT's own keywords",
     "trackers/outside/norfair.py:NorfairTracker": "norfair's own keywords",
     "trackers/bytetrack.py:ByteTrackTracker": "ByteTrack's own keywords",
-    # to group
-    "trackers/comparators/ccmspf.py:ConnectedComponentMeanShiftPF": "to group",
-    "trackers/comparators/particle_filter.py:ColourParticleFilter": "to group",
-    "trackers/comparators/meanshift.py:ScaleAdaptiveMeanShift": "to group",
 }
 _LOOSE_NAMES = {"int", "float", "bool", "str", "None", "tuple", "list", "Sequence", "Path"}
 

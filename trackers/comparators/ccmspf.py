@@ -26,13 +26,15 @@ is equal and the filter is colour-only. Life cycle (births, loss, restart) and c
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import at_least
+from occbench.trackers.common.checks import at_least, coerce, parameter_group, refuse_moved
 from occbench.trackers.comparators.appearance import ColourTarget, Loss, Restart, clip_box
 from occbench.trackers.comparators.meanshift import mean_shift, similarity
-from occbench.trackers.comparators.particle_filter import ParticleTrackerBase
+from occbench.trackers.comparators.particle_filter import ParticleSampling, ParticleTrackerBase
 from occbench.trackers.records import Detections, Track
 
 
@@ -67,40 +69,74 @@ def component_dice(boxes: np.ndarray, labels: np.ndarray, areas: np.ndarray) -> 
     return out
 
 
+@dataclass(frozen=True)
+class ParticleShift:
+    """The mean shift moving each predicted particle to its colour mode.
+
+    Args:
+        mean_shift_iterations: mean-shift iterations per particle and frame (0: none).
+        search: half-width of the region a particle's mean shift searches, in box sizes.
+    """
+
+    mean_shift_iterations: int = 2
+    search: float = 0.5
+
+    def __post_init__(self) -> None:
+        at_least("shift", 0, mean_shift_iterations=self.mean_shift_iterations,
+                 search=self.search)
+        coerce(self, {"mean_shift_iterations": int, "search": float})
+
+
+@dataclass(frozen=True)
+class Cues:
+    """The likelihood's two cues, p(z|x) = exp(-lambda (1 - rho)) exp(-lambda_c (1 - D)).
+
+    Args:
+        likelihood_lambda: lambda of the colour cue exp(-lambda (1 - rho)).
+        component_lambda: lambda_c of the component cue exp(-lambda_c (1 - D)); 0 =
+            colour alone.
+    """
+
+    likelihood_lambda: float = 20.0
+    component_lambda: float = 1.0
+
+    def __post_init__(self) -> None:
+        at_least("cues", 0, likelihood_lambda=self.likelihood_lambda,
+                 component_lambda=self.component_lambda)
+        coerce(self, {"likelihood_lambda": float, "component_lambda": float})
+
+
+#: the CCMSPF's particle sets unless given: fewer particles than the colour particle
+#: filter's (each is moved by mean shift) and a random walk of the scale
+CCMSPF_SAMPLING = ParticleSampling(particles=30, scale_noise=0.05)
+#: the CCMSPF's groups: its argument -> the group's class
+GROUPS = {"sampling": ParticleSampling, "shift": ParticleShift, "cues": Cues}
+
+
 class ConnectedComponentMeanShiftPF(ParticleTrackerBase):
     """CCMSPF: particles moved by mean shift, weighted by colour and connected components.
 
     Args:
-        particles: N, particles per target.
-        position_noise: random-walk standard deviation of the centre, in box sizes.
-        scale_noise: random-walk standard deviation of the log scale.
-        mean_shift_iterations: mean-shift iterations per particle and frame.
-        search: half-width of the region a particle's mean shift searches, in box sizes.
-        likelihood_lambda: lambda of the colour cue exp(-lambda (1 - rho)).
-        component_lambda: lambda_c of the component cue exp(-lambda_c (1 - D)); 0 =
-            colour alone.
-        seed: seed of the random walk and the resampling (restarted by ``reset``).
+        sampling: N particles per target, their random walk over centre and log scale, and
+            its seed (``ParticleSampling``; None: ``CCMSPF_SAMPLING``).
+        shift: each particle's mean shift (``ParticleShift``; None: its defaults).
+        cues: the colour and component cues (``Cues``; None: its defaults).
         birth_iou, loss, restart, max_targets: life cycle (``ColourTrackerBase``); the
             evidence ``loss`` judges is rho at the posterior-mean box.
+        A key of the flat arguments before the groups is refused with a TypeError naming
+        its group.
     """
 
-    def __init__(self, particles: int = 30, position_noise: float = 0.1,
-                 scale_noise: float = 0.05, mean_shift_iterations: int = 2,
-                 search: float = 0.5, likelihood_lambda: float = 20.0,
-                 component_lambda: float = 1.0, seed: int = 0,
+    def __init__(self, sampling: ParticleSampling | None = None,
+                 shift: ParticleShift | None = None, cues: Cues | None = None,
                  birth_iou: float = 0.3, loss: Loss | None = None,
-                 restart: Restart | None = None, max_targets: int | None = None) -> None:
-        at_least("", 0, mean_shift_iterations=mean_shift_iterations)
-        self.position_noise = position_noise
-        self.scale_noise = scale_noise
-        self.mean_shift_iterations = mean_shift_iterations
-        self.search = search
-        self.likelihood_lambda = likelihood_lambda
-        self.component_lambda = component_lambda
-        super().__init__(particles, seed, birth_iou, loss, restart, max_targets,
-                         position_noise=position_noise, scale_noise=scale_noise, search=search,
-                         likelihood_lambda=likelihood_lambda,
-                         component_lambda=component_lambda)
+                 restart: Restart | None = None, max_targets: int | None = None,
+                 **moved: object) -> None:
+        refuse_moved("tracker", moved, GROUPS)
+        self.shift = parameter_group("shift", shift, ParticleShift)
+        self.cues = parameter_group("cues", cues, Cues)
+        sampling = CCMSPF_SAMPLING if sampling is None else sampling
+        super().__init__(sampling, birth_iou, loss, restart, max_targets)
 
     def reset(self) -> None:
         super().reset()
@@ -108,24 +144,25 @@ class ConnectedComponentMeanShiftPF(ParticleTrackerBase):
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         x, y, w, h = target.box
+        walk, shift, cues = self.sampling, self.shift, self.cues
         s = self._sets.get(target.id)
         if s is None:  # log scale against the current box, which then becomes the reference
-            s = np.tile([x + w / 2, y + h / 2, 0.0], (self.particles, 1))
-        s = s + self._rng.normal(0.0, 1.0, s.shape) * [self.position_noise * w,
-                                                       self.position_noise * h,
-                                                       self.scale_noise]  # x_t = x_{t-1} + e
+            s = np.tile([x + w / 2, y + h / 2, 0.0], (walk.particles, 1))
+        s = s + self._rng.normal(0.0, 1.0, s.shape) * [walk.position_noise * w,
+                                                       walk.position_noise * h,
+                                                       walk.scale_noise]  # x_t = x_{t-1} + e
         boxes = np.column_stack([s[:, 0] - w * np.exp(s[:, 2]) / 2,
                                  s[:, 1] - h * np.exp(s[:, 2]) / 2,
                                  w * np.exp(s[:, 2]), h * np.exp(s[:, 2])])
-        if self.mean_shift_iterations:  # each particle moved to its colour mode (eqs. 10, 13)
-            boxes = np.array([mean_shift(target.q, b, bins, self.search,
-                                         self.mean_shift_iterations) for b in boxes])
+        if shift.mean_shift_iterations:  # each particle moved to its colour mode (eqs. 10, 13)
+            boxes = np.array([mean_shift(target.q, b, bins, shift.search,
+                                         shift.mean_shift_iterations) for b in boxes])
             s[:, :2] = boxes[:, :2] + boxes[:, 2:] / 2
         rho = np.array([similarity(target.q, bins, b) for b in boxes])
         cue = np.zeros(len(boxes)) if self._components is None else component_dice(
             boxes, *self._components)
-        weight = np.exp(-self.likelihood_lambda * (1.0 - rho)
-                        - self.component_lambda * (1.0 - cue))  # p(z|x), two cues
+        weight = np.exp(-cues.likelihood_lambda * (1.0 - rho)
+                        - cues.component_lambda * (1.0 - cue))  # p(z|x), two cues
         self._estimate(target, s, weight / weight.sum(), scale=2)
         return similarity(target.q, bins, target.box)
 

@@ -17,10 +17,18 @@ tracking"). Life cycle and colour model:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
-from occbench.trackers.common.checks import at_least, require
+from occbench.trackers.common.checks import (
+    at_least,
+    coerce,
+    parameter_group,
+    refuse_moved,
+    require,
+)
 from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
@@ -101,6 +109,26 @@ class MeanShiftTracker(ColourTrackerBase):
         return similarity(target.q, bins, target.box)
 
 
+@dataclass(frozen=True)
+class ScaleTest:
+    """Comaniciu, Ramesh and Meer's scale test (CVPR 2000).
+
+    Args:
+        step: the relative size change tested (Delta h / h_prev), in (0, 1) (the paper's
+            0.1).
+        gamma: the smoothing weight of h_opt, in [0, 1] (0 keeps the size fixed; the
+            paper's 0.1).
+    """
+
+    step: float = 0.1
+    gamma: float = 0.1
+
+    def __post_init__(self) -> None:
+        require("scale.step", 0.0 < self.step < 1.0, "must lie in (0, 1)", self.step)
+        require("scale.gamma", 0.0 <= self.gamma <= 1.0, "must lie in [0, 1]", self.gamma)
+        coerce(self, {"step": float, "gamma": float})
+
+
 class ScaleAdaptiveMeanShift(MeanShiftTracker):
     """Mean shift with Comaniciu, Ramesh and Meer's scale test: the box's size adapts.
 
@@ -111,32 +139,34 @@ class ScaleAdaptiveMeanShift(MeanShiftTracker):
     height scale together (the box's aspect is the starting box's).
 
     Args:
-        step: the relative size change tested (Delta h / h_prev), in (0, 1).
-        gamma: the smoothing weight of h_opt, in [0, 1] (0 keeps the size fixed).
+        scale: the sizes tested and the smoothing of the chosen one (``ScaleTest``; None:
+            the paper's).
         max_iterations, search, birth_iou, loss, restart, max_targets: as for
             ``MeanShiftTracker``; ``loss`` judges rho of the box at h_new.
+        A key of the flat arguments before the groups is refused with a TypeError naming
+        its group.
     """
 
-    def __init__(self, step: float = 0.1, gamma: float = 0.1, max_iterations: int = 10,
+    def __init__(self, scale: ScaleTest | None = None, max_iterations: int = 10,
                  search: float = 1.0, birth_iou: float = 0.3, loss: Loss | None = None,
-                 restart: Restart | None = None, max_targets: int | None = None) -> None:
-        require("step", 0.0 < step < 1.0, "must lie in (0, 1)", step)
-        require("gamma", 0.0 <= gamma <= 1.0, "must lie in [0, 1]", gamma)
-        self.step = step
-        self.gamma = gamma
+                 restart: Restart | None = None, max_targets: int | None = None,
+                 **moved: object) -> None:
+        refuse_moved("tracker", moved, {"scale": ScaleTest})
+        self.scale = parameter_group("scale", scale, ScaleTest)
         super().__init__(max_iterations, search, birth_iou, loss, restart, max_targets)
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         x, y, w, h = target.box
         cx, cy = x + w / 2, y + h / 2
         best, best_rho, best_f = target.box, -1.0, 1.0
-        for f in (1.0, 1.0 - self.step, 1.0 + self.step):  # h_prev, h_prev -/+ Delta h
+        step, gamma = self.scale.step, self.scale.gamma
+        for f in (1.0, 1.0 - step, 1.0 + step):  # h_prev, h_prev -/+ Delta h
             start = np.array([cx - f * w / 2, cy - f * h / 2, f * w, f * h])
             box = mean_shift(target.q, start, bins, self.search, self.max_iterations)
             rho = similarity(target.q, bins, box)
             if rho > best_rho:  # ties keep the earlier: h_prev first
                 best, best_rho, best_f = box, rho, f
-        s = self.gamma * best_f + (1.0 - self.gamma)  # h_new = gamma h_opt + (1 - gamma) h_prev
+        s = gamma * best_f + (1.0 - gamma)  # h_new = gamma h_opt + (1 - gamma) h_prev
         bx, by = best[0] + best[2] / 2, best[1] + best[3] / 2
         target.box = np.array([bx - s * w / 2, by - s * h / 2, s * w, s * h])
         return similarity(target.q, bins, target.box)

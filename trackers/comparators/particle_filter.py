@@ -12,9 +12,11 @@ seed gives the same tracks. Life cycle and colour model: ``occbench.trackers.com
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from occbench.trackers.common.checks import at_least
+from occbench.trackers.common.checks import at_least, coerce, parameter_group, refuse_moved
 from occbench.trackers.comparators.appearance import (
     ColourTarget,
     ColourTrackerBase,
@@ -33,29 +35,48 @@ def systematic_resample(weight: np.ndarray, rng: np.random.Generator) -> np.ndar
     return np.minimum(np.searchsorted(np.cumsum(weight), u), n - 1)
 
 
+@dataclass(frozen=True)
+class ParticleSampling:
+    """A target's particle set and its random walk.
+
+    Args:
+        particles: N, particles per target.
+        position_noise: random-walk standard deviation of the centre (and, for the colour
+            particle filter, of the velocity), in box sizes (per frame).
+        scale_noise: random-walk standard deviation of the log scale (0 = a fixed size, as
+            mean shift keeps: colour alone favours boxes shrunk inside the person).
+        seed: seed of the random walk and the resampling (restarted by ``reset``).
+    """
+
+    particles: int = 100
+    position_noise: float = 0.1
+    scale_noise: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        at_least("sampling", 1, particles=self.particles)
+        at_least("sampling", 0, position_noise=self.position_noise, scale_noise=self.scale_noise)
+        coerce(self, {"particles": int, "position_noise": float, "scale_noise": float,
+                      "seed": int})
+
+
 class ParticleTrackerBase(ColourTrackerBase):
     """A colour comparator with one seeded particle set per target (``_sets``, id -> (N, d)),
     dropped when its target ends; subclasses implement ``_follow``.
 
     Args:
-        particles: N, particles per target.
-        seed: seed of the random walk and the resampling (restarted by ``reset``).
+        sampling: the particle sets and their random walk (``ParticleSampling``).
         birth_iou, loss, restart, max_targets: life cycle (``ColourTrackerBase``).
-        non_negative: the subclass's parameters that must be >= 0, by name.
     """
 
-    def __init__(self, particles: int, seed: int, birth_iou: float, loss: Loss | None,
-                 restart: Restart | None, max_targets: int | None,
-                 **non_negative: float) -> None:
-        at_least("", 1, particles=particles)
-        at_least("", 0, **non_negative)
-        self.particles = particles
-        self.seed = seed
+    def __init__(self, sampling: ParticleSampling, birth_iou: float, loss: Loss | None,
+                 restart: Restart | None, max_targets: int | None) -> None:
+        self.sampling = parameter_group("sampling", sampling, ParticleSampling)
         super().__init__(birth_iou, loss, restart, max_targets)
 
     def reset(self) -> None:
         super().reset()
-        self._rng = np.random.default_rng(self.seed)
+        self._rng = np.random.default_rng(self.sampling.seed)
         self._sets: dict[int, np.ndarray] = {}
 
     def _estimate(self, target: ColourTarget, s: np.ndarray, weight: np.ndarray,
@@ -85,37 +106,35 @@ class ColourParticleFilter(ParticleTrackerBase):
     """Bootstrap particle filter with a colour likelihood, one particle set per target.
 
     Args:
-        particles: N, particles per target.
-        position_noise: random-walk standard deviation of the centre and of the velocity,
-            in box sizes (per frame).
-        scale_noise: random-walk standard deviation of the log scale (0 = a fixed size, as
-            mean shift keeps: colour alone favours boxes shrunk inside the person).
+        sampling: N particles per target, their random walk over centre, velocity and log
+            scale, and its seed (``ParticleSampling``; None: its defaults).
         likelihood_lambda: lambda of exp(-lambda (1 - rho)).
-        seed: seed of the random walk and the resampling (restarted by ``reset``).
         birth_iou, loss, restart, max_targets: life cycle (``ColourTrackerBase``); the
             evidence ``loss`` judges is rho at the posterior-mean box.
+        A key of the flat arguments before the groups is refused with a TypeError naming
+        its group.
     """
 
-    def __init__(self, particles: int = 100, position_noise: float = 0.1,
-                 scale_noise: float = 0.0, likelihood_lambda: float = 20.0, seed: int = 0,
-                 birth_iou: float = 0.3, loss: Loss | None = None,
-                 restart: Restart | None = None, max_targets: int | None = None) -> None:
-        self.position_noise = position_noise
-        self.scale_noise = scale_noise
+    def __init__(self, sampling: ParticleSampling | None = None,
+                 likelihood_lambda: float = 20.0, birth_iou: float = 0.3,
+                 loss: Loss | None = None, restart: Restart | None = None,
+                 max_targets: int | None = None, **moved: object) -> None:
+        refuse_moved("tracker", moved, {"sampling": ParticleSampling})
+        at_least("", 0, likelihood_lambda=likelihood_lambda)
         self.likelihood_lambda = likelihood_lambda
-        super().__init__(particles, seed, birth_iou, loss, restart, max_targets,
-                         position_noise=position_noise, scale_noise=scale_noise,
-                         likelihood_lambda=likelihood_lambda)
+        super().__init__(parameter_group("sampling", sampling, ParticleSampling), birth_iou,
+                         loss, restart, max_targets)
 
     def _follow(self, target: ColourTarget, bins: np.ndarray) -> float:
         x, y, w, h = target.box
         s = self._sets.get(target.id)
+        walk = self.sampling
         if s is None:  # (N, 5): centre x, y, velocity x, y, log scale against the current box
-            s = np.tile([x + w / 2, y + h / 2, 0.0, 0.0, 0.0], (self.particles, 1))
-        e = self._rng.normal(0.0, 1.0, s.shape) * [self.position_noise * w,
-                                                   self.position_noise * h,
-                                                   self.position_noise * w,
-                                                   self.position_noise * h, self.scale_noise]
+            s = np.tile([x + w / 2, y + h / 2, 0.0, 0.0, 0.0], (walk.particles, 1))
+        e = self._rng.normal(0.0, 1.0, s.shape) * [walk.position_noise * w,
+                                                   walk.position_noise * h,
+                                                   walk.position_noise * w,
+                                                   walk.position_noise * h, walk.scale_noise]
         s = s + e
         s[:, :2] += s[:, 2:4]  # second-order dynamics: x_t = x_{t-1} + v_t + e, v_t = v_{t-1} + e
         scale = np.exp(s[:, 4])

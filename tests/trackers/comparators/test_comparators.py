@@ -10,6 +10,7 @@ from occbench.trackers.comparators import (
     ScaleAdaptiveMeanShift,
     SimilarityBelow,
 )
+from occbench.trackers.comparators.particle_filter import ParticleSampling
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections
 
@@ -79,15 +80,17 @@ def test_a_single_target_tracker_starts_nothing_more(make):
 
 def test_particle_filter_is_seeded():
     frames, boxes = _scene(15)
-    a = _follow(ColourParticleFilter(seed=3), frames, boxes)
-    b = _follow(ColourParticleFilter(seed=3), frames, boxes)
+    a = _follow(ColourParticleFilter(ParticleSampling(seed=3)), frames, boxes)
+    b = _follow(ColourParticleFilter(ParticleSampling(seed=3)), frames, boxes)
     assert all(np.array_equal(x[0].box, y[0].box) for x, y in zip(a, b))
 
 
 def test_frames_are_required_and_arguments_named():
     with pytest.raises(ValueError, match="needs frames"):
         MeanShiftTracker().update(None, Detections.empty())
-    with pytest.raises(ValueError, match="particles"):
-        ColourParticleFilter(particles=0)
+    with pytest.raises(ValueError, match=r"^sampling\.particles "):
+        ParticleSampling(particles=0)
+    with pytest.raises(TypeError, match=r"tracker.particles: moved to tracker.sampling"):
+        ColourParticleFilter(particles=50)  # a flat key before the groups (issue 36)
     with pytest.raises(ValueError, match="threshold"):
         SimilarityBelow(threshold=2)

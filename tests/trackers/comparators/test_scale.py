@@ -1,6 +1,8 @@
 """Scale in PBM's comparators: Comaniciu et al.'s +/-10 % test in ScaleAdaptiveMeanShift and
 the connected-component cue of the CCMSPF, on a red person changing size on grey noise."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -9,7 +11,8 @@ from occbench.trackers.comparators import (
     MeanShiftTracker,
     ScaleAdaptiveMeanShift,
 )
-from occbench.trackers.comparators.ccmspf import component_dice, components
+from occbench.trackers.comparators.ccmspf import CCMSPF_SAMPLING, Cues, component_dice, components
+from occbench.trackers.comparators.meanshift import ScaleTest
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections
 
@@ -68,17 +71,17 @@ def test_the_scale_test_keeps_the_size_on_a_tie():
 
 def test_smoothing_weight_zero_is_fixed_size_mean_shift():
     frames, boxes, _ = _scene(24, 12, n=20)
-    a = _final_box(ScaleAdaptiveMeanShift(gamma=0.0), frames, boxes)
+    a = _final_box(ScaleAdaptiveMeanShift(ScaleTest(gamma=0.0)), frames, boxes)
     b = _final_box(MeanShiftTracker(), frames, boxes)
     assert a.tolist() == b.tolist()
 
 
 def test_ccmspf_sizes_its_box_on_the_connected_component():
     frames, boxes, masks = _scene(12, 24)
-    with_components = _final_box(ConnectedComponentMeanShiftPF(component_lambda=10.0), frames,
-                                  boxes, masks)
-    colour_alone = _final_box(ConnectedComponentMeanShiftPF(component_lambda=0.0), frames, boxes,
-                              masks)
+    with_components = _final_box(ConnectedComponentMeanShiftPF(cues=Cues(component_lambda=10.0)),
+                                  frames, boxes, masks)
+    colour_alone = _final_box(ConnectedComponentMeanShiftPF(cues=Cues(component_lambda=0.0)),
+                              frames, boxes, masks)
     assert _iou(with_components, boxes[-1]) > 0.6
     assert _iou(colour_alone, boxes[-1]) < _iou(with_components, boxes[-1]) - 0.2
 
@@ -99,10 +102,15 @@ def test_component_dice_counts_every_fragment_a_box_touches():
 
 def test_ccmspf_is_seeded_and_names_bad_arguments():
     frames, boxes, masks = _scene(12, 24, n=10)
-    a = _final_box(ConnectedComponentMeanShiftPF(seed=4), frames, boxes, masks)
-    b = _final_box(ConnectedComponentMeanShiftPF(seed=4), frames, boxes, masks)
+    seeded = replace(CCMSPF_SAMPLING, seed=4)
+    a = _final_box(ConnectedComponentMeanShiftPF(seeded), frames, boxes, masks)
+    b = _final_box(ConnectedComponentMeanShiftPF(seeded), frames, boxes, masks)
     assert a.tobytes() == b.tobytes()
-    with pytest.raises(ValueError, match="component_lambda"):
-        ConnectedComponentMeanShiftPF(component_lambda=-1)
-    with pytest.raises(ValueError, match="step"):
-        ScaleAdaptiveMeanShift(step=1.5)
+    with pytest.raises(ValueError, match=r"^cues\.component_lambda "):
+        Cues(component_lambda=-1)
+    with pytest.raises(ValueError, match=r"^scale\.step "):
+        ScaleTest(step=1.5)
+    with pytest.raises(TypeError, match=r"tracker.component_lambda: moved to tracker.cues"):
+        ConnectedComponentMeanShiftPF(component_lambda=1.0)  # a flat key before the groups
+    with pytest.raises(TypeError, match=r"tracker.gamma: moved to tracker.scale.gamma"):
+        ScaleAdaptiveMeanShift(gamma=0.0)
