@@ -435,15 +435,6 @@ CONSTRUCTOR_RAISES_ALLOWED = {
     "trackers/frontend/heads.py:ColourMixtures": "data record (fitted colour mixtures)",
     "trackers/layered/feature_models.py:FoldedMixture": "data record (fitted feature models)",
     "trackers/layered/feature_models.py:FeatureModels": "data record (fitted feature models)",
-    # the paper trackers' own rooms, converted by their owners (issue 36 items 2 and 3)
-    "trackers/layered/adaptations.py:Adaptations": "PBM's room: to convert",
-    "trackers/layered/params.py:FeatureParams": "PBM's room: to convert",
-    "trackers/layered/params.py:CandidateParams": "PBM's room: to convert",
-    "trackers/layered/params.py:MatchParams": "PBM's room: to convert",
-    "trackers/layered/parts.py:PartFeatureExtractor": "PBM's room: to convert",
-    "trackers/layered/candidates.py:DetectorHeads": "PBM's room: to convert",
-    "trackers/three_hypothesis/appearance.py:EllipseHistogrammer": "Reta's room: to convert",
-    "trackers/three_hypothesis/graph.py:TrackingGraph": "Reta's room: to convert",
 }
 MAX_LOOSE_PARAMETERS = 5  # SORT's baseline takes 5; the paper trackers take 1 (min_score)
 LOOSE_PARAMETERS_ALLOWED = {

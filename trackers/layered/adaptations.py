@@ -221,14 +221,15 @@ class Adaptations:
         require("adaptations.contested_template",
                 self.contested_template == 0 or self.contested_template >= 1,
                 "must be 0 (off) or >= 1", self.contested_template)
-        if self.stale is not None and not isinstance(self.stale, StaleParts):
-            raise ValueError(f"adaptations.stale must be StaleParts or None, got {self.stale!r}")
-        if self.hidden_evidence is not None and not isinstance(self.hidden_evidence, HiddenEvidence):
-            raise ValueError(f"adaptations.hidden_evidence must be HiddenEvidence or None, "
-                             f"got {self.hidden_evidence!r}")
-        if self.hidden_evidence is not None and self.report_support > 0:
-            raise ValueError("adaptations.report_support and adaptations.hidden_evidence are two "
-                             f"rules for one step: set one (report_support {self.report_support})")
+        require("adaptations.stale", self.stale is None or isinstance(self.stale, StaleParts),
+                "must be StaleParts or None", self.stale)
+        require("adaptations.hidden_evidence",
+                self.hidden_evidence is None or isinstance(self.hidden_evidence, HiddenEvidence),
+                "must be HiddenEvidence or None", self.hidden_evidence)
+        require("adaptations.report_support",
+                self.hidden_evidence is None or not self.report_support > 0,
+                "and adaptations.hidden_evidence are two rules for one step: set one",
+                self.report_support)
         coerce(self, {**dict.fromkeys(("model_spread", "min_support", "relative_match",
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support", "rival_match", "contested_template",

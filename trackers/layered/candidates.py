@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from occbench.trackers.common.checks import require
 from occbench.trackers.geometry import iou_matrix, overlap_ratio_matrix
 from occbench.trackers.layered.params import CandidateParams
 from occbench.trackers.layered.search import (
@@ -56,9 +57,9 @@ class DetectorHeads:
 
     def __init__(self, params: CandidateParams, max_heads: int = 4) -> None:
         detector = params.head_detector
-        if detector is None or not callable(getattr(detector, "heads_in", None)):
-            raise ValueError("adaptations.profile_heads=false needs candidates.head_detector "
-                             "with a heads_in(frame, foreground, box, max_heads) method (PBM 2.3)")
+        require("candidates.head_detector", callable(getattr(detector, "heads_in", None)),
+                "must have a heads_in(frame, foreground, box, max_heads) method when "
+                "adaptations.profile_heads=false (PBM 2.3)", detector)
         self.detector, self.max_heads = detector, int(max_heads)
 
     def heads(self, mask: np.ndarray, sbox: np.ndarray, s: int, frame: np.ndarray | None,

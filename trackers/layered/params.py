@@ -17,7 +17,7 @@ import numpy as np
 
 from occbench.trackers.common.checks import at_least, coerce, require, unit
 from occbench.trackers.layered.feature_models import FeatureModels
-from occbench.trackers.layered.parts import FEATURES, N_PARTS
+from occbench.trackers.layered.parts import FEATURES, MIN_GRID, N_PARTS
 
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
@@ -25,10 +25,10 @@ DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
 
 
 def _grid(group: str, name: str, value: Sequence[int]) -> tuple[int, int]:
-    """(rows, cols), both >= 1."""
+    """(rows, cols), at least ``MIN_GRID`` (``PartFeatureExtractor``'s)."""
     rc = tuple(int(v) for v in value)
-    if len(rc) != 2 or min(rc) < 1:
-        raise ValueError(f"{group}.{name} must be two sizes >= 1 (rows, cols), got {list(value)}")
+    require(f"{group}.{name}", len(rc) == 2 and rc[0] >= MIN_GRID[0] and rc[1] >= MIN_GRID[1],
+            "must be at least {} x {} samples (rows, cols)".format(*MIN_GRID), list(value))
     return rc  # type: ignore[return-value]
 
 
@@ -68,21 +68,19 @@ class FeatureParams:
             models = FeatureModels.default()
         elif isinstance(models, Mapping):
             models = FeatureModels.from_dict(dict(models), "features.models")
-        elif not isinstance(models, FeatureModels):
-            raise ValueError(f"features.models must be FeatureModels, a mapping or None, "
-                             f"got {type(models).__name__}")
+        require("features.models", isinstance(models, FeatureModels),
+                "must be FeatureModels, a mapping or None", type(models).__name__)
         fw = dict(DEFAULT_FEATURE_WEIGHTS if self.feature_weights is None else self.feature_weights)
-        unknown = set(fw) - set(FEATURES)
-        if unknown:
-            raise ValueError(f"features.feature_weights: unknown features {sorted(unknown)}; "
-                             f"known {FEATURES}")
+        unknown = sorted(set(fw) - set(FEATURES))
+        require("features.feature_weights", not unknown,
+                f"names unknown features {unknown} (known: {FEATURES})", fw)
         omega = np.array([float(fw.get(f, 0.0)) for f in FEATURES])
-        if (omega < 0).any() or omega.sum() <= 0:
-            raise ValueError(f"features.feature_weights must be >= 0 with a positive sum, got {fw}")
+        require("features.feature_weights", bool((omega >= 0).all() and omega.sum() > 0),
+                "must be >= 0 with a positive sum", fw)
         gamma = np.asarray(list(self.part_weights), dtype=np.float64)
-        if gamma.shape != (N_PARTS,) or (gamma < 0).any() or gamma.sum() <= 0:
-            raise ValueError(f"features.part_weights must be {N_PARTS} weights >= 0 with a "
-                             f"positive sum, got {list(self.part_weights)}")
+        require("features.part_weights", gamma.shape == (N_PARTS,)
+                and bool((gamma >= 0).all() and gamma.sum() > 0),
+                f"must be {N_PARTS} weights >= 0 with a positive sum", list(self.part_weights))
         at_least("features", 1, histogram_bins=self.histogram_bins)
         set_ = object.__setattr__
         set_(self, "models", models)
@@ -118,9 +116,9 @@ class CandidateParams:
         at_least("candidates", 0, min_blob_area=self.min_blob_area,
                  head_separation=self.head_separation)
         at_least("candidates", 1, blob_downsample=self.blob_downsample)
-        if self.head_detector is not None and not callable(getattr(self.head_detector, "detect", None)):
-            raise ValueError("candidates.head_detector must have a detect(frame, foreground, "
-                             "boxes) method")
+        require("candidates.head_detector", self.head_detector is None
+                or callable(getattr(self.head_detector, "detect", None)),
+                "must have a detect(frame, foreground, boxes) method", self.head_detector)
         coerce(self, {"min_blob_area": int, "head_separation": float, "blob_downsample": int})
 
 
@@ -228,9 +226,9 @@ class MatchParams:
 
     def __post_init__(self) -> None:
         unit("matching", match_threshold=self.match_threshold, weak_threshold=self.weak_threshold)
-        if self.weak_threshold > self.match_threshold:
-            raise ValueError(f"matching.weak_threshold ({self.weak_threshold}) must be <= "
-                             f"matching.match_threshold ({self.match_threshold})")
+        require("matching.weak_threshold", self.weak_threshold <= self.match_threshold,
+                f"must be <= matching.match_threshold {self.match_threshold}",
+                self.weak_threshold)
         at_least("matching", 1, margin_ratio=self.margin_ratio)
 
 

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from occbench.trackers.common.checks import require
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered import sampling_kernels
 from occbench.trackers.layered.split import (  # eqs. 1-2, re-exported here
@@ -60,6 +61,8 @@ N_PARTS = len(PART_NAMES)
 FEATURES: tuple[str, ...] = ("area", "perimeter", "hsv", "xyz", "displacement", "overlap")
 """The Nf = 6 features of every part (PBM 2.2), in the order of every (..., 6) array."""
 N_FEATURES = len(FEATURES)
+#: fewest (rows, cols) samples of a box (the head band, its top 1/7, is whole rows)
+MIN_GRID = (7, 2)
 
 DEFAULT_ALPHA = 0.5
 """Centroid column ratio of an upright symmetric person (eq. 1)."""
@@ -219,10 +222,10 @@ class PartFeatureExtractor:
     """
 
     def __init__(self, bins: int = 4, grid_rows: int = 35, grid_cols: int = 15) -> None:
-        if bins < 1 or bins > 32:
-            raise ValueError(f"bins must be in 1..32, got {bins}")
-        if grid_rows < 7 or grid_cols < 2:
-            raise ValueError(f"grid must be at least 7 x 2 samples, got {grid_rows} x {grid_cols}")
+        require("features.histogram_bins", 1 <= bins <= 32, "must lie in 1..32", bins)
+        require("features.grid", grid_rows >= MIN_GRID[0] and grid_cols >= MIN_GRID[1],
+                "must be at least {} x {} samples (rows, cols)".format(*MIN_GRID),
+                [grid_rows, grid_cols])
         self.bins = bins
         self.grid_rows = grid_rows
         self.grid_cols = grid_cols

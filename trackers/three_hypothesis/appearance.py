@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from occbench.trackers.common.checks import require
 from occbench.trackers.three_hypothesis._kernels import ellipse_histograms
 from occbench.trackers.three_hypothesis.features import bhattacharyya
 
@@ -45,10 +46,8 @@ class EllipseHistogrammer:
 
     def __init__(self, bins: int = 16, min_foreground: float = 0.2, cache_size: int = 4096,
                  stride: int = 1) -> None:
-        if bins < 1 or 256 % bins:
-            raise ValueError(f"bins must divide 256, got {bins}")
-        if stride < 1:
-            raise ValueError(f"stride must be >= 1, got {stride}")
+        require("appearance.bins", bins >= 1 and 256 % bins == 0, "must divide 256", bins)
+        require("appearance.pixel_stride", stride >= 1, "must be >= 1", stride)
         self.bins = bins
         self.stride = stride
         self.min_foreground = min_foreground

@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from occbench.trackers.common.checks import require
+
 VISIBLE = "visible"
 TENTATIVE = "tentative"
 HYPOTHESIS = "hypothesis"
@@ -102,8 +104,7 @@ class TrackingGraph:
     """
 
     def __init__(self, window: int) -> None:
-        if window < 1:
-            raise ValueError(f"window must be >= 1, got {window}")
+        require("the graph's window (life_cycle.m + 1)", window >= 1, "must be >= 1", window)
         self._layers: deque[_Layer] = deque(maxlen=window)
         self._next_key = 1
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from occbench.trackers.histograms import colour_histogram
+from occbench.trackers.layered.params import FeatureParams
 from occbench.trackers.layered.parts import (
     DEFAULT_ALPHA,
     DEFAULT_BETA,
@@ -144,8 +145,12 @@ def test_bad_input():
         ex.start(np.zeros((10, 10)), None)
     with pytest.raises(ValueError, match="foreground shape"):
         ex.start(np.zeros((10, 10, 3), np.uint8), np.zeros((5, 5), bool))
-    with pytest.raises(ValueError, match="bins"):
-        PartFeatureExtractor(bins=0)
+    with pytest.raises(ValueError, match=r"^features\.histogram_bins must lie in 1\.\.32, got 0$"):
+        PartFeatureExtractor(bins=0)  # through common.checks, named by its config key (issue 36)
+    with pytest.raises(ValueError, match=r"^features\.grid must be at least 7 x 2 "):
+        PartFeatureExtractor(4, 5, 9)
+    with pytest.raises(ValueError, match=r"^features\.search_grid must be at least 7 x 2 "):
+        FeatureParams(search_grid=(5, 9))  # named by its own key before an extractor is built
 
 
 def test_lut_bins_equal_the_joint_index_formula():

@@ -101,6 +101,8 @@ def test_bad_input_raises_clear_errors():
         t.update(np.zeros((20, 30, 3), np.uint8), Detections.empty(), np.zeros((5, 5), bool))
     with pytest.raises(ValueError, match="matching.margin_ratio"):
         PBMTracker(matching=MatchParams(margin_ratio=0.5))
+    with pytest.raises(ValueError, match=r"^matching\.weak_threshold must be <= matching\.match"):
+        MatchParams(weak_threshold=0.3, match_threshold=0.2)
     with pytest.raises(ValueError, match="features.part_weights"):
         PBMTracker(features=FeatureParams(part_weights=[1, 1, 1, 1]))
     with pytest.raises(ValueError, match="unknown features"):

@@ -27,6 +27,7 @@ from occbench.trackers.three_hypothesis import (
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
 from occbench.trackers.three_hypothesis.association import _hungarian, _person_costs, associate
 from occbench.trackers.three_hypothesis.features import ellipse_histograms, region_similarity
+from occbench.trackers.three_hypothesis.graph import TrackingGraph
 from occbench.trackers.three_hypothesis.motion import MotionModel, box_measurements, correct, predict
 from occbench.trackers.three_hypothesis.occlusion import (
     area_above,
@@ -291,6 +292,10 @@ def test_bad_input_raises_clear_errors():
         Occlusion(lam=0.5)
     with pytest.raises(ValueError, match=r"life_cycle\.m must"):
         LifeCycle(m=0)
+    with pytest.raises(ValueError, match=r"^appearance\.bins must divide 256, got 7$"):
+        EllipseHistogrammer(bins=7)  # through common.checks, named by its config key (issue 36)
+    with pytest.raises(ValueError, match=r"^the graph's window \(life_cycle\.m \+ 1\) must"):
+        TrackingGraph(window=0)
     with pytest.raises(TypeError, match="association: expected a Association"):
         RetaTracker(association={"mu_rho": 0.3})
 
