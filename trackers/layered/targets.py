@@ -22,6 +22,7 @@ it is re-learned (step ``relearn_rate``). A hidden part is never re-learned.
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -250,34 +251,62 @@ def stale_parts(targets: Targets, rows: np.ndarray, cand: PartFeatures, ks: np.n
     return relearn
 
 
-def update_parts(model: PartFeatures, rows: np.ndarray, cand: PartFeatures, ks: np.ndarray,
-                 part_scores: np.ndarray, part_match_threshold: float, update_rate: float,
-                 shift: np.ndarray, boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray,
-                 relearn: np.ndarray | None = None, relearn_rate: float = 1.0) -> None:
+@dataclass(frozen=True)
+class PartMatches:
+    """The M matched targets whose parts models ``update_parts`` updates (PBM 4.2), one row
+    each.
+
+    Attributes:
+        rows: (M,) the targets' rows. ks: (M,) their chosen candidates' rows.
+        part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Targets.update``).
+        boxes: (M, 4) xywh, alpha, beta: (M,) the updated global models.
+        relearn: (M, 5) stale parts (``stale_parts``): moved towards the candidate by
+            ``PartRates.relearn_rate`` whatever p_j, and given its centroid. None: none.
+    """
+
+    rows: np.ndarray
+    ks: np.ndarray
+    part_scores: np.ndarray
+    shift: np.ndarray
+    boxes: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
+    relearn: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class PartRates:
+    """How a part's model learns (PBM 4.2): ``threshold``, the part_match_threshold a part's
+    p_j must reach to match; ``rate``, eta = rate p_j of a match; ``relearn_rate``, eta of a
+    stale part."""
+
+    threshold: float
+    rate: float
+    relearn_rate: float = 1.0
+
+
+def update_parts(model: PartFeatures, cand: PartFeatures, m: PartMatches,
+                 rates: PartRates) -> None:
     """PBM 4.2 parts-model update of several targets at once, in place.
 
-    Each part whose score p_j reaches ``part_match_threshold`` moves its area, perimeter
-    and colour histograms towards the candidate's by a running average with weight
-    ``update_rate * p_j``, and takes the candidate's centroid; a part below it keeps its
+    Each part whose score p_j reaches ``rates.threshold`` moves its area, perimeter and
+    colour histograms towards the candidate's by a running average with weight
+    ``rates.rate * p_j``, and takes the candidate's centroid; a part below it keeps its
     model frozen, its centroid following the global model's ``shift``. The rectangles
     follow the (updated) global model.
 
     Args:
-        model: the parts models of all targets. rows: (M,) the updated targets' rows.
-        cand: features holding the chosen candidates at ``ks`` (M,) (no copy).
-        part_scores: (M, 5) p_j (eq. 12). shift: (M, 2) centroid shifts (``Targets.update``).
-        boxes: (M, 4) xywh, alpha, beta: (M,) the updated global models.
-        relearn: (M, 5) stale parts (``stale_parts``): moved towards the candidate by
-            ``relearn_rate`` whatever p_j, and given its centroid. None: none.
+        model: the parts models of all targets, updated at ``m.rows``.
+        cand: features holding the chosen candidates at ``m.ks`` (no copy).
+        m: the matched targets (``PartMatches``). rates: how the parts learn.
     """
-    if relearn is None:
-        relearn = np.zeros((len(rows), N_PARTS), dtype=bool)
+    relearn = np.zeros((len(m.rows), N_PARTS), dtype=bool) if m.relearn is None else m.relearn
     model_update.update_parts_kernel(
         (model.parts, model.area, model.perimeter, model.hsv, model.xyz, model.centroid,
-         model.height), np.asarray(rows, dtype=np.int64),
+         model.height), np.asarray(m.rows, dtype=np.int64),
         (cand.parts, cand.area, cand.perimeter, cand.hsv, cand.xyz, cand.centroid, cand.height),
-        np.asarray(ks, dtype=np.int64), np.asarray(part_scores, dtype=np.float64),
-        (float(part_match_threshold), float(update_rate), float(relearn_rate)),
-        np.asarray(shift, dtype=np.float64),
-        (np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64)),
-        np.asarray(boxes, dtype=np.float64), np.asarray(relearn, dtype=np.bool_))
+        np.asarray(m.ks, dtype=np.int64), np.asarray(m.part_scores, dtype=np.float64),
+        (float(rates.threshold), float(rates.rate), float(rates.relearn_rate)),
+        np.asarray(m.shift, dtype=np.float64),
+        (np.asarray(m.alpha, dtype=np.float64), np.asarray(m.beta, dtype=np.float64)),
+        np.asarray(m.boxes, dtype=np.float64), np.asarray(relearn, dtype=np.bool_))

@@ -78,7 +78,8 @@ from occbench.trackers.layered.rules import build_rules
 from occbench.trackers.layered.search import Candidates, head_patch, head_patches, occlusion_kinds
 from occbench.trackers.layered.selection import FrameScores, MultipleResponsePruning
 from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
-from occbench.trackers.layered.targets import Targets, dof_from_box, update_parts
+from occbench.trackers.layered.targets import (PartMatches, PartRates, Targets, dof_from_box,
+                                               update_parts)
 from occbench.trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
@@ -298,12 +299,12 @@ class PBMTracker:
             un = ~occl
             relearn = stale.relearn(targets, mt[un], feats, ks[un], pj[un], u.part_threshold,
                                     self.reporting.max_misses, image_size)
-        relearn_rate = 1.0 if stale is None else stale.relearn_rate
+        rates = PartRates(u.part_threshold, u.rate, 1.0 if stale is None else stale.relearn_rate)
         for g, (rows, f) in enumerate(groups):
             r = mt[rows]
-            update_parts(targets.parts, r, f, ks[rows], pj[rows], u.part_threshold, u.rate,
-                         shift[rows], dof_t[r[:, None], _BOX_COLUMNS], targets.alpha[r],
-                         targets.beta[r], relearn if g == 0 else None, relearn_rate)
+            update_parts(targets.parts, f, PartMatches(
+                r, ks[rows], pj[rows], shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
+                targets.alpha[r], targets.beta[r], relearn if g == 0 else None), rates)
         targets.score[mt] = found.score
         fresh = mt[~occl & (pj[:, 0] >= u.part_threshold)]
         for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):

@@ -126,7 +126,8 @@ def test_section_4_2_update_kernels_equal_the_equations():
     want = [update_parts(model.take(r), cand.take(k), pj[q], 0.4, 0.3, shift[q], new_boxes[q],
                            alpha[q], beta[q], relearn[q], 0.8)
             for q, (r, k) in enumerate(zip(rows, ks))]
-    T.update_parts(model, rows, cand, ks, pj, 0.4, 0.3, shift, new_boxes, alpha, beta, relearn, 0.8)
+    T.update_parts(model, cand, T.PartMatches(rows, ks, pj, shift, new_boxes, alpha, beta, relearn),
+                   T.PartRates(0.4, 0.3, 0.8))
     for q, r in enumerate(rows):
         for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid", "height"):
             np.testing.assert_allclose(getattr(model, name)[r], getattr(want[q], name)[0],

@@ -475,7 +475,7 @@ def test_bool_and_label_foreground_give_the_same_tracks():
 
 def test_update_parts_equals_the_numpy_running_averages():
     from occbench.trackers.layered.parts import part_boxes
-    from occbench.trackers.layered.targets import update_parts
+    from occbench.trackers.layered.targets import PartMatches, PartRates, update_parts
 
     rng = np.random.default_rng(11)
     ex = PartFeatureExtractor()
@@ -497,7 +497,8 @@ def test_update_parts_equals_the_numpy_running_averages():
     ref.centroid[rows] = np.where(matched[:, :, None], cand.centroid[ks], ref.centroid[rows] + shift[:, None])
     ref.parts[rows] = part_boxes(new_boxes, alpha, beta)
     ref.height[rows] = new_boxes[:, 3]
-    update_parts(model, rows, cand, ks, pj, 0.4, 0.3, shift, new_boxes, alpha, beta)
+    update_parts(model, cand, PartMatches(rows, ks, pj, shift, new_boxes, alpha, beta),
+                 PartRates(0.4, 0.3))
     for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid", "height"):
         np.testing.assert_array_equal(getattr(model, name), getattr(ref, name), err_msg=name)
     assert (matched.any() and (~matched).any())  # both branches ran
