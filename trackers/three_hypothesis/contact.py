@@ -261,7 +261,7 @@ class RegionAtContact:
         return evidence
 
 
-# --------------------------------------------------------------- 3.3.2 step 2: the region term where a merged pair parts
+# --------------------------------------------------------------- 3.3.2 after stage 1: whose is which box where a merged pair parts
 
 
 @dataclass(frozen=True)

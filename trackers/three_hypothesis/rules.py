@@ -299,7 +299,7 @@ class Rules(NamedTuple):
     contact: AppearanceAtContact | RegionAtContact  # eq. 4 between people in O (3.3.2)
     parts: AnyLeftover | SplitParts  # what stage 2 may match (3.3.2 steps 5-8)
     region: WholeRegion | VisibleRegion  # eq. 5's region term of a node behind others
-    split: RegionAtSplit | AppearanceAtSplit  # eq. 5 where a merged pair parts (3.3.2)
+    split: RegionAtSplit | AppearanceAtSplit  # whose is which box where a merged pair parts
     line: FilterVelocity | MeasuredLine  # hypothesis 1's velocity (3.3.3, case 1)
     motion: CentreState | BoxState  # M's state (3.2)
     motion_behind: PredictedBehind | CorrectedBehind
