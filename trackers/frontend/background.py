@@ -169,7 +169,7 @@ class BackgroundModel:
                 history=self.model.history, dist2Threshold=self.model.var_threshold,
                 detectShadows=self.model.detect_shadows,
             )
-        if self.model.background_ratio is not None:
+        if self.method == "mog2" and self.model.background_ratio is not None:  # KNN has none
             self._model.setBackgroundRatio(float(self.model.background_ratio))
         self._model.setShadowThreshold(self.model.shadow_threshold)
 

@@ -32,7 +32,8 @@ class PixelModel:
         var_threshold: MOG2 squared Mahalanobis threshold (KNN: squared distance threshold).
         learning_rate: per-frame update rate in [0, 1]; -1 lets OpenCV choose 1/history.
         detect_shadows: let the model label shadows (then removed from the mask).
-        background_ratio: MOG2 share of the mixture weight counted as background; None
+        background_ratio: MOG2 share of the mixture weight counted as background (KNN has
+            no such setting and ignores it); None
             keeps OpenCV's 0.9, with which anyone present in more than 10% of the recent
             frames becomes background (0.5: more than half).
         shadow_threshold: MOG2/KNN shadow threshold tau: a pixel darker than the background

@@ -162,6 +162,17 @@ def test_online_warm_up_never_reads_a_frame_after_the_current_one(method):
     assert any((masks["sequence", "a"][t] != masks["sequence", "b"][t]).any() for t in range(24))
 
 
+def test_knn_builds_at_its_defaults_and_finds_a_walker():
+    """method "knn" with the default ``model``: OpenCV's KNN subtractor has no background
+    ratio, and setting MOG2's raised AttributeError before any frame."""
+    frames = _walker_frames(40, 0)
+    bg = BackgroundModel(method="knn", start=WarmUp(warmup_frames=8))
+    bg.warm_up(frames[:8])
+    mask = [bg.apply(f) for f in frames][-1]
+    x = 4 + 2 * 39
+    assert mask[25:55, x + 2:x + 10].mean() > 0.5 and mask[:, :2].sum() == 0
+
+
 def test_online_warm_up_keeps_an_even_sample_of_the_past():
     bg = BackgroundModel(start=WarmUp(warmup_frames=4, warmup_span="online"))
     frames = _walker_frames(20, 1)
