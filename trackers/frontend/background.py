@@ -166,7 +166,7 @@ class BackgroundModel:
             )
         else:
             self._model = cv2.createBackgroundSubtractorKNN(
-                history=self.model.history, dist2Threshold=self.model.var_threshold,
+                history=self.model.history, dist2Threshold=self.model.dist2_threshold,
                 detectShadows=self.model.detect_shadows,
             )
         if self.method == "mog2" and self.model.background_ratio is not None:  # KNN has none

@@ -29,7 +29,9 @@ class PixelModel:
 
     Args:
         history: frames of history of the model.
-        var_threshold: MOG2 squared Mahalanobis threshold (KNN: squared distance threshold).
+        var_threshold: MOG2 squared Mahalanobis threshold (``varThreshold``).
+        dist2_threshold: KNN squared distance threshold (``dist2Threshold``; OpenCV's 400 on
+            0-255 colour values: a distance of 20, where MOG2's threshold is in variances).
         learning_rate: per-frame update rate in [0, 1]; -1 lets OpenCV choose 1/history.
         detect_shadows: let the model label shadows (then removed from the mask).
         background_ratio: MOG2 share of the mixture weight counted as background (KNN has
@@ -43,6 +45,7 @@ class PixelModel:
 
     history: int = 500
     var_threshold: float = 25.0
+    dist2_threshold: float = 400.0
     learning_rate: float = -1.0
     detect_shadows: bool = True
     background_ratio: float | None = 0.5
@@ -52,6 +55,8 @@ class PixelModel:
         g = "background.model"
         at_least(g, 1, history=self.history)
         require(f"{g}.var_threshold", self.var_threshold > 0, "must be > 0", self.var_threshold)
+        require(f"{g}.dist2_threshold", self.dist2_threshold > 0, "must be > 0",
+                self.dist2_threshold)
         require(f"{g}.learning_rate", self.learning_rate == -1 or 0.0 <= self.learning_rate <= 1.0,
                 "must be -1 or lie in [0, 1]", self.learning_rate)
         require(f"{g}.background_ratio",
@@ -59,7 +64,8 @@ class PixelModel:
                 "must lie in (0, 1] or be None", self.background_ratio)
         require(f"{g}.shadow_threshold", 0.0 < self.shadow_threshold < 1.0,
                 "must lie in (0, 1)", self.shadow_threshold)
-        coerce(self, {"history": int, "var_threshold": float, "learning_rate": float,
+        coerce(self, {"history": int, "var_threshold": float, "dist2_threshold": float,
+                      "learning_rate": float,
                       "detect_shadows": bool, "shadow_threshold": float})
 
 

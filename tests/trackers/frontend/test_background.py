@@ -173,6 +173,21 @@ def test_knn_builds_at_its_defaults_and_finds_a_walker():
     assert mask[25:55, x + 2:x + 10].mean() > 0.5 and mask[:, :2].sum() == 0
 
 
+def test_knn_default_threshold_ignores_sensor_noise():
+    """KNN's squared distance threshold is its own (OpenCV's 400), not MOG2's variance
+    threshold (25, a colour distance of 5: camera noise of a few grey levels then lit most
+    of a still floor)."""
+    rng = np.random.default_rng(3)
+    frames = [np.clip(f + rng.normal(0, 4, f.shape), 0, 255).astype(np.uint8)
+              for f in _walker_frames(40, 0)]
+    bg = BackgroundModel(method="knn", start=WarmUp(warmup_frames=8))
+    bg.warm_up(frames[:8])
+    mask = [bg.apply(f) for f in frames][-1]
+    x = 4 + 2 * 39
+    assert mask[25:55, x + 2:x + 10].mean() > 0.5  # the walker
+    assert (mask[:, :x - 10] > 0).mean() < 0.02  # the still floor behind him
+
+
 def test_online_warm_up_keeps_an_even_sample_of_the_past():
     bg = BackgroundModel(start=WarmUp(warmup_frames=4, warmup_span="online"))
     frames = _walker_frames(20, 1)
