@@ -11,6 +11,9 @@ number of people: the median of ``--repeats`` runs, the time in units of a refer
 workload run in the same process, and the CPU time of each step of Alg. 1 (one more,
 instrumented run; ``tracker_timing``). ``--check [DIGESTS.json]`` prints the sha256 of the
 reported rows (and writes or compares the file): a speed-up must leave them unchanged.
+``--vs CHECKOUT`` times this tree's tracker against another checkout's ``three_hypothesis``
+(``tracker_timing.import_other``) in this process, on the same scene, ``--rounds`` rounds in
+turn ABBA: frames/s of both and the ratio of their median times, and whether their rows agree.
 
 Accuracy: IDF1 and HOTA (``occbench.metrics``) of reta and the baseline on the synthetic
 suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
@@ -18,7 +21,8 @@ suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` det
 the data root (``occbench.config.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
 Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]
-[--people 10 40 100] [--size 640x480] [--repeats 3] [--check [DIGESTS.json]]``.
+[--people 10 40 100] [--size 640x480] [--repeats 3] [--check [DIGESTS.json]]
+[--vs CHECKOUT [--rounds 3]]``.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ import argparse
 import importlib
 import statistics
 import sys
+from functools import partial
 from pathlib import Path
 
 import cv2
@@ -42,8 +47,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, reference_seconds,
-                            rows_digest)
+from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, import_other,
+                            paired_seconds, reference_seconds, rows_digest)
 
 from occbench.config.paths import data_path
 from occbench.trackers.baseline import BaselineTracker
@@ -151,6 +156,33 @@ def speed(people_counts=(10, 40, 100), frames: int = 300, repeats: int = 3,
     return pd.DataFrame(rows), digests, stage_tables
 
 
+def versus(other, people_counts=(100,), frames: int = 150, rounds: int = 3,
+           size: tuple[int, int] = (WIDTH, HEIGHT)) -> pd.DataFrame:
+    """This tree's ``RetaTracker`` against ``other`` (another checkout's ``three_hypothesis``
+    module, ``tracker_timing.import_other``) per number of people: the same scene, each run
+    once untimed, then ``rounds`` timed rounds in turn (``paired_seconds``); frames/s of the
+    median times, ``ratio`` = this tree's median time / the other's (below 1: this tree is
+    faster), the range of the rounds' ratios, and whether the reported rows are the same."""
+    cv2.setNumThreads(1)
+    rows = []
+    for n in people_counts:
+        scene = make_scene(n, frames, seed=n, size=size)
+        trackers = {"this": RetaTracker, "other": other.RetaTracker}
+
+        def run(label, scene=scene):
+            tracker = trackers[label]()
+            return [tracker.update(img, dets) for img, dets in scene]
+
+        same = rows_digest(run("this")) == rows_digest(run("other"))
+        seconds = paired_seconds({label: partial(run, label) for label in trackers}, rounds)
+        this, that = statistics.median(seconds["this"]), statistics.median(seconds["other"])
+        pairs = [a / b for a, b in zip(seconds["this"], seconds["other"])]
+        rows.append({"people": n, "this_fps": frames / this, "other_fps": frames / that,
+                     "ratio": this / that, "ratio_min": min(pairs), "ratio_max": max(pairs),
+                     "same_rows": same})
+    return pd.DataFrame(rows)
+
+
 def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
     """IDF1 / HOTA / MOTA / IDs of reta and baseline on the synthetic suite and CAVIAR."""
     from occbench import metrics
@@ -205,9 +237,22 @@ def main(argv: list[str] | None = None) -> int:
                         metavar="DIGESTS.json",
                         help="print the sha256 of the reported rows; with a file: write it when "
                              "absent, else compare (exit 1 when they differ)")
+    parser.add_argument("--vs", type=Path, metavar="CHECKOUT",
+                        help="time against another checkout's three_hypothesis in this process")
+    parser.add_argument("--rounds", type=int, default=3, help="--vs: rounds of each, in turn")
     args = parser.parse_args(argv)
     pd.set_option("display.width", 160)
     status = 0
+    if args.vs is not None:
+        other = import_other(args.vs, three_hypothesis.__name__, "reta_vs")
+        print(f"load average (uptime): {os.getloadavg()}; this: {ROOT}, other: {args.vs}")
+        table = versus(other, args.people, args.frames, args.rounds, args.size)
+        print(f"RetaTracker.update, this tree against the other ({args.size[0]}x{args.size[1]}, "
+              f"{args.frames} frames, {args.rounds} rounds in turn ABBA, CPU time; ratio: this "
+              f"tree's median time / the other's)")
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}" if v < 10 else f"{v:.1f}"))
+        print(f"load average after: {os.getloadavg()}")
+        return 0
     if not args.accuracy_only:
         print(f"load average (uptime): {os.getloadavg()}")
         table, digests, stages = speed(args.people, args.frames, args.repeats, args.pixel_stride,

@@ -12,8 +12,11 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import importlib
 import json
 import statistics
+import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -91,6 +94,44 @@ def reference_seconds(repeats: int = 5) -> float:
             total += v * v
 
     return statistics.median(cpu_seconds(work) for _ in range(repeats))
+
+
+def import_other(tree: Path, package: str, alias: str):
+    """``package`` (e.g. ``occbench.trackers.three_hypothesis``) of another checkout ``tree``,
+    imported as the top-level package ``alias`` beside this tree's: its files copied (once per
+    content, under the temp dir, so numba's disk cache is kept between runs) with every
+    ``package`` name in them renamed. What it imports from outside ``package`` is this tree's.
+    Raises ``FileNotFoundError`` naming the folder when ``tree`` has no such package."""
+    src = Path(tree) / "trackers" / package.rsplit(".", 1)[-1]
+    files = sorted(src.glob("*.py"))
+    if not files:
+        raise FileNotFoundError(f"no {package} at {src}")
+    texts = {f.name: f.read_text().replace(package, alias) for f in files}
+    key = hashlib.sha256(json.dumps(texts, sort_keys=True).encode()).hexdigest()[:16]
+    root = Path(tempfile.gettempdir()) / f"occbench_vs_{alias}_{key}"
+    if not (root / alias / "__init__.py").exists():
+        (root / alias).mkdir(parents=True, exist_ok=True)
+        for name in sorted(texts, key=lambda name: name == "__init__.py"):  # __init__ last
+            (root / alias / name).write_text(texts[name])
+    if alias in sys.modules:
+        raise RuntimeError(f"{alias} is imported already")
+    sys.path.insert(0, str(root))
+    try:
+        return importlib.import_module(alias)
+    finally:
+        sys.path.remove(str(root))
+
+
+def paired_seconds(runs: dict[str, Callable[[], object]], rounds: int) -> dict[str, list[float]]:
+    """CPU seconds of each of two ``runs`` (label -> call), ``rounds`` rounds taken in turn
+    ABBA (round k runs them in order when k is even, reversed when odd): a slow spell of the
+    machine falls on both alike."""
+    labels = list(runs)
+    out: dict[str, list[float]] = {label: [] for label in labels}
+    for k in range(rounds):
+        for label in (labels if k % 2 == 0 else labels[::-1]):
+            out[label].append(cpu_seconds(runs[label]))
+    return out
 
 
 def rows_digest(frames: Iterable[list]) -> str:

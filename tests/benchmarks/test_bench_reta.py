@@ -1,0 +1,40 @@
+"""benchmarks/bench_reta.py --vs: another checkout's three_hypothesis imported beside this
+tree's (``tracker_timing.import_other``) and timed on the same scene in turn."""
+
+from __future__ import annotations
+
+import importlib.util
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "benchmarks"))  # bench_reta imports tracker_timing by name
+_spec = importlib.util.spec_from_file_location("bench_reta", ROOT / "benchmarks" / "bench_reta.py")
+bench = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = bench
+_spec.loader.exec_module(bench)
+
+
+def test_vs_times_the_other_checkouts_code_on_the_same_scene(tmp_path):
+    package = tmp_path / "trackers" / "three_hypothesis"
+    shutil.copytree(ROOT / "trackers" / "three_hypothesis", package,
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    with open(package / "__init__.py", "a") as f:
+        f.write("\nMARK = 'the other checkout'\n")
+    other = bench.import_other(tmp_path, bench.three_hypothesis.__name__, "reta_vs_test")
+    assert other.MARK == "the other checkout"  # its files, not this tree's
+    assert other.RetaTracker is not bench.RetaTracker
+    assert other.RetaTracker.update.__module__ == "reta_vs_test.tracker"
+    table = bench.versus(other, people_counts=(3,), frames=4, rounds=2)
+    row = table.iloc[0]
+    assert row.same_rows  # the same code: the same rows
+    assert row.this_fps > 0 and row.other_fps > 0
+    assert row.ratio_min <= row.ratio <= row.ratio_max
+
+
+def test_vs_names_a_checkout_without_the_package(tmp_path):
+    with pytest.raises(FileNotFoundError, match="three_hypothesis"):
+        bench.import_other(tmp_path, bench.three_hypothesis.__name__, "reta_vs_missing")
