@@ -40,21 +40,23 @@ def meeting_pairs(a: np.ndarray, b: np.ndarray, pad: float = 0.0) -> tuple[np.nd
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     order = np.argsort(b[:, 0], kind="stable")
     bs = b[order]
-    widest = float(np.nanmax(bs[:, 2])) if not np.isnan(bs[:, 2]).all() else 0.0
+    widths = bs[:, 2][~np.isnan(bs[:, 2])]
+    widest = float(widths.max()) if len(widths) else 0.0  # np.nanmax's, without its checks
     counts = np.zeros(len(a), np.int64)
     _sweep(a, bs, order, widest, counts, np.zeros(0, np.int64))
     ib = np.empty(int(counts.sum()), np.int64)
     _sweep(a, bs, order, widest, counts, ib)
     ia = np.repeat(np.arange(len(a), dtype=np.int64), counts)
-    return ia, ib[np.lexsort((ib, ia))]  # each row's columns in ascending order
+    return ia, ib  # each row's columns in ascending order (``_sweep`` sorts them)
 
 
 @numba.njit(cache=True)
 def _sweep(a, bs, order, widest, counts, out):  # pragma: no cover (compiled)
     """Per box of a, the boxes of bs (sorted by x, ``order`` their original rows) that meet
     it: counted into ``counts`` when ``out`` is empty, else written to ``out`` (original
-    rows, row by row). A box of bs meeting a[i] starts left of a[i]'s right edge and
-    right of its left edge minus the widest box (the candidates; each is then tested)."""
+    rows, row by row, each row's ascending). A box of bs meeting a[i] starts left of a[i]'s
+    right edge and right of its left edge minus the widest box (the candidates; each is
+    then tested)."""
     m = bs.shape[0]
     fill = out.shape[0] > 0
     k = 0
@@ -70,6 +72,7 @@ def _sweep(a, bs, order, widest, counts, out):  # pragma: no cover (compiled)
             else:
                 hi = mid
         c = 0
+        start = k
         for q in range(lo, m):
             bx1 = bs[q, 0]
             if not bx1 < ax2:
@@ -79,7 +82,11 @@ def _sweep(a, bs, order, widest, counts, out):  # pragma: no cover (compiled)
             h = min(ay2, by1 + bs[q, 3]) - max(ay1, by1)
             if w > 0 and h > 0:
                 if fill:
-                    out[k] = order[q]
+                    j = k  # insertion into the row's ascending run out[start:k]
+                    while j > start and out[j - 1] > order[q]:
+                        out[j] = out[j - 1]
+                        j -= 1
+                    out[j] = order[q]
                     k += 1
                 c += 1
         if not fill:

@@ -47,10 +47,20 @@ def occlusions(S: Predictions, V: Measurements, occlusion: Occlusion) -> Occlusi
     keep = ~node | (owners[ia] < owners[np.where(node, ib, 0)])
     ia, ib, node = ia[keep], ib[keep], node[keep]
     delta = region_overlap_values(pred, regions, ia, ib, occlusion.region_samples)
-    delta_v = csr_array((delta[~node], (ia[~node], ib[~node] - nb)), shape=(nb, len(V.boxes)))
+    delta_v = _csr(delta[~node], ia[~node], ib[~node] - nb, (nb, len(V.boxes)))
     ratio = 0.5 * delta[node]  # eq. 2's ratio of the node pairs
     pairs = np.column_stack([ia[node], ib[node]])[ratio > occlusion.lam].astype(int)
     return Occlusions(pairs, ratio[ratio > occlusion.lam], delta_v)
+
+
+def _csr(values: np.ndarray, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]
+         ) -> csr_array:
+    """The CSR matrix of entries (rows[k], cols[k]) = values[k], given sorted by row then
+    column without repeats (``meeting_pairs``' order): the arrays scipy's
+    ``csr_array((values, (rows, cols)))`` builds, int64 indices, without its COO pass."""
+    indptr = np.zeros(shape[0] + 1, np.int64)
+    np.cumsum(np.bincount(rows, minlength=shape[0]), out=indptr[1:])
+    return csr_array((values, cols.astype(np.int64), indptr), shape=shape)
 
 
 def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules: Rules,

@@ -41,3 +41,22 @@ def test_block_by_block_gives_the_whole_frames_tracks(name, overrides, n, monkey
     monkeypatch.setattr(spatial.blocks, "__defaults__", (4,))  # every frame in blocks
     assert _tracks(name, overrides, n=n) == whole
     assert sum(len(o) for o in whole) > 500
+
+
+def test_the_sparse_delta_holds_the_arrays_scipys_coo_pass_builds():
+    from scipy.sparse import csr_array
+
+    from occbench.trackers.three_hypothesis.steps_occlusion import _csr
+
+    rng = np.random.default_rng(4)
+    for n, m in [(0, 3), (3, 0), (1, 1), (7, 5), (30, 12)]:
+        pairs = np.unique(rng.integers(0, [max(n, 1), max(m, 1)], (rng.integers(0, 40), 2)),
+                          axis=0).reshape(-1, 2)[: (0 if n * m == 0 else None)]
+        values = rng.random(len(pairs))
+        values[::4] = 0.0  # explicit zeros stay stored
+        ours = _csr(values, pairs[:, 0], pairs[:, 1], (n, m))
+        theirs = csr_array((values, (pairs[:, 0], pairs[:, 1])), shape=(n, m))
+        for name in ("indptr", "indices", "data"):
+            assert getattr(ours, name).tolist() == getattr(theirs, name).tolist(), name
+            assert getattr(ours, name).dtype == getattr(theirs, name).dtype, name
+        assert ours.shape == theirs.shape
