@@ -286,9 +286,11 @@ class AppearanceAtSplit:
     measurements that both could take (rho >= mu_rho, each meeting the other's
     measurement), eq. 5 has said that the pair is measured but cannot say which is whose:
     the appearance (eq. 4), which the occlusion did not take from the hidden person, decides
-    (the two measurements exchanged when rho_ib + rho_ja > rho_ia + rho_jb). Nobody else's
-    match changes."""
+    (the two measurements exchanged when rho_ib + rho_ja > rho_ia + rho_jb + ``margin``:
+    like PBM's multiple-response test, colours that fit the exchange only a little better
+    are ambiguous and decide nothing). Nobody else's match changes."""
 
+    margin: float = 0.0
     uses_merged: ClassVar[bool] = True
 
     def matches(self, rows: np.ndarray, stages: np.ndarray, rho: Callable,
@@ -316,7 +318,7 @@ class AppearanceAtSplit:
             to_i = delta[nj][:, [di]].toarray()[:, 0]
             own, other = rho(i, di) + rho(j, dj), rho(i, dj) + rho(j, di)
             if (di == dj or min(rho(i, dj), rho(j, di)) < mu_rho or not to_j.max() > 0
-                    or not to_i.max() > 0 or other <= own):
+                    or not to_i.max() > 0 or other <= own + self.margin):
                 continue
             if out is rows:
                 out = rows.copy()

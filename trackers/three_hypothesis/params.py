@@ -233,6 +233,10 @@ class Adaptations:
             measurements each could take, the appearance (eq. 4) says which is whose: they
             are exchanged when the colours fit the exchange better
             (``contact.AppearanceAtSplit``); False: stage 1's cost decides (the paper, 3.3.2).
+        split_appearance_margin: with ``split_appearance``, the colours must win by this
+            much: the exchange is taken only when eq. 4's sum over the exchanged pairs
+            exceeds stage 1's by more than this margin (PBM's multiple-response test: an
+            ambiguous appearance decides nothing); 0: whenever it is larger.
     """
 
     gate_sigmas: float = 3.0
@@ -265,11 +269,13 @@ class Adaptations:
     measured_hypothesis: bool = True
     measured_hypothesis_sigmas: float = 2.0
     split_appearance: bool = False
+    split_appearance_margin: float = 0.1
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
                       "shape_gate": float, "early_confirm_score": float,
                       "measured_hypothesis_sigmas": float,
+                      "split_appearance_margin": float,
                       "report_memory": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
@@ -285,7 +291,8 @@ class Adaptations:
                  report_support=self.report_support,
                  tentative_misses=self.tentative_misses,
                  early_confirm=self.early_confirm, report_memory=self.report_memory,
-                 measured_hypothesis_sigmas=self.measured_hypothesis_sigmas)
+                 measured_hypothesis_sigmas=self.measured_hypothesis_sigmas,
+                 split_appearance_margin=self.split_appearance_margin)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
              early_confirm_score=self.early_confirm_score)
@@ -307,7 +314,7 @@ class Adaptations:
                    merged_appearance=False, split_parts=False,
                    merged_motion=False, visible_region=False,
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
-                   split_appearance=False)
+                   split_appearance=False, split_appearance_margin=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

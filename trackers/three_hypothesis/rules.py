@@ -335,7 +335,8 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         region=VisibleRegion() if a.visible_region else WholeRegion(),
-        split=AppearanceAtSplit() if a.split_appearance else RegionAtSplit(),
+        split=(AppearanceAtSplit(a.split_appearance_margin) if a.split_appearance
+               else RegionAtSplit()),
         line=(MeasuredLine(life_cycle.m, a.measured_hypothesis_sigmas)
               if a.measured_hypothesis else FilterVelocity()),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),

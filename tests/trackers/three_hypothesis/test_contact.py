@@ -204,15 +204,17 @@ def test_own_shares_equal_the_per_row_definition_bit_for_bit():
 
 
 def _split_takers(rule, merged: list[bool], hidden: list[bool], stage: int = 1,
-                  delta: list | None = None) -> list[int]:
+                  delta: list | None = None, rho_10: float = 0.7) -> list[int]:
     """pets1-400 sil frame 166 in miniature: persons 0 and 1 in O, two measurements meet
     both. Colours: person 0 rho 0.6 for both, person 1 0.7 for measurement 0 and 0.5 for 1;
     regions: person 0 delta 0.49 / 0.76, person 1 0.24 / 0.83 (person 0's M dragged by the
     merged box, person 1's hypothesis lagging). Stage 1 (the paper's cost) gives each the
-    other's measurement; returns the measurement each person takes after ``rule``."""
+    other's measurement; returns the measurement each person takes after ``rule``
+    (``rho_10``: person 1's rho for measurement 0)."""
     from occbench.trackers.three_hypothesis.association import associate
 
-    sqrt_q = np.array([[0.6, 0.6, np.sqrt(0.28)], [0.7, 0.5, np.sqrt(0.26)]])
+    sqrt_q = np.array([[0.6, 0.6, np.sqrt(0.28)],
+                       [rho_10, 0.5, np.sqrt(max(1.0 - rho_10 ** 2 - 0.25, 0.0))]])
     sqrt_p = np.eye(3)[:2]  # rho = sqrt_q's first two columns
     boxes = np.array([[100.0, 50, 20, 60], [104.0, 50, 20, 60]])
     owners, pairs = np.array([0, 1]), np.array([[0, 1]])
@@ -249,3 +251,16 @@ def test_where_a_merged_pair_parts_the_colours_say_who_is_whose():
                       AppearanceAtSplit)
     assert "split_appearance" not in Adaptations.paper().changed()
     assert "split_appearance" not in Adaptations().changed()  # off until measured
+
+
+def test_where_a_merged_pair_parts_colours_that_win_by_little_decide_nothing():
+    """``split_appearance_margin``: the same parting with person 1's rho for measurement 0
+    at 0.55: the exchange fits the colours better by 0.05 (0.6 + 0.55 against 0.6 + 0.5),
+    taken at margin 0, not at 0.1; at 0.7 (by 0.2) taken at both."""
+    assert _split_takers(AppearanceAtSplit(), [True, False], [False, True], rho_10=0.55) == [1, 0]
+    assert _split_takers(AppearanceAtSplit(0.1), [True, False], [False, True],
+                         rho_10=0.55) == [0, 1]
+    assert _split_takers(AppearanceAtSplit(0.1), [True, False], [False, True]) == [1, 0]
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(split_appearance=True), h).split == AppearanceAtSplit(0.1)
+    assert Adaptations.paper().split_appearance_margin == 0.0
