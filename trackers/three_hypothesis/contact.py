@@ -1,8 +1,7 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
 ``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
-``split_appearance``),
-``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
+``split_appearance``, ``merged_unmixed``), ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
 xywh, 0-based pixels.
@@ -32,8 +31,10 @@ class MeasurementAppearance:
     as its appearance q."""
 
     uses_shares: ClassVar[bool] = False
+    uses_partners: ClassVar[bool] = False
 
-    def update(self, q: np.ndarray, p: np.ndarray, own: float) -> np.ndarray:
+    def update(self, q: np.ndarray, p: np.ndarray, own: float,
+               partner: np.ndarray | None = None) -> np.ndarray:
         return p
 
 
@@ -48,11 +49,36 @@ class MergedAppearance:
     each other."""
 
     uses_shares: ClassVar[bool] = True
+    uses_partners: ClassVar[bool] = False
 
-    def update(self, q: np.ndarray, p: np.ndarray, own: float) -> np.ndarray:
+    def update(self, q: np.ndarray, p: np.ndarray, own: float,
+               partner: np.ndarray | None = None) -> np.ndarray:
         if own >= 1.0:
             return p
         return blend(q, p, own) if own > 0 else q
+
+
+@dataclass(frozen=True)
+class UnmixedAppearance(MergedAppearance):
+    """``merged_unmixed`` (with ``merged_appearance``): a merged measurement is an
+    occlusion, so its histogram p (eq. 1) is the mixture of the two people's by their shares
+    of its region, p = own q_i + (1 - own) q_j, and the hidden partner j's appearance q_j is
+    known (kept through the occlusion). Person i's part of p is what is left when j's share
+    is taken out, r = max(p - (1 - own) q_j, 0) normalised, and q moves towards r (not p) by
+    ``own``: q <- (1 - own) q + own r. A person in front of a look-alike, or wholly inside
+    the partner's region (own 0), keeps q; with no partner (own 1) q = p as in the paper.
+    (PBM keeps a target's parts model when a part does not match, ``update.part_threshold``:
+    the colours of the person behind do not enter the model of the person in front.)"""
+
+    uses_partners: ClassVar[bool] = True
+
+    def update(self, q: np.ndarray, p: np.ndarray, own: float,
+               partner: np.ndarray | None = None) -> np.ndarray:
+        if own >= 1.0 or partner is None:
+            return MergedAppearance.update(self, q, p, own)
+        r = np.maximum(p - (1.0 - own) * partner, 0.0)
+        total = r.sum()
+        return blend(q, r / total, own) if own > 0 and total > 0 else q
 
 
 # --------------------------------------------------------------- 3.3.3: M of a person in front
@@ -86,7 +112,7 @@ class MergedMotion:
 
 def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
                hidden: np.ndarray, pred: np.ndarray, dets: np.ndarray,
-               delta: csr_array) -> np.ndarray:
+               delta: csr_array, partners: np.ndarray | None = None) -> np.ndarray:
     """(K,) share of each matched measurement's region that no predicted region of a hidden
     partner covers: 1 - max_m |S_m & S_d| / |S_d| over the nodes m, in O with the row's node,
     of a person with ``hidden`` True (|S_m & S_d| = delta (|S_m| + |S_d|) / 2, eq. 5).
@@ -98,6 +124,8 @@ def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
         pred: (B, 4) predicted regions; dets: (D, 4) measurements.
         delta: sparse (B, D) region similarity of ``pred`` and ``dets`` (eq. 5), canonical
             (sorted, no duplicates: as ``steps_occlusion.occlusions`` builds it).
+        partners: optional (K,) int array, filled in place with the person whose nodes
+            cover most of each row's measurement (left as given where none does).
     """
     own = np.ones(len(matches))
     if not len(pairs) or not hidden.any():
@@ -124,6 +152,10 @@ def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
     np.maximum.at(biggest, r, inter)  # max over the row's partners
     k = np.unique(r)
     own[k] = np.clip(1.0 - biggest[k] / np.maximum(area_d[k], 1e-9), 0.0, 1.0)
+    if partners is not None:  # the person of each row's largest cover (the last of a tie)
+        o = np.lexsort((inter, r))
+        last = np.r_[r[o][1:] != r[o][:-1], True]
+        partners[r[o][last]] = owners[m[o][last]]
     return own
 
 

@@ -237,6 +237,10 @@ class Adaptations:
             much: the exchange is taken only when eq. 4's sum over the exchanged pairs
             exceeds stage 1's by more than this margin (PBM's multiple-response test: an
             ambiguous appearance decides nothing); 0: whenever it is larger.
+        merged_unmixed: with ``merged_appearance``, the person matched to a measurement
+            that holds a hidden partner moves q towards the measurement's histogram less
+            the partner's q by its share (``contact.UnmixedAppearance``); False: towards
+            the measurement's whole histogram p.
     """
 
     gate_sigmas: float = 3.0
@@ -270,6 +274,7 @@ class Adaptations:
     measured_hypothesis_sigmas: float = 2.0
     split_appearance: bool = False
     split_appearance_margin: float = 0.1
+    merged_unmixed: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -285,7 +290,7 @@ class Adaptations:
                       "contact_region": bool, "merged_appearance": bool,
                       "split_parts": bool, "merged_motion": bool,
                       "visible_region": bool, "measured_hypothesis": bool,
-                      "split_appearance": bool})
+                      "split_appearance": bool, "merged_unmixed": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -314,7 +319,8 @@ class Adaptations:
                    merged_appearance=False, split_parts=False,
                    merged_motion=False, visible_region=False,
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
-                   split_appearance=False, split_appearance_margin=0.0)
+                   split_appearance=False, split_appearance_margin=0.0,
+                   merged_unmixed=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -28,6 +28,7 @@ from occbench.trackers.three_hypothesis.contact import (
     RegionAtContact,
     RegionAtSplit,
     SplitParts,
+    UnmixedAppearance,
     VisibleRegion,
     WholeRegion,
 )
@@ -305,7 +306,7 @@ class Rules(NamedTuple):
     motion_behind: PredictedBehind | CorrectedBehind
     motion_front: MeasurementMotion | MergedMotion  # R of a person in front (3.3.3)
     appearance_behind: KeepAppearance | BlendVisible
-    appearance_front: MeasurementAppearance | MergedAppearance  # q of a person in front (3.3.3)
+    appearance_front: MeasurementAppearance | MergedAppearance | UnmixedAppearance  # 3.3.3
     shape_behind: PredictionShape | EstimateShape
     identity: NewIdentity | HiddenIdentity  # the id a confirmed track takes
     support: NoSupport | ForegroundSupport
@@ -343,7 +344,8 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         motion_front=MergedMotion() if a.merged_motion else MeasurementMotion(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
-        appearance_front=MergedAppearance() if a.merged_appearance else MeasurementAppearance(),
+        appearance_front=(MeasurementAppearance() if not a.merged_appearance
+                          else UnmixedAppearance() if a.merged_unmixed else MergedAppearance()),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
         identity=HiddenIdentity() if a.inherit_hidden_id else NewIdentity(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),

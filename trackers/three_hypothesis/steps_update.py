@@ -43,7 +43,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     dbox = V.boxes[visible_dets]
     behind = np.array([m.node in in_front for m in matches])
     z = box_measurements(dbox)
-    own = _own_share(S, V, O, A, rules, matches)
+    own, partner = _own_share(S, V, O, A, rules, matches)
     Rs = rules.motion_front.noise(np.array([persons[i].R for i in keys]),
                                   np.where(behind, 1.0, own))
     predicted = S.Xp[idx], S.Pp[idx]
@@ -62,7 +62,8 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
         if not behind[r]:
-            person.q = rules.appearance_front.update(person.q, p[d], own[r])
+            person.q = rules.appearance_front.update(
+                person.q, p[d], own[r], persons[partner[r]].q if partner[r] >= 0 else None)
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
@@ -151,16 +152,19 @@ def _visible_share(V: Measurements, A: Matching, D: DepthOrder, matches: list[Ma
 
 
 def _own_share(S: Predictions, V: Measurements, O: Occlusions, A: Matching, rules: Rules,
-               matches: list[Match]) -> np.ndarray:
+               matches: list[Match]) -> tuple[np.ndarray, np.ndarray]:
     """Per matched person (``matches``), the share of its measured region no
-    hidden confirmed partner in O covers (``contact.own_shares``); 1 everywhere unless a
-    front rule reads it."""
+    hidden confirmed partner in O covers (``contact.own_shares``; 1 everywhere unless a
+    front rule reads it), and the person index of the partner covering most (-1: none, or
+    no rule reads it)."""
+    partner = np.full(len(matches), -1)
     if not (rules.appearance_front.uses_shares or rules.motion_front.uses_shares
             or rules.split.uses_merged):
-        return np.ones(len(matches))
+        return np.ones(len(matches)), partner
     hidden = np.array([person.confirmed and i not in A.matched
                        for i, person in enumerate(S.persons)], dtype=bool)
-    return own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta)
+    return own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta,
+                      partner if rules.appearance_front.uses_partners else None), partner
 
 
 def _confirm(S: Predictions, A: Matching, absorbed: set[int], person: Person,
