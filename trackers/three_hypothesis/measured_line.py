@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import chain
 from typing import ClassVar
 
 import numpy as np
@@ -94,7 +95,9 @@ class MeasuredLine:
         sizes = np.array([len(person.centres) for person in persons], dtype=np.int64)
         for n in np.unique(sizes[sizes >= 3]).tolist():
             k = np.flatnonzero(sizes == n)
-            t0, x0, y0, vx, vy = _lines(np.array([persons[r].centres for r in k.tolist()]))
+            rows = chain.from_iterable(chain.from_iterable(persons[r].centres for r in k.tolist()))
+            t0, x0, y0, vx, vy = _lines(np.fromiter(rows, np.float64, len(k) * n * 3)
+                                        .reshape(len(k), n, 3))  # the (G, n, 3) histories
             h2 = _squares(np.maximum(boxes[k, 3], 1.0))
             mine = (_squares(predicted[k, 0] - cx[k]) + _squares(predicted[k, 1] - cy[k])) / h2
             line = (_squares(x0 + vx * (frame - t0) - cx[k])

@@ -47,10 +47,10 @@ def predict(persons: list[Person], motion: CentreState | BoxState) -> Prediction
     kinds = [b.kind for b in branches]
     occ_v = np.zeros((len(branches), 2))  # read by 'occluder' hypotheses only
     if hyp.OCCLUDER in kinds:
-        velocity = {person.key: person.branches[0].x[4:6] for person in persons}
+        person_of = {person.key: person for person in persons}
         for r, b in enumerate(branches):
-            if b.kind == hyp.OCCLUDER and b.occluder in velocity:
-                occ_v[r] = velocity[b.occluder]
+            if b.kind == hyp.OCCLUDER and b.occluder in person_of:
+                occ_v[r] = person_of[b.occluder].branches[0].x[4:6]
     x_set = hyp.set_motion(x_prev, kinds, occ_v)
     Qs = np.array([person.Q for person in persons])[owners]
     Xp, Pp = motion.predict(x_set, P_prev, Qs)
