@@ -159,6 +159,11 @@ class Adaptations:
             0: off, each target kept until lost, PBM 3). Stands aside without a mask.
         fold_twins_own: with ``fold_twins``, the foreground share of the younger box lying
             outside the older box below which the younger has no region of its own.
+        measured_velocity: an unfound target is reported at its last box moved by its
+            measured velocity (the displacement of its last two found boxes per frame) when
+            that velocity has predicted its found boxes better than KF1's so far
+            (``trackers.common.measured_velocity``, reta's rule; false: where KF1 predicts,
+            ``report_predicted``). Reporting only.
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -199,6 +204,7 @@ class Adaptations:
     coarse_search: bool = False
     fold_twins: int = 0
     fold_twins_own: float = 0.0
+    measured_velocity: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -240,7 +246,7 @@ class Adaptations:
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
-                                       "coarse_search"),
+                                       "coarse_search", "measured_velocity"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int})
@@ -259,7 +265,8 @@ class Adaptations:
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
-                   coarse_search=False, fold_twins=0, fold_twins_own=0.0)
+                   coarse_search=False, fold_twins=0, fold_twins_own=0.0,
+                   measured_velocity=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from occbench.trackers.common.assignment import assign
+from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.evidence import HiddenEvidence, box_foreground
@@ -343,6 +344,7 @@ class Rules(NamedTuple):
     exit: PredictedExit | BorderExit  # an unfound target that left the picture (ours)
     leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
     twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
+    velocity: FilterPrediction | MeasuredVelocity  # where an unfound target stands (ours)
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -368,4 +370,21 @@ def build_rules(a: Adaptations) -> Rules:
         leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0
                  else ReportAnywhere()),
         twins=FoldTwins(a.fold_twins, a.fold_twins_own) if a.fold_twins > 0 else KeepStacked(),
+        velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
     )
+
+
+def place_unfound(rule: FilterPrediction | MeasuredVelocity, frame: int, targets: Targets,
+                  rows: np.ndarray, boxes: np.ndarray, found: np.ndarray) -> None:
+    """``rules.velocity`` (``adaptations.measured_velocity``): record the found confirmed
+    targets' boxes among ``rows`` with KF1's velocities, and move the boxes (R, 4) of the
+    unfound ones in place where their measured velocity has predicted better; found (T,)
+    bool. Reporting only: no target's state changes."""
+    seen = found[rows] & targets.confirmed[rows]
+    rule.found(frame, targets.id[rows[seen]].tolist(), boxes[seen], targets.kf1.x[rows[seen], 2:4])
+    hidden = ~found[rows]
+    if hidden.any():
+        moved = boxes[hidden]
+        rule.place(frame, targets.id[rows[hidden]].tolist(), moved)
+        boxes[hidden] = moved
+    rule.forget(set(targets.id.tolist()))

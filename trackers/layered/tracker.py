@@ -74,7 +74,7 @@ from occbench.trackers.layered.params import (
     UpdateParams,
 )
 from occbench.trackers.layered.parts import PartFeatureExtractor, PartFeatures, centroid_ratios
-from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.layered.rules import build_rules, place_unfound
 from occbench.trackers.layered.search import Candidates, head_patch, head_patches, occlusion_kinds
 from occbench.trackers.layered.selection import FrameScores, MultipleResponsePruning
 from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
@@ -162,9 +162,9 @@ class PBMTracker:
         self.targets = Targets(self._gate, self.noise.kf1, self.noise.kf2, u.ratio_window,
                                u.occluded_window, self._extractor.bins)
         self._finder.reset()
-        self._next_id = 1
-        self._frame = 0
+        self._next_id, self._frame = 1, 0
         self._stacked: dict[tuple[int, int], int] = {}  # adaptations.fold_twins' evidence
+        self.rules.velocity.reset()  # adaptations.measured_velocity's records
 
     # ------------------------------------------------------------------ update (PBM Fig. 1)
     def update(self, frame: np.ndarray, detections: Detections | None,
@@ -369,11 +369,10 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ report
     def _report(self, fg: np.ndarray | None, W: int, H: int) -> list[Track]:
-        """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed
-        and unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) at its
-        last box or where KF1 predicts it (``rules.report_box``), while ``rules.report_shown``
-        finds evidence of it there and ``rules.leaving`` does not see it walk out of the
-        (W, H) image."""
+        """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed and
+        unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) where
+        ``rules.report_box`` / ``rules.velocity`` put it, while ``rules.report_shown`` finds
+        evidence of it and ``rules.leaving`` does not see it walk out of the (W, H) image."""
         tg = self.targets
         found = tg.misses == 0
         shown = found
@@ -383,6 +382,7 @@ class PBMTracker:
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
         self.rules.report_box.place(boxes, tg, rows, found)
+        place_unfound(self.rules.velocity, self._frame, tg, rows, boxes, found)
         keep = self.rules.report_shown.shown(boxes, fg, tg.hits[rows], tg.misses[rows])
         keep = self.rules.leaving.shown(boxes, tg.kf1.x[rows, 2:], found[rows], W, H, keep)
         if keep is not None:
