@@ -164,6 +164,10 @@ class Adaptations:
             that velocity has predicted its found boxes better than KF1's so far
             (``trackers.common.measured_velocity``, reta's rule; false: where KF1 predicts,
             ``report_predicted``). Reporting only.
+        reported_behind: a confirmed target unfound for longer than
+            ``reporting.max_misses`` frames is still reported while a found target nearer
+            the camera covers this share of its box (``evidence.ReportedBehind``; 0: off,
+            reported for ``reporting.max_misses`` frames at most).
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -205,13 +209,14 @@ class Adaptations:
     fold_twins: int = 0
     fold_twins_own: float = 0.0
     measured_velocity: bool = False
+    reported_behind: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
                 self.model_spread)
         unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
              report_support=self.report_support, rival_match=self.rival_match,
-             lone_shrink=self.lone_shrink)
+             lone_shrink=self.lone_shrink, reported_behind=self.reported_behind)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
@@ -240,7 +245,7 @@ class Adaptations:
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support", "rival_match", "contested_template",
                                        "lone_shrink", "lone_shrink_shape", "leaving_unreported",
-                                       "fold_twins_own"),
+                                       "fold_twins_own", "reported_behind"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -266,7 +271,7 @@ class Adaptations:
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
                    coarse_search=False, fold_twins=0, fold_twins_own=0.0,
-                   measured_velocity=False)
+                   measured_velocity=False, reported_behind=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

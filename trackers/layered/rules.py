@@ -20,7 +20,8 @@ from occbench.trackers.common.assignment import assign
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
-from occbench.trackers.layered.evidence import HiddenEvidence, box_foreground
+from occbench.trackers.layered.evidence import (HiddenEvidence, MissesBound, ReportedBehind,
+                                               box_foreground)
 from occbench.trackers.layered.exits import (
     BorderExit,
     LeavingUnreported,
@@ -345,6 +346,7 @@ class Rules(NamedTuple):
     leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
     twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
     velocity: FilterPrediction | MeasuredVelocity  # where an unfound target stands (ours)
+    behind: MissesBound | ReportedBehind  # reported past reporting.max_misses? (ours)
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -371,6 +373,7 @@ def build_rules(a: Adaptations) -> Rules:
                  else ReportAnywhere()),
         twins=FoldTwins(a.fold_twins, a.fold_twins_own) if a.fold_twins > 0 else KeepStacked(),
         velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
+        behind=ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound(),
     )
 
 

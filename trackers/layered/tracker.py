@@ -369,15 +369,15 @@ class PBMTracker:
 
     # ------------------------------------------------------------------ report
     def _report(self, fg: np.ndarray | None, W: int, H: int) -> list[Track]:
-        """One Track per reported target: found (CONFIRMED or TENTATIVE), or confirmed and
-        unfound for at most ``reporting.max_misses`` frames (OCCLUDED, score 0) where
-        ``rules.report_box`` / ``rules.velocity`` put it, while ``rules.report_shown`` finds
-        evidence of it and ``rules.leaving`` does not see it walk out of the (W, H) image."""
+        """One Track per reported target: found, or confirmed and unfound for at most
+        ``reporting.max_misses`` frames (``rules.behind``: longer; OCCLUDED, score 0) where
+        ``rules.report_box`` / ``rules.velocity`` put it, as ``rules.report_shown`` and
+        ``rules.leaving`` allow in the (W, H) image."""
         tg = self.targets
-        found = tg.misses == 0
-        shown = found
+        found = shown = tg.misses == 0
         if self.reporting.occluded:
             shown = found | (tg.confirmed & (tg.misses <= self.reporting.max_misses))
+            shown = self.rules.behind.shown(tg, found, shown, self.rules.report_box)
         rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
