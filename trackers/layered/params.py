@@ -17,7 +17,7 @@ import numpy as np
 
 from occbench.trackers.common.checks import at_least, coerce, require, unit
 from occbench.trackers.layered.feature_models import FeatureModels
-from occbench.trackers.layered.parts import FEATURES, MIN_GRID, N_PARTS
+from occbench.trackers.layered.parts import FEATURES, MAX_GRID_COLS, MIN_GRID, N_PARTS
 
 DEFAULT_FEATURE_WEIGHTS = {"area": 0.15, "perimeter": 0.1, "hsv": 0.25, "xyz": 0.25,
                            "displacement": 0.1, "overlap": 0.15}
@@ -25,10 +25,13 @@ DEFAULT_PART_WEIGHTS = (0.3, 0.2, 0.2, 0.15, 0.15)
 
 
 def _grid(group: str, name: str, value: Sequence[int]) -> tuple[int, int]:
-    """(rows, cols), at least ``MIN_GRID`` (``PartFeatureExtractor``'s)."""
+    """(rows, cols), at least ``MIN_GRID``, at most ``MAX_GRID_COLS`` columns
+    (``PartFeatureExtractor``'s)."""
     rc = tuple(int(v) for v in value)
-    require(f"{group}.{name}", len(rc) == 2 and rc[0] >= MIN_GRID[0] and rc[1] >= MIN_GRID[1],
-            "must be at least {} x {} samples (rows, cols)".format(*MIN_GRID), list(value))
+    require(f"{group}.{name}", len(rc) == 2 and rc[0] >= MIN_GRID[0]
+            and MIN_GRID[1] <= rc[1] <= MAX_GRID_COLS,
+            "must be at least {} x {} samples (rows, cols), at most {} columns".format(
+                *MIN_GRID, MAX_GRID_COLS), list(value))
     return rc  # type: ignore[return-value]
 
 

@@ -63,6 +63,8 @@ FEATURES: tuple[str, ...] = ("area", "perimeter", "hsv", "xyz", "displacement", 
 N_FEATURES = len(FEATURES)
 #: fewest (rows, cols) samples of a box (the head band, its top 1/7, is whole rows)
 MIN_GRID = (7, 2)
+#: most sample columns of a box (a grid row is one 64-bit mask in ``sampling_kernels``)
+MAX_GRID_COLS = 64
 
 DEFAULT_ALPHA = 0.5
 """Centroid column ratio of an upright symmetric person (eq. 1)."""
@@ -223,9 +225,9 @@ class PartFeatureExtractor:
 
     def __init__(self, bins: int = 4, grid_rows: int = 35, grid_cols: int = 15) -> None:
         require("features.histogram_bins", 1 <= bins <= 32, "must lie in 1..32", bins)
-        require("features.grid", grid_rows >= MIN_GRID[0] and grid_cols >= MIN_GRID[1],
-                "must be at least {} x {} samples (rows, cols)".format(*MIN_GRID),
-                [grid_rows, grid_cols])
+        require("features.grid", grid_rows >= MIN_GRID[0] and MIN_GRID[1] <= grid_cols <= MAX_GRID_COLS,
+                "must be at least {} x {} samples (rows, cols), at most {} columns".format(
+                    *MIN_GRID, MAX_GRID_COLS), [grid_rows, grid_cols])
         self.bins = bins
         self.grid_rows = grid_rows
         self.grid_cols = grid_cols

@@ -158,15 +158,28 @@ def grid_centroids(boxes: np.ndarray, grid: tuple, image: tuple, out: np.ndarray
 
 @numba.njit(cache=True, inline="always")
 def _box_scratch(R: int, C: int, nb: int) -> tuple:
-    """The scratch of ``_box_counts`` for an R x C sample grid and nb-bin histograms: the
-    grid (ys, xs, yi, xi, on, band, right, coff), the per-part sums (count, edge, sx,
-    sy), the joint-bin counts hist (2, 5, nb) int64 (HSV, XYZ; zero between boxes) and
-    the occupied bins of each count row as a bit mask (2, 5) uint64 (bin u: bit u; kept
-    when nb <= 64)."""
+    """The scratch of ``_box_counts`` for an R x C sample grid (C <= ``MAX_GRID_COLS``) and
+    nb-bin histograms: the grid (ys, xs, yi, xi, on, band, right, coff), the per-part sums
+    (count, edge, sx, sy), the joint-bin counts hist (2, 5, nb) int64 (HSV, XYZ; zero
+    between boxes), the occupied bins of each count row as a bit mask (2, 5) uint64 (bin u:
+    bit u; kept when nb <= 64) and the foreground samples of each grid row as a bit mask
+    (R,) uint64 (column c: bit c; ``_row_masks``)."""
     return (np.empty(R), np.empty(C), np.empty(R, np.int64), np.empty(C, np.int64),
             np.empty((R, C), np.uint8), np.empty(R, np.int64), np.empty(C, np.int64),
             np.empty(C, np.uint64), np.zeros(5, np.int64), np.zeros(5, np.int64), np.zeros(5),
-            np.zeros(5), np.zeros((2, 5, nb), np.int64), np.zeros((2, 5), np.uint64))
+            np.zeros(5), np.zeros((2, 5, nb), np.int64), np.zeros((2, 5), np.uint64),
+            np.empty(R, np.uint64))
+
+
+@numba.njit(cache=True, inline="always")
+def _row_masks(on: np.ndarray, masks: np.ndarray) -> None:
+    """The foreground flags ``on`` (R, C) (``_sample_grid``) of each grid row as a bit mask
+    into masks (R,) uint64 (column c: bit c; C <= ``MAX_GRID_COLS``)."""
+    for r in range(on.shape[0]):
+        b = np.uint64(0)
+        for c in range(on.shape[1]):
+            b |= np.uint64(on[r, c]) << np.uint64(c)
+        masks[r] = b
 
 
 @numba.njit(cache=True, inline="always")
@@ -180,16 +193,21 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
     Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
     centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
     sample is on the outline when a 4-neighbour is background or off the grid.
+
+    A grid row is walked as bit masks (``_row_masks``): its foreground samples left of the
+    split, then those right of it (the two parts' sums are separate, each in sample
+    order, as ``np.bincount(weights=...)``); the outline samples are those whose row's and
+    neighbour rows' masks are not all set around them.
     """
     fr, fc = grid
     frame, fg, has_fg = image
     hsv_lut, xyz_lut = luts
     table, stamp = pixel_bins
-    ys, xs, yi, xi, on, band, right, coff, count, edge, sx, sy, hist, occupied = s
+    ys, xs, yi, xi, on, band, right, coff, count, edge, sx, sy, hist, occupied, masks = s
     H, W = frame.shape[0], frame.shape[1]
     R, C = fr.shape[0], fc.shape[0]
     pixels = frame.reshape(H * W * 3)
-    one, two, three, low = np.uint64(1), np.uint64(2), np.uint64(3), np.uint64(63)
+    zero, one, low = np.uint64(0), np.uint64(1), np.uint64(63)
     x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
     _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
     if at_centroids:
@@ -213,65 +231,63 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
         else:
             band[r] = 3
             rows_legs += 1
+    right_mask = zero
     for c in range(C):
         right[c] = 1 if xs[c] >= split else 0
         cols_right += right[c]
+        right_mask |= np.uint64(right[c]) << np.uint64(c)
+    _row_masks(on, masks)
     count[:] = 0
     edge[:] = 0
     sx[:] = 0.0
     sy[:] = 0.0
     occupied[:] = 0
     for r in range(R):
-        # the row's left and right parts (the same part in the head band); their
-        # sums are carried in registers through the row, each in sample order
+        row = masks[r]
+        up = masks[r - 1] if r > 0 else zero
+        down = masks[r + 1] if r < R - 1 else zero
+        outline = row & ~(up & down & (row << one) & (row >> one))  # bits 0, C - 1: always
         kl = band[r]
-        kr = kl + 1 if kl > 0 else 0
-        split_row = kr != kl
-        yr = ys[r]
-        nl, el, sxl, syl = count[kl], edge[kl], sx[kl], sy[kl]
-        nr, er, sxr, syr = count[kr], edge[kr], sx[kr], sy[kr]
-        hl, xl, hr, xr = occupied[0, kl], occupied[1, kl], occupied[0, kr], occupied[1, kr]
+        kr = kl + 1 if kl > 0 else 0  # the same part in the head band
         roff = np.uint64(yi[r] * W)
-        for c in range(C):
-            if not on[r, c]:
-                continue
-            q = roff + coff[c]  # the pixel's index (unsigned: no negative-index test)
-            packed = table[q]
-            if (packed >> 32) != stamp:  # first read this frame: convert it
-                o = q * three
-                ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
-                                                  np.int64(pixels[o + two]))
-                packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
-                           + hsv_lut[2, np.uint64(cv)]) << 16) | (
-                    xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
-                ) | (stamp << 32)
-                table[q] = packed
-            hsv_bin, xyz_bin = np.uint64((packed >> 16) & 0xFFFF), np.uint64(packed & 0xFFFF)
-            outline = (r == 0 or c == 0 or r == R - 1 or c == C - 1 or not on[r - 1, c]
-                       or not on[r + 1, c] or not on[r, c - 1] or not on[r, c + 1])
-            if split_row and right[c]:
-                k = kr
-                nr += 1
-                er += outline
-                sxr += xs[c]  # in sample order, as np.bincount(weights=...)
-                syr += yr
-                hr |= one << (hsv_bin & low)
-                xr |= one << (xyz_bin & low)
+        for side in range(2):
+            if kr == kl:
+                if side == 1:
+                    break
+                bits, k = row, kl
+            elif side == 0:
+                bits, k = row & ~right_mask, kl
             else:
-                k = kl
-                nl += 1
-                el += outline
-                sxl += xs[c]
-                syl += yr
-                hl |= one << (hsv_bin & low)
-                xl |= one << (xyz_bin & low)
-            hist[0, k, hsv_bin] += 1
-            hist[1, k, xyz_bin] += 1
-        count[kl], edge[kl], sx[kl], sy[kl] = nl, el, sxl, syl
-        occupied[0, kl], occupied[1, kl] = hl, xl
-        if split_row:
-            count[kr], edge[kr], sx[kr], sy[kr] = nr, er, sxr, syr
-            occupied[0, kr], occupied[1, kr] = hr, xr
+                bits, k = row & right_mask, kr
+            # the part's sums carried in registers through the row, in sample order
+            n, e, sxk, syk = count[k], edge[k], sx[k], sy[k]
+            hk, xk = occupied[0, k], occupied[1, k]
+            while bits != zero:
+                c = trailing_zeros(bits)
+                bits &= bits - one
+                # the pixel's bins (its index unsigned: no negative-index test)
+                q = roff + coff[c]
+                packed = table[q]
+                if (packed >> 32) != stamp:  # first read this frame: convert it
+                    o = q * np.uint64(3)
+                    ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
+                                                      np.int64(pixels[o + np.uint64(2)]))
+                    packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
+                               + hsv_lut[2, np.uint64(cv)]) << 16) | (
+                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
+                    ) | (stamp << 32)
+                    table[q] = packed
+                hsv_bin, xyz_bin = np.uint64((packed >> 16) & 0xFFFF), np.uint64(packed & 0xFFFF)
+                n += 1
+                e += np.int64((outline >> np.uint64(c)) & one)
+                sxk += xs[c]  # in sample order, as np.bincount(weights=...)
+                syk += ys[r]
+                hk |= one << (hsv_bin & low)
+                xk |= one << (xyz_bin & low)
+                hist[0, k, hsv_bin] += 1
+                hist[1, k, xyz_bin] += 1
+            count[k], edge[k], sx[k], sy[k] = n, e, sxk, syk
+            occupied[0, k], occupied[1, k] = hk, xk
     return rows_head, rows_torso, rows_legs, cols_right
 
 

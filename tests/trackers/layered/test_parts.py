@@ -151,6 +151,12 @@ def test_bad_input():
         PartFeatureExtractor(4, 5, 9)
     with pytest.raises(ValueError, match=r"^features\.search_grid must be at least 7 x 2 "):
         FeatureParams(search_grid=(5, 9))  # named by its own key before an extractor is built
+    # a grid row is one 64-bit mask in the kernels
+    with pytest.raises(ValueError, match=r"^features\.grid .* at most 64 columns, got \[35, 65\]$"):
+        PartFeatureExtractor(4, 35, 65)
+    with pytest.raises(ValueError, match=r"^features\.search_grid .* at most 64 columns"):
+        FeatureParams(search_grid=(21, 65))
+    PartFeatureExtractor(4, 7, 64)  # the widest grid
 
 
 def test_lut_bins_equal_the_joint_index_formula():
@@ -274,7 +280,7 @@ def _scene(seed, fg_kind):
 
 @pytest.mark.parametrize("fg_kind", ["mask", "empty", "none"])
 @pytest.mark.parametrize(
-    "bins, grid", [(4, (35, 15)), (4, (21, 9)), (8, (21, 9)), (3, (14, 5)), (2, (133, 3))])
+    "bins, grid", [(4, (35, 15)), (4, (21, 9)), (8, (21, 9)), (3, (14, 5)), (2, (133, 3)), (4, (14, 64))])
 def test_extractor_equals_the_reference(fg_kind, bins, grid):
     frame, fg, boxes, alpha, beta = _scene(bins * 100 + grid[0], fg_kind)
     ex = PartFeatureExtractor(bins, *grid)
