@@ -39,7 +39,7 @@ def test_unknown_key_exits_nonzero_naming_it():
 
 
 @pytest.mark.parametrize("tracker,key", [
-    ("reta", "stage1_unmatched_cost"), ("pbm", "occluded_cover"), ("pbm", "measured_velocity"),
+    ("reta", "stage1_unmatched_cost"), ("pbm", "occluded_cover"),
     ("pbm", "assignment"), ("pbm", "overlap_as_measured"), ("pbm", "position_gate"),
     ("reta", "noise_estimate"), ("pbm", "merge_stacked"), ("pbm", "twin_refind")])
 def test_an_adaptation_key_a_tracker_does_not_have_is_named(tracker, key):
