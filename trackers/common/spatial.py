@@ -38,16 +38,28 @@ def meeting_pairs(a: np.ndarray, b: np.ndarray, pad: float = 0.0) -> tuple[np.nd
         a = a + np.array([-pad, -pad, 2 * pad, 2 * pad])
     if len(a) == 0 or len(b) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    a, b = _meeting_nothing(a), _meeting_nothing(b)
     order = np.argsort(b[:, 0], kind="stable")
     bs = b[order]
-    widths = bs[:, 2][~np.isnan(bs[:, 2])]
-    widest = float(widths.max()) if len(widths) else 0.0  # np.nanmax's, without its checks
+    widest = float(bs[:, 2].max())
     counts = np.zeros(len(a), np.int64)
     _sweep(a, bs, order, widest, counts, np.zeros(0, np.int64))
     ib = np.empty(int(counts.sum()), np.int64)
     _sweep(a, bs, order, widest, counts, ib)
     ia = np.repeat(np.arange(len(a), dtype=np.int64), counts)
     return ia, ib  # each row's columns in ascending order (``_sweep`` sorts them)
+
+
+def _meeting_nothing(boxes: np.ndarray) -> np.ndarray:
+    """``boxes`` with every box holding a NaN made (0, 0, -1, -1), which meets nothing: in
+    ``boxes_meet`` a NaN makes the pair's width or height NaN, so it meets nothing, while
+    the sweep's scalar min and max would drop a NaN of the second box."""
+    bad = np.isnan(boxes).any(axis=1)
+    if not bad.any():
+        return boxes
+    boxes = boxes.copy()
+    boxes[bad] = (0.0, 0.0, -1.0, -1.0)
+    return boxes
 
 
 @numba.njit(cache=True)

@@ -22,6 +22,9 @@ def test_meeting_pairs_are_the_dense_pairs_in_row_major_order():
         a, b = _boxes(rng, rng.integers(0, 40)), _boxes(rng, rng.integers(0, 40))
         if trial % 5 == 0 and len(a):
             a[0] = [np.nan, 1, 2, 3]  # never meets
+        if trial % 3 == 0 and len(a) > 1 and len(b) > 1:  # a NaN anywhere: never meets
+            a[-1, trial % 4] = np.nan
+            b[-1, (trial // 3) % 4] = np.nan
         if trial % 7 == 0 and len(b):
             b[0, 2] = np.inf  # meets everything on its rows
         ia, ib = meeting_pairs(a, b)
