@@ -164,10 +164,11 @@ class Adaptations:
             that velocity has predicted its found boxes better than KF1's so far
             (``trackers.common.measured_velocity``, reta's rule; false: where KF1 predicts,
             ``report_predicted``). Reporting only.
-        reported_behind: a confirmed target unfound for longer than
+        reported_behind: with a foreground mask, a confirmed target unfound for longer than
             ``reporting.max_misses`` frames is still reported while a found target nearer
             the camera covers this share of its box (``evidence.ReportedBehind``; 0: off,
-            reported for ``reporting.max_misses`` frames at most).
+            reported for ``reporting.max_misses`` frames at most). Stands aside without a
+            mask.
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.

@@ -92,18 +92,21 @@ class HiddenEvidence:
 class MissesBound:
     """An unfound target is reported for ``reporting.max_misses`` frames at most."""
 
-    def shown(self, targets, found: np.ndarray, shown: np.ndarray, report_box) -> np.ndarray:
+    def shown(self, targets, found: np.ndarray, shown: np.ndarray, report_box,
+              fg: np.ndarray | None) -> np.ndarray:
         return shown
 
 
 @dataclass(frozen=True)
 class ReportedBehind:
-    """``adaptations.reported_behind``: a confirmed target unfound for longer than
-    ``reporting.max_misses`` frames is still reported while a target found this frame,
-    nearer the camera (``covered_from_front``), covers >= ``cover`` of the box it would be
-    reported at (``rules.report_box``): a person standing or walking behind another, PBM's
-    own case, whom the paper tracks "until lost" (PBM 3). The other reporting rules then
-    apply as to any unfound target; it lives as long as before (``life_cycle.max_misses``).
+    """``adaptations.reported_behind``: with a foreground mask, a confirmed target unfound for
+    longer than ``reporting.max_misses`` frames is still reported while a target found this
+    frame, nearer the camera (``covered_from_front``), covers >= ``cover`` of the box it
+    would be reported at (``rules.report_box``): a person standing or walking behind
+    another, PBM's own case, whom the paper tracks "until lost" (PBM 3). The other
+    reporting rules then apply as to any unfound target; it lives as long as before
+    (``life_cycle.max_misses``). Without a mask it stands aside, as ``HiddenEvidence``
+    does (its first form, everywhere, reported people who had left: docs/adaptations.md).
 
     Args:
         cover: share of the box under one nearer found target (0-1).
@@ -111,12 +114,13 @@ class ReportedBehind:
 
     cover: float
 
-    def shown(self, targets, found: np.ndarray, shown: np.ndarray, report_box) -> np.ndarray:
+    def shown(self, targets, found: np.ndarray, shown: np.ndarray, report_box,
+              fg: np.ndarray | None) -> np.ndarray:
         """(T,) bool: ``shown`` (found, or confirmed and unfound <= ``reporting.max_misses``)
         with the confirmed unfound targets behind a found one added; ``found`` (T,) bool;
-        ``targets``: ``Targets``."""
+        ``targets``: ``Targets``; ``fg`` the frame's mask (None: ``shown`` as it is)."""
         rows = (targets.confirmed & ~shown).nonzero()[0]
-        if not len(rows) or not found.any():
+        if fg is None or not len(rows) or not found.any():
             return shown
         boxes = targets.boxes[rows]
         report_box.place(boxes, targets, rows, found)

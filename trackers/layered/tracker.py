@@ -377,7 +377,7 @@ class PBMTracker:
         found = shown = tg.misses == 0
         if self.reporting.occluded:
             shown = found | (tg.confirmed & (tg.misses <= self.reporting.max_misses))
-            shown = self.rules.behind.shown(tg, found, shown, self.rules.report_box)
+            shown = self.rules.behind.shown(tg, found, shown, self.rules.report_box, fg)
         rows = shown.nonzero()[0]
         # copies (fancy indexing): the rows of the state arrays change in place later
         boxes = tg.dof[rows[:, None], _BOX_COLUMNS]
