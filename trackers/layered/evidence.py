@@ -88,7 +88,6 @@ class HiddenEvidence:
         return show
 
 
-
 class MissesBound:
     """An unfound target is reported for ``reporting.max_misses`` frames at most."""
 
