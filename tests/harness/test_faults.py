@@ -444,7 +444,12 @@ def _slow_run(tmp_path: Path, folder: Path, names: str = "abcdefghij") -> subpro
         stderr=subprocess.PIPE)
 
 
-def _wait_for(path: Path, proc: subprocess.Popen, timeout: float = 120) -> None:
+#: a hang guard only: on 2 cores at load 10-20 (other engineers' runs) a fresh occbench
+#: process took over 120 s to score its first sequence, and the test failed though it holds
+HANG = 300.0
+
+
+def _wait_for(path: Path, proc: subprocess.Popen, timeout: float = HANG) -> None:
     deadline = time.monotonic() + timeout
     while not path.exists() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.2)
@@ -471,7 +476,7 @@ def test_a_second_run_is_refused_and_a_stopped_run_ends_in_one_line(tmp_path, si
                                          "for it to end or choose another hydra.run.dir")
         assert (folder / "config.yaml").read_text() == config
         first.send_signal(sig)
-        _, err = first.communicate(timeout=120)
+        _, err = first.communicate(timeout=HANG)
     finally:
         if first.poll() is None:
             first.kill()
