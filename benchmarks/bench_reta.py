@@ -165,9 +165,9 @@ def versus(other, people_counts=(100,), frames: int = 150, rounds: int = 3,
     faster), the range of the rounds' ratios, and whether the reported rows are the same."""
     cv2.setNumThreads(1)
     rows = []
+    trackers = {"this": RetaTracker, "other": other.RetaTracker}
     for n in people_counts:
         scene = make_scene(n, frames, seed=n, size=size)
-        trackers = {"this": RetaTracker, "other": other.RetaTracker}
 
         def run(label, scene=scene):
             tracker = trackers[label]()
