@@ -241,6 +241,11 @@ class Adaptations:
             that holds a hidden partner moves q towards the measurement's histogram less
             the partner's q by its share (``contact.UnmixedAppearance``); False: towards
             the measurement's whole histogram p.
+        duplicates_together: with ``merge_duplicates``, two hypotheses of a person are one
+            only if they also stay together: their velocities differ by less than half a
+            pixel over the m frames of pruning (``rules.MergeTogether``); False: by place
+            alone, so hypothesis 3 (still) of a person whose velocity is a few tenths of a
+            pixel per frame is dropped at its first frame and hypothesis 1 drifts alone.
     """
 
     gate_sigmas: float = 3.0
@@ -275,6 +280,7 @@ class Adaptations:
     split_appearance: bool = False
     split_appearance_margin: float = 0.1
     merged_unmixed: bool = False
+    duplicates_together: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -290,7 +296,8 @@ class Adaptations:
                       "contact_region": bool, "merged_appearance": bool,
                       "split_parts": bool, "merged_motion": bool,
                       "visible_region": bool, "measured_hypothesis": bool,
-                      "split_appearance": bool, "merged_unmixed": bool})
+                      "split_appearance": bool, "merged_unmixed": bool,
+                      "duplicates_together": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -320,7 +327,7 @@ class Adaptations:
                    merged_motion=False, visible_region=False,
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
                    split_appearance=False, split_appearance_margin=0.0,
-                   merged_unmixed=False)
+                   merged_unmixed=False, duplicates_together=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -245,7 +245,9 @@ class KeepDuplicates:
     """Alg. 1 as written: PruneHypothesis removes contradicted, false-positive and departed
     hypotheses only; two at the same place both stay."""
 
-    def duplicate(self, corner: list[float], kept: list[list[float]]) -> bool:
+    def duplicate(self, corner: list[float], kept: list[list[float]],
+                  velocity: list[float] | None = None,
+                  kept_velocities: list[list[float]] | None = None) -> bool:
         return False
 
 
@@ -255,9 +257,35 @@ class MergeDuplicates:
     person (every xywh value within half a pixel) is dropped; the kinds come in order of
     preference, so the preferred kind stays."""
 
-    def duplicate(self, corner: list[float], kept: list[list[float]]) -> bool:
+    def duplicate(self, corner: list[float], kept: list[list[float]],
+                  velocity: list[float] | None = None,
+                  kept_velocities: list[list[float]] | None = None) -> bool:
         """``corner``: (4,) xywh of a hypothesis; ``kept``: those kept before it."""
         return any(max(abs(u - v) for u, v in zip(corner, k)) < 0.5 for k in kept)
+
+
+@dataclass(frozen=True)
+class MergeTogether:
+    """``duplicates_together``: as ``MergeDuplicates``, and the two must also stay together:
+    their velocities (vx, vy, vw, vh) differ by less than half a pixel over the m frames
+    PruneHypothesis weighs (|dv| m < 0.5). Hypothesis 3 of a person standing with M's
+    velocity a few tenths of a pixel per frame starts within half a pixel of hypothesis 1
+    and is not dropped for it; hypothesis 1 drifts away, hypothesis 3 stays."""
+
+    m: int
+
+    def duplicate(self, corner: list[float], kept: list[list[float]],
+                  velocity: list[float] | None = None,
+                  kept_velocities: list[list[float]] | None = None) -> bool:
+        """``velocity`` / ``kept_velocities``: (4,) rates of the hypothesis and of those
+        kept before it (None: positions alone, as ``MergeDuplicates``)."""
+        for i, k in enumerate(kept):
+            if max(abs(u - v) for u, v in zip(corner, k)) >= 0.5:
+                continue
+            if velocity is None or kept_velocities is None or max(
+                    abs(u - v) for u, v in zip(velocity, kept_velocities[i])) * self.m < 0.5:
+                return True
+        return False
 
 
 # --------------------------------------------------------------- 3.3 / Fig. 3: a confirmed track's id
@@ -311,7 +339,7 @@ class Rules(NamedTuple):
     identity: NewIdentity | HiddenIdentity  # the id a confirmed track takes
     support: NoSupport | ForegroundSupport
     presence: NoPresence | ForegroundPresence  # what contradicts a hypothesis (Alg. 1)
-    duplicates: KeepDuplicates | MergeDuplicates
+    duplicates: KeepDuplicates | MergeDuplicates | MergeTogether
     choice: LeastContradicted | FirstHypothesis  # which hypothesis is reported (a reading)
     report: ReportRule
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
@@ -350,7 +378,9 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         identity=HiddenIdentity() if a.inherit_hidden_id else NewIdentity(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),
         presence=ForegroundPresence(histograms) if a.foreground_presence else NoPresence(),
-        duplicates=MergeDuplicates() if a.merge_duplicates else KeepDuplicates(),
+        duplicates=(KeepDuplicates() if not a.merge_duplicates
+                    else MergeTogether(life_cycle.m) if a.duplicates_together
+                    else MergeDuplicates()),
         choice=FirstHypothesis() if first else LeastContradicted(),
         report=ReportRule(a.report_exposed, a.report_spread, a.report_support,
                           a.report_memory),

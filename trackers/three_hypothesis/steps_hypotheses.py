@@ -113,6 +113,7 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
         kept: list[Branch] = []
         kept_boxes: list[np.ndarray] = []
         kept_corners: list[list[float]] = []
+        kept_rates: list[list[float]] = []
         for b in c.branches:
             box, corner, g, hidden, held_k = hyp_boxes[k], corners[k], gone[k], cover[k], held[k]
             b.unseen = unseen[k]
@@ -122,11 +123,14 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
             b.exposed = 0 if hidden else b.exposed + (0 if held_k else 1)
             if g or b.exposed >= m:
                 continue
-            if kept_corners and rules.duplicates.duplicate(corner, kept_corners):
+            rates = b.x[len(b.x) // 2:].tolist()  # the state's velocities (3.2)
+            if kept_corners and rules.duplicates.duplicate(corner, kept_corners, rates,
+                                                           kept_rates):
                 continue
             kept.append(b)
             kept_boxes.append(box)
             kept_corners.append(corner)
+            kept_rates.append(rates)
         if not person.confirmed and person.misses > a.tentative_misses:
             kept = []  # false-positive track
         if person.misses > a.max_hidden:
