@@ -127,7 +127,8 @@ class Adaptations:
             0, off).
         early_confirm: a new target overlapping no other live target (IoU < 0.1) is
             confirmed after this many matches (``rules.IsolatedEarly``; 0: after
-            ``life_cycle.min_hits``, our life cycle's rule; the paper starts targets by hand).
+            ``life_cycle.min_hits``, our life cycle's rule; the paper starts targets by hand);
+            1: confirmed at its birth.
         reupdate: a target found again after at least this many frames unfound has KF1 and
             KF2 rewound to its last observation and re-run over the line from it to the new
             one (``reupdate.ReUpdate``, OC-SORT's observation-centric re-update; 0: off,

@@ -5,8 +5,8 @@ constructor, so ``PBMTracker.update`` calls a rule instead of testing a flag. Ea
 names the step of PBM it replaces; ``docs/adaptations.md`` gives the evidence. (Stale
 parts are ``adaptations.StaleParts`` or None; the pruning adaptations live in
 ``selection.MultipleResponsePruning``, the blob-head ones in ``candidates``, PBM 3.1's
-smaller region in ``smaller``, the exits in ``exits``.) Boxes are
-(N, 4) float64 xywh pixels.
+smaller region in ``smaller``, the exits in ``exits``, confirmation in
+``confirmation``.) Boxes are (N, 4) float64 xywh pixels.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import numpy as np
 
 from occbench.trackers.common.assignment import assign
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
-from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.confirmation import InARow, IsolatedEarly
 from occbench.trackers.layered.evidence import (HiddenEvidence, MissesBound, ReportedBehind,
                                                box_foreground)
 from occbench.trackers.layered.exits import (
@@ -239,38 +239,6 @@ class ReportOnForeground:
         if fg is None:
             return None
         return (misses == 0) | (box_foreground(boxes, fg) >= self.fraction)
-
-
-# --------------------------------------------------------------- life cycle: confirmation (ours)
-
-
-class InARow:
-    """A new target is confirmed after ``life_cycle.min_hits`` matches in a row (a miss
-    before that drops it)."""
-
-    def confirm(self, targets: Targets, rows: np.ndarray, min_hits: int) -> None:
-        """Confirms, in place, the targets at ``rows`` (matched this frame) that qualify."""
-        targets.confirmed[rows] |= targets.hits[rows] >= min_hits
-
-
-@dataclass(frozen=True)
-class IsolatedEarly:
-    """``early_confirm``: a new target is confirmed after ``hits`` matches when its box
-    overlaps no other live target's (IoU < ``max_iou``): a lone newcomer is a person, not a
-    fragment or a second response of one (after ByteTrack and OC-SORT, which report a track
-    from its first frames); otherwise after ``life_cycle.min_hits``."""
-
-    hits: int
-    max_iou: float = 0.1
-
-    def confirm(self, targets: Targets, rows: np.ndarray, min_hits: int) -> None:
-        InARow().confirm(targets, rows, min_hits)
-        early = rows[(targets.hits[rows] >= self.hits) & ~targets.confirmed[rows]]
-        if not len(early):
-            return
-        iou = iou_matrix(targets.boxes[early], targets.boxes)
-        iou[np.arange(len(early)), early] = 0.0  # a target does not overlap itself
-        targets.confirmed[early[iou.max(axis=1) < self.max_iou]] = True
 
 
 # --------------------------------------------------------------- PBM 4.1: a candidate two targets may take

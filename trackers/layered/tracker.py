@@ -334,8 +334,7 @@ class PBMTracker:
         split heads) that is tall enough (``life_cycle.min_height``), a detection or
         (``life_cycle.blob_births``) a blob, not withheld (``rules.match``), supported by
         foreground (``rules.birth``) and overlapping no live target
-        (``life_cycle.new_track_iou``). In the first ``min_hits`` frames targets are
-        confirmed at once (people present from the start)."""
+        (``life_cycle.new_track_iou``); confirmed at once in the first ``min_hits`` frames."""
         targets, lc = self.targets, self.life_cycle
         live_boxes = targets.boxes if len(free) else None
         new: list[tuple] = []  # (id, dof, alpha, beta, candidate, head template), in order
@@ -364,8 +363,9 @@ class PBMTracker:
             ids, dofs, alphas, betas, ns, templates = zip(*new, strict=True)
             targets.extend(list(ids), np.array(dofs), list(alphas), list(betas),
                            feats.take(list(ns)), list(templates))
-            if self._frame <= lc.min_hits:
-                targets.confirmed[-len(new):] = True
+            born = np.arange(len(targets.id) - len(new), len(targets.id))
+            targets.confirmed[born] |= self._frame <= lc.min_hits
+            self.rules.confirmation.confirm_born(targets, born)  # adaptations.early_confirm 1
 
     # ------------------------------------------------------------------ report
     def _report(self, fg: np.ndarray | None, W: int, H: int) -> list[Track]:

@@ -8,7 +8,8 @@ import pytest
 
 from occbench.trackers.layered import Adaptations
 from occbench.trackers.layered.dynamics import Gate
-from occbench.trackers.layered.rules import InARow, IsolatedEarly, build_rules
+from occbench.trackers.layered.confirmation import InARow, IsolatedEarly
+from occbench.trackers.layered.rules import build_rules
 from occbench.trackers.layered.targets import Targets
 
 
@@ -41,3 +42,16 @@ def test_early_confirm_is_off_in_paper_mode_and_checked():
     assert Adaptations.paper().early_confirm == 0
     with pytest.raises(ValueError, match="early_confirm"):
         Adaptations(early_confirm=-1)
+
+
+def test_with_one_a_lone_newcomer_is_confirmed_at_birth():
+    # 0: an older target; 1: born alone; 2 and 3: born this frame on one another
+    boxes = [(10.0, 10, 20, 60), (100.0, 10, 20, 60), (200.0, 10, 20, 60), (205.0, 10, 20, 60)]
+    born = np.array([1, 2, 3])
+    two = _targets(boxes, [5, 1, 1, 1])
+    IsolatedEarly(2).confirm_born(two, born)
+    InARow().confirm_born(two, born)
+    assert two.confirmed.tolist() == [False, False, False, False]  # first match: tentative
+    one = _targets(boxes, [5, 1, 1, 1])
+    IsolatedEarly(1).confirm_born(one, born)
+    assert one.confirmed.tolist() == [False, True, False, False]

@@ -320,6 +320,16 @@ def test_tentative_before_confirmation():
             det = scene.detections(k, lab)
         states.append({t.state for t in tracker.update(img, det, lab)})
     assert states[4] == {TrackState.TENTATIVE} and states[6] == {TrackState.CONFIRMED}
+    # adaptations.early_confirm 1: the lone newcomers are reported from their first frame
+    born = PBMTracker(life_cycle=LifeCycleParams(min_hits=3), adaptations=Adaptations(early_confirm=1))
+    for k in range(5):
+        img, lab = scene.render(k)
+        if k < 4:
+            img, lab, det = scene.background(), np.zeros_like(lab), Detections.empty()
+        else:
+            det = scene.detections(k, lab)
+        first = {t.state for t in born.update(img, det, lab)}
+    assert first == {TrackState.CONFIRMED}
 
 
 def test_synthetic_uturn_behind_beats_baseline():
