@@ -79,7 +79,7 @@ def associate(
     sqrt_q: np.ndarray,
     measurement_boxes: np.ndarray,
     sqrt_p: np.ndarray,
-    mu_rho: float,
+    mu_rho: float | np.ndarray,
     mu_g: float,
     delta: np.ndarray | None = None,
     gated: np.ndarray | None = None,
@@ -111,7 +111,7 @@ def associate(
             nonzero (the other terms of eq. 4 are 0).
         measurement_boxes: (D, 4) xywh.
         sqrt_p: (D, K) square roots of the measurements' histograms p, same K bins.
-        mu_rho: appearance threshold mu_rho in [0, 1].
+        mu_rho: appearance threshold mu_rho in [0, 1], or (P,) one per person.
         mu_g: gate radius mu_g in pixels.
         delta: optional precomputed (B, D) region similarity of nodes and measurements.
         gated: optional (P,) bool: persons that may take part in stage 2 (default all).
@@ -172,7 +172,7 @@ class _Pairs:
 
     @classmethod
     def of(cls, node_boxes: np.ndarray, owners: np.ndarray, sqrt_q: np.ndarray,
-           measurement_boxes: np.ndarray, sqrt_p: np.ndarray, mu_rho: float,
+           measurement_boxes: np.ndarray, sqrt_p: np.ndarray, mu_rho: float | np.ndarray,
            admissible: np.ndarray | None) -> _Pairs:
         """``associate``'s arguments of the same names, rho computed (eq. 4)."""
         n_persons = len(sqrt_q)
@@ -180,6 +180,8 @@ class _Pairs:
         np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)  # clipped to [0, 1]
         one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
         rho_nodes = rho if one_node else rho[owners]  # (B, D)
+        if np.ndim(mu_rho):  # one threshold per person
+            mu_rho = np.asarray(mu_rho, dtype=float)[owners][:, None]
         appearance_ok = rho_nodes >= mu_rho
         if admissible is not None:
             appearance_ok &= admissible

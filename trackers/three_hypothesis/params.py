@@ -246,6 +246,9 @@ class Adaptations:
             pixel over the m frames of pruning (``rules.MergeTogether``); False: by place
             alone, so hypothesis 3 (still) of a person whose velocity is a few tenths of a
             pixel per frame is dropped at its first frame and hypothesis 1 drifts alone.
+        own_return: a confirmed person hidden at t - 1 may take a measurement only with
+            rho at least the lowest rho of its own last m matches (and mu_rho)
+            (``returning.OwnReturn``); False: mu_rho for everyone (the paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -281,6 +284,7 @@ class Adaptations:
     split_appearance_margin: float = 0.1
     merged_unmixed: bool = False
     duplicates_together: bool = False
+    own_return: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -297,7 +301,7 @@ class Adaptations:
                       "split_parts": bool, "merged_motion": bool,
                       "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
-                      "duplicates_together": bool})
+                      "duplicates_together": bool, "own_return": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -327,7 +331,8 @@ class Adaptations:
                    merged_motion=False, visible_region=False,
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
                    split_appearance=False, split_appearance_margin=0.0,
-                   merged_unmixed=False, duplicates_together=False)
+                   merged_unmixed=False, duplicates_together=False,
+                   own_return=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -42,6 +42,7 @@ from occbench.trackers.three_hypothesis.motion import (
 )
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle
 from occbench.trackers.three_hypothesis.reported import FirstHypothesis, LeastContradicted, ReportRule
+from occbench.trackers.three_hypothesis.returning import AnyReturn, OwnReturn
 from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
 from occbench.trackers.three_hypothesis.tentative import (
     AfterMatches,
@@ -345,6 +346,7 @@ class Rules(NamedTuple):
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
     shape: AnyShape | ShapeGate  # which sizes may continue a node (3.3.2)
     confirm: AfterMatches | ClearEarly  # when a tentative track is confirmed (3.3)
+    returning: AnyReturn | OwnReturn  # the appearance a hidden person needs (3.3.2)
 
 
 def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
@@ -388,4 +390,5 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         shape=ShapeGate(a.shape_gate) if a.shape_gate > 0 else AnyShape(),
         confirm=(ClearEarly(a.early_confirm, a.early_confirm_score) if a.early_confirm
                  else AfterMatches()),
+        returning=OwnReturn(life_cycle.m) if a.own_return else AnyReturn(),
     )

@@ -47,6 +47,7 @@ class Person:
     centres: list = field(default_factory=list)  # (frame, xc, yc) last measured (rules.line)
     line_errors: list = field(default_factory=lambda: [0.0, 0.0])  # M's, the line's
     merged: bool = False  # its last measurement held a hidden partner (rules.split)
+    matched_rho: list = field(default_factory=list)  # rho of its last m matches (rules.returning)
 
     @property
     def confirmed(self) -> bool:

@@ -84,7 +84,9 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
     entrants = rules.stage2.entrants(np.array([person.confirmed for person in persons],
                                               dtype=bool))
     inp = _Inputs(S, V, O, rules, association, sqrt_q, sqrt_p, seen, entrants,
-                  rules.gate.radii(S.Pp, R), lambda matched: rules.parts.barred(V.boxes, matched),
+                  rules.gate.radii(S.Pp, R),
+                  rules.returning.floors(persons, association.mu_rho),
+                  lambda matched: rules.parts.barred(V.boxes, matched),
                   lambda: _fronts(S, O, pi))
     n_p, n_d = len(persons), len(V.boxes)
     parts = blocks(n_p, n_d, lambda: (S.owners[O.delta.tocoo().row], O.delta.tocoo().col))
@@ -143,7 +145,8 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
     if 2 not in stages:
         entrants = np.zeros(len(rows), dtype=bool)
     m = associate(
-        pred, owners, s.sqrt_q[rows], dets, s.sqrt_p[cols], a.mu_rho, a.mu_g,
+        pred, owners, s.sqrt_q[rows], dets, s.sqrt_p[cols],
+        a.mu_rho if s.mu_rho is None else s.mu_rho[rows], a.mu_g,
         delta=delta if 1 in stages else np.zeros_like(delta), gated=entrants,
         gate=None if s.gate is None else s.gate[nodes],
         evidence=rules.contact.evidence(rules.stage1_appearance.evidence,
@@ -268,6 +271,7 @@ class _Inputs(NamedTuple):
     seen: np.ndarray | None
     entrants: np.ndarray | None
     gate: np.ndarray | None
+    mu_rho: np.ndarray | None  # (P,) per person (rules.returning), None: mu_rho
     barred: Callable[[np.ndarray], np.ndarray | None] | None  # the frame's rules.parts
     fronts: Callable[[], np.ndarray]
 

@@ -73,6 +73,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
             person.hits += 1
         person.misses = 0
         person.spawned = False
+        rules.returning.record(person, match.rho)
         if not person.confirmed and rules.confirm.confirms(
                 person.hits, setting.life_cycle.confirm_frames, clear.get(d, False),
                 float(V.scores[d])):

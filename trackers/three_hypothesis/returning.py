@@ -1,0 +1,48 @@
+"""What appearance a hidden person needs to be matched again (Reta 3.3.2, mu_rho).
+
+* ``AnyReturn`` (the paper): every pair with rho >= mu_rho may match, hidden or not.
+* ``OwnReturn`` (``adaptations.own_return``): a confirmed person hidden at t - 1 may take a
+  measurement only with rho (eq. 4) at least the lowest rho of its own last m matches (and
+  mu_rho): its colours have varied that much while it was seen; a measurement further from
+  them is someone else (issue 35: pets1-400 sil frame 156, a hidden person took an untracked
+  passer-by's box at rho 0.48 after matches at 0.8-1.0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from occbench.trackers.three_hypothesis.state import Person
+
+
+@dataclass(frozen=True)
+class AnyReturn:
+    """3.3.2 as written: mu_rho for every person."""
+
+    def record(self, person: Person, rho: float) -> None:
+        return None
+
+    def floors(self, persons: list[Person], mu_rho: float) -> np.ndarray | None:
+        return None
+
+
+@dataclass(frozen=True)
+class OwnReturn:
+    """``own_return``: a hidden confirmed person's floor is the lowest rho of its last
+    ``m`` matches (``LifeCycle.m``), never below mu_rho."""
+
+    m: int
+
+    def record(self, person: Person, rho: float) -> None:
+        """Keep ``rho`` of ``person``'s match at t among its last m."""
+        person.matched_rho = [*person.matched_rho[-(self.m - 1):], float(rho)]
+
+    def floors(self, persons: list[Person], mu_rho: float) -> np.ndarray:
+        """(P,) smallest rho each person may be matched with at t."""
+        return np.array([max(mu_rho, min(p.matched_rho))
+                         if p.confirmed and p.misses > 0 and p.matched_rho else mu_rho
+                         for p in persons], dtype=float)
