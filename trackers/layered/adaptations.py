@@ -201,7 +201,7 @@ class Adaptations:
     report_support: float = 0.0
     hidden_evidence: HiddenEvidence | None = field(default_factory=HiddenEvidence)
     rival_match: float = 0.0
-    early_confirm: int = 2
+    early_confirm: int = 1
     reupdate: int = 0
     contested_template: float = 0.0
     rival_claims: bool = False

@@ -282,7 +282,7 @@ class LifeCycleParams:
 
     Args:
         min_hits: matches in a row that confirm a new target (``adaptations.early_confirm``:
-            fewer for one that overlaps no other).
+            fewer, or at its birth, for one that overlaps no other).
         max_misses: frames a confirmed target survives unfound.
         min_height: smallest candidate height that starts a target (pixels).
         new_track_iou: a free candidate overlapping a live target by more IoU than this

@@ -37,7 +37,7 @@ def test_a_lone_newcomer_is_confirmed_early_a_fragment_is_not():
 
 
 def test_early_confirm_is_off_in_paper_mode_and_checked():
-    assert isinstance(build_rules(Adaptations()).confirmation, IsolatedEarly)  # on (2)
+    assert build_rules(Adaptations()).confirmation == IsolatedEarly(1)  # on: at birth
     assert isinstance(build_rules(Adaptations(early_confirm=0)).confirmation, InARow)
     assert Adaptations.paper().early_confirm == 0
     with pytest.raises(ValueError, match="early_confirm"):

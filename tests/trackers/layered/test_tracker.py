@@ -309,7 +309,7 @@ def test_deterministic():
 
 def test_tentative_before_confirmation():
     scene, _ = S.uturn_behind(12)
-    tracker = PBMTracker(life_cycle=LifeCycleParams(min_hits=3))
+    tracker = PBMTracker(life_cycle=LifeCycleParams(min_hits=3), adaptations=Adaptations(early_confirm=2))
     states = []
     for k in range(8):
         img, lab = scene.render(k)
