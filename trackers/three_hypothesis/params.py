@@ -249,6 +249,9 @@ class Adaptations:
         own_return: a confirmed person hidden at t - 1 may take a measurement only with
             rho at least the lowest rho of its own last m matches (and mu_rho)
             (``returning.OwnReturn``); False: mu_rho for everyone (the paper, 3.3.2).
+        hold_last: a confirmed person whose hypotheses are all contradicted is kept, its
+            first contradicted hypothesis standing where it is, unreported, until
+            ``max_hidden`` (``returning.HoldLast``); False: it ends (Alg. 1).
     """
 
     gate_sigmas: float = 3.0
@@ -285,6 +288,7 @@ class Adaptations:
     merged_unmixed: bool = False
     duplicates_together: bool = False
     own_return: bool = False
+    hold_last: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -301,7 +305,8 @@ class Adaptations:
                       "split_parts": bool, "merged_motion": bool,
                       "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
-                      "duplicates_together": bool, "own_return": bool})
+                      "duplicates_together": bool, "own_return": bool,
+                      "hold_last": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -332,7 +337,7 @@ class Adaptations:
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
                    split_appearance=False, split_appearance_margin=0.0,
                    merged_unmixed=False, duplicates_together=False,
-                   own_return=False)
+                   own_return=False, hold_last=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

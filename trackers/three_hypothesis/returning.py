@@ -1,4 +1,7 @@
-"""What appearance a hidden person needs to be matched again (Reta 3.3.2, mu_rho).
+"""A hidden person's return: whether it is kept when every hypothesis is contradicted (Alg. 1
+PruneHypothesis) and what appearance it needs to be matched again (3.3.2, mu_rho).
+
+* ``EndContradicted`` (the paper) / ``HoldLast`` (``adaptations.hold_last``).
 
 * ``AnyReturn`` (the paper): every pair with rho >= mu_rho may match, hidden or not.
 * ``OwnReturn`` (``adaptations.own_return``): a confirmed person hidden at t - 1 may take a
@@ -16,7 +19,32 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from occbench.trackers.three_hypothesis.state import Person
+    from occbench.trackers.three_hypothesis.state import Branch, Person
+
+
+@dataclass(frozen=True)
+class EndContradicted:
+    """Alg. 1 PruneHypothesis as written: a person with no hypothesis left ends."""
+
+    def hold(self, person: Person, dropped: Branch | None) -> Branch | None:
+        return None
+
+
+@dataclass(frozen=True)
+class HoldLast:
+    """``hold_last``: a confirmed person whose last hypotheses were all contradicted (m
+    frames in plain view) is kept, its first contradicted hypothesis standing where it is
+    (velocity 0), unreported (``report_exposed``), until ``max_hidden``: a target kept
+    unfound and found again through its gate (PBM's unfound targets; issue 35: pets1-400 sil
+    person 13, undetected 166-212, ended at 209 and came back at 213 under a new id)."""
+
+    def hold(self, person: Person, dropped: Branch | None) -> Branch | None:
+        """The branch that keeps ``person``, or None (it ends)."""
+        if dropped is None or not person.confirmed:
+            return None
+        dropped.x = dropped.x.copy()
+        dropped.x[len(dropped.x) // 2:] = 0.0  # it stands (3.3.3 case 3's motion)
+        return dropped
 
 
 @dataclass(frozen=True)

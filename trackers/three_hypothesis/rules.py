@@ -42,7 +42,7 @@ from occbench.trackers.three_hypothesis.motion import (
 )
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle
 from occbench.trackers.three_hypothesis.reported import FirstHypothesis, LeastContradicted, ReportRule
-from occbench.trackers.three_hypothesis.returning import AnyReturn, OwnReturn
+from occbench.trackers.three_hypothesis.returning import AnyReturn, EndContradicted, HoldLast, OwnReturn
 from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
 from occbench.trackers.three_hypothesis.tentative import (
     AfterMatches,
@@ -347,6 +347,7 @@ class Rules(NamedTuple):
     shape: AnyShape | ShapeGate  # which sizes may continue a node (3.3.2)
     confirm: AfterMatches | ClearEarly  # when a tentative track is confirmed (3.3)
     returning: AnyReturn | OwnReturn  # the appearance a hidden person needs (3.3.2)
+    ending: EndContradicted | HoldLast  # a person whose hypotheses are all contradicted
 
 
 def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
@@ -391,4 +392,5 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         confirm=(ClearEarly(a.early_confirm, a.early_confirm_score) if a.early_confirm
                  else AfterMatches()),
         returning=OwnReturn(life_cycle.m) if a.own_return else AnyReturn(),
+        ending=HoldLast() if a.hold_last else EndContradicted(),
     )

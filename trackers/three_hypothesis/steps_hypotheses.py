@@ -114,6 +114,7 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
         kept_boxes: list[np.ndarray] = []
         kept_corners: list[list[float]] = []
         kept_rates: list[list[float]] = []
+        dropped = None  # its first hypothesis contradicted this frame (rules.ending)
         for b in c.branches:
             box, corner, g, hidden, held_k = hyp_boxes[k], corners[k], gone[k], cover[k], held[k]
             b.unseen = unseen[k]
@@ -122,6 +123,8 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
             b.covered = hidden
             b.exposed = 0 if hidden else b.exposed + (0 if held_k else 1)
             if g or b.exposed >= m:
+                if not g and dropped is None:
+                    dropped = (b, box, corner)
                 continue
             rates = b.x[len(b.x) // 2:].tolist()  # the state's velocities (3.2)
             if kept_corners and rules.duplicates.duplicate(corner, kept_corners, rates,
@@ -133,6 +136,10 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
             kept_rates.append(rates)
         if not person.confirmed and person.misses > a.tentative_misses:
             kept = []  # false-positive track
+        if not kept and dropped is not None:
+            holder = rules.ending.hold(person, dropped[0])
+            if holder is not None:
+                kept, kept_boxes = [holder], [dropped[1]]
         if person.misses > a.max_hidden:
             kept = []
         if not kept:

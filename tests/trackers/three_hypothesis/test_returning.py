@@ -10,7 +10,7 @@ from reta_scenes import RED, detections, ellipse_frame
 from occbench.trackers.records import TrackState
 from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
-from occbench.trackers.three_hypothesis.returning import AnyReturn, OwnReturn
+from occbench.trackers.three_hypothesis.returning import AnyReturn, EndContradicted, HoldLast, OwnReturn
 from occbench.trackers.three_hypothesis.rules import build_rules
 from occbench.trackers.three_hypothesis.state import Person
 
@@ -55,3 +55,26 @@ def test_floors_are_the_lowest_of_the_last_m_matches():
     assert isinstance(build_rules(Adaptations(own_return=True), h).returning, OwnReturn)
     assert isinstance(build_rules(Adaptations(), h).returning, AnyReturn)
     assert "own_return" not in Adaptations().changed() + Adaptations.paper().changed()
+
+
+def _after_a_long_miss(hold: bool) -> list[int]:
+    """a walks right 12 frames, then the detector misses it for 30 frames (it stops where it
+    is and nobody covers it); then it is detected again 4 px further on. The ids on it."""
+    tracker = RetaTracker(adaptations=Adaptations(hold_last=hold, foreground_presence=False))
+    ids = []
+    for t in range(45):
+        a = [30.0 + 2.0 * min(t, 12) + (4.0 if t >= 42 else 0.0), 30.0, 16.0, 48.0]
+        tracks = tracker.update(ellipse_frame([a], [RED], (W, H)),
+                                detections([a] if t < 12 or t >= 42 else []))
+        ids += [k.id for k in tracks if k.state == TrackState.CONFIRMED
+                and abs(k.box[0] - a[0]) < 1]
+    return ids
+
+
+def test_a_person_all_of_whose_hypotheses_are_contradicted_is_held():
+    assert len(set(_after_a_long_miss(False))) == 2  # ended, back under a new id
+    assert len(set(_after_a_long_miss(True))) == 1
+    h = EllipseHistogrammer()
+    assert isinstance(build_rules(Adaptations(hold_last=True), h).ending, HoldLast)
+    assert isinstance(build_rules(Adaptations(), h).ending, EndContradicted)
+    assert "hold_last" not in Adaptations().changed() + Adaptations.paper().changed()
