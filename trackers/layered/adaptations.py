@@ -129,6 +129,9 @@ class Adaptations:
             confirmed after this many matches (``rules.IsolatedEarly``; 0: after
             ``life_cycle.min_hits``, our life cycle's rule; the paper starts targets by hand);
             1: confirmed at its birth.
+        border_birth_waits: with ``early_confirm`` 1, a newcomer whose box touches an image
+            border (within 1 px) is not confirmed at birth (``confirmation.IsolatedEarly``;
+            paper: False).
         reupdate: a target found again after at least this many frames unfound has KF1 and
             KF2 rewound to its last observation and re-run over the line from it to the new
             one (``reupdate.ReUpdate``, OC-SORT's observation-centric re-update; 0: off,
@@ -212,6 +215,7 @@ class Adaptations:
     fold_twins_own: float = 0.0
     measured_velocity: bool = False
     reported_behind: float = 0.0
+    border_birth_waits: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -253,7 +257,8 @@ class Adaptations:
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
-                                       "coarse_search", "measured_velocity"),
+                                       "coarse_search", "measured_velocity",
+                                       "border_birth_waits"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int})
@@ -273,7 +278,7 @@ class Adaptations:
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
                    coarse_search=False, fold_twins=0, fold_twins_own=0.0,
-                   measured_velocity=False, reported_behind=0.0)
+                   measured_velocity=False, reported_behind=0.0, border_birth_waits=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

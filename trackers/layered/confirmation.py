@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered.exits import touches_border
 from occbench.trackers.layered.targets import Targets
 
 
@@ -19,7 +20,7 @@ class InARow:
         """Confirms, in place, the targets at ``rows`` (matched this frame) that qualify."""
         targets.confirmed[rows] |= targets.hits[rows] >= min_hits
 
-    def confirm_born(self, targets: Targets, rows: np.ndarray) -> None:
+    def confirm_born(self, targets: Targets, rows: np.ndarray, image_size: tuple[int, int]) -> None:
         """Targets born this frame (``rows``) stay TENTATIVE."""
 
 
@@ -30,10 +31,13 @@ class IsolatedEarly:
     fragment or a second response of one (after ByteTrack and OC-SORT, which report a track
     from its first frames); otherwise after ``life_cycle.min_hits``. With ``hits`` 1 a lone
     newcomer is confirmed at its birth (``confirm_born``), as reta's ``early_confirm`` 1
-    starts a confirmed track."""
+    starts a confirmed track; with ``border_waits`` (``adaptations.border_birth_waits``) not
+    one whose box touches an image border (within 1 pixel, as ``exits.BorderExit``): a
+    person partly outside the picture, stepping in, whose first box is a sliver of him."""
 
     hits: int
     max_iou: float = 0.1
+    border_waits: bool = False
 
     def confirm(self, targets: Targets, rows: np.ndarray, min_hits: int) -> None:
         InARow().confirm(targets, rows, min_hits)
@@ -42,12 +46,16 @@ class IsolatedEarly:
             return
         targets.confirmed[early[self._alone(targets, early)]] = True
 
-    def confirm_born(self, targets: Targets, rows: np.ndarray) -> None:
+    def confirm_born(self, targets: Targets, rows: np.ndarray, image_size: tuple[int, int]) -> None:
         """With ``hits`` 1, the targets born this frame (``rows``) that overlap no other
         live target (those born with them included) are confirmed at once: their first
-        match is the one that confirms them."""
+        match is the one that confirms them (``border_waits``: unless at a border of the
+        (W, H) ``image_size``)."""
         if self.hits == 1 and len(rows):
-            targets.confirmed[rows[self._alone(targets, rows)]] = True
+            ok = self._alone(targets, rows)
+            if self.border_waits:
+                ok &= ~touches_border(targets.boxes[rows], *image_size)
+            targets.confirmed[rows[ok]] = True
 
     def _alone(self, targets: Targets, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) bool: the box of each target at ``rows`` overlaps no other's."""

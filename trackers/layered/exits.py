@@ -38,10 +38,15 @@ class BorderExit:
 
     def gone(self, targets: Targets, width: int, height: int) -> np.ndarray:
         """(T,) bool: the targets whose last occluded box touched a border."""
-        x, y, w, h = targets.dof[:, 0], targets.dof[:, 1], targets.dof[:, 4], targets.dof[:, 5]
-        at_border = ((x <= self.touch) | (y <= self.touch) | (x + w >= width - self.touch)
-                     | (y + h >= height - self.touch))
-        return targets.occluded & at_border
+        return targets.occluded & touches_border(targets.dof[:, [0, 1, 4, 5]], width, height,
+                                                  self.touch)
+
+
+def touches_border(boxes: np.ndarray, width: int, height: int, touch: float = 1.0) -> np.ndarray:
+    """(N,) bool: the (N, 4) xywh boxes within ``touch`` pixels of a border of the (width,
+    height) image, or beyond it."""
+    x, y, w, h = boxes[:, 0], boxes[:, 1], boxes[:, 2], boxes[:, 3]
+    return (x <= touch) | (y <= touch) | (x + w >= width - touch) | (y + h >= height - touch)
 
 
 class ReportAnywhere:

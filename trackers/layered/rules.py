@@ -330,7 +330,8 @@ def build_rules(a: Adaptations) -> Rules:
         sharing=OneToOne() if a.one_to_one else Alone(),
         report_shown=a.hidden_evidence or (ReportOnForeground(a.report_support)
                                            if a.report_support > 0 else ReportUnfound()),
-        confirmation=IsolatedEarly(a.early_confirm) if a.early_confirm > 0 else InARow(),
+        confirmation=(IsolatedEarly(a.early_confirm, border_waits=a.border_birth_waits)
+                      if a.early_confirm > 0 else InARow()),
         reupdate=ReUpdate(a.reupdate) if a.reupdate > 0 else AfterPrediction(),
         contest=(TemplateContest(a.contested_template, a.prune_max_misses)
                  if a.contested_template > 0 else NoContest()),

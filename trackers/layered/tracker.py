@@ -365,7 +365,7 @@ class PBMTracker:
                            feats.take(list(ns)), list(templates))
             born = np.arange(len(targets.id) - len(new), len(targets.id))
             targets.confirmed[born] |= self._frame <= lc.min_hits
-            self.rules.confirmation.confirm_born(targets, born)  # adaptations.early_confirm 1
+            self.rules.confirmation.confirm_born(targets, born, frame.shape[1::-1])  # early_confirm 1
 
     # ------------------------------------------------------------------ report
     def _report(self, fg: np.ndarray | None, W: int, H: int) -> list[Track]:

@@ -49,9 +49,23 @@ def test_with_one_a_lone_newcomer_is_confirmed_at_birth():
     boxes = [(10.0, 10, 20, 60), (100.0, 10, 20, 60), (200.0, 10, 20, 60), (205.0, 10, 20, 60)]
     born = np.array([1, 2, 3])
     two = _targets(boxes, [5, 1, 1, 1])
-    IsolatedEarly(2).confirm_born(two, born)
-    InARow().confirm_born(two, born)
+    IsolatedEarly(2).confirm_born(two, born, (640, 480))
+    InARow().confirm_born(two, born, (640, 480))
     assert two.confirmed.tolist() == [False, False, False, False]  # first match: tentative
     one = _targets(boxes, [5, 1, 1, 1])
-    IsolatedEarly(1).confirm_born(one, born)
+    IsolatedEarly(1).confirm_born(one, born, (640, 480))
     assert one.confirmed.tolist() == [False, True, False, False]
+
+
+def test_border_birth_waits_keeps_a_newcomer_at_an_image_border_tentative():
+    # 0: born at the left border (a person stepping in); 1: born inside; both alone
+    boxes = [(0.0, 10, 12, 60), (100.0, 10, 20, 60)]
+    born = np.array([0, 1])
+    one = _targets(boxes, [1, 1])
+    IsolatedEarly(1).confirm_born(one, born, (640, 480))
+    assert one.confirmed.tolist() == [True, True]
+    waits = _targets(boxes, [1, 1])
+    IsolatedEarly(1, border_waits=True).confirm_born(waits, born, (640, 480))
+    assert waits.confirmed.tolist() == [False, True]
+    assert build_rules(Adaptations(border_birth_waits=True)).confirmation.border_waits
+    assert Adaptations.paper().border_birth_waits is False
