@@ -100,6 +100,18 @@ def test_combine_joins_earlier_tables(tmp_path):
     assert "| synth (U) | pbm | 0.550 / 0.500 / 0.500 | norfair_tuned 0.700;" in versus
 
 
+def test_the_csv_keeps_full_precision_for_combine(tmp_path):
+    """generalisation.csv is read back by ``--combine``: a score written at 4 decimals and
+    rounded again to 3 in the tables moved by 0.001 (0.81949 -> 0.8195 -> 0.820)."""
+    t = pd.DataFrame({"set": ["synth"], "role": "untouched", "tracker": ["pbm"],
+                      "IDF1": [0.81949], "HOTA": [1 / 3], "MOTA": 0.5, "n_seeds": 2,
+                      "failures": 0})
+    G.write(t, G.SETS, tmp_path)
+    back = pd.read_csv(tmp_path / "generalisation.csv")
+    assert back["IDF1"].iloc[0] == 0.81949 and back["HOTA"].iloc[0] == 1 / 3
+    assert G.markdown(back, G.SETS) == G.markdown(t, G.SETS)
+
+
 def test_docs_table_replaced_and_the_reading_around_it_kept():
     """``--docs`` replaces only the table section of docs/generalisation.md: the head before
     it and the hand-written reading after it (from the next ``### `` heading) survive."""
