@@ -101,7 +101,7 @@ RETA_STAGES = {
                 "update_matched", "continue_unmatched", "prune", "start_tracks", "outputs"),
     "steps_update": ("add_node", "_visible_share", "_confirm"),
     "steps_hypotheses": ("add_node", "_hidden_share"),
-    "steps_output": ("_track", "_place_hidden"),
+    "steps_output": ("_tracks", "_place_hidden"),
 }
 """RetaTracker's steps of Alg. 1 (its module docstring), timed one by one in ``stages``, and
 the helpers they call per node or per frame (a graph node, a Track, ``rules.velocity``, the

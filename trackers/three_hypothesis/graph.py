@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -25,18 +26,17 @@ TENTATIVE = "tentative"
 HYPOTHESIS = "hypothesis"
 
 
-@dataclass(slots=True)
-class Node:
-    """One node n^t_k of the tracking graph.
+class Node(NamedTuple):
+    """One node n^t_k of the tracking graph, as its layer keeps it (its key k and frame t are
+    its place in the layer; its ellipse S, (5,) (xc, yc, phi, rx, ry) pixels, is computed for
+    the whole layer at once from ``box``: ``TrackingGraph.ellipses``).
 
     Attributes:
-        key: unique node number within a tracker run (k).
-        frame: frame number t (1-based, counted by the tracker).
         person: internal person key (stable, also for tentative tracks).
         id: public identity; negative (-person) while the track is tentative.
         kind: VISIBLE, TENTATIVE or HYPOTHESIS.
         hypothesis: for hypothesis nodes 'velocity', 'occluder' or 'still', else None.
-        S: (5,) ellipse (xc, yc, phi, rx, ry), pixels.
+        box: [x, y, w, h] the region the ellipse S is inscribed in, pixels.
         q: (bins,) colour histogram (eq. 1), shared with the person (frozen under occlusion).
         x: (8,) Kalman state (xc, yc, w, h, vx, vy, vw, vh); P: (8, 8) covariance (M).
         occluder: public id of the person this node is hidden behind, or None.
@@ -46,54 +46,61 @@ class Node:
         rho: appearance similarity (eq. 4) of the match, NaN otherwise.
     """
 
-    key: int
-    frame: int
     person: int
     id: int
     kind: str
     hypothesis: str | None
-    S: np.ndarray
+    box: list
     q: np.ndarray
     x: np.ndarray
     P: np.ndarray
-    occluder: int | None = None
-    depth: int = 0
-    parent: int | None = None
-    stage: int = 0
-    rho: float = float("nan")
+    occluder: int | None
+    depth: int
+    parent: int | None
+    stage: int
+    rho: float
 
-    def record(self) -> dict:
-        """Plain record (no arrays but the shape) for CSV/JSON export."""
-        xc, yc, phi, rx, ry = (float(v) for v in self.S)
-        return {
-            "frame": self.frame, "node": self.key, "id": self.id, "kind": self.kind,
-            "hypothesis": self.hypothesis or "", "xc": xc, "yc": yc, "phi": phi, "rx": rx,
-            "ry": ry, "vx": float(self.x[4]), "vy": float(self.x[5]),
-            "occluder": -1 if self.occluder is None else int(self.occluder),
-            "depth": self.depth, "parent": -1 if self.parent is None else self.parent,
-            "stage": self.stage, "rho": self.rho,
-        }
+
+def ellipses(boxes: np.ndarray) -> np.ndarray:
+    """(N, 5) ellipses S = (xc, yc, phi, rx, ry) inscribed in (N, 4) xywh ``boxes``, phi = 0
+    (``reading:axis_aligned_ellipses``)."""
+    x, y, w, h = boxes.T
+    S = np.zeros((len(boxes), 5))
+    S[:, 0] = x + w / 2
+    S[:, 1] = y + h / 2
+    S[:, 3] = w / 2
+    S[:, 4] = h / 2
+    return S
 
 
 @dataclass(slots=True)
-class Edge:
-    """Directed edge (n^{t-1}_i, n^t_j): kind 'match' (similarity association) or
-    'hypothesis' (predicted successor of a missing or occluded person)."""
-
-    frame: int
-    source: int
-    target: int
-    kind: str
-
-    def record(self) -> dict:
-        return {"frame": self.frame, "source": self.source, "target": self.target, "kind": self.kind}
-
-
-@dataclass
 class _Layer:
+    """The nodes of frame t, keys ``first`` on; their ellipses once asked for."""
+
     frame: int
+    first: int
     nodes: list[Node] = field(default_factory=list)
-    edges: list[Edge] = field(default_factory=list)
+    S: np.ndarray | None = None
+
+    def record(self, k: int) -> dict:
+        """Plain record of the layer's k-th node (no arrays) for CSV/JSON export."""
+        n = self.nodes[k]
+        xc, yc, phi, rx, ry = self.S[k].tolist()
+        return {
+            "frame": self.frame, "node": self.first + k, "id": n.id, "kind": n.kind,
+            "hypothesis": n.hypothesis or "", "xc": xc, "yc": yc, "phi": phi, "rx": rx,
+            "ry": ry, "vx": float(n.x[4]), "vy": float(n.x[5]),
+            "occluder": -1 if n.occluder is None else int(n.occluder),
+            "depth": n.depth, "parent": -1 if n.parent is None else n.parent,
+            "stage": n.stage, "rho": n.rho,
+        }
+
+    def edges(self) -> list[dict]:
+        """Directed edges (n^{t-1}_i, n^t_j) into this layer: kind 'match' (similarity
+        association) or 'hypothesis' (predicted successor of a missing or occluded person)."""
+        return [{"frame": self.frame, "source": n.parent, "target": self.first + k,
+                 "kind": "hypothesis" if n.kind == HYPOTHESIS else "match"}
+                for k, n in enumerate(self.nodes) if n.parent is not None]
 
 
 class TrackingGraph:
@@ -110,30 +117,40 @@ class TrackingGraph:
 
     def begin_frame(self, frame: int) -> None:
         """Open the layer of frame t (drops the oldest layer beyond the window)."""
-        self._layers.append(_Layer(frame))
+        self._layers.append(_Layer(frame, self._next_key))
 
-    def add_node(self, *attributes, **named) -> Node:
+    def add_node(self, *attributes) -> int:
         """AddNodeToGraph (+ AddEdgeToGraph from its parent): a new node in the current
-        layer with the attributes of ``Node`` after ``key`` and ``frame`` (given in that
-        order or by name); returns it."""
+        layer with the attributes of ``Node``, in that order; returns its key k."""
         layer = self._layers[-1]
-        node = Node(self._next_key, layer.frame, *attributes, **named)
+        layer.nodes.append(Node(*attributes))
+        layer.S = None
         self._next_key += 1
-        layer.nodes.append(node)
-        if node.parent is not None:
-            kind = "hypothesis" if node.kind == HYPOTHESIS else "match"
-            layer.edges.append(Edge(node.frame, node.parent, node.key, kind))
-        return node
+        return self._next_key - 1
+
+    def ellipses(self) -> tuple[np.ndarray, int]:
+        """The current layer's ellipses S, (N, 5) in node order, and its first node's key
+        (node k's S is row k - first)."""
+        layer = self._layers[-1]
+        if layer.S is None:
+            boxes = np.array([n.box for n in layer.nodes], dtype=np.float64).reshape(-1, 4)
+            layer.S = ellipses(boxes)
+        return layer.S, layer.first
+
+    def current_nodes(self) -> list[Node]:
+        """The current layer's nodes, in key order."""
+        return self._layers[-1].nodes
 
     def snapshot(self) -> dict:
         """Records of the current frame: {'frame', 'nodes': [...], 'edges': [...]}."""
         if not self._layers:
             return {"frame": 0, "nodes": [], "edges": []}
         layer = self._layers[-1]
+        self.ellipses()
         return {
             "frame": layer.frame,
-            "nodes": [n.record() for n in layer.nodes],
-            "edges": [e.record() for e in layer.edges],
+            "nodes": [layer.record(k) for k in range(len(layer.nodes))],
+            "edges": layer.edges(),
         }
 
     @property
@@ -143,7 +160,7 @@ class TrackingGraph:
 
     @property
     def edge_count(self) -> int:
-        return sum(len(layer.edges) for layer in self._layers)
+        return sum(n.parent is not None for layer in self._layers for n in layer.nodes)
 
     def clear(self) -> None:
         self._layers.clear()

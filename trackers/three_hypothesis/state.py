@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
-from occbench.trackers.three_hypothesis.graph import Node, TrackingGraph
+from occbench.trackers.three_hypothesis.graph import TrackingGraph
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle, Occlusion
 from occbench.trackers.three_hypothesis.rules import Rules
 
@@ -22,14 +22,13 @@ class Branch:
     kind: str
     x: np.ndarray
     P: np.ndarray
-    node: int | None = None  # graph key of the node in the last frame
+    node: int | None = None  # graph key of its node in the last frame (this frame's once added)
     occluder: int | None = None  # person key followed / hidden behind
     exposed: int = 0  # consecutive frames in plain view without a detection
     covered: bool = False  # hidden behind a visible person this frame
     unseen: bool = False  # its region holds (almost) no foreground this frame
     share: float = 1.0  # foreground share of its ellipse (measured when ``rules.report`` asks)
     depth: int = 0  # people in front of this node (eq. 3)
-    graph_node: Node | None = None  # this frame's graph node
 
 
 @dataclass

@@ -8,7 +8,8 @@ import numpy as np
 
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.records import Track, TrackState
-from occbench.trackers.three_hypothesis.graph import HYPOTHESIS, TENTATIVE, VISIBLE
+from occbench.trackers.three_hypothesis.graph import (HYPOTHESIS, TENTATIVE, VISIBLE,
+                                                      TrackingGraph)
 from occbench.trackers.three_hypothesis.rules import Rules
 from occbench.trackers.three_hypothesis.state import Branch, Memory, Person
 
@@ -26,34 +27,27 @@ def add_node(memory: Memory, person: Person, branch: Branch, box: np.ndarray,
         kind = HYPOTHESIS if confirmed else TENTATIVE
         hypothesis = branch.kind
     occluder = None if branch.occluder is None else memory.public.get(branch.occluder)
-    x, y, w, h = box.tolist()
-    node = memory.graph.add_node(
-        person.key, person.public_id, kind, hypothesis,
-        np.array([x + w / 2, y + h / 2, 0.0, w / 2, h / 2]), person.q, branch.x, branch.P,
-        occluder, branch.depth, parent, stage, rho,
-    )
-    branch.graph_node = node
-    return node.key
+    return memory.graph.add_node(person.key, person.public_id, kind, hypothesis, box.tolist(),
+                                 person.q, branch.x, branch.P, occluder, branch.depth, parent,
+                                 stage, rho)
 
 
-def outputs(persons: list[Person], t: int, rules: Rules) -> list[Track]:
+def outputs(persons: list[Person], t: int, rules: Rules, graph: TrackingGraph) -> list[Track]:
     """One Track per node of every person of N^t (CONFIRMED, OCCLUDED, HYPOTHESIS,
-    TENTATIVE: ``tracker``'s module docstring); a reported hidden person where
-    ``rules.velocity`` places it."""
-    out: list[Track] = []
+    TENTATIVE: ``tracker``'s module docstring), in person then branch order; a reported
+    hidden person where ``rules.velocity`` places it."""
     report = rules.report
-    found, velocities = [], []
+    rows: list[tuple[Person, Branch, TrackState]] = []
+    measured: list[int] = []  # rows at their measurement (person.shape)
     for person in persons:
         branches = person.branches
         if branches[0].kind == VISIBLE:
-            state = TrackState.CONFIRMED if person.confirmed else TrackState.TENTATIVE
-            out.append(_track(person, branches[0], person.shape, state))
-            if person.confirmed:
-                found.append(out[-1])
-                velocities.append(branches[0].x[4:6])
+            measured.append(len(rows))
+            rows.append((person, branches[0],
+                         TrackState.CONFIRMED if person.confirmed else TrackState.TENTATIVE))
             continue
         if not person.confirmed:
-            out.append(_track(person, branches[0], None, TrackState.TENTATIVE))
+            rows.append((person, branches[0], TrackState.TENTATIVE))
             continue
         best = rules.choice.choose([b.kind for b in branches],
                                    [b.exposed for b in branches],
@@ -61,21 +55,43 @@ def outputs(persons: list[Person], t: int, rules: Rules) -> list[Track]:
         if not report.reported(branches[best], person.hits, person.misses):
             best = -1  # drawn (HYPOTHESIS), not reported
         for k, b in enumerate(branches):
-            state = TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS
-            out.append(_track(person, b, None, state))
-    _place_hidden(out, found, velocities, persons, t, rules.velocity)
+            rows.append((person, b, TrackState.OCCLUDED if k == best else TrackState.HYPOTHESIS))
+    out = _tracks(rows, measured, graph)
+    _place_hidden(out, measured, [b for _, b, _ in rows], persons, t, rules.velocity)
     return out
 
 
-def _place_hidden(out: list[Track], found: list[Track], velocities: list,
+def _tracks(rows: list[tuple[Person, Branch, TrackState]], measured: list[int],
+            graph: TrackingGraph) -> list[Track]:
+    """The Track of each row's node: at its person's measured region for the ``measured``
+    rows, else the box of its ellipse S (all rows' S and boxes as whole-frame arrays)."""
+    S_layer, first = graph.ellipses()
+    keys = [b.node for _, b, _ in rows]
+    S = S_layer[np.array(keys, dtype=np.int64) - first]
+    xc, yc, rx, ry = S[:, 0], S[:, 1], S[:, 3], S[:, 4]
+    boxes = np.stack([xc - rx, yc - ry, 2 * rx, 2 * ry], axis=1)
+    if measured:
+        boxes[measured] = np.array([rows[r][0].shape for r in measured], dtype=np.float64)
+    nodes = graph.current_nodes()
+    out = []
+    for k, (person, _, state) in enumerate(rows):
+        node = nodes[keys[k] - first]
+        extra = {"ellipse": S[k], "hypothesis": node.hypothesis, "occluder": node.occluder,
+                 "depth": node.depth, "node": keys[k]}
+        out.append(Track(person.public_id, boxes[k], state, 1.0, extra))
+    return out
+
+
+def _place_hidden(out: list[Track], measured: list[int], branches: list[Branch],
                   persons: list[Person], frame: int,
                   rule: FilterPrediction | MeasuredVelocity) -> None:
     """``rules.velocity`` (``rule``) at frame t: record the found people's boxes and filter
     velocities, and move the reported hidden people's boxes where their measured velocity
     wins."""
-    rule.found(frame, [t.id for t in found],
-               np.array([t.box for t in found]).reshape(-1, 4),
-               np.array(velocities).reshape(-1, 2))
+    found = [r for r in measured if out[r].state == TrackState.CONFIRMED]
+    rule.found(frame, [out[r].id for r in found],
+               np.array([out[r].box for r in found]).reshape(-1, 4),
+               np.array([branches[r].x[4:6] for r in found]).reshape(-1, 2))
     hidden = [t for t in out if t.state == TrackState.OCCLUDED]
     if hidden:
         boxes = np.array([t.box for t in hidden])
@@ -83,17 +99,3 @@ def _place_hidden(out: list[Track], found: list[Track], velocities: list,
         for t, box in zip(hidden, boxes):
             t.box = box
     rule.forget({person.public_id for person in persons})
-
-
-def _track(person: Person, branch: Branch, box: np.ndarray | None, state: TrackState) -> Track:
-    """The Track of one node: at ``box`` (a measurement), else the box of its ellipse."""
-    node = branch.graph_node
-    S = node.S
-    if box is None:
-        xc, yc, _, rx, ry = S.tolist()
-        box = np.array([xc - rx, yc - ry, 2 * rx, 2 * ry])
-    else:
-        box = np.array(box, dtype=np.float64)  # a copy: the caller may keep it
-    extra = {"ellipse": S, "hypothesis": node.hypothesis, "occluder": node.occluder,
-             "depth": node.depth, "node": node.key}
-    return Track(person.public_id, box, state, 1.0, extra)

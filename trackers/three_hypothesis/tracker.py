@@ -159,4 +159,4 @@ class RetaTracker:
         kept = prune(S, V, O, U, H, setting, m)
         new = start_tracks(S, V, O, A, setting, m)
         m.end_frame(U.persons + kept + new)
-        return outputs(m.persons, m.t, rules)
+        return outputs(m.persons, m.t, rules, m.graph)
