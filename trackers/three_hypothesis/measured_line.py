@@ -69,6 +69,20 @@ def _squares(a: np.ndarray) -> np.ndarray:
     return np.array([math.pow(v, 2) for v in a.tolist()])
 
 
+def _record_steps(persons: list, frame: int, cx: list, cy: list, heights: list) -> None:
+    """Add to each person with at least 3 centres (those ``MeasuredLine.record`` scores) the
+    squared distance, over its box height squared, of its measured centre (``cx``, ``cy`` at
+    ``frame``) from the one its last step predicts: the last centre moved on by the
+    displacement of the last two per frame."""
+    for person, x, y, h in zip(persons, cx, cy, heights):
+        if len(person.centres) < 3:
+            continue
+        (f1, x1, y1), (f2, x2, y2) = person.centres[-2:]
+        k = (frame - f2) / max(f2 - f1, 1)
+        dx, dy = x2 + (x2 - x1) * k - x, y2 + (y2 - y1) * k - y
+        person.step_error += (dx * dx + dy * dy) / max(h, 1.0) ** 2
+
+
 @dataclass(frozen=True)
 class MeasuredLine:
     """``measured_hypothesis``: hypothesis 1 of a person just missed moves with the velocity
@@ -78,10 +92,15 @@ class MeasuredLine:
     before it: the person's own track record chooses); else M's, as the paper. With
     ``sigmas`` > 0 the line is taken only where it is measured to differ from M's velocity,
     by more than ``sigmas`` standard errors of its slope in x or in y (a standing person's
-    jitter draws a line that predicts as well as M by chance)."""
+    jitter draws a line that predicts as well as M by chance). With ``step``
+    (``adaptations.measured_step``) a third predictor is scored on the same measurements, the
+    last step (the displacement of the last two measured centres per frame), and hypothesis 1
+    takes it when its record is the best of the three: a person who has just turned keeps the
+    line's and M's old direction for several frames, its last step does not (exact boxes)."""
 
     window: int
     sigmas: float = 0.0
+    step: bool = False
     records: ClassVar[bool] = True
 
     def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray
@@ -105,6 +124,8 @@ class MeasuredLine:
             for r, e_m, e_l in zip(k.tolist(), mine.tolist(), line.tolist()):
                 persons[r].line_errors[0] += e_m
                 persons[r].line_errors[1] += e_l
+        if self.step:
+            _record_steps(persons, frame, cx.tolist(), cy.tolist(), boxes[:, 3].tolist())
         for person, x, y in zip(persons, cx.tolist(), cy.tolist()):
             person.centres.append((frame, x, y))
             del person.centres[:-self.window]
@@ -113,7 +134,15 @@ class MeasuredLine:
         """(8,) state of hypothesis 1 at a person's first miss, from its last estimate
         ``x_prev`` and M's prediction ``x_pred``."""
         errors = person.line_errors
-        if len(person.centres) < 3 or errors[1] >= errors[0]:
+        if len(person.centres) < 3:
+            return x_pred
+        if self.step and person.step_error < min(errors):
+            (f1, x1, y1), (f2, x2, y2) = person.centres[-2:]
+            vx, vy = (x2 - x1) / max(f2 - f1, 1), (y2 - y1) / max(f2 - f1, 1)
+            x = x_pred.copy()  # from the last measured centre (t - 1) one step on
+            x[0], x[1], x[4], x[5] = x2 + vx, y2 + vy, vx, vy
+            return x
+        if errors[1] >= errors[0]:
             return x_pred
         _, _, _, vx, vy, se_x, se_y = _fit(person.centres)
         if self.sigmas > 0 and (abs(vx - x_pred[4]) <= self.sigmas * se_x

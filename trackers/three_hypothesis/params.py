@@ -246,6 +246,10 @@ class Adaptations:
             pixel over the m frames of pruning (``rules.MergeTogether``); False: by place
             alone, so hypothesis 3 (still) of a person whose velocity is a few tenths of a
             pixel per frame is dropped at its first frame and hypothesis 1 drifts alone.
+        measured_step: with ``measured_hypothesis``, a third predictor of hypothesis 1 is
+            scored on the person's measurements, its last step (the displacement of its last
+            two measured centres per frame), and taken when its record beats M's and the
+            line's (``measured_line.MeasuredLine.step``); False: M's or the line's.
         own_return: a confirmed person hidden at t - 1 may take a measurement only with
             rho at least the lowest rho of its own last m matches (and mu_rho)
             (``returning.OwnReturn``); False: mu_rho for everyone (the paper, 3.3.2).
@@ -289,6 +293,7 @@ class Adaptations:
     duplicates_together: bool = False
     own_return: bool = False
     hold_last: bool = False
+    measured_step: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -306,7 +311,7 @@ class Adaptations:
                       "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
                       "duplicates_together": bool, "own_return": bool,
-                      "hold_last": bool})
+                      "hold_last": bool, "measured_step": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -337,7 +342,7 @@ class Adaptations:
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
                    split_appearance=False, split_appearance_margin=0.0,
                    merged_unmixed=False, duplicates_together=False,
-                   own_return=False, hold_last=False)
+                   own_return=False, hold_last=False, measured_step=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -45,6 +45,7 @@ class Person:
     spawned: bool = False  # occlusion hypotheses created in this hidden streak
     centres: list = field(default_factory=list)  # (frame, xc, yc) last measured (rules.line)
     line_errors: list = field(default_factory=lambda: [0.0, 0.0])  # M's, the line's
+    step_error: float = 0.0  # the last step's, on the same measurements (rules.line.step)
     merged: bool = False  # its last measurement held a hidden partner (rules.split)
     matched_rho: list = field(default_factory=list)  # rho of its last m matches (rules.returning)
 

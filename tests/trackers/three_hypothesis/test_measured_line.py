@@ -109,3 +109,36 @@ def test_squares_round_as_the_scalar_power_does():
     differs from it in about one value of a thousand."""
     a = np.random.default_rng(4).normal(0, 100, 20_000)
     assert _squares(a).tolist() == [v ** 2 for v in a.tolist()]
+
+
+def test_a_person_who_has_just_turned_keeps_its_last_step():
+    """``measured_step``: a person walks left at 3 px/frame (t = 1..6), turns and walks right
+    at 3 (t = 7..9); M's velocity catches up slowly (-3, -3, -1, +1) and the line through the
+    last 8 centres still points left. The last step has predicted the measurements best (one
+    miss, at the turn), so hypothesis 1 at the first miss moves right from the last measured
+    centre; without the rule it keeps M's prediction (the line did worse than M)."""
+    centres = [50.0 - 3 * t for t in range(1, 7)] + [32.0 + 3 * k for k in (1, 2, 3)]
+    m_velocity = [-3.0] * 7 + [-1.0, 1.0]
+
+    def walked(rule):
+        person = SimpleNamespace(centres=[], line_errors=[0.0, 0.0], step_error=0.0)
+        for t, (xc, v) in enumerate(zip(centres, m_velocity), start=1):
+            previous = centres[t - 2] if t > 1 else xc
+            predicted = np.array([previous + v, 10.0, 10, 20, v, 0, 0, 0])
+            rule.record([person], t, np.array([[xc - 5, 0.0, 10, 20]]), predicted[None])
+        return person
+
+    x_prev = np.array([40.0, 10.0, 10, 20, 1.0, 0, 0, 0])  # M's estimate at t = 9, lagging
+    x_pred = x_prev + np.array([1.0, 0, 0, 0, 0, 0, 0, 0])
+    with_step = MeasuredLine(window=8, sigmas=2.0, step=True)
+    person = walked(with_step)
+    assert person.step_error < min(person.line_errors)
+    assert person.line_errors[1] > person.line_errors[0]  # the line lags more than M
+    x = with_step.start(person, x_prev, x_pred)
+    assert np.allclose(x[[0, 1, 4, 5]], [44.0, 10.0, 3.0, 0.0])
+    assert np.allclose(x[2:4], x_pred[2:4])
+    without = MeasuredLine(window=8, sigmas=2.0)
+    assert without.start(walked(without), x_prev, x_pred) is x_pred
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(measured_step=True), h).line == MeasuredLine(8, 2.0, True)
+    assert not Adaptations().measured_step and "measured_step" not in Adaptations.paper().changed()
