@@ -9,14 +9,18 @@ median of ``--repeats`` runs, and in units of a reference workload run in the sa
 the machine may be shared), with the CPU time of each step (one more, instrumented run;
 ``tracker_timing``). Targets (foreground mask): >= 1,000 frames/s at 10 people, >= 200 at
 100. ``--check [DIGESTS.json]`` prints the sha256 of the reported rows (and writes or
-compares the file): a speed-up must leave them unchanged.
+compares the file): a speed-up must leave them unchanged. ``--vs CHECKOUT`` times this tree's
+tracker against another checkout's ``trackers/layered`` (``tracker_timing.import_other``, built
+from that checkout's ``conf/tracker/pbm.yaml``) in this process, on the same scene, with and
+without the mask, ``--rounds`` rounds in turn ABBA: frames/s of both, the ratio of their
+median times and whether their rows agree.
 
 Accuracy: IDF1, HOTA, MOTA, IDs and Frag of ``pbm`` and ``baseline`` (both with their
 ``conf/tracker`` defaults) on the synthetic suite and on the shipped CAVIAR OneLeaveShop1cor, with ``NoisyGroundTruth(miss_rate, seed)`` detections.
 
     .venv/bin/python benchmarks/bench_pbm.py [--speed-frames 300] [--repeats 3] [--miss 0.3]
         [--seed 0] [--skip-speed] [--skip-accuracy] [--length 150] [--people 10 40 100]
-        [--check [DIGESTS.json]]
+        [--check [DIGESTS.json]] [--vs CHECKOUT [--rounds 3]]
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import argparse
 import logging
 import os
 import statistics
+from functools import partial
 from pathlib import Path
 
 import cv2
@@ -32,8 +37,8 @@ import numpy as np
 import pandas as pd
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
-from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, reference_seconds,
-                            rows_digest)
+from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, import_other,
+                            paired_seconds, reference_seconds, rows_digest)
 
 from occbench.datasets.synthetic import DEFAULT_SCENARIOS, load_scenario, load_suite
 from occbench.config.paths import data_path
@@ -42,6 +47,7 @@ from occbench.pipeline.record import score
 from occbench.pipeline.summary import summary_rows
 from occbench.sources.annotations import NoisyGroundTruth
 from occbench.config.meta import without_meta
+from occbench.trackers import layered
 
 ROOT = Path(__file__).resolve().parents[1]
 CAVIAR = data_path("CAVIAR-OneLeaveShop1cor")
@@ -110,6 +116,42 @@ def speed(frames: int, people: int, seed: int, repeats: int = 3,
     return rows, digests, stages
 
 
+def other_builder(tree: Path, alias: str = "pbm_vs"):
+    """A builder of another checkout's ``pbm`` (``tree``'s ``trackers/layered`` imported as
+    ``alias``, ``tracker_timing.import_other``; its ``conf/tracker/pbm.yaml`` with the
+    package's ``_target_`` names renamed to it)."""
+    module = import_other(tree, layered.__name__, alias)
+    text = (Path(tree) / "conf" / "tracker" / "pbm.yaml").read_text()
+    cfg = without_meta(OmegaConf.create(text.replace(layered.__name__, alias)))
+    if OmegaConf.select(cfg, "_target_") != f"{alias}.PBMTracker":
+        raise ValueError(f"{tree}/conf/tracker/pbm.yaml does not build {layered.__name__}.PBMTracker")
+    return module, lambda: instantiate(cfg)
+
+
+def versus(build_other, people: int, frames: int, rounds: int, seed: int = 0,
+           size: tuple[int, int] = SIZE) -> list[dict]:
+    """This tree's ``pbm`` against ``build_other()`` (``other_builder``) on one scene, with and
+    without the mask: each run once untimed, then ``rounds`` timed rounds in turn
+    (``paired_seconds``); frames/s of the median times, ``ratio`` = this tree's median time /
+    the other's (below 1: this tree is faster), the rounds' range and whether the rows agree."""
+    data = scene(frames, people, seed, size)
+    builders = {"this": partial(build, "pbm"), "other": build_other}
+    rows = []
+    for label, use_fg in (("foreground mask", True), ("no foreground", False)):
+        def run(which, use_fg=use_fg):
+            tracker = builders[which]()
+            return [tracker.update(img, dets, fg if use_fg else None) for img, dets, fg in data]
+
+        same = rows_digest(run("this")) == rows_digest(run("other"))
+        seconds = paired_seconds({which: partial(run, which) for which in builders}, rounds)
+        this, that = statistics.median(seconds["this"]), statistics.median(seconds["other"])
+        pairs = [a / b for a, b in zip(seconds["this"], seconds["other"])]
+        rows.append({"people": people, "mode": label, "this_fps": frames / this,
+                     "other_fps": frames / that, "ratio": this / that, "ratio_min": min(pairs),
+                     "ratio_max": max(pairs), "same_rows": same})
+    return rows
+
+
 def accuracy(sequences, miss: float, seed: int, foreground: str, title: str) -> pd.DataFrame:
     rows = []
     for seq in sequences:
@@ -146,9 +188,23 @@ def main() -> None:
                     metavar="DIGESTS.json",
                     help="print the sha256 of the reported rows; with a file: write it when "
                          "absent, else compare (exit 1 when they differ)")
+    ap.add_argument("--vs", type=Path, metavar="CHECKOUT",
+                    help="time against another checkout's trackers/layered in this process")
+    ap.add_argument("--rounds", type=int, default=3, help="--vs: rounds of each, in turn")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
     cv2.setNumThreads(1)
+    if args.vs is not None:
+        _, build_other = other_builder(args.vs)
+        print(f"load average (uptime): {os.getloadavg()}; this: {ROOT}, other: {args.vs}")
+        rows = [r for people in args.people for r in versus(
+            build_other, people, args.speed_frames, args.rounds, args.seed, args.size)]
+        print(f"PBMTracker.update, this tree against the other ({args.size[0]}x{args.size[1]}, "
+              f"{args.speed_frames} frames, {args.rounds} rounds in turn ABBA, CPU time; ratio: "
+              "this tree's median time / the other's)")
+        print(pd.DataFrame(rows).to_string(index=False, float_format=lambda v: f"{v:.3f}" if v < 10 else f"{v:.1f}"))
+        print(f"load average after: {os.getloadavg()}")
+        return
     if not args.skip_speed:
         print(f"load average (uptime): {os.getloadavg()}")
         rows, digests = [], {}

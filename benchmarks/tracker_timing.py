@@ -100,17 +100,24 @@ def import_other(tree: Path, package: str, alias: str):
     """``package`` (e.g. ``occbench.trackers.three_hypothesis``) of another checkout ``tree``,
     imported as the top-level package ``alias`` beside this tree's: its files copied (once per
     content, under the temp dir, so numba's disk cache is kept between runs) with every
-    ``package`` name in them renamed. What it imports from outside ``package`` is this tree's.
+    ``package`` name in them renamed, and the files of its subfolders (data) as they are. What it imports from outside ``package`` is this tree's.
     Raises ``FileNotFoundError`` naming the folder when ``tree`` has no such package."""
     src = Path(tree) / "trackers" / package.rsplit(".", 1)[-1]
     files = sorted(src.glob("*.py"))
     if not files:
         raise FileNotFoundError(f"no {package} at {src}")
     texts = {f.name: f.read_text().replace(package, alias) for f in files}
-    key = hashlib.sha256(json.dumps(texts, sort_keys=True).encode()).hexdigest()[:16]
-    root = Path(tempfile.gettempdir()) / f"occbench_vs_{alias}_{key}"
+    data = {str(f.relative_to(src)): f.read_bytes() for f in sorted(src.glob("*/**/*"))
+            if f.is_file() and "__pycache__" not in f.parts}  # e.g. layered/data/*.yaml
+    h = hashlib.sha256(json.dumps(texts, sort_keys=True).encode())
+    for name, blob in data.items():
+        h.update(name.encode() + b"\0" + blob)
+    root = Path(tempfile.gettempdir()) / f"occbench_vs_{alias}_{h.hexdigest()[:16]}"
     if not (root / alias / "__init__.py").exists():
         (root / alias).mkdir(parents=True, exist_ok=True)
+        for name, blob in data.items():
+            (root / alias / name).parent.mkdir(parents=True, exist_ok=True)
+            (root / alias / name).write_bytes(blob)
         for name in sorted(texts, key=lambda name: name == "__init__.py"):  # __init__ last
             (root / alias / name).write_text(texts[name])
     if alias in sys.modules:
