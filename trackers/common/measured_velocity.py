@@ -72,7 +72,8 @@ class MeasuredVelocity:
             rec.measured_velocity = ((centre[0] - last[0]) / k, (centre[1] - last[1]) / k)
             rec.frame, rec.box, rec.filter_velocity = frame, tuple(box), tuple(v)
 
-    def place(self, frame: int, ids: list[int], boxes: np.ndarray) -> None:
+    def place(self, frame: int, ids: list[int], boxes: np.ndarray,
+              velocity: np.ndarray | None = None) -> None:
         """Move, in place, the boxes (N, 4) of hidden ``ids`` whose measured velocity has
         predicted better: their last measured box moved by it times the frames since."""
         for r, tid in enumerate(ids):
@@ -101,7 +102,8 @@ class FilterPrediction:
               filter_velocity: np.ndarray) -> None:
         pass
 
-    def place(self, frame: int, ids: list[int], boxes: np.ndarray) -> None:
+    def place(self, frame: int, ids: list[int], boxes: np.ndarray,
+              velocity: np.ndarray | None = None) -> None:
         pass
 
     def forget(self, alive: set[int]) -> None:

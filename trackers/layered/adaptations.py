@@ -168,6 +168,11 @@ class Adaptations:
             that velocity has predicted its found boxes better than KF1's so far
             (``trackers.common.measured_velocity``, reta's rule; false: where KF1 predicts,
             ``report_predicted``). Reporting only.
+        camera_placement: an unfound target is reported by whichever of three predictors
+            (the tracker's KF1 box, its last found box moved by its measured velocity, its
+            last found box unmoved) has placed the camera's re-found targets best so far,
+            pooled over every target of the sequence (``placement.CameraPlacement``; false:
+            ``measured_velocity``'s or KF1's). Reporting only.
         reported_behind: with a foreground mask, a confirmed target unfound for longer than
             ``reporting.max_misses`` frames is still reported while a found target nearer
             the camera covers this share of its box (``evidence.ReportedBehind``; 0: off,
@@ -216,6 +221,7 @@ class Adaptations:
     measured_velocity: bool = False
     reported_behind: float = 0.0
     border_birth_waits: bool = False
+    camera_placement: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -235,6 +241,10 @@ class Adaptations:
         require("adaptations.lone_shrink_shape",
                 self.lone_shrink_shape == 0 or self.lone_shrink > 0,
                 "needs adaptations.lone_shrink > 0", self.lone_shrink_shape)
+        require("adaptations.camera_placement",
+                not (self.camera_placement and self.measured_velocity),
+                "and adaptations.measured_velocity are two rules for one step: set one",
+                self.camera_placement)
         require("adaptations.contested_template",
                 self.contested_template == 0 or self.contested_template >= 1,
                 "must be 0 (off) or >= 1", self.contested_template)
@@ -258,7 +268,7 @@ class Adaptations:
                                        "several_heads_merge", "profile_heads", "held_detections",
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
                                        "coarse_search", "measured_velocity",
-                                       "border_birth_waits"),
+                                       "border_birth_waits", "camera_placement"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int})
@@ -278,7 +288,8 @@ class Adaptations:
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
                    coarse_search=False, fold_twins=0, fold_twins_own=0.0,
-                   measured_velocity=False, reported_behind=0.0, border_birth_waits=False)
+                   measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
+                   camera_placement=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -29,6 +29,7 @@ from occbench.trackers.layered.exits import (
     ReportAnywhere,
 )
 from occbench.trackers.layered.parts import PartFeatures
+from occbench.trackers.layered.placement import CameraPlacement
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
 from occbench.trackers.layered.smaller import LoneShrink, OccludedSmaller
@@ -313,7 +314,7 @@ class Rules(NamedTuple):
     exit: PredictedExit | BorderExit  # an unfound target that left the picture (ours)
     leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
     twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
-    velocity: FilterPrediction | MeasuredVelocity  # where an unfound target stands (ours)
+    velocity: FilterPrediction | MeasuredVelocity | CameraPlacement  # where unfound (ours)
     behind: MissesBound | ReportedBehind  # reported past reporting.max_misses? (ours)
 
 
@@ -341,15 +342,16 @@ def build_rules(a: Adaptations) -> Rules:
         leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0
                  else ReportAnywhere()),
         twins=FoldTwins(a.fold_twins, a.fold_twins_own) if a.fold_twins > 0 else KeepStacked(),
-        velocity=MeasuredVelocity() if a.measured_velocity else FilterPrediction(),
+        velocity=(CameraPlacement() if a.camera_placement else
+                  MeasuredVelocity() if a.measured_velocity else FilterPrediction()),
         behind=ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound(),
     )
 
 
-def place_unfound(rule: FilterPrediction | MeasuredVelocity, frame: int, targets: Targets,
-                  rows: np.ndarray, boxes: np.ndarray, found: np.ndarray) -> None:
-    """``rules.velocity`` (``adaptations.measured_velocity``): record the found confirmed
-    targets' boxes among ``rows`` with KF1's velocities, and move the boxes (R, 4) of the
+def place_unfound(rule: FilterPrediction | MeasuredVelocity | CameraPlacement, frame: int,
+                  targets: Targets, rows: np.ndarray, boxes: np.ndarray, found: np.ndarray) -> None:
+    """``rules.velocity`` (``adaptations.measured_velocity``, ``camera_placement``): record
+    the found confirmed targets' boxes among ``rows`` with KF1's velocities, and move the boxes (R, 4) of the
     unfound ones in place where their measured velocity has predicted better; found (T,)
     bool. Reporting only: no target's state changes."""
     seen = found[rows] & targets.confirmed[rows]
@@ -357,6 +359,7 @@ def place_unfound(rule: FilterPrediction | MeasuredVelocity, frame: int, targets
     hidden = ~found[rows]
     if hidden.any():
         moved = boxes[hidden]
-        rule.place(frame, targets.id[rows[hidden]].tolist(), moved)
+        rule.place(frame, targets.id[rows[hidden]].tolist(), moved,
+                   targets.kf1.x[rows[hidden], 2:4])
         boxes[hidden] = moved
     rule.forget(set(targets.id.tolist()))
