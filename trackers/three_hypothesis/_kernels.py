@@ -2,8 +2,9 @@
 histograms of the measurements' ellipses, one call per frame, and eq. 5's region
 similarity of the pairs of ellipses that meet (``region_overlap_pairs``, the integration of
 ``occlusion.region_overlaps``, tested bit for bit against ``features.region_similarity``),
-and ``blend``, the appearance update of ``rules.BlendVisible`` (tested against its numpy
-expression).
+``blend``, the appearance update of ``rules.BlendVisible`` (tested against its numpy
+expression), and ``line_misses``, the least-squares lines of ``measured_line.MeasuredLine``
+(tested bit for bit against ``measured_line._lines``).
 
 It computes what ``EllipseHistogrammer.measure``'s numpy and ``cv2.calcHist`` path did
 (the definition: ``features.ellipse_histograms``), bit for bit: the ellipse of a snapped
@@ -223,3 +224,91 @@ def depth_orders(pairs: np.ndarray, visible: np.ndarray, shapes: np.ndarray, pre
                 out[k] = 1
             elif up < down:
                 out[k] = -1
+
+
+@numba.njit(cache=True)
+def _block_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """numpy's ``pairwise_sum`` of a[lo:lo + n] for n <= 128: below 8 terms one by one,
+    else eight running sums added as a tree, then the rest one by one."""
+    if n < 8:
+        res = -0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r = np.empty(8)
+    for j in range(8):
+        r[j] = a[lo + j]
+    i = 8
+    while i < n - n % 8:
+        for j in range(8):
+            r[j] += a[lo + i + j]
+        i += 8
+    res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@numba.njit(cache=True)
+def _pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """numpy's pairwise summation of a[lo:lo + n] (its float64 add loop's
+    ``pairwise_sum``): ``_block_sum`` up to 128 terms, beyond it the sum of two halves
+    split at a multiple of 8, left + right; the same bits as ``a[lo:lo + n].sum()``. The
+    halving runs on an explicit stack (numba's disk cache does not load a recursive
+    function)."""
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    seg = np.empty((192, 3), np.int64)  # (start, length, 1: add the two sums above it)
+    vals = np.empty(96)
+    seg[0, 0], seg[0, 1], seg[0, 2] = lo, n, 0
+    top, nv = 1, 0
+    while top > 0:
+        top -= 1
+        s, m, join = seg[top, 0], seg[top, 1], seg[top, 2]
+        if join:
+            nv -= 1
+            vals[nv - 1] = vals[nv - 1] + vals[nv]
+        elif m <= 128:
+            vals[nv] = _block_sum(a, s, m)
+            nv += 1
+        else:
+            m2 = m // 2
+            m2 -= m2 % 8
+            seg[top, 0], seg[top, 1], seg[top, 2] = s, m, 1
+            seg[top + 1, 0], seg[top + 1, 1], seg[top + 1, 2] = s + m2, m - m2, 0
+            seg[top + 2, 0], seg[top + 2, 1], seg[top + 2, 2] = s, m2, 0
+            top += 3
+    return vals[0]
+
+
+@numba.njit(cache=True)
+def line_misses(hist: np.ndarray, sizes: np.ndarray, frame: float, cx: np.ndarray,
+                cy: np.ndarray, out: np.ndarray) -> None:
+    """``measured_line._lines`` of K histories at once and their misses at ``frame``: person
+    k's n = sizes[k] (frame, xc, yc) rows follow person k - 1's in ``hist`` (sum of sizes,
+    3); its least-squares line (t0, x0, y0, vx, vy) through them, and out[:, k] = (x0 + vx
+    (frame - t0) - cx[k], y0 + vy (frame - t0) - cy[k]) (2, K). Each mean and sum as
+    ``_lines``' numpy reductions along a row (0 + the pairwise sum, / n): the same bits."""
+    lo = 0
+    w = np.empty((5, sizes.max() if len(sizes) else 0))
+    c0 = np.empty(3)
+    for k in range(len(sizes)):
+        n = sizes[k]
+        for i in range(n):
+            for c in range(3):
+                w[c, i] = hist[lo + i, c]
+        for c in range(3):  # t0, x0, y0: the means
+            c0[c] = (0.0 + _pairwise_sum(w[c], 0, n)) / n
+        for i in range(n):
+            w[0, i] = w[0, i] - c0[0]  # t
+            w[3, i] = w[0, i] * w[0, i]  # t t
+        tt = 0.0 + _pairwise_sum(w[3], 0, n)
+        for i in range(n):
+            w[4, i] = w[0, i] * (w[1, i] - c0[1])  # t x
+            w[3, i] = w[0, i] * (w[2, i] - c0[2])  # t y
+        vx = (0.0 + _pairwise_sum(w[4], 0, n)) / tt
+        vy = (0.0 + _pairwise_sum(w[3], 0, n)) / tt
+        out[0, k] = c0[1] + vx * (frame - c0[0]) - cx[k]
+        out[1, k] = c0[2] + vy * (frame - c0[0]) - cy[k]
+        lo += n

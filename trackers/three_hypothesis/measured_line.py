@@ -16,6 +16,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from occbench.trackers.three_hypothesis._kernels import line_misses
+
 
 @dataclass(frozen=True)
 class FilterVelocity:
@@ -108,19 +110,23 @@ class MeasuredLine:
         """Score both predictors on each person's measured box at ``frame`` (``boxes`` (K, 4)
         xywh; M's prediction: ``predicted`` (K, 8) states), then keep its centre. A person
         with at least 3 centres adds, to M's error and to the line's, the squared distance of
-        the predicted centre from the measured one over the box height squared; the people
-        are scored a group of equal history length at a time (``_lines``)."""
+        the predicted centre from the measured one over the box height squared; every
+        person's line in one compiled call (``_kernels.line_misses``: ``_lines``' bits)."""
         cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
-        sizes = np.array([len(person.centres) for person in persons], dtype=np.int64)
-        for n in np.unique(sizes[sizes >= 3]).tolist():
-            k = np.flatnonzero(sizes == n)
-            rows = chain.from_iterable(chain.from_iterable(persons[r].centres for r in k.tolist()))
-            t0, x0, y0, vx, vy = _lines(np.fromiter(rows, np.float64, len(k) * n * 3)
-                                        .reshape(len(k), n, 3))  # the (G, n, 3) histories
-            h2 = _squares(np.maximum(boxes[k, 3], 1.0))
-            mine = (_squares(predicted[k, 0] - cx[k]) + _squares(predicted[k, 1] - cy[k])) / h2
-            line = (_squares(x0 + vx * (frame - t0) - cx[k])
-                    + _squares(y0 + vy * (frame - t0) - cy[k])) / h2
+        sizes = np.fromiter(map(len, (person.centres for person in persons)), np.int64,
+                            len(persons))
+        k = np.flatnonzero(sizes >= 3)
+        if len(k):
+            rows = chain.from_iterable(chain.from_iterable(persons[r].centres
+                                                           for r in k.tolist()))
+            n = sizes[k]
+            hist = np.fromiter(rows, np.float64, int(n.sum()) * 3).reshape(-1, 3)
+            misses = np.empty((2, len(k)))  # the line's, in x and y
+            line_misses(hist, n, float(frame), cx[k], cy[k], misses)  # _lines, compiled
+            h2, mx, my, lx, ly = _squares(np.concatenate([
+                np.maximum(boxes[k, 3], 1.0), predicted[k, 0] - cx[k],
+                predicted[k, 1] - cy[k], misses[0], misses[1]])).reshape(5, len(k))
+            mine, line = (mx + my) / h2, (lx + ly) / h2
             for r, e_m, e_l in zip(k.tolist(), mine.tolist(), line.tolist()):
                 persons[r].line_errors[0] += e_m
                 persons[r].line_errors[1] += e_l

@@ -9,7 +9,9 @@ import numpy as np
 
 from occbench.trackers.three_hypothesis import Adaptations
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
-from occbench.trackers.three_hypothesis.measured_line import FilterVelocity, MeasuredLine, _line, _squares
+from occbench.trackers.three_hypothesis._kernels import line_misses
+from occbench.trackers.three_hypothesis.measured_line import (FilterVelocity, MeasuredLine, _line,
+                                                             _lines, _squares)
 from occbench.trackers.three_hypothesis.rules import build_rules
 
 
@@ -142,3 +144,23 @@ def test_a_person_who_has_just_turned_keeps_its_last_step():
     h = EllipseHistogrammer()
     assert build_rules(Adaptations(measured_step=True), h).line == MeasuredLine(8, 2.0, True)
     assert not Adaptations().measured_step and "measured_step" not in Adaptations.paper().changed()
+
+
+def test_compiled_lines_equal_numpy_lines_bit_for_bit():
+    """``_kernels.line_misses`` against ``_lines`` (numpy's reductions) for histories of 3
+    to 20 rows (numpy sums below 8 terms one by one, 8 and more in eight running sums) and
+    of 130 and 300 (its halving beyond 128), with negative zeros and equal frames' ties."""
+    rng = np.random.default_rng(5)
+    for n in [*range(3, 21), 130, 300]:
+        G = 7
+        hist = np.stack([np.sort(rng.uniform(0, 500, (G, n)), axis=1),
+                         rng.normal(0, 300, (G, n)), rng.normal(0, 300, (G, n))], axis=2)
+        hist[0, :, 1:] = -0.0
+        hist[1, : n // 2, 0] = hist[1, 0, 0]  # repeated frames
+        frame = float(hist[:, -1, 0].max() + 1)
+        cx, cy = rng.normal(0, 300, G), rng.normal(0, 300, G)
+        t0, x0, y0, vx, vy = _lines(hist)
+        want = np.stack([x0 + vx * (frame - t0) - cx, y0 + vy * (frame - t0) - cy])
+        got = np.empty((2, G))
+        line_misses(hist.reshape(-1, 3), np.full(G, n), frame, cx, cy, got)
+        assert got.tobytes() == want.tobytes(), n
