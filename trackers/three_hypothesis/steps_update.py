@@ -41,7 +41,8 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     idx = np.array([m.node for m in matches])
     visible_dets = [m.det for m in matches]
     dbox = V.boxes[visible_dets]
-    behind = np.array([m.node in in_front for m in matches])
+    behind_r = [m.node in in_front for m in matches]
+    behind = np.array(behind_r)
     z = box_measurements(dbox)
     own, partner = _own_share(S, V, O, A, rules, matches)
     Rs = rules.motion_front.noise(np.array([persons[i].R for i in keys]),
@@ -58,17 +59,19 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     asked = [r for r, m in enumerate(matches) if m.det in tent and m.det not in empty_dets]
     clear = _clear(S, V, O, rules, [keys[r] for r in asked], [matches[r].det for r in asked])
     rules.line.record([persons[i] for i in keys], memory.t, dbox, S.Xp[idx])
+    scores = V.scores.tolist()
     absorbed: set[int] = set()
+    shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
-        if not behind[r]:
+        if not behind_r[r]:
             person.q = rules.appearance_front.update(
-                person.q, p[d], own[r], persons[partner[r]].q if partner[r] >= 0 else None)
+                person.q, p[d], shares[r], persons[partners[r]].q if partners[r] >= 0 else None)
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
             person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
-        person.merged = bool(own[r] < 1.0)  # read by rules.split at t + 1
+        person.merged = shares[r] < 1.0  # read by rules.split at t + 1
         if person.confirmed or d not in empty_dets:
             person.hits += 1
         person.misses = 0
@@ -76,7 +79,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         rules.returning.record(person, match.rho)
         if not person.confirmed and rules.confirm.confirms(
                 person.hits, setting.life_cycle.confirm_frames, clear.get(d, False),
-                float(V.scores[d])):
+                scores[d]):
             _confirm(S, A, absorbed, person, shape, rules, memory)
         fronts = in_front.get(n, [])
         branch = Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
