@@ -199,6 +199,33 @@ def _check_colour_formulas() -> None:
             "trackers/layered/sampling_kernels._hsv_xyz: update it")
 
 
+class PixelBins:
+    """The frame's pixels' joint HSV and XYZ bins (``bins`` per channel), each converted at
+    its first read by a sample of the frame (``sampling_kernels.part_features``'
+    ``pixel_bins``: one uint32 an entry, the frame's stamp in the bits above the two bins);
+    extractors of the same ``bins`` may share one table (the bins of a pixel are a function
+    of its colour alone)."""
+
+    def __init__(self, bins: int) -> None:
+        self.bins = bins
+        self.shift = max((bins**3 - 1).bit_length(), 1)  # bits of a joint bin
+        self._last = (1 << (32 - 2 * self.shift)) - 1  # the largest stamp
+        self._table = np.zeros(0, np.uint32)
+        self._stamp = 0
+
+    def start(self, size: int) -> None:
+        """A new frame of ``size`` pixels: every entry stale (a new stamp; the table zeroed,
+        stamp 0, when its size changes or the stamps wrap)."""
+        if len(self._table) != size or self._stamp == self._last:
+            self._table = np.zeros(size, np.uint32)  # stamp 0: nothing converted
+            self._stamp = 0
+        self._stamp += 1
+
+    def kernel_args(self) -> tuple[np.ndarray, int, int]:
+        """(table (size,) uint32, stamp, shift): ``part_features``' ``pixel_bins``."""
+        return self._table, self._stamp, self.shift
+
+
 class PartFeatureExtractor:
     """Part features of many boxes of one frame (PBM 2.1-2.2), by compiled kernels.
 
@@ -221,9 +248,12 @@ class PartFeatureExtractor:
         bins: histogram bins per channel (joint histograms have ``bins**3`` bins).
         grid_rows, grid_cols: samples per box (rows should be a multiple of 7 so the head
             band of PBM 2.1 is whole rows).
+        shared: another extractor of the same ``bins`` whose pixel bins (``PixelBins``) this
+            one uses; each ``start``s on the same frame, one after the other.
     """
 
-    def __init__(self, bins: int = 4, grid_rows: int = 35, grid_cols: int = 15) -> None:
+    def __init__(self, bins: int = 4, grid_rows: int = 35, grid_cols: int = 15,
+                 shared: PartFeatureExtractor | None = None) -> None:
         require("features.histogram_bins", 1 <= bins <= 32, "must lie in 1..32", bins)
         require("features.grid", grid_rows >= MIN_GRID[0] and MIN_GRID[1] <= grid_cols <= MAX_GRID_COLS,
                 "must be at least {} x {} samples (rows, cols), at most {} columns".format(
@@ -234,8 +264,9 @@ class PartFeatureExtractor:
         self._fr = (np.arange(grid_rows) + 0.5) / grid_rows
         self._fc = (np.arange(grid_cols) + 0.5) / grid_cols
         self._luts: tuple[np.ndarray, np.ndarray] | None = None  # made on first use
-        self._pixel_bins: np.ndarray | None = None  # the frame's converted pixels (``start``)
-        self._stamp = 0  # frames started on this table
+        require("features.histogram_bins", shared is None or shared.bins == bins,
+                "must equal the bins of the extractor whose pixel bins are shared", bins)
+        self.pixels = PixelBins(bins) if shared is None else shared.pixels  # (``start``)
         self._frame: np.ndarray | None = None
         self._fg: np.ndarray | None = None  # (H, W) bool, C-contiguous
 
@@ -251,11 +282,7 @@ class PartFeatureExtractor:
                 f"foreground shape {foreground.shape} differs from frame {frame.shape[:2]}")
         self._frame = np.ascontiguousarray(frame)
         self._fg = None if foreground is None else np.ascontiguousarray(foreground, dtype=bool)
-        size = frame.shape[0] * frame.shape[1]
-        if self._pixel_bins is None or len(self._pixel_bins) != size:
-            self._pixel_bins = np.zeros(size, np.int64)  # stamp 0: nothing converted
-            self._stamp = 0
-        self._stamp += 1  # this frame's pixels not converted yet (``part_features``)
+        self.pixels.start(frame.shape[0] * frame.shape[1])  # this frame's: not converted yet
 
     def _colour_luts(self) -> tuple[np.ndarray, np.ndarray]:
         """The (3, 256) HSV and XYZ channel terms of the joint bins (``_channel_luts``)."""
@@ -333,7 +360,7 @@ class PartFeatureExtractor:
         a, be = np.empty(len(b)), np.empty(len(b))
         a[:], be[:] = alpha, beta
         return b, (a, be), ((self._fr, self._fc), self._image(), self._colour_luts(),
-                            (self._pixel_bins, self._stamp))
+                            self.pixels.kernel_args())
 
     def _extract(self, b: np.ndarray, alpha: np.ndarray, beta: np.ndarray,
                  centres: np.ndarray | None) -> PartFeatures:
@@ -349,5 +376,5 @@ class PartFeatureExtractor:
         sampling_kernels.part_features(b, alpha, beta, at_centroids, centres if at_centroids else _NO_CENTRES,
                                (self._fr, self._fc), self._image(), self._colour_luts(),
                                (parts, area, perimeter, hsv, xyz, centroid),
-                               (self._pixel_bins, self._stamp))
+                               self.pixels.kernel_args())
         return PartFeatures(parts, area, perimeter, hsv, xyz, centroid, b[:, 3].copy())

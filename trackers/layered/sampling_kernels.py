@@ -202,7 +202,9 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
     fr, fc = grid
     frame, fg, has_fg = image
     hsv_lut, xyz_lut = luts
-    table, stamp = pixel_bins
+    table, stamp, shift = pixel_bins
+    sh = np.uint64(shift)
+    sh2, bin_mask, st = sh + sh, (np.uint64(1) << sh) - np.uint64(1), np.uint64(stamp)
     ys, xs, yi, xi, on, band, right, coff, count, edge, sx, sy, hist, occupied, masks = s
     H, W = frame.shape[0], frame.shape[1]
     R, C = fr.shape[0], fc.shape[0]
@@ -267,17 +269,17 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
                 bits &= bits - one
                 # the pixel's bins (its index unsigned: no negative-index test)
                 q = roff + coff[c]
-                packed = table[q]
-                if (packed >> 32) != stamp:  # first read this frame: convert it
+                packed = np.uint64(table[q])
+                if (packed >> sh2) != st:  # first read this frame: convert it
                     o = q * np.uint64(3)
                     ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
                                                       np.int64(pixels[o + np.uint64(2)]))
-                    packed = ((hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)]
-                               + hsv_lut[2, np.uint64(cv)]) << 16) | (
-                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)]
-                    ) | (stamp << 32)
-                    table[q] = packed
-                hsv_bin, xyz_bin = np.uint64((packed >> 16) & 0xFFFF), np.uint64(packed & 0xFFFF)
+                    packed = (st << sh2) | (np.uint64(
+                        hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)] + hsv_lut[2, np.uint64(cv)]
+                    ) << sh) | np.uint64(
+                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)])
+                    table[q] = np.uint32(packed)
+                hsv_bin, xyz_bin = (packed >> sh) & bin_mask, packed & bin_mask
                 n += 1
                 e += np.int64((outline >> np.uint64(c)) & one)
                 sxk += xs[c]  # in sample order, as np.bincount(weights=...)
@@ -351,11 +353,13 @@ def part_features(boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, at_cen
             the joint bin (``parts._channel_luts``).
         out: (parts (N, 5, 4) (``_part_rects``), area, perimeter (N, 5), hsv, xyz
             (N, 5, B), centroid (N, 5, 2)), written.
-        pixel_bins: ((H * W,) int64, stamp): each pixel's joint bins ``stamp << 32 |
-            hsv_bin << 16 | xyz_bin`` once a sample of this frame read it: the boxes of a
-            frame share most of their pixels (the search's boxes around one head), whose
-            colour conversion is then done once per frame; an entry of another stamp (the
-            caller's frame count, >= 1) is stale, so nothing is reset between frames.
+        pixel_bins: ((H * W,) uint32, stamp, shift) (``parts.PixelBins``): each pixel's
+            joint bins ``stamp << 2 shift | hsv_bin << shift | xyz_bin`` once a sample of
+            this frame read it (shift: the bits of a joint bin): the boxes of a frame share
+            most of their pixels (the search's boxes around one head), whose colour
+            conversion is then done once per frame; an entry of another stamp (>= 1, the
+            caller's count of frames, the table zeroed when it wraps) is stale, so nothing
+            is reset between frames.
     """
     parts = out[0]
     s = _box_scratch(grid[0].shape[0], grid[1].shape[0], out[3].shape[2])

@@ -143,7 +143,7 @@ class PBMTracker:
                           self.adaptations.gate_max_fraction)
         f = self.features
         self._extractor = PartFeatureExtractor(f.histogram_bins, *f.grid)
-        self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid)
+        self._search_extractor = PartFeatureExtractor(f.histogram_bins, *f.search_grid, self._extractor)
         a = self.adaptations
         blob_heads = ProfileHeads(self.candidates) if a.profile_heads else DetectorHeads(self.candidates)
         held = HeldDetections(self.search.overlap) if a.held_detections else NoHeldDetections()

@@ -103,6 +103,36 @@ def test_part_features_with_the_frames_pixels_converted_before_are_the_same():
             assert getattr(got, name).tobytes() == getattr(ref, name).tobytes(), name
 
 
+@pytest.mark.parametrize("bins", [4, 32])
+def test_part_features_on_a_shared_table_and_after_its_stamps_wrap_are_the_same(bins):
+    """Two extractors of one pixel-bin table (``shared``, the tracker's candidates and search
+    grids) and a table whose stamps wrap (32 bins: joint bins of 15 bits, stamps 1..3 in a
+    uint32) measure as a fresh extractor does, frame after frame."""
+    from occbench.trackers.layered.parts import PartFeatureExtractor
+
+    rng = np.random.default_rng(bins)
+    frames = [rng.integers(0, 256, (60, 70, 3), dtype=np.uint8) for _ in range(3)]
+    fg = rng.random((60, 70)) < 0.7
+    boxes = np.column_stack([rng.uniform(-10, 60, 9), rng.uniform(-10, 40, 9),
+                             rng.uniform(5, 30, 9), rng.uniform(10, 50, 9)])
+    first = PartFeatureExtractor(bins, 35, 15)
+    second = PartFeatureExtractor(bins, 21, 9, shared=first)
+    assert second.pixels is first.pixels
+    for k in range(9):  # 18 starts of one table: its stamps wrap at 32 bins
+        frame = frames[k % 3]
+        first.start(frame, fg)
+        second.start(frame, fg)
+        got = (first.extract(boxes + 0.5, 0.45, 0.55), second.extract(boxes, 0.4, 0.6))
+        for ex, feats, shift in zip((PartFeatureExtractor(bins, 35, 15), PartFeatureExtractor(bins, 21, 9)),
+                                    got, (0.5, 0.0)):
+            ex.start(frame, fg)
+            ref = ex.extract(boxes + shift, *((0.45, 0.55) if shift else (0.4, 0.6)))
+            for name in ("parts", "area", "perimeter", "hsv", "xyz", "centroid"):
+                assert getattr(feats, name).tobytes() == getattr(ref, name).tobytes(), (k, name)
+    with pytest.raises(ValueError, match="bins"):
+        PartFeatureExtractor(bins + 1, 21, 9, shared=first)
+
+
 @pytest.mark.parametrize("bins, with_fg", [(4, True), (4, False), (5, True)])
 def test_box_scores_have_the_bits_of_extract_then_pair_scores(bins, with_fg):
     """``box_scores`` (features made and scored box by box, rho over the occupied bins)
