@@ -2,8 +2,9 @@
 ``benchmarks/bench_pbm.py`` shows their numpy forms cost the tracker's speed: the head
 bands of the detection boxes (``band_heads``, PBM 3.1, tested against
 ``cv2.boundingRect`` of each band) and the foreground the detection boxes cover
-(``covered_count``, PBM 2, tested against ``geometry.box_slices``). None calls a kernel of
-another file.
+(``covered_count``, PBM 2, tested against ``geometry.box_slices``) and the occlusion test
+of every (target, candidate) pair (``occlusion_kinds_into``, PBM 3.1, tested against its
+numpy arrays). None calls a kernel of another file.
 """
 
 from __future__ import annotations
@@ -126,3 +127,24 @@ def covered_count(fg: np.ndarray, boxes: np.ndarray) -> int:
     for r in range(rmin, rmax):
         total += _covered_in_row(fg[r], r, spans, starts, ends)
     return total
+
+
+@numba.njit(cache=True)
+def occlusion_kinds_into(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: float,
+                         out: np.ndarray) -> None:
+    """PBM 3.1's occlusion test (``search.occlusion_kinds``) of N regions (N, 2) against T
+    predictions (T, 2) into out (T, N) int64: +1 when (region - prediction) / max(prediction,
+    1) of the width or the height is above ``threshold``, else -1 when one is below
+    -threshold, else 0 (the same operations as numpy's elementwise arrays; a NaN is 0)."""
+    for t in range(predicted_wh.shape[0]):
+        w, h = predicted_wh[t, 0], predicted_wh[t, 1]
+        nw = w if (w >= 1.0 or w != w) else 1.0  # np.maximum(w, 1.0)
+        nh = h if (h >= 1.0 or h != h) else 1.0
+        for n in range(region_wh.shape[0]):
+            dw, dh = (region_wh[n, 0] - w) / nw, (region_wh[n, 1] - h) / nh
+            if dw > threshold or dh > threshold:
+                out[t, n] = 1
+            elif dw < -threshold or dh < -threshold:
+                out[t, n] = -1
+            else:
+                out[t, n] = 0

@@ -32,6 +32,7 @@ import numpy as np
 from occbench.trackers.layered._search_kernels import (
     band_heads,
     covered_count,
+    occlusion_kinds_into,
 )
 from occbench.trackers.layered.split import HEAD_FRACTION
 from scipy.ndimage import minimum_filter1d
@@ -248,10 +249,9 @@ def occlusion_kinds(region_wh: np.ndarray, predicted_wh: np.ndarray, threshold: 
     """
     region_wh = np.asarray(region_wh, dtype=np.float64).reshape(-1, 2)
     predicted_wh = np.asarray(predicted_wh, dtype=np.float64).reshape(-1, 2)
-    rel = ((region_wh[None, :, :] - predicted_wh[:, None, :])
-           / np.maximum(predicted_wh, 1.0)[:, None, :])                 # (T, N, 2)
-    larger, smaller = (rel > threshold).any(axis=2), (rel < -threshold).any(axis=2)
-    return np.where(larger, 1, np.where(smaller, -1, 0)).astype(np.int64)
+    out = np.empty((len(predicted_wh), len(region_wh)), dtype=np.int64)
+    occlusion_kinds_into(region_wh, predicted_wh, float(threshold), out)
+    return out
 
 
 def search_boxes(head: np.ndarray, predicted_wh: np.ndarray, alpha: float, step: float,

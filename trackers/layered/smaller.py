@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from occbench.trackers.layered.search import Candidates
@@ -59,14 +60,42 @@ class LoneShrink:
         w, h = pred_wh[ti, 0], pred_wh[ti, 1]
         head = cand.head[n]
         aligned = np.column_stack([head[:, 0] - targets.alpha[ti] * w, head[:, 1], w, h])
-        boxes = targets.dof[:, [0, 1, 4, 5]]
-        x0 = np.maximum(aligned[:, None, 0], boxes[None, :, 0])
-        x1 = np.minimum(aligned[:, None, 0] + w[:, None], (boxes[:, 0] + boxes[:, 2])[None])
-        y0 = np.maximum(aligned[:, None, 1], boxes[None, :, 1])
-        y1 = np.minimum(aligned[:, None, 1] + h[:, None], (boxes[:, 1] + boxes[:, 3])[None])
-        inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)  # (P, T)
-        share = inter / np.maximum(w * h, 1e-9)[:, None]
-        share[np.arange(len(ti)), ti] = 0.0  # not its own occluder
-        share[:, ~present] = 0.0
-        lone = share.max(axis=1) < self.cover
+        lone = np.empty(len(ti), dtype=bool)
+        lone_rows(aligned, targets.dof[:, [0, 1, 4, 5]], ti, present, self.cover, lone)
         kinds[ti[lone], n[lone]] = 0
+
+
+@numba.njit(cache=True, inline="always")
+def _maximum(a: float, b: float) -> float:
+    """``np.maximum`` of two floats (NaN when either is)."""
+    return a if (a >= b or a != a) else b
+
+
+@numba.njit(cache=True, inline="always")
+def _minimum(a: float, b: float) -> float:
+    """``np.minimum`` of two floats (NaN when either is)."""
+    return a if (a <= b or a != a) else b
+
+
+@numba.njit(cache=True)
+def lone_rows(aligned: np.ndarray, boxes: np.ndarray, ti: np.ndarray, present: np.ndarray,
+              cover: float, out: np.ndarray) -> None:
+    """``LoneShrink``'s test of P aligned xywh boxes (P, 4) against T target boxes (T, 4)
+    into out (P,) bool: no ``present`` target but ti[p] covers ``cover`` or more of box p,
+    its share inter / max(w h, 1e-9) in the same operations as numpy's elementwise arrays
+    (False when a share is NaN, as numpy's max of the row is then)."""
+    for p in range(aligned.shape[0]):
+        x, y, w, h = aligned[p, 0], aligned[p, 1], aligned[p, 2], aligned[p, 3]
+        area = _maximum(w * h, 1e-9)
+        top, nan = -np.inf, False
+        for t in range(boxes.shape[0]):
+            share = 0.0  # not its own occluder, nor an absent target
+            if t != ti[p] and present[t]:
+                x0, x1 = _maximum(x, boxes[t, 0]), _minimum(x + w, boxes[t, 0] + boxes[t, 2])
+                y0, y1 = _maximum(y, boxes[t, 1]), _minimum(y + h, boxes[t, 1] + boxes[t, 3])
+                share = _maximum(x1 - x0, 0.0) * _maximum(y1 - y0, 0.0) / area
+            if share != share:
+                nan = True
+            elif share > top:
+                top = share
+        out[p] = not nan and top < cover

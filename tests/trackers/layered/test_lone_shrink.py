@@ -77,3 +77,42 @@ def test_shape_keeps_pbm_31_for_a_piece_of_a_person():
 def test_shape_needs_lone_shrink():
     with pytest.raises(ValueError, match="lone_shrink_shape"):
         Adaptations(lone_shrink=0.0, lone_shrink_shape=0.5)
+
+
+def _plain_lone(aligned, boxes, ti, present, cover):
+    """The occluder test as numpy arrays (P, T): the reference of ``smaller.lone_rows``."""
+    w, h = aligned[:, 2], aligned[:, 3]
+    x0 = np.maximum(aligned[:, None, 0], boxes[None, :, 0])
+    x1 = np.minimum(aligned[:, None, 0] + w[:, None], (boxes[:, 0] + boxes[:, 2])[None])
+    y0 = np.maximum(aligned[:, None, 1], boxes[None, :, 1])
+    y1 = np.minimum(aligned[:, None, 1] + h[:, None], (boxes[:, 1] + boxes[:, 3])[None])
+    with np.errstate(invalid="ignore"):
+        inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
+        share = inter / np.maximum(w * h, 1e-9)[:, None]
+    share[np.arange(len(ti)), ti] = 0.0
+    share[:, ~present] = 0.0
+    return share.max(axis=1) < cover
+
+
+def test_lone_rows_equal_the_numpy_arrays_on_random_ties_empty_and_nan():
+    from occbench.trackers.layered.smaller import lone_rows
+
+    rng = np.random.default_rng(5)
+    for P, T in ((0, 3), (1, 1), (40, 12), (200, 30)):
+        aligned = np.column_stack([rng.uniform(0, 100, P), rng.uniform(0, 100, P),
+                                   rng.uniform(0, 40, P), rng.uniform(0, 90, P)])
+        boxes = np.column_stack([rng.uniform(0, 100, T), rng.uniform(0, 100, T),
+                                 rng.uniform(1, 40, T), rng.uniform(1, 90, T)])
+        ti, present = rng.integers(0, T, P), rng.random(T) < 0.8
+        if P >= 40:
+            aligned[3, 2:] = 0.0  # an empty box (area floored at 1e-9)
+            aligned[4] = (boxes[(ti[4] + 1) % T, 0], boxes[(ti[4] + 1) % T, 1], 10.0, 10.0)
+            boxes[(ti[5] + 1) % T] = (aligned[5, 0], aligned[5, 1], aligned[5, 2], 0.3 * aligned[5, 3])
+            aligned[6, 0] = np.nan  # NaN share: not lone, as numpy's max
+            boxes[(ti[7] + 1) % T, 2] = np.nan
+            aligned[8] = aligned[9]  # ties
+            ti[8] = ti[9]
+        for cover in (0.0, 0.3, 1.0):  # 0.3: box 5 covered exactly 0.3 by one target
+            got = np.empty(P, dtype=bool)
+            lone_rows(aligned, boxes, ti, present, cover, got)
+            assert got.tolist() == _plain_lone(aligned, boxes, ti, present, cover).tolist(), (P, cover)

@@ -215,6 +215,30 @@ def test_head_fill_and_head_patch_equal_the_references():
 # ---------------------------------------------------------------------- occlusion and search
 
 
+def _plain_kinds(region, pred, threshold):
+    """PBM 3.1's occlusion test as numpy arrays (T, N, 2): the reference of
+    ``occlusion_kinds``' kernel."""
+    with np.errstate(invalid="ignore"):
+        rel = (region[None, :, :] - pred[:, None, :]) / np.maximum(pred, 1.0)[:, None, :]
+        larger, smaller = (rel > threshold).any(axis=2), (rel < -threshold).any(axis=2)
+    return np.where(larger, 1, np.where(smaller, -1, 0)).astype(np.int64)
+
+
+def test_occlusion_kinds_equal_the_numpy_arrays_on_random_ties_empty_and_nan():
+    rng = np.random.default_rng(11)
+    for T, N in ((0, 4), (3, 0), (1, 1), (30, 40)):
+        region, pred = rng.uniform(0.2, 120, (N, 2)), rng.uniform(0.2, 100, (T, 2))
+        if T > 10:
+            pred[0] = (0.5, 0.25)  # floored at 1 pixel
+            region[1] = pred[2] * 1.5  # ties: exactly at +-threshold 0.5
+            region[2] = pred[3] * 0.5
+            region[3, 0], pred[4, 1] = np.nan, np.nan
+            region[4] = (np.inf, 10.0)
+        for threshold in (0.0, 0.5):
+            got = S.occlusion_kinds(region, pred, threshold)
+            assert got.dtype == np.int64 and got.tolist() == _plain_kinds(region, pred, threshold).tolist()
+
+
 def test_occlusion_kinds_shape_and_search_boxes_equal_the_one_at_a_time_versions():
     rng = np.random.default_rng(9)
     for _ in range(50):
