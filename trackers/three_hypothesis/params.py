@@ -293,7 +293,7 @@ class Adaptations:
     duplicates_together: bool = False
     own_return: bool = False
     hold_last: bool = False
-    measured_step: bool = False
+    measured_step: bool = True
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,

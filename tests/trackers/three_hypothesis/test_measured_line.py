@@ -39,7 +39,7 @@ def test_hypothesis_1_takes_the_measured_line_when_it_predicted_better():
     assert FilterVelocity().start(lagging, x_prev, x_pred) is x_pred
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).line, FilterVelocity)
-    assert build_rules(Adaptations(measured_hypothesis=True), h).line == MeasuredLine(8, 2.0)
+    assert build_rules(Adaptations(measured_hypothesis=True), h).line == MeasuredLine(8, 2.0, True)
 
 
 def test_the_line_is_taken_only_where_it_differs_from_m_beyond_its_error():
@@ -67,7 +67,7 @@ def test_the_line_is_taken_only_where_it_differs_from_m_beyond_its_error():
     assert np.allclose(walker[[0, 4]], [31.0, 3.0])
     h = EllipseHistogrammer()
     built = build_rules(Adaptations(measured_hypothesis=True, measured_hypothesis_sigmas=2), h)
-    assert built.line == MeasuredLine(8, 2.0)
+    assert built.line == MeasuredLine(8, 2.0, True)
     assert Adaptations().measured_hypothesis and Adaptations().measured_hypothesis_sigmas == 2.0
     assert "measured_hypothesis_sigmas" not in Adaptations.paper().changed()
 
@@ -143,7 +143,7 @@ def test_a_person_who_has_just_turned_keeps_its_last_step():
     assert without.start(walked(without), x_prev, x_pred) is x_pred
     h = EllipseHistogrammer()
     assert build_rules(Adaptations(measured_step=True), h).line == MeasuredLine(8, 2.0, True)
-    assert not Adaptations().measured_step and "measured_step" not in Adaptations.paper().changed()
+    assert Adaptations().measured_step and "measured_step" not in Adaptations.paper().changed()
 
 
 def test_compiled_lines_equal_numpy_lines_bit_for_bit():
