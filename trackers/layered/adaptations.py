@@ -178,6 +178,11 @@ class Adaptations:
             the camera covers this share of its box (``evidence.ReportedBehind``; 0: off,
             reported for ``reporting.max_misses`` frames at most). Stands aside without a
             mask.
+        reported_by_record: a confirmed target unfound for m > ``reporting.max_misses``
+            frames is still reported while the sequence's resolved runs of >= m misses ended
+            found again where reported (IoU >= 0.5) at least half the time
+            (``record.ReportedByRecord``; false: reported for ``reporting.max_misses``
+            frames at most). Reporting only.
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -222,6 +227,7 @@ class Adaptations:
     reported_behind: float = 0.0
     border_birth_waits: bool = False
     camera_placement: bool = False
+    reported_by_record: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -241,6 +247,10 @@ class Adaptations:
         require("adaptations.lone_shrink_shape",
                 self.lone_shrink_shape == 0 or self.lone_shrink > 0,
                 "needs adaptations.lone_shrink > 0", self.lone_shrink_shape)
+        require("adaptations.reported_by_record",
+                not (self.reported_by_record and self.reported_behind > 0),
+                "and adaptations.reported_behind are two rules for one step: set one",
+                self.reported_by_record)
         require("adaptations.camera_placement",
                 not (self.camera_placement and self.measured_velocity),
                 "and adaptations.measured_velocity are two rules for one step: set one",
@@ -268,7 +278,8 @@ class Adaptations:
                                        "several_heads_merge", "profile_heads", "held_detections",
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
                                        "coarse_search", "measured_velocity",
-                                       "border_birth_waits", "camera_placement"),
+                                       "border_birth_waits", "camera_placement",
+                                       "reported_by_record"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int})
@@ -289,7 +300,7 @@ class Adaptations:
                    leaving_unreported=-1.0, weak_ranked=False,
                    coarse_search=False, fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
-                   camera_placement=False)
+                   camera_placement=False, reported_by_record=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -30,6 +30,7 @@ from occbench.trackers.layered.exits import (
 )
 from occbench.trackers.layered.parts import PartFeatures
 from occbench.trackers.layered.placement import CameraPlacement
+from occbench.trackers.layered.record import ReportedByRecord
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
 from occbench.trackers.layered.smaller import LoneShrink, OccludedSmaller
@@ -315,7 +316,7 @@ class Rules(NamedTuple):
     leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
     twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
     velocity: FilterPrediction | MeasuredVelocity | CameraPlacement  # where unfound (ours)
-    behind: MissesBound | ReportedBehind  # reported past reporting.max_misses? (ours)
+    behind: MissesBound | ReportedBehind | ReportedByRecord  # past reporting.max_misses? (ours)
 
 
 def build_rules(a: Adaptations) -> Rules:
@@ -344,8 +345,17 @@ def build_rules(a: Adaptations) -> Rules:
         twins=FoldTwins(a.fold_twins, a.fold_twins_own) if a.fold_twins > 0 else KeepStacked(),
         velocity=(CameraPlacement() if a.camera_placement else
                   MeasuredVelocity() if a.measured_velocity else FilterPrediction()),
-        behind=ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound(),
+        behind=(ReportedByRecord() if a.reported_by_record else
+                ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound()),
     )
+
+
+def reset_rules(rules: Rules) -> None:
+    """Forget the records the stateful rules keep (``measured_velocity``,
+    ``camera_placement``, ``reported_by_record``): a new sequence, a new camera."""
+    rules.velocity.reset()
+    if isinstance(rules.behind, ReportedByRecord):
+        rules.behind.reset()
 
 
 def place_unfound(rule: FilterPrediction | MeasuredVelocity | CameraPlacement, frame: int,

@@ -74,7 +74,7 @@ from occbench.trackers.layered.params import (
     UpdateParams,
 )
 from occbench.trackers.layered.parts import PartFeatureExtractor, PartFeatures, centroid_ratios
-from occbench.trackers.layered.rules import build_rules, place_unfound
+from occbench.trackers.layered.rules import build_rules, place_unfound, reset_rules
 from occbench.trackers.layered.search import Candidates, head_patch, head_patches, occlusion_kinds
 from occbench.trackers.layered.selection import FrameScores, MultipleResponsePruning
 from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
@@ -164,7 +164,7 @@ class PBMTracker:
         self._finder.reset()
         self._next_id, self._frame = 1, 0
         self._stacked: dict[tuple[int, int], int] = {}  # adaptations.fold_twins' evidence
-        self.rules.velocity.reset()  # adaptations.measured_velocity's records
+        reset_rules(self.rules)  # the records of measured_velocity, reported_by_record, ...
 
     # ------------------------------------------------------------------ update (PBM Fig. 1)
     def update(self, frame: np.ndarray, detections: Detections | None,
