@@ -287,9 +287,11 @@ def line_misses(hist: np.ndarray, sizes: np.ndarray, frame: float, cx: np.ndarra
                 cy: np.ndarray, out: np.ndarray) -> None:
     """``measured_line._lines`` of K histories at once and their misses at ``frame``: person
     k's n = sizes[k] (frame, xc, yc) rows follow person k - 1's in ``hist`` (sum of sizes,
-    3); its least-squares line (t0, x0, y0, vx, vy) through them, and out[:, k] = (x0 + vx
-    (frame - t0) - cx[k], y0 + vy (frame - t0) - cy[k]) (2, K). Each mean and sum as
-    ``_lines``' numpy reductions along a row (0 + the pairwise sum, / n): the same bits."""
+    3); its least-squares line (t0, x0, y0, vx, vy) through them, and out[:2, k] = (x0 + vx
+    (frame - t0) - cx[k], y0 + vy (frame - t0) - cy[k]) (4, K). Each mean and sum as
+    ``_lines``' numpy reductions along a row (0 + the pairwise sum, / n): the same bits.
+    out[2:, k]: the miss of its last step (``MeasuredLine.step``: the last centre moved on
+    by the displacement of the last two per frame), as Python's floats compute it."""
     lo = 0
     w = np.empty((5, sizes.max() if len(sizes) else 0))
     c0 = np.empty(3)
@@ -311,4 +313,12 @@ def line_misses(hist: np.ndarray, sizes: np.ndarray, frame: float, cx: np.ndarra
         vy = (0.0 + _pairwise_sum(w[3], 0, n)) / tt
         out[0, k] = c0[1] + vx * (frame - c0[0]) - cx[k]
         out[1, k] = c0[2] + vy * (frame - c0[0]) - cy[k]
+        f1, x1, y1 = hist[lo + n - 2, 0], hist[lo + n - 2, 1], hist[lo + n - 2, 2]
+        f2, x2, y2 = hist[lo + n - 1, 0], hist[lo + n - 1, 1], hist[lo + n - 1, 2]
+        gap = f2 - f1
+        if 1.0 > gap:  # Python's max(f2 - f1, 1)
+            gap = 1.0
+        s = (frame - f2) / gap
+        out[2, k] = x2 + (x2 - x1) * s - cx[k]
+        out[3, k] = y2 + (y2 - y1) * s - cy[k]
         lo += n

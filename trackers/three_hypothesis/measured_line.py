@@ -71,20 +71,6 @@ def _squares(a: np.ndarray) -> np.ndarray:
     return np.array([math.pow(v, 2) for v in a.tolist()])
 
 
-def _record_steps(persons: list, frame: int, cx: list, cy: list, heights: list) -> None:
-    """Add to each person with at least 3 centres (those ``MeasuredLine.record`` scores) the
-    squared distance, over its box height squared, of its measured centre (``cx``, ``cy`` at
-    ``frame``) from the one its last step predicts: the last centre moved on by the
-    displacement of the last two per frame."""
-    for person, x, y, h in zip(persons, cx, cy, heights):
-        if len(person.centres) < 3:
-            continue
-        (f1, x1, y1), (f2, x2, y2) = person.centres[-2:]
-        k = (frame - f2) / max(f2 - f1, 1)
-        dx, dy = x2 + (x2 - x1) * k - x, y2 + (y2 - y1) * k - y
-        person.step_error += (dx * dx + dy * dy) / max(h, 1.0) ** 2
-
-
 @dataclass(frozen=True)
 class MeasuredLine:
     """``measured_hypothesis``: hypothesis 1 of a person just missed moves with the velocity
@@ -110,8 +96,9 @@ class MeasuredLine:
         """Score both predictors on each person's measured box at ``frame`` (``boxes`` (K, 4)
         xywh; M's prediction: ``predicted`` (K, 8) states), then keep its centre. A person
         with at least 3 centres adds, to M's error and to the line's, the squared distance of
-        the predicted centre from the measured one over the box height squared; every
-        person's line in one compiled call (``_kernels.line_misses``: ``_lines``' bits)."""
+        the predicted centre from the measured one over the box height squared (with
+        ``step``, the last step's to its own); every person's line and step in one compiled
+        call (``_kernels.line_misses``: ``_lines``' bits)."""
         cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
         sizes = np.fromiter(map(len, (person.centres for person in persons)), np.int64,
                             len(persons))
@@ -121,17 +108,19 @@ class MeasuredLine:
                                                            for r in k.tolist()))
             n = sizes[k]
             hist = np.fromiter(rows, np.float64, int(n.sum()) * 3).reshape(-1, 3)
-            misses = np.empty((2, len(k)))  # the line's, in x and y
+            misses = np.empty((4, len(k)))  # the line's and the last step's, in x and y
             line_misses(hist, n, float(frame), cx[k], cy[k], misses)  # _lines, compiled
             h2, mx, my, lx, ly = _squares(np.concatenate([
                 np.maximum(boxes[k, 3], 1.0), predicted[k, 0] - cx[k],
                 predicted[k, 1] - cy[k], misses[0], misses[1]])).reshape(5, len(k))
             mine, line = (mx + my) / h2, (lx + ly) / h2
-            for r, e_m, e_l in zip(k.tolist(), mine.tolist(), line.tolist()):
+            step = (misses[2] * misses[2] + misses[3] * misses[3]) / h2
+            for r, e_m, e_l, e_s in zip(k.tolist(), mine.tolist(), line.tolist(),
+                                        step.tolist()):
                 persons[r].line_errors[0] += e_m
                 persons[r].line_errors[1] += e_l
-        if self.step:
-            _record_steps(persons, frame, cx.tolist(), cy.tolist(), boxes[:, 3].tolist())
+                if self.step:
+                    persons[r].step_error += e_s
         for person, x, y in zip(persons, cx.tolist(), cy.tolist()):
             person.centres.append((frame, x, y))
             del person.centres[:-self.window]
