@@ -187,6 +187,10 @@ class Adaptations:
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
             9-10). A shortcut for speed (issue 38), not exact.
+        pyramid_template: PBM 4.1's head template in multiple-response pruning is matched
+            at half resolution, then at full resolution around that best
+            (``template_match.PyramidMatch``; paper: every position of the window). A
+            shortcut for speed (issue 38), not exact.
     """
 
     model_spread: float = 4.5
@@ -221,6 +225,7 @@ class Adaptations:
     leaving_unreported: float = -1.0
     weak_ranked: bool = False
     coarse_search: bool = False
+    pyramid_template: bool = False
     fold_twins: int = 0
     fold_twins_own: float = 0.0
     measured_velocity: bool = False
@@ -277,7 +282,7 @@ class Adaptations:
                                        "gap_division", "hold_size", "blob_box_ratio",
                                        "several_heads_merge", "profile_heads", "held_detections",
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
-                                       "coarse_search", "measured_velocity",
+                                       "coarse_search", "pyramid_template", "measured_velocity",
                                        "border_birth_waits", "camera_placement",
                                        "reported_by_record"),
                                       bool),
@@ -298,7 +303,7 @@ class Adaptations:
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
-                   coarse_search=False, fold_twins=0, fold_twins_own=0.0,
+                   coarse_search=False, pyramid_template=False, fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False)
 

@@ -366,14 +366,27 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
         -1 when the window cannot hold the template).
     """
     template = grey_region(template, 0, template.shape[0], 0, template.shape[1])
-    th, tw = template.shape
-    H, W = image.shape[:2]
+    window = search_window(image.shape, template.shape, centre, radius)
+    if window is None:
+        return np.asarray(centre, dtype=np.float64), -1.0
+    r0, r1, c0, c1 = window
+    res = cv2.matchTemplate(grey_region(image, r0, r1, c0, c1), template, cv2.TM_CCOEFF_NORMED)
+    _, best, _, (bx, by) = cv2.minMaxLoc(res)
+    return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
+
+
+def search_window(shape: tuple, template_shape: tuple, centre, radius: float
+                  ) -> tuple[int, int, int, int] | None:
+    """``match_head_template``'s window (r0, r1, c0, c1) in an image of ``shape``: a
+    template of ``template_shape`` (th, tw) placed at every top-left corner within
+    ``radius`` (a square) of ``centre`` (x, y), clipped to the image; None when the clipped
+    window cannot hold the template."""
+    th, tw = template_shape[:2]
+    H, W = shape[:2]
     r = math.ceil(radius)
     x0, y0 = round(float(centre[0])) - r, round(float(centre[1])) - r
     c0, r0 = max(x0, 0), max(y0, 0)
     c1, r1 = min(x0 + 2 * r + tw, W), min(y0 + 2 * r + th, H)
     if c1 - c0 < tw or r1 - r0 < th:
-        return np.asarray(centre, dtype=np.float64), -1.0
-    res = cv2.matchTemplate(grey_region(image, r0, r1, c0, c1), template, cv2.TM_CCOEFF_NORMED)
-    _, best, _, (bx, by) = cv2.minMaxLoc(res)
-    return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
+        return None
+    return r0, r1, c0, c1

@@ -15,8 +15,9 @@ from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import ambiguous, ambiguous_rows
 from occbench.trackers.layered.params import MatchParams, PruneParams
 from occbench.trackers.layered.parts import N_PARTS, PartFeatures
-from occbench.trackers.layered.search import Candidates, match_head_template
+from occbench.trackers.layered.search import Candidates
 from occbench.trackers.layered.targets import Targets, dof_from_head
+from occbench.trackers.layered.template_match import template_matcher
 
 
 def _norms(v: np.ndarray) -> np.ndarray:
@@ -127,6 +128,7 @@ class MultipleResponsePruning:
         self.adaptations = adaptations
         self.claims = RivalClaims() if adaptations.rival_claims else OwnRow()
         self.weak = RankedAtThreshold() if adaptations.weak_ranked else AtThreshold()
+        self.matcher = template_matcher(adaptations.pyramid_template)  # PBM 4.1's match
 
     def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray) -> None:
         """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
@@ -228,7 +230,7 @@ class MultipleResponsePruning:
         else:
             cx, cy = heads.mean(axis=0).tolist()
             radius = float(np.max(np.linalg.norm(heads - [cx, cy], axis=1)))
-        tl, corr = match_head_template(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
+        tl, corr = self.matcher(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
         if corr < self.pruning.template_threshold:
             return -1, None
         rx, ry = tl[0] + 0.5 * tw, float(tl[1])

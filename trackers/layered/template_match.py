@@ -1,0 +1,60 @@
+"""PBM 4.1's head-template match in multiple-response pruning, as the paper does it
+(``ExactMatch``: every position of the window, ``search.match_head_template``) and as
+``adaptations.pyramid_template`` does it (``PyramidMatch``, ours: coarse to fine, for speed;
+not exact). Each returns the best top-left corner (2,) float64 (x, y) and its normalised
+correlation (TM_CCOEFF_NORMED), -1 when the window cannot hold the template."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from occbench.trackers.layered.search import grey_region, match_head_template, search_window
+
+
+class ExactMatch:
+    """PBM 4.1 as written: "an image template of the target's head is exhaustively matched
+    in a local neighborhood" (``match_head_template``)."""
+
+    def __call__(self, image: np.ndarray, template: np.ndarray, centre, radius: float
+                 ) -> tuple[np.ndarray, float]:
+        return match_head_template(image, template, centre, radius)
+
+
+class PyramidMatch:
+    """``pyramid_template``: the window and the template at half resolution
+    (``cv2.pyrDown``) matched first, then the template at full resolution at the positions
+    within ``REFINE`` pixels of the coarse best (doubled); the correlation returned is that
+    full-resolution one. A window of fewer than ``MIN_POSITIONS`` positions, or a template
+    under ``MIN_SIDE`` pixels a side, is matched exactly (``match_head_template``). The
+    chosen corner may differ from the exact match where the correlation has several peaks."""
+
+    REFINE = 2
+    MIN_POSITIONS = 400
+    MIN_SIDE = 8
+
+    def __call__(self, image: np.ndarray, template: np.ndarray, centre, radius: float
+                 ) -> tuple[np.ndarray, float]:
+        grey = grey_region(template, 0, template.shape[0], 0, template.shape[1])
+        th, tw = grey.shape
+        window = search_window(image.shape, grey.shape, centre, radius)
+        if window is None:
+            return np.asarray(centre, dtype=np.float64), -1.0
+        r0, r1, c0, c1 = window
+        ny, nx = r1 - r0 - th + 1, c1 - c0 - tw + 1  # positions of the exact match
+        if ny * nx < self.MIN_POSITIONS or min(th, tw) < self.MIN_SIDE:
+            return match_head_template(image, grey, centre, radius)
+        region = grey_region(image, r0, r1, c0, c1)
+        coarse = cv2.matchTemplate(cv2.pyrDown(region), cv2.pyrDown(grey), cv2.TM_CCOEFF_NORMED)
+        _, _, _, (bx, by) = cv2.minMaxLoc(coarse)
+        R = self.REFINE
+        x0, y0 = min(max(2 * bx - R, 0), nx - 1), min(max(2 * by - R, 0), ny - 1)
+        x1, y1 = min(2 * bx + R, nx - 1), min(2 * by + R, ny - 1)
+        fine = cv2.matchTemplate(region[y0:y1 + th, x0:x1 + tw], grey, cv2.TM_CCOEFF_NORMED)
+        _, best, _, (fx, fy) = cv2.minMaxLoc(fine)
+        return np.array([c0 + x0 + fx, r0 + y0 + fy], dtype=np.float64), float(best)
+
+
+def template_matcher(pyramid: bool) -> ExactMatch | PyramidMatch:
+    """``adaptations.pyramid_template``'s strategy."""
+    return PyramidMatch() if pyramid else ExactMatch()
