@@ -1,0 +1,57 @@
+"""``adaptations.pyramid_template`` (``template_match.PyramidMatch``): PBM 4.1's head template
+matched at half resolution, then at full resolution around that best; the exact match
+(``ExactMatch``) is ``search.match_head_template``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.params import MatchParams, PruneParams
+from occbench.trackers.layered.search import match_head_template
+from occbench.trackers.layered.selection import MultipleResponsePruning
+from occbench.trackers.layered.template_match import ExactMatch, PyramidMatch
+
+
+def _frame(seed: int = 0) -> np.ndarray:
+    """A smooth textured BGR frame (blobs a few pixels wide, as heads and clothes are)."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    small = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    return cv2.resize(small, (640, 480), interpolation=cv2.INTER_CUBIC)
+
+
+def test_pyramid_finds_the_exact_matchs_corner_and_its_full_resolution_score():
+    frame = _frame()
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        x, y = int(rng.integers(60, 540)), int(rng.integers(60, 380))
+        template = frame[y:y + 12, x:x + 30].copy()
+        centre = (x + int(rng.integers(-6, 7)), y + int(rng.integers(-6, 7)))
+        exact_tl, exact = ExactMatch()(frame, template, centre, 30.0)
+        tl, corr = PyramidMatch()(frame, template, centre, 30.0)
+        assert tl.tolist() == exact_tl.tolist() == [x, y]
+        assert abs(corr - exact) < 1e-4 and corr > 0.99
+
+
+def test_pyramid_matches_small_windows_and_templates_exactly():
+    frame = _frame(2)
+    template = frame[100:106, 200:230].copy()  # 6 rows: under MIN_SIDE
+    for args in (((195, 98), 12.0), ((420, 300), 40.0)):
+        assert [v.tolist() if isinstance(v, np.ndarray) else v for v in PyramidMatch()(frame, template, *args)] == \
+               [v.tolist() if isinstance(v, np.ndarray) else v for v in match_head_template(frame, template, *args)]
+    template = frame[100:112, 200:230].copy()  # a window of 9 x 9 positions: under MIN_POSITIONS
+    tl, corr = PyramidMatch()(frame, template, (197, 97), 4.0)
+    ref_tl, ref = match_head_template(frame, template, (197, 97), 4.0)
+    assert tl.tolist() == ref_tl.tolist() and corr == ref
+    tl, corr = PyramidMatch()(frame, template, (700.0, 10.0), 3.0)  # off the image
+    assert tl.tolist() == [700.0, 10.0] and corr == -1.0
+
+
+def test_pyramid_template_is_an_adaptation_off_by_default_and_in_paper_mode():
+    assert not Adaptations().pyramid_template and not Adaptations.paper().pyramid_template
+    pick = {on: type(MultipleResponsePruning(MatchParams(), PruneParams(),
+                                             Adaptations(pyramid_template=on)).matcher)
+            for on in (False, True)}
+    assert pick == {False: ExactMatch, True: PyramidMatch}
