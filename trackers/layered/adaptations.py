@@ -178,6 +178,10 @@ class Adaptations:
             the camera covers this share of its box (``evidence.ReportedBehind``; 0: off,
             reported for ``reporting.max_misses`` frames at most). Stands aside without a
             mask.
+        lone_shrink_narrow: with ``lone_shrink_shape``, a smaller detection is the target at
+            its own size only when its height / width is also at most 1 /
+            ``lone_shrink_shape`` x the prediction's (not a sliver cut by a vertical edge;
+            ``smaller.LoneShrink.narrow``; false: no upper bound).
         reported_by_record: a confirmed target unfound for m > ``reporting.max_misses``
             frames is still reported while the sequence's resolved runs of >= m misses ended
             found again where reported (IoU >= 0.5) at least half the time
@@ -233,6 +237,7 @@ class Adaptations:
     border_birth_waits: bool = False
     camera_placement: bool = False
     reported_by_record: bool = False
+    lone_shrink_narrow: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -252,6 +257,9 @@ class Adaptations:
         require("adaptations.lone_shrink_shape",
                 self.lone_shrink_shape == 0 or self.lone_shrink > 0,
                 "needs adaptations.lone_shrink > 0", self.lone_shrink_shape)
+        require("adaptations.lone_shrink_narrow",
+                not self.lone_shrink_narrow or self.lone_shrink_shape > 0,
+                "needs adaptations.lone_shrink_shape > 0", self.lone_shrink_narrow)
         require("adaptations.reported_by_record",
                 not (self.reported_by_record and self.reported_behind > 0),
                 "and adaptations.reported_behind are two rules for one step: set one",
@@ -284,7 +292,7 @@ class Adaptations:
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
                                        "coarse_search", "pyramid_template", "measured_velocity",
                                        "border_birth_waits", "camera_placement",
-                                       "reported_by_record"),
+                                       "reported_by_record", "lone_shrink_narrow"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int})
@@ -305,7 +313,8 @@ class Adaptations:
                    leaving_unreported=-1.0, weak_ranked=False,
                    coarse_search=False, pyramid_template=False, fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
-                   camera_placement=False, reported_by_record=False)
+                   camera_placement=False, reported_by_record=False,
+                   lone_shrink_narrow=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -337,7 +337,8 @@ def build_rules(a: Adaptations) -> Rules:
         reupdate=ReUpdate(a.reupdate) if a.reupdate > 0 else AfterPrediction(),
         contest=(TemplateContest(a.contested_template, a.prune_max_misses)
                  if a.contested_template > 0 else NoContest()),
-        smaller=(LoneShrink(a.lone_shrink, a.lone_shrink_shape) if a.lone_shrink > 0
+        smaller=(LoneShrink(a.lone_shrink, a.lone_shrink_shape, a.lone_shrink_narrow)
+                 if a.lone_shrink > 0
                  else OccludedSmaller()),
         exit=BorderExit() if a.border_exit else PredictedExit(),
         leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0

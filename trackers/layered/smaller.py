@@ -41,10 +41,17 @@ class LoneShrink:
     ``shape`` (``lone_shrink_shape``, 0: any shape): the detection is t at its own size
     only when it has t's shape, its height / width at least ``shape`` x the prediction's
     (KF2's h / w): a whole person seen smaller, not a piece of one (a head-high sliver of
-    a person beside t is as wide as it is tall); otherwise PBM 3.1's reading stands."""
+    a person beside t is as wide as it is tall); otherwise PBM 3.1's reading stands.
+
+    ``narrow`` (``lone_shrink_narrow``): with ``shape``, the detection's height / width must
+    also be at most 1 / ``shape`` x the prediction's: a person cut by a vertical edge (a
+    doorway's frame, a pillar) leaves a sliver taller than his shape, and taking it as the
+    whole person shrinks the target to it (ecp1-180 gt frames 38-54: 3 x 61, then 3 x 27,
+    against 18 x 82; its gate never reaches him again)."""
 
     cover: float
     shape: float = 0.0
+    narrow: bool = False
 
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, pred_wh: np.ndarray,
               present: np.ndarray) -> None:
@@ -54,6 +61,8 @@ class LoneShrink:
         if self.shape > 0 and len(ti):
             region = cand.region[n]
             own = region[:, 3] * pred_wh[ti, 0] >= self.shape * pred_wh[ti, 1] * region[:, 2]
+            if self.narrow:
+                own &= self.shape * region[:, 3] * pred_wh[ti, 0] <= pred_wh[ti, 1] * region[:, 2]
             ti, n = ti[own], n[own]
         # the kernel is called when no pair is smaller too: a warm-up loads it (test_warmup)
         w, h = pred_wh[ti, 0], pred_wh[ti, 1]

@@ -116,3 +116,28 @@ def test_lone_rows_equal_the_numpy_arrays_on_random_ties_empty_and_nan():
             got = np.empty(P, dtype=bool)
             lone_rows(aligned, boxes, ti, present, cover, got)
             assert got.tolist() == _plain_lone(aligned, boxes, ti, present, cover).tolist(), (P, cover)
+
+
+def test_narrow_keeps_pbm_31_for_a_sliver_cut_by_a_vertical_edge():
+    """With ``lone_shrink_narrow``, a detection much taller than the target's shape (3 x 61
+    against 18 x 82: a person stepping behind a doorway's frame) is the target partly
+    occluded; a whole person's shape (20 x 60 against 40 x 160) is still the target at its
+    own size."""
+    def sliver():
+        kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+        pred[0] = (18.0, 82.0)
+        cand.box[0] = cand.region[0] = (100.0, 50.0, 3.0, 61.0)
+        return kinds, cand, targets, pred
+    kinds, cand, targets, pred = sliver()
+    LoneShrink(0.3, shape=0.7).apply(kinds, cand, targets, pred, np.array([True, True]))
+    assert kinds.tolist() == [[0], [0]]  # without the bound: the target shrinks to 3 x 61
+    kinds, cand, targets, pred = sliver()
+    LoneShrink(0.3, shape=0.7, narrow=True).apply(kinds, cand, targets, pred, np.array([True, True]))
+    assert kinds.tolist() == [[-1], [0]]
+    kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+    LoneShrink(0.3, shape=0.7, narrow=True).apply(kinds, cand, targets, pred, np.array([True, True]))
+    assert kinds.tolist() == [[0], [0]]
+    assert build_rules(Adaptations(lone_shrink_narrow=True)).smaller == LoneShrink(0.3, 0.7, True)
+    assert Adaptations.paper().changed() == [] and not Adaptations().lone_shrink_narrow
+    with pytest.raises(ValueError, match="lone_shrink_narrow"):
+        Adaptations(lone_shrink_shape=0.0, lone_shrink_narrow=True)
