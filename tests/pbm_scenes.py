@@ -248,3 +248,26 @@ def random_features(rng: np.random.Generator, n: int, bins: int = 4) -> PartFeat
 def unit_models() -> FeatureModels:
     """Half-normal models with sigma 1 for every feature and part."""
     return FeatureModels({f: [FoldedMixture([1.0], [0.0], [1.0])] * N_PARTS for f in FEATURES})
+
+
+def pace_change_hidden(overrides: list[str], missed: set[int], reported_from: int = 0
+                       ) -> tuple[list[float], list[float]]:
+    """A person (a 12 x 40 box of colour in a 200 x 120 image) walking right at 1 px a frame
+    for 14 frames, then at 5 px a frame, for 22 frames, undetected at the frames ``missed``,
+    tracked by pbm with the config ``overrides``; the x of its hidden (OCCLUDED) reports
+    from frame ``reported_from`` on, and the person's x at the missed frames from then."""
+    from occbench.config.build import build_tracker, compose_config
+    from occbench.trackers.records import TrackState
+
+    tracker = build_tracker("pbm", compose_config(["tracker=pbm", *overrides]).tracker)
+    x, hidden, truth = 20.0, [], []
+    for k in range(22):
+        x += 1.0 if k < 14 else 5.0
+        frame = np.full((120, 200, 3), 90, dtype=np.uint8)
+        frame[40:80, int(x):int(x) + 12] = (30, 60, 200)
+        box = np.zeros((0, 4)) if k in missed else np.array([[x, 40.0, 12, 40]])
+        out = tracker.update(frame, Detections(box, np.ones(len(box))))
+        if k >= reported_from:
+            hidden += [t.box[0] for t in out if t.state == TrackState.OCCLUDED]
+            truth += [x] if k in missed else []
+    return hidden, truth

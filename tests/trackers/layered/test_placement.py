@@ -7,31 +7,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from occbench.config.build import build_tracker, compose_config
 from occbench.trackers.common.measured_velocity import FilterPrediction
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.placement import FILTER, MEASURED, STILL, CameraPlacement
 from occbench.trackers.layered.rules import build_rules
-from occbench.trackers.records import Detections, TrackState
+from pbm_scenes import pace_change_hidden
 
 
 def _hidden_boxes(on: bool) -> tuple[list[float], list[float]]:
-    """A person (a 12 x 40 box of colour in a 200 x 120 image) walking right at 1 px a frame
-    for 14 frames, then at 5 px a frame, missed at frame 17 and at frames 20-21; the x of
-    pbm's hidden (OCCLUDED) reports at 20-21 and where the person is."""
-    cfg = compose_config(["tracker=pbm", f"tracker.adaptations.camera_placement={on}"])
-    tracker = build_tracker("pbm", cfg.tracker)
-    x, hidden, truth = 20.0, [], []
-    for k in range(22):
-        x += 1.0 if k < 14 else 5.0
-        frame = np.full((120, 200, 3), 90, dtype=np.uint8)
-        frame[40:80, int(x):int(x) + 12] = (30, 60, 200)
-        box = np.array([[x, 40.0, 12, 40]]) if k not in (17, 20, 21) else np.zeros((0, 4))
-        out = tracker.update(frame, Detections(box, np.ones(len(box))))
-        if k >= 20:
-            hidden += [t.box[0] for t in out if t.state == TrackState.OCCLUDED]
-            truth.append(x)
-    return hidden, truth
+    """A person walking right at 1, then 5 px a frame (``pbm_scenes.pace_change_hidden``),
+    missed at frame 17 and at frames 20-21; pbm's hidden x at 20-21 and where he is."""
+    return pace_change_hidden([f"tracker.adaptations.camera_placement={on}"], {17, 20, 21}, 20)
 
 
 def test_the_cameras_record_places_a_hidden_person():
