@@ -4,20 +4,16 @@ config, and timed on the same scene in turn."""
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 import sys
 from functools import partial
 from pathlib import Path
 
 import pytest
+from benchmark_scripts import load
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "benchmarks"))  # bench_pbm imports tracker_timing by name
-_spec = importlib.util.spec_from_file_location("bench_pbm", ROOT / "benchmarks" / "bench_pbm.py")
-bench = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = bench
-_spec.loader.exec_module(bench)
+bench = load("bench_pbm")
 
 
 def test_vs_builds_the_other_checkouts_pbm_from_its_config(tmp_path):

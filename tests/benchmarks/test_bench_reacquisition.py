@@ -2,18 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
+from benchmark_scripts import load
 from mot_tables import table
 
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_reacquisition.py"
-_spec = importlib.util.spec_from_file_location("bench_reacquisition", _PATH)
-bench = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = bench  # its dataclasses resolve their module
-_spec.loader.exec_module(bench)
+bench = load("bench_reacquisition")
 
 
 def test_one_detection_taken_in_turn_is_a_duplicate_and_a_hidden_person_is_not():

@@ -3,19 +3,14 @@ tree's (``tracker_timing.import_other``) and timed on the same scene in turn."""
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
+from benchmark_scripts import load
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "benchmarks"))  # bench_reta imports tracker_timing by name
-_spec = importlib.util.spec_from_file_location("bench_reta", ROOT / "benchmarks" / "bench_reta.py")
-bench = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = bench
-_spec.loader.exec_module(bench)
+bench = load("bench_reta")
 
 
 def test_vs_times_the_other_checkouts_code_on_the_same_scene(tmp_path):

@@ -3,17 +3,13 @@ code (PYTHONPATH=CHECKOUT imported the editable install's: both columns timed on
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from benchmark_scripts import load
 
 ROOT = Path(__file__).resolve().parents[2]
-_spec = importlib.util.spec_from_file_location("bench_startup", ROOT / "benchmarks" / "bench_startup.py")
-startup = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = startup
-_spec.loader.exec_module(startup)
+startup = load("bench_startup")
 
 
 def _checkout(folder: Path) -> Path:

@@ -5,26 +5,14 @@ one-to-one per frame; the ablation turns exactly the rules paper mode switches o
 from __future__ import annotations
 
 import importlib
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from benchmark_scripts import load
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
-
-
-def _load(name: str):
-    sys.path.insert(0, str(BENCH))
-    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-figures = _load("difference_figures")
-ablation = _load("paper_mode_ablation")
+figures = load("difference_figures")
+ablation = load("paper_mode_ablation")
 
 
 def _mot(path: Path, rows: list[tuple]) -> str:

@@ -4,13 +4,9 @@ of its own tables' differences, each diagnosis with a figure that exists."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
+from benchmark_scripts import load
 
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "paper_differences.py"
-_spec = importlib.util.spec_from_file_location("paper_differences", _PATH)
-pd_ = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(pd_)
+pd_ = load("paper_differences")
 
 DOC = """<!-- begin reta_table2 -->
 | method | GT | MT (%) | PT (%) | ML (%) | Frag | IDS |

@@ -3,15 +3,10 @@ of docs/reproduction.md replaced while the others stay as they are (no harness r
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
+from benchmark_scripts import load
 
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "reproduction.py"
-_spec = importlib.util.spec_from_file_location("reproduction", _PATH)
-repro = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(repro)
+repro = load("reproduction")
 
 TABLE = """## A title
 

@@ -3,17 +3,13 @@ code), and a process left behind is described by the run that started it."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import subprocess
 import sys
-from pathlib import Path
 
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "suite_under_load.py"
-_spec = importlib.util.spec_from_file_location("suite_under_load", _PATH)
-load = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = load
-_spec.loader.exec_module(load)
+from benchmark_scripts import load
+
+load = load("suite_under_load")
 
 XML = """<?xml version="1.0" encoding="utf-8"?><testsuites><testsuite name="pytest" errors="{e}"
 failures="{f}" skipped="1" tests="4"><testcase classname="tests.a" name="test_x"/>

@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
-
+from benchmark_scripts import load
 from occbench.trackers.records import Track, TrackState
 
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "tracker_timing.py"
-_spec = importlib.util.spec_from_file_location("tracker_timing", _PATH)
-timing = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = timing
-_spec.loader.exec_module(timing)
+timing = load("tracker_timing")
 
 
 def _frames(x: float) -> list[list[Track]]:

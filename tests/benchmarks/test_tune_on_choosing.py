@@ -4,22 +4,15 @@ config whose comments say where it came from."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pandas as pd
 import pytest
+from benchmark_scripts import load
 from omegaconf import OmegaConf
 
 pytest.importorskip("optuna")
 pytest.importorskip("motpy")
 
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "tune_on_choosing.py"
-_spec = importlib.util.spec_from_file_location("tune_on_choosing", _PATH)
-tuner = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = tuner
-_spec.loader.exec_module(tuner)
+tuner = load("tune_on_choosing")
 
 G = tuner.G
 TINY = G.EvalSet("tiny", G.TUNING, ("dataset=synthetic", "dataset.scenarios=[crossing]",
