@@ -3,8 +3,9 @@ histograms of the measurements' ellipses, one call per frame, and eq. 5's region
 similarity of the pairs of ellipses that meet (``region_overlap_pairs``, the integration of
 ``occlusion.region_overlaps``, tested bit for bit against ``features.region_similarity``),
 ``blend``, the appearance update of ``rules.BlendVisible`` (tested against its numpy
-expression), and ``line_misses``, the least-squares lines of ``measured_line.MeasuredLine``
-(tested bit for bit against ``measured_line._lines``).
+expression), ``blend_at``, the same reading p at its nonzero bins only (tested bit for bit
+against ``blend``), and ``line_misses``, the least-squares lines of
+``measured_line.MeasuredLine`` (tested bit for bit against ``measured_line._lines``).
 
 It computes what ``EllipseHistogrammer.measure``'s numpy and ``cv2.calcHist`` path did
 (the definition: ``features.ellipse_histograms``), bit for bit: the ellipse of a snapped
@@ -193,6 +194,22 @@ def blend(q: np.ndarray, p: np.ndarray, v: float) -> np.ndarray:
     out = np.empty_like(q)
     w = 1.0 - v
     for u in range(q.shape[0]):
+        out[u] = w * q[u] + v * p[u]
+    return out
+
+
+@numba.njit(cache=True)
+def blend_at(q: np.ndarray, p: np.ndarray, v: float, bins: np.ndarray) -> np.ndarray:
+    """``blend(q, p, v)`` of a p that is +0 outside ``bins`` (its nonzero bins, any order):
+    the same bits without reading p there. Outside them ``blend`` computes w q_u + v p_u
+    with v p_u = +0 (v > 0 finite), i.e. w q_u + 0.0, which this computes as written (no
+    fast-math: the + 0.0 is kept, so a -0 product gives +0 as there)."""
+    out = np.empty_like(q)
+    w = 1.0 - v
+    for u in range(q.shape[0]):
+        out[u] = w * q[u] + 0.0
+    for k in range(bins.shape[0]):
+        u = bins[k]
         out[u] = w * q[u] + v * p[u]
     return out
 

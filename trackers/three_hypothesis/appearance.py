@@ -15,13 +15,20 @@ from __future__ import annotations
 import numpy as np
 
 from occbench.trackers.common.checks import require
-from occbench.trackers.three_hypothesis._kernels import ellipse_histograms
+from occbench.trackers.three_hypothesis._kernels import blend, blend_at, ellipse_histograms
 from occbench.trackers.three_hypothesis.features import bhattacharyya
 
-__all__ = ["EllipseHistogrammer", "bhattacharyya", "snap_boxes"]
+__all__ = ["EllipseHistogrammer", "bhattacharyya", "snap_boxes", "towards"]
 
 _NO_MASK = np.zeros((1, 1), dtype=bool)
 """The kernel's placeholder foreground when there is none."""
+
+
+def towards(q: np.ndarray, p: np.ndarray, v: float, bins: np.ndarray | None = None
+            ) -> np.ndarray:
+    """A new q' = (1 - v) q + v p (v > 0), compiled: the bits of numpy's expression;
+    ``bins``, p's nonzero bins (``EllipseHistogrammer.measure``), spares reading the rest."""
+    return blend(q, p, v) if bins is None else blend_at(q, p, v, bins)
 
 
 def snap_boxes(boxes: np.ndarray) -> np.ndarray:
@@ -112,17 +119,20 @@ class EllipseHistogrammer:
 
     def measure(
         self, frame: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None
-    ) -> tuple[list[np.ndarray], np.ndarray]:
+    ) -> tuple[list[np.ndarray], np.ndarray, tuple[np.ndarray, np.ndarray]]:
         """Histograms p (eq. 1), each an array of its own (a person can keep a measurement's
-        histogram as its appearance q without a copy), and the bins they occupy.
+        histogram as its appearance q without a copy), the bins they occupy, and each one's.
 
         A person's histogram fills few of the bins**3 bins; the Bhattacharyya coefficient
         rho = sum_b sqrt(q_b p_b) (eq. 4) against these measurements only needs the
-        ``support`` bins (elsewhere every p_b is 0).
+        ``support`` bins (elsewhere every p_b is 0), and a blend towards p only p's own
+        (``_kernels.blend_at``).
 
         Returns:
             p: list of N (bins**3,) float64 arrays (arguments as ``__call__``);
-            support: (K,) int sorted bins where at least one p is nonzero.
+            support: (K,) int sorted bins where at least one p is nonzero;
+            bins: (nonzero, starts): p[i]'s nonzero bins are nonzero[starts[i]:starts[i + 1]]
+            (sorted; every other bin of p[i] is +0), starts (N + 1,).
         """
         snapped = snap_boxes(boxes).astype(np.int64)
         hists = np.zeros((len(snapped), self.bins**3))
@@ -133,4 +143,7 @@ class EllipseHistogrammer:
         ellipse_histograms(frame, snapped, foreground if has_fg else _NO_MASK, has_fg,
                            float(self.min_foreground), self.stride, self.bins, hists, occupied)
         out = [h.copy() for h in hists]  # one array each: a person keeps its own q
-        return out, occupied.nonzero()[0]
+        support = occupied.nonzero()[0]
+        rows, cols = np.nonzero(hists[:, support])  # row-major: each row's bins sorted
+        starts = np.searchsorted(rows, np.arange(len(hists) + 1))
+        return out, support, (support[cols], starts)

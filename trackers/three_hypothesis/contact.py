@@ -17,7 +17,7 @@ import numpy as np
 from scipy.sparse import csr_array
 
 from occbench.trackers.common.spatial import row_entries
-from occbench.trackers.three_hypothesis._kernels import blend
+from occbench.trackers.three_hypothesis.appearance import towards
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
     from occbench.trackers.three_hypothesis.values import Match
@@ -34,7 +34,8 @@ class MeasurementAppearance:
     uses_partners: ClassVar[bool] = False
 
     def update(self, q: np.ndarray, p: np.ndarray, own: float,
-               partner: np.ndarray | None = None) -> np.ndarray:
+               partner: np.ndarray | None = None, bins: np.ndarray | None = None
+               ) -> np.ndarray:
         return p
 
 
@@ -52,10 +53,11 @@ class MergedAppearance:
     uses_partners: ClassVar[bool] = False
 
     def update(self, q: np.ndarray, p: np.ndarray, own: float,
-               partner: np.ndarray | None = None) -> np.ndarray:
+               partner: np.ndarray | None = None, bins: np.ndarray | None = None
+               ) -> np.ndarray:
         if own >= 1.0:
             return p
-        return blend(q, p, own) if own > 0 else q
+        return towards(q, p, own, bins) if own > 0 else q
 
 
 @dataclass(frozen=True)
@@ -73,12 +75,13 @@ class UnmixedAppearance(MergedAppearance):
     uses_partners: ClassVar[bool] = True
 
     def update(self, q: np.ndarray, p: np.ndarray, own: float,
-               partner: np.ndarray | None = None) -> np.ndarray:
+               partner: np.ndarray | None = None, bins: np.ndarray | None = None
+               ) -> np.ndarray:
         if own >= 1.0 or partner is None:
-            return MergedAppearance.update(self, q, p, own)
+            return MergedAppearance.update(self, q, p, own, bins=bins)
         r = np.maximum(p - (1.0 - own) * partner, 0.0)
         total = r.sum()
-        return blend(q, r / total, own) if own > 0 and total > 0 else q
+        return towards(q, r / total, own) if own > 0 and total > 0 else q
 
 
 # --------------------------------------------------------------- 3.3.3: M of a person in front

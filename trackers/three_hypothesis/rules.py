@@ -15,8 +15,7 @@ import numpy as np
 
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.geometry import iou_matrix
-from occbench.trackers.three_hypothesis._kernels import blend
-from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, towards
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
     AppearanceAtContact,
@@ -144,7 +143,8 @@ class KeepAppearance:
 
     uses_visible_share: ClassVar[bool] = False
 
-    def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
+    def update(self, q: np.ndarray, p: np.ndarray, visible: float,
+               bins: np.ndarray | None = None) -> np.ndarray:
         return q
 
 
@@ -156,9 +156,10 @@ class BlendVisible:
 
     uses_visible_share: ClassVar[bool] = True
 
-    def update(self, q: np.ndarray, p: np.ndarray, visible: float) -> np.ndarray:
+    def update(self, q: np.ndarray, p: np.ndarray, visible: float,
+               bins: np.ndarray | None = None) -> np.ndarray:
         if visible > 0:
-            return blend(q, p, visible)  # (1 - v) q + v p, compiled
+            return towards(q, p, visible, bins)  # (1 - v) q + v p, compiled
         return q
 
 

@@ -27,6 +27,7 @@ class Measurements:
     scores: np.ndarray  # (D,) their detection scores
     p: list[np.ndarray]  # D histograms over their ellipses (eq. 1)
     support: np.ndarray  # (K,) bins where some p is nonzero
+    bins: tuple[np.ndarray, np.ndarray]  # p[d]'s nonzero bins bins[0][bins[1][d]:bins[1][d + 1]]
     foreground: np.ndarray | None  # (H, W) mask or label image
     width: int
     height: int

@@ -58,6 +58,7 @@ def test_merged_measurement_moves_q_by_the_own_share_only():
     assert ours.update(q, p, 1.0) is p
     assert ours.update(q, p, 0.0) is q
     assert ours.update(q, p, 0.25).tolist() == [0.75, 0.25]
+    assert ours.update(q, p, 0.25, bins=np.array([1])).tolist() == [0.75, 0.25]  # p's bins
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).appearance_front, MeasurementAppearance)
     assert isinstance(build_rules(Adaptations(merged_appearance=True), h).appearance_front,

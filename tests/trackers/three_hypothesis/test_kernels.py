@@ -56,11 +56,14 @@ def test_eq1_kernel_equals_the_numpy_reading(stride, bins):
     labels = (rng.random((90, 120)) < 0.5) * rng.integers(1, 5, (90, 120))  # a label image
     for fg in (None, labels != 0, labels.astype(np.int32), np.zeros((90, 120), bool)):
         hist = EllipseHistogrammer(bins=bins, min_foreground=0.3, stride=stride)
-        p, support = hist.measure(frame, boxes, fg)
+        p, support, (nonzero, starts) = hist.measure(frame, boxes, fg)
         ref, ref_support = _reference(frame, boxes, fg, bins, 0.3, stride)
         assert np.array(p).tobytes() == ref.tobytes()
         assert support.tolist() == ref_support.tolist()
         assert len({id(h) for h in p}) == len(p)  # one array each
+        assert len(starts) == len(p) + 1
+        for h, a, b in zip(p, starts[:-1], starts[1:]):  # each p's own nonzero bins
+            assert nonzero[a:b].tolist() == np.flatnonzero(h).tolist()
 
 
 def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
@@ -70,8 +73,8 @@ def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
     fg = rng.random((60, 80)) < 0.7
     got = EllipseHistogrammer(min_foreground=0.0)(frame, boxes, fg)
     np.testing.assert_array_equal(got, ellipse_histograms(frame, boxes, mask=fg))
-    p, support = EllipseHistogrammer().measure(frame, np.zeros((0, 4)))
-    assert p == [] and len(support) == 0
+    p, support, (nonzero, starts) = EllipseHistogrammer().measure(frame, np.zeros((0, 4)))
+    assert p == [] and len(support) == 0 and len(nonzero) == 0 and starts.tolist() == [0]
 
 
 def test_eq5_kernel_has_the_bits_of_the_definition():
@@ -102,6 +105,35 @@ def test_blend_kernel_has_the_bits_of_the_numpy_expression():
         for v in (1e-9, 0.3, 0.5, 1.0, float(rng.random())):
             got = blend(q, p, v)
             assert got is not q and got.tobytes() == ((1.0 - v) * q + v * p).tobytes()
+
+
+def test_blend_over_the_measurements_bins_has_the_bits_of_the_dense_blend():
+    """``blend_at`` (p read at its nonzero bins only) against ``blend`` and numpy's
+    expression: random sparse histograms, empty ones, disjoint and equal supports, ties
+    (q = p), a q holding -0 (its product is +0 in both) and p's bins given unsorted."""
+    from occbench.trackers.three_hypothesis._kernels import blend, blend_at
+
+    rng = np.random.default_rng(12)
+
+    def sparse(n, k):
+        h = np.zeros(n)
+        h[rng.choice(n, k, replace=False)] = rng.random(k)
+        return h / h.sum() if k else h
+
+    n = 4096
+    cases = [(sparse(n, rng.integers(0, 52)), sparse(n, rng.integers(1, 30)))
+             for _ in range(40)]
+    q = sparse(n, 16)
+    disjoint = np.where(q > 0, 0.0, sparse(n, 20))
+    cases += [(np.zeros(n), np.zeros(n)), (np.zeros(n), sparse(n, 7)), (q, np.zeros(n)),
+              (q, disjoint), (q, q.copy()), (-np.zeros(n), sparse(n, 5)), (np.zeros(1), np.ones(1))]
+    for q, p in cases:
+        bins = np.flatnonzero(p)
+        for v in (1e-9, 0.25, 0.5, 1.0, float(rng.random())):
+            want = blend(q, p, v)
+            assert want.tobytes() == ((1.0 - v) * q + v * p).tobytes()
+            assert blend_at(q, p, v, bins).tobytes() == want.tobytes()
+            assert blend_at(q, p, v, bins[::-1].copy()).tobytes() == want.tobytes()
 
 
 def test_eq3_kernel_gives_the_verdicts_of_depth_order():

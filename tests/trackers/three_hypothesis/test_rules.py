@@ -115,6 +115,8 @@ def test_appearance_behind_others_kept_or_blended_by_the_visible_share():
     q, p = np.array([1.0, 0.0]), np.array([0.0, 1.0])
     assert KeepAppearance().update(q, p, 0.75) is q
     np.testing.assert_allclose(BlendVisible().update(q, p, 0.25), [0.75, 0.25])
+    assert (BlendVisible().update(q, p, 0.25, np.array([1])).tobytes()  # over p's bins only
+            == BlendVisible().update(q, p, 0.25).tobytes())
     np.testing.assert_array_equal(BlendVisible().update(q, p, 1.0), p)
     assert BlendVisible().update(q, p, 0.0) is q  # fully hidden: as the paper
 

@@ -78,7 +78,7 @@ def test_measure_gives_one_histogram_array_each_and_their_support():
     frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8) // 64 * 64  # few colours
     boxes = np.array([[10.0, 5.0, 30.0, 60.0], [70.0, 20.0, 40.0, 50.0], [200.0, 0, 10, 10]])
     h = EllipseHistogrammer()
-    p, support = h.measure(frame, boxes)
+    p, support, _ = h.measure(frame, boxes)
     assert len(p) == 3 and all(row.shape == (4096,) for row in p)
     assert not np.shares_memory(p[0], p[1])
     np.testing.assert_array_equal(np.array(p), h(frame, boxes))
