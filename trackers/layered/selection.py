@@ -149,30 +149,30 @@ class MultipleResponsePruning:
         bests, _, ambs = ambiguous_rows(S, m.match_threshold, m.margin_ratio)
         weaks = (bests < 0) & (np.maximum.reduce(S, axis=1) >= m.weak_threshold)
         heads_xy = cand.head[:, :2]
-        claimed = self.claims.claimed(S, m.match_threshold) if (ambs | weaks).any() else None
-        for ti in (ambs | weaks).nonzero()[0].tolist():  # changes only row ti, after reading it
+        rows = (ambs | weaks).nonzero()[0]
+        claimed = self.claims.claimed(S, m.match_threshold) if len(rows) else None
+        # every pruned row's responses and their distances at once, read before any row changes
+        near_all, hw_all, dist_all = self._nearby(S[rows], ambs[rows], bests[rows], cand.head)
+        for k, ti in enumerate(rows.tolist()):  # changes only row ti, after reading it
             row = S[ti]
             best, amb, weak = int(bests[ti]), bool(ambs[ti]), bool(weaks[ti])
+            near, hw, dist = near_all[k], hw_all[k], dist_all[k]
             if (amb and claimed is not None and claimed[ti].any()
                     and self._untemplated(row, best, cand.head, int(targets.misses[ti]))):
                 row = np.where(claimed[ti], -np.inf, row)  # the pruning's view of the row
                 best, _, amb = ambiguous(row, m.match_threshold, m.margin_ratio)
                 if not amb:  # one candidate of its own left: the assignment decides
                     continue
-            lo = m.match_threshold if amb else m.weak_threshold
-            cands = (row >= lo).nonzero()[0]
-            r = best if best >= 0 else int(np.argmax(row))
-            hw = max(cand.head[r, 2], 1.0)
-            dist = _norms(heads_xy[cands] - heads_xy[r])
-            near = dist <= self.pruning.radius * hw
-            cands = cands[near]
+                near, hw, dist = (v[0] for v in self._nearby(row[None], np.array([amb]),
+                                                                 np.array([best]), cand.head))
+            cands = near.nonzero()[0]
             if amb and len(cands) < 2:
                 continue
             if targets.misses[ti] > a.prune_max_misses:
                 if weak:
                     continue
                 chosen, refined = best, None
-            elif amb and dist[near].max() <= a.duplicate_radius * hw:
+            elif amb and dist[cands].max() <= a.duplicate_radius * hw:
                 chosen, refined = best, None  # one response: the heads coincide
             else:
                 chosen, refined = self.match_template(targets.head_template[ti], cands, heads_xy[cands],
@@ -191,6 +191,23 @@ class MultipleResponsePruning:
             keep = row[chosen]
             S[ti, cands] = -np.inf
             S[ti, chosen] = self.weak.value(keep, m.match_threshold)
+
+    def _nearby(self, S: np.ndarray, amb: np.ndarray, best: np.ndarray, heads: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """PBM 4 steps 4-5 and 4.1's responses of R rows of S (R, N), ambiguous ``amb``
+        (R,) with their ``best`` (R,) (-1: weak), candidates' heads (N, 3): the candidates
+        at p >= the match threshold (ambiguous) or the weak threshold (eq. 13) within
+        ``pruning.radius`` head widths of the reference head r (the best, else the row's
+        argmax). Returns near (R, N) bool, r's head width hw (R,) (at least 1) and the
+        heads' distances (R, N) from r's head, each as one row's own arrays would give it."""
+        m = self.matching
+        lo = np.where(amb, m.match_threshold, m.weak_threshold)  # PBM 4 steps 4-5, p of eq. 13
+        r = np.where(best >= 0, best, S.argmax(axis=1)) if S.size else best
+        hw = np.maximum(heads[r, 2], 1.0)
+        xy = heads[:, :2]
+        dist = _norms(xy[None, :, :] - xy[r][:, None, :])  # (R, N, 2) -> (R, N)
+        near = (S >= lo[:, None]) & (dist <= self.pruning.radius * hw[:, None])  # PBM 4.1: nearby
+        return near, hw, dist
 
     def _untemplated(self, row: np.ndarray, best: int, heads: np.ndarray, misses: int) -> bool:
         """Whether the pruning keeps an ambiguous row's ``best`` without its head template:

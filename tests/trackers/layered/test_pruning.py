@@ -13,6 +13,9 @@ from omegaconf import OmegaConf
 from occbench.datasets.synthetic import load_scenario
 from occbench.sources.annotations import NoisyGroundTruth
 from occbench.config.meta import without_meta
+from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.params import MatchParams, PruneParams
+from occbench.trackers.layered.selection import MultipleResponsePruning, _norms
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -65,3 +68,43 @@ def test_a_long_lost_target_is_not_pruned_by_its_stale_template():
     _template_matches(0.25, 5, default)
     assert max(always) > 5  # the crowd has such targets
     assert default and max(default) <= 5
+
+
+def _nearby_row(pruning, row, amb, best, heads):
+    """One row's responses as the pruning loop read them before they were stacked: the
+    candidates at p >= its threshold, their distances from r's head, those within the radius."""
+    m = pruning.matching
+    lo = m.match_threshold if amb else m.weak_threshold
+    cands = (row >= lo).nonzero()[0]
+    r = best if best >= 0 else int(np.argmax(row))
+    hw = max(heads[r, 2], 1.0)
+    dist = _norms(heads[cands, :2] - heads[r, :2])
+    near = dist <= pruning.pruning.radius * hw
+    return cands[near], hw, dist[near]
+
+
+def test_stacked_responses_equal_each_rows_own_bit_for_bit():
+    pruning = MultipleResponsePruning(MatchParams(), PruneParams(), Adaptations())
+    m, rng = pruning.matching, np.random.default_rng(3)
+    checked = 0
+    for case in range(60):
+        R, N = int(rng.integers(1, 7)), int(rng.integers(1, 12))
+        S = rng.choice([-np.inf, m.weak_threshold, m.match_threshold, 0.3, 0.95], size=(R, N))
+        S = np.where(rng.random((R, N)) < 0.5, rng.random((R, N)), S)
+        if case % 7 == 0:
+            S[0, 0] = np.nan
+        heads = np.c_[rng.normal(100, 30, (N, 2)), rng.choice([0.0, 0.5, 1.0, 9.0, 20.0], N)]
+        heads[rng.random(N) < 0.2, :2] = heads[0, :2]  # ties: coincident heads
+        amb = rng.random(R) < 0.5
+        best = np.where(amb, rng.integers(0, N, R), -1)
+        near, hw, dist = pruning._nearby(S, amb, best, heads)
+        for k in range(R):
+            cands, hw_k, dist_k = _nearby_row(pruning, S[k], bool(amb[k]), int(best[k]), heads)
+            assert np.array_equal(near[k].nonzero()[0], cands)
+            assert hw[k].tobytes() == np.float64(hw_k).tobytes()
+            assert dist[k][cands].tobytes() == dist_k.tobytes()
+            checked += len(cands)
+    assert checked > 100
+    empty = pruning._nearby(np.zeros((0, 4)), np.zeros(0, bool), np.zeros(0, np.intp),
+                            np.ones((4, 3)))
+    assert [v.shape for v in empty] == [(0, 4), (0,), (0, 4)]
