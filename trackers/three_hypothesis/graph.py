@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -127,6 +128,20 @@ class TrackingGraph:
         layer.S = None
         self._next_key += 1
         return self._next_key - 1
+
+    def add_nodes(self, *columns) -> int:
+        """``add_node`` for several nodes at once: ``columns``, one sequence per attribute of
+        ``Node`` in its order (node r's attributes their r-th items); returns the first
+        node's key (node r's: that + r)."""
+        require("add_nodes' columns", len(columns) == len(Node._fields),
+                f"must be the {len(Node._fields)} of Node", len(columns))
+        layer = self._layers[-1]
+        count = len(layer.nodes)
+        layer.nodes.extend(map(partial(tuple.__new__, Node), zip(*columns, strict=True)))
+        layer.S = None
+        first = self._next_key
+        self._next_key += len(layer.nodes) - count
+        return first
 
     def ellipses(self) -> tuple[np.ndarray, int]:
         """The current layer's ellipses S, (N, 5) in node order, and its first node's key

@@ -32,6 +32,25 @@ def add_node(memory: Memory, person: Person, branch: Branch, box: np.ndarray,
                                  stage, rho)
 
 
+def add_visible_nodes(memory: Memory, people: list[Person], branches: list[Branch],
+                      boxes: list[list[float]], occluders: list[int | None],
+                      parents: list[int], stages: list[int], rhos: list[float]) -> None:
+    """``add_node`` of each matched person's visible branch (step 6), in one
+    ``add_nodes`` call: row r is ``people[r]``'s ``branches[r]`` at ``boxes[r]``, its
+    occluder's public id ``occluders[r]`` (read when the person was updated, as
+    ``add_node`` reads it), the edge from ``parents[r]``; each branch's ``node`` becomes
+    its key. The same nodes and keys as ``add_node`` row by row."""
+    ids = [person.id for person in people]
+    first = memory.graph.add_nodes(
+        [person.key for person in people],
+        [i if i > 0 else -person.key for i, person in zip(ids, people)],  # public_id
+        [VISIBLE if i > 0 else TENTATIVE for i in ids], [None] * len(people), boxes,
+        [person.q for person in people], [b.x for b in branches], [b.P for b in branches],
+        occluders, [b.depth for b in branches], parents, stages, rhos)
+    for key, branch in enumerate(branches, first):
+        branch.node = key
+
+
 def outputs(persons: list[Person], t: int, rules: Rules, graph: TrackingGraph) -> list[Track]:
     """One Track per node of every person of N^t (CONFIRMED, OCCLUDED, HYPOTHESIS,
     TENTATIVE: ``tracker``'s module docstring), in person then branch order; a reported

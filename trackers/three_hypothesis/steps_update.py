@@ -14,7 +14,7 @@ from occbench.trackers.three_hypothesis.motion import box_measurements, state_bo
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
 from occbench.trackers.three_hypothesis.rules import Rules
 from occbench.trackers.three_hypothesis.state import Branch, Memory, Person, Setting
-from occbench.trackers.three_hypothesis.steps_output import add_node
+from occbench.trackers.three_hypothesis.steps_output import add_node, add_visible_nodes
 from occbench.trackers.three_hypothesis.tentative import clear_measurements
 from occbench.trackers.three_hypothesis.values import DepthOrder, Match, Matching, Measurements
 from occbench.trackers.three_hypothesis.values import Occlusions, Predictions, Updated
@@ -38,20 +38,23 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         return Updated([], np.zeros((0, 4)), [], frozenset())
     matches = [A.matched[i] for i in keys]
     persons, p, in_front, rules = S.persons, V.p, D.in_front, setting.rules
+    hidden = np.array([person.id for person in persons], dtype=np.int64) > 0  # confirmed
+    hidden[keys] = False  # and unmatched at t
+    confirmed = [persons[i].id > 0 for i in keys]
     idx = np.array([m.node for m in matches])
     visible_dets = [m.det for m in matches]
     dbox = V.boxes[visible_dets]
     behind_r = [m.node in in_front for m in matches]
     behind = np.array(behind_r)
     z = box_measurements(dbox)
-    own, partner = _own_share(S, V, O, A, rules, matches)
+    own, partner = _own_share(S, V, O, rules, matches, hidden)
     Rs = rules.motion_front.noise(np.array([persons[i].R for i in keys]),
                                   np.where(behind, 1.0, own))
     predicted = S.Xp[idx], S.Pp[idx]
     Xc, Pc = rules.motion_behind.update(rules.motion.correct(*predicted, z, Rs), predicted,
                                         behind)  # x = x + K y, Joseph P
     estimate = state_boxes(Xc).tolist()
-    tent = [m.det for i, m in zip(keys, matches) if not persons[i].confirmed]
+    tent = [m.det for r, m in enumerate(matches) if not confirmed[r]]
     empty = rules.support.empty(V.foreground, V.boxes[tent]) if tent else None
     # a detection on no foreground does not confirm a tentative track
     empty_dets = set() if empty is None else {d for d, e in zip(tent, empty.tolist()) if e}
@@ -63,6 +66,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     absorbed: set[int] = set()
     shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
     nonzero, starts = V.bins[0], V.bins[1].tolist()  # p[d]'s nonzero bins (V.bins)
+    branches, shapes, occluders = [], [], []  # their nodes' columns (one add_nodes call)
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
         bins = nonzero[starts[d]:starts[d + 1]]
@@ -75,22 +79,26 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
             person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r], bins)
         person.merged = shares[r] < 1.0  # read by rules.split at t + 1
-        if person.confirmed or d not in empty_dets:
+        if confirmed[r] or d not in empty_dets:
             person.hits += 1
         person.misses = 0
         person.spawned = False
         rules.returning.record(person, match.rho)
-        if not person.confirmed and rules.confirm.confirms(
+        if not confirmed[r] and rules.confirm.confirms(
                 person.hits, setting.life_cycle.confirm_frames, clear.get(d, False),
                 scores[d]):
-            _confirm(S, A, absorbed, person, shape, rules, memory)
+            _confirm(S, hidden, absorbed, person, shape, rules, memory)
         fronts = in_front.get(n, [])
         branch = Branch(VISIBLE, Xc[r], Pc[r], depth=len(fronts),
                         occluder=persons[fronts[0]].key if fronts else None)
-        branch.node = add_node(memory, person, branch, shape, S.branches[n].node,
-                               match.stage, match.rho)
+        branches.append(branch)
+        shapes.append(shape.tolist())
+        occluders.append(memory.public.get(branch.occluder) if fronts else None)  # now
         person.shape = shape
         person.branches = [branch]
+    add_visible_nodes(memory, [persons[i] for i in keys], branches, shapes, occluders,
+                      [S.branches[m.node].node for m in matches],
+                      [m.stage for m in matches], [m.rho for m in matches])
     return Updated([persons[i] for i in keys], dbox, visible_dets, frozenset(absorbed))
 
 
@@ -158,31 +166,30 @@ def _visible_share(V: Measurements, A: Matching, D: DepthOrder, matches: list[Ma
     return share
 
 
-def _own_share(S: Predictions, V: Measurements, O: Occlusions, A: Matching, rules: Rules,
-               matches: list[Match]) -> tuple[np.ndarray, np.ndarray]:
+def _own_share(S: Predictions, V: Measurements, O: Occlusions, rules: Rules,
+               matches: list[Match], hidden: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per matched person (``matches``), the share of its measured region no
-    hidden confirmed partner in O covers (``contact.own_shares``; 1 everywhere unless a
-    front rule reads it), and the person index of the partner covering most (-1: none, or
-    no rule reads it)."""
+    hidden confirmed partner in O (``hidden``: (P,) bool, confirmed and unmatched at t)
+    covers (``contact.own_shares``; 1 everywhere unless a front rule reads it), and the
+    person index of the partner covering most (-1: none, or no rule reads it)."""
     partner = np.full(len(matches), -1)
     if not (rules.appearance_front.uses_shares or rules.motion_front.uses_shares
             or rules.split.uses_merged):
         return np.ones(len(matches)), partner
-    hidden = np.array([person.confirmed and i not in A.matched
-                       for i, person in enumerate(S.persons)], dtype=bool)
     return own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta,
                       partner if rules.appearance_front.uses_partners else None), partner
 
 
-def _confirm(S: Predictions, A: Matching, absorbed: set[int], person: Person,
+def _confirm(S: Predictions, hidden: np.ndarray, absorbed: set[int], person: Person,
              shape: np.ndarray, rules: Rules, memory: Memory) -> None:
     """A tentative track reaches ``confirm_frames``: it takes a new id, or (by
     ``rules.identity``) the id of a hidden confirmed person, unmatched this frame and not
     yet ``absorbed``, one of whose hypotheses lies where it stands; that person joins
-    ``absorbed`` (its hypotheses then end)."""
+    ``absorbed`` (its hypotheses then end). ``hidden``: (P,) bool, the confirmed people
+    unmatched at t (a confirmation within the frame only changes matched people)."""
     persons = S.persons
-    candidate = np.array([p.confirmed and i not in A.matched and i not in absorbed
-                          for i, p in enumerate(persons)], dtype=bool)
+    candidate = hidden.copy()
+    candidate[list(absorbed)] = False
     best = rules.identity.returning(shape, S.boxes, S.owners, candidate)
     if best is not None:
         person.id = persons[best].id
