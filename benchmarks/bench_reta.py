@@ -99,8 +99,8 @@ def make_scene(people: int, frames: int, seed: int = 0, size: tuple[int, int] = 
 RETA_STAGES = {
     "tracker": ("measure", "predict", "occlusions", "max_similarity", "sort_occlusions",
                 "update_matched", "continue_unmatched", "prune", "start_tracks", "outputs"),
-    "steps_update": ("add_node", "_visible_share", "_confirm"),
-    "steps_hypotheses": ("add_node", "_hidden_share"),
+    "steps_update": ("add_node", "add_nodes", "_visible_share", "_confirm"),
+    "steps_hypotheses": ("add_nodes", "_hidden_share"),
     "steps_output": ("_tracks", "_place_hidden"),
 }
 """RetaTracker's steps of Alg. 1 (its module docstring), timed one by one in ``stages``, and

@@ -15,7 +15,7 @@ from occbench.trackers.three_hypothesis.motion import state_boxes
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
 from occbench.trackers.three_hypothesis.rules import Rules
 from occbench.trackers.three_hypothesis.state import Branch, Memory, Person, Setting
-from occbench.trackers.three_hypothesis.steps_output import add_node
+from occbench.trackers.three_hypothesis.steps_output import add_nodes
 from occbench.trackers.three_hypothesis.values import (
     Continuation,
     DepthOrder,
@@ -107,16 +107,16 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
     cover, unseen, corners = cover.tolist(), unseen.tolist(), hyp_boxes.tolist()
     m, a = setting.life_cycle.m, setting.adaptations
     survivors: list[Person] = []
+    rows: tuple[list, list, list] = ([], [], [])  # people, branches, boxes of the nodes
     k = 0
     for c in H:
         person = c.person
         kept: list[Branch] = []
-        kept_boxes: list[np.ndarray] = []
         kept_corners: list[list[float]] = []
         kept_rates: list[list[float]] = []
         dropped = None  # its first hypothesis contradicted this frame (rules.ending)
         for b in c.branches:
-            box, corner, g, hidden, held_k = hyp_boxes[k], corners[k], gone[k], cover[k], held[k]
+            corner, g, hidden, held_k = corners[k], gone[k], cover[k], held[k]
             b.unseen = unseen[k]
             b.share = 1.0 if share is None else float(share[k])
             k += 1
@@ -124,14 +124,13 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
             b.exposed = 0 if hidden else b.exposed + (0 if held_k else 1)
             if g or b.exposed >= m:
                 if not g and dropped is None:
-                    dropped = (b, box, corner)
+                    dropped = (b, corner)
                 continue
             rates = b.x[len(b.x) // 2:].tolist()  # the state's velocities (3.2)
             if kept_corners and rules.duplicates.duplicate(corner, kept_corners, rates,
                                                            kept_rates):
                 continue
             kept.append(b)
-            kept_boxes.append(box)
             kept_corners.append(corner)
             kept_rates.append(rates)
         if not person.confirmed and person.misses > a.tentative_misses:
@@ -139,16 +138,19 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
         if not kept and dropped is not None:
             holder = rules.ending.hold(person, dropped[0])
             if holder is not None:
-                kept, kept_boxes = [holder], [dropped[1]]
+                kept, kept_corners = [holder], [dropped[1]]
         if person.misses > a.max_hidden:
             kept = []
         if not kept:
             log.debug("person %d ended at frame %d", person.public_id, memory.t)
             continue
         person.branches = kept
-        for b, box in zip(kept, kept_boxes):
-            b.node = add_node(memory, person, b, box, b.node, 0, float("nan"))
+        rows[0].extend([person] * len(kept))
+        rows[1].extend(kept)
+        rows[2].extend(kept_corners)
         survivors.append(person)
+    add_nodes(memory, *rows, [b.node for b in rows[1]], [0] * len(rows[1]),
+              [float("nan")] * len(rows[1]))  # from each hypothesis's node at t-1
     return survivors
 
 

@@ -19,32 +19,28 @@ def add_node(memory: Memory, person: Person, branch: Branch, box: np.ndarray,
     """AddNodeToGraph + AddEdgeToGraph for one branch of ``person`` at ``box`` (its region at
     t), the edge from node ``parent`` of t-1 (None: a new person) with the association's
     ``stage`` and ``rho`` (0, NaN: no match); returns the node key."""
-    confirmed = person.confirmed
-    if branch.kind == VISIBLE:
-        kind = VISIBLE if confirmed else TENTATIVE
-        hypothesis = None
-    else:
-        kind = HYPOTHESIS if confirmed else TENTATIVE
-        hypothesis = branch.kind
-    occluder = None if branch.occluder is None else memory.public.get(branch.occluder)
-    return memory.graph.add_node(person.key, person.public_id, kind, hypothesis, box.tolist(),
-                                 person.q, branch.x, branch.P, occluder, branch.depth, parent,
-                                 stage, rho)
+    add_nodes(memory, [person], [branch], [box.tolist()], [parent], [stage], [rho])
+    return branch.node
 
 
-def add_visible_nodes(memory: Memory, people: list[Person], branches: list[Branch],
-                      boxes: list[list[float]], occluders: list[int | None],
-                      parents: list[int], stages: list[int], rhos: list[float]) -> None:
-    """``add_node`` of each matched person's visible branch (step 6), in one
-    ``add_nodes`` call: row r is ``people[r]``'s ``branches[r]`` at ``boxes[r]``, its
-    occluder's public id ``occluders[r]`` (read when the person was updated, as
-    ``add_node`` reads it), the edge from ``parents[r]``; each branch's ``node`` becomes
-    its key. The same nodes and keys as ``add_node`` row by row."""
+def add_nodes(memory: Memory, people: list[Person], branches: list[Branch],
+              boxes: list[list[float]], parents: list[int | None], stages: list[int],
+              rhos: list[float], occluders: list[int | None] | None = None) -> None:
+    """``add_node`` of many branches in one ``TrackingGraph.add_nodes`` call: row r is
+    ``people[r]``'s ``branches[r]`` at ``boxes[r]`` (xywh list), the edge from
+    ``parents[r]``; each branch's ``node`` becomes its key. ``occluders``: the occluders'
+    public ids read earlier (step 6 reads each when it updates the person behind: a
+    confirmation later in the frame does not change it); None: read now."""
+    if occluders is None:
+        public = memory.public
+        occluders = [None if b.occluder is None else public.get(b.occluder) for b in branches]
     ids = [person.id for person in people]
     first = memory.graph.add_nodes(
         [person.key for person in people],
         [i if i > 0 else -person.key for i, person in zip(ids, people)],  # public_id
-        [VISIBLE if i > 0 else TENTATIVE for i in ids], [None] * len(people), boxes,
+        [TENTATIVE if i <= 0 else VISIBLE if b.kind == VISIBLE else HYPOTHESIS
+         for i, b in zip(ids, branches)],
+        [None if b.kind == VISIBLE else b.kind for b in branches], boxes,
         [person.q for person in people], [b.x for b in branches], [b.P for b in branches],
         occluders, [b.depth for b in branches], parents, stages, rhos)
     for key, branch in enumerate(branches, first):

@@ -14,7 +14,7 @@ from occbench.trackers.three_hypothesis.motion import box_measurements, state_bo
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
 from occbench.trackers.three_hypothesis.rules import Rules
 from occbench.trackers.three_hypothesis.state import Branch, Memory, Person, Setting
-from occbench.trackers.three_hypothesis.steps_output import add_node, add_visible_nodes
+from occbench.trackers.three_hypothesis.steps_output import add_node, add_nodes
 from occbench.trackers.three_hypothesis.tentative import clear_measurements
 from occbench.trackers.three_hypothesis.values import DepthOrder, Match, Matching, Measurements
 from occbench.trackers.three_hypothesis.values import Occlusions, Predictions, Updated
@@ -96,9 +96,9 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         occluders.append(memory.public.get(branch.occluder) if fronts else None)  # now
         person.shape = shape
         person.branches = [branch]
-    add_visible_nodes(memory, [persons[i] for i in keys], branches, shapes, occluders,
-                      [S.branches[m.node].node for m in matches],
-                      [m.stage for m in matches], [m.rho for m in matches])
+    add_nodes(memory, [persons[i] for i in keys], branches, shapes,
+              [S.branches[m.node].node for m in matches], [m.stage for m in matches],
+              [m.rho for m in matches], occluders)
     return Updated([persons[i] for i in keys], dbox, visible_dets, frozenset(absorbed))
 
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from occbench.trackers.records import Detections
-from occbench.trackers.three_hypothesis import RetaTracker, steps_update
-from occbench.trackers.three_hypothesis.graph import TrackingGraph
-from occbench.trackers.three_hypothesis.steps_output import add_node
+from occbench.trackers.three_hypothesis import RetaTracker, steps_hypotheses, steps_update
+from occbench.trackers.three_hypothesis.graph import (HYPOTHESIS, TENTATIVE, VISIBLE,
+                                                      TrackingGraph)
 
 
 def _rows(n: int, rng: np.random.Generator) -> list[tuple]:
@@ -37,7 +37,8 @@ def test_add_nodes_gives_the_keys_and_snapshot_of_add_node_row_by_row():
 
 
 def _scene(frames: int = 40, people: int = 10):
-    """Coloured boxes crossing on noise, exact detections: contacts and occlusions."""
+    """Coloured boxes crossing on noise, exact detections, a fifth of them missed:
+    contacts, occlusions and hypotheses."""
     rng = np.random.default_rng(3)
     start = np.stack([rng.uniform(5, 140, people), rng.uniform(20, 60, people)], axis=1)
     velocity = np.stack([rng.choice([-3.0, 3.0], people), rng.uniform(-0.5, 0.5, people)],
@@ -51,30 +52,45 @@ def _scene(frames: int = 40, people: int = 10):
             x = float(np.clip(x, 0, 140))
             img[int(y):int(y) + 40, int(x):int(x) + 18] = colours[i]
             boxes.append([x, y, 18.0, 40.0])
-        yield img, Detections(np.array(boxes), np.ones(people))
+        kept = rng.random(people) > 0.2
+        yield img, Detections(np.array(boxes)[kept].reshape(-1, 4), np.ones(int(kept.sum())))
 
 
-def test_step_6_adds_the_nodes_add_node_adds_one_by_one(monkeypatch):
-    """``update_matched``'s one ``add_visible_nodes`` call gives the graph ``add_node``
-    gives row by row. The reference here runs after the frame's confirmations, the step
-    reads an occluder's public id when it updates the person behind (as ``add_node`` did in
-    its loop): they differ only where the occluder is a tentative track confirmed later in
+def _add_node(memory, person, branch, box, parent, stage, rho) -> int:
+    """The definition: AddNodeToGraph of one branch, ``add_node`` as it was written."""
+    confirmed = person.confirmed
+    if branch.kind == VISIBLE:
+        kind, hypothesis = (VISIBLE if confirmed else TENTATIVE), None
+    else:
+        kind, hypothesis = (HYPOTHESIS if confirmed else TENTATIVE), branch.kind
+    occluder = None if branch.occluder is None else memory.public.get(branch.occluder)
+    return memory.graph.add_node(person.key, person.public_id, kind, hypothesis, list(box),
+                                 person.q, branch.x, branch.P, occluder, branch.depth, parent,
+                                 stage, rho)
+
+
+def test_steps_6_and_8_add_the_nodes_add_node_adds_one_by_one(monkeypatch):
+    """``update_matched``'s and ``prune``'s one ``add_nodes`` call each give the graph that
+    ``_add_node`` gives row by row. The reference here runs after step 6's confirmations,
+    the step reads an occluder's public id when it updates the person behind (as its loop
+    did): they differ only where the occluder is a tentative track confirmed later in
     that frame (-key in the step, its new id in the reference)."""
 
-    def one_by_one(memory, people, branches, boxes, occluders, parents, stages, rhos):
-        for person, b, box, parent, stage, rho in zip(people, branches, boxes, parents,
-                                                      stages, rhos):
-            b.node = add_node(memory, person, b, np.array(box), parent, stage, rho)
+    def one_by_one(memory, people, branches, boxes, parents, stages, rhos, occluders=None):
+        for row in zip(people, branches, boxes, parents, stages, rhos):
+            row[1].node = _add_node(memory, *row)
 
     def nodes(tracker):
         return [n for img, dets in _scene()
                 for n in (tracker.update(img, dets), tracker.graph_snapshot())[1]["nodes"]]
 
     fast = nodes(RetaTracker())
-    monkeypatch.setattr(steps_update, "add_visible_nodes", one_by_one)
+    monkeypatch.setattr(steps_update, "add_nodes", one_by_one)
+    monkeypatch.setattr(steps_hypotheses, "add_nodes", one_by_one)
     slow = nodes(RetaTracker())
     assert len(fast) == len(slow) > 100
     assert any(n["kind"] == "visible" and n["occluder"] >= 0 for n in fast)
+    assert any(n["kind"] == "hypothesis" for n in fast)
     moved = 0
     for a, b in zip(fast, slow):
         if a["occluder"] != b["occluder"]:
