@@ -34,12 +34,10 @@ def add_nodes(memory: Memory, people: list[Person], branches: list[Branch],
     if occluders is None:
         public = memory.public
         occluders = [None if b.occluder is None else public.get(b.occluder) for b in branches]
-    ids = [person.id for person in people]
     first = memory.graph.add_nodes(
-        [person.key for person in people],
-        [i if i > 0 else -person.key for i, person in zip(ids, people)],  # public_id
-        [TENTATIVE if i <= 0 else VISIBLE if b.kind == VISIBLE else HYPOTHESIS
-         for i, b in zip(ids, branches)],
+        [person.key for person in people], [person.public_id for person in people],
+        [(VISIBLE if b.kind == VISIBLE else HYPOTHESIS) if person.confirmed else TENTATIVE
+         for person, b in zip(people, branches)],
         [None if b.kind == VISIBLE else b.kind for b in branches], boxes,
         [person.q for person in people], [b.x for b in branches], [b.P for b in branches],
         occluders, [b.depth for b in branches], parents, stages, rhos)

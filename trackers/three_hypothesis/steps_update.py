@@ -38,9 +38,9 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         return Updated([], np.zeros((0, 4)), [], frozenset())
     matches = [A.matched[i] for i in keys]
     persons, p, in_front, rules = S.persons, V.p, D.in_front, setting.rules
-    hidden = np.array([person.id for person in persons], dtype=np.int64) > 0  # confirmed
+    hidden = np.array([person.confirmed for person in persons], dtype=bool)
     hidden[keys] = False  # and unmatched at t
-    confirmed = [persons[i].id > 0 for i in keys]
+    confirmed = [persons[i].confirmed for i in keys]
     idx = np.array([m.node for m in matches])
     visible_dets = [m.det for m in matches]
     dbox = V.boxes[visible_dets]
