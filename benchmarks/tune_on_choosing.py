@@ -1,5 +1,5 @@
-"""Outside trackers tuned on the real choosing sets (issue 35 item 4): each tracker's search
-space of its ``+experiment=tune_<name>`` (``hydra.sweeper.params``), Optuna TPE (sampler seed
+"""Trackers tuned on the real choosing sets (issue 35 item 4): the outside trackers and ours
+(reta, pbm: the same budget, rows beside their defaults), each tracker's search space of its ``+experiment=tune_<name>`` (``hydra.sweeper.params``), Optuna TPE (sampler seed
 0, ``--startup`` random start-up trials, the tracker's defaults enqueued as trial 0 where they
 lie in the space), the objective the mean IDF1 over the choosing sets of
 ``occbench.sweeps.generalisation`` (each set's mean over its seeds, as the table gives it;
@@ -43,18 +43,20 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from occbench.config.meta import shipped
 from occbench.sweeps import generalisation as G
 from occbench.sweeps.tune import defaults_of, search_space
 from shared_data import use_shared_data
 
-#: the tune experiment (its search space) of each outside tracker that can be tuned here
+#: the tune experiment (its search space) of each tracker that can be tuned here
 EXPERIMENT = {"norfair": "tune_norfair", "motpy": "tune_motpy", "ocsort": "tune_ocsort",
               "bytetrack": "tune_bytetrack", "boxmot_boosttrack": "tune_boosttrack",
-              "boxmot_botsort": "tune_botsort"}
+              "boxmot_botsort": "tune_botsort", "reta": "tune_reta", "pbm": "tune_pbm"}
 SUFFIX = "_tuned_real"
 #: each tuned row's colour in the views (``occbench.config.meta``: distinct from every tracker's)
 COLOURS = {"norfair": "#ce6dbd", "motpy": "#6b6ecf", "ocsort": "#5254a3",
-           "bytetrack": "#e7ba52", "boxmot_boosttrack": "#bd9e39", "boxmot_botsort": "#ad494a"}
+           "bytetrack": "#e7ba52", "boxmot_boosttrack": "#bd9e39", "boxmot_botsort": "#ad494a",
+           "reta": "#fd8d3c", "pbm": "#31a354"}
 METRIC = "IDF1"
 
 
@@ -189,8 +191,10 @@ def config_text(name: str, table: pd.DataFrame, sets: Sequence[G.EvalSet], start
         *textwrap.wrap(f"Per set: {per_set}.", 90, initial_indent="# ",
                        subsequent_indent="# "),
         "defaults:", f"  - {name}", "  - _self_"]
+    parent = shipped(name)  # ours stay ours (versus.md gives their verdicts), drawn as theirs
     node = OmegaConf.create({"meta": {"label": f"{name}{SUFFIX}", "colour": COLOURS[name],
-                                      "role": "outside", "style": "boxes"}})
+                                      "role": "ours" if parent.role == "ours" else "outside",
+                                      "style": parent.style if parent.role == "ours" else "boxes"}})
     for k, dist in dists.items():
         OmegaConf.update(node, k.removeprefix("tracker."), _value(dist, best[k]), force_add=True)
     return "\n".join(lines) + "\n" + OmegaConf.to_yaml(node)

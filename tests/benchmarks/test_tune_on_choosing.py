@@ -63,3 +63,41 @@ def test_a_longer_study_in_batches_begins_with_the_shorter_study(tmp_path, monke
     assert tuner.batch_sizes(16, 10) == [10, 6]
     with pytest.raises(SystemExit, match="do not make 40 trials"):
         tuner.batch_sizes(40, 10, [6, 20])
+
+
+def _scored_batch(batch, sets, out, data_root):
+    """A stand-in for the harness runs of any tracker: IDF1 a function of the trial's values."""
+    return pd.DataFrame([{"label": label, "set": s.name,
+                          "IDF1": sum(float(v) for v in p.values()) % 1.0}
+                         for label, (name, p) in batch.items() for s in sets])
+
+
+@pytest.mark.parametrize("name,paper", [("reta", "reta_paper"), ("pbm", "pbm_paper")])
+def test_ours_tuned_row_differs_from_its_defaults_only_in_the_tuned_keys(
+        name, paper, tmp_path, monkeypatch):
+    """Ours get the outside trackers' study: the written ``<name>_tuned_real`` keeps every
+    adaptation (every key but the searched ones) of ``<name>.yaml``, is one of ours with a
+    colour no shipped tracker has, and the paper mode takes nothing from it."""
+    from occbench.config.meta import shipped
+
+    monkeypatch.setattr(tuner, "run_batch", _scored_batch)
+    tuner.tune([name], [TINY], trials=3, startup=2, out=tmp_path)
+    (path,) = tuner.write_configs(tmp_path, [TINY], 2, folder=tmp_path)
+    node = OmegaConf.create(path.read_text())
+    assert list(node.defaults) == [name, "_self_"]
+    parent = G.compose([f"tracker={name}"]).tracker
+    tuned = OmegaConf.merge(parent, {k: v for k, v in node.items() if k != "defaults"})
+    keys = [k.removeprefix("tracker.") for k in tuner.space(name)]
+    for key in keys:  # only the searched keys are set, to the best trial's values
+        assert OmegaConf.select(tuned, key) == OmegaConf.select(node, key), key
+    for key in keys:
+        OmegaConf.update(tuned, key, OmegaConf.select(parent, key))
+    assert tuned.adaptations == parent.adaptations
+    assert OmegaConf.to_container(tuned.meta) != OmegaConf.to_container(parent.meta)
+    tuned.meta = parent.meta
+    assert tuned == parent  # nothing else differs
+    assert node.meta.role == "ours" and node.meta.style == shipped(name).style
+    colours = {shipped(p.stem).colour.lower() for p in (G.CONF / "tracker").glob("*.yaml")
+               if p.stem != f"{name}{tuner.SUFFIX}" and shipped(p.stem) is not None}
+    assert node.meta.colour.lower() not in colours
+    assert list(OmegaConf.load(G.CONF / "tracker" / f"{paper}.yaml").defaults) == [name, "_self_"]
