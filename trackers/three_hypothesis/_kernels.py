@@ -2,9 +2,9 @@
 histograms of the measurements' ellipses, one call per frame, and eq. 5's region
 similarity of the pairs of ellipses that meet (``region_overlap_pairs``, the integration of
 ``occlusion.region_overlaps``, tested bit for bit against ``features.region_similarity``),
-``blend``, the appearance update of ``rules.BlendVisible`` (tested against its numpy
-expression), ``blend_at``, the same reading p at its nonzero bins only (tested bit for bit
-against ``blend``), and ``line_misses``, the least-squares lines of
+``blend``, the appearance update q <- (1 - v) q + v p of ``rules.BlendVisible`` and
+``contact.MergedAppearance`` over histograms kept as their occupied bins (tested bit for bit
+against numpy's dense expression), and ``line_misses``, the least-squares lines of
 ``measured_line.MeasuredLine`` (tested bit for bit against ``measured_line._lines``).
 
 It computes what ``EllipseHistogrammer.measure``'s numpy and ``cv2.calcHist`` path did
@@ -28,9 +28,10 @@ import numpy as np
 
 @numba.njit(cache=True)
 def ellipse_histograms(frame: np.ndarray, snapped: np.ndarray, fg: np.ndarray, has_fg: bool,
-                       min_foreground: float, stride: int, bins: int, out: np.ndarray,
-                       occupied: np.ndarray) -> None:
-    """Eq. 1 of every box: p_u = |{pixels of S in bin u}| / |S|.
+                       min_foreground: float, stride: int, bins: int, nonzero: np.ndarray,
+                       values: np.ndarray, starts: np.ndarray, occupied: np.ndarray) -> int:
+    """Eq. 1 of every box: p_u = |{pixels of S in bin u}| / |S|, each p kept as its nonzero
+    bins (every other p_u is +0).
 
     Args:
         frame: (H, W, 3) uint8 image.
@@ -41,8 +42,12 @@ def ellipse_histograms(frame: np.ndarray, snapped: np.ndarray, fg: np.ndarray, h
             whole ellipse (a person the background model missed keeps a model).
         stride: count every stride-th row and column of the box's crop only.
         bins: bins per channel (a power of 2 up to 256).
-        out: (N, bins**3) float64, zero on entry: the histograms, written.
+        nonzero, values: (N bins**3,) int64 and float64: written, box k's nonzero bins in
+            increasing order and their p_u at [starts[k], starts[k + 1]).
+        starts: (N + 1,) int64, written.
         occupied: (bins**3,) bool, False on entry: set where some histogram is nonzero.
+    Returns:
+        starts[N], the entries written.
     """
     H, W = frame.shape[0], frame.shape[1]
     shift = 0
@@ -50,9 +55,11 @@ def ellipse_histograms(frame: np.ndarray, snapped: np.ndarray, fg: np.ndarray, h
         shift += 1
     # channel k's bin is its value >> shift; the joint bin (c0 bins + c1) bins + c2 in bits
     sh, sb, sb2 = np.uint64(shift), np.uint64(8 - shift), np.uint64(16 - 2 * shift)
-    counts = np.zeros(out.shape[1], np.int64)
+    counts = np.zeros(occupied.shape[0], np.int64)
+    used = 0
     span = np.empty((H, 2), np.int64)  # per image row of the box: its ellipse's columns [lo, hi)
     for k in range(snapped.shape[0]):
+        starts[k] = used
         x, y, w, h = snapped[k, 0], snapped[k, 1], snapped[k, 2], snapped[k, 3]
         r0, r1 = max(y, 0), min(y + h, H)
         c0, c1 = max(x, 0), min(x + w, W)
@@ -82,9 +89,13 @@ def ellipse_histograms(frame: np.ndarray, snapped: np.ndarray, fg: np.ndarray, h
             continue
         for u in range(counts.shape[0]):
             if counts[u]:
-                out[k, u] = counts[u] / float(n)  # eq. 1: / |S|
+                nonzero[used] = u
+                values[used] = counts[u] / float(n)  # eq. 1: / |S|
+                used += 1
                 occupied[u] = True
                 counts[u] = 0
+    starts[snapped.shape[0]] = used
+    return used
 
 
 @numba.njit(cache=True, inline="always")
@@ -187,31 +198,30 @@ def region_overlap_pairs(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.nd
 
 
 @numba.njit(cache=True)
-def blend(q: np.ndarray, p: np.ndarray, v: float) -> np.ndarray:
-    """A new (N,) q' = (1 - v) q + v p of float64 histograms q, p (N,) (``rules.BlendVisible``),
-    each bin as numpy's ``(1.0 - v) * q + v * p`` computes it: the same bits, one pass and
-    one array instead of three."""
-    out = np.empty_like(q)
+def blend(q_bins: np.ndarray, q: np.ndarray, p_bins: np.ndarray, p: np.ndarray,
+          v: float) -> tuple[np.ndarray, np.ndarray]:
+    """q' = (1 - v) q + v p (v > 0 finite) of two histograms kept as their bins (sorted,
+    distinct) and values, every other bin +0: q' over the union of the bins, each bin as
+    numpy's dense ``(1.0 - v) * q + v * p`` computes it. Where p is +0, v p_u is +0, so
+    w q_u + 0.0; where q is, w 0.0 + v p_u (no fast-math: both are kept as written, so a
+    -0 product turns +0 as in the dense sum). Returns (bins, values)."""
     w = 1.0 - v
-    for u in range(q.shape[0]):
-        out[u] = w * q[u] + v * p[u]
-    return out
-
-
-@numba.njit(cache=True)
-def blend_at(q: np.ndarray, p: np.ndarray, v: float, bins: np.ndarray) -> np.ndarray:
-    """``blend(q, p, v)`` of a p that is +0 outside ``bins`` (its nonzero bins, any order):
-    the same bits without reading p there. Outside them ``blend`` computes w q_u + v p_u
-    with v p_u = +0 (v > 0 finite), i.e. w q_u + 0.0, which this computes as written (no
-    fast-math: the + 0.0 is kept, so a -0 product gives +0 as there)."""
-    out = np.empty_like(q)
-    w = 1.0 - v
-    for u in range(q.shape[0]):
-        out[u] = w * q[u] + 0.0
-    for k in range(bins.shape[0]):
-        u = bins[k]
-        out[u] = w * q[u] + v * p[u]
-    return out
+    bins = np.empty(q_bins.shape[0] + p_bins.shape[0], np.int64)
+    out = np.empty(bins.shape[0])
+    i, j, k = 0, 0, 0
+    while i < q_bins.shape[0] or j < p_bins.shape[0]:
+        if j == p_bins.shape[0] or (i < q_bins.shape[0] and q_bins[i] < p_bins[j]):
+            bins[k], out[k] = q_bins[i], w * q[i] + 0.0
+            i += 1
+        elif i == q_bins.shape[0] or p_bins[j] < q_bins[i]:
+            bins[k], out[k] = p_bins[j], w * 0.0 + v * p[j]
+            j += 1
+        else:
+            bins[k], out[k] = q_bins[i], w * q[i] + v * p[j]
+            i += 1
+            j += 1
+        k += 1
+    return bins[:k], out[:k]
 
 
 @numba.njit(cache=True)

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.sparse import csr_array
 
 from occbench.trackers.common.spatial import row_entries
-from occbench.trackers.three_hypothesis.appearance import towards
+from occbench.trackers.three_hypothesis.appearance import Histogram, towards
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
     from occbench.trackers.three_hypothesis.values import Match
@@ -33,9 +33,8 @@ class MeasurementAppearance:
     uses_shares: ClassVar[bool] = False
     uses_partners: ClassVar[bool] = False
 
-    def update(self, q: np.ndarray, p: np.ndarray, own: float,
-               partner: np.ndarray | None = None, bins: np.ndarray | None = None
-               ) -> np.ndarray:
+    def update(self, q: Histogram, p: Histogram, own: float,
+               partner: Histogram | None = None) -> Histogram:
         return p
 
 
@@ -52,12 +51,11 @@ class MergedAppearance:
     uses_shares: ClassVar[bool] = True
     uses_partners: ClassVar[bool] = False
 
-    def update(self, q: np.ndarray, p: np.ndarray, own: float,
-               partner: np.ndarray | None = None, bins: np.ndarray | None = None
-               ) -> np.ndarray:
+    def update(self, q: Histogram, p: Histogram, own: float,
+               partner: Histogram | None = None) -> Histogram:
         if own >= 1.0:
             return p
-        return towards(q, p, own, bins) if own > 0 else q
+        return towards(q, p, own) if own > 0 else q
 
 
 @dataclass(frozen=True)
@@ -74,14 +72,13 @@ class UnmixedAppearance(MergedAppearance):
 
     uses_partners: ClassVar[bool] = True
 
-    def update(self, q: np.ndarray, p: np.ndarray, own: float,
-               partner: np.ndarray | None = None, bins: np.ndarray | None = None
-               ) -> np.ndarray:
+    def update(self, q: Histogram, p: Histogram, own: float,
+               partner: Histogram | None = None) -> Histogram:
         if own >= 1.0 or partner is None:
-            return MergedAppearance.update(self, q, p, own, bins=bins)
-        r = np.maximum(p - (1.0 - own) * partner, 0.0)
+            return MergedAppearance.update(self, q, p, own)
+        r = np.maximum(p.dense() - (1.0 - own) * partner.dense(), 0.0)  # dense: r.sum()'s order
         total = r.sum()
-        return towards(q, r / total, own) if own > 0 and total > 0 else q
+        return towards(q, Histogram.of(r / total), own) if own > 0 and total > 0 else q
 
 
 # --------------------------------------------------------------- 3.3.3: M of a person in front

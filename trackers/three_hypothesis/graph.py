@@ -16,11 +16,14 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, field
 from functools import partial
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from occbench.trackers.common.checks import require
+
+if TYPE_CHECKING:
+    from occbench.trackers.three_hypothesis.appearance import Histogram
 
 VISIBLE = "visible"
 TENTATIVE = "tentative"
@@ -38,7 +41,8 @@ class Node(NamedTuple):
         kind: VISIBLE, TENTATIVE or HYPOTHESIS.
         hypothesis: for hypothesis nodes 'velocity', 'occluder' or 'still', else None.
         box: [x, y, w, h] the region the ellipse S is inscribed in, pixels.
-        q: (bins,) colour histogram (eq. 1), shared with the person (frozen under occlusion).
+        q: colour histogram (eq. 1, ``appearance.Histogram``: its occupied bins), shared
+            with the person (frozen under occlusion).
         x: (8,) Kalman state (xc, yc, w, h, vx, vy, vw, vh); P: (8, 8) covariance (M).
         occluder: public id of the person this node is hidden behind, or None.
         depth: number of other people in front of this node (eq. 3), 0 = front.
@@ -52,7 +56,7 @@ class Node(NamedTuple):
     kind: str
     hypothesis: str | None
     box: list
-    q: np.ndarray
+    q: Histogram
     x: np.ndarray
     P: np.ndarray
     occluder: int | None

@@ -15,7 +15,7 @@ import numpy as np
 
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.geometry import iou_matrix
-from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, towards
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram, towards
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
     AppearanceAtContact,
@@ -143,8 +143,7 @@ class KeepAppearance:
 
     uses_visible_share: ClassVar[bool] = False
 
-    def update(self, q: np.ndarray, p: np.ndarray, visible: float,
-               bins: np.ndarray | None = None) -> np.ndarray:
+    def update(self, q: Histogram, p: Histogram, visible: float) -> Histogram:
         return q
 
 
@@ -156,10 +155,9 @@ class BlendVisible:
 
     uses_visible_share: ClassVar[bool] = True
 
-    def update(self, q: np.ndarray, p: np.ndarray, visible: float,
-               bins: np.ndarray | None = None) -> np.ndarray:
+    def update(self, q: Histogram, p: Histogram, visible: float) -> Histogram:
         if visible > 0:
-            return towards(q, p, visible, bins)  # (1 - v) q + v p, compiled
+            return towards(q, p, visible)  # (1 - v) q + v p, compiled
         return q
 
 

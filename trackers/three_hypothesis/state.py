@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram
 from occbench.trackers.three_hypothesis.graph import TrackingGraph
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle, Occlusion
 from occbench.trackers.three_hypothesis.rules import Rules
@@ -34,7 +34,7 @@ class Branch:
 @dataclass
 class Person:
     key: int
-    q: np.ndarray
+    q: Histogram  # appearance (eq. 1), its occupied bins
     Q: np.ndarray
     R: np.ndarray
     branches: list[Branch]

@@ -13,6 +13,7 @@ from scipy.sparse import csr_array
 
 from occbench.trackers.common.spatial import blocks, meeting_pairs
 from occbench.trackers.three_hypothesis._kernels import depth_orders
+from occbench.trackers.three_hypothesis.appearance import columns
 from occbench.trackers.three_hypothesis.association import Matches, associate
 from occbench.trackers.three_hypothesis.graph import VISIBLE
 from occbench.trackers.three_hypothesis.occlusion import region_overlap_values
@@ -75,9 +76,8 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
     entrants and the measurements left whose distance is within the gate: the same
     optimum as the whole frame's. ``pi``: pi^{t-1}, read where ``rules.region`` orders."""
     persons, support = S.persons, V.support
-    sqrt_q = np.sqrt(np.array([person.q[support] for person in persons]).reshape(
-        len(persons), len(support)))
-    sqrt_p = np.sqrt(np.array([h[support] for h in V.p]).reshape(len(V.boxes), len(support)))
+    sqrt_q = np.sqrt(columns([person.q for person in persons], support))  # (P, K)
+    sqrt_p = np.sqrt(columns(V.p, support))  # (D, K)
     R = np.array([person.R[0, 0] for person in persons])[S.owners]  # R = (sigma_z h)^2 I
     seen = (np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
             if rules.shape.uses_seen else None)  # visible nodes of t-1, for the shape rule

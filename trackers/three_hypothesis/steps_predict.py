@@ -26,9 +26,9 @@ def measure(image: np.ndarray, detections: Detections, foreground: np.ndarray | 
     keep = valid_boxes(detections.boxes) & (detections.scores >= min_score)
     boxes = detections.boxes[keep]
     scores = detections.scores[keep]
-    p, support, bins = histograms.measure(image, boxes, pixels.mask(foreground))
+    p, support = histograms.measure(image, boxes, pixels.mask(foreground))
     height, width = image.shape[:2]
-    return Measurements(boxes, scores, p, support, bins, foreground, width, height)
+    return Measurements(boxes, scores, p, support, foreground, width, height)
 
 
 def predict(persons: list[Person], motion: CentreState | BoxState) -> Predictions:

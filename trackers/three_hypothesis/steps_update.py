@@ -65,19 +65,16 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     scores = V.scores.tolist()
     absorbed: set[int] = set()
     shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
-    nonzero, starts = V.bins[0], V.bins[1].tolist()  # p[d]'s nonzero bins (V.bins)
     branches, shapes, occluders = [], [], []  # their nodes' columns (one add_nodes call)
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
-        bins = nonzero[starts[d]:starts[d + 1]]
         if not behind_r[r]:
             person.q = rules.appearance_front.update(
-                person.q, p[d], shares[r], persons[partners[r]].q if partners[r] >= 0 else None,
-                bins)
+                person.q, p[d], shares[r], persons[partners[r]].q if partners[r] >= 0 else None)
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
-            person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r], bins)
+            person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
         person.merged = shares[r] < 1.0  # read by rules.split at t + 1
         if confirmed[r] or d not in empty_dets:
             person.hits += 1

@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.sparse import csr_array
 
+from occbench.trackers.three_hypothesis.appearance import Histogram
 from occbench.trackers.three_hypothesis.state import Branch, Person
 
 
@@ -25,9 +26,8 @@ class Measurements:
 
     boxes: np.ndarray  # (D, 4) the detections kept
     scores: np.ndarray  # (D,) their detection scores
-    p: list[np.ndarray]  # D histograms over their ellipses (eq. 1)
+    p: list[Histogram]  # D histograms over their ellipses (eq. 1), as their occupied bins
     support: np.ndarray  # (K,) bins where some p is nonzero
-    bins: tuple[np.ndarray, np.ndarray]  # p[d]'s nonzero bins bins[0][bins[1][d]:bins[1][d + 1]]
     foreground: np.ndarray | None  # (H, W) mask or label image
     width: int
     height: int

@@ -11,7 +11,7 @@ from scipy.sparse import csr_array
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.records import Detections
 from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
-from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
     AppearanceAtSplit,
@@ -52,13 +52,12 @@ def test_own_share_is_the_measured_region_no_hidden_partner_covers():
 
 
 def test_merged_measurement_moves_q_by_the_own_share_only():
-    q, p = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    q, p = Histogram.of(np.array([1.0, 0.0])), Histogram.of(np.array([0.0, 1.0]))
     paper, ours = MeasurementAppearance(), MergedAppearance()
     assert paper.update(q, p, 0.0) is p  # the paper: q = p whoever else is inside
     assert ours.update(q, p, 1.0) is p
     assert ours.update(q, p, 0.0) is q
-    assert ours.update(q, p, 0.25).tolist() == [0.75, 0.25]
-    assert ours.update(q, p, 0.25, bins=np.array([1])).tolist() == [0.75, 0.25]  # p's bins
+    assert ours.update(q, p, 0.25).dense().tolist() == [0.75, 0.25]
     h = EllipseHistogrammer()
     assert isinstance(build_rules(Adaptations.paper(), h).appearance_front, MeasurementAppearance)
     assert isinstance(build_rules(Adaptations(merged_appearance=True), h).appearance_front,
@@ -273,13 +272,13 @@ def test_merged_measurement_unmixed_takes_out_the_hidden_partners_colours():
     red (the person's) and green (the partner's, q_j) half and half. The paper takes p, the
     merged form moves q halfway to p (a quarter green), the unmixed form takes the partner's
     half out and keeps q red; with no partner or own 1 it is the merged form."""
-    q, q_j = np.array([0.8, 0.0, 0.2]), np.array([0.0, 1.0, 0.0])
-    p = np.array([0.5, 0.5, 0.0])
+    q, q_j = Histogram.of(np.array([0.8, 0.0, 0.2])), Histogram.of(np.array([0.0, 1.0, 0.0]))
+    p = Histogram.of(np.array([0.5, 0.5, 0.0]))
     assert MeasurementAppearance().update(q, p, 0.5, q_j) is p
-    assert np.allclose(MergedAppearance().update(q, p, 0.5, q_j), [0.65, 0.25, 0.1])
-    assert np.allclose(UnmixedAppearance().update(q, p, 0.5, q_j), [0.9, 0.0, 0.1])
-    assert np.array_equal(UnmixedAppearance().update(q, p, 0.5, None),
-                          MergedAppearance().update(q, p, 0.5))
+    assert np.allclose(MergedAppearance().update(q, p, 0.5, q_j).dense(), [0.65, 0.25, 0.1])
+    assert np.allclose(UnmixedAppearance().update(q, p, 0.5, q_j).dense(), [0.9, 0.0, 0.1])
+    assert np.array_equal(UnmixedAppearance().update(q, p, 0.5, None).dense(),
+                          MergedAppearance().update(q, p, 0.5).dense())
     assert UnmixedAppearance().update(q, p, 1.0, q_j) is p
     assert UnmixedAppearance().update(q, p, 0.0, q_j) is q  # wholly the partner's: kept
     h = EllipseHistogrammer()
@@ -327,7 +326,7 @@ def _walker_colours_after_passing(unmixed: bool) -> tuple[float, float]:
         union = np.array([x0, y0, x1 - x0, y1 - y0])
         dets = [p_box, q_box] if t < 22 else [union] if t < 34 else [p_box]
         if t == 34:
-            before = {p.id: p.q.copy() for p in tracker.memory.persons if p.confirmed}
+            before = {p.id: p.q.dense() for p in tracker.memory.persons if p.confirmed}
         tracker.update(img, Detections(np.array(dets), np.ones(len(dets))))
     own_p = tracker.histograms(img, p_box[None])[0]
     rho = {i: float(np.sqrt(q) @ np.sqrt(own_p)) for i, q in before.items()}

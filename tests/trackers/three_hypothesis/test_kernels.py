@@ -56,14 +56,13 @@ def test_eq1_kernel_equals_the_numpy_reading(stride, bins):
     labels = (rng.random((90, 120)) < 0.5) * rng.integers(1, 5, (90, 120))  # a label image
     for fg in (None, labels != 0, labels.astype(np.int32), np.zeros((90, 120), bool)):
         hist = EllipseHistogrammer(bins=bins, min_foreground=0.3, stride=stride)
-        p, support, (nonzero, starts) = hist.measure(frame, boxes, fg)
+        p, support = hist.measure(frame, boxes, fg)
         ref, ref_support = _reference(frame, boxes, fg, bins, 0.3, stride)
-        assert np.array(p).tobytes() == ref.tobytes()
+        assert np.array([h.dense() for h in p]).tobytes() == ref.tobytes()
         assert support.tolist() == ref_support.tolist()
-        assert len({id(h) for h in p}) == len(p)  # one array each
-        assert len(starts) == len(p) + 1
-        for h, a, b in zip(p, starts[:-1], starts[1:]):  # each p's own nonzero bins
-            assert nonzero[a:b].tolist() == np.flatnonzero(h).tolist()
+        for h, row in zip(p, ref):  # each p as its own nonzero bins, in order
+            assert h.bins.tolist() == np.flatnonzero(row).tolist() and h.size == bins**3
+            assert h.values.tobytes() == row[h.bins].tobytes()
 
 
 def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
@@ -73,8 +72,8 @@ def test_eq1_kernel_equals_the_definition_and_takes_no_boxes():
     fg = rng.random((60, 80)) < 0.7
     got = EllipseHistogrammer(min_foreground=0.0)(frame, boxes, fg)
     np.testing.assert_array_equal(got, ellipse_histograms(frame, boxes, mask=fg))
-    p, support, (nonzero, starts) = EllipseHistogrammer().measure(frame, np.zeros((0, 4)))
-    assert p == [] and len(support) == 0 and len(nonzero) == 0 and starts.tolist() == [0]
+    p, support = EllipseHistogrammer().measure(frame, np.zeros((0, 4)))
+    assert p == [] and len(support) == 0
 
 
 def test_eq5_kernel_has_the_bits_of_the_definition():
@@ -94,24 +93,12 @@ def test_eq5_kernel_has_the_bits_of_the_definition():
         assert got.tobytes() == region_similarity(a, b, samples=(12, 24)[k % 2]).tobytes()
 
 
-def test_blend_kernel_has_the_bits_of_the_numpy_expression():
-    from occbench.trackers.three_hypothesis._kernels import blend
-
-    rng = np.random.default_rng(11)
-    for n in (0, 1, 7, 4096):
-        q, p = rng.random(n), rng.random(n)
-        q[: n // 3] = 0.0  # bins empty in q, in p, in both
-        p[n // 4 : n // 2] = 0.0
-        for v in (1e-9, 0.3, 0.5, 1.0, float(rng.random())):
-            got = blend(q, p, v)
-            assert got is not q and got.tobytes() == ((1.0 - v) * q + v * p).tobytes()
-
-
-def test_blend_over_the_measurements_bins_has_the_bits_of_the_dense_blend():
-    """``blend_at`` (p read at its nonzero bins only) against ``blend`` and numpy's
-    expression: random sparse histograms, empty ones, disjoint and equal supports, ties
-    (q = p), a q holding -0 (its product is +0 in both) and p's bins given unsorted."""
-    from occbench.trackers.three_hypothesis._kernels import blend, blend_at
+def test_blend_over_the_occupied_bins_has_the_bits_of_the_dense_numpy_expression():
+    """``appearance.towards`` (``_kernels.blend`` over the bins q or p occupies) against
+    numpy's dense ``(1.0 - v) * q + v * p``, bit for bit once made dense: random sparse and
+    dense histograms, empty ones, disjoint and equal supports, ties (q = p), a q holding -0
+    (its product is +0 in both), one bin, v from 1e-9 to 1."""
+    from occbench.trackers.three_hypothesis.appearance import Histogram, towards
 
     rng = np.random.default_rng(12)
 
@@ -125,15 +112,18 @@ def test_blend_over_the_measurements_bins_has_the_bits_of_the_dense_blend():
              for _ in range(40)]
     q = sparse(n, 16)
     disjoint = np.where(q > 0, 0.0, sparse(n, 20))
+    dense = rng.random(7)
+    dense[:2] = 0.0
     cases += [(np.zeros(n), np.zeros(n)), (np.zeros(n), sparse(n, 7)), (q, np.zeros(n)),
-              (q, disjoint), (q, q.copy()), (-np.zeros(n), sparse(n, 5)), (np.zeros(1), np.ones(1))]
+              (q, disjoint), (q, q.copy()), (-np.zeros(n), sparse(n, 5)),
+              (np.zeros(1), np.ones(1)), (dense, rng.random(7)), (rng.random(7), dense)]
     for q, p in cases:
-        bins = np.flatnonzero(p)
         for v in (1e-9, 0.25, 0.5, 1.0, float(rng.random())):
-            want = blend(q, p, v)
-            assert want.tobytes() == ((1.0 - v) * q + v * p).tobytes()
-            assert blend_at(q, p, v, bins).tobytes() == want.tobytes()
-            assert blend_at(q, p, v, bins[::-1].copy()).tobytes() == want.tobytes()
+            want = (1.0 - v) * q + v * p
+            got = towards(Histogram.of(q), Histogram.of(p), v)
+            assert got.dense().tobytes() == want.tobytes()
+            assert (np.diff(got.bins) > 0).all()  # sorted, distinct
+            assert got.bins.tolist() == np.flatnonzero((q != 0) | (p != 0)).tolist()
 
 
 def test_eq3_kernel_gives_the_verdicts_of_depth_order():

@@ -24,7 +24,7 @@ from occbench.trackers.three_hypothesis import (
     Occlusion,
     RetaTracker,
 )
-from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, snap_boxes
+from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, columns, snap_boxes
 from occbench.trackers.three_hypothesis.association import _hungarian, _person_costs, associate
 from occbench.trackers.three_hypothesis.features import ellipse_histograms, region_similarity
 from occbench.trackers.three_hypothesis.graph import TrackingGraph
@@ -73,17 +73,18 @@ def test_histogram_uses_foreground_pixels_only_when_enough():
     np.testing.assert_array_equal(h(frame, box, tiny), h(frame, box))
 
 
-def test_measure_gives_one_histogram_array_each_and_their_support():
+def test_measure_gives_one_histogram_each_and_their_support():
     rng = np.random.default_rng(4)
     frame = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8) // 64 * 64  # few colours
     boxes = np.array([[10.0, 5.0, 30.0, 60.0], [70.0, 20.0, 40.0, 50.0], [200.0, 0, 10, 10]])
     h = EllipseHistogrammer()
-    p, support, _ = h.measure(frame, boxes)
-    assert len(p) == 3 and all(row.shape == (4096,) for row in p)
-    assert not np.shares_memory(p[0], p[1])
-    np.testing.assert_array_equal(np.array(p), h(frame, boxes))
-    np.testing.assert_array_equal(support, np.flatnonzero(np.array(p).any(axis=0)))
-    assert 0 < len(support) <= 4**3 and not p[2].any()  # box 3 lies outside the frame
+    p, support = h.measure(frame, boxes)
+    dense = np.array([row.dense() for row in p])
+    assert len(p) == 3 and all(row.size == 4096 for row in p)
+    np.testing.assert_array_equal(dense, h(frame, boxes))
+    np.testing.assert_array_equal(support, np.flatnonzero(dense.any(axis=0)))
+    assert 0 < len(support) <= 4**3 and len(p[2].bins) == 0  # box 3 lies outside the frame
+    np.testing.assert_array_equal(columns(p, support), dense[:, support])
 
 
 def test_region_overlaps_equal_the_front_end_definition_exactly():
