@@ -195,6 +195,11 @@ class Adaptations:
             at half resolution, then at full resolution around that best
             (``template_match.PyramidMatch``; paper: every position of the window). A
             shortcut for speed (issue 38), not exact.
+        large_head_pyramid: with ``pyramid_template`` off, a head template wider than this
+            many pixels is matched as ``pyramid_template`` matches it, narrower ones at
+            every position (``template_match.PyramidMatch(min_width)``; 0: off, the
+            paper's match everywhere). A shortcut for 1920x1080 speed (issue 38), exact
+            wherever heads are at most that wide.
     """
 
     model_spread: float = 4.5
@@ -230,6 +235,7 @@ class Adaptations:
     weak_ranked: bool = False
     coarse_search: bool = False
     pyramid_template: bool = False
+    large_head_pyramid: int = 0
     fold_twins: int = 0
     fold_twins_own: float = 0.0
     measured_velocity: bool = False
@@ -248,7 +254,8 @@ class Adaptations:
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
-                 reupdate=self.reupdate, fold_twins=self.fold_twins)
+                 reupdate=self.reupdate, fold_twins=self.fold_twins,
+                 large_head_pyramid=self.large_head_pyramid)
         unit("adaptations", fold_twins_own=self.fold_twins_own)
         require("adaptations.fold_twins_own", self.fold_twins_own == 0 or self.fold_twins > 0,
                 "needs adaptations.fold_twins > 0", self.fold_twins_own)
@@ -295,7 +302,7 @@ class Adaptations:
                                        "reported_by_record", "lone_shrink_narrow"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
-                      "reupdate": int, "fold_twins": int})
+                      "reupdate": int, "fold_twins": int, "large_head_pyramid": int})
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -311,7 +318,8 @@ class Adaptations:
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
-                   coarse_search=False, pyramid_template=False, fold_twins=0, fold_twins_own=0.0,
+                   coarse_search=False, pyramid_template=False, large_head_pyramid=0,
+                   fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False)

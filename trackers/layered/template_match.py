@@ -1,7 +1,8 @@
 """PBM 4.1's head-template match in multiple-response pruning, as the paper does it
 (``ExactMatch``: every position of the window, ``search.match_head_template``) and as
 ``adaptations.pyramid_template`` does it (``PyramidMatch``, ours: coarse to fine, for speed;
-not exact). Each returns the best top-left corner (2,) float64 (x, y) and its normalised
+not exact), or ``adaptations.large_head_pyramid`` (``PyramidMatch`` for templates wider
+than a number of pixels only, exact below it). Each returns the best top-left corner (2,) float64 (x, y) and its normalised
 correlation (TM_CCOEFF_NORMED), -1 when the window cannot hold the template."""
 
 from __future__ import annotations
@@ -27,11 +28,19 @@ class PyramidMatch:
     within ``REFINE`` pixels of the coarse best (doubled); the correlation returned is that
     full-resolution one. A window of fewer than ``MIN_POSITIONS`` positions, or a template
     under ``MIN_SIDE`` pixels a side, is matched exactly (``match_head_template``). The
-    chosen corner may differ from the exact match where the correlation has several peaks."""
+    chosen corner may differ from the exact match where the correlation has several peaks.
+
+    Args:
+        min_width: a template at most this many pixels wide is matched exactly too
+            (``adaptations.large_head_pyramid``; 0: every template above ``MIN_SIDE``).
+    """
 
     REFINE = 2
     MIN_POSITIONS = 400
     MIN_SIDE = 8
+
+    def __init__(self, min_width: int = 0) -> None:
+        self.min_width = int(min_width)
 
     def __call__(self, image: np.ndarray, template: np.ndarray, centre, radius: float
                  ) -> tuple[np.ndarray, float]:
@@ -42,7 +51,7 @@ class PyramidMatch:
             return np.asarray(centre, dtype=np.float64), -1.0
         r0, r1, c0, c1 = window
         ny, nx = r1 - r0 - th + 1, c1 - c0 - tw + 1  # positions of the exact match
-        if ny * nx < self.MIN_POSITIONS or min(th, tw) < self.MIN_SIDE:
+        if ny * nx < self.MIN_POSITIONS or min(th, tw) < self.MIN_SIDE or tw <= self.min_width:
             return match_head_template(image, grey, centre, radius)
         region = grey_region(image, r0, r1, c0, c1)
         coarse = cv2.matchTemplate(cv2.pyrDown(region), cv2.pyrDown(grey), cv2.TM_CCOEFF_NORMED)
@@ -55,6 +64,10 @@ class PyramidMatch:
         return np.array([c0 + x0 + fx, r0 + y0 + fy], dtype=np.float64), float(best)
 
 
-def template_matcher(pyramid: bool) -> ExactMatch | PyramidMatch:
-    """``adaptations.pyramid_template``'s strategy."""
-    return PyramidMatch() if pyramid else ExactMatch()
+def template_matcher(pyramid: bool, large_head: int = 0) -> ExactMatch | PyramidMatch:
+    """The strategy of ``adaptations.pyramid_template`` (every template) or, when that is
+    off, of ``adaptations.large_head_pyramid`` (templates wider than ``large_head`` pixels;
+    0: off)."""
+    if pyramid:
+        return PyramidMatch()
+    return PyramidMatch(min_width=large_head) if large_head > 0 else ExactMatch()

@@ -5,6 +5,7 @@ matched at half resolution, then at full resolution around that best; the exact 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.params import MatchParams, PruneParams
@@ -55,3 +56,33 @@ def test_pyramid_template_is_an_adaptation_off_by_default_and_in_paper_mode():
                                              Adaptations(pyramid_template=on)).matcher)
             for on in (False, True)}
     assert pick == {False: ExactMatch, True: PyramidMatch}
+
+
+def test_large_head_pyramid_matches_narrow_templates_exactly_and_wide_ones_coarse_to_fine():
+    frame = _frame(3)
+    matcher = PyramidMatch(min_width=30)
+    rng = np.random.default_rng(4)
+    told = {True: False, False: False}  # a case on each side where the two matches differ
+    for width, exact_expected in ((24, True), (30, True), (31, False), (48, False)):
+        x, y = int(rng.integers(60, 500)), int(rng.integers(60, 380))
+        template = frame[y:y + 12, x:x + width].copy()
+        centre, radius = (x + 3, y - 4), 30.0
+        tl, corr = matcher(frame, template, centre, radius)
+        exact = match_head_template(frame, template, centre, radius)
+        pyramid = PyramidMatch()(frame, template, centre, radius)
+        want = exact if exact_expected else pyramid
+        assert tl.tolist() == want[0].tolist() and corr == want[1]
+        told[exact_expected] |= (exact[0].tolist(), exact[1]) != (pyramid[0].tolist(), pyramid[1])
+    assert told == {True: True, False: True}
+
+
+def test_large_head_pyramid_is_an_adaptation_off_by_default_and_in_paper_mode():
+    assert Adaptations().large_head_pyramid == 0 == Adaptations.paper().large_head_pyramid
+    build = lambda **kw: MultipleResponsePruning(MatchParams(), PruneParams(), Adaptations(**kw)).matcher
+    assert type(build()) is ExactMatch
+    wide = build(large_head_pyramid=48)
+    assert type(wide) is PyramidMatch and wide.min_width == 48
+    both = build(pyramid_template=True, large_head_pyramid=48)
+    assert type(both) is PyramidMatch and both.min_width == 0
+    with pytest.raises(ValueError, match="large_head_pyramid"):
+        Adaptations(large_head_pyramid=-1)
