@@ -200,6 +200,10 @@ class Adaptations:
             every position (``template_match.PyramidMatch(min_width)``; 0: off, the
             paper's match everywhere). A shortcut for 1920x1080 speed (issue 38), exact
             wherever heads are at most that wide.
+        large_head_peaks: with ``large_head_pyramid``, the coarse level's this many best
+            peaks are refined at full resolution (within 3 pixels each when more than one;
+            ``PyramidMatch.peaks``), the best full-resolution score winning; 1: the coarse
+            best alone, within 2 pixels, as ``pyramid_template``.
     """
 
     model_spread: float = 4.5
@@ -236,6 +240,7 @@ class Adaptations:
     coarse_search: bool = False
     pyramid_template: bool = False
     large_head_pyramid: int = 0
+    large_head_peaks: int = 1
     fold_twins: int = 0
     fold_twins_own: float = 0.0
     measured_velocity: bool = False
@@ -256,6 +261,7 @@ class Adaptations:
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
                  reupdate=self.reupdate, fold_twins=self.fold_twins,
                  large_head_pyramid=self.large_head_pyramid)
+        at_least("adaptations", 1, large_head_peaks=self.large_head_peaks)
         unit("adaptations", fold_twins_own=self.fold_twins_own)
         require("adaptations.fold_twins_own", self.fold_twins_own == 0 or self.fold_twins > 0,
                 "needs adaptations.fold_twins > 0", self.fold_twins_own)
@@ -302,7 +308,8 @@ class Adaptations:
                                        "reported_by_record", "lone_shrink_narrow"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
-                      "reupdate": int, "fold_twins": int, "large_head_pyramid": int})
+                      "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
+                      "large_head_peaks": int})
 
     @classmethod
     def paper(cls) -> Adaptations:
@@ -318,7 +325,7 @@ class Adaptations:
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
-                   coarse_search=False, pyramid_template=False, large_head_pyramid=0,
+                   coarse_search=False, pyramid_template=False, large_head_pyramid=0, large_head_peaks=1,
                    fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,

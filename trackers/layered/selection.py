@@ -129,7 +129,8 @@ class MultipleResponsePruning:
         self.claims = RivalClaims() if adaptations.rival_claims else OwnRow()
         self.weak = RankedAtThreshold() if adaptations.weak_ranked else AtThreshold()
         self.matcher = template_matcher(adaptations.pyramid_template,  # PBM 4.1's match
-                                        adaptations.large_head_pyramid)
+                                        adaptations.large_head_pyramid,
+                                        adaptations.large_head_peaks)
 
     def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray) -> None:
         """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up

@@ -86,3 +86,29 @@ def test_large_head_pyramid_is_an_adaptation_off_by_default_and_in_paper_mode():
     assert type(both) is PyramidMatch and both.min_width == 0
     with pytest.raises(ValueError, match="large_head_pyramid"):
         Adaptations(large_head_pyramid=-1)
+
+
+def test_large_head_peaks_refines_the_coarse_levels_next_peaks_too():
+    """Two copies of a 16 x 50 head: B with a pixel checkerboard (gone at half resolution,
+    so the coarse best) and A with a ramp (the exact best). One refined peak keeps B, three
+    find A; one peak is pyramid_template's match, bit for bit."""
+    frame = _frame(6)
+    template = frame[200:216, 300:350].copy()
+    yy, xx = np.mgrid[0:16, 0:50]
+    scene = frame.copy()
+    checker = (((yy + xx) % 2) * 2 - 1)[..., None] * 60.0
+    scene[100:116, 100:150] = np.clip(template + checker, 0, 255).astype(np.uint8)
+    scene[100:116, 160:210] = np.clip(template + (xx[..., None] - 25) * 1.6, 0, 255).astype(np.uint8)
+    exact_tl, exact = match_head_template(scene, template, (130, 100), 45.0)
+    one_tl, one = PyramidMatch(min_width=48, peaks=1)(scene, template, (130, 100), 45.0)
+    three_tl, three = PyramidMatch(min_width=48, peaks=3)(scene, template, (130, 100), 45.0)
+    assert exact_tl.tolist() == three_tl.tolist() == [160, 100] and one_tl.tolist() == [100, 100]
+    assert abs(three - exact) < 1e-4 and one < 0.5
+    plain_tl, plain = PyramidMatch()(scene, template, (130, 100), 45.0)
+    assert plain_tl.tolist() == one_tl.tolist() and plain == one
+    assert Adaptations().large_head_peaks == 1 == Adaptations.paper().large_head_peaks
+    chosen = MultipleResponsePruning(MatchParams(), PruneParams(),
+                                     Adaptations(large_head_pyramid=48, large_head_peaks=3)).matcher
+    assert (chosen.min_width, chosen.peaks) == (48, 3)
+    with pytest.raises(ValueError, match="large_head_peaks"):
+        Adaptations(large_head_peaks=0)
