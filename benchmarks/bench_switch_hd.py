@@ -7,7 +7,7 @@ synthetic, and the seeds must be ones nobody chose anything on (>= 1000; the pro
 on 0-15 and 100).
 
     .venv/bin/python benchmarks/bench_switch_hd.py adaptations.large_head_pyramid=48 \\
-        [--tracker pbm] [--people 60 150] [--seeds 1000 1001 1002 1003 1004] [--size 1920x1080]
+        [adaptations.large_head_peaks=3 ...] [--tracker pbm] [--people 60 150] [--seeds 1000 1001 1002 1003 1004] [--size 1920x1080]
         [--length 150] [--miss 0.3] [--out DIR]
 
 Run it niced on a shared machine (``nice -n 10``).
@@ -46,20 +46,21 @@ def crowd_set(people: int, size: tuple[int, int], seeds: list[int], length: int,
                       f"detector.miss_rate={miss}"), tuple(seeds))
 
 
-def trackers(name: str, switch: str) -> dict:
-    """``name`` at its defaults and with ``switch`` (a dotted ``key=value`` of its config)."""
+def trackers(name: str, switches: list[str]) -> dict:
+    """``name`` at its defaults and with ``switches`` (dotted ``key=value``s of its config)."""
     base = G.compose([f"tracker={name}"]).tracker
-    key, _, value = switch.partition("=")
-    if OmegaConf.select(base, key, default=None) is None:
-        raise SystemExit(f"occbench: {switch}: conf/tracker/{name}.yaml has no key {key}")
-    changed = OmegaConf.merge(base, OmegaConf.from_dotlist([switch]))
+    for switch in switches:
+        key = switch.partition("=")[0]
+        if OmegaConf.select(base, key, default=None) is None:
+            raise SystemExit(f"occbench: {switch}: conf/tracker/{name}.yaml has no key {key}")
+    changed = OmegaConf.merge(base, OmegaConf.from_dotlist(list(switches)))
     return {name: base, f"{name}+switch": changed}
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("switch", help="key=value of the tracker's config, e.g. "
-                    "adaptations.large_head_pyramid=48")
+    ap.add_argument("switch", nargs="+", help="key=value of the tracker's config, e.g. "
+                    "adaptations.large_head_pyramid=48; several: all set in the switch row")
     ap.add_argument("--tracker", default="pbm")
     ap.add_argument("--people", type=int, nargs="+", default=[60, 150])
     ap.add_argument("--seeds", type=int, nargs="+", default=[1000, 1001, 1002, 1003, 1004])
@@ -86,7 +87,7 @@ def main(argv=None) -> int:
     wide = table.pivot_table(index=["set", "seed"], columns="tracker", values=METRICS)
     print(wide.round(4).to_string())
     means = table.groupby(["set", "tracker"], sort=False)[METRICS].mean().round(4)
-    print(f"\nseed means ({args.switch} against {args.tracker}'s defaults):\n{means.to_string()}")
+    print(f"\nseed means ({' '.join(args.switch)} against {args.tracker}'s defaults):\n{means.to_string()}")
     print(f"\nwritten: {out / 'switch_hd.csv'}")
     return 0
 
