@@ -7,8 +7,9 @@ synthetic, and the seeds must be ones nobody chose anything on (>= 1000; the pro
 on 0-15 and 100).
 
     .venv/bin/python benchmarks/bench_switch_hd.py adaptations.large_head_pyramid=48 \\
-        [adaptations.large_head_peaks=3 ...] [--tracker pbm] [--people 60 150] [--seeds 1000 1001 1002 1003 1004] [--size 1920x1080]
-        [--length 150] [--miss 0.3] [--out DIR]
+        [adaptations.large_head_peaks=3 ...] [--tracker pbm] [--people 60 150]
+        [--seeds 1000 1001 1002 1003 1004] [--size 1920x1080] [--length 150] [--miss 0.3]
+        [--out DIR]
 
 Run it niced on a shared machine (``nice -n 10``).
 """
@@ -72,7 +73,8 @@ def main(argv=None) -> int:
     os.chdir(ROOT)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     configs = trackers(args.tracker, args.switch)
-    out = args.out or ROOT / "results" / "switch_hd" / dt.datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
+    stamp = dt.datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
+    out = args.out or ROOT / "results" / "switch_hd" / stamp
     rows = []
     for people in args.people:
         s = crowd_set(people, args.size, args.seeds, args.length, args.miss)
@@ -87,7 +89,8 @@ def main(argv=None) -> int:
     wide = table.pivot_table(index=["set", "seed"], columns="tracker", values=METRICS)
     print(wide.round(4).to_string())
     means = table.groupby(["set", "tracker"], sort=False)[METRICS].mean().round(4)
-    print(f"\nseed means ({' '.join(args.switch)} against {args.tracker}'s defaults):\n{means.to_string()}")
+    print(f"\nseed means ({' '.join(args.switch)} against {args.tracker}'s defaults):")
+    print(means.to_string())
     print(f"\nwritten: {out / 'switch_hd.csv'}")
     return 0
 

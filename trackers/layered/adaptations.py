@@ -325,8 +325,8 @@ class Adaptations:
                    hidden_evidence=None, rival_match=0.0, early_confirm=0, reupdate=0,
                    contested_template=0.0, rival_claims=False,
                    leaving_unreported=-1.0, weak_ranked=False,
-                   coarse_search=False, pyramid_template=False, large_head_pyramid=0, large_head_peaks=1,
-                   fold_twins=0, fold_twins_own=0.0,
+                   coarse_search=False, pyramid_template=False, large_head_pyramid=0,
+                   large_head_peaks=1, fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False)

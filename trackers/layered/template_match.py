@@ -2,8 +2,9 @@
 (``ExactMatch``: every position of the window, ``search.match_head_template``) and as
 ``adaptations.pyramid_template`` does it (``PyramidMatch``, ours: coarse to fine, for speed;
 not exact), or ``adaptations.large_head_pyramid`` (``PyramidMatch`` for templates wider
-than a number of pixels only, exact below it). Each returns the best top-left corner (2,) float64 (x, y) and its normalised
-correlation (TM_CCOEFF_NORMED), -1 when the window cannot hold the template."""
+than a number of pixels only, exact below it). Each returns the best top-left corner (2,)
+float64 (x, y) and its normalised correlation (TM_CCOEFF_NORMED), -1 when the window cannot
+hold the template."""
 
 from __future__ import annotations
 

@@ -78,7 +78,9 @@ def test_large_head_pyramid_matches_narrow_templates_exactly_and_wide_ones_coars
 
 def test_large_head_pyramid_is_an_adaptation_off_by_default_and_in_paper_mode():
     assert Adaptations().large_head_pyramid == 0 == Adaptations.paper().large_head_pyramid
-    build = lambda **kw: MultipleResponsePruning(MatchParams(), PruneParams(), Adaptations(**kw)).matcher
+    def build(**kw):
+        return MultipleResponsePruning(MatchParams(), PruneParams(), Adaptations(**kw)).matcher
+
     assert type(build()) is ExactMatch
     wide = build(large_head_pyramid=48)
     assert type(wide) is PyramidMatch and wide.min_width == 48
@@ -98,7 +100,8 @@ def test_large_head_peaks_refines_the_coarse_levels_next_peaks_too():
     scene = frame.copy()
     checker = (((yy + xx) % 2) * 2 - 1)[..., None] * 60.0
     scene[100:116, 100:150] = np.clip(template + checker, 0, 255).astype(np.uint8)
-    scene[100:116, 160:210] = np.clip(template + (xx[..., None] - 25) * 1.6, 0, 255).astype(np.uint8)
+    ramp = (xx[..., None] - 25) * 1.6
+    scene[100:116, 160:210] = np.clip(template + ramp, 0, 255).astype(np.uint8)
     exact_tl, exact = match_head_template(scene, template, (130, 100), 45.0)
     one_tl, one = PyramidMatch(min_width=48, peaks=1)(scene, template, (130, 100), 45.0)
     three_tl, three = PyramidMatch(min_width=48, peaks=3)(scene, template, (130, 100), 45.0)
