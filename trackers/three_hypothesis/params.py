@@ -256,6 +256,9 @@ class Adaptations:
         hold_last: a confirmed person whose hypotheses are all contradicted is kept, its
             first contradicted hypothesis standing where it is, unreported, until
             ``max_hidden`` (``returning.HoldLast``); False: it ends (Alg. 1).
+        return_floor: a confirmed person hidden at t - 1 may take a measurement (stage 1 or
+            2, through any hypothesis) only with rho (eq. 4) at least this floor, one value
+            for everyone (``returning.ReturnFloor``), in [0, 1]; 0: mu_rho (the paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -294,12 +297,13 @@ class Adaptations:
     own_return: bool = False
     hold_last: bool = False
     measured_step: bool = True
+    return_floor: float = 0.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
                       "shape_gate": float, "early_confirm_score": float,
                       "measured_hypothesis_sigmas": float,
-                      "split_appearance_margin": float,
+                      "split_appearance_margin": float, "return_floor": float,
                       "report_memory": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
@@ -321,7 +325,7 @@ class Adaptations:
                  split_appearance_margin=self.split_appearance_margin)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
-             early_confirm_score=self.early_confirm_score)
+             early_confirm_score=self.early_confirm_score, return_floor=self.return_floor)
         require("adaptations.shape_gate", 0.0 <= self.shape_gate < 1.0, "must lie in [0, 1)",
                 self.shape_gate)
 
@@ -342,7 +346,8 @@ class Adaptations:
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
                    split_appearance=False, split_appearance_margin=0.0,
                    merged_unmixed=False, duplicates_together=False,
-                   own_return=False, hold_last=False, measured_step=False)
+                   own_return=False, hold_last=False, measured_step=False,
+                   return_floor=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -9,6 +9,9 @@ PruneHypothesis) and what appearance it needs to be matched again (3.3.2, mu_rho
   mu_rho): its colours have varied that much while it was seen; a measurement further from
   them is someone else (issue 35: pets1-400 sil frame 156, a hidden person took an untracked
   passer-by's box at rho 0.48 after matches at 0.8-1.0).
+* ``ReturnFloor`` (``adaptations.return_floor``): a confirmed person hidden at t - 1 may take a
+  measurement only with rho at least one fixed floor, the same for everyone, on top of
+  either rule above (issue 35: ecp1-180 sil 163, a hidden id took a newcomer at rho 0.43).
 """
 
 from __future__ import annotations
@@ -74,3 +77,31 @@ class OwnReturn:
         return np.array([max(mu_rho, min(p.matched_rho))
                          if p.confirmed and p.misses > 0 and p.matched_rho else mu_rho
                          for p in persons], dtype=float)
+
+
+@dataclass(frozen=True)
+class ReturnFloor:
+    """``return_floor``: ``inner``'s floors, raised to ``floor`` for every confirmed person
+    hidden at t - 1 (``misses`` > 0)."""
+
+    floor: float
+    inner: AnyReturn | OwnReturn
+
+    def record(self, person: Person, rho: float) -> None:
+        self.inner.record(person, rho)
+
+    def floors(self, persons: list[Person], mu_rho: float) -> np.ndarray:
+        """(P,) smallest rho each person may be matched with at t."""
+        inner = self.inner.floors(persons, mu_rho)
+        base = np.full(len(persons), mu_rho, dtype=float) if inner is None else inner
+        hidden = np.array([p.confirmed and p.misses > 0 for p in persons], dtype=bool)
+        return np.where(hidden, np.maximum(base, self.floor), base)
+
+
+Returning = AnyReturn | OwnReturn | ReturnFloor
+
+
+def returning_rule(own_return: bool, m: int, floor: float) -> Returning:
+    """The rule of ``adaptations.own_return`` (m: ``LifeCycle.m``) and ``return_floor``."""
+    inner = OwnReturn(m) if own_return else AnyReturn()
+    return ReturnFloor(floor, inner) if floor > 0 else inner

@@ -41,7 +41,8 @@ from occbench.trackers.three_hypothesis.motion import (
 )
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle
 from occbench.trackers.three_hypothesis.reported import FirstHypothesis, LeastContradicted, ReportRule
-from occbench.trackers.three_hypothesis.returning import AnyReturn, EndContradicted, HoldLast, OwnReturn
+from occbench.trackers.three_hypothesis.returning import (EndContradicted, HoldLast, Returning,
+                                                           returning_rule)
 from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
 from occbench.trackers.three_hypothesis.tentative import (
     AfterMatches,
@@ -345,7 +346,7 @@ class Rules(NamedTuple):
     velocity: FilterPrediction | MeasuredVelocity  # where a reported hidden person stands
     shape: AnyShape | ShapeGate  # which sizes may continue a node (3.3.2)
     confirm: AfterMatches | ClearEarly  # when a tentative track is confirmed (3.3)
-    returning: AnyReturn | OwnReturn  # the appearance a hidden person needs (3.3.2)
+    returning: Returning  # the appearance a hidden person needs (3.3.2)
     ending: EndContradicted | HoldLast  # a person whose hypotheses are all contradicted
 
 
@@ -390,6 +391,6 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         shape=ShapeGate(a.shape_gate) if a.shape_gate > 0 else AnyShape(),
         confirm=(ClearEarly(a.early_confirm, a.early_confirm_score) if a.early_confirm
                  else AfterMatches()),
-        returning=OwnReturn(life_cycle.m) if a.own_return else AnyReturn(),
+        returning=returning_rule(a.own_return, life_cycle.m, a.return_floor),
         ending=HoldLast() if a.hold_last else EndContradicted(),
     )

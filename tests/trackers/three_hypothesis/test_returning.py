@@ -1,16 +1,18 @@
 """A hidden person matched again only with colours as close as its own recent matches
 (``own_return``; pets1-400 sil frame 156: a hidden person took an untracked passer-by's box at
-rho 0.48)."""
+rho 0.48) or as one fixed floor (``return_floor``; ecp1-180 sil 163)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from reta_scenes import RED, detections, ellipse_frame
 
 from occbench.trackers.records import TrackState
 from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer
-from occbench.trackers.three_hypothesis.returning import AnyReturn, EndContradicted, HoldLast, OwnReturn
+from occbench.trackers.three_hypothesis.returning import (AnyReturn, EndContradicted, HoldLast,
+                                                           OwnReturn, ReturnFloor)
 from occbench.trackers.three_hypothesis.rules import build_rules
 from occbench.trackers.three_hypothesis.state import Person
 
@@ -18,10 +20,11 @@ W, H = 160, 120
 HALF = ((40, 40, 200), (120, 50, 30))  # a red shirt over a blue body: half of RED's colours
 
 
-def _first_id_on_the_stranger(own: bool) -> tuple[bool, int]:
+def _first_id_on_the_stranger(own: bool, floor: float = 0.0) -> tuple[bool, int]:
     """a walks right, seen 12 frames, missed 2; then a stranger who shares half its colours
-    is detected where a's hypothesis stands. Whether a's id took the stranger's box."""
-    tracker = RetaTracker(adaptations=Adaptations(own_return=own))
+    (rho between 0.5 and 0.6 with a's q) is detected where a's hypothesis stands. Whether a's
+    id took the stranger's box."""
+    tracker = RetaTracker(adaptations=Adaptations(own_return=own, return_floor=floor))
     for t in range(15):
         a = [30.0 + 2.0 * t, 30.0, 16.0, 48.0]
         img = ellipse_frame([a], [RED], (W, H))
@@ -38,6 +41,30 @@ def _first_id_on_the_stranger(own: bool) -> tuple[bool, int]:
 def test_a_hidden_person_does_not_take_a_strangers_box():
     assert _first_id_on_the_stranger(False)[0]  # the paper: rho >= mu_rho is enough
     assert not _first_id_on_the_stranger(True)[0]
+
+
+def test_a_hidden_person_needs_the_return_floor():
+    assert _first_id_on_the_stranger(False, 0.5)[0]  # rho above the floor: taken
+    assert not _first_id_on_the_stranger(False, 0.6)[0]  # below it: refused
+
+
+def test_the_return_floor_binds_hidden_confirmed_persons_only():
+    seen, hidden, young = (Person(key=k, q=np.zeros(4), Q=np.eye(2), R=np.eye(2), branches=[],
+                                  shape=np.zeros(4), id=k) for k in (1, 2, 0))  # 0: tentative
+    hidden.misses, young.misses = 1, 1
+    assert ReturnFloor(0.6, AnyReturn()).floors([seen, hidden, young], 0.3).tolist() == [
+        0.3, 0.6, 0.3]
+    hidden.matched_rho = [0.9, 0.7]  # own_return's floor above it is kept
+    own = ReturnFloor(0.6, OwnReturn(3))
+    assert own.floors([seen, hidden], 0.3).tolist() == [0.3, 0.7]
+    own.record(hidden, 0.8)
+    assert hidden.matched_rho == [0.9, 0.7, 0.8]
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(return_floor=0.5), h).returning == ReturnFloor(0.5, AnyReturn())
+    assert "return_floor" not in Adaptations().changed() + Adaptations.paper().changed()
+    assert Adaptations(return_floor=0.5).changed().count("return_floor") == 1
+    with pytest.raises(ValueError, match="adaptations.return_floor"):
+        Adaptations(return_floor=1.5)
 
 
 def test_floors_are_the_lowest_of_the_last_m_matches():
