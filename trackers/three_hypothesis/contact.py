@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from scipy.sparse import csr_array
 
-from occbench.trackers.common.spatial import row_entries
+from occbench.trackers.three_hypothesis import _shares as shares
 from occbench.trackers.three_hypothesis.appearance import Histogram, towards
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
@@ -130,32 +130,15 @@ def own_shares(matches: list[Match], pairs: np.ndarray, owners: np.ndarray,
     own = np.ones(len(matches))
     if not len(pairs) or not hidden.any():
         return own
-    a, b = pairs[:, 0], pairs[:, 1]
-    # O's pairs both ways, (node n, partner m), where m's person is hidden
-    n = np.concatenate([a[hidden[owners[b]]], b[hidden[owners[a]]]])
-    m = np.concatenate([b[hidden[owners[b]]], a[hidden[owners[a]]]])
-    row = np.full(len(owners), -1)  # node -> its matched row, -1: not matched
+    row = np.full(len(owners), -1, dtype=np.int64)  # node -> its matched row, -1: none
     row[[match.node for match in matches]] = np.arange(len(matches))
-    r = row[n]
-    r, m = r[r >= 0], m[r >= 0]
-    if not len(r):
-        return own
     d = np.array([match.det for match in matches], dtype=np.int64)
-    e, col, value = row_entries(delta, m)  # delta of the partners' nodes, where stored
-    at = col == d[r[e]]
-    delta_md = np.zeros(len(m))
-    delta_md[e[at]] = value[at]  # (m, d) once at most: a canonical CSR
-    area_n = pred[:, 2] * pred[:, 3]  # pi / 4 cancels in the ratio
-    area_d = dets[d, 2] * dets[d, 3]
-    inter = delta_md * (area_n[m] + area_d[r]) / 2  # |S_m & S_d| (eq. 5)
-    biggest = np.full(len(matches), -np.inf)
-    np.maximum.at(biggest, r, inter)  # max over the row's partners
-    k = np.unique(r)
-    own[k] = np.clip(1.0 - biggest[k] / np.maximum(area_d[k], 1e-9), 0.0, 1.0)
-    if partners is not None:  # the person of each row's largest cover (the last of a tie)
-        o = np.lexsort((inter, r))
-        last = np.r_[r[o][1:] != r[o][:-1], True]
-        partners[r[o][last]] = owners[m[o][last]]
+    # pi / 4 cancels in the ratio; O's pairs both ways, compiled (the numpy expression's bits)
+    shares.own_shares(np.asarray(pairs, dtype=np.int64), np.asarray(owners, dtype=np.int64),
+                      np.asarray(hidden, dtype=bool), row, d, pred[:, 2] * pred[:, 3],
+                      dets[d, 2] * dets[d, 3], *shares.csr(delta), own,
+                      np.zeros(len(matches), np.int64) if partners is None else partners,
+                      partners is not None)
     return own
 
 

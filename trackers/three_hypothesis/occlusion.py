@@ -13,6 +13,7 @@ import numpy as np
 
 from occbench.trackers.common.spatial import meeting_pairs
 from occbench.trackers.three_hypothesis._kernels import region_overlap_pairs
+from occbench.trackers.three_hypothesis import _shares as shares
 
 
 def region_overlaps(
@@ -75,14 +76,6 @@ def boxes_meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     bx1, by1 = b[:, 0], b[:, 1]
     w = np.minimum(ax1 + a[:, 2:3], bx1 + b[:, 2]) - np.maximum(ax1, bx1)
     h = np.minimum(ay1 + a[:, 3:4], by1 + b[:, 3]) - np.maximum(ay1, by1)
-    return (w > 0) & (h > 0)
-
-
-def boxes_meet_pairs(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
-    """(K,) bool: ``boxes_meet`` of the pairs (a[ia[k]], b[ib[k]]) alone."""
-    a, b = a[ia], b[ib]
-    w = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2]) - np.maximum(a[:, 0], b[:, 0])
-    h = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3]) - np.maximum(a[:, 1], b[:, 1])
     return (w > 0) & (h > 0)
 
 
@@ -209,11 +202,7 @@ def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24,
         ia, ib = meeting_pairs(boxes, visible)
     else:
         ia, ib = (np.asarray(k, dtype=np.int64) for k in pairs)
-        meet = boxes_meet_pairs(boxes, visible, ia, ib)
-        ia, ib = ia[meet], ib[meet]
-    area_i = np.pi / 4 * boxes[:, 2] * boxes[:, 3]
-    area_v = np.pi / 4 * visible[:, 2] * visible[:, 3]
-    ratio = 0.5 * region_overlap_values(boxes, visible, ia, ib, samples)  # eq. 2's ratio
-    inter = ratio * (area_i[ia] + area_v[ib])
-    np.maximum.at(out, ia, inter / np.maximum(area_i, 1e-9)[ia])
+    shares.covered(np.ascontiguousarray(boxes, dtype=np.float64),
+                   np.ascontiguousarray(visible, dtype=np.float64), ia, ib, pairs is not None,
+                   _grid(samples), out)  # the pairs whose boxes meet, compiled
     return out

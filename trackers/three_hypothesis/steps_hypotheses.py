@@ -8,7 +8,7 @@ import logging
 
 import numpy as np
 
-from occbench.trackers.common.spatial import row_entries
+from occbench.trackers.three_hypothesis import _shares as shares
 from occbench.trackers.three_hypothesis import hypotheses as hyp
 from occbench.trackers.three_hypothesis.graph import VISIBLE
 from occbench.trackers.three_hypothesis.motion import state_boxes
@@ -166,16 +166,9 @@ def _hidden_share(S: Predictions, O: Occlusions, U: Updated, boxes: np.ndarray,
     if len(visible) and cont.any():
         column = np.full(O.delta.shape[1], -1)  # measurement -> its row of U.visible
         column[U.visible_dets] = np.arange(len(U.visible_dets))
-        i, d, delta = row_entries(O.delta, src[cont])  # the pairs that meet
-        v = column[d]
-        i, v, delta = i[v >= 0], v[v >= 0], delta[v >= 0]  # the others hide nothing
-        pred = S.boxes
-        area_n = pred[src[cont], 2] * pred[src[cont], 3]
-        area_v = visible[:, 2] * visible[:, 3]
-        hidden = np.zeros(cont.sum())
-        np.maximum.at(hidden, i, delta * (area_n[i] + area_v[v]) / 2
-                      / np.maximum(area_n, 1e-9)[i])
-        fraction[cont] = hidden
+        pred = S.boxes  # the pairs that meet, compiled (numpy's bits)
+        shares.hidden_shares(src.astype(np.int64), pred[:, 2] * pred[:, 3], *shares.csr(O.delta),
+                             column.astype(np.int64), visible[:, 2] * visible[:, 3], fraction)
     if (~cont).any():
         fraction[~cont] = covered_fraction(boxes[~cont], visible,
                                            setting.occlusion.region_samples)

@@ -15,7 +15,8 @@ import numpy as np
 
 from scipy.sparse import csr_array
 
-from occbench.trackers.common.spatial import meeting_pairs, row_entries
+from occbench.trackers.common.spatial import meeting_pairs
+from occbench.trackers.three_hypothesis import _shares as shares
 
 # --------------------------------------------------------------- 3.3.2 steps 5-8: who enters stage 2
 
@@ -66,10 +67,9 @@ def clear_measurements(dets: np.ndarray, rows: np.ndarray, delta: csr_array,
     crowded[ia[ib != rows[ia]]] = True  # a box meets itself
     column = np.full(delta.shape[1], -1)  # measurement -> its index in rows
     column[rows] = np.arange(len(rows))
-    node, d, value = row_entries(delta, np.arange(delta.shape[0]))
-    r = column[d]
-    near = (r >= 0) & (value > 0)
-    crowded[r[near][owners[node[near]] != row_owners[r[near]]]] = True
+    shares.crowded_by_others(*shares.csr(delta), np.asarray(owners, dtype=np.int64),
+                             column.astype(np.int64), np.asarray(row_owners, dtype=np.int64),
+                             crowded)  # every stored pair, compiled
     return ~crowded
 
 
