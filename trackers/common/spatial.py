@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 import numba
 import numpy as np
-from scipy.sparse import coo_array, csr_array
+from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
 DENSE_LIMIT = 1 << 18  # largest N x M solved as one dense block (2 MB of float64)
@@ -137,15 +137,3 @@ def blocks(n_rows: int, n_cols: int, pairs: Callable[[], tuple[np.ndarray, np.nd
     if n_r or n_c:
         out.append((np.sort(np.concatenate(rows)), np.sort(np.concatenate(cols))))
     return out
-
-
-def row_entries(matrix: csr_array, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The stored entries of rows ``rows`` ((R,) int, repeats allowed) of a CSR ``matrix``,
-    row by row: (E,) index into ``rows``, column and value of each, what
-    ``matrix[rows].tocoo()`` holds (explicit zeros included), from the CSR arrays alone
-    (scipy's indexing costs tens of microseconds a call)."""
-    start = matrix.indptr[rows]
-    count = matrix.indptr[np.asarray(rows) + 1] - start
-    i = np.repeat(np.arange(len(count)), count)
-    at = np.arange(int(count.sum())) + np.repeat(start - (np.cumsum(count) - count), count)
-    return i, matrix.indices[at], matrix.data[at]

@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import csr_array
 
 from occbench.trackers.common.assignment import assign, assign_in_blocks, assign_min_cost
-from occbench.trackers.common.spatial import blocks, meeting_pairs, row_entries
+from occbench.trackers.common.spatial import blocks, meeting_pairs
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis.occlusion import boxes_meet
 
@@ -59,20 +58,3 @@ def test_assignment_block_by_block_is_the_whole_matrix_assignment():
             split = assign_in_blocks(parts, lambda r, c: cost[np.ix_(r, c)], 0.9, solve)
             for w, s in zip(whole, split):
                 assert w.tolist() == s.tolist()
-
-
-def test_row_entries_are_scipys_row_selection():
-    """Random CSR matrices (explicit zeros, empty rows), rows asked with repeats and none:
-    the entries of ``row_entries`` are ``matrix[rows].tocoo()``'s, in its order."""
-    rng = np.random.default_rng(2)
-    for _ in range(40):
-        n, m = rng.integers(1, 9), rng.integers(1, 7)
-        k = rng.integers(0, n * m + 1)
-        cells = rng.permutation(n * m)[:k]
-        value = rng.choice([0.0, 0.3, 1.0], k)
-        matrix = csr_array((value, (cells // m, cells % m)), shape=(n, m))
-        rows = rng.integers(0, n, rng.integers(0, 12))
-        want = matrix[rows].tocoo()
-        i, col, got = row_entries(matrix, rows)
-        assert i.tolist() == want.row.tolist() and col.tolist() == want.col.tolist()
-        assert got.tolist() == want.data.tolist()
