@@ -11,12 +11,16 @@ docs/generalisation.md.
         --trackers reta pbm norfair norfair_tuned
     .venv/bin/python benchmarks/bench_generalisation.py --list          # sets and trackers
     .venv/bin/python benchmarks/bench_generalisation.py --scores-only   # no pages or plots
+    .venv/bin/python benchmarks/bench_generalisation.py --combine A/generalisation.csv \
+        B/generalisation.csv --out DIR                                # join runs, no running
     .venv/bin/python benchmarks/bench_generalisation.py --docs          # + docs' table section
 
 Writes ``generalisation.csv`` (long: set, role, tracker, IDF1, HOTA, MOTA, n_seeds,
 failures), ``generalisation.md`` (the wide table and the legend of the sets) and
 ``versus.md`` (reta and pbm against the best outside tracker of each set, per metric, with
-the verdict: ``occbench.sweeps.versus``) into
+the verdict: ``occbench.sweeps.versus``) and, unless ``--scores-only``, ``generalisation.png``
+(reta, pbm and their paper modes against the best outside tracker of each set, IDF1 and HOTA:
+``occbench.sweeps.plots.plot_generalisation``) into
 ``--out`` (default ``results/generalisation/<date>_<time>/``), each set's run directories
 under ``runs/``, and prints the table. Sets whose data is absent are skipped with a
 message; trackers whose library is not installed are skipped with the reason. Every
@@ -38,7 +42,9 @@ sys.path.insert(0, str(ROOT))
 
 from shared_data import use_shared_data  # noqa: E402
 
+from occbench.errors import refusal  # noqa: E402
 from occbench.sweeps import generalisation as G  # noqa: E402
+from occbench.sweeps import plots as P  # noqa: E402
 from occbench.sweeps import versus as V  # noqa: E402
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
@@ -99,7 +105,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, help="output folder")
     ap.add_argument("--scores-only", action="store_true",
                     help="runs write their scores only (report=false: no report.html, plots "
-                    "or paired differences; the same figures)")
+                    "or paired differences; the same figures) and no generalisation.png")
     ap.add_argument("--docs", action="store_true",
                     help="replace the table section of docs/generalisation.md too")
     ap.add_argument("--list", action="store_true", help="list sets and trackers, run nothing")
@@ -164,6 +170,12 @@ def _report(table, sets, out: Path, args, argv) -> int:
     verdicts = V.markdown(V.versus_outside(table), sets)  # issue 28's acceptance, per set
     (out / "versus.md").write_text(verdicts)
     print(f"Ours against the best outside tracker of each set:\n\n{verdicts}")
+    if not args.scores_only:  # its promise: no plots
+        try:
+            P.plot_generalisation(table, out / "generalisation.png", [s.name for s in sets])
+        except ValueError as err:
+            print(refusal(err), file=sys.stderr)
+            return 1
     print(f"results: {out}")
     if args.docs:
         note = "" if args.length is None else f" (sequences cut to {args.length} frames)"

@@ -1,24 +1,32 @@
 """Sweep plots: each metric against each swept parameter (mean over jobs with a 95% bootstrap
 percentile interval, which stays inside each metric's range; one line per tracker, one panel
 per metric in a grid, one legend) and, when two or more parameters are swept, a heatmap of
-each pair."""
+each pair; and the generalisation table's figure (``plot_generalisation``: ours and their
+paper modes against the best outside tracker of every set, tuning sets then untouched)."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.patches import Patch
 
 from occbench.config.meta import TrackerMeta, metas
 from occbench.metrics import COMBINED
+from occbench.report.figures import save_figure
 from occbench.sweeps.jobs import DONE
 from occbench.sweeps.tables import aggregate, plot_axes, tick
 
 MAX_HEATMAP_VALUES = 12  # a parameter with more distinct values gets no heatmap
+#: the generalisation figure's trackers drawn beside the best outside one, in bar order
+GENERALISATION_SHOWN = ("reta", "reta_paper", "pbm", "pbm_paper")
+GENERALISATION_METRICS = ("IDF1", "HOTA")
+_SLOT = 0.16  # bar height in set rows (five bars and a gap per set)
 
 
 def plot_sweep(frame: pd.DataFrame, out_dir: str | Path, metrics: Sequence[str],
@@ -133,3 +141,100 @@ def _heatmap(agg: pd.DataFrame, a: str, b: str, m: str, path: Path) -> Path:
 
 def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
+
+
+def plot_generalisation(table: pd.DataFrame, path: str | Path, sets: Sequence[str] = (),
+                        shown: Sequence[str] = GENERALISATION_SHOWN,
+                        metrics: Sequence[str] = GENERALISATION_METRICS,
+                        title: str | None = None) -> Path | None:
+    """The generalisation table (long: set, role, tracker, metrics, optional failures) as
+    horizontal bars into ``path`` (PNG): one panel per metric, one row per set (``sets``' order,
+    sets it does not name after them; tuning sets (T) above untouched (U)), in each row the
+    trackers of ``shown`` present in the table and the best outside tracker of the set
+    (``occbench.sweeps.versus.best_outside``, per metric), named at its bar and hatched.
+    Colours and labels from each tracker's ``meta:``. A missing score is written "no score" in
+    its bar's place (never a zero bar); "(!)" marks a score whose set recorded a failure.
+
+    Returns the written path, or None when no tracker to draw is in the table.
+    Raises ValueError naming a missing column."""
+    from occbench.sweeps.versus import best_outside  # start-up: hydra and the pipeline
+
+    needed = ["set", "role", "tracker", *metrics]
+    absent = [c for c in needed if c not in table.columns]
+    if absent:
+        raise ValueError(f"generalisation table: no column {absent[0]!r} (the figure needs "
+                         f"{', '.join(needed)}; columns: {', '.join(map(str, table.columns))})")
+    ours = [t for t in shown if (table["tracker"] == t).any()]
+    bests = best_outside(table, metrics)
+    if not ours and not bests:
+        return None
+    rows = _set_rows(table, sets)
+    looks = metas([*ours, *(r["tracker"] for b in bests.values() for r in b.values())])
+    matplotlib.use("Agg", force=False)
+    height = 1.2 + 0.72 * len(rows)
+    fig = plt.figure(figsize=(7.0 * len(metrics), height), dpi=100)
+    grid = fig.add_gridspec(2, len(metrics), height_ratios=[0.9, height - 0.9])
+    for i, m in enumerate(metrics):
+        ax = fig.add_subplot(grid[1, i])
+        _generalisation_panel(ax, table, rows, ours, bests, m, looks)
+        if i:
+            ax.set_yticklabels([])
+    top = fig.add_subplot(grid[0, :])
+    top.axis("off")
+    handles = [Patch(color=looks[t].colour, label=looks[t].label) for t in ours]
+    handles.append(Patch(facecolor="white", edgecolor="black", hatch="///",
+                         label="best outside tracker of the set (its colour, named at its bar)"))
+    top.legend(handles=handles, loc="center", ncol=len(handles), fontsize=9, frameon=False)
+    top.set_title(title or "Generalisation table: COMBINED scores per set, ours and their paper "
+                  "modes against the best outside tracker of the set", fontsize=11)
+    return save_figure(fig, path)
+
+
+def _set_rows(table: pd.DataFrame, sets: Sequence[str]) -> list[tuple[str, str, float]]:
+    """(set, T or U, y) of each set of ``table``: tuning sets first, each group in ``sets``'
+    order then the table's; a gap of half a row between the groups."""
+    order = {n: i for i, n in enumerate(sets)}
+    names = sorted(dict.fromkeys(table["set"].astype(str)), key=lambda n: order.get(n, len(order)))
+    first = table.drop_duplicates("set")
+    role = dict(zip(first["set"].astype(str), first["role"]))
+    tuning = [n for n in names if role[n] == "tuning"]
+    untouched = [n for n in names if role[n] != "tuning"]
+    return ([(n, "T", float(i)) for i, n in enumerate(tuning)]
+            + [(n, "U", len(tuning) + 0.5 + i) for i, n in enumerate(untouched)])
+
+
+def _generalisation_panel(ax: Any, table: pd.DataFrame, rows: Sequence[tuple[str, str, float]],
+                          ours: Sequence[str], bests: Mapping[str, Mapping[str, pd.Series]],
+                          m: str, looks: Mapping[str, TrackerMeta]) -> None:
+    """One metric's panel of ``plot_generalisation``."""
+    n = len(ours) + 1
+    for name, _, y in rows:
+        s = table[table["set"].astype(str) == name]
+        bars = [(t, s[s["tracker"] == t]) for t in ours]
+        best = bests.get(name, {}).get(m)
+        bars.append((None if best is None else str(best["tracker"]),
+                     None if best is None else best.to_frame().T))
+        for k, (t, r) in enumerate(bars):
+            yk = y + (k - (n - 1) / 2) * _SLOT
+            v = float("nan") if r is None or r.empty else float(r[m].iloc[0])
+            if not np.isfinite(v):
+                what = "no outside tracker" if t is None else f"{looks[t].label}: no score"
+                ax.text(0.01, yk, what, va="center", fontsize=6.5, color="#b00000")
+                continue
+            outside = k == n - 1
+            ax.barh(yk, v, _SLOT * 0.92, color=looks[t].colour, hatch="///" if outside else None,
+                    edgecolor="black" if outside else "none", linewidth=0.4)
+            failed = "failures" in r and bool(pd.to_numeric(r["failures"], errors="coerce")
+                                              .fillna(0).iloc[0])
+            text = f"{v:.3f}{' (!)' if failed else ''}" + (f" {looks[t].label}" if outside else "")
+            ax.text(v + 0.008, yk, text, va="center", fontsize=6.5)
+    ax.set_yticks([y for *_, y in rows], [f"{n} ({g})" for n, g, _ in rows], fontsize=8.5)
+    ax.set_ylim(max([y for *_, y in rows], default=0.0) + 0.5, -0.5)
+    split = [y for _, g, y in rows if g == "U"]
+    if split and split[0] > 0:
+        ax.axhline(split[0] - 0.5, color="black", linewidth=0.8, linestyle="--")
+    ax.set_xlim(min(0.0, float(pd.to_numeric(table[m], errors="coerce").min())), 1.42)
+    ax.set_xticks(np.linspace(0.0, 1.0, 6))
+    ax.grid(axis="x", alpha=0.3)
+    ax.set_xlabel(f"{m} (COMBINED; mean over the set's seeds)")
+    ax.set_title(f"{m}: tuning sets (T) above the dashed line, untouched (U) below", fontsize=9)

@@ -28,16 +28,15 @@ def versus_outside(table: pd.DataFrame, ours: Sequence[str] | None = None) -> pd
     tracker's metrics, the best outside tracker's per metric (``best_<M>``, ``best_<M>_by``)
     and the margin ``<M> - best`` (``margin_<M>``). A set without an outside tracker gives
     no row."""
-    roles = {n: m.role for n, m in metas(dict.fromkeys(table["tracker"].astype(str))).items()}
+    roles = _roles(table)
     if ours is None:
         ours = [n for n, role in roles.items() if role == "ours"]
+    bests = best_outside(table)
     rows = []
     for name, s in table.groupby("set", sort=False):
-        outside = s[s["tracker"].astype(str).map(roles) == "outside"].dropna(
-            subset=list(METRICS), how="all")
-        if outside.empty:
+        if name not in bests:
             continue
-        best = {m: outside.loc[outside[m].idxmax()] for m in METRICS}
+        best = bests[name]
         for t in ours:
             mine = s[s["tracker"] == t]
             if mine.empty:
@@ -45,10 +44,32 @@ def versus_outside(table: pd.DataFrame, ours: Sequence[str] | None = None) -> pd
             row = {"set": name, "role": mine["role"].iloc[0], "tracker": t}
             for m in METRICS:
                 row[m] = float(mine[m].iloc[0])
-                row[f"best_{m}"], row[f"best_{m}_by"] = float(best[m][m]), best[m]["tracker"]
+                b = best.get(m)  # None: no outside tracker scored on m
+                row[f"best_{m}"] = float("nan") if b is None else float(b[m])
+                row[f"best_{m}_by"] = "" if b is None else b["tracker"]
                 row[f"margin_{m}"] = row[m] - row[f"best_{m}"]
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _roles(table: pd.DataFrame) -> dict[str, str]:
+    return {n: m.role for n, m in metas(dict.fromkeys(table["tracker"].astype(str))).items()}
+
+
+def best_outside(table: pd.DataFrame, metrics: Sequence[str] = METRICS,
+                 ) -> dict[str, dict[str, pd.Series]]:
+    """Set -> metric of ``metrics`` -> the table row of the best outside tracker of that set
+    on that metric (each metric on its own; a metric no outside tracker of the set scored is
+    absent); a set with no outside tracker scored on any of ``metrics`` is absent."""
+    roles = _roles(table)
+    out = {}
+    for name, s in table.groupby("set", sort=False):
+        outside = s[s["tracker"].astype(str).map(roles) == "outside"].dropna(
+            subset=list(metrics), how="all")
+        if not outside.empty:
+            out[name] = {m: outside.loc[outside[m].idxmax()] for m in metrics
+                         if outside[m].notna().any()}
+    return out
 
 
 def verdict(row: pd.Series) -> str:

@@ -98,6 +98,10 @@ def test_combine_joins_earlier_tables(tmp_path):
     assert "0.700 / 0.600 / 0.400" in (tmp_path / "out" / "generalisation.md").read_text()
     versus = (tmp_path / "out" / "versus.md").read_text()  # ours against the best outside
     assert "| synth (U) | pbm | 0.550 / 0.500 / 0.500 | norfair_tuned 0.700;" in versus
+    assert (tmp_path / "out" / "generalisation.png").stat().st_size > 0  # the table drawn
+    assert bench.main(["--combine", str(tmp_path / "a.csv"), "--scores-only",
+                       "--out", str(tmp_path / "scores")]) == 0
+    assert not (tmp_path / "scores" / "generalisation.png").exists()  # its promise: no plots
 
 
 def test_the_csv_keeps_full_precision_for_combine(tmp_path):

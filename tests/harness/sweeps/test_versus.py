@@ -72,3 +72,12 @@ def test_a_table_without_outside_rows_says_so_instead_of_failing():
     v = V.versus_outside(ours)
     assert v.empty
     assert "nothing to compare against" in V.markdown(v, G.SETS)
+
+
+def test_a_metric_no_outside_tracker_scored_is_no_verdict_not_a_crash():
+    t = _table()
+    t.loc[t["tracker"].isin(["norfair_tuned", "motpy"]), "IDF1"] = float("nan")
+    v = V.versus_outside(t).set_index(["set", "tracker"])
+    reta = v.loc[("synth", "reta")]
+    assert (reta["best_HOTA_by"], reta["best_HOTA"]) == ("motpy", 0.84)
+    assert V.verdict(reta) == "no score"
