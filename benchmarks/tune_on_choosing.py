@@ -1,6 +1,7 @@
 """Trackers tuned on the real choosing sets (issue 35 item 4): the outside trackers and ours
-(reta, pbm: the same budget, rows beside their defaults), each tracker's search space of its ``+experiment=tune_<name>`` (``hydra.sweeper.params``), Optuna TPE (sampler seed
-0, ``--startup`` random start-up trials, the tracker's defaults enqueued as trial 0 where they
+(reta, pbm: the same budget, rows beside their defaults), each tracker's search space of its
+``+experiment=tune_<name>`` (``hydra.sweeper.params``), Optuna TPE (sampler seed 0,
+``--startup`` random start-up trials, the tracker's defaults enqueued as trial 0 where they
 lie in the space), the objective the mean IDF1 over the choosing sets of
 ``occbench.sweeps.generalisation`` (each set's mean over its seeds, as the table gives it;
 ``synth-tune`` is not one: synthetic scenes never choose anything), ``--trials`` trials per
