@@ -34,6 +34,7 @@ import argparse
 import datetime as dt
 import logging
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -49,6 +50,8 @@ from occbench.sweeps import versus as V  # noqa: E402
 
 DATA = use_shared_data()  # $OCCBENCH_SHARED: the sets not shipped
 
+#: where ``--docs`` puts the run's figure (relative to docs/)
+FIGURE = "img/generalisation_latest.png"
 DOCS_HEAD = """# Generalisation: every tracker on data nobody chose anything on
 
 `benchmarks/bench_generalisation.py` runs every tracker (ours and outside; `*_tuned` rows are
@@ -107,7 +110,8 @@ def main(argv=None) -> int:
                     help="runs write their scores only (report=false: no report.html, plots "
                     "or paired differences; the same figures) and no generalisation.png")
     ap.add_argument("--docs", action="store_true",
-                    help="replace the table section of docs/generalisation.md too")
+                    help="replace the table section of docs/generalisation.md too (the table, its "
+                         "figure copied to docs/img/generalisation_latest.png, versus.md)")
     ap.add_argument("--list", action="store_true", help="list sets and trackers, run nothing")
     ap.add_argument("--combine", nargs="+", type=Path, metavar="CSV",
                     help="run nothing: join generalisation.csv files of earlier runs (e.g. the "
@@ -178,17 +182,32 @@ def _report(table, sets, out: Path, args, argv) -> int:
             return 1
     print(f"results: {out}")
     if args.docs:
-        note = "" if args.length is None else f" (sequences cut to {args.length} frames)"
-        missing = [s.name for s in G.SETS if s.name not in set(table["set"])]
-        scope = "all sets" if not missing else f"not run: {', '.join(missing)}"
-        doc = ROOT / "docs" / "generalisation.md"
-        doc.parent.mkdir(exist_ok=True)
-        section = (f"{G.TABLE_HEADING} ({G.provenance()}; {scope}{note})\n\n"
-                   f"`{' '.join(['benchmarks/bench_generalisation.py', *(argv or sys.argv[1:])])}`"
-                   f"\n\n{text}")
-        doc.write_text(G.with_table(doc.read_text() if doc.exists() else DOCS_HEAD, section))
-        print("wrote docs/generalisation.md (its table section; the text around it kept)")
+        _write_docs(set(table["set"]), text, verdicts,
+                    None if args.scores_only else out / "generalisation.png", args, argv)
     return 0
+
+
+def _write_docs(ran: set[str], text: str, verdicts: str, figure: Path | None, args,
+                argv) -> None:
+    """docs/generalisation.md's table section: the run's provenance and command (``ran``:
+    the sets it holds), its figure (copied to ``FIGURE``; none with ``--scores-only``), the
+    table and versus.md."""
+    note = "" if args.length is None else f" (sequences cut to {args.length} frames)"
+    missing = [s.name for s in G.SETS if s.name not in ran]
+    scope = "all sets" if not missing else f"not run: {', '.join(missing)}"
+    doc = ROOT / "docs" / "generalisation.md"
+    picture = ""
+    if figure is not None:
+        (doc.parent / FIGURE).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(figure, doc.parent / FIGURE)
+        picture = f"![The table drawn: ours against the best outside of each set]({FIGURE})\n\n"
+    section = (f"{G.TABLE_HEADING} ({G.provenance()}; {scope}{note})\n\n"
+               f"`{' '.join(['benchmarks/bench_generalisation.py', *(argv or sys.argv[1:])])}`"
+               f"\n\n{picture}{text}\nOurs against the best outside tracker of each set "
+               f"(`versus.md` of the same run):\n\n{verdicts}")
+    doc.parent.mkdir(exist_ok=True)
+    doc.write_text(G.with_table(doc.read_text() if doc.exists() else DOCS_HEAD, section))
+    print("wrote docs/generalisation.md (its table section; the text around it kept)")
 
 
 if __name__ == "__main__":

@@ -104,6 +104,32 @@ def test_combine_joins_earlier_tables(tmp_path):
     assert not (tmp_path / "scores" / "generalisation.png").exists()  # its promise: no plots
 
 
+def test_docs_section_holds_the_figure_and_versus(tmp_path, monkeypatch):
+    """``--docs`` writes the run's figure beside docs/generalisation.md and its section shows
+    it, the table and versus.md; with ``--scores-only`` (no plots) no picture line."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_generalisation", G.ROOT / "benchmarks" / "bench_generalisation.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    monkeypatch.setattr(bench, "ROOT", tmp_path)
+    pd.DataFrame({"set": ["synth", "synth"], "role": "untouched",
+                  "tracker": ["reta", "norfair_tuned"], "IDF1": [0.6, 0.7], "HOTA": 0.5,
+                  "MOTA": 0.5, "n_seeds": 2, "failures": 0}).to_csv(tmp_path / "a.csv",
+                                                                   index=False)
+    assert bench.main(["--combine", str(tmp_path / "a.csv"), "--docs",
+                       "--out", str(tmp_path / "out")]) == 0
+    doc = (tmp_path / "docs" / "generalisation.md").read_text()
+    assert f"]({bench.FIGURE})" in doc and "| synth (U) | reta | 0.600 / 0.500 / 0.500" in doc
+    assert ((tmp_path / "docs" / bench.FIGURE).read_bytes()
+            == (tmp_path / "out" / "generalisation.png").read_bytes())
+    assert bench.main(["--combine", str(tmp_path / "a.csv"), "--docs", "--scores-only",
+                       "--out", str(tmp_path / "scores")]) == 0
+    doc = (tmp_path / "docs" / "generalisation.md").read_text()
+    assert bench.FIGURE not in doc and "| synth (U) | reta |" in doc
+
+
 def test_the_csv_keeps_full_precision_for_combine(tmp_path):
     """generalisation.csv is read back by ``--combine``: a score written at 4 decimals and
     rounded again to 3 in the tables moved by 0.001 (0.81949 -> 0.8195 -> 0.820)."""
