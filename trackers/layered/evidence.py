@@ -91,6 +91,9 @@ class HiddenEvidence:
 class MissesBound:
     """An unfound target is reported for ``reporting.max_misses`` frames at most."""
 
+    def reset(self) -> None:  # no record (``record.ReportedByRecord`` keeps one)
+        pass
+
     def shown(self, targets, found: np.ndarray, shown: np.ndarray, report_box,
               fg: np.ndarray | None) -> np.ndarray:
         return shown
@@ -112,6 +115,9 @@ class ReportedBehind:
     """
 
     cover: float
+
+    def reset(self) -> None:  # no record: each frame's mask decides
+        pass
 
     def shown(self, targets, found: np.ndarray, shown: np.ndarray, report_box,
               fg: np.ndarray | None) -> np.ndarray:

@@ -355,8 +355,7 @@ def reset_rules(rules: Rules) -> None:
     """Forget the records the stateful rules keep (``measured_velocity``,
     ``camera_placement``, ``reported_by_record``): a new sequence, a new camera."""
     rules.velocity.reset()
-    if isinstance(rules.behind, ReportedByRecord):
-        rules.behind.reset()
+    rules.behind.reset()
 
 
 def place_unfound(rule: FilterPrediction | MeasuredVelocity | CameraPlacement, frame: int,
