@@ -259,6 +259,9 @@ class Adaptations:
         return_floor: a confirmed person hidden at t - 1 may take a measurement (stage 1 or
             2, through any hypothesis) only with rho (eq. 4) at least this floor, one value
             for everyone (``returning.ReturnFloor``), in [0, 1]; 0: mu_rho (the paper, 3.3.2).
+        restore_still: a confirmed person all of whose hypotheses are contradicted gets back,
+            once a hidden spell, the hypothesis 3 ``merge_duplicates`` dropped beside another
+            (``returning.RestoreStill``); False: it ends (Alg. 1).
     """
 
     gate_sigmas: float = 3.0
@@ -298,6 +301,7 @@ class Adaptations:
     hold_last: bool = False
     measured_step: bool = True
     return_floor: float = 0.0
+    restore_still: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -315,7 +319,7 @@ class Adaptations:
                       "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
                       "duplicates_together": bool, "own_return": bool,
-                      "hold_last": bool, "measured_step": bool})
+                      "hold_last": bool, "measured_step": bool, "restore_still": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -347,7 +351,7 @@ class Adaptations:
                    split_appearance=False, split_appearance_margin=0.0,
                    merged_unmixed=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
-                   return_floor=0.0)
+                   return_floor=0.0, restore_still=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -1,7 +1,8 @@
 """A hidden person's return: whether it is kept when every hypothesis is contradicted (Alg. 1
 PruneHypothesis) and what appearance it needs to be matched again (3.3.2, mu_rho).
 
-* ``EndContradicted`` (the paper) / ``HoldLast`` (``adaptations.hold_last``).
+* ``EndContradicted`` (the paper) / ``HoldLast`` (``adaptations.hold_last``) /
+  ``RestoreStill`` (``adaptations.restore_still``).
 
 * ``AnyReturn`` (the paper): every pair with rho >= mu_rho may match, hidden or not.
 * ``OwnReturn`` (``adaptations.own_return``): a confirmed person hidden at t - 1 may take a
@@ -16,10 +17,12 @@ PruneHypothesis) and what appearance it needs to be matched again (3.3.2, mu_rho
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from occbench.trackers.three_hypothesis.hypotheses import STILL
 
 if TYPE_CHECKING:
     from occbench.trackers.three_hypothesis.state import Branch, Person
@@ -28,6 +31,9 @@ if TYPE_CHECKING:
 @dataclass(frozen=True)
 class EndContradicted:
     """Alg. 1 PruneHypothesis as written: a person with no hypothesis left ends."""
+
+    def merged(self, person: Person, branch: Branch) -> None:
+        return None
 
     def hold(self, person: Person, dropped: Branch | None) -> Branch | None:
         return None
@@ -41,6 +47,9 @@ class HoldLast:
     unfound and found again through its gate (PBM's unfound targets; issue 35: pets1-400 sil
     person 13, undetected 166-212, ended at 209 and came back at 213 under a new id)."""
 
+    def merged(self, person: Person, branch: Branch) -> None:
+        return None
+
     def hold(self, person: Person, dropped: Branch | None) -> Branch | None:
         """The branch that keeps ``person``, or None (it ends)."""
         if dropped is None or not person.confirmed:
@@ -48,6 +57,32 @@ class HoldLast:
         dropped.x = dropped.x.copy()
         dropped.x[len(dropped.x) // 2:] = 0.0  # it stands (3.3.3 case 3's motion)
         return dropped
+
+
+@dataclass(frozen=True)
+class RestoreStill:
+    """``restore_still``: hypothesis 3 (the person stays where it was last seen, Alg. 1) is
+    dropped by ``merge_duplicates`` when it starts within half a pixel of another hypothesis
+    (a person who stands or walks a few tenths of a pixel a frame), though nothing
+    contradicted it. When every hypothesis kept is later contradicted (m frames in plain
+    view, Alg. 1 PruneHypothesis), the person gets that hypothesis 3 back, once a hidden
+    spell, at the place it was dropped with its exposure count at 0, and it is pruned as any
+    hypothesis is. Issue 35: pets1-400 sil person 13, undetected 166-212 while he stood,
+    ended at 209 when hypothesis 1 drifted off him and came back at 213 under a new id."""
+
+    def merged(self, person: Person, branch: Branch) -> None:
+        """``branch`` of ``person`` was dropped beside another hypothesis at its place."""
+        if branch.kind == STILL and person.confirmed and person.merged_still is None:
+            person.merged_still = branch
+
+    def hold(self, person: Person, dropped: Branch | None) -> Branch | None:
+        """The dropped hypothesis 3 (covariance and node of ``dropped``), or None."""
+        still = person.merged_still
+        if still is None or dropped is None or not person.confirmed:
+            return None
+        person.merged_still = None  # once a spell
+        return replace(still, P=dropped.P, node=dropped.node, occluder=None, exposed=0,
+                       covered=False, unseen=False, share=1.0, depth=0)
 
 
 @dataclass(frozen=True)

@@ -41,8 +41,8 @@ from occbench.trackers.three_hypothesis.motion import (
 )
 from occbench.trackers.three_hypothesis.params import Adaptations, LifeCycle
 from occbench.trackers.three_hypothesis.reported import FirstHypothesis, LeastContradicted, ReportRule
-from occbench.trackers.three_hypothesis.returning import (EndContradicted, HoldLast, Returning,
-                                                           returning_rule)
+from occbench.trackers.three_hypothesis.returning import (EndContradicted, HoldLast, RestoreStill,
+                                                           Returning, returning_rule)
 from occbench.trackers.three_hypothesis.shape_gate import AnyShape, ShapeGate
 from occbench.trackers.three_hypothesis.tentative import (
     AfterMatches,
@@ -347,7 +347,7 @@ class Rules(NamedTuple):
     shape: AnyShape | ShapeGate  # which sizes may continue a node (3.3.2)
     confirm: AfterMatches | ClearEarly  # when a tentative track is confirmed (3.3)
     returning: Returning  # the appearance a hidden person needs (3.3.2)
-    ending: EndContradicted | HoldLast  # a person whose hypotheses are all contradicted
+    ending: EndContradicted | HoldLast | RestoreStill  # a person with none left (Alg. 1)
 
 
 def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
@@ -392,5 +392,6 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         confirm=(ClearEarly(a.early_confirm, a.early_confirm_score) if a.early_confirm
                  else AfterMatches()),
         returning=returning_rule(a.own_return, life_cycle.m, a.return_floor),
-        ending=HoldLast() if a.hold_last else EndContradicted(),
+        ending=(HoldLast() if a.hold_last else RestoreStill() if a.restore_still
+                else EndContradicted()),
     )

@@ -48,6 +48,7 @@ class Person:
     step_error: float = 0.0  # the last step's, on the same measurements (rules.line.step)
     merged: bool = False  # its last measurement held a hidden partner (rules.split)
     matched_rho: list = field(default_factory=list)  # rho of its last m matches (rules.returning)
+    merged_still: Branch | None = None  # hypothesis 3 dropped as a duplicate (rules.ending)
 
     @property
     def confirmed(self) -> bool:

@@ -129,6 +129,7 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
             rates = b.x[len(b.x) // 2:].tolist()  # the state's velocities (3.2)
             if kept_corners and rules.duplicates.duplicate(corner, kept_corners, rates,
                                                            kept_rates):
+                rules.ending.merged(person, b)
                 continue
             kept.append(b)
             kept_corners.append(corner)
@@ -138,7 +139,8 @@ def prune(S: Predictions, V: Measurements, O: Occlusions, U: Updated,
         if not kept and dropped is not None:
             holder = rules.ending.hold(person, dropped[0])
             if holder is not None:
-                kept, kept_corners = [holder], [dropped[1]]
+                kept, kept_corners = [holder], [dropped[1] if holder is dropped[0] else
+                                                state_boxes(holder.x[None])[0].tolist()]
         if person.misses > a.max_hidden:
             kept = []
         if not kept:

@@ -80,6 +80,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
             person.hits += 1
         person.misses = 0
         person.spawned = False
+        person.merged_still = None  # a new spell (rules.ending)
         rules.returning.record(person, match.rho)
         if not confirmed[r] and rules.confirm.confirms(
                 person.hits, setting.life_cycle.confirm_frames, clear.get(d, False),
