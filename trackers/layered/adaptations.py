@@ -182,6 +182,10 @@ class Adaptations:
             its own size only when its height / width is also at most 1 /
             ``lone_shrink_shape`` x the prediction's (not a sliver cut by a vertical edge;
             ``smaller.LoneShrink.narrow``; false: no upper bound).
+        merge_found_elsewhere: a detection larger than a target's prediction (one head)
+            that PBM 3.1 searched as a merge, whose other holders all took other candidates
+            this frame as measured, is the target grown: the frame is associated again with
+            that pair unoccluded (``merges.FoundElsewhere``; false: a merge, PBM 3.1).
         reported_by_record: a confirmed target unfound for m > ``reporting.max_misses``
             frames is still reported while the sequence's resolved runs of >= m misses ended
             found again where reported (IoU >= 0.5) at least half the time
@@ -249,6 +253,7 @@ class Adaptations:
     camera_placement: bool = False
     reported_by_record: bool = False
     lone_shrink_narrow: bool = False
+    merge_found_elsewhere: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -305,7 +310,8 @@ class Adaptations:
                                        "one_to_one", "border_exit", "rival_claims", "weak_ranked",
                                        "coarse_search", "pyramid_template", "measured_velocity",
                                        "border_birth_waits", "camera_placement",
-                                       "reported_by_record", "lone_shrink_narrow"),
+                                       "reported_by_record", "lone_shrink_narrow",
+                                       "merge_found_elsewhere"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
@@ -329,7 +335,7 @@ class Adaptations:
                    large_head_peaks=1, fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,
-                   lone_shrink_narrow=False)
+                   lone_shrink_narrow=False, merge_found_elsewhere=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

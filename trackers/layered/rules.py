@@ -33,6 +33,7 @@ from occbench.trackers.layered.placement import CameraPlacement
 from occbench.trackers.layered.record import ReportedByRecord
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
+from occbench.trackers.layered.merges import AllHolders, FoundElsewhere
 from occbench.trackers.layered.smaller import LoneShrink, OccludedSmaller
 from occbench.trackers.layered.stacked import FoldTwins, KeepStacked
 from occbench.trackers.layered.targets import Targets
@@ -312,6 +313,7 @@ class Rules(NamedTuple):
     reupdate: AfterPrediction | ReUpdate
     contest: NoContest | TemplateContest  # a candidate several targets may take (PBM 4.1)
     smaller: OccludedSmaller | LoneShrink  # a region smaller than predicted (PBM 3.1)
+    merge: AllHolders | FoundElsewhere  # a larger region whose other holders are found (3.1)
     exit: PredictedExit | BorderExit  # an unfound target that left the picture (ours)
     leaving: ReportAnywhere | LeavingUnreported  # an unfound target walking out: reported?
     twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
@@ -340,6 +342,7 @@ def build_rules(a: Adaptations) -> Rules:
         smaller=(LoneShrink(a.lone_shrink, a.lone_shrink_shape, a.lone_shrink_narrow)
                  if a.lone_shrink > 0
                  else OccludedSmaller()),
+        merge=FoundElsewhere() if a.merge_found_elsewhere else AllHolders(),
         exit=BorderExit() if a.border_exit else PredictedExit(),
         leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0
                  else ReportAnywhere()),

@@ -41,6 +41,7 @@ were validated in (None for a target born this frame).
 from __future__ import annotations
 
 import logging
+from functools import partial
 
 import numpy as np
 
@@ -49,14 +50,8 @@ from occbench.trackers.common.spatial import blocks
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.association import LayeredScores
-from occbench.trackers.layered.candidates import (
-    CandidateFinder,
-    DetectorHeads,
-    HeldDetections,
-    NoHeldDetections,
-    ProfileHeads,
-    checked_inputs,
-)
+from occbench.trackers.layered.candidates import (CandidateFinder, DetectorHeads, HeldDetections,
+                                                  NoHeldDetections, ProfileHeads, checked_inputs)
 from occbench.trackers.layered.dynamics import Gate
 from occbench.trackers.layered.frame_blocks import Association, interacting_pairs, merged
 from occbench.trackers.layered.gating import OcclusionSearch, pairs_in_gates
@@ -210,10 +205,11 @@ class PBMTracker:
         is at most ``spatial.DENSE_LIMIT``)."""
         targets = self.targets
         parts = blocks(len(targets), len(cand), lambda: interacting_pairs(targets, cand, pred_wh))
+        block = partial(self.rules.merge.associate, self._associate_block)  # merges.py
         if len(parts) == 1:
-            return self._associate_block(frame, targets, cand, feats, fg, pred_wh)
+            return block(frame, targets, cand, feats, fg, pred_wh)
         targets.last_gate = targets.gate_boxes()  # as _score_in_gates sets it
-        return merged([(rows, cols, self._associate_block(
+        return merged([(rows, cols, block(
             frame, targets.subset(rows), cand.take(cols), feats.take(cols), fg, pred_wh[rows]))
             for rows, cols in parts], self._extractor.bins)
 
@@ -257,6 +253,7 @@ class PBMTracker:
         kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
         live = targets.misses <= self.reporting.max_misses
         self.rules.smaller.apply(kinds, cand, targets, pred_wh, live)
+        self.rules.merge.apply(kinds, cand, targets, live, self.search.overlap)
         present = live & self.adaptations.lone_growth
         pairs = pairs_in_gates(targets, cand, gates, pred_wh, kinds, present, self.search.overlap,
                                self.adaptations.several_heads_merge)

@@ -1,0 +1,104 @@
+"""PBM 3.1's larger region: a merge of the targets it holds, or one of them grown.
+
+A candidate larger than a target's prediction by more than ``search.occlusion_threshold``
+is, in PBM 3.1, a merge: the target is searched for inside it (eqs. 9-10) and its box
+carved from the prediction. ``adaptations.lone_growth`` reads a region holding no other
+live target as the target grown. ``FoundElsewhere`` (``adaptations.merge_found_elsewhere``)
+asks the frame's assignment too: a detection whose other holders all took other
+candidates, unoccluded, holds none of them, so the target it was searched in is that target
+grown. Kinds are ``occlusion_kinds``' (T, N) array (+1 larger, -1 smaller, 0 neither).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
+
+from occbench.trackers.geometry import overlap_ratio_matrix
+
+if TYPE_CHECKING:  # annotations only
+    from occbench.trackers.layered.frame_blocks import Association
+    from occbench.trackers.layered.search import Candidates
+    from occbench.trackers.layered.targets import Targets
+
+Block = Callable[..., "Association"]
+
+
+class AllHolders:
+    """PBM 3.1 (with ``lone_growth``) as it stands: a larger region holding another live
+    target is a merge, whatever that target takes this frame; one assignment per frame."""
+
+    def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, live: np.ndarray,
+              overlap: float) -> None:
+        """Leaves ``kinds`` as the size test set them."""
+
+    def associate(self, block: Block, frame: np.ndarray, targets: Targets, cand: Candidates,
+                  *rest) -> Association:
+        """``block(frame, targets, cand, *rest)``, once."""
+        return block(frame, targets, cand, *rest)
+
+
+class FoundElsewhere:
+    """``merge_found_elsewhere``: the frame (or block) is associated as PBM 3.1 reads it;
+    where a target t took a detection n as a merge (searched inside it: n larger than t's
+    prediction, one head) while every other live target n holds (``overlap`` of its box
+    inside n's region, as ``lone_growth`` counts holders) took another candidate as
+    measured (unoccluded), the association is run again with those pairs (t, n) as t grown
+    (kind 0, scored as measured), as ``lone_growth`` would have read n had those targets not
+    stood there. Blobs and regions with several heads keep PBM 3.1's merge (their pixels
+    may be two people whatever the detections say).
+
+    Why (docs/generalisation.md, "pbm, eighth round"): on cav1-150 gt seed 1001 frame 35 the
+    walking person 5's detection (22 x 63; his target's prediction 13 x 63) also holds the
+    box of person 2's target, which takes person 2's own detection that frame; person 5's
+    target is searched inside it as a merge and keeps a carved 14 px box that no longer
+    follows him, and three frames later person 2's target takes his detection."""
+
+    def __init__(self) -> None:
+        self._grown: np.ndarray | None = None  # (G, 2) pairs taken as grown in the second pass
+        self._first: tuple[np.ndarray, np.ndarray, float] | None = None  # kinds, live, overlap
+
+    def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, live: np.ndarray,
+              overlap: float) -> None:
+        """Second pass: the grown pairs' kinds set to 0 in place. First pass: keeps
+        ``kinds`` (the array the occlusion test goes on to change in place) to read the
+        merges after the assignment."""
+        if self._grown is not None:
+            kinds[self._grown[:, 0], self._grown[:, 1]] = 0
+        else:
+            self._first = (kinds, live.copy(), overlap)
+
+    def associate(self, block: Block, frame: np.ndarray, targets: Targets, cand: Candidates,
+                  *rest) -> Association:
+        """``block`` once, and again with the grown pairs when there are any."""
+        self._grown, self._first = None, None
+        found = block(frame, targets, cand, *rest)
+        grown = self.grown_pairs(found, targets, cand)
+        if len(grown):
+            self._grown = grown
+            try:
+                found = block(frame, targets, cand, *rest)
+            finally:
+                self._grown = None
+        self._first = None
+        return found
+
+    def grown_pairs(self, found: Association, targets: Targets, cand: Candidates) -> np.ndarray:
+        """(G, 2) (target, candidate) matches of the first pass that are a target grown."""
+        if self._first is None or found.chosen is None:
+            return np.empty((0, 2), dtype=np.intp)
+        kinds, live, overlap = self._first
+        matches, occluded = found.matches, found.chosen.occluded
+        taken = np.full(len(targets), -1, dtype=np.intp)  # the candidate each target took
+        taken[matches[:, 0]] = np.where(occluded, -2, matches[:, 1])  # -2: as a merge
+        holds = overlap_ratio_matrix(targets.dof[:, [0, 1, 4, 5]], cand.region) >= overlap
+        grown = []
+        for (t, n), carved in zip(matches.tolist(), occluded.tolist()):
+            if not carved or kinds[t, n] <= 0 or cand.blob[n] or cand.heads_in_region[n] > 1:
+                continue
+            others = np.flatnonzero(holds[:, n] & live)
+            others = others[others != t]
+            if len(others) and np.all((taken[others] >= 0) & (taken[others] != n)):
+                grown.append((t, n))
+        return np.array(grown, dtype=np.intp).reshape(-1, 2)
