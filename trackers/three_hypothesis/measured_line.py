@@ -24,9 +24,10 @@ class FilterVelocity:
     """3.3.3 as written: hypothesis 1 continues M's prediction (M's velocity)."""
 
     records: ClassVar[bool] = False
+    uses_shares: ClassVar[bool] = False
 
-    def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray
-               ) -> None:
+    def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray,
+               own: np.ndarray | None = None) -> None:
         return None
 
     def start(self, person, x_prev: np.ndarray, x_pred: np.ndarray) -> np.ndarray:
@@ -84,21 +85,42 @@ class MeasuredLine:
     (``adaptations.measured_step``) a third predictor is scored on the same measurements, the
     last step (the displacement of the last two measured centres per frame), and hypothesis 1
     takes it when its record is the best of the three: a person who has just turned keeps the
-    line's and M's old direction for several frames, its last step does not (exact boxes)."""
+    line's and M's old direction for several frames, its last step does not (exact boxes).
+    With ``own_only`` (``adaptations.merged_line``) a measurement that held a hidden partner
+    (its own share below 1, ``contact.own_shares``) is an occlusion, its centre the pair's: it
+    neither enters the person's centres nor scores the predictors, and at a first miss right
+    after one, hypothesis 1 starts on the chosen predictor at t from the person's own
+    measurements (the line's centre at t, or the last own centre moved by the step per frame
+    since), not from the estimate the merged measurement dragged."""
 
     window: int
     sigmas: float = 0.0
     step: bool = False
+    own_only: bool = False
     records: ClassVar[bool] = True
 
-    def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray
-               ) -> None:
+    @property
+    def uses_shares(self) -> bool:
+        """Whether ``record`` reads the matched measurements' own shares."""
+        return self.own_only
+
+    def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray,
+               own: np.ndarray | None = None) -> None:
         """Score both predictors on each person's measured box at ``frame`` (``boxes`` (K, 4)
         xywh; M's prediction: ``predicted`` (K, 8) states), then keep its centre. A person
         with at least 3 centres adds, to M's error and to the line's, the squared distance of
         the predicted centre from the measured one over the box height squared (with
         ``step``, the last step's to its own); every person's line and step in one compiled
-        call (``_kernels.line_misses``: ``_lines``' bits)."""
+        call (``_kernels.line_misses``: ``_lines``' bits). With ``own_only``, the rows whose
+        ``own`` (K,) share is below 1 are left out and their persons marked
+        (``merged_at``)."""
+        if self.own_only and own is not None:
+            keep = np.asarray(own) >= 1.0
+            for person, kept in zip(persons, keep.tolist()):
+                person.merged_at = -1 if kept else frame
+            if not keep.all():
+                persons = [person for person, kept in zip(persons, keep.tolist()) if kept]
+                boxes, predicted = boxes[keep], predicted[keep]
         cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
         sizes = np.fromiter(map(len, (person.centres for person in persons)), np.int64,
                             len(persons))
@@ -131,18 +153,26 @@ class MeasuredLine:
         errors = person.line_errors
         if len(person.centres) < 3:
             return x_pred
+        merged = self.own_only and person.merged_at >= 0  # t - 1's measurement left out
+        t = person.merged_at + 1 if merged else 0
         if self.step and person.step_error < min(errors):
             (f1, x1, y1), (f2, x2, y2) = person.centres[-2:]
             vx, vy = (x2 - x1) / max(f2 - f1, 1), (y2 - y1) / max(f2 - f1, 1)
             x = x_pred.copy()  # from the last measured centre (t - 1) one step on
-            x[0], x[1], x[4], x[5] = x2 + vx, y2 + vy, vx, vy
+            if merged:  # from the last own centre, a step a frame since
+                x[0], x[1], x[4], x[5] = x2 + vx * (t - f2), y2 + vy * (t - f2), vx, vy
+            else:
+                x[0], x[1], x[4], x[5] = x2 + vx, y2 + vy, vx, vy
             return x
         if errors[1] >= errors[0]:
             return x_pred
-        _, _, _, vx, vy, se_x, se_y = _fit(person.centres)
+        t0, x0, y0, vx, vy, se_x, se_y = _fit(person.centres)
         if self.sigmas > 0 and (abs(vx - x_pred[4]) <= self.sigmas * se_x
                                 and abs(vy - x_pred[5]) <= self.sigmas * se_y):
             return x_pred  # the line's velocity is M's within its own error
         x = x_pred.copy()
-        x[0], x[1], x[4], x[5] = x_prev[0] + vx, x_prev[1] + vy, vx, vy
+        if merged:  # the line's centre at t
+            x[0], x[1], x[4], x[5] = x0 + vx * (t - t0), y0 + vy * (t - t0), vx, vy
+        else:
+            x[0], x[1], x[4], x[5] = x_prev[0] + vx, x_prev[1] + vy, vx, vy
         return x

@@ -262,6 +262,10 @@ class Adaptations:
         restore_still: a confirmed person all of whose hypotheses are contradicted gets back,
             once a hidden spell, the hypothesis 3 ``merge_duplicates`` dropped beside another
             (``returning.RestoreStill``); False: it ends (Alg. 1).
+        merged_line: with ``measured_hypothesis``, a measurement that held a hidden partner
+            (own share below 1) stays out of the person's line, and hypothesis 1 at a first
+            miss right after one starts on the line (or step) at t from the person's own
+            measurements (``measured_line.MeasuredLine``); False: every measurement.
     """
 
     gate_sigmas: float = 3.0
@@ -302,6 +306,7 @@ class Adaptations:
     measured_step: bool = True
     return_floor: float = 0.0
     restore_still: bool = False
+    merged_line: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -319,7 +324,8 @@ class Adaptations:
                       "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
                       "duplicates_together": bool, "own_return": bool,
-                      "hold_last": bool, "measured_step": bool, "restore_still": bool})
+                      "hold_last": bool, "measured_step": bool, "restore_still": bool,
+                      "merged_line": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -351,7 +357,7 @@ class Adaptations:
                    split_appearance=False, split_appearance_margin=0.0,
                    merged_unmixed=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
-                   return_floor=0.0, restore_still=False)
+                   return_floor=0.0, restore_still=False, merged_line=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -369,8 +369,8 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         region=VisibleRegion() if a.visible_region else WholeRegion(),
         split=(AppearanceAtSplit(a.split_appearance_margin) if a.split_appearance
                else RegionAtSplit()),
-        line=(MeasuredLine(life_cycle.m, a.measured_hypothesis_sigmas, a.measured_step)
-              if a.measured_hypothesis else FilterVelocity()),
+        line=(MeasuredLine(life_cycle.m, a.measured_hypothesis_sigmas, a.measured_step,
+                           a.merged_line) if a.measured_hypothesis else FilterVelocity()),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),
         motion_front=MergedMotion() if a.merged_motion else MeasurementMotion(),

@@ -49,6 +49,7 @@ class Person:
     merged: bool = False  # its last measurement held a hidden partner (rules.split)
     matched_rho: list = field(default_factory=list)  # rho of its last m matches (rules.returning)
     merged_still: Branch | None = None  # hypothesis 3 dropped as a duplicate (rules.ending)
+    merged_at: int = -1  # frame of its last measurement if left out of its line (rules.line)
 
     @property
     def confirmed(self) -> bool:

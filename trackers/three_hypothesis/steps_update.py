@@ -61,7 +61,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     visible_share = _visible_share(V, A, D, matches, behind, dbox, setting)
     asked = [r for r, m in enumerate(matches) if m.det in tent and m.det not in empty_dets]
     clear = _clear(S, V, O, rules, [keys[r] for r in asked], [matches[r].det for r in asked])
-    rules.line.record([persons[i] for i in keys], memory.t, dbox, S.Xp[idx])
+    rules.line.record([persons[i] for i in keys], memory.t, dbox, S.Xp[idx], own)
     scores = V.scores.tolist()
     absorbed: set[int] = set()
     shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
@@ -172,7 +172,7 @@ def _own_share(S: Predictions, V: Measurements, O: Occlusions, rules: Rules,
     person index of the partner covering most (-1: none, or no rule reads it)."""
     partner = np.full(len(matches), -1)
     if not (rules.appearance_front.uses_shares or rules.motion_front.uses_shares
-            or rules.split.uses_merged):
+            or rules.split.uses_merged or rules.line.uses_shares):
         return np.ones(len(matches)), partner
     return own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta,
                       partner if rules.appearance_front.uses_partners else None), partner

@@ -173,3 +173,34 @@ def test_compiled_lines_equal_numpy_lines_bit_for_bit():
         got = np.empty((4, G))  # rows 2-3: the last step's misses (the record test's)
         line_misses(hist.reshape(-1, 3), np.full(G, n), frame, cx, cy, got)
         assert got[:2].tobytes() == want.tobytes(), n
+
+
+def test_a_merged_measurement_stays_out_of_the_line():
+    """``merged_line``: the walker (xc = 10 + 3 t, M lagging at 1 px/frame) is matched at
+    t = 7 and 8 to measurements merged over a hidden partner standing at xc 30 (own share
+    below 1, centre 30): they stay out of its centres and records, and at its first miss
+    (t = 9) hypothesis 1 starts on the line through its own centres at t = 9, 10 + 27 = 37;
+    without the rule the merged centres bend the line and it starts from the dragged
+    estimate."""
+    def walk(rule):
+        person = SimpleNamespace(centres=[], line_errors=[0.0, 0.0], step_error=0.0,
+                                 merged_at=-1)
+        for t in range(1, 9):
+            xc = 10.0 + 3 * t if t <= 6 else 30.0
+            predicted = np.array([xc - 3 + 1.0, 10.0, 10, 20, 1.0, 0, 0, 0])
+            rule.record([person], t, np.array([[xc - 5, 0.0, 10, 20]]), predicted[None],
+                        np.array([1.0 if t <= 6 else 0.4]))
+        return person
+    x_prev = np.array([30.0, 10.0, 10, 20, 1.0, 0, 0, 0])  # dragged onto the partner
+    x_pred = x_prev + np.array([1.0, 0, 0, 0, 0, 0, 0, 0])
+    own = MeasuredLine(window=4, own_only=True)
+    person = walk(own)
+    assert [c[0] for c in person.centres] == [3, 4, 5, 6] and person.merged_at == 8
+    assert np.allclose(own.start(person, x_prev, x_pred)[[0, 4]], [37.0, 3.0])
+    every = MeasuredLine(window=4)
+    assert [c[0] for c in walk(every).centres] == [5, 6, 7, 8]
+    assert not np.isclose(every.start(walk(every), x_prev, x_pred)[0], 37.0)
+    assert own.uses_shares and not every.uses_shares
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(merged_line=True), h).line == MeasuredLine(8, 2.0, True, True)
+    assert "merged_line" not in Adaptations().changed() + Adaptations.paper().changed()
