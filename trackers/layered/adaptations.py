@@ -186,6 +186,10 @@ class Adaptations:
             that PBM 3.1 searched as a merge, whose other holders all took other candidates
             this frame as measured, is the target grown: the frame is associated again with
             that pair unoccluded (``merges.FoundElsewhere``; false: a merge, PBM 3.1).
+        distinct_detections: with ``duplicate_radius``, coinciding heads are one response
+            only when a blob's head is among them; an ambiguous target whose coinciding
+            candidates are all detections is not pruned (two people; the one-to-one
+            assignment decides; ``selection.DetectionsApart``; false: one response).
         reported_by_record: a confirmed target unfound for m > ``reporting.max_misses``
             frames is still reported while the sequence's resolved runs of >= m misses ended
             found again where reported (IoU >= 0.5) at least half the time
@@ -254,6 +258,7 @@ class Adaptations:
     reported_by_record: bool = False
     lone_shrink_narrow: bool = False
     merge_found_elsewhere: bool = False
+    distinct_detections: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -311,7 +316,7 @@ class Adaptations:
                                        "coarse_search", "pyramid_template", "measured_velocity",
                                        "border_birth_waits", "camera_placement",
                                        "reported_by_record", "lone_shrink_narrow",
-                                       "merge_found_elsewhere"),
+                                       "merge_found_elsewhere", "distinct_detections"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
@@ -335,7 +340,8 @@ class Adaptations:
                    large_head_peaks=1, fold_twins=0, fold_twins_own=0.0,
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,
-                   lone_shrink_narrow=False, merge_found_elsewhere=False)
+                   lone_shrink_narrow=False, merge_found_elsewhere=False,
+                   distinct_detections=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

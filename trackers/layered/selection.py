@@ -113,12 +113,31 @@ class RankedAtThreshold:
         return p if p >= match_threshold else match_threshold + self.RANK * p
 
 
+class OneResponse:
+    """``duplicate_radius`` as it stands: ambiguous candidates whose heads coincide are one
+    response of the target, whatever they are."""
+
+    def one_response(self, cand: Candidates, cands: np.ndarray) -> bool:
+        return True
+
+
+class DetectionsApart:
+    """``distinct_detections``: coinciding heads are one response only when a blob's head is
+    among them; two detections (the detector's boxes, kept apart by its own suppression)
+    are two people, one in front of the other, and the target's row is left to the
+    one-to-one assignment (its head template cannot tell heads 1 px apart)."""
+
+    def one_response(self, cand: Candidates, cands: np.ndarray) -> bool:
+        return bool(cand.blob[cands].any())
+
+
 class MultipleResponsePruning:
     """PBM 4 steps 4-5 and 4.1 on one frame's scores (``__call__``).
 
     Args:
         matching: thresholds and margin of a match. pruning: the template's threshold and
-            the radius of "nearby". adaptations: ``duplicate_radius``,
+            the radius of "nearby". adaptations: ``duplicate_radius`` (with
+            ``distinct_detections``: ``DetectionsApart`` / ``OneResponse``),
             ``prune_max_misses`` and ``rival_claims`` (``RivalClaims`` / ``OwnRow``).
     """
 
@@ -128,6 +147,7 @@ class MultipleResponsePruning:
         self.adaptations = adaptations
         self.claims = RivalClaims() if adaptations.rival_claims else OwnRow()
         self.weak = RankedAtThreshold() if adaptations.weak_ranked else AtThreshold()
+        self.coinciding = DetectionsApart() if adaptations.distinct_detections else OneResponse()
         self.matcher = template_matcher(adaptations.pyramid_template,  # PBM 4.1's match
                                         adaptations.large_head_pyramid,
                                         adaptations.large_head_peaks)
@@ -175,6 +195,8 @@ class MultipleResponsePruning:
                     continue
                 chosen, refined = best, None
             elif amb and dist[cands].max() <= a.duplicate_radius * hw:
+                if not self.coinciding.one_response(cand, cands):
+                    continue  # two detections: two people, left to the assignment
                 chosen, refined = best, None  # one response: the heads coincide
             else:
                 chosen, refined = self.match_template(targets.head_template[ti], cands, heads_xy[cands],
