@@ -257,7 +257,7 @@ class Adaptations:
     camera_placement: bool = False
     reported_by_record: bool = False
     lone_shrink_narrow: bool = False
-    merge_found_elsewhere: bool = False
+    merge_found_elsewhere: bool = True
     distinct_detections: bool = False
 
     def __post_init__(self) -> None:

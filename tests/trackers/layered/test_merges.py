@@ -86,8 +86,8 @@ def test_the_second_pass_reads_the_pair_unoccluded_and_the_paper_passes_once():
     assert len(calls) == 1
 
 
-def test_off_by_default_and_in_paper_mode():
-    assert isinstance(build_rules(Adaptations()).merge, AllHolders)
+def test_on_by_default_and_off_in_paper_mode():
+    assert isinstance(build_rules(Adaptations()).merge, FoundElsewhere)
     assert isinstance(build_rules(Adaptations.paper()).merge, AllHolders)
-    assert isinstance(build_rules(Adaptations(merge_found_elsewhere=True)).merge, FoundElsewhere)
-    assert Adaptations.paper().changed() == [] and not Adaptations().merge_found_elsewhere
+    assert isinstance(build_rules(Adaptations(merge_found_elsewhere=False)).merge, AllHolders)
+    assert Adaptations.paper().changed() == [] and Adaptations().merge_found_elsewhere

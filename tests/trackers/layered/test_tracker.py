@@ -826,7 +826,7 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     assert [type(r) for r in ours] == [R.PredictedModels, R.RelativeMatch, R.ForegroundSupport,
                                        R.PredictedBox, R.PerFrame, R.HeldSize, R.OneToOne,
                                        HiddenEvidence, R.IsolatedEarly,
-                                       AfterPrediction, R.NoContest, R.LoneShrink, R.AllHolders,
+                                       AfterPrediction, R.NoContest, R.LoneShrink, R.FoundElsewhere,
                                        R.BorderExit, R.ReportAnywhere, R.KeepStacked,
                                        R.FilterPrediction, R.MissesBound]
     # report_support, reupdate, contested_template, leaving_unreported, fold_twins,
