@@ -21,8 +21,8 @@ import numba
 import numpy as np
 
 from occbench.trackers.layered import kernel_cache  # noqa: F401 (before any kernel: one stamp for all)
-from occbench.trackers.layered.differences import _pair_differences
-from occbench.trackers.layered.sampling_kernels import _NO_CENTRES, _box_counts, _box_features, _box_scratch
+from occbench.trackers.layered.box_groups import _measure, _measure_all
+from occbench.trackers.layered.sampling_kernels import _box_scratch
 from occbench.trackers.layered.scores import _memo, _score_row, _survival
 
 BOUND_CELLS = 2048
@@ -98,23 +98,6 @@ def _score_some(d: np.ndarray, g0: int, qs: np.ndarray, best: float, spread: flo
         if p[k] > best:  # noqa: PLR1730 (p is finite here)
             best = p[k]
     return best
-
-
-@numba.njit(cache=True, inline="always")
-def _measure(k: int, boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple,
-             m: tuple, misses: np.ndarray, scratch: tuple, d: np.ndarray) -> None:
-    """Box k measured as ``part_features`` measures it (``_box_counts``, ``_box_features``
-    into the one-row feature set of ``scratch``) and eq. 11 of it against target ti[k]
-    into d[k]. ``scratch``: (``_box_scratch``, the one-row features, ``_rho``'s index
-    scratch, ``listed`` of ``_pair_differences``)."""
-    grid, image, luts, pixel_bins = sampling
-    s, one, idx, listed = scratch
-    bands = _box_counts(boxes, k, ratios[0], ratios[1], False, _NO_CENTRES, grid, image,
-                        luts, pixel_bins, s, one[0][0])
-    _box_features(s, bands, one[0][0], 0, one[1:6])
-    one[6][0] = boxes[k, 3]
-    t = ti[k]
-    _pair_differences(m, one, t, 0, 1.0 / (1.0 + misses[t]), d, k, idx, listed)  # eq. 11
 
 
 @numba.njit(cache=True)
@@ -231,9 +214,8 @@ def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling
     """
     scratch, weights, memo, d, pj, p = _kernel_state(boxes, ti, sampling, m, rule, theta)
     spread = rule[0]
-    for k in range(boxes.shape[0]):
-        _measure(k, boxes, ti, ratios, sampling, m, misses, scratch, d)
     size, grouped, table = groups
+    _measure_all(boxes, ti, ratios, sampling, m, misses, scratch, size, grouped, d)
     first = 0
     if size > 0:
         for g0 in range(0, grouped, size):

@@ -16,8 +16,8 @@ from pathlib import Path
 
 from numba.core import caching
 
-KERNEL_MODULES = ("split", "sampling_kernels", "dynamics", "gating", "differences", "scores",
-                  "box_search", "model_update")
+KERNEL_MODULES = ("split", "colour_kernels", "sampling_kernels", "dynamics", "gating",
+                  "differences", "scores", "box_groups", "box_search", "model_update")
 """The modules of this package whose kernels call kernels of another of them."""
 _HERE = Path(__file__).resolve().parent
 _FILES = frozenset(str(_HERE / f"{m}.py") for m in KERNEL_MODULES)

@@ -40,7 +40,7 @@ import numpy as np
 
 from occbench.trackers.common.checks import require
 from occbench.trackers.geometry import iou_matrix
-from occbench.trackers.layered import sampling_kernels
+from occbench.trackers.layered import colour_kernels, sampling_kernels
 from occbench.trackers.layered.split import (  # eqs. 1-2, re-exported here
     HEAD_FRACTION,
     centroid_ratios,  # noqa: F401
@@ -185,18 +185,18 @@ def _channel_luts(bins: int, ranges: tuple[float, float, float]) -> np.ndarray:
 @functools.lru_cache(maxsize=1)
 def _check_colour_formulas() -> None:
     """Raise RuntimeError unless the kernels' HSV and XYZ values (OpenCV's integer
-    formulas, ``sampling_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
+    formulas, ``colour_kernels._hsv_xyz``) equal ``cv2.cvtColor``'s on 65**3 colours; run
     once per process (tests/trackers/layered/test_parts.py checks all 2**24)."""
     v = np.append(np.arange(0, 256, 4), 255).astype(np.uint8)
     pixels = np.stack(np.meshgrid(v, v, v, indexing="ij"), -1).reshape(-1, 3)
     got = np.empty((len(pixels), 6), np.uint8)
-    sampling_kernels.convert(pixels, got)
+    colour_kernels.convert(pixels, got)
     want = np.concatenate([cv2.cvtColor(pixels[None], cv2.COLOR_BGR2HSV)[0],
                            cv2.cvtColor(pixels[None], cv2.COLOR_BGR2XYZ)[0]], axis=1)
     if not np.array_equal(got, want):
         raise RuntimeError(
             f"OpenCV {cv2.__version__} converts BGR to 8-bit HSV or XYZ differently from "
-            "trackers/layered/sampling_kernels._hsv_xyz: update it")
+            "trackers/layered/colour_kernels._hsv_xyz: update it")
 
 
 class PixelBins:

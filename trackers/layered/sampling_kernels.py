@@ -1,6 +1,6 @@
 """PBM 2.1-2.2, compiled: the part features of boxes measured on a fixed grid of samples
 (``part_features``; ``reading:sample_grid``) and the foreground centroid of a box
-(``grid_centroids``), colours converted as OpenCV converts them (``convert``). The
+(``grid_centroids``), colours converted as OpenCV converts them (``colour_kernels``). The
 extractor that calls them is ``occbench.trackers.layered.parts.PartFeatureExtractor``.
 
 In the per-sample loops, indices read from arrays are cast to unsigned (``np.uint64``):
@@ -14,6 +14,7 @@ import numba
 import numpy as np
 
 from occbench.trackers.layered import kernel_cache  # noqa: F401 (before any kernel: one stamp for all)
+from occbench.trackers.layered.colour_kernels import _pixel_packed
 from occbench.trackers.layered.split import _centroid_ratios, _part_rects
 
 if numba.config.DISABLE_JIT:  # plain Python (tests/traced_run.py): numba's intrinsic cannot run
@@ -65,53 +66,6 @@ def _sample_grid(
             if inside and has_fg:
                 inside = mrow[np.uint64(xi[c])]  # unsigned: no negative-index test
             on[r, c] = inside
-
-
-# ----------------------------------------------------------------------------- colours
-
-
-HSV_SHIFT = 12
-"""Fixed-point bits of OpenCV's 8-bit HSV and XYZ conversions (``hsv_shift``, ``xyz_shift``)."""
-
-
-_S_DIV = np.concatenate([[0], np.rint((255 << HSV_SHIFT) / np.arange(1.0, 256.0))]).astype(np.int64)
-"""``sdiv_table`` of OpenCV's RGB2HSV_b: round(255 * 2**12 / v) (saturate_cast rounds to even)."""
-
-
-_H_DIV = np.concatenate([[0], np.rint((180 << HSV_SHIFT) / (6.0 * np.arange(1.0, 256.0)))]).astype(np.int64)
-"""``hdiv_table180`` of RGB2HSV_b: round(180 * 2**12 / (6 * diff))."""
-
-
-_XYZ = np.array([[739, 1465, 1689], [296, 2929, 871], [3892, 488, 79]], dtype=np.int64)
-"""Rows X, Y, Z, columns B, G, R: OpenCV's ``sRGB2XYZ_D65_i`` (RGB2XYZ_i<uchar>), in BGR order."""
-
-
-@numba.njit(cache=True, inline="always")
-def _hsv_xyz(b: int, g: int, r: int) -> tuple[int, int, int, int, int, int]:
-    """OpenCV's 8-bit HSV (hue 0..179) and XYZ of one BGR pixel, as ``cv2.cvtColor`` with
-    COLOR_BGR2HSV (RGB2HSV_b: integer division by tables) and COLOR_BGR2XYZ (RGB2XYZ_i)."""
-    v, vmin = max(b, g, r), min(b, g, r)
-    diff = v - vmin
-    half = 1 << (HSV_SHIFT - 1)
-    s = (diff * _S_DIV[np.uint64(v)] + half) >> HSV_SHIFT  # unsigned: no negative-index test
-    # the hue sector without branches (colours are noisy): OpenCV's vr, vg masks
-    vr, vg = -np.int64(v == r), -np.int64(v == g)
-    h = (vr & (g - b)) + (~vr & ((vg & (b - r + 2 * diff)) + (~vg & (r - g + 4 * diff))))
-    h = (h * _H_DIV[np.uint64(diff)] + half) >> HSV_SHIFT
-    h = min(h + (180 & -np.int64(h < 0)), 255)
-    x = min((b * _XYZ[0, 0] + g * _XYZ[0, 1] + r * _XYZ[0, 2] + half) >> HSV_SHIFT, 255)
-    y = min((b * _XYZ[1, 0] + g * _XYZ[1, 1] + r * _XYZ[1, 2] + half) >> HSV_SHIFT, 255)
-    z = min((b * _XYZ[2, 0] + g * _XYZ[2, 1] + r * _XYZ[2, 2] + half) >> HSV_SHIFT, 255)
-    return h, s, v, x, y, z
-
-
-@numba.njit(cache=True)
-def convert(pixels: np.ndarray, out: np.ndarray) -> None:
-    """(M, 3) uint8 BGR pixels to (M, 6) uint8 H, S, V, X, Y, Z (``_hsv_xyz``; the colour
-    spaces of PBM 2.2's histograms), for the check against ``cv2.cvtColor``."""
-    for m in range(pixels.shape[0]):
-        out[m, 0], out[m, 1], out[m, 2], out[m, 3], out[m, 4], out[m, 5] = _hsv_xyz(
-            np.int64(pixels[m, 0]), np.int64(pixels[m, 1]), np.int64(pixels[m, 2]))
 
 
 # ----------------------------------------------------------------------------- PBM 2.1-2.2
@@ -183,47 +137,12 @@ def _row_masks(on: np.ndarray, masks: np.ndarray) -> None:
 
 
 @numba.njit(cache=True, inline="always")
-def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
-                at_centroids: bool, centres: np.ndarray, grid: tuple, image: tuple, luts: tuple,
-                pixel_bins: tuple, s: tuple, p: np.ndarray) -> tuple[int, int, int, int]:
-    """The samples of box i (``part_features``' arguments) counted into the scratch ``s``
-    (``_box_scratch``) and its part rectangles (eqs. 1-2) into p (5, 4); returns the
-    sample rows of the head, torso and leg bands and the sample columns right of the split.
-
-    Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
-    centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
-    sample is on the outline when a 4-neighbour is background or off the grid.
-
-    A grid row is walked as bit masks (``_row_masks``): its foreground samples left of the
-    split, then those right of it (the two parts' sums are separate, each in sample
-    order, as ``np.bincount(weights=...)``); the outline samples are those whose row's and
-    neighbour rows' masks are not all set around them.
-    """
-    fr, fc = grid
-    frame, fg, has_fg = image
-    hsv_lut, xyz_lut = luts
-    table, stamp, shift = pixel_bins
-    sh = np.uint64(shift)
-    sh2, bin_mask, st = sh + sh, (np.uint64(1) << sh) - np.uint64(1), np.uint64(stamp)
-    ys, xs, yi, xi, on, band, right, coff, count, edge, sx, sy, hist, occupied, masks = s
-    H, W = frame.shape[0], frame.shape[1]
-    R, C = fr.shape[0], fc.shape[0]
-    pixels = frame.reshape(H * W * 3)
-    zero, one, low = np.uint64(0), np.uint64(1), np.uint64(63)
-    x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
-    _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
-    if at_centroids:
-        cx, cy = _grid_centroid(x, y, w, h, on)
-        centres[i, 0], centres[i, 1] = cx, cy
-        alpha[i], beta[i] = _centroid_ratios(x, y, w, h, cx, cy)            # eqs. 1-2
-    _part_rects(x, y, w, h, alpha[i], beta[i], p)                         # eqs. 1-2
-    # a sample's band and side: above the head's bottom, the torsos' bottom, left of
-    # the left parts' right edge (ties go down and right)
-    head_end, torso_end, split = p[0, 1] + p[0, 3], p[1, 1] + p[1, 3], p[1, 0] + p[1, 2]
-    for c in range(C):
-        coff[c] = np.uint64(xi[c])
-    rows_head, rows_torso, rows_legs, cols_right = 0, 0, 0, 0
-    for r in range(R):
+def _bands(ys: np.ndarray, head_end: float, torso_end: float, band: np.ndarray
+           ) -> tuple[int, int, int]:
+    """The band of each sample row ``ys`` into ``band``: 0 above the head's bottom, 1 above
+    the torsos' bottom, 3 below (ties go down); returns the rows of each band."""
+    rows_head, rows_torso, rows_legs = 0, 0, 0
+    for r in range(ys.shape[0]):
         if ys[r] < head_end:
             band[r] = 0
             rows_head += 1
@@ -233,12 +152,39 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
         else:
             band[r] = 3
             rows_legs += 1
-    right_mask = zero
-    for c in range(C):
+    return rows_head, rows_torso, rows_legs
+
+
+@numba.njit(cache=True, inline="always")
+def _sides(xs: np.ndarray, split: float, right: np.ndarray) -> tuple[np.uint64, int]:
+    """Whether each sample column ``xs`` is right of the split (ties go right) into
+    ``right``; returns them as a bit mask (column c: bit c) and their number."""
+    right_mask, cols_right = np.uint64(0), 0
+    for c in range(xs.shape[0]):
         right[c] = 1 if xs[c] >= split else 0
         cols_right += right[c]
         right_mask |= np.uint64(right[c]) << np.uint64(c)
-    _row_masks(on, masks)
+    return right_mask, cols_right
+
+
+@numba.njit(cache=True, inline="always")
+def _count_rows(masks: np.ndarray, band: np.ndarray, yi: np.ndarray, W: int, coff: np.ndarray,
+                right_mask: np.uint64, xs: np.ndarray, ys: np.ndarray, table: np.ndarray,
+                colours: tuple, s: tuple) -> None:
+    """The foreground samples of a box's grid rows (``masks`` (R,), ``_row_masks``) counted
+    into the scratch ``s`` (``_box_scratch``): row r in part ``band[r]`` (0 head, 1 torso,
+    3 legs; the right half one more where ``right_mask`` is set), sample (r, c) at
+    ``(xs[c], ys[r])`` on pixel ``yi[r] W + coff[c]`` of the bin ``table``
+    (``_pixel_packed``). A row's foreground samples left of the split, then those right of
+    it (the two parts' sums are separate, each in sample order, as
+    ``np.bincount(weights=...)``); the outline samples are those whose row's and neighbour
+    rows' masks are not all set around them."""
+    count, edge, sx, sy, hist, occupied = s[8], s[9], s[10], s[11], s[12], s[13]
+    st, sh = colours[2], colours[3]
+    sh2 = sh + sh
+    bin_mask = (np.uint64(1) << sh) - np.uint64(1)
+    zero, one, low = np.uint64(0), np.uint64(1), np.uint64(63)
+    R = masks.shape[0]
     count[:] = 0
     edge[:] = 0
     sx[:] = 0.0
@@ -271,14 +217,7 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
                 q = roff + coff[c]
                 packed = np.uint64(table[q])
                 if (packed >> sh2) != st:  # first read this frame: convert it
-                    o = q * np.uint64(3)
-                    ch, cs, cv, cx, cy, cz = _hsv_xyz(np.int64(pixels[o]), np.int64(pixels[o + one]),
-                                                      np.int64(pixels[o + np.uint64(2)]))
-                    packed = (st << sh2) | (np.uint64(
-                        hsv_lut[0, np.uint64(ch)] + hsv_lut[1, np.uint64(cs)] + hsv_lut[2, np.uint64(cv)]
-                    ) << sh) | np.uint64(
-                        xyz_lut[0, np.uint64(cx)] + xyz_lut[1, np.uint64(cy)] + xyz_lut[2, np.uint64(cz)])
-                    table[q] = np.uint32(packed)
+                    packed = _pixel_packed(q, table, colours)
                 hsv_bin, xyz_bin = (packed >> sh) & bin_mask, packed & bin_mask
                 n += 1
                 e += np.int64((outline >> np.uint64(c)) & one)
@@ -290,6 +229,46 @@ def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
                 hist[1, k, xyz_bin] += 1
             count[k], edge[k], sx[k], sy[k] = n, e, sxk, syk
             occupied[0, k], occupied[1, k] = hk, xk
+
+
+@numba.njit(cache=True, inline="always")
+def _box_counts(boxes: np.ndarray, i: int, alpha: np.ndarray, beta: np.ndarray,
+                at_centroids: bool, centres: np.ndarray, grid: tuple, image: tuple, luts: tuple,
+                pixel_bins: tuple, s: tuple, p: np.ndarray) -> tuple[int, int, int, int]:
+    """The samples of box i (``part_features``' arguments) counted into the scratch ``s``
+    (``_box_scratch``) and its part rectangles (eqs. 1-2) into p (5, 4); returns the
+    sample rows of the head, torso and leg bands and the sample columns right of the split.
+
+    Part of a sample: the head band above ``y + h / 7``, torso-and-arm rows above the
+    centroid row, legs below; left or right of the centroid column (PBM 2.1). A foreground
+    sample is on the outline when a 4-neighbour is background or off the grid.
+
+    A grid row is walked as a bit mask (``_row_masks``, ``_count_rows``).
+    """
+    fr, fc = grid
+    frame, fg, has_fg = image
+    table, stamp, shift = pixel_bins
+    sh, st = np.uint64(shift), np.uint64(stamp)
+    ys, xs, yi, xi, on, band, right, coff, masks = s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[14]
+    H, W = frame.shape[0], frame.shape[1]
+    R, C = fr.shape[0], fc.shape[0]
+    pixels = frame.reshape(H * W * 3)
+    x, y, w, h = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
+    _sample_grid(boxes[i], fr, fc, H, W, fg, has_fg, ys, xs, yi, xi, on)
+    if at_centroids:
+        cx, cy = _grid_centroid(x, y, w, h, on)
+        centres[i, 0], centres[i, 1] = cx, cy
+        alpha[i], beta[i] = _centroid_ratios(x, y, w, h, cx, cy)            # eqs. 1-2
+    _part_rects(x, y, w, h, alpha[i], beta[i], p)                         # eqs. 1-2
+    # a sample's band and side: above the head's bottom, the torsos' bottom, left of
+    # the left parts' right edge (ties go down and right)
+    head_end, torso_end, split = p[0, 1] + p[0, 3], p[1, 1] + p[1, 3], p[1, 0] + p[1, 2]
+    for c in range(C):
+        coff[c] = np.uint64(xi[c])
+    rows_head, rows_torso, rows_legs = _bands(ys, head_end, torso_end, band)
+    right_mask, cols_right = _sides(xs, split, right)
+    _row_masks(on, masks)
+    _count_rows(masks, band, yi, W, coff, right_mask, xs, ys, table, (pixels, luts, st, sh), s)
     return rows_head, rows_torso, rows_legs, cols_right
 
 

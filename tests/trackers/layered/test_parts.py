@@ -298,7 +298,7 @@ def test_extractor_equals_the_reference(fg_kind, bins, grid):
 def test_colour_conversion_equals_cvtcolor_for_every_colour():
     # the kernels' integer HSV and XYZ formulas against OpenCV on all 2**24 BGR colours,
     # 16 blue values (2**20 colours) at a time
-    from occbench.trackers.layered import sampling_kernels
+    from occbench.trackers.layered import colour_kernels
 
     v = np.arange(256, dtype=np.uint8)
     block = np.empty((16, 256, 256, 3), np.uint8)
@@ -307,7 +307,7 @@ def test_colour_conversion_equals_cvtcolor_for_every_colour():
     for b0 in range(0, 256, 16):
         block[..., 0] = v[b0:b0 + 16, None, None]
         img = block.reshape(1024, 1024, 3)
-        sampling_kernels.convert(img.reshape(-1, 3), got)
+        colour_kernels.convert(img.reshape(-1, 3), got)
         np.testing.assert_array_equal(got[:, :3], cv2.cvtColor(img, cv2.COLOR_BGR2HSV).reshape(-1, 3))
         np.testing.assert_array_equal(got[:, 3:], cv2.cvtColor(img, cv2.COLOR_BGR2XYZ).reshape(-1, 3))
 
