@@ -186,6 +186,11 @@ class Adaptations:
             that PBM 3.1 searched as a merge, whose other holders all took other candidates
             this frame as measured, is the target grown: the frame is associated again with
             that pair unoccluded (``merges.FoundElsewhere``; false: a merge, PBM 3.1).
+        merge_recent_holder: with ``merge_found_elsewhere``, a detection (one head) a target
+            took as a merge while exactly one other live target holding it, found more
+            recently (fewer misses), took nothing, is that target grown: associated again
+            with that pair unoccluded and the merge's pair struck
+            (``merges.FoundElsewhere.recent_holder``; false: the merge stands, PBM 3.1).
         distinct_detections: with ``duplicate_radius``, coinciding heads are one response
             only when a blob's head is among them; an ambiguous target whose coinciding
             candidates are all detections is not pruned (two people; the one-to-one
@@ -259,6 +264,7 @@ class Adaptations:
     lone_shrink_narrow: bool = False
     merge_found_elsewhere: bool = True
     distinct_detections: bool = False
+    merge_recent_holder: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -287,6 +293,9 @@ class Adaptations:
                 not (self.reported_by_record and self.reported_behind > 0),
                 "and adaptations.reported_behind are two rules for one step: set one",
                 self.reported_by_record)
+        require("adaptations.merge_recent_holder",
+                not self.merge_recent_holder or self.merge_found_elsewhere,
+                "needs adaptations.merge_found_elsewhere", self.merge_recent_holder)
         require("adaptations.camera_placement",
                 not (self.camera_placement and self.measured_velocity),
                 "and adaptations.measured_velocity are two rules for one step: set one",
@@ -316,7 +325,8 @@ class Adaptations:
                                        "coarse_search", "pyramid_template", "measured_velocity",
                                        "border_birth_waits", "camera_placement",
                                        "reported_by_record", "lone_shrink_narrow",
-                                       "merge_found_elsewhere", "distinct_detections"),
+                                       "merge_found_elsewhere", "distinct_detections",
+                                       "merge_recent_holder"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
@@ -341,7 +351,7 @@ class Adaptations:
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
-                   distinct_detections=False)
+                   distinct_detections=False, merge_recent_holder=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

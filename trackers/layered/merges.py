@@ -6,7 +6,9 @@ carved from the prediction. ``adaptations.lone_growth`` reads a region holding n
 live target as the target grown. ``FoundElsewhere`` (``adaptations.merge_found_elsewhere``)
 asks the frame's assignment too: a detection whose other holders all took other
 candidates, unoccluded, holds none of them, so the target it was searched in is that target
-grown. Kinds are ``occlusion_kinds``' (T, N) array (+1 larger, -1 smaller, 0 neither).
+grown. With ``recent_holder`` (``adaptations.merge_recent_holder``) it also reads the
+opposite case: a detection taken as a merge by a target missed longer than a holder that
+took nothing is that holder grown. Kinds are ``occlusion_kinds``' (T, N) array (+1 larger, -1 smaller, 0 neither).
 """
 
 from __future__ import annotations
@@ -33,6 +35,9 @@ class AllHolders:
               overlap: float) -> None:
         """Leaves ``kinds`` as the size test set them."""
 
+    def strike(self, S: np.ndarray) -> None:
+        """Leaves the scores as they are."""
+
     def associate(self, block: Block, frame: np.ndarray, targets: Targets, cand: Candidates,
                   *rest) -> Association:
         """``block(frame, targets, cand, *rest)``, once."""
@@ -53,10 +58,25 @@ class FoundElsewhere:
     walking person 5's detection (22 x 63; his target's prediction 13 x 63) also holds the
     box of person 2's target, which takes person 2's own detection that frame; person 5's
     target is searched inside it as a merge and keeps a carved 14 px box that no longer
-    follows him, and three frames later person 2's target takes his detection."""
+    follows him, and three frames later person 2's target takes his detection.
 
-    def __init__(self) -> None:
+    ``recent_holder`` (``adaptations.merge_recent_holder``): where a target u took a
+    detection n as a merge while exactly one other live target t holding n, found more
+    recently than u (fewer misses), took nothing, n is t's region: the frame is associated
+    again with (t, n) as t grown (kind 0) and u's pair (u, n) struck (a region read as one
+    target grown is no merge, PBM 3.1's search of u inside it stands on nothing).
+
+    Why (docs/generalisation.md, "pbm, ninth round"): on ecp1-180 gt seed 1000 frame 161
+    person 4, rising through the stairwell, is seen whole (29 x 99; his target 6, found the
+    frame before on his 47 px top, predicts 25 x 39); the detection also holds the last box
+    of person 3's target 4, unfound two frames (person 3 sank out of view there). Target 6's
+    head-anchored box falls outside its gate (the head rose 52 px), target 4's search scores
+    0.374 and takes him, target 6 is left unfound and person 4 ends with person 3's id."""
+
+    def __init__(self, recent_holder: bool = False) -> None:
+        self.recent_holder = recent_holder
         self._grown: np.ndarray | None = None  # (G, 2) pairs taken as grown in the second pass
+        self._struck: np.ndarray | None = None  # (S, 2) pairs not scored in the second pass
         self._first: tuple[np.ndarray, np.ndarray, float] | None = None  # kinds, live, overlap
 
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, live: np.ndarray,
@@ -69,35 +89,74 @@ class FoundElsewhere:
         else:
             self._first = (kinds, live.copy(), overlap)
 
+    def strike(self, S: np.ndarray) -> None:
+        """Second pass: the struck pairs' scores set to -inf in place (no candidate of
+        theirs)."""
+        if self._struck is not None and len(self._struck):
+            S[self._struck[:, 0], self._struck[:, 1]] = -np.inf
+
     def associate(self, block: Block, frame: np.ndarray, targets: Targets, cand: Candidates,
                   *rest) -> Association:
-        """``block`` once, and again with the grown pairs when there are any."""
-        self._grown, self._first = None, None
+        """``block`` once, and again with the grown (and struck) pairs when there are any."""
+        self._grown, self._struck, self._first = None, None, None
         found = block(frame, targets, cand, *rest)
         grown = self.grown_pairs(found, targets, cand)
+        struck = np.empty((0, 2), dtype=np.intp)
+        if self.recent_holder:
+            held, struck = self.recent_pairs(found, targets, cand)
+            grown = np.concatenate([grown, held])
         if len(grown):
-            self._grown = grown
+            self._grown, self._struck = grown, struck
             try:
                 found = block(frame, targets, cand, *rest)
             finally:
-                self._grown = None
+                self._grown, self._struck = None, None
         self._first = None
         return found
+
+    def _taken(self, found: Association, targets: Targets, cand: Candidates
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """The candidate each target took (-1 none, -2 as a merge) and which live targets'
+        boxes each candidate's region holds (T, N), from the first pass."""
+        kinds, live, overlap = self._first
+        matches, occluded = found.matches, found.chosen.occluded
+        taken = np.full(len(targets), -1, dtype=np.intp)
+        taken[matches[:, 0]] = np.where(occluded, -2, matches[:, 1])
+        holds = overlap_ratio_matrix(targets.dof[:, [0, 1, 4, 5]], cand.region) >= overlap
+        return taken, holds & live[:, None]
+
+    def recent_pairs(self, found: Association, targets: Targets, cand: Candidates
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """(t, n) pairs of the first pass's merges to read as the recent holder t grown,
+        and the (u, n) pairs to strike (``recent_holder``), each (G, 2)."""
+        none = np.empty((0, 2), dtype=np.intp)
+        if self._first is None or found.chosen is None:
+            return none, none
+        kinds = self._first[0]
+        taken, holds = self._taken(found, targets, cand)
+        held, struck = [], []
+        for (u, n), carved in zip(found.matches.tolist(), found.chosen.occluded.tolist()):
+            if not carved or kinds[u, n] <= 0 or cand.blob[n] or cand.heads_in_region[n] > 1:
+                continue
+            left = np.flatnonzero(holds[:, n] & (taken == -1) & (targets.misses < targets.misses[u]))
+            if len(left) == 1:
+                held.append((int(left[0]), n))
+                struck.append((u, n))
+        return (np.array(held, dtype=np.intp).reshape(-1, 2),
+                np.array(struck, dtype=np.intp).reshape(-1, 2))
 
     def grown_pairs(self, found: Association, targets: Targets, cand: Candidates) -> np.ndarray:
         """(G, 2) (target, candidate) matches of the first pass that are a target grown."""
         if self._first is None or found.chosen is None:
             return np.empty((0, 2), dtype=np.intp)
-        kinds, live, overlap = self._first
+        kinds = self._first[0]
         matches, occluded = found.matches, found.chosen.occluded
-        taken = np.full(len(targets), -1, dtype=np.intp)  # the candidate each target took
-        taken[matches[:, 0]] = np.where(occluded, -2, matches[:, 1])  # -2: as a merge
-        holds = overlap_ratio_matrix(targets.dof[:, [0, 1, 4, 5]], cand.region) >= overlap
+        taken, holds = self._taken(found, targets, cand)  # taken -2: as a merge
         grown = []
         for (t, n), carved in zip(matches.tolist(), occluded.tolist()):
             if not carved or kinds[t, n] <= 0 or cand.blob[n] or cand.heads_in_region[n] > 1:
                 continue
-            others = np.flatnonzero(holds[:, n] & live)
+            others = np.flatnonzero(holds[:, n])
             others = others[others != t]
             if len(others) and np.all((taken[others] >= 0) & (taken[others] != n)):
                 grown.append((t, n))

@@ -267,6 +267,7 @@ class PBMTracker:
             scores.S[ti_s, n_s] = found.p[found.kept]
             scores.hyp[ti_s, n_s] = found.kept.nonzero()[0]
             scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found.pj, found.feats, found.k, found.dof
+        self.rules.merge.strike(scores.S)  # merges.py: a merge read as another target grown
 
     # ------------------------------------------------------------------ model update (PBM 4.2)
     def _update_models(self, frame: np.ndarray, found: Association, feats: PartFeatures,

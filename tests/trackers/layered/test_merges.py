@@ -5,6 +5,7 @@ whose other holders all took other candidates as measured, is the target grown
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.merges import AllHolders, FoundElsewhere
@@ -91,3 +92,65 @@ def test_on_by_default_and_off_in_paper_mode():
     assert isinstance(build_rules(Adaptations.paper()).merge, AllHolders)
     assert isinstance(build_rules(Adaptations(merge_found_elsewhere=False)).merge, AllHolders)
     assert Adaptations.paper().changed() == [] and Adaptations().merge_found_elsewhere
+
+
+def _stairwell():
+    """ecp1-180 gt seed 1000 frame 161 in small: candidate 0 (29 x 99, person 4 seen whole)
+    holds the last box of target 0 (person 3's, 15 x 63, unfound 2 frames) and of target 1
+    (person 4's, 29 x 47, found last frame); both are larger-region pairs."""
+    region = np.array([[53.0, 87.0, 29.0, 99.0]])
+    cand = Candidates(region, region.copy(), np.array([[68.0, 87.5, 14.5]]),
+                      np.array([False]), np.array([1]))
+    dof = np.array([[53.0, 107.0, 60.5, 138.5, 15.0, 63.0],
+                    [51.0, 139.0, 65.5, 162.5, 29.0, 47.0]])
+    targets = _Targets(dof=dof, misses=np.array([2, 0]))
+    return np.array([[1], [1]]), cand, targets, np.array([True, True])
+
+
+def _stairwell_pass(rule):
+    kinds, cand, targets, live = _stairwell()
+    rule.apply(kinds, cand, targets, live, 0.5)
+    return targets, cand
+
+
+def test_a_merge_taken_by_the_longer_missed_holder_is_the_recent_holder_grown():
+    rule = FoundElsewhere(recent_holder=True)
+    targets, cand = _stairwell_pass(rule)
+    held, struck = rule.recent_pairs(_found([[0, 0]], [True]), targets, cand)
+    assert held.tolist() == [[1, 0]] and struck.tolist() == [[0, 0]]
+    targets, cand = _stairwell_pass(rule)  # the recent holder took something: the merge stands
+    assert rule.recent_pairs(_found([[0, 0], [1, 1]], [True, False]), targets, cand)[0].size == 0
+    targets, cand = _stairwell_pass(rule)
+    targets.misses = np.array([2, 2])  # not found more recently: the merge stands
+    assert rule.recent_pairs(_found([[0, 0]], [True]), targets, cand)[0].size == 0
+
+
+def test_the_recent_holder_second_pass_strikes_the_merge_and_off_passes_once():
+    for on in (True, False):
+        rule = FoundElsewhere(recent_holder=on)
+        calls, seen = [], []
+
+        def block(frame, targets, cand, *rest, rule=rule, calls=calls, seen=seen):
+            kinds, _, _, live = _stairwell()
+            rule.apply(kinds, cand, targets, live, 0.5)
+            S = np.array([[0.374], [0.366]])
+            rule.strike(S)
+            seen.append((kinds.tolist(), S[:, 0].tolist()))
+            calls.append(1)
+            return _found([[0, 0]] if len(calls) == 1 else [[1, 0]], [len(calls) == 1])
+
+        _, cand, targets, _ = _stairwell()
+        found = rule.associate(block, None, targets, cand)
+        if on:
+            assert seen == [([[1], [1]], [0.374, 0.366]), ([[1], [0]], [-np.inf, 0.366])]
+            assert found.matches.tolist() == [[1, 0]]
+        else:
+            assert len(calls) == 1 and found.matches.tolist() == [[0, 0]]
+
+
+def test_recent_holder_off_by_default_off_in_paper_mode_and_needs_found_elsewhere():
+    assert not build_rules(Adaptations()).merge.recent_holder
+    assert build_rules(Adaptations(merge_recent_holder=True)).merge.recent_holder
+    assert "merge_recent_holder" not in Adaptations.paper().changed()
+    with pytest.raises(ValueError, match="merge_recent_holder"):
+        Adaptations(merge_recent_holder=True, merge_found_elsewhere=False)
