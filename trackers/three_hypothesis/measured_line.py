@@ -25,9 +25,10 @@ class FilterVelocity:
 
     records: ClassVar[bool] = False
     uses_shares: ClassVar[bool] = False
+    uses_partners: ClassVar[bool] = False
 
     def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray,
-               own: np.ndarray | None = None) -> None:
+               own: np.ndarray | None = None, partner: np.ndarray | None = None) -> None:
         return None
 
     def start(self, person, x_prev: np.ndarray, x_pred: np.ndarray) -> np.ndarray:
@@ -91,12 +92,18 @@ class MeasuredLine:
     neither enters the person's centres nor scores the predictors, and at a first miss right
     after one, hypothesis 1 starts on the chosen predictor at t from the person's own
     measurements (the line's centre at t, or the last own centre moved by the step per frame
-    since), not from the estimate the merged measurement dragged."""
+    since), not from the estimate the merged measurement dragged. With ``shift`` > 0
+    (``adaptations.merged_line_shift``) such a measurement counts as merged only when it is
+    evidence of two people: its centre lies off the line through the person's own last
+    centres (at t), towards the hidden partner's predicted centre, by more than ``shift``
+    times its width (a box fitted over the pair is pulled towards the partner; a person's own
+    box beside a hidden neighbour stays on the person's line)."""
 
     window: int
     sigmas: float = 0.0
     step: bool = False
     own_only: bool = False
+    shift: float = 0.0
     records: ClassVar[bool] = True
 
     @property
@@ -104,8 +111,31 @@ class MeasuredLine:
         """Whether ``record`` reads the matched measurements' own shares."""
         return self.own_only
 
+    @property
+    def uses_partners(self) -> bool:
+        """Whether ``record`` reads the hidden partners' predicted centres."""
+        return self.own_only and self.shift > 0
+
+    def pulled(self, persons: list, frame: int, boxes: np.ndarray, partner: np.ndarray,
+               rows: np.ndarray) -> np.ndarray:
+        """(len(rows),) bool: whether each measurement ``boxes[r]`` (r in ``rows``) lies off
+        the line through its person's own last centres at ``frame``, towards ``partner[r]``
+        (the hidden partner's predicted centre), by more than ``shift`` times its width; False
+        for a person with fewer than 3 centres (no line) or no partner."""
+        out = np.zeros(len(rows), dtype=bool)
+        for a, r in enumerate(rows.tolist()):
+            centres = persons[r].centres
+            if len(centres) < 3 or np.isnan(partner[r]).any():
+                continue
+            t0, x0, y0, vx, vy = _line(centres)
+            at = np.array([x0 + vx * (frame - t0), y0 + vy * (frame - t0)])
+            u = partner[r] - at
+            c = boxes[r, :2] + boxes[r, 2:] / 2
+            out[a] = float((c - at) @ u) > self.shift * boxes[r, 2] * float(np.hypot(*u))
+        return out
+
     def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray,
-               own: np.ndarray | None = None) -> None:
+               own: np.ndarray | None = None, partner: np.ndarray | None = None) -> None:
         """Score both predictors on each person's measured box at ``frame`` (``boxes`` (K, 4)
         xywh; M's prediction: ``predicted`` (K, 8) states), then keep its centre. A person
         with at least 3 centres adds, to M's error and to the line's, the squared distance of
@@ -113,9 +143,13 @@ class MeasuredLine:
         ``step``, the last step's to its own); every person's line and step in one compiled
         call (``_kernels.line_misses``: ``_lines``' bits). With ``own_only``, the rows whose
         ``own`` (K,) share is below 1 are left out and their persons marked
-        (``merged_at``)."""
+        (``merged_at``); with ``shift``, only those ``pulled`` towards their ``partner``
+        ((K, 2) predicted centres)."""
         if self.own_only and own is not None:
             keep = np.asarray(own) >= 1.0
+            if self.shift > 0 and partner is not None and not keep.all():
+                rows = np.flatnonzero(~keep)
+                keep[rows] = ~self.pulled(persons, frame, boxes, partner, rows)
             for person, kept in zip(persons, keep.tolist()):
                 person.merged_at = -1 if kept else frame
             if not keep.all():

@@ -266,6 +266,10 @@ class Adaptations:
             (own share below 1) stays out of the person's line, and hypothesis 1 at a first
             miss right after one starts on the line (or step) at t from the person's own
             measurements (``measured_line.MeasuredLine``); False: every measurement.
+        merged_line_shift: with ``merged_line``, such a measurement counts as merged only
+            when its centre lies off the line through the person's own last centres towards
+            the hidden partner's predicted centre by more than this many times its width
+            (``MeasuredLine.shift``); 0: whenever its own share is below 1.
     """
 
     gate_sigmas: float = 3.0
@@ -307,12 +311,14 @@ class Adaptations:
     return_floor: float = 0.0
     restore_still: bool = False
     merged_line: bool = False
+    merged_line_shift: float = 0.0
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
                       "shape_gate": float, "early_confirm_score": float,
                       "measured_hypothesis_sigmas": float,
                       "split_appearance_margin": float, "return_floor": float,
+                      "merged_line_shift": float,
                       "report_memory": float, "blend_visible": bool,
                       "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
@@ -332,7 +338,8 @@ class Adaptations:
                  tentative_misses=self.tentative_misses,
                  early_confirm=self.early_confirm, report_memory=self.report_memory,
                  measured_hypothesis_sigmas=self.measured_hypothesis_sigmas,
-                 split_appearance_margin=self.split_appearance_margin)
+                 split_appearance_margin=self.split_appearance_margin,
+                 merged_line_shift=self.merged_line_shift)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
              early_confirm_score=self.early_confirm_score, return_floor=self.return_floor)
@@ -357,7 +364,8 @@ class Adaptations:
                    split_appearance=False, split_appearance_margin=0.0,
                    merged_unmixed=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
-                   return_floor=0.0, restore_still=False, merged_line=False)
+                   return_floor=0.0, restore_still=False, merged_line=False,
+                   merged_line_shift=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

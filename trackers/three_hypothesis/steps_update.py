@@ -61,7 +61,8 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     visible_share = _visible_share(V, A, D, matches, behind, dbox, setting)
     asked = [r for r, m in enumerate(matches) if m.det in tent and m.det not in empty_dets]
     clear = _clear(S, V, O, rules, [keys[r] for r in asked], [matches[r].det for r in asked])
-    rules.line.record([persons[i] for i in keys], memory.t, dbox, S.Xp[idx], own)
+    rules.line.record([persons[i] for i in keys], memory.t, dbox, S.Xp[idx], own,
+                      _partner_centres(S, V, O, rules, matches, hidden, own))
     scores = V.scores.tolist()
     absorbed: set[int] = set()
     shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
@@ -176,6 +177,26 @@ def _own_share(S: Predictions, V: Measurements, O: Occlusions, rules: Rules,
         return np.ones(len(matches)), partner
     return own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta,
                       partner if rules.appearance_front.uses_partners else None), partner
+
+
+def _partner_centres(S: Predictions, V: Measurements, O: Occlusions, rules: Rules,
+                     matches: list[Match], hidden: np.ndarray, own: np.ndarray) -> np.ndarray:
+    """(K, 2) centre of the predicted region (of the hidden partner in O covering most of
+    each matched measurement, ``contact.own_shares``) that covers most of it; nan where
+    none does or no rule reads it (``rules.line.uses_partners``)."""
+    out = np.full((len(matches), 2), np.nan)
+    if not rules.line.uses_partners or not (own < 1.0).any():
+        return out
+    partner = np.full(len(matches), -1)
+    own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta, partner)
+    for r in np.flatnonzero(partner >= 0).tolist():
+        nodes, d = np.flatnonzero(S.owners == partner[r]), matches[r].det
+        b = S.boxes[nodes]  # |S_m & S_d| = delta (|S_m| + |S_d|) / 2 (eq. 5)
+        cover = O.delta[nodes][:, [d]].toarray().ravel() * (b[:, 2] * b[:, 3]
+                                                             + V.boxes[d, 2] * V.boxes[d, 3])
+        best = b[int(np.argmax(cover))]
+        out[r] = best[0] + best[2] / 2, best[1] + best[3] / 2
+    return out
 
 
 def _confirm(S: Predictions, hidden: np.ndarray, absorbed: set[int], person: Person,

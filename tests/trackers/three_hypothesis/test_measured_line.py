@@ -204,3 +204,29 @@ def test_a_merged_measurement_stays_out_of_the_line():
     h = EllipseHistogrammer()
     assert build_rules(Adaptations(merged_line=True), h).line == MeasuredLine(8, 2.0, True, True)
     assert "merged_line" not in Adaptations().changed() + Adaptations.paper().changed()
+
+
+def test_a_merged_measurement_is_one_pulled_towards_the_partner():
+    """``merged_line_shift``: the walker (xc = 10 + 3 t, width 10) beside a hidden partner
+    whose predicted centre stands at xc 40 holds share 0.6 of its boxes at t = 5 and 6. At
+    t = 5 its own box lies on its line (a person's own box beside a hidden neighbour): kept.
+    At t = 6 the box is fitted over the pair, 5 px (half its width) towards the partner: left
+    out. Without the shift (``merged_line`` alone) both are left out."""
+    def walk(rule):
+        person = SimpleNamespace(centres=[], line_errors=[0.0, 0.0], step_error=0.0,
+                                 merged_at=-1)
+        for t in range(1, 7):
+            xc = 10.0 + 3 * t + (5.0 if t == 6 else 0.0)
+            rule.record([person], t, np.array([[xc - 5, 0.0, 10, 20]]),
+                        np.array([[xc, 10.0, 10, 20, 3.0, 0, 0, 0]]),
+                        np.array([0.6 if t >= 5 else 1.0]), np.array([[40.0, 10.0]]))
+        return person
+    shifted = walk(MeasuredLine(window=8, own_only=True, shift=0.15))
+    assert [c[0] for c in shifted.centres] == [1, 2, 3, 4, 5] and shifted.merged_at == 6
+    assert [c[0] for c in walk(MeasuredLine(window=8, own_only=True)).centres] == [1, 2, 3, 4]
+    assert MeasuredLine(8, own_only=True, shift=0.15).uses_partners
+    assert not MeasuredLine(8, own_only=True).uses_partners
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(merged_line=True, merged_line_shift=0.15), h).line == \
+        MeasuredLine(8, 2.0, True, True, 0.15)
+    assert "merged_line_shift" not in Adaptations().changed() + Adaptations.paper().changed()
