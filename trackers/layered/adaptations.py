@@ -186,7 +186,7 @@ class Adaptations:
             that PBM 3.1 searched as a merge, whose other holders all took other candidates
             this frame as measured, is the target grown: the frame is associated again with
             that pair unoccluded (``merges.FoundElsewhere``; false: a merge, PBM 3.1).
-        merge_recent_holder: with ``merge_found_elsewhere``, a detection (one head) a target
+        merge_recent_holder: a detection (one head) a target
             took as a merge while exactly one other live target holding it, found more
             recently (fewer misses), took nothing, is that target grown: associated again
             with that pair unoccluded and the merge's pair struck
@@ -264,7 +264,7 @@ class Adaptations:
     lone_shrink_narrow: bool = False
     merge_found_elsewhere: bool = True
     distinct_detections: bool = False
-    merge_recent_holder: bool = False
+    merge_recent_holder: bool = True
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -293,9 +293,6 @@ class Adaptations:
                 not (self.reported_by_record and self.reported_behind > 0),
                 "and adaptations.reported_behind are two rules for one step: set one",
                 self.reported_by_record)
-        require("adaptations.merge_recent_holder",
-                not self.merge_recent_holder or self.merge_found_elsewhere,
-                "needs adaptations.merge_found_elsewhere", self.merge_recent_holder)
         require("adaptations.camera_placement",
                 not (self.camera_placement and self.measured_velocity),
                 "and adaptations.measured_velocity are two rules for one step: set one",

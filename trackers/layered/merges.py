@@ -60,7 +60,8 @@ class FoundElsewhere:
     target is searched inside it as a merge and keeps a carved 14 px box that no longer
     follows him, and three frames later person 2's target takes his detection.
 
-    ``recent_holder`` (``adaptations.merge_recent_holder``): where a target u took a
+    ``recent_holder`` (``adaptations.merge_recent_holder``; ``found_elsewhere`` False: this
+    reading alone, ``merge_found_elsewhere`` off): where a target u took a
     detection n as a merge while exactly one other live target t holding n, found more
     recently than u (fewer misses), took nothing, n is t's region: the frame is associated
     again with (t, n) as t grown (kind 0) and u's pair (u, n) struck (a region read as one
@@ -73,8 +74,8 @@ class FoundElsewhere:
     head-anchored box falls outside its gate (the head rose 52 px), target 4's search scores
     0.374 and takes him, target 6 is left unfound and person 4 ends with person 3's id."""
 
-    def __init__(self, recent_holder: bool = False) -> None:
-        self.recent_holder = recent_holder
+    def __init__(self, recent_holder: bool = False, found_elsewhere: bool = True) -> None:
+        self.recent_holder, self.found_elsewhere = recent_holder, found_elsewhere
         self._grown: np.ndarray | None = None  # (G, 2) pairs taken as grown in the second pass
         self._struck: np.ndarray | None = None  # (S, 2) pairs not scored in the second pass
         self._first: tuple[np.ndarray, np.ndarray, float] | None = None  # kinds, live, overlap
@@ -100,7 +101,8 @@ class FoundElsewhere:
         """``block`` once, and again with the grown (and struck) pairs when there are any."""
         self._grown, self._struck, self._first = None, None, None
         found = block(frame, targets, cand, *rest)
-        grown = self.grown_pairs(found, targets, cand)
+        grown = (self.grown_pairs(found, targets, cand) if self.found_elsewhere
+                 else np.empty((0, 2), dtype=np.intp))
         struck = np.empty((0, 2), dtype=np.intp)
         if self.recent_holder:
             held, struck = self.recent_pairs(found, targets, cand)

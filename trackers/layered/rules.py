@@ -342,8 +342,8 @@ def build_rules(a: Adaptations) -> Rules:
         smaller=(LoneShrink(a.lone_shrink, a.lone_shrink_shape, a.lone_shrink_narrow)
                  if a.lone_shrink > 0
                  else OccludedSmaller()),
-        merge=(FoundElsewhere(a.merge_recent_holder) if a.merge_found_elsewhere
-               else AllHolders()),
+        merge=(FoundElsewhere(a.merge_recent_holder, a.merge_found_elsewhere)
+               if a.merge_found_elsewhere or a.merge_recent_holder else AllHolders()),
         exit=BorderExit() if a.border_exit else PredictedExit(),
         leaving=(LeavingUnreported(a.leaving_unreported) if a.leaving_unreported >= 0
                  else ReportAnywhere()),

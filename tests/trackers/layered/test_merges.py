@@ -5,7 +5,6 @@ whose other holders all took other candidates as measured, is the target grown
 from types import SimpleNamespace
 
 import numpy as np
-import pytest
 
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.merges import AllHolders, FoundElsewhere
@@ -90,7 +89,8 @@ def test_the_second_pass_reads_the_pair_unoccluded_and_the_paper_passes_once():
 def test_on_by_default_and_off_in_paper_mode():
     assert isinstance(build_rules(Adaptations()).merge, FoundElsewhere)
     assert isinstance(build_rules(Adaptations.paper()).merge, AllHolders)
-    assert isinstance(build_rules(Adaptations(merge_found_elsewhere=False)).merge, AllHolders)
+    assert isinstance(build_rules(Adaptations(merge_found_elsewhere=False,
+                                              merge_recent_holder=False)).merge, AllHolders)
     assert Adaptations.paper().changed() == [] and Adaptations().merge_found_elsewhere
 
 
@@ -148,9 +148,12 @@ def test_the_recent_holder_second_pass_strikes_the_merge_and_off_passes_once():
             assert len(calls) == 1 and found.matches.tolist() == [[0, 0]]
 
 
-def test_recent_holder_off_by_default_off_in_paper_mode_and_needs_found_elsewhere():
-    assert not build_rules(Adaptations()).merge.recent_holder
-    assert build_rules(Adaptations(merge_recent_holder=True)).merge.recent_holder
+def test_recent_holder_on_by_default_off_in_paper_mode_and_switched_apart():
+    assert build_rules(Adaptations()).merge.recent_holder
+    assert not build_rules(Adaptations(merge_recent_holder=False)).merge.recent_holder
     assert "merge_recent_holder" not in Adaptations.paper().changed()
-    with pytest.raises(ValueError, match="merge_recent_holder"):
-        Adaptations(merge_recent_holder=True, merge_found_elsewhere=False)
+    assert "merge_recent_holder" in Adaptations().changed()
+    alone = build_rules(Adaptations(merge_found_elsewhere=False)).merge
+    assert alone.recent_holder and not alone.found_elsewhere
+    assert isinstance(build_rules(Adaptations(merge_found_elsewhere=False,
+                                              merge_recent_holder=False)).merge, AllHolders)
