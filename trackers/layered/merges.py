@@ -8,7 +8,8 @@ asks the frame's assignment too: a detection whose other holders all took other
 candidates, unoccluded, holds none of them, so the target it was searched in is that target
 grown. With ``recent_holder`` (``adaptations.merge_recent_holder``) it also reads the
 opposite case: a detection taken as a merge by a target missed longer than a holder that
-took nothing is that holder grown. Kinds are ``occlusion_kinds``' (T, N) array (+1 larger, -1 smaller, 0 neither).
+took nothing is that holder grown. Kinds are ``occlusion_kinds``' (T, N) array (+1
+larger, -1 smaller, 0 neither).
 """
 
 from __future__ import annotations
@@ -120,7 +121,7 @@ class FoundElsewhere:
                ) -> tuple[np.ndarray, np.ndarray]:
         """The candidate each target took (-1 none, -2 as a merge) and which live targets'
         boxes each candidate's region holds (T, N), from the first pass."""
-        kinds, live, overlap = self._first
+        _, live, overlap = self._first
         matches, occluded = found.matches, found.chosen.occluded
         taken = np.full(len(targets), -1, dtype=np.intp)
         taken[matches[:, 0]] = np.where(occluded, -2, matches[:, 1])
@@ -140,7 +141,8 @@ class FoundElsewhere:
         for (u, n), carved in zip(found.matches.tolist(), found.chosen.occluded.tolist()):
             if not carved or kinds[u, n] <= 0 or cand.blob[n] or cand.heads_in_region[n] > 1:
                 continue
-            left = np.flatnonzero(holds[:, n] & (taken == -1) & (targets.misses < targets.misses[u]))
+            recent = targets.misses < targets.misses[u]
+            left = np.flatnonzero(holds[:, n] & (taken == -1) & recent)
             if len(left) == 1:
                 held.append((int(left[0]), n))
                 struck.append((u, n))
