@@ -22,10 +22,29 @@ from occbench.trackers.geometry import overlap_ratio_matrix
 
 if TYPE_CHECKING:  # annotations only
     from occbench.trackers.layered.frame_blocks import Association
+    from occbench.trackers.layered.gating import Carved, Gated
     from occbench.trackers.layered.search import Candidates
+    from occbench.trackers.layered.selection import FrameScores
     from occbench.trackers.layered.targets import Targets
 
 Block = Callable[..., "Association"]
+PairScores = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+Search = Callable[[], "Carved | None"]
+
+
+def scored(scores: FrameScores, pairs: Gated, pj: np.ndarray, p: np.ndarray,
+           found: Carved | None, rows: np.ndarray | None = None) -> None:
+    """Into ``scores``: the unoccluded pairs' p_j and p (eqs. 11-13) and the searched pairs'
+    carved candidates ``found`` (PBM 3.1) where kept; ``rows`` (P,): each searched pair's row
+    of ``found`` (None: its own)."""
+    scores.pj[pairs.ti, pairs.n], scores.S[pairs.ti, pairs.n] = pj, p
+    if found is not None:
+        rows = np.arange(len(found.kept)) if rows is None else rows
+        kept = found.kept[rows]
+        ti_s, n_s = pairs.search_ti[kept], pairs.search_n[kept]
+        scores.S[ti_s, n_s] = found.p[rows][kept]
+        scores.hyp[ti_s, n_s] = rows[kept]
+        scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found.pj, found.feats, found.k, found.dof
 
 
 class AllHolders:
@@ -35,6 +54,12 @@ class AllHolders:
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, live: np.ndarray,
               overlap: float) -> None:
         """Leaves ``kinds`` as the size test set them."""
+
+    def score(self, scores: FrameScores, pairs: Gated, pair_scores: PairScores,
+              search: Search) -> None:
+        """``scored`` of ``pair_scores`` (eqs. 11-13) and ``search`` (PBM 3.1)."""
+        scored(scores, pairs, *pair_scores(pairs.ti, pairs.n),
+               search() if len(pairs.search_ti) else None)
 
     def strike(self, S: np.ndarray) -> None:
         """Leaves the scores as they are."""
@@ -80,6 +105,39 @@ class FoundElsewhere:
         self._grown: np.ndarray | None = None  # (G, 2) pairs taken as grown in the second pass
         self._struck: np.ndarray | None = None  # (S, 2) pairs not scored in the second pass
         self._first: tuple[np.ndarray, np.ndarray, float] | None = None  # kinds, live, overlap
+        self._scored: tuple | None = None  # the first pass's pairs, p_j, p, search, its DOF
+
+    def score(self, scores: FrameScores, pairs: Gated, pair_scores: PairScores,
+              search: Search) -> None:
+        """``AllHolders.score``; the second pass takes each pair's scores from the first
+        (a pair's p_j, p and search are its own: eqs. 9-13 of its target and candidate),
+        scoring only the pairs the first did not score alike (a grown pair as measured)."""
+        if self._grown is None:
+            pj, p = pair_scores(pairs.ti, pairs.n)
+            found = search() if len(pairs.search_ti) else None
+            scored(scores, pairs, pj, p, found)
+            self._scored = (pairs, pj, p, found, None if found is None else found.dof.copy())
+            return
+        first, pj1, p1, found, dof = self._scored  # dof: before the pruning re-anchored it
+        T, N = scores.S.shape
+        at = np.full((T, N), -1, dtype=np.intp)
+        at[first.ti, first.n] = np.arange(len(first.ti))
+        q = at[pairs.ti, pairs.n]
+        new = q < 0
+        pj, p = np.empty((len(q),) + pj1.shape[1:]), np.empty(len(q))
+        pj[~new], p[~new] = pj1[q[~new]], p1[q[~new]]
+        if new.any():
+            pj[new], p[new] = pair_scores(pairs.ti[new], pairs.n[new])
+        at.fill(-1)
+        at[first.search_ti, first.search_n] = np.arange(len(first.search_ti))
+        rows = at[pairs.search_ti, pairs.search_n]
+        if not len(pairs.search_ti):
+            found, rows = None, None
+        elif found is None or (rows < 0).any() or (first.kind[rows] != pairs.kind).any():
+            found, rows = search(), None  # a pair the first pass did not search alike
+        else:
+            found = found._replace(dof=dof)
+        scored(scores, pairs, pj, p, found, rows)
 
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, live: np.ndarray,
               overlap: float) -> None:
@@ -100,7 +158,7 @@ class FoundElsewhere:
     def associate(self, block: Block, frame: np.ndarray, targets: Targets, cand: Candidates,
                   *rest) -> Association:
         """``block`` once, and again with the grown (and struck) pairs when there are any."""
-        self._grown, self._struck, self._first = None, None, None
+        self._grown, self._struck, self._first, self._scored = None, None, None, None
         found = block(frame, targets, cand, *rest)
         grown = (self.grown_pairs(found, targets, cand) if self.found_elsewhere
                  else np.empty((0, 2), dtype=np.intp))
@@ -114,7 +172,7 @@ class FoundElsewhere:
                 found = block(frame, targets, cand, *rest)
             finally:
                 self._grown, self._struck = None, None
-        self._first = None
+        self._first, self._scored = None, None
         return found
 
     def _taken(self, found: Association, targets: Targets, cand: Candidates

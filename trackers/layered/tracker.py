@@ -258,15 +258,9 @@ class PBMTracker:
         pairs = pairs_in_gates(targets, cand, gates, pred_wh, kinds, present, self.search.overlap,
                                self.adaptations.several_heads_merge)
         misses = self.rules.gap.misses(targets)  # eq. 11 after a gap
-        scores.pj[pairs.ti, pairs.n], scores.S[pairs.ti, pairs.n] = self._scores.pairs(
-            model, feats, pairs.ti, pairs.n, misses)
-        found = self._search_occluded(targets, cand, pairs, fg, pred_wh, model, misses) if len(
-            pairs.search_ti) else None  # PBM 3.1
-        if found is not None:
-            ti_s, n_s = pairs.search_ti[found.kept], pairs.search_n[found.kept]
-            scores.S[ti_s, n_s] = found.p[found.kept]
-            scores.hyp[ti_s, n_s] = found.kept.nonzero()[0]
-            scores.pj_h, scores.feats_h, scores.k_h, scores.dof_h = found.pj, found.feats, found.k, found.dof
+        self.rules.merge.score(scores, pairs, lambda ti, n: self._scores.pairs(  # eqs. 11-13
+            model, feats, ti, n, misses), lambda: self._search_occluded(  # PBM 3.1
+            targets, cand, pairs, fg, pred_wh, model, misses))
         self.rules.merge.strike(scores.S)  # merges.py: a merge read as another target grown
 
     # ------------------------------------------------------------------ model update (PBM 4.2)

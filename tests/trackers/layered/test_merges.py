@@ -7,9 +7,11 @@ from types import SimpleNamespace
 import numpy as np
 
 from occbench.trackers.layered.adaptations import Adaptations
+from occbench.trackers.layered.gating import Carved, Gated
 from occbench.trackers.layered.merges import AllHolders, FoundElsewhere
 from occbench.trackers.layered.rules import build_rules
 from occbench.trackers.layered.search import Candidates
+from occbench.trackers.layered.selection import FrameScores
 
 
 def _scene(blob=False, heads=1):
@@ -157,3 +159,53 @@ def test_recent_holder_on_by_default_off_in_paper_mode_and_switched_apart():
     assert alone.recent_holder and not alone.found_elsewhere
     assert isinstance(build_rules(Adaptations(merge_found_elsewhere=False,
                                               merge_recent_holder=False)).merge, AllHolders)
+
+
+def _pair_scores(calls):
+    """Each pair's own p_j and p (as eqs. 11-13 are), recording the pairs scored."""
+    def score(ti, n):
+        calls.extend(zip(ti.tolist(), n.tolist()))
+        p = 10.0 * ti + n
+        return p[:, None] + np.arange(5.0), p
+    return score
+
+
+def _search(pairs, calls):
+    """A ``Carved`` of each searched pair's own (kept when ti + n is even)."""
+    def search():
+        calls.append(len(pairs.search_ti))
+        p = 100.0 + 10.0 * pairs.search_ti + pairs.search_n
+        return Carved((pairs.search_ti + pairs.search_n) % 2 == 0, p, p[:, None] + np.zeros(5),
+                      None, np.arange(len(p)), p[:, None] + np.arange(6.0))
+    return search
+
+
+def _gated(ti, n, search_ti, search_n, kind):
+    return Gated(*(np.array(v, dtype=np.intp) for v in (ti, n, search_ti, search_n, kind)))
+
+
+def test_the_second_pass_scores_only_what_the_first_did_not_score_alike():
+    """The second pass (a grown pair moved from the searched to the measured pairs) takes
+    every other pair's scores from the first and equals the pairs scored afresh
+    (``AllHolders.score``), even after the pruning re-anchored a first-pass DOF; a pair the
+    first pass did not search alike is searched again. Fails when the reuse mis-indexes."""
+    first = _gated([0, 1], [0, 1], [0, 2, 2, 1], [2, 0, 2, 0], [1, 1, -1, 1])
+    second = _gated([0, 0, 1], [0, 2, 1], [2, 2, 1], [0, 2, 0], [1, -1, 1])  # (0, 2) grown
+    fe, calls, searches = FoundElsewhere(), [], []
+    s1 = FrameScores.empty(3, 3)
+    fe.score(s1, first, _pair_scores(calls), _search(first, searches))
+    s1.dof_h[2] = -1.0  # the pruning re-anchors pair (2, 2)'s carved box
+    fe._grown = np.array([[0, 2]])
+    s2, ref = FrameScores.empty(3, 3), FrameScores.empty(3, 3)
+    calls.clear()
+    fe.score(s2, second, _pair_scores(calls), _search(second, searches))
+    assert calls == [(0, 2)] and searches == [4]
+    AllHolders().score(ref, second, _pair_scores([]), _search(second, []))
+    assert np.array_equal(s2.S, ref.S) and np.array_equal(s2.pj, ref.pj)
+    assert np.array_equal(s2.hyp >= 0, ref.hyp >= 0)
+    on = ref.hyp >= 0
+    assert np.array_equal(s2.dof_h[s2.hyp[on]], ref.dof_h[ref.hyp[on]])
+    assert np.array_equal(s2.pj_h[s2.hyp[on]], ref.pj_h[ref.hyp[on]])
+    other = _gated([0, 0, 1], [0, 2, 1], [2, 1], [1, 0], [1, 1])  # (2, 1): not searched before
+    fe.score(FrameScores.empty(3, 3), other, _pair_scores([]), _search(other, searches))
+    assert searches == [4, 2]
