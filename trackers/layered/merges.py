@@ -51,6 +51,8 @@ class AllHolders:
     """PBM 3.1 (with ``lone_growth``) as it stands: a larger region holding another live
     target is a merge, whatever that target takes this frame; one assignment per frame."""
 
+    matched = None  # no template matches kept (one pass)
+
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, live: np.ndarray,
               overlap: float) -> None:
         """Leaves ``kinds`` as the size test set them."""
@@ -106,6 +108,7 @@ class FoundElsewhere:
         self._struck: np.ndarray | None = None  # (S, 2) pairs not scored in the second pass
         self._first: tuple[np.ndarray, np.ndarray, float] | None = None  # kinds, live, overlap
         self._scored: tuple | None = None  # the first pass's pairs, p_j, p, search, its DOF
+        self.matched: dict = {}  # the block's template matches (PBM 4.1), kept over its passes
 
     def score(self, scores: FrameScores, pairs: Gated, pair_scores: PairScores,
               search: Search) -> None:
@@ -159,6 +162,7 @@ class FoundElsewhere:
                   *rest) -> Association:
         """``block`` once, and again with the grown (and struck) pairs when there are any."""
         self._grown, self._struck, self._first, self._scored = None, None, None, None
+        self.matched.clear()
         found = block(frame, targets, cand, *rest)
         grown = (self.grown_pairs(found, targets, cand) if self.found_elsewhere
                  else np.empty((0, 2), dtype=np.intp))
@@ -173,6 +177,7 @@ class FoundElsewhere:
             finally:
                 self._grown, self._struck = None, None
         self._first, self._scored = None, None
+        self.matched.clear()
         return found
 
     def _taken(self, found: Association, targets: Targets, cand: Candidates

@@ -152,7 +152,8 @@ class MultipleResponsePruning:
                                         adaptations.large_head_pyramid,
                                         adaptations.large_head_peaks)
 
-    def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray) -> None:
+    def __call__(self, scores: FrameScores, cand: Candidates, targets: Targets, frame: np.ndarray,
+                 matched: dict | None = None) -> None:
         """PBM 4 steps 4-5, 4.1: a target whose best candidate does not beat the runner-up
         by ``matching.margin_ratio`` (ambiguous), or whose candidates all score in
         [weak_threshold, match_threshold) (weak), keeps the nearby candidate (within
@@ -165,7 +166,8 @@ class MultipleResponsePruning:
         ``adaptations.duplicate_radius`` head widths of the best's are one response (best
         kept, no template match); a target unfound for more than
         ``adaptations.prune_max_misses`` frames has a stale template: an ambiguous choice
-        keeps the best, a weak one takes none.
+        keeps the best, a weak one takes none. ``matched``: template matches by (row,
+        candidates) kept over a block's passes (``merges.FoundElsewhere``), or None.
         """
         S, m, a = scores.S, self.matching, self.adaptations
         bests, _, ambs = ambiguous_rows(S, m.match_threshold, m.margin_ratio)
@@ -199,8 +201,8 @@ class MultipleResponsePruning:
                     continue  # two detections: two people, left to the assignment
                 chosen, refined = best, None  # one response: the heads coincide
             else:
-                chosen, refined = self.match_template(targets.head_template[ti], cands, heads_xy[cands],
-                                                      frame)
+                chosen, refined = self._matched(matched, ti, targets.head_template[ti], cands,
+                                                heads_xy[cands], frame)
             if chosen < 0:
                 if weak:
                     continue
@@ -245,6 +247,18 @@ class MultipleResponsePruning:
             return False
         return misses > self.adaptations.prune_max_misses or bool(
             dist.max() <= self.adaptations.duplicate_radius * hw)
+
+    def _matched(self, matched: dict | None, ti: int, template: np.ndarray | None,
+                 cands: np.ndarray, heads: np.ndarray, frame: np.ndarray
+                 ) -> tuple[int, np.ndarray | None]:
+        """``match_template``, once per (row, candidates) while ``matched`` is kept (row ti's
+        template, the candidates' heads and the frame are the same in a block's passes)."""
+        if matched is None:
+            return self.match_template(template, cands, heads, frame)
+        key = (ti, cands.tobytes())
+        if key not in matched:
+            matched[key] = self.match_template(template, cands, heads, frame)
+        return matched[key]
 
     def match_template(self, template: np.ndarray | None, cands: np.ndarray, heads: np.ndarray,
                        frame: np.ndarray) -> tuple[int, np.ndarray | None]:

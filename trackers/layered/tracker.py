@@ -223,7 +223,7 @@ class PBMTracker:
         scores = FrameScores.empty(len(targets), len(cand))
         if len(targets) and len(cand):
             self._score_in_gates(scores, targets, cand, feats, fg, pred_wh)  # PBM 3, 3.1, eqs. 9-13
-            self._pruning(scores, cand, targets, frame)  # PBM 4, 4.1
+            self._pruning(scores, cand, targets, frame, self.rules.merge.matched)  # PBM 4, 4.1
             self.rules.contest.settle(scores.S, cand, targets, frame,  # 4.1, by column
                                       m.match_threshold, self.pruning.template_threshold)
         withheld = self.rules.match.withhold(scores.S, targets, m.match_threshold)

@@ -209,3 +209,14 @@ def test_the_second_pass_scores_only_what_the_first_did_not_score_alike():
     other = _gated([0, 0, 1], [0, 2, 1], [2, 1], [1, 0], [1, 1])  # (2, 1): not searched before
     fe.score(FrameScores.empty(3, 3), other, _pair_scores([]), _search(other, searches))
     assert searches == [4, 2]
+
+
+def test_a_block_starts_and_ends_with_no_template_match_kept():
+    """Template matches are kept over one block's passes only (a match of another block's
+    row ti is another target's)."""
+    fe = FoundElsewhere()
+    fe.matched[(0, b"")] = (1, None)
+    seen = []
+    found = SimpleNamespace(matches=np.zeros((0, 2), np.intp), chosen=None)
+    fe.associate(lambda *a: seen.append(dict(fe.matched)) or found, None, None, None)
+    assert seen == [{}] and fe.matched == {}

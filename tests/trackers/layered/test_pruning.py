@@ -108,3 +108,18 @@ def test_stacked_responses_equal_each_rows_own_bit_for_bit():
     empty = pruning._nearby(np.zeros((0, 4)), np.zeros(0, bool), np.zeros(0, np.intp),
                             np.ones((4, 3)))
     assert [v.shape for v in empty] == [(0, 4), (0,), (0, 4)]
+
+
+def test_a_kept_template_match_is_made_once_per_row_and_candidates():
+    """``matched`` (a block's passes, ``merges.FoundElsewhere``) keeps each (row,
+    candidates) match: the second pass's same row and candidates take the first's, another
+    row or other candidates are matched; without it every call matches."""
+    pruning = MultipleResponsePruning(MatchParams(), PruneParams(), Adaptations())
+    calls = []
+    pruning.match_template = lambda template, cands, heads, frame: calls.append(cands) or (
+        len(calls), None)
+    a, b = np.array([1, 2]), np.array([1, 3])
+    kept: dict = {}
+    got = [pruning._matched(kept, ti, None, c, None, None) for ti, c in ((0, a), (0, a), (1, a), (0, b))]
+    assert [g[0] for g in got] == [1, 1, 2, 3] and len(calls) == 3
+    assert pruning._matched(None, 0, None, a, None, None)[0] == 4
