@@ -165,7 +165,7 @@ def _measure_all(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tup
 
 @numba.njit(cache=True)
 def _group_scratch(side: int, R: int, C: int, H: int) -> tuple:
-    """``_measure_group``'s scratch: per height (ys, yi, band (side, R), band sizes (side,
+    """``_measure_grid``'s scratch: per height (ys, yi, band (side, R), band sizes (side,
     3)), per width (xs, pixel columns, sides (side, C), right mask, right size (side,)),
     the (width, pixel row) masks and their group stamps (side, H) and the group count (1,)."""
     return (np.empty((side, R)), np.empty((side, R), np.int64), np.empty((side, R), np.int64),

@@ -180,6 +180,16 @@ class FoundElsewhere:
         self.matched.clear()
         return found
 
+    def _merges(self, found: Association, cand: Candidates) -> list[tuple[int, int]]:
+        """The first pass's (target, candidate) matches taken as a merge: searched inside a
+        candidate larger than the target's prediction (kind +1), neither a blob nor a region
+        of several heads (those keep PBM 3.1's merge)."""
+        kinds = self._first[0]
+        return [(t, n) for (t, n), carved in zip(found.matches.tolist(),
+                                                 found.chosen.occluded.tolist())
+                if carved and kinds[t, n] > 0 and not cand.blob[n]
+                and cand.heads_in_region[n] <= 1]
+
     def _taken(self, found: Association, targets: Targets, cand: Candidates
                ) -> tuple[np.ndarray, np.ndarray]:
         """The candidate each target took (-1 none, -2 as a merge) and which live targets'
@@ -198,12 +208,9 @@ class FoundElsewhere:
         none = np.empty((0, 2), dtype=np.intp)
         if self._first is None or found.chosen is None:
             return none, none
-        kinds = self._first[0]
         taken, holds = self._taken(found, targets, cand)
         held, struck = [], []
-        for (u, n), carved in zip(found.matches.tolist(), found.chosen.occluded.tolist()):
-            if not carved or kinds[u, n] <= 0 or cand.blob[n] or cand.heads_in_region[n] > 1:
-                continue
+        for u, n in self._merges(found, cand):
             recent = targets.misses < targets.misses[u]
             left = np.flatnonzero(holds[:, n] & (taken == -1) & recent)
             if len(left) == 1:
@@ -216,13 +223,9 @@ class FoundElsewhere:
         """(G, 2) (target, candidate) matches of the first pass that are a target grown."""
         if self._first is None or found.chosen is None:
             return np.empty((0, 2), dtype=np.intp)
-        kinds = self._first[0]
-        matches, occluded = found.matches, found.chosen.occluded
         taken, holds = self._taken(found, targets, cand)  # taken -2: as a merge
         grown = []
-        for (t, n), carved in zip(matches.tolist(), occluded.tolist()):
-            if not carved or kinds[t, n] <= 0 or cand.blob[n] or cand.heads_in_region[n] > 1:
-                continue
+        for t, n in self._merges(found, cand):
             others = np.flatnonzero(holds[:, n])
             others = others[others != t]
             if len(others) and np.all((taken[others] >= 0) & (taken[others] != n)):

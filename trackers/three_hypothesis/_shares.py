@@ -26,9 +26,9 @@ from occbench.trackers.three_hypothesis._kernels import region_overlap_pairs
 def csr(delta: csr_array) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The (B + 1,) indptr, (E,) indices (int64) and (E,) data (float64) of a sparse (B, D)
     delta as CSR, the kernels' form of it."""
-    delta = delta.tocsr()
-    return (delta.indptr.astype(np.int64), delta.indices.astype(np.int64),
-            delta.data.astype(np.float64))
+    delta = delta.tocsr()  # no copy where they already have these types (O.delta: _csr)
+    return (delta.indptr.astype(np.int64, copy=False), delta.indices.astype(np.int64, copy=False),
+            delta.data.astype(np.float64, copy=False))
 
 
 @numba.njit(cache=True, inline="always")
