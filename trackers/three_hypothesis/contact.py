@@ -1,6 +1,7 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
 ``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
+``contact_coincident``,
 ``split_appearance``, ``merged_unmixed``), ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
@@ -244,6 +245,12 @@ class AppearanceAtContact:
     """3.3.2 as written: at a contact too, stage 1 weighs the appearance term of each pair
     (eq. 4) as for any other pair."""
 
+    uses_seen: ClassVar[bool] = False
+
+    def pairs(self, pairs: np.ndarray, ratio: np.ndarray, pred: np.ndarray,
+              seen: np.ndarray | None) -> np.ndarray:
+        return pairs
+
     def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
         return appearance
 
@@ -255,7 +262,30 @@ class RegionAtContact:
     both in stage 1, its histogram p (eq. 1, over the measurement's ellipse) holds both
     people's pixels, so eq. 4 cannot tell which of them it is: both pairs get the mean of
     their appearance terms, and the region term (eq. 5, the motion model's prediction)
-    decides between them. Pairs of people not in O keep their appearance term."""
+    decides between them. Pairs of people not in O keep their appearance term.
+
+    ``coincident`` (``contact_coincident``, with ``contact_region`` off): only the pairs of O
+    whose two nodes were both seen at t - 1 (visible nodes: each person's q is the histogram
+    of its measurement at t - 1, 3.3.3) and whose predicted regions coincide, each holding at
+    least ``coincident`` of the larger one (|Si & Sj| >= coincident max(|Si|, |Sj|)): two
+    people measured over the same pixels, whose q's both hold both of them. 0: every pair of
+    O (``contact_region``)."""
+
+    coincident: float = 0.0
+    uses_seen: ClassVar[bool] = True
+
+    def pairs(self, pairs: np.ndarray, ratio: np.ndarray, pred: np.ndarray,
+              seen: np.ndarray | None) -> np.ndarray:
+        """The rows of O (``pairs`` (K, 2) node rows, eq. 2's ``ratio`` (K,) = |Si & Sj| /
+        (|Si| + |Sj|)) whose appearance terms are shared, from ``pred`` (B, 4) predicted
+        regions and ``seen`` (B,) bool, visible nodes of t - 1."""
+        if self.coincident <= 0 or not len(pairs):
+            return pairs
+        area = pred[:, 2] * pred[:, 3]  # pi / 4 cancels
+        i, j = pairs[:, 0], pairs[:, 1]
+        common = ratio * (area[i] + area[j])  # |Si & Sj|
+        keep = seen[i] & seen[j] & (common >= self.coincident * np.maximum(area[i], area[j]))
+        return pairs[keep]
 
     def evidence(self, appearance, pairs: np.ndarray, owners: np.ndarray):
         """``appearance`` (rho (P, D), admissible (P, D) bool) -> (P, D) wrapped so that

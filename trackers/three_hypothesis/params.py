@@ -270,6 +270,12 @@ class Adaptations:
             when its centre lies off the line through the person's own last centres towards
             the hidden partner's predicted centre by more than this many times its width
             (``MeasuredLine.shift``); 0: whenever its own share is below 1.
+        contact_coincident: two people in O both seen at t - 1 whose predicted regions
+            coincide (each holds at least ``LifeCycle.cover`` of the larger) were measured over
+            the same pixels, so eq. 4 cannot tell them apart: on a measurement meeting both in
+            stage 1 they share one appearance term (the mean) and the region term (eq. 5)
+            decides (``contact.RegionAtContact`` ``coincident``; ``contact_region`` does so
+            for every pair of O); False: eq. 4 weighs each pair (the paper, 3.3.2).
     """
 
     gate_sigmas: float = 3.0
@@ -312,6 +318,7 @@ class Adaptations:
     restore_still: bool = False
     merged_line: bool = False
     merged_line_shift: float = 0.0
+    contact_coincident: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -331,7 +338,7 @@ class Adaptations:
                       "split_appearance": bool, "merged_unmixed": bool,
                       "duplicates_together": bool, "own_return": bool,
                       "hold_last": bool, "measured_step": bool, "restore_still": bool,
-                      "merged_line": bool})
+                      "merged_line": bool, "contact_coincident": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -365,7 +372,7 @@ class Adaptations:
                    merged_unmixed=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
                    return_floor=0.0, restore_still=False, merged_line=False,
-                   merged_line_shift=0.0)
+                   merged_line_shift=0.0, contact_coincident=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -364,7 +364,9 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         gate=KalmanGate(a.gate_sigmas) if a.gate_sigmas > 0 else FixedGate(),
         stage2=ConfirmedInStage2() if a.tentative_stage1_only else EveryNodeInStage2(),
         stage1_appearance=AppearanceMargin() if a.appearance_margin else AbsoluteAppearance(),
-        contact=RegionAtContact() if a.contact_region else AppearanceAtContact(),
+        contact=(RegionAtContact() if a.contact_region
+                 else RegionAtContact(life_cycle.cover) if a.contact_coincident
+                 else AppearanceAtContact()),
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         region=VisibleRegion() if a.visible_region else WholeRegion(),
         split=(AppearanceAtSplit(a.split_appearance_margin) if a.split_appearance

@@ -81,13 +81,17 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
     R = np.array([person.R[0, 0] for person in persons])[S.owners]  # R = (sigma_z h)^2 I
     seen = (np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
             if rules.shape.uses_seen else None)  # visible nodes of t-1, for the shape rule
+    contacts = rules.contact.pairs(
+        O.pairs, O.ratio, S.boxes,
+        np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
+        if rules.contact.uses_seen else None)  # the pairs of O sharing an appearance term
     entrants = rules.stage2.entrants(np.array([person.confirmed for person in persons],
                                               dtype=bool))
     inp = _Inputs(S, V, O, rules, association, sqrt_q, sqrt_p, seen, entrants,
                   rules.gate.radii(S.Pp, R),
                   rules.returning.floors(persons, association.mu_rho),
                   lambda matched: rules.parts.barred(V.boxes, matched),
-                  lambda: _fronts(S, O, pi))
+                  lambda: _fronts(S, O, pi), contacts)
     n_p, n_d = len(persons), len(V.boxes)
     parts = blocks(n_p, n_d, lambda: (S.owners[O.delta.tocoo().row], O.delta.tocoo().col))
     if len(parts) == 1:
@@ -150,7 +154,7 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
         delta=delta if 1 in stages else np.zeros_like(delta), gated=entrants,
         gate=None if s.gate is None else s.gate[nodes],
         evidence=rules.contact.evidence(rules.stage1_appearance.evidence,
-                                        _local_pairs(O.pairs, nodes), owners),
+                                        _local_pairs(s.contacts, nodes), owners),
         admissible=admissible,
         barred=None if s.barred is None else partial(_barred, s.barred, cols))
     return _Block(m, rows, cols, nodes)
@@ -258,8 +262,9 @@ def _local_pairs(pairs: np.ndarray, nodes: np.ndarray) -> np.ndarray:
 class _Inputs(NamedTuple):
     """What every block of a frame's association reads: the frame's values, rules and
     parameters, (P, K) sqrt q, (D, K) sqrt p, (B,) seen or None, (P,) stage-2 entrants or
-    None, (B,) gate radii or None, the frame's rules.parts, and eq. 3's order of O's pairs
-    by pi^{t-1} (``_fronts``, read where ``rules.region`` orders)."""
+    None, (B,) gate radii or None, the frame's rules.parts, eq. 3's order of O's pairs
+    by pi^{t-1} (``_fronts``, read where ``rules.region`` orders) and the pairs of O
+    ``rules.contact`` reads."""
 
     S: Predictions
     V: Measurements
@@ -274,6 +279,7 @@ class _Inputs(NamedTuple):
     mu_rho: np.ndarray | None  # (P,) per person (rules.returning), None: mu_rho
     barred: Callable[[np.ndarray], np.ndarray | None] | None  # the frame's rules.parts
     fronts: Callable[[], np.ndarray]
+    contacts: np.ndarray  # (K', 2) the node pairs of O whose appearance terms rules.contact shares
 
 
 class _Block(NamedTuple):

@@ -14,11 +14,13 @@ from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram
 from occbench.trackers.three_hypothesis.contact import (
     AnyLeftover,
+    AppearanceAtContact,
     AppearanceAtSplit,
     MeasurementAppearance,
     MeasurementMotion,
     MergedAppearance,
     MergedMotion,
+    RegionAtContact,
     RegionAtSplit,
     SplitParts,
     UnmixedAppearance,
@@ -27,7 +29,7 @@ from occbench.trackers.three_hypothesis.contact import (
     own_shares,
     union_cover,
 )
-from occbench.trackers.three_hypothesis.rules import build_rules
+from occbench.trackers.three_hypothesis.rules import AppearanceMargin, build_rules
 from occbench.trackers.three_hypothesis.values import Match
 
 BOX = np.array([[0.0, 0.0, 10.0, 20.0]])
@@ -341,3 +343,42 @@ def test_a_walker_in_front_keeps_its_colours_through_a_merged_box():
     merged, unmixed = (_walker_colours_after_passing(u) for u in (False, True))
     assert unmixed[0] > merged[0] + 0.03  # 0.94 against 0.89
     assert unmixed[0] > unmixed[1]
+
+
+def test_coincident_people_seen_at_t_minus_1_share_their_appearance_term():
+    """``contact_coincident``: persons 0 and 1, both seen at t - 1, predicted 20 x 60 and
+    20 x 56 at the same place (each region holds more than half of the larger), meet one
+    measurement: person 0's colours fit it better (rho 0.95 against 0.7, the q's of two
+    people measured over the same pixels), person 1's region better (delta 0.98 against
+    0.80). The paper gives it to person 0; the rule to person 1. Moved 12 px apart (the
+    common part below half of the larger), or with person 1 hidden at t - 1, the pair keeps
+    its appearance terms and person 0 takes it again."""
+    from occbench.trackers.three_hypothesis.association import associate
+    from occbench.trackers.three_hypothesis.occlusion import region_overlap_values
+
+    sqrt_q = np.array([[0.95, np.sqrt(1 - 0.95**2)], [0.7, np.sqrt(1 - 0.7**2)]])
+    sqrt_p = np.array([[1.0, 0.0]])
+    delta = np.array([[0.80], [0.98]])
+    owners, pairs = np.array([0, 1]), np.array([[0, 1]])
+    rule = RegionAtContact(0.5)
+
+    def taker(pred, seen):
+        ratio = 0.5 * region_overlap_values(pred, pred, np.array([0]), np.array([1]), 12)
+        kept = rule.pairs(pairs, ratio, pred, seen)
+        m = associate(pred, owners, sqrt_q, pred[1:], sqrt_p, 0.5, 50.0, delta=delta,
+                      evidence=rule.evidence(AppearanceMargin().evidence, kept, owners))
+        return len(kept), m.matches[:, 0].tolist()
+
+    together = np.array([[100.0, 50, 20, 60], [100.0, 52, 20, 56]])
+    apart = np.array([[100.0, 50, 20, 60], [112.0, 52, 20, 56]])
+    both, one = np.array([True, True]), np.array([True, False])
+    assert taker(together, both) == (1, [1])
+    assert taker(apart, both) == (0, [0])  # they overlap (in O) but do not coincide
+    assert taker(together, one) == (0, [0])  # person 1's q is its own, kept while hidden
+    assert len(RegionAtContact().pairs(pairs, np.array([0.1]), apart, None)) == 1  # every pair
+    assert AppearanceAtContact().pairs(pairs, np.array([0.1]), apart, None) is pairs
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(contact_coincident=True), h).contact == RegionAtContact(0.5)
+    assert build_rules(Adaptations(), h).contact == AppearanceAtContact()
+    assert "contact_coincident" in Adaptations(contact_coincident=True).changed()
+    assert "contact_coincident" not in Adaptations().changed() + Adaptations.paper().changed()
