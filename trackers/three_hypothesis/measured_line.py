@@ -97,13 +97,18 @@ class MeasuredLine:
     evidence of two people: its centre lies off the line through the person's own last
     centres (at t), towards the hidden partner's predicted centre, by more than ``shift``
     times its width (a box fitted over the pair is pulled towards the partner; a person's own
-    box beside a hidden neighbour stays on the person's line)."""
+    box beside a hidden neighbour stays on the person's line). With ``still``
+    (``adaptations.measured_still``) a person whose last ``window`` measured centres show no
+    motion (the line's slopes within ``sigmas`` standard errors of zero, in x and in y) is
+    missed standing: hypothesis 1 stands where it was last estimated, velocity 0 (the state
+    of the paper's hypothesis 3, ``hypotheses.spawn``), whatever M's velocity or the step."""
 
     window: int
     sigmas: float = 0.0
     step: bool = False
     own_only: bool = False
     shift: float = 0.0
+    still: bool = False
     records: ClassVar[bool] = True
 
     @property
@@ -133,6 +138,12 @@ class MeasuredLine:
             c = boxes[r, :2] + boxes[r, 2:] / 2
             out[a] = float((c - at) @ u) > self.shift * boxes[r, 2] * float(np.hypot(*u))
         return out
+
+    def stands(self, centres: list[tuple[float, float, float]]) -> bool:
+        """Whether the line through (frame, xc, yc) ``centres`` (>= 3 rows) shows no motion:
+        each slope within ``sigmas`` standard errors of zero."""
+        _, _, _, vx, vy, se_x, se_y = _fit(centres)
+        return abs(vx) <= self.sigmas * se_x and abs(vy) <= self.sigmas * se_y
 
     def record(self, persons: list, frame: int, boxes: np.ndarray, predicted: np.ndarray,
                own: np.ndarray | None = None, partner: np.ndarray | None = None) -> None:
@@ -187,6 +198,10 @@ class MeasuredLine:
         errors = person.line_errors
         if len(person.centres) < 3:
             return x_pred
+        if self.still and len(person.centres) == self.window and self.stands(person.centres):
+            x = x_prev.copy()  # hypothesis 3's state: the last estimate, velocity 0
+            x[len(x) // 2:] = 0.0
+            return x
         merged = self.own_only and person.merged_at >= 0  # t - 1's measurement left out
         t = person.merged_at + 1 if merged else 0
         if self.step and person.step_error < min(errors):

@@ -270,6 +270,11 @@ class Adaptations:
             when its centre lies off the line through the person's own last centres towards
             the hidden partner's predicted centre by more than this many times its width
             (``MeasuredLine.shift``); 0: whenever its own share is below 1.
+        measured_still: with ``measured_hypothesis``, a person whose last m measured centres
+            show no motion (the line's slopes within ``measured_hypothesis_sigmas`` standard
+            errors of zero, in x and in y) is missed standing: hypothesis 1 stands at its
+            last estimate with velocity 0 (``measured_line.MeasuredLine`` ``still``); False:
+            it moves with M's velocity, the line's or the step's.
         contact_coincident: two people in O both seen at t - 1 whose predicted regions
             coincide (each holds at least ``LifeCycle.cover`` of the larger) were measured over
             the same pixels, so eq. 4 cannot tell them apart: on a measurement meeting both in
@@ -319,6 +324,7 @@ class Adaptations:
     merged_line: bool = False
     merged_line_shift: float = 0.0
     contact_coincident: bool = False
+    measured_still: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -338,7 +344,8 @@ class Adaptations:
                       "split_appearance": bool, "merged_unmixed": bool,
                       "duplicates_together": bool, "own_return": bool,
                       "hold_last": bool, "measured_step": bool, "restore_still": bool,
-                      "merged_line": bool, "contact_coincident": bool})
+                      "merged_line": bool, "contact_coincident": bool,
+                      "measured_still": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -372,7 +379,8 @@ class Adaptations:
                    merged_unmixed=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
                    return_floor=0.0, restore_still=False, merged_line=False,
-                   merged_line_shift=0.0, contact_coincident=False)
+                   merged_line_shift=0.0, contact_coincident=False,
+                   measured_still=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

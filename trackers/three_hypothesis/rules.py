@@ -372,7 +372,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         split=(AppearanceAtSplit(a.split_appearance_margin) if a.split_appearance
                else RegionAtSplit()),
         line=(MeasuredLine(life_cycle.m, a.measured_hypothesis_sigmas, a.measured_step,
-                           a.merged_line, a.merged_line_shift)
+                           a.merged_line, a.merged_line_shift, a.measured_still)
               if a.measured_hypothesis else FilterVelocity()),
         motion=BoxState(motion) if a.filter_size else CentreState(motion),
         motion_behind=CorrectedBehind() if a.correct_behind else PredictedBehind(),

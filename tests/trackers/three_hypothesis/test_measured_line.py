@@ -230,3 +230,35 @@ def test_a_merged_measurement_is_one_pulled_towards_the_partner():
     assert build_rules(Adaptations(merged_line=True, merged_line_shift=0.15), h).line == \
         MeasuredLine(8, 2.0, True, True, 0.15)
     assert "merged_line_shift" not in Adaptations().changed() + Adaptations.paper().changed()
+
+
+def test_a_person_measured_standing_is_missed_standing():
+    """``measured_still``: a person standing at xc 100 (its measured centres jitter by +-0.5
+    px, no trend: the line's slope -0.04 px/frame against a standard error of 0.08), whose
+    M drifts at 0.4 px/frame, is missed at t = 9: hypothesis 1 stands at its last estimate,
+    velocity 0; without the rule it drifts with M. A walker at 0.5 px/frame measured as
+    exactly (the slope 0.5, its error 0) keeps moving; so does a person with fewer than m
+    centres."""
+    def measured(xs):
+        person = SimpleNamespace(centres=[], line_errors=[0.0, 0.0], step_error=0.0,
+                                 merged_at=-1)
+        rule = MeasuredLine(window=8, sigmas=2.0)
+        for t, xc in enumerate(xs, start=1):
+            rule.record([person], t, np.array([[xc - 5, 0.0, 10, 20]]),
+                        np.array([[xc, 10.0, 10, 20, 0.4, 0, 0, 0]]))
+        return person
+    jitter = [100.5, 99.5, 100.0, 100.5, 99.5, 100.0, 100.5, 99.5]
+    x_prev = np.array([100.2, 10.0, 10, 20, 0.4, 0.0, 0.1, 0.0])
+    x_pred = x_prev + np.array([0.4, 0, 0.1, 0, 0, 0, 0, 0])
+    still = MeasuredLine(window=8, sigmas=2.0, still=True)
+    x = still.start(measured(jitter), x_prev, x_pred)
+    assert np.array_equal(x[:4], x_prev[:4]) and not x[4:].any()
+    assert MeasuredLine(window=8, sigmas=2.0).start(measured(jitter), x_prev, x_pred) is x_pred
+    walker = [100.0 + 0.5 * t for t in range(8)]
+    assert still.start(measured(walker), x_prev, x_pred)[4] != 0.0
+    assert still.start(measured(jitter[:5]), x_prev, x_pred) is x_pred  # 5 < m centres
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(measured_still=True), h).line == \
+        MeasuredLine(8, 2.0, True, still=True)
+    assert "measured_still" in Adaptations(measured_still=True).changed()
+    assert "measured_still" not in Adaptations().changed() + Adaptations.paper().changed()
