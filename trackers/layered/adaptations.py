@@ -200,6 +200,10 @@ class Adaptations:
             found again where reported (IoU >= 0.5) at least half the time
             (``record.ReportedByRecord``; false: reported for ``reporting.max_misses``
             frames at most). Reporting only.
+        reported_first: the targets still reported (unfound for at most
+            ``reporting.max_misses`` frames) share the frame's candidates among themselves
+            first; a target unfound longer takes none of those they take
+            (``lost.ReportedFirst``; false: every target in one assignment, PBM 4 step 4).
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -265,6 +269,7 @@ class Adaptations:
     merge_found_elsewhere: bool = True
     distinct_detections: bool = False
     merge_recent_holder: bool = True
+    reported_first: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -323,7 +328,7 @@ class Adaptations:
                                        "border_birth_waits", "camera_placement",
                                        "reported_by_record", "lone_shrink_narrow",
                                        "merge_found_elsewhere", "distinct_detections",
-                                       "merge_recent_holder"),
+                                       "merge_recent_holder", "reported_first"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
@@ -348,7 +353,8 @@ class Adaptations:
                    measured_velocity=False, reported_behind=0.0, border_birth_waits=False,
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
-                   distinct_detections=False, merge_recent_holder=False)
+                   distinct_detections=False, merge_recent_holder=False,
+                   reported_first=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -28,9 +28,11 @@ from occbench.trackers.layered.exits import (
     PredictedExit,
     ReportAnywhere,
 )
+from occbench.trackers.layered.params import ReportParams
 from occbench.trackers.layered.parts import PartFeatures
 from occbench.trackers.layered.placement import CameraPlacement
 from occbench.trackers.layered.record import ReportedByRecord
+from occbench.trackers.layered.lost import AllAtOnce, ReportedFirst
 from occbench.trackers.layered.reupdate import AfterPrediction, ReUpdate
 from occbench.trackers.layered.search import Candidates, match_head_template
 from occbench.trackers.layered.merges import AllHolders, FoundElsewhere
@@ -319,10 +321,12 @@ class Rules(NamedTuple):
     twins: KeepStacked | FoldTwins  # a target standing on an older one's person (ours)
     velocity: FilterPrediction | MeasuredVelocity | CameraPlacement  # where unfound (ours)
     behind: MissesBound | ReportedBehind | ReportedByRecord  # past reporting.max_misses? (ours)
+    lost: AllAtOnce | ReportedFirst  # lost targets' share of the candidates (PBM 4 step 4)
 
 
-def build_rules(a: Adaptations) -> Rules:
-    """The paper's rule where the adaptation is off (false, 0), ours where it is on."""
+def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Rules:
+    """The paper's rule where the adaptation is off (false, 0), ours where it is on;
+    ``max_misses``: ``reporting.max_misses`` (frames an unfound target is reported)."""
     return Rules(
         compared=PredictedModels() if a.motion_compensation else LastModels(),
         match=(RivalMatch(a.relative_match, a.rival_match) if a.rival_match > 0 else
@@ -352,6 +356,7 @@ def build_rules(a: Adaptations) -> Rules:
                   MeasuredVelocity() if a.measured_velocity else FilterPrediction()),
         behind=(ReportedByRecord() if a.reported_by_record else
                 ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound()),
+        lost=ReportedFirst(max_misses) if a.reported_first else AllAtOnce(),
     )
 
 

@@ -147,7 +147,7 @@ class PBMTracker:
         self._scores = LayeredScores(f.models, f.omega, f.gamma, a.model_spread)  # eqs. 11-13
         self._search_occluded = OcclusionSearch(self.search, self._scores, self._search_extractor,
                                                 a.coarse_search)
-        self.rules = build_rules(self.adaptations)
+        self.rules = build_rules(self.adaptations, self.reporting.max_misses)
         self.starts = AutoStarts() if starts is None else starts
         self.reset()
 
@@ -227,6 +227,7 @@ class PBMTracker:
             self.rules.contest.settle(scores.S, cand, targets, frame,  # 4.1, by column
                                       m.match_threshold, self.pruning.template_threshold)
         withheld = self.rules.match.withhold(scores.S, targets, m.match_threshold)
+        self.rules.lost.strike(scores.S, targets, self.rules.sharing, 1.0 - m.match_threshold)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
         matches, lost, free = self.rules.sharing.assign(cost, 1.0 - m.match_threshold)
         chosen = chosen_candidates(matches, scores, cand, targets, pred_wh) if len(matches) else None

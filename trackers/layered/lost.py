@@ -1,0 +1,58 @@
+"""PBM 4 step 4's sharing of candidates between reported targets and lost ones.
+
+PBM tracks each target alone until it is found or lost (PBM 3); with many targets the
+tracker shares the frame's candidates in one assignment on 1 - p (``rules.sharing``), so a
+target unfound for many frames, no longer reported, competes on its score alone with a
+target found last frame. ``ReportedFirst`` (``adaptations.reported_first``) lets the
+reported targets choose first, as a matching cascade does (Wojke et al. 2017, DeepSORT's
+cascade by time since the last update). S is the (T, N) score matrix (-inf: no candidate).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # annotations only
+    from occbench.trackers.layered.rules import Alone, OneToOne
+    from occbench.trackers.layered.targets import Targets
+
+
+class AllAtOnce:
+    """Every live target in one assignment, lost or reported (the frame's sharing as it
+    stands)."""
+
+    def strike(self, S: np.ndarray, targets: Targets, sharing: Alone | OneToOne,
+               max_cost: float) -> None:
+        """Leaves the scores as they are."""
+
+
+@dataclass(frozen=True)
+class ReportedFirst:
+    """``reported_first``: the targets unfound for at most ``max_misses`` frames (still
+    reported, ``reporting.max_misses``) share the candidates among themselves first, by
+    ``sharing`` on 1 - p alone; a target unfound longer (lost, no longer reported) takes
+    none of the candidates they take (its pairs with them struck in S). It re-finds its
+    person only on a candidate no reported target wants.
+
+    Why (docs/generalisation.md, "pbm, tenth round"): on ecp1-180 gt seed 1000 frame 168
+    person 3's target 4, unfound 9 frames since he sank out of view through the stairwell,
+    scores person 4's detection 0.513 against person 4's own target 6 (found at 167) 0.463,
+    takes it, and person 4 carries person 3's id for four frames."""
+
+    max_misses: int
+
+    def strike(self, S: np.ndarray, targets: Targets, sharing: Alone | OneToOne,
+               max_cost: float) -> None:
+        """Sets S[lost, n] = -inf in place for every candidate n the reported targets take
+        when ``sharing`` assigns them alone (cost 1 - S, at most ``max_cost``)."""
+        lost = targets.misses > self.max_misses
+        if not S.size or not lost.any() or lost.all():
+            return
+        shown = ~lost
+        Ss = S[shown]
+        matches, _, _ = sharing.assign(np.where(np.isfinite(Ss), 1.0 - Ss, np.inf), max_cost)
+        if len(matches):
+            S[np.ix_(lost, matches[:, 1])] = -np.inf
