@@ -288,7 +288,8 @@ class MultipleResponsePruning:
         tl, corr = self.matcher(frame, template, (cx - 0.5 * tw, cy), radius + 0.5 * tw + 2)
         if corr < self.pruning.template_threshold:
             return -1, None
-        rx, ry = tl[0] + 0.5 * tw, float(tl[1])
+        x, ry = tl.tolist()
+        rx = x + 0.5 * tw
         if len(cands) < 8:
             dist = [math.sqrt((hx - rx) * (hx - rx) + (hy - ry) * (hy - ry)) for hx, hy in hs]
             nearest = dist.index(min(dist))

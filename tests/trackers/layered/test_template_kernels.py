@@ -1,0 +1,85 @@
+"""``_template_kernels.ccoeff_normed``: PBM 4.1's head-template scores, bit for bit
+``cv2.matchTemplate(..., cv2.TM_CCOEFF_NORMED)`` on random and edge cases."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from occbench.trackers.layered._template_kernels import ccoeff_normed
+
+
+def _same(image: np.ndarray, template: np.ndarray) -> np.ndarray:
+    """The kernel's scores, asserted equal bit for bit to OpenCV's."""
+    ref = cv2.matchTemplate(image, template, cv2.TM_CCOEFF_NORMED)
+    out = ccoeff_normed(image, template)
+    assert out.shape == ref.shape and out.dtype == np.float32
+    bad = np.flatnonzero(out.view(np.uint32) != ref.view(np.uint32))
+    assert not len(bad), (image.shape, template.shape, out.flat[bad[:3]], ref.flat[bad[:3]])
+    return out
+
+
+def _smooth(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """Grey texture with blobs a few pixels wide, as heads and clothes are."""
+    small = rng.integers(0, 256, (max(h // 6, 2), max(w // 6, 2)), dtype=np.uint8)
+    return cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_windows_and_templates_score_as_opencv(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(40):
+        th, tw = int(rng.integers(1, 40)), int(rng.integers(1, 90))
+        # windows from the template's own size (one position; OpenCV's DFT path when the
+        # template is over a quarter of the window) to ten times it (its IPP path)
+        h, w = th + int(rng.integers(0, 4 * th + 2)), tw + int(rng.integers(0, 4 * tw + 2))
+        image = _smooth(rng, h, w) if rng.random() < 0.7 else rng.integers(0, 256, (h, w), np.uint8)
+        if rng.random() < 0.5:  # the template cut from the window: a peak of 1
+            y, x = int(rng.integers(0, h - th + 1)), int(rng.integers(0, w - tw + 1))
+            template = image[y:y + th, x:x + tw].copy()
+            if rng.random() < 0.3:
+                template = 255 - template  # its negative: -1
+        else:
+            template = _smooth(rng, th, tw)
+        _same(image, template)
+
+
+def test_flat_template_scores_one_everywhere_and_flat_windows_zero():
+    rng = np.random.default_rng(5)
+    image = _smooth(rng, 60, 90)
+    assert (_same(image, np.full((8, 20), 77, np.uint8)) == 1.0).all()  # no template variance
+    image[10:40, 20:70] = 200  # flat windows inside: OpenCV's floor, denominator 0
+    out = _same(image, _smooth(rng, 8, 20))
+    assert (out[10:33, 20:51] == 0.0).all() and (out != 0.0).any()
+    for value in (0, 255):  # saturated images
+        _same(np.full((30, 40), value, np.uint8), _smooth(rng, 6, 9))
+    # flat windows whose variance rounds above 0 (1 / n inexact): OpenCV's floor
+    for th, tw in ((1, 3), (3, 5), (5, 7), (7, 11), (9, 13)):
+        for value in (3, 17, 101, 254):
+            image = np.full((2 * th + 3, 2 * tw + 3), value, np.uint8)
+            assert (_same(image, _smooth(rng, th, tw)) == 0.0).all()
+
+
+def test_planted_heads_and_their_negatives_reach_plus_and_minus_one():
+    rng = np.random.default_rng(6)
+    hits = 0
+    for _ in range(30):
+        image = rng.integers(0, 256, (50, 70), np.uint8)
+        template = image[20:32, 30:55].copy()
+        out = _same(image, template)
+        assert abs(out[20, 30] - 1.0) < 1e-6
+        hits += out[20, 30] == 1.0
+        image[20:32, 30:55] = 255 - template
+        assert abs(_same(image, template)[20, 30] + 1.0) < 1e-6
+    assert hits  # some peaks are OpenCV's clamp to exactly 1
+
+
+def test_other_inputs_are_refused():
+    grey = np.zeros((20, 20), np.uint8)
+    with pytest.raises(ValueError, match="uint8"):
+        ccoeff_normed(grey.astype(np.float32), grey[:5, :5])
+    with pytest.raises(ValueError, match="uint8"):
+        ccoeff_normed(np.zeros((20, 20, 3), np.uint8), grey[:5, :5])
+    with pytest.raises(ValueError, match="larger"):
+        ccoeff_normed(grey[:4], grey[:5, :5])
