@@ -35,6 +35,11 @@ For choosing rules on tuning data only (docs/generalisation.md): the sets are th
 else yours (``--seeds``); seeds of a set's untouched list are refused unless ``--untouched``
 is given (to measure, once, not to choose: then the set's own seeds are the default). Several ``--set`` are run one after the other.
 
+With ``--out DIR``, the IDF1 points lost by cause of every (set, tracker) are also written
+there: ``idf1_causes.csv`` (full precision), ``idf1_causes.md`` (docs/generalisation.md's
+"Diagnosis by cause" table) and ``idf1_causes.png`` beside them (a stacked bar per row, one
+colour per cause of ``idf1_losses.CAUSES``; ``--title`` names it).
+
     .venv/bin/python benchmarks/bench_reacquisition.py --set "crowd d0.8" --seeds 0 1 \\
         --trackers reta pbm "pbm_rm0=pbm:tracker.adaptations.relative_match=0"
 
@@ -58,7 +63,7 @@ from scipy.optimize import linear_sum_assignment
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from idf1_losses import CAUSES, idf1_causes, idf1_losses, inside, losses_line  # noqa: E402
+from idf1_losses import CAUSES, LABELS, idf1_causes, idf1_losses, inside, losses_line  # noqa: E402
 from shared_data import use_shared_data  # noqa: E402
 
 from occbench.io.mot import MotTable  # noqa: E402
@@ -66,6 +71,7 @@ from occbench.metrics import combine, score_sequence  # noqa: E402
 from occbench.metrics.paper import considered, match_rows  # noqa: E402
 from occbench.config.build import build_source, build_tracker, load_sequences  # noqa: E402
 from occbench.pipeline.loop import frames  # noqa: E402
+from occbench.report.figures import save_figure  # noqa: E402
 from occbench.sweeps import generalisation as G  # noqa: E402
 from occbench.trackers.geometry import iou_matrix  # noqa: E402
 
@@ -336,8 +342,73 @@ def line(label: str, tally: Tally, m: np.ndarray) -> str:
             + " ".join(f"{k} {tally.modes.get(k, 0)}" for k in MODES)
             + "; " + losses_line(tally.missed, tally.false)
             + "; IDF1 lost by cause (points) " + " ".join(
-                f"{c} {tally.causes.get(c, 0) / max(tally.denominator, 1):.3f}" for c in CAUSES
-                if tally.causes.get(c, 0)))
+                f"{c} {v:.3f}" for c, v in points(tally).items() if tally.causes.get(c, 0)))
+
+
+def points(tally: Tally) -> dict[str, float]:
+    """Each cause of ``CAUSES`` in IDF1 points: its boxes over IDF1's denominator (2 IDTP +
+    IDFP + IDFN), both pooled over the tally's sequences."""
+    return {c: tally.causes.get(c, 0) / max(tally.denominator, 1) for c in CAUSES}
+
+
+def cause_row(name: str, label: str, tally: Tally, m: np.ndarray) -> dict:
+    """One (set, tracker) row of the causes table: ``m`` (``metrics``, seed means) and each
+    cause of ``CAUSES`` in IDF1 points (its boxes over IDF1's denominator, pooled over seeds)."""
+    return {"set": name, "tracker": label, "IDF1": m[0], "HOTA": m[1], "MOTA": m[2],
+            **points(tally)}
+
+
+#: one colour per cause: a wrong id's events warm, false boxes blue, boxes nobody reported grey
+COLOURS = {"split": "#d62728", "merged": "#ff7f0e", "dropped_misses": "#bcbd22",
+           "contact": "#ffbb78", "reacquired_wrong": "#9467bd", "new_id_other": "#c5b0d5",
+           "handover_other": "#f7b6d2", "phantom": "#1f77b4", "double_box": "#aec7e8",
+           "found_nobody": "#17becf", "tentative": "#c7c7c7", "unreported": "#7f7f7f"}
+
+
+def causes_figure(rows: list[dict], title: str = "IDF1 lost by cause"):
+    """A stacked horizontal bar per row of ``cause_row``: the IDF1 points each cause of
+    ``CAUSES`` takes (the bar's length is about 1 - IDF1, written at its end); every cause is
+    in the legend, those absent from every row too."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 0.32 * len(rows) + 1.9))
+    left = np.zeros(len(rows))
+    for c in CAUSES:
+        v = np.array([r[c] for r in rows], dtype=float)
+        ax.barh(range(len(rows)), v, left=left, color=COLOURS[c], label=LABELS[c],
+                edgecolor="white", linewidth=0.3)
+        left += v
+    for k, r in enumerate(rows):
+        ax.text(left[k] + 0.003, k, f"IDF1 {r['IDF1']:.3f}", va="center", fontsize=7)
+    ax.set_yticks(range(len(rows)), [f"{r['set']} · {r['tracker']}" for r in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlim(0, max(left.max(initial=0), 0.01) * 1.18)
+    ax.set_xlabel("IDF1 points lost (boxes / (2 IDTP + IDFP + IDFN), pooled over seeds)",
+                  fontsize=8)
+    ax.legend(fontsize=7, ncol=6, loc="lower center", bbox_to_anchor=(0.5, 1.0))
+    ax.set_title(title, fontsize=9, pad=40)
+    return fig
+
+
+def write_causes(rows: list[dict], out: Path, title: str = "IDF1 lost by cause") -> list[Path]:
+    """``idf1_causes.csv``, ``.md`` and ``.png`` of ``rows`` (``cause_row``) in ``out``."""
+    import pandas as pd
+
+    out.mkdir(parents=True, exist_ok=True)
+    table = pd.DataFrame(rows, columns=["set", "tracker", "IDF1", "HOTA", "MOTA", *CAUSES])
+    table.to_csv(out / "idf1_causes.csv", index=False)
+    head = ["set", "tracker", "IDF1 / HOTA / MOTA", *(LABELS[c] for c in CAUSES)]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        cells = [r["set"], r["tracker"], f"{r['IDF1']:.3f} / {r['HOTA']:.3f} / {r['MOTA']:.3f}",
+                 *("0" if r[c] == 0 else f"{r[c]:.3f}" for c in CAUSES)]
+        lines.append("| " + " | ".join(cells) + " |")
+    (out / "idf1_causes.md").write_text("\n".join(lines) + "\n")
+    figure = save_figure(causes_figure(rows, title), out / "idf1_causes.png")
+    return [out / "idf1_causes.csv", out / "idf1_causes.md", figure]
 
 
 def main(argv=None) -> int:
@@ -353,12 +424,15 @@ def main(argv=None) -> int:
     ap.add_argument("--untouched", action="store_true", help="allow the set's untouched seeds")
     ap.add_argument("--stacks", action="store_true", help="count stacked targets (docstring)")
     ap.add_argument("--dump", type=Path, help="pickle each run's gt, tracks and detections here")
+    ap.add_argument("--out", type=Path, help="write the IDF1 causes' table and figure here")
+    ap.add_argument("--title", default="IDF1 lost by cause", help="the figure's title")
     args = ap.parse_args(argv)
     sets = {e.name: e for e in G.SETS}
     bad = [n for n in args.set if n not in sets]
     if bad:
         ap.error(f"--set {bad}: not in {sorted(sets)}")
     trackers = [parse_tracker(t) for t in args.trackers]
+    rows = []
     for name in args.set:
         s = sets[name]
         own = s.role == G.TUNING or args.untouched  # measuring an untouched set: its seeds
@@ -367,12 +441,16 @@ def main(argv=None) -> int:
         if held and not args.untouched:
             ap.error(f"seeds {held} are {name}'s untouched seeds: choose tuning seeds "
                      "(or --untouched to measure, not to choose)")
-        run_set(name, seeds, trackers, args)
+        rows += run_set(name, seeds, trackers, args)
+    if args.out:
+        for path in write_causes(rows, args.out, args.title):
+            print(f"wrote {path}")
     return 0
 
 
-def run_set(name: str, seeds: list[int], trackers: list, args) -> None:
-    """Print every tracker's line per seed and over the seeds of set ``name``."""
+def run_set(name: str, seeds: list[int], trackers: list, args) -> list[dict]:
+    """Print every tracker's line per seed and over the seeds of set ``name``; the causes
+    table's rows (``cause_row``), one per tracker."""
     total = {label: Tally() for label, _, _ in trackers}
     per_seed: dict[str, list[np.ndarray]] = {label: [] for label in total}
     for seed in seeds:
@@ -387,12 +465,15 @@ def run_set(name: str, seeds: list[int], trackers: list, args) -> None:
                 for e in tally.events:
                     print("    ", e)
             total[label].add(tally)
+    rows = []
     for label, tally in total.items():
         m = np.mean(per_seed[label], axis=0)  # the generalisation table's mean over seeds
         m[3] = sum(x[3] for x in per_seed[label])  # IDs summed
         print(f"{name} seeds {seeds} (mean; IDs summed) {line(label, tally, m)}", flush=True)
         if args.stacks:
             print(f"{name} seeds {seeds} {label} stacks: {dict(tally.stacks)}")
+        rows.append(cause_row(name, label, tally, m))
+    return rows
 
 
 if __name__ == "__main__":

@@ -99,6 +99,12 @@ def losses_line(fn: Counter, fp: Counter) -> str:
 CAUSES = ("split", "merged", "dropped_misses", "phantom", "contact", "reacquired_wrong",
           "new_id_other", "handover_other", "double_box", "found_nobody", "tentative",
           "unreported")
+#: each cause as docs/generalisation.md's "Diagnosis by cause" names it (table and figure)
+LABELS = {"split": "split", "merged": "merged", "dropped_misses": "dropped in misses",
+          "phantom": "phantom", "contact": "contact", "reacquired_wrong": "wrong re-acq.",
+          "new_id_other": "new id, other", "handover_other": "handover, other",
+          "double_box": "double box", "found_nobody": "found on nobody",
+          "tentative": "late confirm", "unreported": "unreported"}
 
 
 def inside(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -134,3 +134,31 @@ def test_idf1_lost_at_a_swap_is_a_merged_box_or_a_contact():
     merged[6] = np.array([[98.0, 48, 75, 104]])  # one box over both people
     causes, _ = _causes(gt, rows, {}, merged)
     assert causes == {"merged": 16}
+
+
+def test_the_causes_figure_is_written_beside_its_table_with_every_cause(tmp_path):
+    import pandas as pd
+    from idf1_losses import CAUSES, LABELS
+
+    rows = [{"set": "cav1-150 sil", "tracker": "reta", "IDF1": 0.7, "HOTA": 0.5, "MOTA": 0.6,
+             **{c: 0.0 for c in CAUSES}, "merged": 0.2, "unreported": 0.1},
+            {"set": "cav1-150 sil", "tracker": "pbm", "IDF1": 0.8, "HOTA": 0.6, "MOTA": 0.7,
+             **{c: 0.01 * (k + 1) for k, c in enumerate(CAUSES)}}]
+    fig = bench.causes_figure(rows)
+    ax = fig.axes[0]
+    # every cause in the legend, in CAUSES's order, those no row has too
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [LABELS[c] for c in CAUSES]
+    # each bar's segments, in cause order, are the row's points
+    for k, r in enumerate(rows):
+        widths = [c.patches[k].get_width() for c in ax.containers]
+        assert np.allclose(widths, [r[c] for c in CAUSES])
+    written = bench.write_causes(rows, tmp_path / "out", "test")
+    assert [p.name for p in written] == ["idf1_causes.csv", "idf1_causes.md", "idf1_causes.png"]
+    assert (tmp_path / "out" / "idf1_causes.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    table = pd.read_csv(tmp_path / "out" / "idf1_causes.csv")
+    assert list(table.columns) == ["set", "tracker", "IDF1", "HOTA", "MOTA", *CAUSES]
+    assert table.loc[0, "merged"] == 0.2 and table.loc[1, "unreported"] == 0.12
+    md = (tmp_path / "out" / "idf1_causes.md").read_text().splitlines()
+    assert md[0].endswith("| found on nobody | late confirm | unreported |")
+    assert md[2] == ("| cav1-150 sil | reta | 0.700 / 0.500 / 0.600 | 0 | 0.200 | 0 | 0 | 0 | 0 "
+                     "| 0 | 0 | 0 | 0 | 0 | 0.100 |")
