@@ -204,6 +204,9 @@ class Adaptations:
             ``reporting.max_misses`` frames) share the frame's candidates among themselves
             first; a target unfound longer takes none of those they take
             (``lost.ReportedFirst``; false: every target in one assignment, PBM 4 step 4).
+        reported_first_stay: with ``reported_first``, a lost target still competes for a
+            candidate at IoU >= this with its last box moved by KF1's prediction (where
+            ``report_predicted`` would report it; 0: for none).
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -270,6 +273,7 @@ class Adaptations:
     distinct_detections: bool = False
     merge_recent_holder: bool = True
     reported_first: bool = False
+    reported_first_stay: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -283,7 +287,11 @@ class Adaptations:
                  reupdate=self.reupdate, fold_twins=self.fold_twins,
                  large_head_pyramid=self.large_head_pyramid)
         at_least("adaptations", 1, large_head_peaks=self.large_head_peaks)
-        unit("adaptations", fold_twins_own=self.fold_twins_own)
+        unit("adaptations", fold_twins_own=self.fold_twins_own,
+             reported_first_stay=self.reported_first_stay)
+        require("adaptations.reported_first_stay",
+                self.reported_first_stay == 0 or self.reported_first,
+                "needs adaptations.reported_first", self.reported_first_stay)
         require("adaptations.fold_twins_own", self.fold_twins_own == 0 or self.fold_twins > 0,
                 "needs adaptations.fold_twins > 0", self.fold_twins_own)
         require("adaptations.lone_shrink_shape", self.lone_shrink_shape >= 0, "must be >= 0",
@@ -318,7 +326,8 @@ class Adaptations:
                                        "duplicate_radius", "gate_max_fraction", "exit_margin",
                                        "report_support", "rival_match", "contested_template",
                                        "lone_shrink", "lone_shrink_shape", "leaving_unreported",
-                                       "fold_twins_own", "reported_behind"),
+                                       "fold_twins_own", "reported_behind",
+                                       "reported_first_stay"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -354,7 +363,7 @@ class Adaptations:
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
                    distinct_detections=False, merge_recent_holder=False,
-                   reported_first=False)
+                   reported_first=False, reported_first_stay=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -227,7 +227,8 @@ class PBMTracker:
             self.rules.contest.settle(scores.S, cand, targets, frame,  # 4.1, by column
                                       m.match_threshold, self.pruning.template_threshold)
         withheld = self.rules.match.withhold(scores.S, targets, m.match_threshold)
-        self.rules.lost.strike(scores.S, targets, self.rules.sharing, 1.0 - m.match_threshold)
+        self.rules.lost.strike(scores.S, targets, self.rules.sharing, 1.0 - m.match_threshold,
+                               cand.box)
         cost = np.where(np.isfinite(scores.S), 1.0 - scores.S, np.inf)
         matches, lost, free = self.rules.sharing.assign(cost, 1.0 - m.match_threshold)
         chosen = chosen_candidates(matches, scores, cand, targets, pred_wh) if len(matches) else None

@@ -5,14 +5,18 @@ every target in one assignment (``lost.AllAtOnce``)."""
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.lost import AllAtOnce, ReportedFirst
 from occbench.trackers.layered.rules import Alone, OneToOne, build_rules
 
 
-def _targets(*misses):
-    return SimpleNamespace(misses=np.array(misses))
+def _targets(*misses, boxes=None, shift=None):
+    T = len(misses)
+    boxes = np.zeros((T, 4)) if boxes is None else np.array(boxes, dtype=float)
+    shift = np.zeros((T, 2)) if shift is None else np.array(shift, dtype=float)
+    return SimpleNamespace(misses=np.array(misses), boxes=boxes, predicted_shift=lambda: shift)
 
 
 def _shared(rule, S, misses, sharing=OneToOne()):
@@ -56,8 +60,44 @@ def test_the_reported_targets_choose_by_the_sharing_given():
     assert S2[2].tolist() == [-np.inf, -np.inf]  # one-to-one: 0 takes 1 (0.3), 1 takes 0
 
 
+def test_with_stay_a_lost_target_keeps_a_candidate_where_it_would_be_reported():
+    S = np.array([[0.513], [0.463]])
+    det = np.array([[163.0, 64.0, 31.0, 91.0]])
+    # ecp1-180 sil frame 98: person 2's target, last at [167 66 23 62], IoU 0.505 with the box
+    behind = _targets(13, 0, boxes=[[167, 66, 23, 62], [165, 62, 31, 91]])
+    kept = S.copy()
+    ReportedFirst(5, 0.5).strike(kept, behind, OneToOne(), 0.75, det)
+    assert kept.tolist() == S.tolist()
+    struck = S.copy()
+    ReportedFirst(5).strike(struck, behind, OneToOne(), 0.75, det)  # no stay: struck
+    assert struck[0, 0] == -np.inf
+    # the stairwell: target 4's last box [54 108 15 63] against person 4's [62 86 27 102]
+    stair = _targets(9, 0, boxes=[[54, 108, 15, 63], [54, 86, 29, 101]])
+    S2 = S.copy()
+    ReportedFirst(5, 0.5).strike(S2, stair, OneToOne(), 0.75, np.array([[62.0, 86, 27, 102]]))
+    assert S2[0, 0] == -np.inf and S2[1, 0] == 0.463
+
+
+def test_stay_reads_the_box_moved_by_kf1s_prediction():
+    S = np.array([[0.6], [0.5]])
+    det = np.array([[130.0, 66.0, 23.0, 62.0]])  # 30 px right of the last box
+    still = _targets(9, 0, boxes=[[100, 66, 23, 62], [125, 60, 25, 70]])
+    S1 = S.copy()
+    ReportedFirst(5, 0.5).strike(S1, still, OneToOne(), 0.75, det)
+    assert S1[0, 0] == -np.inf
+    moving = _targets(9, 0, boxes=[[100, 66, 23, 62], [125, 60, 25, 70]],
+                      shift=[[30, 0], [0, 0]])
+    S2 = S.copy()
+    ReportedFirst(5, 0.5).strike(S2, moving, OneToOne(), 0.75, det)
+    assert S2[0, 0] == 0.6
+
+
 def test_paper_and_default_share_in_one_assignment_and_the_switch_builds_the_rule():
     assert isinstance(build_rules(Adaptations.paper()).lost, AllAtOnce)
     assert isinstance(build_rules(Adaptations()).lost, AllAtOnce)
     assert build_rules(Adaptations(reported_first=True), 3).lost == ReportedFirst(3)
+    assert build_rules(Adaptations(reported_first=True, reported_first_stay=0.5),
+                       3).lost == ReportedFirst(3, 0.5)
+    with pytest.raises(ValueError, match="reported_first_stay"):
+        Adaptations(reported_first_stay=0.5)
     assert "reported_first" not in Adaptations.paper().changed()
