@@ -217,8 +217,9 @@ class PBMTracker:
                          feats: PartFeatures, fg: np.ndarray | None, pred_wh: np.ndarray
                          ) -> Association:
         """One frame's (or block's) scores (``_score_in_gates``), multiple-response pruning
-        and contest (PBM 4.1), the matches ``rules.match`` withholds and the sharing of
-        candidates by 1 - p (``rules.sharing``, PBM 4 step 4)."""
+        and contest (PBM 4.1), the matches ``rules.match`` withholds, the lost targets'
+        share (``rules.lost``) and the sharing of candidates by 1 - p (``rules.sharing``,
+        PBM 4 step 4)."""
         m = self.matching
         scores = FrameScores.empty(len(targets), len(cand))
         if len(targets) and len(cand):
