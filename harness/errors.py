@@ -2,6 +2,9 @@
 
 import os
 import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 EXIT_SIGINT, EXIT_SIGTERM = 128 + signal.SIGINT, 128 + signal.SIGTERM  # a stopped run's status
 REFUSED = 1  # exit status of a refused input (a missing file, a malformed row, a bad value)
@@ -35,3 +38,33 @@ class Terminated(BaseException):  # a signal, named as KeyboardInterrupt
     """SIGTERM received: raised in the main thread (``occbench.commands.cli.run``) so that a
     run stops as on Ctrl-C (its summary says interrupted, errors.txt says where) and exits
     143."""
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Within: Ctrl-C (SIGINT) and SIGTERM do not cut the block; the first one received is
+    acted on as it would have been (KeyboardInterrupt, ``Terminated``) once the block ends.
+    For a block that must not stop halfway: an import cut by a signal leaves its
+    half-imported submodules in ``sys.modules``, and every later import of the package in
+    the process fails (matplotlib: "module 'matplotlib' has no attribute
+    'get_data_path'"), the interrupted run's own summary included. Python runs signal
+    handlers in the main thread only: in another thread the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[tuple[int, object]] = []
+    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s in saved:
+        signal.signal(s, lambda signum, frame: caught.append((signum, frame)))
+    try:
+        yield
+    finally:
+        for s, handler in saved.items():
+            signal.signal(s, handler)
+        if caught:
+            signum, frame = caught[0]
+            handler = saved[signum]
+            if callable(handler):
+                handler(signum, frame)
+            elif handler != signal.SIG_IGN:  # the default action (None: not set from Python)
+                os.kill(os.getpid(), signum)

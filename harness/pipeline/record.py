@@ -17,6 +17,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from occbench.datasets.base import Sequence
+from occbench.errors import signals_held
 from occbench.io.mot import MotTable, read_mot, read_mot_text
 from occbench.io.write import format_mot, write_atomic
 from occbench.metrics import SequenceScore, score_sequence
@@ -50,8 +51,9 @@ def score(gt: Any, result: MotTable, iou_threshold: float = 0.5) -> SequenceScor
 def pages() -> ModuleType:
     """``occbench.report.publish``, the report room's door: imported when the first
     sequence's summary is written, not before the first frames."""
-    # start-up: the report room's pandas, matplotlib and altair (~1 s CPU)
-    from occbench.report import publish
+    with signals_held():  # a Ctrl-C in the middle would break the interrupted run's summary
+        # start-up: the report room's pandas, matplotlib and altair (~1 s CPU)
+        from occbench.report import publish
 
     return publish
 
