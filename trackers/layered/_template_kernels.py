@@ -32,6 +32,10 @@ _FLT_EPSILON_10 = float(np.float32(10) * np.finfo(np.float32).eps)
 
 _DBL_EPSILON = float(np.finfo(np.float64).eps)
 
+_INT32_ROWS = np.iinfo(np.int32).max // 255**2
+"""The tallest template whose window columns' sums of I^2 (at most 255^2 th) ``_ccoeff_normed``
+holds in int32; a taller one is left to OpenCV."""
+
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
 def _normalise_row(raw: np.ndarray, ps: np.ndarray, pq: np.ndarray, tw: int, mean: float,
@@ -103,6 +107,8 @@ def ccoeff_normed(image: np.ndarray, template: np.ndarray) -> np.ndarray:
     th, tw = template.shape
     if th > image.shape[0] or tw > image.shape[1]:
         raise ValueError(f"ccoeff_normed: template {template.shape} larger than image {image.shape}")
+    if th > _INT32_ROWS:
+        return cv2.matchTemplate(image, template, cv2.TM_CCOEFF_NORMED)
     raw = cv2.matchTemplate(image, template, cv2.TM_CCORR)
     mean, sdv = cv2.meanStdDev(template)
     _ccoeff_normed(image, th, tw, raw, float(mean[0, 0]), float(sdv[0, 0]))

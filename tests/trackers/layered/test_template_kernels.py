@@ -83,3 +83,12 @@ def test_other_inputs_are_refused():
         ccoeff_normed(np.zeros((20, 20, 3), np.uint8), grey[:5, :5])
     with pytest.raises(ValueError, match="larger"):
         ccoeff_normed(grey[:4], grey[:5, :5])
+
+
+def test_a_template_too_tall_for_int32_column_sums_scores_as_opencv():
+    # 255^2 th overflows the kernel's int32 column sums past th = 33,025 rows
+    rng = np.random.default_rng(7)
+    th = 40_000
+    template = rng.integers(0, 256, (th, 2), dtype=np.uint8)
+    image = rng.integers(250, 256, (th + 2, 4), dtype=np.uint8)  # sums of I^2 near 2.5e9
+    _same(image, template)
