@@ -1,7 +1,7 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
 ``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
-``contact_coincident``,
+``contact_coincident``, ``covered_appearance``,
 ``split_appearance``, ``merged_unmixed``), ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
@@ -18,7 +18,9 @@ import numpy as np
 from scipy.sparse import csr_array
 
 from occbench.trackers.three_hypothesis import _shares as shares
+from occbench.trackers.common.spatial import meeting_pairs
 from occbench.trackers.three_hypothesis.appearance import Histogram, towards
+from occbench.trackers.three_hypothesis.occlusion import covered_fraction
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
     from occbench.trackers.three_hypothesis.values import Match
@@ -80,6 +82,38 @@ class UnmixedAppearance(MergedAppearance):
         r = np.maximum(p.dense() - (1.0 - own) * partner.dense(), 0.0)  # dense: r.sum()'s order
         total = r.sum()
         return towards(q, Histogram.of(r / total), own) if own > 0 and total > 0 else q
+
+
+@dataclass(frozen=True)
+class AnyCover:
+    """3.3.3 as written: a matched person updates q from its measurement (in front of
+    everyone, eq. 3) or keeps it (behind others), whatever other measurement covers it."""
+
+    def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray | None:
+        return None
+
+
+@dataclass(frozen=True)
+class NearerCover:
+    """``covered_appearance``: a person partly seen is hypothesis territory. The part of a
+    measurement's region another measurement nearer the camera (its foot line lower, as
+    ``reading:eq3_tie`` orders regions) covers is that nearer person's, not this one's
+    evidence; a measurement covered by one nearer measurement for at least ``cover`` of its
+    ellipse is a person behind's, and its person keeps q as a person behind others does
+    in the paper (3.3.3: the appearance is frozen), whatever eq. 3's order says (in front,
+    or behind with ``blend_visible``)."""
+
+    cover: float
+
+    def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray:
+        """(K,) bool per measurement row ``dets`` (K,) of (D, 4) xywh ``boxes``: its ellipse
+        covered for at least ``cover`` by the ellipse of one measurement whose foot line
+        (y + h) lies lower (``occlusion.covered_fraction`` on a ``samples`` grid)."""
+        own = boxes[dets]
+        ia, ib = meeting_pairs(own, boxes)
+        foot = boxes[:, 1] + boxes[:, 3]
+        nearer = (ib != dets[ia]) & (foot[ib] > foot[dets[ia]])
+        return covered_fraction(own, boxes, samples, (ia[nearer], ib[nearer])) >= self.cover
 
 
 # --------------------------------------------------------------- 3.3.3: M of a person in front

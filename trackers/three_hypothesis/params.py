@@ -281,6 +281,11 @@ class Adaptations:
             stage 1 they share one appearance term (the mean) and the region term (eq. 5)
             decides (``contact.RegionAtContact`` ``coincident``; ``contact_region`` does so
             for every pair of O); False: eq. 4 weighs each pair (the paper, 3.3.2).
+        covered_appearance: a person partly seen is hypothesis territory: a matched person
+            whose measurement's ellipse one measurement nearer the camera (its foot line
+            lower) covers for at least ``LifeCycle.cover`` keeps q, as a person behind others
+            does in the paper (``contact.NearerCover``); False: q from its measurement in
+            front, kept (or blended, ``blend_visible``) behind by eq. 3 (the paper, 3.3.3).
     """
 
     gate_sigmas: float = 3.0
@@ -325,6 +330,7 @@ class Adaptations:
     merged_line_shift: float = 0.0
     contact_coincident: bool = False
     measured_still: bool = False
+    covered_appearance: bool = False
 
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
@@ -345,7 +351,7 @@ class Adaptations:
                       "duplicates_together": bool, "own_return": bool,
                       "hold_last": bool, "measured_step": bool, "restore_still": bool,
                       "merged_line": bool, "contact_coincident": bool,
-                      "measured_still": bool})
+                      "measured_still": bool, "covered_appearance": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
                  report_support=self.report_support,
@@ -380,7 +386,7 @@ class Adaptations:
                    own_return=False, hold_last=False, measured_step=False,
                    return_floor=0.0, restore_still=False, merged_line=False,
                    merged_line_shift=0.0, contact_coincident=False,
-                   measured_still=False)
+                   measured_still=False, covered_appearance=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

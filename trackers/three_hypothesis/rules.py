@@ -17,6 +17,7 @@ from occbench.trackers.common.measured_velocity import FilterPrediction, Measure
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram, towards
 from occbench.trackers.three_hypothesis.contact import (
+    AnyCover,
     AnyLeftover,
     AppearanceAtContact,
     AppearanceAtSplit,
@@ -24,6 +25,7 @@ from occbench.trackers.three_hypothesis.contact import (
     MeasurementMotion,
     MergedAppearance,
     MergedMotion,
+    NearerCover,
     RegionAtContact,
     RegionAtSplit,
     SplitParts,
@@ -336,6 +338,7 @@ class Rules(NamedTuple):
     motion_front: MeasurementMotion | MergedMotion  # R of a person in front (3.3.3)
     appearance_behind: KeepAppearance | BlendVisible
     appearance_front: MeasurementAppearance | MergedAppearance | UnmixedAppearance  # 3.3.3
+    covered: AnyCover | NearerCover  # whose measurement a nearer one covers (3.3.3)
     shape_behind: PredictionShape | EstimateShape
     identity: NewIdentity | HiddenIdentity  # the id a confirmed track takes
     support: NoSupport | ForegroundSupport
@@ -380,6 +383,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
         appearance_front=(MeasurementAppearance() if not a.merged_appearance
                           else UnmixedAppearance() if a.merged_unmixed else MergedAppearance()),
+        covered=NearerCover(life_cycle.cover) if a.covered_appearance else AnyCover(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),
         identity=HiddenIdentity() if a.inherit_hidden_id else NewIdentity(),
         support=ForegroundSupport(histograms) if a.foreground_support else NoSupport(),

@@ -29,7 +29,8 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     M is corrected by the measurement (``rules.motion``; one behind others by
     ``rules.motion_behind``). A person absent from any occlusion takes the measurement's
     q and S; one behind another keeps q and takes S from its prediction area
-    (``rules.appearance_behind`` and ``rules.shape_behind``). A person matched through a
+    (``rules.appearance_behind`` and ``rules.shape_behind``); one whose measurement a
+    nearer measurement covers keeps q (``rules.covered``). A person matched through a
     hypothesis keeps its id and loses its other hypotheses; a tentative track is
     confirmed after ``confirm_frames`` matches (or sooner, by ``rules.confirm``), with
     the id ``rules.identity`` gives. Each gets a node in ``memory.graph``."""
@@ -66,16 +67,20 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     scores = V.scores.tolist()
     absorbed: set[int] = set()
     shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
+    covered = _covered(V, visible_dets, setting)
     branches, shapes, occluders = [], [], []  # their nodes' columns (one add_nodes call)
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
         if not behind_r[r]:
-            person.q = rules.appearance_front.update(
-                person.q, p[d], shares[r], persons[partners[r]].q if partners[r] >= 0 else None)
+            if not covered[r]:
+                person.q = rules.appearance_front.update(person.q, p[d], shares[r],
+                                                         persons[partners[r]].q
+                                                         if partners[r] >= 0 else None)
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
-            person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
+            if not covered[r]:
+                person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
         person.merged = shares[r] < 1.0  # read by rules.split at t + 1
         if confirmed[r] or d not in empty_dets:
             person.hits += 1
@@ -141,6 +146,14 @@ def _clear(S: Predictions, V: Measurements, O: Occlusions, rules: Rules, persons
     rows = np.array(dets)
     return dict(zip(rows.tolist(), clear_measurements(
         V.boxes, rows, O.delta, S.owners, np.array(persons)).tolist()))
+
+
+def _covered(V: Measurements, dets: list[int], setting: Setting) -> list[bool]:
+    """Per matched person (measured at rows ``dets`` of V), whether ``rules.covered`` puts
+    its measurement behind a nearer one (its q is then kept)."""
+    kept = setting.rules.covered.behind(np.array(dets), V.boxes,
+                                        setting.occlusion.region_samples)
+    return [False] * len(dets) if kept is None else kept.tolist()
 
 
 def _visible_share(V: Measurements, A: Matching, D: DepthOrder, matches: list[Match],
