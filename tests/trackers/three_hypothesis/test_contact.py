@@ -5,6 +5,7 @@ hand-derivable cases, the paper's rule beside ours."""
 from __future__ import annotations
 
 import cv2
+import pytest
 import numpy as np
 from scipy.sparse import csr_array
 
@@ -13,6 +14,7 @@ from occbench.trackers.records import Detections
 from occbench.trackers.three_hypothesis import Adaptations, RetaTracker
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram
 from occbench.trackers.three_hypothesis.contact import (
+    AnyCover,
     AnyLeftover,
     AppearanceAtContact,
     AppearanceAtSplit,
@@ -20,6 +22,7 @@ from occbench.trackers.three_hypothesis.contact import (
     MeasurementMotion,
     MergedAppearance,
     MergedMotion,
+    NearerCover,
     RegionAtContact,
     RegionAtSplit,
     SplitParts,
@@ -382,3 +385,48 @@ def test_coincident_people_seen_at_t_minus_1_share_their_appearance_term():
     assert build_rules(Adaptations(), h).contact == AppearanceAtContact()
     assert "contact_coincident" in Adaptations(contact_coincident=True).changed()
     assert "contact_coincident" not in Adaptations().changed() + Adaptations.paper().changed()
+
+
+def test_a_measurement_mostly_covered_by_a_nearer_one_is_a_person_behind():
+    """``covered_appearance``: measurement 0 (20 x 60, foot line 110) lies for 0.71 of its
+    ellipse inside measurement 1's (24 x 70, foot line 126: nearer the camera); measurement
+    1 is covered by 0 too, but 0 stands farther; measurement 2 meets nobody. Only 0 is a
+    person behind. At cover 0.75 none is."""
+    boxes = np.array([[100.0, 50, 20, 60], [104.0, 56, 24, 70], [300.0, 50, 20, 60]])
+    rows = np.array([0, 1, 2])
+    assert NearerCover(0.5).behind(rows, boxes, 12).tolist() == [True, False, False]
+    assert NearerCover(0.75).behind(rows, boxes, 12).tolist() == [False, False, False]
+    assert NearerCover(0.5).behind(rows[1:], boxes, 12).tolist() == [False, False]
+    assert AnyCover().behind(rows, boxes, 12) is None
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(covered_appearance=True), h).covered == NearerCover(0.5)
+    assert build_rules(Adaptations(), h).covered == AnyCover()
+    assert "covered_appearance" in Adaptations(covered_appearance=True).changed()
+    assert "covered_appearance" not in Adaptations().changed() + Adaptations.paper().changed()
+
+
+def _red_person_q_after_a_green_one_steps_in_front(covered: bool) -> float:
+    """A red person (20 x 60 at x 100) measured alone for five frames; at frame 5 a green
+    newcomer stands in front of it (24 x 70, foot line 16 px lower), drawn over most of the
+    red ellipse, and both are measured. Returns rho (eq. 4) of the red person's q after
+    frame 5 with its q of frame 4."""
+    tracker = RetaTracker(adaptations=Adaptations(covered_appearance=covered))
+    red, green = np.array([100.0, 50, 20, 60]), np.array([104.0, 56, 24, 70])
+    for t in range(6):
+        img = np.full((160, 240, 3), 90, np.uint8)
+        boxes = [red] if t < 5 else [red, green]
+        for (x, y, w, h), colour in zip(boxes, ((40, 40, 200), (40, 200, 40))):
+            cv2.ellipse(img, ((int(x + w / 2), int(y + h / 2)), (int(w), int(h)), 0), colour, -1)
+        if t == 5:
+            (person,) = [p for p in tracker.memory.persons if p.confirmed]
+            before = person.q.dense()
+        tracker.update(img, Detections(np.array(boxes), np.ones(len(boxes))))
+    return float(np.sqrt(person.q.dense()) @ np.sqrt(before))
+
+
+def test_a_person_whose_measurement_a_nearer_one_covers_keeps_its_colours():
+    """``covered_appearance``: the paper's red person takes its measurement's histogram,
+    green for the most part (rho 0.55 with its q of frame 4); with the rule its measurement
+    is a person behind's and its q is kept (rho 1)."""
+    assert _red_person_q_after_a_green_one_steps_in_front(False) < 0.9
+    assert _red_person_q_after_a_green_one_steps_in_front(True) == pytest.approx(1.0)
