@@ -86,8 +86,8 @@ class UnmixedAppearance(MergedAppearance):
 
 @dataclass(frozen=True)
 class AnyCover:
-    """3.3.3 as written: a matched person updates q from its measurement (in front of
-    everyone, eq. 3) or keeps it (behind others), whatever other measurement covers it."""
+    """3.3.3 as written: a person matched behind nobody (eq. 3) updates q from its
+    measurement, whatever other measurement covers it."""
 
     def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray | None:
         return None
@@ -99,9 +99,9 @@ class NearerCover:
     measurement's region another measurement nearer the camera (its foot line lower, as
     ``reading:eq3_tie`` orders regions) covers is that nearer person's, not this one's
     evidence; a measurement covered by one nearer measurement for at least ``cover`` of its
-    ellipse is a person behind's, and its person keeps q as a person behind others does
-    in the paper (3.3.3: the appearance is frozen), whatever eq. 3's order says (in front,
-    or behind with ``blend_visible``)."""
+    ellipse is a person behind's: its person, though eq. 3's order puts it in front, keeps q
+    as a person behind others does (3.3.3: the appearance is frozen). A person eq. 3 puts
+    behind is left to ``rules.appearance_behind``."""
 
     cover: float
 

@@ -281,11 +281,11 @@ class Adaptations:
             stage 1 they share one appearance term (the mean) and the region term (eq. 5)
             decides (``contact.RegionAtContact`` ``coincident``; ``contact_region`` does so
             for every pair of O); False: eq. 4 weighs each pair (the paper, 3.3.2).
-        covered_appearance: a person partly seen is hypothesis territory: a matched person
-            whose measurement's ellipse one measurement nearer the camera (its foot line
-            lower) covers for at least ``LifeCycle.cover`` keeps q, as a person behind others
-            does in the paper (``contact.NearerCover``); False: q from its measurement in
-            front, kept (or blended, ``blend_visible``) behind by eq. 3 (the paper, 3.3.3).
+        covered_appearance: a person partly seen is hypothesis territory: a person matched
+            in front (eq. 3) whose measurement's ellipse one measurement nearer the camera
+            (its foot line lower) covers for at least ``LifeCycle.cover`` keeps q, as a
+            person behind others does (``contact.NearerCover``); False: q from its
+            measurement (the paper, 3.3.3).
     """
 
     gate_sigmas: float = 3.0

@@ -29,8 +29,8 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     M is corrected by the measurement (``rules.motion``; one behind others by
     ``rules.motion_behind``). A person absent from any occlusion takes the measurement's
     q and S; one behind another keeps q and takes S from its prediction area
-    (``rules.appearance_behind`` and ``rules.shape_behind``); one whose measurement a
-    nearer measurement covers keeps q (``rules.covered``). A person matched through a
+    (``rules.appearance_behind`` and ``rules.shape_behind``); one in front whose
+    measurement a nearer measurement covers keeps q too (``rules.covered``). A person matched through a
     hypothesis keeps its id and loses its other hypotheses; a tentative track is
     confirmed after ``confirm_frames`` matches (or sooner, by ``rules.confirm``), with
     the id ``rules.identity`` gives. Each gets a node in ``memory.graph``."""
@@ -67,7 +67,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     scores = V.scores.tolist()
     absorbed: set[int] = set()
     shares, partners = own.tolist(), partner.tolist()  # per-person reads as Python scalars
-    covered = _covered(V, visible_dets, setting)
+    covered = _covered(V, visible_dets, behind, setting)
     branches, shapes, occluders = [], [], []  # their nodes' columns (one add_nodes call)
     for r, (i, match) in enumerate(zip(keys, matches)):
         person, d, n = persons[i], match.det, match.node
@@ -79,8 +79,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
-            if not covered[r]:
-                person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
+            person.q = rules.appearance_behind.update(person.q, p[d], visible_share[r])
         person.merged = shares[r] < 1.0  # read by rules.split at t + 1
         if confirmed[r] or d not in empty_dets:
             person.hits += 1
@@ -148,12 +147,20 @@ def _clear(S: Predictions, V: Measurements, O: Occlusions, rules: Rules, persons
         V.boxes, rows, O.delta, S.owners, np.array(persons)).tolist()))
 
 
-def _covered(V: Measurements, dets: list[int], setting: Setting) -> list[bool]:
+def _covered(V: Measurements, dets: list[int], behind: np.ndarray,
+             setting: Setting) -> list[bool]:
     """Per matched person (measured at rows ``dets`` of V), whether ``rules.covered`` puts
-    its measurement behind a nearer one (its q is then kept)."""
-    kept = setting.rules.covered.behind(np.array(dets), V.boxes,
-                                        setting.occlusion.region_samples)
-    return [False] * len(dets) if kept is None else kept.tolist()
+    its measurement behind a nearer one though eq. 3 puts it in front (``behind`` False);
+    its q is then kept."""
+    out = [False] * len(dets)
+    front = np.flatnonzero(~behind)
+    kept = (setting.rules.covered.behind(np.array(dets)[front], V.boxes,
+                                         setting.occlusion.region_samples)
+            if len(front) else None)
+    if kept is not None:
+        for r, k in zip(front.tolist(), kept.tolist()):
+            out[r] = k
+    return out
 
 
 def _visible_share(V: Measurements, A: Matching, D: DepthOrder, matches: list[Match],
