@@ -1,12 +1,11 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
 ``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
-``contact_coincident``, ``covered_appearance``,
-``split_appearance``, ``merged_unmixed``), ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
+``contact_coincident``, ``covered_appearance``, ``split_appearance``, ``merged_unmixed``),
+``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
-xywh, 0-based pixels.
-"""
+xywh, 0-based pixels."""
 
 from __future__ import annotations
 
@@ -86,8 +85,7 @@ class UnmixedAppearance(MergedAppearance):
 
 @dataclass(frozen=True)
 class AnyCover:
-    """3.3.3 as written: a person matched behind nobody (eq. 3) updates q from its
-    measurement, whatever other measurement covers it."""
+    """3.3.3 as written: a person matched in front (eq. 3) takes q from its measurement."""
 
     def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray | None:
         return None
@@ -96,19 +94,15 @@ class AnyCover:
 @dataclass(frozen=True)
 class NearerCover:
     """``covered_appearance``: a person partly seen is hypothesis territory. The part of a
-    measurement's region another measurement nearer the camera (its foot line lower, as
-    ``reading:eq3_tie`` orders regions) covers is that nearer person's, not this one's
-    evidence; a measurement covered by one nearer measurement for at least ``cover`` of its
-    ellipse is a person behind's: its person, though eq. 3's order puts it in front, keeps q
-    as a person behind others does (3.3.3: the appearance is frozen). A person eq. 3 puts
-    behind is left to ``rules.appearance_behind``."""
+    measurement's region a measurement nearer the camera (foot line lower, as
+    ``reading:eq3_tie`` orders regions) covers is not its person's evidence: a person eq. 3
+    puts in front whose measurement's ellipse one nearer measurement covers for at least
+    ``cover`` keeps q, as a person behind others does (3.3.3)."""
 
     cover: float
 
     def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray:
-        """(K,) bool per measurement row ``dets`` (K,) of (D, 4) xywh ``boxes``: its ellipse
-        covered for at least ``cover`` by the ellipse of one measurement whose foot line
-        (y + h) lies lower (``occlusion.covered_fraction`` on a ``samples`` grid)."""
+        """(K,) bool per row ``dets`` of (D, 4) xywh ``boxes``: a lower-footed box covers it."""
         own = boxes[dets]
         ia, ib = meeting_pairs(own, boxes)
         foot = boxes[:, 1] + boxes[:, 3]

@@ -17,22 +17,9 @@ from occbench.trackers.common.measured_velocity import FilterPrediction, Measure
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram, towards
 from occbench.trackers.three_hypothesis.contact import (
-    AnyCover,
-    AnyLeftover,
-    AppearanceAtContact,
-    AppearanceAtSplit,
-    MeasurementAppearance,
-    MeasurementMotion,
-    MergedAppearance,
-    MergedMotion,
-    NearerCover,
-    RegionAtContact,
-    RegionAtSplit,
-    SplitParts,
-    UnmixedAppearance,
-    VisibleRegion,
-    WholeRegion,
-)
+    AnyCover, AnyLeftover, AppearanceAtContact, AppearanceAtSplit, MeasurementAppearance,
+    MeasurementMotion, MergedAppearance, MergedMotion, NearerCover, RegionAtContact, RegionAtSplit,
+    SplitParts, UnmixedAppearance, VisibleRegion, WholeRegion)
 from occbench.trackers.three_hypothesis.measured_line import FilterVelocity, MeasuredLine
 from occbench.trackers.three_hypothesis.motion import (
     BoxState,

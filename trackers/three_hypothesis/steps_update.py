@@ -28,12 +28,12 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
 
     M is corrected by the measurement (``rules.motion``; one behind others by
     ``rules.motion_behind``). A person absent from any occlusion takes the measurement's
-    q and S; one behind another keeps q and takes S from its prediction area
-    (``rules.appearance_behind`` and ``rules.shape_behind``); one in front whose
-    measurement a nearer measurement covers keeps q too (``rules.covered``). A person matched through a
-    hypothesis keeps its id and loses its other hypotheses; a tentative track is
-    confirmed after ``confirm_frames`` matches (or sooner, by ``rules.confirm``), with
-    the id ``rules.identity`` gives. Each gets a node in ``memory.graph``."""
+    q and S (unless ``rules.covered`` puts its measurement behind a nearer one); one behind
+    another keeps q and takes S from its prediction area (``rules.appearance_behind`` and
+    ``rules.shape_behind``). A person matched through a hypothesis keeps its id and loses
+    its other hypotheses; a tentative track is confirmed after ``confirm_frames`` matches
+    (or sooner, by ``rules.confirm``), with the id ``rules.identity`` gives. Each gets a
+    node in ``memory.graph``."""
     keys = sorted(A.matched)  # the matched persons, in person order
     if not keys:
         return Updated([], np.zeros((0, 4)), [], frozenset())
@@ -73,9 +73,8 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         person, d, n = persons[i], match.det, match.node
         if not behind_r[r]:
             if not covered[r]:
-                person.q = rules.appearance_front.update(person.q, p[d], shares[r],
-                                                         persons[partners[r]].q
-                                                         if partners[r] >= 0 else None)
+                partner_q = persons[partners[r]].q if partners[r] >= 0 else None
+                person.q = rules.appearance_front.update(person.q, p[d], shares[r], partner_q)
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
