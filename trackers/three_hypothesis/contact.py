@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from scipy.sparse import csr_array
 
-from occbench.trackers.three_hypothesis import _shares as shares
 from occbench.trackers.common.spatial import meeting_pairs
+from occbench.trackers.three_hypothesis import _shares as shares
 from occbench.trackers.three_hypothesis.appearance import Histogram, towards
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
 
