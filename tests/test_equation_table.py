@@ -148,7 +148,8 @@ def _defined_classes() -> dict[str, list[str]]:
 
 def adaptation_references() -> list[tuple[str, str]]:
     """(section tracker, reference) of every backticked code reference: a .py path, a
-    dotted ``trackers.``/``harness.`` name, ``rules.X``, a class (``Name`` or
+    dotted ``trackers.``/``harness.`` name, ``rules.X`` (a name in the tracker's rules.py or
+    a step of its ``Rules``), a class (``Name`` or
     ``Name.member``) or a test function."""
     out, section = [], "three_hypothesis"
     code = re.compile(r"^([\w/]+\.py|(trackers|harness)\.[\w.]+|rules\.\w+|[A-Z][a-z]+[A-Z]\w*"
@@ -176,8 +177,10 @@ def _exists(section: str, ref: str, classes: dict[str, list[str]]) -> tuple[bool
         return True, {(path, name)} if ref.startswith("occbench.trackers.") else set()
     if ref.startswith("rules."):
         name = ref.split(".")[1]
-        ok = hasattr(importlib.import_module(f"occbench.trackers.{section}.rules"), name)
-        return ok, {(f"{section}/rules.py", name)}
+        module = importlib.import_module(f"occbench.trackers.{section}.rules")
+        if name in module.Rules._fields:  # a step of Rules: build_rules fills it on every run
+            return True, {(f"{section}/rules.py", "build_rules")}
+        return hasattr(module, name), {(f"{section}/rules.py", name)}
     if ref.startswith("test_"):
         prefix = ref.removesuffix("...")
         names = [n for p in (ROOT / "tests").rglob("test_*.py") for n in functions_of(p)]
