@@ -207,6 +207,9 @@ class Adaptations:
         reported_first_stay: with ``reported_first``, a lost target still competes for a
             candidate at IoU >= this with its last box moved by KF1's prediction (where
             ``report_predicted`` would report it; 0: for none).
+        reported_first_head: with ``reported_first``, a lost target still competes for a
+            candidate whose head band (top 1/7 of its box, PBM 2.1's head part) shares rows
+            with that of its last box moved by KF1's prediction (false: for none).
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -274,6 +277,7 @@ class Adaptations:
     merge_recent_holder: bool = True
     reported_first: bool = False
     reported_first_stay: float = 0.0
+    reported_first_head: bool = False
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -292,6 +296,9 @@ class Adaptations:
         require("adaptations.reported_first_stay",
                 self.reported_first_stay == 0 or self.reported_first,
                 "needs adaptations.reported_first", self.reported_first_stay)
+        require("adaptations.reported_first_head",
+                not self.reported_first_head or self.reported_first,
+                "needs adaptations.reported_first", self.reported_first_head)
         require("adaptations.fold_twins_own", self.fold_twins_own == 0 or self.fold_twins > 0,
                 "needs adaptations.fold_twins > 0", self.fold_twins_own)
         require("adaptations.lone_shrink_shape", self.lone_shrink_shape >= 0, "must be >= 0",
@@ -337,7 +344,8 @@ class Adaptations:
                                        "border_birth_waits", "camera_placement",
                                        "reported_by_record", "lone_shrink_narrow",
                                        "merge_found_elsewhere", "distinct_detections",
-                                       "merge_recent_holder", "reported_first"),
+                                       "merge_recent_holder", "reported_first",
+                                       "reported_first_head"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
@@ -363,7 +371,7 @@ class Adaptations:
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
                    distinct_detections=False, merge_recent_holder=False,
-                   reported_first=False, reported_first_stay=0.0)
+                   reported_first=False, reported_first_stay=0.0, reported_first_head=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from occbench.trackers.geometry import iou_matrix
+from occbench.trackers.layered.split import HEAD_FRACTION
 
 if TYPE_CHECKING:  # annotations only
     from occbench.trackers.layered.rules import Alone, OneToOne
@@ -52,17 +53,28 @@ class ReportedFirst:
     ended found again there). Why: without it, on ecp1-180 sil person 2, behind person 3 at
     frames 85-101, is no longer found again by his own target (unfound 13 frames, at 98, on
     the pair's box: IoU 0.505 with its last box) and ends with person 3's target's id; the
-    stairwell's person 4 stands elsewhere (IoU 0.14 with target 4's last box)."""
+    stairwell's person 4 stands elsewhere (IoU 0.14 with target 4's last box).
+
+    ``head`` (``adaptations.reported_first_head``): a lost target still competes for a
+    candidate whose head band (the top ``HEAD_FRACTION`` of its box, PBM 2.1's head part)
+    shares rows with the head band of the lost target's last box moved by KF1's prediction:
+    a person who went unseen behind another comes out with his head at the height it had;
+    one sinking out of view and the one rising where he sank do not. Why: at the stairwell
+    (ecp1-180 gt 168) target 4's head band, rows 108-117, lies 8 rows below person 4's, rows
+    86-100; on ecp1-180 sil at 98 person 2's target's, 66-75, and the pair's box's, 64-77,
+    share rows."""
 
     max_misses: int
     stay: float = 0.0
+    head: bool = False
 
     def strike(self, S: np.ndarray, targets: Targets, sharing: Alone | OneToOne,
                max_cost: float, boxes: np.ndarray | None = None) -> None:
         """Sets S[lost, n] = -inf in place for every candidate n the reported targets take
         when ``sharing`` assigns them alone (cost 1 - S, at most ``max_cost``), but (with
         ``stay``) where n's box (``boxes`` (N, 4) xywh) lies at the lost target's
-        predicted box."""
+        predicted box, or (with ``head``) where n's head band shares rows with the lost
+        target's predicted one."""
         lost = targets.misses > self.max_misses
         if not S.size or not lost.any() or lost.all():
             return
@@ -72,10 +84,22 @@ class ReportedFirst:
             return
         rows, taken = np.flatnonzero(lost), matches[:, 1]
         struck = np.ones((len(rows), len(taken)), dtype=bool)
-        if self.stay > 0:
+        if self.stay > 0 or self.head:
             at = targets.boxes[rows]
             at[:, :2] += targets.predicted_shift()[rows]
-            struck = iou_matrix(at, boxes[taken]) < self.stay
+        if self.stay > 0:
+            struck &= iou_matrix(at, boxes[taken]) < self.stay
+        if self.head:
+            struck &= ~_head_bands_meet(at, boxes[taken])
         sub = S[np.ix_(rows, taken)]
         sub[struck] = -np.inf
         S[np.ix_(rows, taken)] = sub
+
+
+def _head_bands_meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(A, B) whether the head bands (rows y .. y + HEAD_FRACTION h) of xywh boxes a (A, 4)
+    and b (B, 4) share rows (touching counts)."""
+    top = np.maximum(a[:, None, 1], b[None, :, 1])
+    bottom = np.minimum(a[:, None, 1] + HEAD_FRACTION * a[:, None, 3],
+                        b[None, :, 1] + HEAD_FRACTION * b[None, :, 3])
+    return bottom >= top

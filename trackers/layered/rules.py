@@ -356,7 +356,7 @@ def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Ru
                   MeasuredVelocity() if a.measured_velocity else FilterPrediction()),
         behind=(ReportedByRecord() if a.reported_by_record else
                 ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound()),
-        lost=(ReportedFirst(max_misses, a.reported_first_stay) if a.reported_first
+        lost=(ReportedFirst(max_misses, a.reported_first_stay, a.reported_first_head) if a.reported_first
               else AllAtOnce()),
     )
 

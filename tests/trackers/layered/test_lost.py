@@ -101,3 +101,45 @@ def test_paper_and_default_share_in_one_assignment_and_the_switch_builds_the_rul
     with pytest.raises(ValueError, match="reported_first_stay"):
         Adaptations(reported_first_stay=0.5)
     assert "reported_first" not in Adaptations.paper().changed()
+
+
+def test_with_head_a_lost_target_keeps_a_candidate_whose_head_is_at_its_heads_height():
+    S = np.array([[0.513], [0.463]])
+    # ecp1-180 sil frame 98: person 2's target, head band rows 66-75, the pair's box's 64-77
+    behind = _targets(13, 0, boxes=[[167, 66, 23, 62], [165, 62, 31, 91]])
+    kept = S.copy()
+    ReportedFirst(5, head=True).strike(kept, behind, OneToOne(), 0.75,
+                                       np.array([[163.0, 64, 31, 91]]))
+    assert kept.tolist() == S.tolist()
+    # the stairwell (ecp1-180 gt 168): target 4's head band, rows 108-117, below person 4's, 86-100
+    stair = _targets(9, 0, boxes=[[54, 108, 15, 63], [54, 86, 29, 101]])
+    S2 = S.copy()
+    ReportedFirst(5, head=True).strike(S2, stair, OneToOne(), 0.75,
+                                       np.array([[62.0, 86, 27, 102]]))
+    assert S2[0, 0] == -np.inf and S2[1, 0] == 0.463
+    # anywhere along the row: the head's height, not the box's place, decides
+    far = _targets(13, 0, boxes=[[20, 66, 23, 62], [165, 62, 31, 91]])
+    S3 = S.copy()
+    ReportedFirst(5, head=True).strike(S3, far, OneToOne(), 0.75, np.array([[163.0, 64, 31, 91]]))
+    assert S3.tolist() == S.tolist()
+
+
+def test_head_reads_the_head_band_moved_by_kf1s_prediction():
+    S = np.array([[0.6], [0.5]])
+    det = np.array([[100.0, 90.0, 23.0, 62.0]])  # 24 rows below the last box
+    still = _targets(9, 0, boxes=[[100, 66, 23, 62], [95, 88, 25, 66]])
+    S1 = S.copy()
+    ReportedFirst(5, head=True).strike(S1, still, OneToOne(), 0.75, det)
+    assert S1[0, 0] == -np.inf
+    falling = _targets(9, 0, boxes=[[100, 66, 23, 62], [95, 88, 25, 66]], shift=[[0, 20], [0, 0]])
+    S2 = S.copy()
+    ReportedFirst(5, head=True).strike(S2, falling, OneToOne(), 0.75, det)
+    assert S2[0, 0] == 0.6
+
+
+def test_the_head_switch_builds_the_rule_and_needs_reported_first():
+    assert build_rules(Adaptations(reported_first=True, reported_first_head=True),
+                       3).lost == ReportedFirst(3, 0.0, True)
+    with pytest.raises(ValueError, match="reported_first_head"):
+        Adaptations(reported_first_head=True)
+    assert "reported_first_head" not in Adaptations.paper().changed()
