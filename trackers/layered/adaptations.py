@@ -209,7 +209,7 @@ class Adaptations:
             ``report_predicted`` would report it; 0: for none).
         reported_first_head: with ``reported_first``, a lost target still competes for a
             candidate whose head band (top 1/7 of its box, PBM 2.1's head part) shares rows
-            with that of its last box moved by KF1's prediction (false: for none).
+            with that of its last box (false: for none).
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.

@@ -57,12 +57,14 @@ class ReportedFirst:
 
     ``head`` (``adaptations.reported_first_head``): a lost target still competes for a
     candidate whose head band (the top ``HEAD_FRACTION`` of its box, PBM 2.1's head part)
-    shares rows with the head band of the lost target's last box moved by KF1's prediction:
-    a person who went unseen behind another comes out with his head at the height it had;
-    one sinking out of view and the one rising where he sank do not. Why: at the stairwell
-    (ecp1-180 gt 168) target 4's head band, rows 108-117, lies 8 rows below person 4's, rows
-    86-100; on ecp1-180 sil at 98 person 2's target's, 66-75, and the pair's box's, 64-77,
-    share rows."""
+    shares rows with the head band of the lost target's last box (not moved: KF1's
+    velocity run on over a long gap drifts): a person who went unseen behind another comes
+    out with his head at the height it had; one sinking out of view and the one rising
+    where he sank do not. Why: at the stairwell (ecp1-180 gt 168) target 4's head band,
+    rows 108-117, lies 8 rows below person 4's, rows 86-100; on ecp1-180 sil at 98 person
+    2's target's, 66-75, and the pair's box's, 64-77, share rows; on cav1-150 sil at 19-23
+    person 5's target (unfound 10-14 frames, last band 50-59) is right on his box (48-57),
+    where KF1's prediction had moved its band 9-13 rows down."""
 
     max_misses: int
     stay: float = 0.0
@@ -73,8 +75,8 @@ class ReportedFirst:
         """Sets S[lost, n] = -inf in place for every candidate n the reported targets take
         when ``sharing`` assigns them alone (cost 1 - S, at most ``max_cost``), but (with
         ``stay``) where n's box (``boxes`` (N, 4) xywh) lies at the lost target's
-        predicted box, or (with ``head``) where n's head band shares rows with the lost
-        target's predicted one."""
+        predicted box, or (with ``head``) where n's head band shares rows with that of the
+        lost target's last box."""
         lost = targets.misses > self.max_misses
         if not S.size or not lost.any() or lost.all():
             return
@@ -84,13 +86,12 @@ class ReportedFirst:
             return
         rows, taken = np.flatnonzero(lost), matches[:, 1]
         struck = np.ones((len(rows), len(taken)), dtype=bool)
-        if self.stay > 0 or self.head:
+        if self.stay > 0:
             at = targets.boxes[rows]
             at[:, :2] += targets.predicted_shift()[rows]
-        if self.stay > 0:
             struck &= iou_matrix(at, boxes[taken]) < self.stay
         if self.head:
-            struck &= ~_head_bands_meet(at, boxes[taken])
+            struck &= ~_head_bands_meet(targets.boxes[rows], boxes[taken])
         sub = S[np.ix_(rows, taken)]
         sub[struck] = -np.inf
         S[np.ix_(rows, taken)] = sub
