@@ -90,6 +90,10 @@ class Adaptations:
             prediction (paper: reporting is ours; at its last validated box).
         gap_division: after m frames unfound, eq. 11's displacement and overlap are divided
             by 1 + m (per-frame differences; paper: as measured, eq. 11).
+        apart_undivided: with ``gap_division``, the overlap of a target none of whose parts
+            overlaps the candidate's (every part's IoU 0: 1 - IoU = 1) is not divided: parts
+            that miss the candidate entirely cost the full overlap whatever the gap
+            (``differences._pair_differences``' ``apart``; false: divided as the rest).
         hold_size: KF2's size rates are zeroed while a target is unfound, so its predicted
             size is held (paper: KF2 predicts, eq. 8).
         blob_box_ratio: a blob-born candidate's box is rescaled by the detection/blob size
@@ -242,6 +246,7 @@ class Adaptations:
     exit_misses: int = 3
     report_predicted: bool = True
     gap_division: bool = True
+    apart_undivided: bool = False
     hold_size: bool = True
     blob_box_ratio: bool = True
     several_heads_merge: bool = True
@@ -299,6 +304,8 @@ class Adaptations:
         require("adaptations.reported_first_head",
                 not self.reported_first_head or self.reported_first,
                 "needs adaptations.reported_first", self.reported_first_head)
+        require("adaptations.apart_undivided", not self.apart_undivided or self.gap_division,
+                "needs adaptations.gap_division", self.apart_undivided)
         require("adaptations.fold_twins_own", self.fold_twins_own == 0 or self.fold_twins > 0,
                 "needs adaptations.fold_twins > 0", self.fold_twins_own)
         require("adaptations.lone_shrink_shape", self.lone_shrink_shape >= 0, "must be >= 0",
@@ -345,7 +352,7 @@ class Adaptations:
                                        "reported_by_record", "lone_shrink_narrow",
                                        "merge_found_elsewhere", "distinct_detections",
                                        "merge_recent_holder", "reported_first",
-                                       "reported_first_head"),
+                                       "reported_first_head", "apart_undivided"),
                                       bool),
                       "prune_max_misses": int, "exit_misses": int, "early_confirm": int,
                       "reupdate": int, "fold_twins": int, "large_head_pyramid": int,
@@ -371,7 +378,8 @@ class Adaptations:
                    camera_placement=False, reported_by_record=False,
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
                    distinct_detections=False, merge_recent_holder=False,
-                   reported_first=False, reported_first_stay=0.0, reported_first_head=False)
+                   reported_first=False, reported_first_stay=0.0, reported_first_head=False,
+                   apart_undivided=False)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -52,11 +52,12 @@ def _arrays(f: PartFeatures) -> tuple[np.ndarray, ...]:
     return f.parts, f.area, f.perimeter, f.hsv, f.xyz, f.centroid, f.height
 
 
-def _misses(misses: np.ndarray | None, n_targets: int) -> np.ndarray:
-    """(T,) float64 misses (zeros when None: the factor 1 / (1 + 0) is exactly 1)."""
+def _gap(misses: np.ndarray | None, n_targets: int, apart: bool) -> tuple[np.ndarray, bool]:
+    """The kernels' ``gap``: (T,) float64 misses (zeros when None: the factor 1 / (1 + 0) is
+    exactly 1) and ``apart`` (``adaptations.apart_undivided``)."""
     if misses is None:
-        return np.zeros(n_targets)
-    return np.asarray(misses, dtype=np.float64)
+        return np.zeros(n_targets), bool(apart)
+    return np.asarray(misses, dtype=np.float64), bool(apart)
 
 
 def _pairs(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray
@@ -74,37 +75,40 @@ def _pairs(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarra
 
 
 def _differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                 misses: np.ndarray | None) -> np.ndarray:
+                 misses: np.ndarray | None, apart: bool) -> np.ndarray:
     """Eq. 11 of pairs (ti[k], n[k]), indices in [0, T) and [0, N) (IndexError else)."""
     ti, n = _pairs(model, cand, ti, n)
     out = np.empty((len(ti), N_FEATURES, N_PARTS))
-    _differences_kernel(_arrays(model), _arrays(cand), ti, n, _misses(misses, len(model)), out)
+    _differences_kernel(_arrays(model), _arrays(cand), ti, n, _gap(misses, len(model), apart),
+                        out)
     return out
 
 
-def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None
-                        ) -> np.ndarray:
+def feature_differences(model: PartFeatures, cand: PartFeatures, misses: np.ndarray | None = None,
+                        apart: bool = False) -> np.ndarray:
     """Eq. 11 for every target/candidate pair.
 
     Args:
         model: T targets' parts models. cand: N candidates' part features.
         misses: (T,) frames since each target was last found; displacement and overlap
             differences are divided by (1 + misses) so they stay per-frame after a gap.
+        apart: the overlap of a pair whose parts all miss the candidate's (every IoU 0) is
+            not divided (``adaptations.apart_undivided``).
     Returns:
         (T, N, 6, 5) differences, features in ``FEATURES`` order.
     """
     T, N = len(model), len(cand)
     ti, n = np.divmod(np.arange(T * N, dtype=np.intp), max(N, 1))
-    return _differences(model, cand, ti, n, misses).reshape(T, N, N_FEATURES, N_PARTS)
+    return _differences(model, cand, ti, n, misses, apart).reshape(T, N, N_FEATURES, N_PARTS)
 
 
 def selected_differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                         misses: np.ndarray | None = None) -> np.ndarray:
+                         misses: np.ndarray | None = None, apart: bool = False) -> np.ndarray:
     """Eq. 11 for the selected pairs (target ti[k], candidate n[k]) only: (K, 6, 5), equal
-    to ``feature_differences(model, cand, misses)[ti, n]`` value for value. The tracker
+    to ``feature_differences(model, cand, misses, apart)[ti, n]`` value for value. The tracker
     scores only the candidates inside a target's gate (PBM 3).
     """
-    return _differences(model, cand, ti, n, misses)
+    return _differences(model, cand, ti, n, misses, apart)
 
 
 def _weights(w: np.ndarray, size: int, name: str) -> np.ndarray:
@@ -147,16 +151,17 @@ def _scores(models: FeatureModels, d: np.ndarray, omega: np.ndarray, gamma: np.n
 
 def pair_scores(models: FeatureModels, model: PartFeatures, cand: PartFeatures, ti: np.ndarray,
                 n: np.ndarray, misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
-                spread: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+                spread: float = 1.0, apart: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 in one call for the pairs (target ti[k], candidate n[k]), equal value for
-    value to ``layered_scores(models, selected_differences(model, cand, ti, n, misses),
-    omega, gamma, spread)``.
+    value to ``layered_scores(models, selected_differences(model, cand, ti, n, misses,
+    apart), omega, gamma, spread)``.
 
     Returns:
         part scores p_j (K, 5) and global scores p (K,).
     """
     ti, n = _pairs(model, cand, ti, n)
-    return _pair_scores_kernel(_arrays(model), _arrays(cand), ti, n, _misses(misses, len(model)),
+    return _pair_scores_kernel(_arrays(model), _arrays(cand), ti, n,
+                               _gap(misses, len(model), apart),
                                float(spread), _weights(omega, N_FEATURES, "omega"),
                                _weights(gamma, N_PARTS, "gamma"), _theta(models))
 
@@ -184,8 +189,8 @@ _BOUNDS: dict[int, tuple] = {}
 def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatureExtractor,
                boxes: np.ndarray, alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray,
                misses: np.ndarray | None, omega: np.ndarray, gamma: np.ndarray,
-               spread: float = 1.0, best_of: int = 0, grouped: int = 0, coarse: bool = False
-               ) -> tuple[np.ndarray, np.ndarray]:
+               spread: float = 1.0, best_of: int = 0, grouped: int = 0, coarse: bool = False,
+               apart: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 of (K, 4) xywh boxes of the extractor's frame (split at alpha, beta (K,)),
     each against the model of its target ti[k]: equal bit for bit to ``pair_scores(models,
     model, extractor.extract(boxes, alpha, beta), ti, arange(K), ...)``, without making the
@@ -215,7 +220,7 @@ def box_scores(models: FeatureModels, model: PartFeatures, extractor: PartFeatur
     table = _bounds(models) if best_of > 0 else None
     groups = (best_of, grouped, table) if table is not None else (0, 0, _NO_TABLE)
     kernel = coarse_box_scores_kernel if coarse and table is not None else box_scores_kernel
-    return kernel(b, ti, ratios, sampling, _arrays(model), _misses(misses, len(model)),
+    return kernel(b, ti, ratios, sampling, _arrays(model), _gap(misses, len(model), apart),
                   (float(spread), _weights(omega, N_FEATURES, "omega"),
                    _weights(gamma, N_PARTS, "gamma")), _theta(models), groups)
 
@@ -259,20 +264,21 @@ def ambiguous_rows(scores: np.ndarray, threshold: float, margin: float
 @dataclass
 class LayeredScores:
     """Eqs. 11-13 with one tracker's feature-difference models theta, weights omega and
-    gamma (``FeatureParams``) and model spread: of selected (target, candidate) pairs
-    (``pairs``, as ``pair_scores``) and of boxes measured where they lie (``boxes``, as
-    ``box_scores``)."""
+    gamma (``FeatureParams``), model spread and ``apart`` (``adaptations.apart_undivided``):
+    of selected (target, candidate) pairs (``pairs``, as ``pair_scores``) and of boxes
+    measured where they lie (``boxes``, as ``box_scores``)."""
 
     models: FeatureModels
     omega: np.ndarray
     gamma: np.ndarray
     spread: float
+    apart: bool = False
 
     def pairs(self, model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
               misses: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """``pair_scores`` of the pairs (target ti[k], candidate n[k]): p_j (K, 5), p (K,)."""
         return pair_scores(self.models, model, cand, ti, n, misses, self.omega, self.gamma,
-                           self.spread)
+                           self.spread, self.apart)
 
     def boxes(self, model: PartFeatures, extractor: PartFeatureExtractor, boxes: np.ndarray,
               alpha: np.ndarray, beta: np.ndarray, ti: np.ndarray, misses: np.ndarray | None,
@@ -280,4 +286,5 @@ class LayeredScores:
               ) -> tuple[np.ndarray, np.ndarray]:
         """``box_scores`` of (K, 4) boxes against their targets ti (K,): p_j (K, 5), p (K,)."""
         return box_scores(self.models, model, extractor, boxes, alpha, beta, ti, misses,
-                          self.omega, self.gamma, self.spread, best_of, grouped, coarse)
+                          self.omega, self.gamma, self.spread, best_of, grouped, coarse,
+                          self.apart)

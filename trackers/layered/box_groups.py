@@ -20,7 +20,7 @@ from occbench.trackers.layered.split import _part_rects
 
 @numba.njit(cache=True, inline="always")
 def _measure(k: int, boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple,
-             m: tuple, misses: np.ndarray, scratch: tuple, d: np.ndarray) -> None:
+             m: tuple, gap: tuple, scratch: tuple, d: np.ndarray) -> None:
     """Box k measured as ``part_features`` measures it (``_box_counts``, ``_box_features``
     into the one-row feature set of ``scratch``) and eq. 11 of it against target ti[k]
     into d[k]. ``scratch``: (``_box_scratch``, the one-row features, ``_rho``'s index
@@ -32,7 +32,7 @@ def _measure(k: int, boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling:
     _box_features(s, bands, one[0][0], 0, one[1:6])
     one[6][0] = boxes[k, 3]
     t = ti[k]
-    _pair_differences(m, one, t, 0, 1.0 / (1.0 + misses[t]), d, k, idx, listed)  # eq. 11
+    _pair_differences(m, one, t, 0, gap, d, k, idx, listed)  # eq. 11
 
 
 @numba.njit(cache=True, inline="always")
@@ -110,7 +110,7 @@ def _group_masks(i: int, k: int, H: int, W: int, image: tuple, axes: tuple, mask
 
 @numba.njit(cache=True)
 def _measure_grid(g0: int, side: int, boxes: np.ndarray, ti: np.ndarray, ratios: tuple,
-                  sampling: tuple, m: tuple, misses: np.ndarray, scratch: tuple, axes: tuple,
+                  sampling: tuple, m: tuple, gap: tuple, scratch: tuple, axes: tuple,
                   d: np.ndarray) -> None:
     """``_measure`` of the boxes g0 .. g0 + side^2 - 1, a grid (``_is_grid``; any one box is a
     grid of side 1), the same bits: each height's rows and each width's columns made once
@@ -138,12 +138,12 @@ def _measure_grid(g0: int, side: int, boxes: np.ndarray, ti: np.ndarray, ratios:
             _box_features(s, (rows[k, 0], rows[k, 1], rows[k, 2], ncols[i]), p, 0, one[1:6])
             one[6][0] = boxes[q, 3]
             t = ti[q]
-            _pair_differences(m, one, t, 0, 1.0 / (1.0 + misses[t]), d, q, idx, listed)  # eq. 11
+            _pair_differences(m, one, t, 0, gap, d, q, idx, listed)  # eq. 11
 
 
 @numba.njit(cache=True, inline="always")
 def _measure_all(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple, m: tuple,
-                 misses: np.ndarray, scratch: tuple, size: int, grouped: int, d: np.ndarray
+                 gap: tuple, scratch: tuple, size: int, grouped: int, d: np.ndarray
                  ) -> None:
     """``_measure`` of every box into d: the groups of ``size`` boxes 0 .. grouped - 1 that
     are grids (``_is_grid``) together, every other box alone (``_measure_grid``)."""
@@ -154,13 +154,13 @@ def _measure_all(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tup
     if side > 0 and side * side == size:
         for g0 in range(0, grouped, size):
             if _is_grid(boxes, ratios[0], ratios[1], g0, side):
-                _measure_grid(g0, side, boxes, ti, ratios, sampling, m, misses, scratch, axes, d)
+                _measure_grid(g0, side, boxes, ti, ratios, sampling, m, gap, scratch, axes, d)
             else:
                 for q in range(g0, g0 + size):
-                    _measure_grid(q, 1, boxes, ti, ratios, sampling, m, misses, scratch, axes, d)
+                    _measure_grid(q, 1, boxes, ti, ratios, sampling, m, gap, scratch, axes, d)
         first = grouped
     for q in range(first, boxes.shape[0]):
-        _measure_grid(q, 1, boxes, ti, ratios, sampling, m, misses, scratch, axes, d)
+        _measure_grid(q, 1, boxes, ti, ratios, sampling, m, gap, scratch, axes, d)
 
 
 @numba.njit(cache=True)

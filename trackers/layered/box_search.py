@@ -110,7 +110,7 @@ def _coarse_group(g0: int, size: int, measure: tuple, rule: tuple, memo: tuple,
     unscored (p -inf, p_j NaN). When a bound is not finite every box is measured and
     scored (``_score_group``). ``measure``: ``_measure``'s arguments after k and before d,
     then d."""
-    boxes, ti, ratios, sampling, m, misses, scratch, d = measure
+    boxes, ti, ratios, sampling, m, gap, scratch, d = measure
     spread, weights, theta = rule
     side = int(round(np.sqrt(size)))
     seen = np.zeros(size, np.bool_)
@@ -123,7 +123,7 @@ def _coarse_group(g0: int, size: int, measure: tuple, rule: tuple, memo: tuple,
     stage, best = 0, -np.inf  # 0: the coarse boxes, 1: the best one's neighbours, 2: all
     while n > 0:
         for a in range(n):  # one call site: the measuring is inlined once
-            _measure(g0 + qs[a], boxes, ti, ratios, sampling, m, misses, scratch, d)
+            _measure(g0 + qs[a], boxes, ti, ratios, sampling, m, gap, scratch, d)
             seen[qs[a]] = True
         if stage == 2:
             _score_group(d, g0, size, spread, weights, theta, memo, table, pj, p)
@@ -192,7 +192,7 @@ def _kernel_state(boxes: np.ndarray, ti: np.ndarray, sampling: tuple, m: tuple, 
 
 @numba.njit(cache=True)
 def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple, m: tuple,
-               misses: np.ndarray, rule: tuple, theta: tuple, groups: tuple
+               gap: tuple, rule: tuple, theta: tuple, groups: tuple
                ) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 of K boxes of the frame, each measured as ``part_features`` measures it
     (PBM 2.1-2.2), against the model of target ti[k]: p_j (K, 5) and p (K,), bit for bit
@@ -206,7 +206,8 @@ def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling
         boxes: (K, 4) xywh. ti: (K,) target rows (IndexError when out of range).
         ratios: (alpha, beta), each (K,), of the boxes' split (eqs. 1-2).
         sampling: (grid, image, luts, pixel_bins) as ``part_features``'.
-        m: the targets' models (a feature set). misses: (T,) float64, g = 1 / (1 + misses).
+        m: the targets' models (a feature set). gap: (misses (T,) float64, apart) as
+            ``differences._pair_differences``'.
         rule: (spread, omega (6,), gamma (5,)) as ``_pair_scores_kernel``'s.
         groups: (size, grouped, table): boxes 0 .. grouped - 1 are consecutive groups of
             ``size`` of which only the first maximum of p counts, scored by
@@ -215,7 +216,7 @@ def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling
     scratch, weights, memo, d, pj, p = _kernel_state(boxes, ti, sampling, m, rule, theta)
     spread = rule[0]
     size, grouped, table = groups
-    _measure_all(boxes, ti, ratios, sampling, m, misses, scratch, size, grouped, d)
+    _measure_all(boxes, ti, ratios, sampling, m, gap, scratch, size, grouped, d)
     first = 0
     if size > 0:
         for g0 in range(0, grouped, size):
@@ -228,7 +229,7 @@ def box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling
 
 @numba.njit(cache=True)
 def coarse_box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, sampling: tuple,
-                             m: tuple, misses: np.ndarray, rule: tuple, theta: tuple,
+                             m: tuple, gap: tuple, rule: tuple, theta: tuple,
                              groups: tuple) -> tuple[np.ndarray, np.ndarray]:
     """``box_scores_kernel`` with each group of ``groups`` (size > 0) searched coarse to fine
     (``_coarse_group``, ``adaptations.coarse_search``); the boxes past the groups are
@@ -237,10 +238,10 @@ def coarse_box_scores_kernel(boxes: np.ndarray, ti: np.ndarray, ratios: tuple, s
     scratch, weights, memo, d, pj, p = _kernel_state(boxes, ti, sampling, m, rule, theta)
     spread = rule[0]
     size, grouped, table = groups
-    measure = (boxes, ti, ratios, sampling, m, misses, scratch, d)
+    measure = (boxes, ti, ratios, sampling, m, gap, scratch, d)
     for g0 in range(0, grouped, size):
         _coarse_group(g0, size, measure, (spread, weights, theta), memo, table, pj, p)
     for k in range(grouped, boxes.shape[0]):
-        _measure(k, boxes, ti, ratios, sampling, m, misses, scratch, d)
+        _measure(k, boxes, ti, ratios, sampling, m, gap, scratch, d)
         _score_row(d, k, spread, weights, theta, memo, pj, p, k)                      # eqs. 12-13
     return pj, p

@@ -26,14 +26,16 @@ if TYPE_CHECKING:  # annotations only
 
 
 def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.ndarray,
-                misses: np.ndarray | None = None) -> np.ndarray:
+                misses: np.ndarray | None = None, apart: bool = False) -> np.ndarray:
     """Eq. 11, d_ij = |f_ij - F_ij|, for the pairs (target ti[k], candidate n[k]).
 
     Features i in ``parts.FEATURES`` order: area and perimeter (absolute differences),
     HSV and XYZ histograms (1 - Bhattacharyya coefficient; 1 when the candidate's part
     has no foreground), displacement of the part centroid over the target's height, and
     1 - IoU of the part rectangles. After a gap of ``misses`` frames the last two are
-    divided by 1 + misses (our reading: per-frame differences; ``adaptations.gap_division``).
+    divided by 1 + misses (our reading: per-frame differences; ``adaptations.gap_division``),
+    except, when ``apart``, the overlap of a pair none of whose parts overlap (every IoU 0:
+    1 - IoU = 1 whatever the gap; ``adaptations.apart_undivided``).
 
     Returns:
         (K, 6, 5) differences, >= 0.
@@ -56,10 +58,13 @@ def differences(model: PartFeatures, cand: PartFeatures, ti: np.ndarray, n: np.n
     inter = iw * ih
     union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
     with np.errstate(invalid="ignore", divide="ignore"):
-        d[:, 5] = 1.0 - np.where(union > 0, inter / union, 0.0)               # 1 - IoU
+        iou = np.where(union > 0, inter / union, 0.0)
+    d[:, 5] = 1.0 - iou                                                      # 1 - IoU
     if misses is not None:
         g = 1.0 / (1.0 + np.asarray(misses, dtype=np.float64)[ti])
         d[:, 4:6] *= g[:, None, None]                                        # per frame
+        if apart:
+            d[(iou == 0).all(axis=1), 5] = 1.0                               # parts apart: whole
     return np.clip(d, 0.0, None)                                             # eq. 11
 
 
@@ -108,14 +113,15 @@ def _rho_listed(a: np.ndarray, b: np.ndarray, t: int, n: int, j: int, bits: np.u
 
 
 @numba.njit(cache=True, inline="always")
-def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarray, k: int,
+def _pair_differences(m: tuple, c: tuple, t: int, n: int, gap: tuple, d: np.ndarray, k: int,
                       idx: np.ndarray, listed: tuple) -> None:
     """Eq. 11, d_ij = |f_ij - F_ij| (``differences``), of model t of ``m`` against
     candidate n of ``c`` into d[k] (6, 5) (``idx``: ``_rho``'s scratch).
 
     Per part j: |area|, |perimeter|, 1 - rho of HSV and XYZ (1 when the candidate part has
     no foreground), |c_n - C_t| / max(H_t, 1) and 1 - IoU (IoU 0 when union <= 0), the
-    last two times g = 1 / (1 + misses); all clipped at 0.
+    last two times g = 1 / (1 + misses[t]) (``gap``: (misses (T,) float64, apart)); when
+    ``apart`` and no part's IoU is above 0, the overlaps are 1, undivided; all clipped at 0.
 
     ``listed``: (use, occupied (2, 5) uint64, finite (T, 2, 5) bool): when ``use``, rho of a
     model histogram that is finite (``finite[t]``) is summed over the candidate's occupied
@@ -124,6 +130,9 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarra
     m_parts, m_area, m_perimeter, m_hsv, m_xyz, m_centroid, m_height = m
     c_parts, c_area, c_perimeter, c_hsv, c_xyz, c_centroid, _ = c
     use_lists, occupied, finite = listed
+    misses, apart = gap
+    g = 1.0 / (1.0 + misses[t])
+    touch = False
     hgt = max(m_height[t], 1.0)
     for j in range(m_area.shape[1]):
         d[k, 0, j] = abs(m_area[t, j] - c_area[n, j])
@@ -148,9 +157,13 @@ def _pair_differences(m: tuple, c: tuple, t: int, n: int, g: float, d: np.ndarra
         union = aw * ah + bw * bh - inter
         iou = inter / union if union > 0 else 0.0
         d[k, 5, j] = (1.0 - iou) * g
+        touch |= iou != 0.0
         for i in range(d.shape[1]):
             if d[k, i, j] < 0.0:  # np.clip(d, 0, None)  # noqa: PLR1730
                 d[k, i, j] = 0.0
+    if apart and not touch:  # every part apart from the candidate's: 1 - IoU = 1, undivided
+        for j in range(m_area.shape[1]):
+            d[k, 5, j] = 1.0
 
 
 _NO_LISTS = (False, np.zeros((2, 5), np.uint64), np.zeros((1, 2, 5), np.bool_))
@@ -158,13 +171,13 @@ _NO_LISTS = (False, np.zeros((2, 5), np.uint64), np.zeros((1, 2, 5), np.bool_))
 
 
 @numba.njit(cache=True)
-def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
+def _differences_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, gap: tuple,
                         out: np.ndarray) -> None:
     """Eq. 11 (``_pair_differences``) of the pairs (ti[k], n[k]) into out (K, 6, 5);
-    misses (T,) float64 per target, g = 1 / (1 + misses)."""
+    gap (misses (T,) float64 per target, g = 1 / (1 + misses); apart)."""
     for k in range(ti.shape[0]):
         if not (0 <= ti[k] < m[1].shape[0] and 0 <= n[k] < c[1].shape[0]):
             raise IndexError("selected pair index out of range")
     idx = np.empty(max(m[3].shape[2], m[4].shape[2]), np.int64)
     for k in range(ti.shape[0]):
-        _pair_differences(m, c, ti[k], n[k], 1.0 / (1.0 + misses[ti[k]]), out, k, idx, _NO_LISTS)
+        _pair_differences(m, c, ti[k], n[k], gap, out, k, idx, _NO_LISTS)

@@ -164,14 +164,14 @@ def _scores_kernel(d: np.ndarray, spread: float, omega: np.ndarray, gamma: np.nd
 
 
 @numba.njit(cache=True)
-def _pair_scores_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, misses: np.ndarray,
+def _pair_scores_kernel(m: tuple, c: tuple, ti: np.ndarray, n: np.ndarray, gap: tuple,
                         spread: float, omega: np.ndarray, gamma: np.ndarray, theta: tuple
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 11-13 of the pairs (ti[k], n[k]) in one call: ``_differences_kernel`` then
     ``_scores_kernel``; returns p_j (K, 5) and p (K,)."""
     K = ti.shape[0]
     d = np.empty((K, theta[0].shape[0], m[1].shape[1]))
-    _differences_kernel(m, c, ti, n, misses, d)
+    _differences_kernel(m, c, ti, n, gap, d)
     pj, p = np.empty((K, m[1].shape[1])), np.empty(K)
     _scores_kernel(d, spread, omega, gamma, theta, pj, p)
     return pj, p

@@ -144,7 +144,8 @@ class PBMTracker:
         held = HeldDetections(self.search.overlap) if a.held_detections else NoHeldDetections()
         self._finder = CandidateFinder(self.candidates, blob_heads, a.blob_box_ratio, held)
         self._pruning = MultipleResponsePruning(self.matching, self.pruning, self.adaptations)
-        self._scores = LayeredScores(f.models, f.omega, f.gamma, a.model_spread)  # eqs. 11-13
+        self._scores = LayeredScores(f.models, f.omega, f.gamma, a.model_spread,  # eqs. 11-13
+                                     a.apart_undivided)
         self._search_occluded = OcclusionSearch(self.search, self._scores, self._search_extractor,
                                                 a.coarse_search)
         self.rules = build_rules(self.adaptations, self.reporting.max_misses)

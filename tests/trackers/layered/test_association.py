@@ -96,6 +96,32 @@ def test_a_gap_divides_displacement_and_overlap(rng):
     np.testing.assert_array_equal(feature_differences(model, cand, misses)[ti, n], divided)
 
 
+def test_parts_apart_from_the_candidate_keep_their_whole_overlap_after_a_gap(rng):
+    """``adaptations.apart_undivided``: a target none of whose parts overlaps the
+    candidate's (every 1 - IoU = 1) has overlap 1 whatever its gap; its displacement is
+    still divided, and a target with one part overlapping is divided as before (the
+    stairwell, ecp1-180 gt seed 1000 frame 168: 1 / (1 + 9) made no overlap beat some)."""
+    model, cand = random_features(rng, 3), random_features(rng, 1)
+    cand.parts[0] = model.parts[1] + [500.0, 0.0, 0.0, 0.0]  # far right of target 1: IoU 0
+    model.parts[2] = cand.parts[0] + [600.0, 0.0, 0.0, 0.0]  # target 2 apart too ...
+    model.parts[2, 0] = cand.parts[0, 0]                     # ... but for its head part
+    ti, n, misses = np.array([0, 1, 2]), np.array([0, 0, 0]), np.array([0, 9, 9])
+    divided = selected_differences(model, cand, ti, n, misses)
+    whole = selected_differences(model, cand, ti, n, misses, apart=True)
+    np.testing.assert_array_equal(divided[1, 5], 0.1)    # the gap division: 1 / (1 + 9)
+    np.testing.assert_array_equal(whole[1, 5], 1.0)      # apart: undivided
+    np.testing.assert_array_equal(whole[1, :5], divided[1, :5])  # displacement still divided
+    np.testing.assert_array_equal(whole[[0, 2]], divided[[0, 2]])  # a part overlaps: as before
+    assert whole[2, 5, 0] == 0.0 and (whole[2, 5, 1:] == 0.1).all()
+    np.testing.assert_allclose(differences(model, cand, ti, n, misses, True), whole,
+                               rtol=RTOL, atol=ATOL)
+    np.testing.assert_array_equal(differences(model, cand, ti, n, misses, True)[:, 5],
+                                  whole[:, 5])
+    np.testing.assert_array_equal(feature_differences(model, cand, misses, True)[ti, n], whole)
+    np.testing.assert_array_equal(selected_differences(model, cand, ti, n, None, True),
+                                  selected_differences(model, cand, ti, n))  # no gap: 1 anyway
+
+
 @pytest.mark.parametrize("bins", [1, 2, 3, 5, 6, 8])
 def test_histogram_term_for_any_bins(rng, bins):
     """B = bins**3 from 1 to 512."""

@@ -39,8 +39,8 @@ def _groups(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return boxes, np.append(a, rng.uniform(0.2, 0.8, M)), np.append(b, rng.uniform(0.2, 0.8, M)), 5
 
 
-@pytest.mark.parametrize("with_fg", [True, False])
-def test_a_group_measured_together_has_the_bits_of_its_boxes_measured_one_by_one(with_fg):
+@pytest.mark.parametrize(("with_fg", "apart"), [(True, False), (False, False), (True, True)])
+def test_a_group_measured_together_has_the_bits_of_its_boxes_measured_one_by_one(with_fg, apart):
     rng = np.random.default_rng(5)
     frame = rng.integers(0, 256, (H, W, 3), dtype=np.uint8)
     ex = PartFeatureExtractor(4, 21, 9)
@@ -50,13 +50,13 @@ def test_a_group_measured_together_has_the_bits_of_its_boxes_measured_one_by_one
     ti = rng.integers(0, T, K)
     model = ex.extract(rng.uniform(10, 40, (T, 4)) + [20, 10, 0, 20], 0.5, 0.5)
     b, ratios, sampling = ex.sampling(boxes, alpha, beta)
-    m, misses, models = _arrays(model), rng.uniform(0, 3, T), load_feature_models()
+    m, gap, models = _arrays(model), (rng.uniform(0, 3, T), apart), load_feature_models()
     rule = (4.5, np.ones(N_FEATURES), np.ones(N_PARTS))
     scratch, _, _, ref, _, _ = _kernel_state(b, ti, sampling, m, rule, _theta(models))
     for k in range(K):
-        _measure(k, b, ti, ratios, sampling, m, misses, scratch, ref)
+        _measure(k, b, ti, ratios, sampling, m, gap, scratch, ref)
     scratch, _, _, d, _, _ = _kernel_state(b, ti, sampling, m, rule, _theta(models))
-    _measure_all(b, ti, ratios, sampling, m, misses, scratch, M, K - M, d)  # the last: past the groups
+    _measure_all(b, ti, ratios, sampling, m, gap, scratch, M, K - M, d)  # the last: past the groups
     # the grids take the shared path, the other three groups are measured box by box
     assert [_is_grid(b, *ratios, g0, SIDE) for g0 in range(0, K, M)] == [True] * grids + [False] * 3
     assert np.isfinite(ref[:grids * M]).all() and np.isnan(ref[5 * M + 7]).any()

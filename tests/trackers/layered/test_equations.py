@@ -5,6 +5,7 @@ the section 4.2 update, ``model_update``), to a tolerance (rtol 1e-9), not bit f
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from occbench.trackers.layered.association import pair_scores, selected_differences
 from occbench.trackers.layered.differences import differences
@@ -19,19 +20,21 @@ from pbm_scenes import random_features, random_models
 RTOL, ATOL = 1e-9, 1e-12
 
 
-def test_eq11_to_13_kernels_equal_the_equations():
+@pytest.mark.parametrize("apart", [False, True])
+def test_eq11_to_13_kernels_equal_the_equations(apart):
     rng = np.random.default_rng(7)
     models = random_models(rng)
     model, cand = random_features(rng, 6), random_features(rng, 30)
+    cand.parts[:5] += [400.0, 0.0, 0.0, 0.0]  # apart from every model's parts (IoU 0)
     misses = rng.integers(0, 4, 6)
     omega, gamma = rng.uniform(0.1, 1, 6), rng.uniform(0.1, 1, N_PARTS)
     ti, n = np.nonzero(rng.random((6, 30)) < 0.4)
-    d = differences(model, cand, ti, n, misses)  # eq. 11
-    np.testing.assert_allclose(selected_differences(model, cand, ti, n, misses), d,
+    d = differences(model, cand, ti, n, misses, apart)  # eq. 11
+    np.testing.assert_allclose(selected_differences(model, cand, ti, n, misses, apart), d,
                                rtol=RTOL, atol=ATOL)
     pj_ref = part_scores(models, d, omega, 2.5)                       # eq. 12
     p_ref = global_score(pj_ref, gamma)                               # eq. 13
-    pj, p = pair_scores(models, model, cand, ti, n, misses, omega, gamma, 2.5)
+    pj, p = pair_scores(models, model, cand, ti, n, misses, omega, gamma, 2.5, apart)
     np.testing.assert_allclose(pj, pj_ref, rtol=RTOL, atol=ATOL)
     np.testing.assert_allclose(p, p_ref, rtol=RTOL, atol=ATOL)
     assert ((p >= 0) & (p <= 1)).all()

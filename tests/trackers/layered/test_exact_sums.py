@@ -165,14 +165,18 @@ def test_box_scores_have_the_bits_of_extract_then_pair_scores(bins, with_fg):
     misses = rng.integers(0, 4, T).astype(float)
     models = random_models(rng)
     omega, gamma = rng.uniform(0.1, 1, N_FEATURES), rng.uniform(0.1, 1, N_PARTS)
-    for fresh in (True, False):  # the frame's pixels converted by box_scores, or before it
-        ex.start(frame, fg)
+    apart_p = {}
+    for fresh, apart in ((True, False), (False, False), (True, True)):  # the frame's pixels
+        ex.start(frame, fg)                                     # converted by box_scores, or before
         if not fresh:
             ex.extract(boxes[::-1], 0.5, 0.5)
-        pj, p = box_scores(models, model, ex, boxes, alpha, beta, ti, misses, omega, gamma, 2.5)
+        pj, p = box_scores(models, model, ex, boxes, alpha, beta, ti, misses, omega, gamma, 2.5,
+                           apart=apart)
         ref_pj, ref_p = pair_scores(models, model, ex.extract(boxes, alpha, beta), ti,
-                                    np.arange(K), misses, omega, gamma, 2.5)
+                                    np.arange(K), misses, omega, gamma, 2.5, apart)
         assert pj.tobytes() == ref_pj.tobytes() and p.tobytes() == ref_p.tobytes()
+        apart_p[apart] = p
+    assert (apart_p[True] != apart_p[False]).any()  # adaptations.apart_undivided: some pair apart
     assert (p[10:14] == p[9]).all() and (pj[10:14] == pj[9]).all()
     pj0, p0 = box_scores(models, model, ex, np.zeros((0, 4)), np.zeros(0), np.zeros(0),
                          np.zeros(0, int), misses, omega, gamma, 2.5)

@@ -815,6 +815,17 @@ def test_paper_mode_turns_every_adaptation_off():
         assert getattr(paper, group) == getattr(ours, group), group
 
 
+def test_apart_undivided_reaches_the_trackers_scores_and_needs_gap_division():
+    """``adaptations.apart_undivided``: off by default and in paper mode, passed to eq.
+    11's kernels through the tracker's ``LayeredScores``; on only with ``gap_division``."""
+    assert not PBMTracker()._scores.apart
+    assert PBMTracker(adaptations=Adaptations(apart_undivided=True))._scores.apart
+    assert "apart_undivided" not in Adaptations.paper().changed()
+    assert "apart_undivided" not in Adaptations().changed()
+    with pytest.raises(ValueError, match="apart_undivided"):
+        Adaptations(gap_division=False, apart_undivided=True)
+
+
 def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     """``rules.build_rules``: paper mode's values select the paper's rule for each step."""
     from occbench.config.build import compose_config
