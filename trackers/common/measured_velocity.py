@@ -20,15 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-def _squared_miss(last: tuple[float, float], velocity: tuple[float, float], frames: int,
-                  centre: tuple[float, float], height: float) -> float:
-    """Squared distance, in box heights^2, of ``centre`` from ``last`` + frames x velocity."""
-    dx = last[0] + frames * velocity[0] - centre[0]
-    dy = last[1] + frames * velocity[1] - centre[1]
-    return (dx * dx + dy * dy) / max(height, 1.0) ** 2
-
-
-@dataclass
+@dataclass(slots=True)
 class _Record:
     """One id's last measurement and its two predictors' track record, as Python floats
     (a handful of 2-vectors per person and frame: numpy's per-call cost would dominate)."""
@@ -58,18 +50,23 @@ class MeasuredVelocity:
         for tid, box, v in zip(ids, np.asarray(boxes, dtype=np.float64).tolist(),
                                np.asarray(filter_velocity, dtype=np.float64).tolist()):
             rec = records.get(tid)
-            centre = (box[0] + box[2] / 2, box[1] + box[3] / 2)
             if rec is None:
                 records[tid] = _Record(frame, tuple(box), tuple(v))
                 continue
+            cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
             n = frame - rec.frame
             x, y, w, h = rec.box
-            last = (x + w / 2, y + h / 2)
-            if rec.measured_velocity is not None:
-                rec.filter_error += _squared_miss(last, rec.filter_velocity, n, centre, h)
-                rec.measured_error += _squared_miss(last, rec.measured_velocity, n, centre, h)
+            lx, ly = x + w / 2, y + h / 2
+            mv = rec.measured_velocity
+            if mv is not None:  # each predictor's squared miss |last + n v - centre|^2 / h^2
+                h2 = max(h, 1.0) ** 2
+                fv = rec.filter_velocity
+                dx, dy = lx + n * fv[0] - cx, ly + n * fv[1] - cy
+                rec.filter_error += (dx * dx + dy * dy) / h2
+                dx, dy = lx + n * mv[0] - cx, ly + n * mv[1] - cy
+                rec.measured_error += (dx * dx + dy * dy) / h2
             k = max(n, 1)
-            rec.measured_velocity = ((centre[0] - last[0]) / k, (centre[1] - last[1]) / k)
+            rec.measured_velocity = ((cx - lx) / k, (cy - ly) / k)
             rec.frame, rec.box, rec.filter_velocity = frame, tuple(box), tuple(v)
 
     def place(self, frame: int, ids: list[int], boxes: np.ndarray,

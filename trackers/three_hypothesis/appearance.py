@@ -66,8 +66,10 @@ def columns(histograms: list[Histogram], support: np.ndarray) -> np.ndarray:
         return out
     bins = np.concatenate([h.bins for h in histograms])
     rows = np.repeat(np.arange(len(histograms)), [len(h.bins) for h in histograms])
-    col = np.minimum(np.searchsorted(support, bins), len(support) - 1)
-    hit = support[col] == bins
+    at = np.full(histograms[0].size, -1)  # each bin's column in support, -1: none
+    at[support] = np.arange(len(support))
+    col = at[bins]
+    hit = col >= 0
     out[rows[hit], col[hit]] = np.concatenate([h.values for h in histograms])[hit]
     return out
 

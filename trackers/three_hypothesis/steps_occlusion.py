@@ -78,7 +78,7 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
     persons, support = S.persons, V.support
     sqrt_q = np.sqrt(columns([person.q for person in persons], support))  # (P, K)
     sqrt_p = np.sqrt(columns(V.p, support))  # (D, K)
-    R = np.array([person.R[0, 0] for person in persons])[S.owners]  # R = (sigma_z h)^2 I
+    R = np.array([person.R.item(0) for person in persons])[S.owners]  # R = (sigma_z h)^2 I
     seen = (np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
             if rules.shape.uses_seen else None)  # visible nodes of t-1, for the shape rule
     contacts = rules.contact.pairs(
@@ -231,10 +231,11 @@ def sort_occlusions(S: Predictions, V: Measurements, O: Occlusions, A: Matching,
     orders = np.empty(len(O.pairs), dtype=np.int64)
     depth_orders(O.pairs, visible, shapes, S.boxes, orders)
     own = S.owners.tolist()
+    keys = [person.key for person in persons]
     boxes = S.boxes.tolist()  # (B,) [x, y, w, h] lists: scalar work below
     for (a, b), order in zip(O.pairs.tolist(), orders.tolist()):
         i, j = own[a], own[b]
-        ki, kj = persons[i].key, persons[j].key
+        ki, kj = keys[i], keys[j]
         if order == 0:  # undecided at t: pi^{t-1} is inherited
             order = pi.get((ki, kj), 0)
         if order == 0:  # unknown and neither visible: the lower region is in front

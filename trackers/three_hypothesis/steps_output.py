@@ -84,15 +84,14 @@ def _tracks(rows: list[tuple[Person, Branch, TrackState]], measured: list[int],
     xc, yc, rx, ry = S[:, 0], S[:, 1], S[:, 3], S[:, 4]
     boxes = np.stack([xc - rx, yc - ry, 2 * rx, 2 * ry], axis=1)
     if measured:
-        boxes[measured] = np.array([rows[r][0].shape for r in measured], dtype=np.float64)
+        boxes[measured] = np.concatenate([rows[r][0].shape for r in measured]
+                                         ).reshape(-1, 4)
     nodes = graph.current_nodes()
-    out = []
-    for k, (person, _, state) in enumerate(rows):
-        node = nodes[keys[k] - first]
-        extra = {"ellipse": S[k], "hypothesis": node.hypothesis, "occluder": node.occluder,
-                 "depth": node.depth, "node": keys[k]}
-        out.append(Track(person.public_id, boxes[k], state, 1.0, extra))
-    return out
+    return [Track(person.public_id, box, state, 1.0,
+                  {"ellipse": ellipse, "hypothesis": node.hypothesis, "occluder": node.occluder,
+                   "depth": node.depth, "node": key})
+            for (person, _, state), box, ellipse, key, node
+            in zip(rows, boxes, S, keys, [nodes[key - first] for key in keys])]
 
 
 def _place_hidden(out: list[Track], measured: list[int], branches: list[Branch],
@@ -103,11 +102,12 @@ def _place_hidden(out: list[Track], measured: list[int], branches: list[Branch],
     wins."""
     found = [r for r in measured if out[r].state == TrackState.CONFIRMED]
     rule.found(frame, [out[r].id for r in found],
-               np.array([out[r].box for r in found]).reshape(-1, 4),
-               np.array([branches[r].x[4:6] for r in found]).reshape(-1, 2))
+               np.concatenate([out[r].box for r in found] or [np.zeros(0)]).reshape(-1, 4),
+               np.concatenate([branches[r].x[4:6] for r in found] or [np.zeros(0)]
+                              ).reshape(-1, 2))
     hidden = [t for t in out if t.state == TrackState.OCCLUDED]
     if hidden:
-        boxes = np.array([t.box for t in hidden])
+        boxes = np.concatenate([t.box for t in hidden]).reshape(-1, 4)
         rule.place(frame, [t.id for t in hidden], boxes)
         for t, box in zip(hidden, boxes):
             t.box = box

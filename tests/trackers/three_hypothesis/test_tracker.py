@@ -24,7 +24,8 @@ from occbench.trackers.three_hypothesis import (
     Occlusion,
     RetaTracker,
 )
-from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, columns, snap_boxes
+from occbench.trackers.three_hypothesis.appearance import (EllipseHistogrammer, Histogram, columns,
+                                                           snap_boxes)
 from occbench.trackers.three_hypothesis.association import _hungarian, _person_costs, associate
 from occbench.trackers.three_hypothesis.features import ellipse_histograms, region_similarity
 from occbench.trackers.three_hypothesis.graph import TrackingGraph
@@ -85,6 +86,12 @@ def test_measure_gives_one_histogram_each_and_their_support():
     np.testing.assert_array_equal(support, np.flatnonzero(dense.any(axis=0)))
     assert 0 < len(support) <= 4**3 and len(p[2].bins) == 0  # box 3 lies outside the frame
     np.testing.assert_array_equal(columns(p, support), dense[:, support])
+    # a person's q occupies bins no measurement does: those are left out
+    outside = np.setdiff1d(np.arange(4096), support)[[0, -1]]
+    q = Histogram(np.sort(np.append(outside, support[0])), np.array([0.25, 0.5, 0.25]), 4096)
+    np.testing.assert_array_equal(columns([q, *p], support),
+                                  np.vstack([q.dense(), dense])[:, support])
+    np.testing.assert_array_equal(columns([q], support[1:]), q.dense()[None, support[1:]])
 
 
 def test_region_overlaps_equal_the_front_end_definition_exactly():
