@@ -14,6 +14,16 @@ reported rows (and writes or compares the file): a speed-up must leave them unch
 ``--vs CHECKOUT`` times this tree's tracker against another checkout's ``three_hypothesis``
 (``tracker_timing.import_other``) in this process, on the same scene, ``--rounds`` rounds in
 turn ABBA: frames/s of both and the ratio of their median times, and whether their rows agree.
+``--instructions`` counts instead of timing (valgrind's callgrind, ``tracker_timing.instructions``;
+the count does not move with the machine's load): per number of people, the scene of ``--frames``
+frames run to its half and to its end, each in its own process under callgrind, and the
+difference over the second half's frames is the instructions a frame of ``update`` (start-up,
+rendering and the first half cancel out); with ``--vs CHECKOUT`` the other checkout's too (the
+whole checkout first on ``PYTHONPATH``) and the ratio (this tree's / the other's). Each tree runs the scene once outside valgrind first,
+so numba's cache is warm; numba compiles for a generic x86-64 there and under valgrind
+(``NUMBA_CPU_NAME=generic``: valgrind's CPU looks different from the host's, and with the
+host's name every kernel was compiled again under it, some 20e9 instructions a run). Some 40
+frames suffice: callgrind runs about 50x slower than the bare process.
 
 Accuracy: IDF1 and HOTA (``occbench.metrics``) of reta and the baseline on the synthetic
 suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections
@@ -22,7 +32,7 @@ the data root (``occbench.config.paths``: shipped, or $OCCBENCH_DATA) holds it.
 
 Usage: ``python benchmarks/bench_reta.py [--speed-only | --accuracy-only] [--frames N]
 [--people 10 40 100] [--size 640x480] [--repeats 3] [--check [DIGESTS.json]]
-[--vs CHECKOUT [--rounds 3]]``.
+[--vs CHECKOUT [--rounds 3]] [--instructions [--vs CHECKOUT]]``.
 """
 
 from __future__ import annotations
@@ -35,7 +45,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse
 import importlib
 import statistics
+import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 from pathlib import Path
 
@@ -48,7 +60,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from tracker_timing import (StageClock, check_digests, cpu_seconds, frame_size, import_other,
-                            paired_seconds, reference_seconds, rows_digest)
+                            instructions, paired_seconds, reference_seconds, rows_digest)
 
 from occbench.config.paths import data_path
 from occbench.trackers.baseline import BaselineTracker
@@ -183,6 +195,62 @@ def versus(other, people_counts=(100,), frames: int = 150, rounds: int = 3,
     return pd.DataFrame(rows)
 
 
+def run_frames(tracker_class, people: int, frames: int, upto: int,
+               size: tuple[int, int] = (WIDTH, HEIGHT)) -> list:
+    """``tracker_class()``'s reported rows over the first ``upto`` frames of the scene of
+    ``frames`` frames (all of them rendered, whatever ``upto``)."""
+    cv2.setNumThreads(1)
+    scene = make_scene(people, frames, seed=people, size=size)
+    tracker = tracker_class()
+    return [tracker.update(img, dets) for img, dets in scene[:upto]]
+
+
+def instructions_per_frame(people_counts=(10, 40, 100), frames: int = 40,
+                           size: tuple[int, int] = (WIDTH, HEIGHT), other: Path | None = None
+                           ) -> pd.DataFrame:
+    """Instructions a frame of ``RetaTracker.update`` per number of people: this script run
+    (``--instructions-upto``) over the scene to ``frames // 2`` and to ``frames`` under
+    callgrind, the difference over the ``frames - frames // 2`` frames between; with
+    ``other`` (a checkout with ``occbench`` linked to its ``harness``, as for a frozen copy)
+    the same runs with the other checkout first on ``PYTHONPATH``, so that all of its code
+    runs (``trackers/common`` too, which ``--vs``'s timing takes from this tree), and
+    ``ratio`` = this tree's instructions a frame / the other's. The counted runs of a
+    number of people run at once (the counts do not depend on it)."""
+    half = frames // 2
+    if half < 1:
+        raise ValueError(f"--instructions needs at least 2 frames, got {frames}")
+    trees: dict[str, dict[str, str]] = {"this": {}}
+    if other is not None:
+        trees["other"] = {"PYTHONPATH": os.pathsep.join(
+            [str(Path(other).resolve()), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    rows = []
+    for n in people_counts:
+        def argv(upto):
+            return [sys.executable, str(Path(__file__).resolve()), "--people", str(n),
+                    "--frames", str(frames), "--size", f"{size[0]}x{size[1]}",
+                    "--instructions-upto", str(upto)]
+
+        envs = {label: {"NUMBA_CPU_NAME": "generic", **extra} for label, extra in trees.items()}
+        for label, env in envs.items():  # numba's cache warm
+            ran = Path(subprocess.run(argv(frames), check=True, env={**os.environ, **env},
+                                      capture_output=True, text=True).stdout.splitlines()[0])
+            tree = ROOT if label == "this" else Path(other).resolve()
+            if not ran.is_relative_to(tree):
+                raise RuntimeError(f"{label} ran {ran}, not {tree}'s tracker (--vs needs a "
+                                   f"checkout with occbench linked to its harness)")
+        with ThreadPoolExecutor(2 * len(envs)) as pool:
+            counts = {(label, upto): pool.submit(instructions, argv(upto), env)
+                      for label, env in envs.items() for upto in (half, frames)}
+        row: dict[str, object] = {"people": n}
+        for label in envs:
+            row[f"{label}_per_frame"] = ((counts[label, frames].result()
+                                          - counts[label, half].result()) / (frames - half))
+        if other is not None:
+            row["ratio"] = row["this_per_frame"] / row["other_per_frame"]
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def accuracy(miss_rates=(0.0, 0.3)) -> pd.DataFrame:
     """IDF1 / HOTA / MOTA / IDs of reta and baseline on the synthetic suite and CAVIAR."""
     from occbench import metrics
@@ -240,7 +308,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--vs", type=Path, metavar="CHECKOUT",
                         help="time against another checkout's three_hypothesis in this process")
     parser.add_argument("--rounds", type=int, default=3, help="--vs: rounds of each, in turn")
+    parser.add_argument("--instructions", action="store_true",
+                        help="instructions a frame under callgrind (with --vs: and the ratio)")
+    parser.add_argument("--instructions-upto", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.instructions_upto is not None:  # one process counted by --instructions
+        print(Path(three_hypothesis.__file__).resolve().parent)  # whose tracker ran
+        run_frames(RetaTracker, args.people[0], args.frames, args.instructions_upto, args.size)
+        return 0
+    if args.instructions:
+        table = instructions_per_frame(args.people, args.frames, args.size, args.vs)
+        print(f"Instructions a frame of RetaTracker.update under callgrind ({args.size[0]}x"
+              f"{args.size[1]}, frames {args.frames // 2 + 1}-{args.frames} of {args.frames}"
+              + (f"; ratio: this tree's / {args.vs}'s" if args.vs else "") + ")")
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}" if v < 10 else f"{v:,.0f}"))
+        return 0
     pd.set_option("display.width", 160)
     status = 0
     if args.vs is not None:

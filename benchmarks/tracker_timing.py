@@ -14,7 +14,10 @@ import argparse
 import hashlib
 import importlib
 import json
+import os
+import shutil
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -127,6 +130,30 @@ def import_other(tree: Path, package: str, alias: str):
         return importlib.import_module(alias)
     finally:
         sys.path.remove(str(root))
+
+
+def instructions(argv: list[str], env: dict[str, str] | None = None) -> int:
+    """Instructions the command ``argv`` executes under valgrind's callgrind (its
+    ``summary:`` count, every instruction of the process from start to exit): a count that,
+    unlike time, does not move with the machine's load. ``PYTHONHASHSEED`` is fixed to 0 so
+    that a Python command runs the same way each time; ``env`` is added to the environment.
+    Raises ``RuntimeError`` naming the
+    command when valgrind is missing or the command fails (with the end of its output)."""
+    valgrind = shutil.which("valgrind")
+    if valgrind is None:
+        raise RuntimeError("valgrind not found on PATH (needed to count instructions)")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "callgrind.out"
+        done = subprocess.run([valgrind, "--tool=callgrind", f"--callgrind-out-file={out}", *argv],
+                              env={**os.environ, **(env or {}), "PYTHONHASHSEED": "0"}, capture_output=True,
+                              text=True)
+        if done.returncode != 0 or not out.exists():
+            raise RuntimeError(f"{' '.join(argv)} failed under callgrind (exit "
+                               f"{done.returncode}):\n{done.stderr[-2000:]}")
+        for line in out.read_text().splitlines():
+            if line.startswith("summary:"):
+                return int(line.split()[1])
+    raise RuntimeError(f"no summary line in callgrind's output of {' '.join(argv)}")
 
 
 def paired_seconds(runs: dict[str, Callable[[], object]], rounds: int) -> dict[str, list[float]]:

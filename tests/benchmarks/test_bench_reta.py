@@ -1,9 +1,11 @@
 """benchmarks/bench_reta.py --vs: another checkout's three_hypothesis imported beside this
-tree's (``tracker_timing.import_other``) and timed on the same scene in turn."""
+tree's (``tracker_timing.import_other``) and timed on the same scene in turn; --instructions:
+instructions a frame as the difference of two counted runs."""
 
 from __future__ import annotations
 
 import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -33,3 +35,26 @@ def test_vs_times_the_other_checkouts_code_on_the_same_scene(tmp_path):
 def test_vs_names_a_checkout_without_the_package(tmp_path):
     with pytest.raises(FileNotFoundError, match="three_hypothesis"):
         bench.import_other(tmp_path, bench.three_hypothesis.__name__, "reta_vs_missing")
+
+
+def test_instructions_a_frame_are_the_difference_of_two_runs_over_their_frames(monkeypatch):
+    counted = []
+
+    def fake(argv, env=None):  # each command run for real, outside valgrind
+        subprocess.run(argv, check=True, env=env)
+        upto = int(argv[argv.index("--instructions-upto") + 1])
+        counted.append(upto)
+        return 1_000_000 + 7_000 * upto  # start-up, then 7,000 a frame
+
+    monkeypatch.setattr(bench, "instructions", fake)
+    table = bench.instructions_per_frame(people_counts=(3,), frames=4)
+    assert sorted(counted) == [2, 4]  # to the half and to the end (at once)
+    assert table.iloc[0].this_per_frame == 7_000
+    with pytest.raises(ValueError, match="2 frames"):
+        bench.instructions_per_frame(people_counts=(3,), frames=1)
+
+
+def test_instructions_refuse_a_checkout_whose_tracker_did_not_run(tmp_path, monkeypatch):
+    monkeypatch.setattr(bench, "instructions", lambda argv, env=None: pytest.fail("counted"))
+    with pytest.raises(RuntimeError, match="occbench linked to its harness"):  # no occbench there
+        bench.instructions_per_frame(people_counts=(3,), frames=2, other=tmp_path)

@@ -1,8 +1,12 @@
-"""benchmarks/tracker_timing.py: the rows digest and its check, the stage clock's wrapping."""
+"""benchmarks/tracker_timing.py: the rows digest and its check, the stage clock's wrapping, the
+instruction count under callgrind."""
 
 from __future__ import annotations
 
+import shutil
+
 import numpy as np
+import pytest
 from benchmark_scripts import load
 from occbench.trackers.records import Track, TrackState
 
@@ -54,3 +58,16 @@ def test_frame_size_reads_width_by_height_and_names_a_bad_value():
     for bad in ("1920", "axb", "32x32"):
         with pytest.raises(argparse.ArgumentTypeError, match="1920x1080|below 64x64"):
             frame_size(bad)
+
+
+def _loop(n: int) -> list[str]:
+    return ["/bin/sh", "-c", f"i=0; while [ $i -lt {n} ]; do i=$((i+1)); done"]
+
+
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind not installed")
+def test_instructions_count_the_command_and_grow_with_its_work():
+    short, again, longer = (timing.instructions(_loop(n)) for n in (200, 200, 2000))
+    assert 0 < short < longer
+    assert abs(again - short) < 0.001 * short  # the same command: the same count
+    with pytest.raises(RuntimeError, match="false"):
+        timing.instructions(["/bin/false"])
