@@ -15,15 +15,16 @@ reported rows (and writes or compares the file): a speed-up must leave them unch
 (``tracker_timing.import_other``) in this process, on the same scene, ``--rounds`` rounds in
 turn ABBA: frames/s of both and the ratio of their median times, and whether their rows agree.
 ``--instructions`` counts instead of timing (valgrind's callgrind, ``tracker_timing.instructions``;
-the count does not move with the machine's load): per number of people, the scene of ``--frames``
-frames run to its half and to its end, each in its own process under callgrind, and the
-difference over the second half's frames is the instructions a frame of ``update`` (start-up,
-rendering and the first half cancel out); with ``--vs CHECKOUT`` the other checkout's too (the
-whole checkout first on ``PYTHONPATH``) and the ratio (this tree's / the other's). Each tree runs the scene once outside valgrind first,
-so numba's cache is warm; numba compiles for a generic x86-64 there and under valgrind
-(``NUMBA_CPU_NAME=generic``: valgrind's CPU looks different from the host's, and with the
-host's name every kernel was compiled again under it, some 20e9 instructions a run). Some 40
-frames suffice: callgrind runs about 50x slower than the bare process.
+the count does not move with the machine's load): per number of people, the scene of
+``--frames`` frames run to its half and to its end, each in its own process under callgrind,
+and the difference over the second half's frames is the instructions a frame of ``update``
+(start-up, rendering and the first half cancel out); with ``--vs CHECKOUT`` the other
+checkout's too (the whole checkout first on ``PYTHONPATH``) and the ratio (this tree's / the
+other's). Each tree runs the scene once outside valgrind first, so numba's cache is warm;
+numba compiles for a generic x86-64 there and under valgrind (``NUMBA_CPU_NAME=generic``:
+valgrind's CPU looks different from the host's, and with the host's name every kernel was
+compiled again under it, some 20e9 instructions a run). Use some 40 frames
+(``--frames 40``): a counted run of 40 frames at 100 people takes minutes.
 
 Accuracy: IDF1 and HOTA (``occbench.metrics``) of reta and the baseline on the synthetic
 suite (``occbench.datasets.synthetic.load_suite``) with ``NoisyGroundTruth`` detections

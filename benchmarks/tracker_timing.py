@@ -137,16 +137,16 @@ def instructions(argv: list[str], env: dict[str, str] | None = None) -> int:
     ``summary:`` count, every instruction of the process from start to exit): a count that,
     unlike time, does not move with the machine's load. ``PYTHONHASHSEED`` is fixed to 0 so
     that a Python command runs the same way each time; ``env`` is added to the environment.
-    Raises ``RuntimeError`` naming the
-    command when valgrind is missing or the command fails (with the end of its output)."""
+    Raises ``RuntimeError`` naming the command when valgrind is missing or the command fails
+    (with the end of its output)."""
     valgrind = shutil.which("valgrind")
     if valgrind is None:
         raise RuntimeError("valgrind not found on PATH (needed to count instructions)")
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
         done = subprocess.run([valgrind, "--tool=callgrind", f"--callgrind-out-file={out}", *argv],
-                              env={**os.environ, **(env or {}), "PYTHONHASHSEED": "0"}, capture_output=True,
-                              text=True)
+                              env={**os.environ, **(env or {}), "PYTHONHASHSEED": "0"},
+                              capture_output=True, text=True)
         if done.returncode != 0 or not out.exists():
             raise RuntimeError(f"{' '.join(argv)} failed under callgrind (exit "
                                f"{done.returncode}):\n{done.stderr[-2000:]}")
