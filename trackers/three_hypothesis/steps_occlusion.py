@@ -79,12 +79,11 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
     sqrt_q = np.sqrt(columns([person.q for person in persons], support))  # (P, K)
     sqrt_p = np.sqrt(columns(V.p, support))  # (D, K)
     R = np.array([person.R.item(0) for person in persons])[S.owners]  # R = (sigma_z h)^2 I
-    seen = (np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
-            if rules.shape.uses_seen else None)  # visible nodes of t-1, for the shape rule
-    contacts = rules.contact.pairs(
-        O.pairs, O.ratio, S.boxes,
-        np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
-        if rules.contact.uses_seen else None)  # the pairs of O sharing an appearance term
+    visible = (np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
+               if rules.shape.uses_seen or rules.contact.uses_seen else None)  # nodes of t-1
+    seen = visible if rules.shape.uses_seen else None  # for the shape rule
+    contacts = rules.contact.pairs(O.pairs, O.ratio, S.boxes,  # O's pairs sharing eq. 4's term
+                                   visible if rules.contact.uses_seen else None)
     entrants = rules.stage2.entrants(np.array([person.confirmed for person in persons],
                                               dtype=bool))
     inp = _Inputs(S, V, O, rules, association, sqrt_q, sqrt_p, seen, entrants,
