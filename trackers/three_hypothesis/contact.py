@@ -87,8 +87,7 @@ class UnmixedAppearance(MergedAppearance):
 class AnyCover:
     """3.3.3 as written: a person matched in front (eq. 3) takes q from its measurement."""
 
-    def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray | None:
-        return None
+    covers: ClassVar[bool] = False  # no measurement is read as covered
 
 
 @dataclass(frozen=True)
@@ -100,6 +99,7 @@ class NearerCover:
     ``cover`` keeps q, as a person behind others does (3.3.3)."""
 
     cover: float
+    covers: ClassVar[bool] = True
 
     def behind(self, dets: np.ndarray, boxes: np.ndarray, samples: int) -> np.ndarray:
         """(K,) bool per row ``dets`` of (D, 4) xywh ``boxes``: a lower-footed box covers it."""

@@ -152,13 +152,15 @@ def _covered(V: Measurements, dets: list[int], behind: np.ndarray,
     its measurement behind a nearer one though eq. 3 puts it in front (``behind`` False);
     its q is then kept."""
     out = [False] * len(dets)
+    if not setting.rules.covered.covers:  # the paper's rule: nothing to compute
+        return out
     front = np.flatnonzero(~behind)
-    kept = (setting.rules.covered.behind(np.array(dets)[front], V.boxes,
-                                         setting.occlusion.region_samples)
-            if len(front) else None)
-    if kept is not None:
-        for r, k in zip(front.tolist(), kept.tolist()):
-            out[r] = k
+    if not len(front):
+        return out
+    kept = setting.rules.covered.behind(np.array(dets)[front], V.boxes,
+                                        setting.occlusion.region_samples)
+    for r, k in zip(front.tolist(), kept.tolist()):
+        out[r] = k
     return out
 
 
