@@ -72,6 +72,7 @@ from occbench.metrics.paper import considered, match_rows  # noqa: E402
 from occbench.config.build import build_source, build_tracker, load_sequences  # noqa: E402
 from occbench.pipeline.loop import frames  # noqa: E402
 from occbench.report.figures import save_figure  # noqa: E402
+from occbench.sweeps.tables import markdown_table  # noqa: E402
 from occbench.sweeps import generalisation as G  # noqa: E402
 from occbench.trackers.geometry import iou_matrix  # noqa: E402
 
@@ -400,13 +401,12 @@ def write_causes(rows: list[dict], out: Path, title: str = "IDF1 lost by cause")
     out.mkdir(parents=True, exist_ok=True)
     table = pd.DataFrame(rows, columns=["set", "tracker", "IDF1", "HOTA", "MOTA", *CAUSES])
     table.to_csv(out / "idf1_causes.csv", index=False)
-    head = ["set", "tracker", "IDF1 / HOTA / MOTA", *(LABELS[c] for c in CAUSES)]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for r in rows:
-        cells = [r["set"], r["tracker"], f"{r['IDF1']:.3f} / {r['HOTA']:.3f} / {r['MOTA']:.3f}",
-                 *("0" if r[c] == 0 else f"{r[c]:.3f}" for c in CAUSES)]
-        lines.append("| " + " | ".join(cells) + " |")
-    (out / "idf1_causes.md").write_text("\n".join(lines) + "\n")
+    cells = pd.DataFrame([[r["set"], r["tracker"],
+                           f"{r['IDF1']:.3f} / {r['HOTA']:.3f} / {r['MOTA']:.3f}",
+                           *("0" if r[c] == 0 else f"{r[c]:.3f}" for c in CAUSES)] for r in rows],
+                         columns=["set", "tracker", "IDF1 / HOTA / MOTA",
+                                  *(LABELS[c] for c in CAUSES)])
+    (out / "idf1_causes.md").write_text(markdown_table(cells))  # cells as written
     figure = save_figure(causes_figure(rows, title), out / "idf1_causes.png")
     return [out / "idf1_causes.csv", out / "idf1_causes.md", figure]
 
