@@ -76,8 +76,8 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
     entrants and the measurements left whose distance is within the gate: the same
     optimum as the whole frame's. ``pi``: pi^{t-1}, read where ``rules.region`` orders."""
     persons, support = S.persons, V.support
-    sqrt_q = np.sqrt(columns([person.q for person in persons], support))  # (P, K)
-    sqrt_p = np.sqrt(columns(V.p, support))  # (D, K)
+    sqrt_qp = np.sqrt(columns([*(person.q for person in persons), *V.p], support))  # one lookup
+    sqrt_q, sqrt_p = sqrt_qp[:len(persons)], sqrt_qp[len(persons):]  # (P, K), (D, K)
     R = np.array([person.R.item(0) for person in persons])[S.owners]  # R = (sigma_z h)^2 I
     visible = (np.array([b.kind == VISIBLE for b in S.branches], dtype=bool)
                if rules.shape.uses_seen or rules.contact.uses_seen else None)  # nodes of t-1
