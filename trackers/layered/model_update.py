@@ -163,6 +163,48 @@ def targets_update(state: tuple, kf1: tuple, kf2: tuple, rows: np.ndarray, dof: 
         misses[n] = 0
 
 
+@numba.njit(cache=True, inline="always")
+def _rect(part: np.ndarray) -> tuple:
+    """(x0, y0, x1, y1, area) of an xywh rectangle (4,), the area at least 1e-9."""
+    x0, y0 = part[0], part[1]
+    return x0, y0, x0 + part[2], y0 + part[3], max(part[2] * part[3], 1e-9)
+
+
+@numba.njit(cache=True, inline="always")
+def _under_others(cover: float, x0: float, y0: float, x1: float, y1: float, size: float, r: int,
+                  dof: np.ndarray, misses: np.ndarray, occluder_misses: int) -> float:
+    """The largest of ``cover`` and the shares of the rectangle (x0, y0)-(x1, y1) of area
+    ``size`` under the box (``dof`` columns 0, 1, 4, 5) of each target but ``r`` unfound for
+    at most ``occluder_misses`` frames."""
+    for t in range(dof.shape[0]):
+        if t == r or misses[t] > occluder_misses:
+            continue
+        iw = min(x1, dof[t, 0] + dof[t, 4]) - max(x0, dof[t, 0])
+        ih = min(y1, dof[t, 1] + dof[t, 5]) - max(y0, dof[t, 1])
+        if iw > 0.0 and ih > 0.0:
+            cover = max(cover, iw * ih / size)
+    return cover
+
+
+@numba.njit(cache=True)
+def contact_parts(dof: np.ndarray, misses: np.ndarray, rows: np.ndarray, c_parts: np.ndarray,
+                  ks: np.ndarray, occluder_misses: int, share: float) -> np.ndarray:
+    """(M, 5) bool: the parts of the targets at ``rows``, matched to the candidates at ``ks``
+    of ``c_parts`` (N, 5, 4) xywh, at least ``share`` of whose rectangle (the candidate's)
+    lies under another target's box (``_under_others``: found, or unfound for at most
+    ``occluder_misses`` frames, at its global model ``dof``): a part at a contact
+    (``adaptations.contact_frozen``, PBM 2 and 4.2: a part's model is kept unchanged while
+    a major occlusion lies over it)."""
+    out = np.zeros((rows.shape[0], c_parts.shape[1]), np.bool_)
+    for q in range(rows.shape[0]):
+        r, k = rows[q], ks[q]
+        for j in range(c_parts.shape[1]):
+            x0, y0, x1, y1, size = _rect(c_parts[k, j])
+            out[q, j] = _under_others(0.0, x0, y0, x1, y1, size, r, dof, misses,
+                                      occluder_misses) >= share
+    return out
+
+
 @numba.njit(cache=True)
 def stale_parts(state: tuple, dof: np.ndarray, misses: np.ndarray, rows: np.ndarray,
                 cand: tuple, ks: np.ndarray, part_scores: np.ndarray, rule: tuple,
@@ -180,23 +222,14 @@ def stale_parts(state: tuple, dof: np.ndarray, misses: np.ndarray, rows: np.ndar
     stale, occluded_parts, m_area = state
     c_parts, c_area = cand
     threshold, occluder_misses, W, H, max_cover, min_fill, stale_frames = rule
-    T = dof.shape[0]
     for q in range(rows.shape[0]):
         r, k = rows[q], ks[q]
         for j in range(c_parts.shape[1]):
-            x0, y0 = c_parts[k, j, 0], c_parts[k, j, 1]
-            x1, y1 = x0 + c_parts[k, j, 2], y0 + c_parts[k, j, 3]
-            size = max(c_parts[k, j, 2] * c_parts[k, j, 3], 1e-9)
+            x0, y0, x1, y1, size = _rect(c_parts[k, j])
             inside = ((min(max(x1, 0.0), W) - min(max(x0, 0.0), W))
                       * (min(max(y1, 0.0), H) - min(max(y0, 0.0), H)))
-            cover = 1.0 - inside / size
-            for t in range(T):
-                if t == r or misses[t] > occluder_misses:
-                    continue
-                iw = min(x1, dof[t, 0] + dof[t, 4]) - max(x0, dof[t, 0])
-                ih = min(y1, dof[t, 1] + dof[t, 5]) - max(y0, dof[t, 1])
-                if iw > 0.0 and ih > 0.0:
-                    cover = max(cover, iw * ih / size)
+            cover = _under_others(1.0 - inside / size, x0, y0, x1, y1, size, r, dof, misses,
+                                  occluder_misses)
             if part_scores[q, j] >= threshold:
                 stale[r, j] = 0
             elif cover <= max_cover and c_area[k, j] >= min_fill * m_area[r, j]:

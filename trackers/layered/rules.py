@@ -6,7 +6,7 @@ names the step of PBM it replaces; ``docs/adaptations.md`` gives the evidence. (
 parts are ``adaptations.StaleParts`` or None; the pruning adaptations live in
 ``selection.MultipleResponsePruning``, the blob-head ones in ``candidates``, PBM 3.1's
 smaller region in ``smaller``, the exits in ``exits``, confirmation in
-``confirmation``.) Boxes are (N, 4) float64 xywh pixels.
+``confirmation``, the parts a contact freezes in ``contact``.) Boxes are (N, 4) float64 xywh pixels.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from occbench.trackers.common.assignment import assign
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.confirmation import InARow, IsolatedEarly
+from occbench.trackers.layered.contact import AsMatched, FrozenAtContact
 from occbench.trackers.layered.evidence import (HiddenEvidence, MissesBound, ReportedBehind,
                                                box_foreground)
 from occbench.trackers.layered.exits import (
@@ -322,6 +323,7 @@ class Rules(NamedTuple):
     velocity: FilterPrediction | MeasuredVelocity | CameraPlacement  # where unfound (ours)
     behind: MissesBound | ReportedBehind | ReportedByRecord  # past reporting.max_misses? (ours)
     lost: AllAtOnce | ReportedFirst  # lost targets' share of the candidates (PBM 4 step 4)
+    contact: AsMatched | FrozenAtContact  # which parts learn from the candidate (PBM 4.2)
 
 
 def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Rules:
@@ -358,6 +360,7 @@ def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Ru
                 ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound()),
         lost=(ReportedFirst(max_misses, a.reported_first_stay, a.reported_first_head) if a.reported_first
               else AllAtOnce()),
+        contact=FrozenAtContact(a.contact_frozen) if a.contact_frozen > 0 else AsMatched(),
     )
 
 

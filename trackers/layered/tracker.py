@@ -274,7 +274,8 @@ class PBMTracker:
         models and filters (``Targets.update``: DOF measured when unoccluded, window-averaged
         when occluded; after a gap ``rules.reupdate``), then each part by a running average
         weighted by p_j, frozen below ``model_update.part_threshold`` (``update_parts``; with
-        ``adaptations.stale`` a visible part failing to match is re-learned), the match
+        ``adaptations.stale`` a visible part failing to match is re-learned; with
+        ``adaptations.contact_frozen`` a part under another target's box is frozen), the match
         scores, the head templates of unoccluded targets whose head matched (PBM 4.1), and
         confirmation after ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
         targets, u = self.targets, self.model_update
@@ -298,9 +299,12 @@ class PBMTracker:
         rates = PartRates(u.part_threshold, u.rate, 1.0 if stale is None else stale.relearn_rate)
         for g, (rows, f) in enumerate(groups):
             r = mt[rows]
+            pj_g, relearn_g = self.rules.contact.learning(  # adaptations.contact_frozen
+                targets, r, f, ks[rows], pj[rows], relearn if g == 0 else None,
+                self.reporting.max_misses)
             update_parts(targets.parts, f, PartMatches(
-                r, ks[rows], pj[rows], shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
-                targets.alpha[r], targets.beta[r], relearn if g == 0 else None), rates)
+                r, ks[rows], pj_g, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
+                targets.alpha[r], targets.beta[r], relearn_g), rates)
         targets.score[mt] = found.score
         fresh = mt[~occl & (pj[:, 0] >= u.part_threshold)]
         for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):

@@ -839,16 +839,17 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
                                        HiddenEvidence, R.IsolatedEarly,
                                        AfterPrediction, R.NoContest, R.LoneShrink, R.FoundElsewhere,
                                        R.BorderExit, R.ReportAnywhere, R.KeepStacked,
-                                       R.FilterPrediction, R.MissesBound, R.AllAtOnce]
+                                       R.FilterPrediction, R.MissesBound, R.AllAtOnce,
+                                       R.AsMatched]
     # report_support, reupdate, contested_template, leaving_unreported, fold_twins,
-    # measured_velocity, reported_behind and reported_first off
+    # measured_velocity, reported_behind, reported_first and contact_frozen off
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
                                         R.LastBox, R.AsMeasured, R.PredictedSize, R.Alone,
                                         R.ReportUnfound, R.InARow, AfterPrediction, R.NoContest,
                                         R.OccludedSmaller, R.AllHolders, R.PredictedExit,
                                         R.ReportAnywhere,
                                         R.KeepStacked, R.FilterPrediction, R.MissesBound,
-                                        R.AllAtOnce]
+                                        R.AllAtOnce, R.AsMatched]
     # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
     tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])

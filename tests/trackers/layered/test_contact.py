@@ -1,0 +1,109 @@
+"""PBM parts at a contact (``adaptations.contact_frozen``, ``contact.FrozenAtContact``): a
+matched target's part whose candidate rectangle lies under another target's box keeps its
+model, as PBM 1-2 ask of a part under a major occlusion; the paper's 4.2 update by p_j
+alone (``contact.AsMatched``) is the default."""
+
+from __future__ import annotations
+
+import numpy as np
+import pbm_scenes as S
+import pytest
+
+from occbench.trackers.layered import Adaptations, PBMTracker
+from occbench.trackers.layered.contact import AsMatched, FrozenAtContact
+from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.parts import PartFeatureExtractor
+from occbench.trackers.layered.rules import build_rules
+from occbench.trackers.layered.targets import Targets
+
+
+def _two_targets() -> tuple[Targets, object]:
+    frame = np.full((200, 200, 3), 90, np.uint8)
+    full = np.zeros((200, 200), bool)
+    full[40:130, 50:80] = True
+    ex = PartFeatureExtractor(4, 35, 15)
+    ex.start(frame, full)
+    cand = ex.extract(np.array([[50.0, 40.0, 30.0, 90.0]]), np.array([0.5]), np.array([0.5]))
+    tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 4.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
+    tg.add(1, np.array([50.0, 40.0, 65.0, 85.0, 30.0, 90.0]), 0.5, 0.5, cand, None)
+    # target 2's box lies over target 1's right torso-arm (and 6% of its right leg)
+    tg.add(2, np.array([66.0, 54.0, 86.0, 74.0, 40.0, 40.0]), 0.5, 0.5, cand, None)
+    return tg, cand
+
+
+def test_a_part_under_another_targets_box_is_frozen():
+    tg, cand = _two_targets()
+    rows, ks = np.array([0]), np.array([0])
+    pj = np.full((1, 5), 0.9)
+    assert AsMatched().learning(tg, rows, cand, ks, pj, None, 5) == (pj, None)
+    assert FrozenAtContact(0.5).frozen(tg, rows, cand, ks, 5)[0].tolist() == [
+        False, False, True, False, False]
+    # a lower share reaches the right leg's 6 %; the image border is no contact
+    assert FrozenAtContact(0.05).frozen(tg, rows, cand, ks, 5)[0].tolist() == [
+        False, False, True, False, True]
+    # the frozen part is read as not matching, flagged, and not re-learned
+    pj_f, relearn = FrozenAtContact(0.5).learning(tg, rows, cand, ks, pj,
+                                                 np.ones((1, 5), bool), 5)
+    assert (pj_f[0] >= 0.4).tolist() == [True, True, False, True, True]
+    assert relearn[0].tolist() == [True, True, False, True, True]
+    assert tg.occluded_parts[0].tolist() == [False, False, True, False, False]
+    # an occluder unfound for longer than occluder_misses frames is no longer there
+    tg.misses[1] = 6
+    assert not FrozenAtContact(0.05).frozen(tg, rows, cand, ks, 5).any()
+
+
+def test_the_switch_is_off_in_paper_mode_and_by_default_and_checked():
+    assert isinstance(build_rules(Adaptations()).contact, AsMatched)
+    assert isinstance(build_rules(Adaptations(contact_frozen=0.5)).contact, FrozenAtContact)
+    assert "contact_frozen" not in Adaptations().changed()
+    assert "contact_frozen" not in Adaptations.paper().changed()
+    with pytest.raises(ValueError, match="contact_frozen"):
+        Adaptations(contact_frozen=1.5)
+
+
+def _crossing(tracker: PBMTracker) -> tuple[int, int, int]:
+    """Person 1 walks in front of the standing person 2. Counts, over (found target, part,
+    frame): parts flagged frozen whose colour model changed, parts flagged frozen though
+    they match (p_j >= 0.4), and parts whose colour model changed while their rectangle lay
+    at least half under the other target's box."""
+    a = S.walk(70, (30, 70), (3.0, 0.0), (30, 100))
+    b = S.walk(70, (120, 62), (0.0, 0.0), (32, 110))
+    scene = S.Scene(300, 220, [
+        S.Person(1, a, shirt=(30, 30, 190), pants=(100, 70, 30), depth=1.0),
+        S.Person(2, b, shirt=(40, 170, 40), pants=(50, 50, 50), hair=(30, 90, 150), depth=1.5),
+    ], seed=4)
+    changed_frozen = matched_frozen = learnt_under = 0
+    for k in range(scene.length):
+        img, lab = scene.render(k)
+        before = {int(i): tracker.targets.parts.hsv[r].copy()
+                  for r, i in enumerate(tracker.targets.id)}
+        tracker.update(img, scene.detections(k, lab), lab)
+        tg = tracker.targets
+        for r, i in enumerate(tg.id.tolist()):
+            if i not in before or tg.misses[r] > 0:
+                continue
+            after, flags = tg.parts.hsv[r], tg.occluded_parts[r]
+            others = [tg.dof[o, [0, 1, 4, 5]] for o in range(len(tg)) if o != r]
+            for j in range(5):
+                moved = not np.array_equal(after[j], before[i][j])
+                if flags[j] and moved:
+                    changed_frozen += 1
+                if flags[j] and tg.part_scores[r, j] >= 0.4:
+                    matched_frozen += 1
+                x, y, w, h = tg.parts.parts[r, j]
+                under = max((max(min(x + w, o[0] + o[2]) - max(x, o[0]), 0)
+                             * max(min(y + h, o[1] + o[3]) - max(y, o[1]), 0) / (w * h)
+                             for o in others), default=0.0)
+                if moved and under >= 0.5:
+                    learnt_under += 1
+    return changed_frozen, matched_frozen, learnt_under
+
+
+def test_a_walker_in_front_of_a_standing_person_keeps_its_covered_parts():
+    # the paper's update: parts half under the neighbour's box learn from its pixels
+    changed, matched_frozen, learnt_under = _crossing(PBMTracker())
+    assert changed == 0 and matched_frozen == 0 and learnt_under > 0
+    # frozen at a contact: parts that match are frozen there, and none learns
+    changed, matched_frozen, learnt_under = _crossing(PBMTracker(
+        adaptations=Adaptations(contact_frozen=0.5)))
+    assert changed == 0 and matched_frozen > 0 and learnt_under == 0
