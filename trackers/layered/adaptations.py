@@ -214,11 +214,11 @@ class Adaptations:
         reported_first_head: with ``reported_first``, a lost target still competes for a
             candidate whose head band (top 1/7 of its box, PBM 2.1's head part) shares rows
             with that of its last box (false: for none).
-        contact_frozen: a matched target's part whose candidate rectangle lies at least this
-            share under another target's box (found, or unfound for at most
-            ``reporting.max_misses`` frames) keeps its model as a part that does not match
-            (``contact.FrozenAtContact``; PBM 1-2: a part's model "kept unchanged until the
-            occlusion has ceased"; 0: off, PBM 4.2's update by p_j alone).
+        contact_frozen: a matched part whose candidate rectangle lies this share under another
+            target's box (found, or reported unfound) keeps its model as a part not matching
+            (``contact.FrozenAtContact``; PBM 1-2; 0: off, PBM 4.2's update by p_j alone).
+        contact_colour: such a part keeps only its colour histograms
+            (``contact.ColourAtContact``; 0: off); one of the two rules.
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -289,6 +289,7 @@ class Adaptations:
     reported_first_stay: float = 0.0
     reported_first_head: bool = False
     contact_frozen: float = 0.0
+    contact_colour: float = 0.0
 
     def __post_init__(self) -> None:
         require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
@@ -296,7 +297,7 @@ class Adaptations:
         unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
              report_support=self.report_support, rival_match=self.rival_match,
              lone_shrink=self.lone_shrink, reported_behind=self.reported_behind,
-             contact_frozen=self.contact_frozen)
+             contact_frozen=self.contact_frozen, contact_colour=self.contact_colour)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
@@ -327,6 +328,9 @@ class Adaptations:
                 not (self.reported_by_record and self.reported_behind > 0),
                 "and adaptations.reported_behind are two rules for one step: set one",
                 self.reported_by_record)
+        require("adaptations.contact_colour", min(self.contact_colour, self.contact_frozen) <= 0,
+                "and adaptations.contact_frozen are two rules for one step: set one",
+                self.contact_colour)
         require("adaptations.camera_placement",
                 not (self.camera_placement and self.measured_velocity),
                 "and adaptations.measured_velocity are two rules for one step: set one",
@@ -348,7 +352,8 @@ class Adaptations:
                                        "report_support", "rival_match", "contested_template",
                                        "lone_shrink", "lone_shrink_shape", "leaving_unreported",
                                        "fold_twins_own", "reported_behind",
-                                       "reported_first_stay", "contact_frozen"),
+                                       "reported_first_stay", "contact_frozen",
+                                       "contact_colour"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -386,7 +391,8 @@ class Adaptations:
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
                    distinct_detections=False, merge_recent_holder=False,
                    reported_first=False, reported_first_stay=0.0, reported_first_head=False,
-                   apart_undivided=False, contact_frozen=0.0)
+                   apart_undivided=False, contact_frozen=0.0,
+                   contact_colour=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

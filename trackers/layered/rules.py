@@ -20,7 +20,7 @@ from occbench.trackers.common.assignment import assign
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.confirmation import InARow, IsolatedEarly
-from occbench.trackers.layered.contact import AsMatched, FrozenAtContact
+from occbench.trackers.layered.contact import AsMatched, ColourAtContact, FrozenAtContact
 from occbench.trackers.layered.evidence import (HiddenEvidence, MissesBound, ReportedBehind,
                                                box_foreground)
 from occbench.trackers.layered.exits import (
@@ -323,7 +323,7 @@ class Rules(NamedTuple):
     velocity: FilterPrediction | MeasuredVelocity | CameraPlacement  # where unfound (ours)
     behind: MissesBound | ReportedBehind | ReportedByRecord  # past reporting.max_misses? (ours)
     lost: AllAtOnce | ReportedFirst  # lost targets' share of the candidates (PBM 4 step 4)
-    contact: AsMatched | FrozenAtContact  # which parts learn from the candidate (PBM 4.2)
+    contact: AsMatched | FrozenAtContact | ColourAtContact  # which parts learn (PBM 4.2)
 
 
 def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Rules:
@@ -360,7 +360,8 @@ def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Ru
                 ReportedBehind(a.reported_behind) if a.reported_behind > 0 else MissesBound()),
         lost=(ReportedFirst(max_misses, a.reported_first_stay, a.reported_first_head) if a.reported_first
               else AllAtOnce()),
-        contact=FrozenAtContact(a.contact_frozen) if a.contact_frozen > 0 else AsMatched(),
+        contact=(FrozenAtContact(a.contact_frozen) if a.contact_frozen > 0 else
+                 ColourAtContact(a.contact_colour) if a.contact_colour > 0 else AsMatched()),
     )
 
 

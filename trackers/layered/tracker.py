@@ -73,8 +73,7 @@ from occbench.trackers.layered.rules import build_rules, place_unfound, reset_ru
 from occbench.trackers.layered.search import Candidates, head_patch, head_patches, occlusion_kinds
 from occbench.trackers.layered.selection import FrameScores, MultipleResponsePruning
 from occbench.trackers.layered.starts import AutoStarts, GivenTargetOnly
-from occbench.trackers.layered.targets import (PartMatches, PartRates, Targets, dof_from_box,
-                                               update_parts)
+from occbench.trackers.layered.targets import PartMatches, PartRates, Targets, dof_from_box
 from occbench.trackers.records import Detections, Track, TrackState
 
 logger = logging.getLogger(__name__)
@@ -275,7 +274,8 @@ class PBMTracker:
         when occluded; after a gap ``rules.reupdate``), then each part by a running average
         weighted by p_j, frozen below ``model_update.part_threshold`` (``update_parts``; with
         ``adaptations.stale`` a visible part failing to match is re-learned; with
-        ``adaptations.contact_frozen`` a part under another target's box is frozen), the match
+        ``adaptations.contact_frozen`` / ``contact_colour`` a part under another target's box
+        keeps its model / its colours: ``rules.contact``), the match
         scores, the head templates of unoccluded targets whose head matched (PBM 4.1), and
         confirmation after ``life_cycle.min_hits`` matches (``rules.confirmation``)."""
         targets, u = self.targets, self.model_update
@@ -299,12 +299,10 @@ class PBMTracker:
         rates = PartRates(u.part_threshold, u.rate, 1.0 if stale is None else stale.relearn_rate)
         for g, (rows, f) in enumerate(groups):
             r = mt[rows]
-            pj_g, relearn_g = self.rules.contact.learning(  # adaptations.contact_frozen
-                targets, r, f, ks[rows], pj[rows], relearn if g == 0 else None,
+            self.rules.contact.update(targets, f, PartMatches(  # update_parts (contact_*)
+                r, ks[rows], pj[rows], shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
+                targets.alpha[r], targets.beta[r], relearn if g == 0 else None), rates,
                 self.reporting.max_misses)
-            update_parts(targets.parts, f, PartMatches(
-                r, ks[rows], pj_g, shift[rows], dof_t[r[:, None], _BOX_COLUMNS],
-                targets.alpha[r], targets.beta[r], relearn_g), rates)
         targets.score[mt] = found.score
         fresh = mt[~occl & (pj[:, 0] >= u.part_threshold)]
         for ti, tpl in zip(fresh.tolist(), head_patches(frame, dof_t[fresh[:, None], _BOX_COLUMNS])):

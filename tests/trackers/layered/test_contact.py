@@ -1,7 +1,8 @@
-"""PBM parts at a contact (``adaptations.contact_frozen``, ``contact.FrozenAtContact``): a
-matched target's part whose candidate rectangle lies under another target's box keeps its
-model, as PBM 1-2 ask of a part under a major occlusion; the paper's 4.2 update by p_j
-alone (``contact.AsMatched``) is the default."""
+"""PBM parts at a contact (``adaptations.contact_frozen``, ``contact.FrozenAtContact``;
+``adaptations.contact_colour``, ``contact.ColourAtContact``): a matched target's part whose
+candidate rectangle lies under another target's box keeps its model (or its colour
+histograms), as PBM 1-2 ask of a part under a major occlusion; the paper's 4.2 update by
+p_j alone (``contact.AsMatched``) is the default."""
 
 from __future__ import annotations
 
@@ -10,11 +11,12 @@ import pbm_scenes as S
 import pytest
 
 from occbench.trackers.layered import Adaptations, PBMTracker
-from occbench.trackers.layered.contact import AsMatched, FrozenAtContact
+from occbench.trackers.layered.contact import AsMatched, ColourAtContact, FrozenAtContact
 from occbench.trackers.layered.dynamics import Gate
+from occbench.trackers.layered.model_update import contact_parts
 from occbench.trackers.layered.parts import PartFeatureExtractor
 from occbench.trackers.layered.rules import build_rules
-from occbench.trackers.layered.targets import Targets
+from occbench.trackers.layered.targets import PartMatches, PartRates, Targets
 
 
 def _two_targets() -> tuple[Targets, object]:
@@ -31,34 +33,72 @@ def _two_targets() -> tuple[Targets, object]:
     return tg, cand
 
 
-def test_a_part_under_another_targets_box_is_frozen():
+def _matches(tg: Targets, pj: np.ndarray, relearn: np.ndarray | None = None) -> PartMatches:
+    return PartMatches(np.array([0]), np.array([0]), pj, np.zeros((1, 2)),
+                       tg.dof[[0]][:, [0, 1, 4, 5]], tg.alpha[[0]], tg.beta[[0]], relearn)
+
+
+def test_a_part_under_another_targets_box_is_at_a_contact():
     tg, cand = _two_targets()
     rows, ks = np.array([0]), np.array([0])
-    pj = np.full((1, 5), 0.9)
-    assert AsMatched().learning(tg, rows, cand, ks, pj, None, 5) == (pj, None)
-    assert FrozenAtContact(0.5).frozen(tg, rows, cand, ks, 5)[0].tolist() == [
+    assert contact_parts(tg.dof, tg.misses, rows, cand.parts, ks, 5, 0.5)[0].tolist() == [
         False, False, True, False, False]
     # a lower share reaches the right leg's 6 %; the image border is no contact
-    assert FrozenAtContact(0.05).frozen(tg, rows, cand, ks, 5)[0].tolist() == [
+    assert contact_parts(tg.dof, tg.misses, rows, cand.parts, ks, 5, 0.05)[0].tolist() == [
         False, False, True, False, True]
-    # the frozen part is read as not matching, flagged, and not re-learned
-    pj_f, relearn = FrozenAtContact(0.5).learning(tg, rows, cand, ks, pj,
-                                                 np.ones((1, 5), bool), 5)
-    assert (pj_f[0] >= 0.4).tolist() == [True, True, False, True, True]
-    assert relearn[0].tolist() == [True, True, False, True, True]
-    assert tg.occluded_parts[0].tolist() == [False, False, True, False, False]
     # an occluder unfound for longer than occluder_misses frames is no longer there
     tg.misses[1] = 6
-    assert not FrozenAtContact(0.05).frozen(tg, rows, cand, ks, 5).any()
+    assert not contact_parts(tg.dof, tg.misses, rows, cand.parts, ks, 5, 0.05).any()
+
+
+def _spoiled(tg: Targets) -> None:
+    """Target 1's model moved off the candidate's: every feature differs."""
+    m = tg.parts
+    m.hsv[0] = np.roll(m.hsv[0], 1, axis=-1)
+    m.xyz[0] = np.roll(m.xyz[0], 1, axis=-1)
+    m.area[0] += 0.2
+    m.perimeter[0] += 3.0
+
+
+def test_each_rule_updates_what_it_says():
+    rates, pj = PartRates(0.4, 0.3), np.full((1, 5), 0.9)
+    changed = {}
+    for rule in (AsMatched(), FrozenAtContact(0.5), ColourAtContact(0.5)):
+        tg, cand = _two_targets()
+        _spoiled(tg)
+        before = tg.parts.copy()
+        rule.update(tg, cand, _matches(tg, pj, np.zeros((1, 5), bool)), rates, 5)
+        changed[type(rule).__name__] = [
+            [not np.array_equal(getattr(tg.parts, f)[0, j], getattr(before, f)[0, j])
+             for j in range(5)] for f in ("hsv", "xyz", "area", "perimeter")]
+        flagged = tg.occluded_parts[0].tolist()
+        assert flagged == ([False, False, True, False, False]
+                           if isinstance(rule, FrozenAtContact) else [False] * 5)
+    assert changed["AsMatched"] == [[True] * 5] * 4
+    at_contact = [True, True, False, True, True]
+    assert changed["FrozenAtContact"] == [at_contact] * 4
+    assert changed["ColourAtContact"] == [at_contact, at_contact, [True] * 5, [True] * 5]
+    # a stale part at a contact is not re-learned when frozen
+    tg, cand = _two_targets()
+    _spoiled(tg)
+    before = tg.parts.copy()
+    FrozenAtContact(0.5).update(tg, cand, _matches(tg, np.full((1, 5), 0.1), np.ones((1, 5), bool)),
+                                rates, 5)
+    assert np.array_equal(tg.parts.hsv[0, 2], before.hsv[0, 2])
+    assert not np.array_equal(tg.parts.hsv[0, 1], before.hsv[0, 1])
 
 
 def test_the_switch_is_off_in_paper_mode_and_by_default_and_checked():
     assert isinstance(build_rules(Adaptations()).contact, AsMatched)
     assert isinstance(build_rules(Adaptations(contact_frozen=0.5)).contact, FrozenAtContact)
-    assert "contact_frozen" not in Adaptations().changed()
-    assert "contact_frozen" not in Adaptations.paper().changed()
-    with pytest.raises(ValueError, match="contact_frozen"):
-        Adaptations(contact_frozen=1.5)
+    assert isinstance(build_rules(Adaptations(contact_colour=0.5)).contact, ColourAtContact)
+    for name in ("contact_frozen", "contact_colour"):
+        assert name not in Adaptations().changed()
+        assert name not in Adaptations.paper().changed()
+        with pytest.raises(ValueError, match=name):
+            Adaptations(**{name: 1.5})
+    with pytest.raises(ValueError, match="contact_colour"):
+        Adaptations(contact_frozen=0.5, contact_colour=0.5)
 
 
 def _crossing(tracker: PBMTracker) -> tuple[int, int, int]:
@@ -107,3 +147,7 @@ def test_a_walker_in_front_of_a_standing_person_keeps_its_covered_parts():
     changed, matched_frozen, learnt_under = _crossing(PBMTracker(
         adaptations=Adaptations(contact_frozen=0.5)))
     assert changed == 0 and matched_frozen > 0 and learnt_under == 0
+    # colour kept at a contact: no colour learnt there either, and no part flagged frozen
+    changed, matched_frozen, learnt_under = _crossing(PBMTracker(
+        adaptations=Adaptations(contact_colour=0.5)))
+    assert matched_frozen == 0 and learnt_under == 0
