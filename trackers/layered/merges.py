@@ -164,11 +164,12 @@ class FoundElsewhere:
         self._grown, self._struck, self._first, self._scored = None, None, None, None
         self.matched.clear()
         found = block(frame, targets, cand, *rest)
-        grown = (self.grown_pairs(found, targets, cand) if self.found_elsewhere
+        merges = self._holders(found, targets, cand)  # read by both rules, made once
+        grown = (self._grown_of(merges) if self.found_elsewhere
                  else np.empty((0, 2), dtype=np.intp))
         struck = np.empty((0, 2), dtype=np.intp)
         if self.recent_holder:
-            held, struck = self.recent_pairs(found, targets, cand)
+            held, struck = self._recent_of(merges, targets)
             grown = np.concatenate([grown, held])
         if len(grown):
             self._grown, self._struck = grown, struck
@@ -190,44 +191,58 @@ class FoundElsewhere:
                 if carved and kinds[t, n] > 0 and not cand.blob[n]
                 and cand.heads_in_region[n] <= 1]
 
-    def _taken(self, found: Association, targets: Targets, cand: Candidates
-               ) -> tuple[np.ndarray, np.ndarray]:
-        """The candidate each target took (-1 none, -2 as a merge) and which live targets'
-        boxes each candidate's region holds (T, N), from the first pass."""
+    def _holders(self, found: Association, targets: Targets, cand: Candidates
+                 ) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray] | None:
+        """The first pass's merges (``_merges``, M (target, candidate) pairs), the candidate
+        each target took (-1 none, -2 as a merge) and which live targets' boxes each merge's
+        region holds (T, M: column m for merge m's candidate); None without a merge."""
+        if self._first is None or found.chosen is None:
+            return None
+        merges = self._merges(found, cand)
+        if not merges:
+            return None
         _, live, overlap = self._first
         matches, occluded = found.matches, found.chosen.occluded
         taken = np.full(len(targets), -1, dtype=np.intp)
         taken[matches[:, 0]] = np.where(occluded, -2, matches[:, 1])
-        holds = overlap_ratio_matrix(targets.dof[:, [0, 1, 4, 5]], cand.region) >= overlap
-        return taken, holds & live[:, None]
+        regions = cand.region[[n for _, n in merges]]
+        holds = overlap_ratio_matrix(targets.dof[:, [0, 1, 4, 5]], regions) >= overlap
+        return merges, taken, holds & live[:, None]
 
     def recent_pairs(self, found: Association, targets: Targets, cand: Candidates
                      ) -> tuple[np.ndarray, np.ndarray]:
         """(t, n) pairs of the first pass's merges to read as the recent holder t grown,
         and the (u, n) pairs to strike (``recent_holder``), each (G, 2)."""
-        none = np.empty((0, 2), dtype=np.intp)
-        if self._first is None or found.chosen is None:
-            return none, none
-        taken, holds = self._taken(found, targets, cand)
-        held, struck = [], []
-        for u, n in self._merges(found, cand):
-            recent = targets.misses < targets.misses[u]
-            left = np.flatnonzero(holds[:, n] & (taken == -1) & recent)
-            if len(left) == 1:
-                held.append((int(left[0]), n))
-                struck.append((u, n))
-        return (np.array(held, dtype=np.intp).reshape(-1, 2),
-                np.array(struck, dtype=np.intp).reshape(-1, 2))
+        return self._recent_of(self._holders(found, targets, cand), targets)
 
     def grown_pairs(self, found: Association, targets: Targets, cand: Candidates) -> np.ndarray:
         """(G, 2) (target, candidate) matches of the first pass that are a target grown."""
-        if self._first is None or found.chosen is None:
-            return np.empty((0, 2), dtype=np.intp)
-        taken, holds = self._taken(found, targets, cand)  # taken -2: as a merge
+        return self._grown_of(self._holders(found, targets, cand))
+
+    @staticmethod
+    def _recent_of(merges: tuple | None, targets: Targets) -> tuple[np.ndarray, np.ndarray]:
+        """``recent_pairs`` of the first pass's ``_holders``."""
+        held, struck = [], []
+        if merges is not None:
+            pairs, taken, holds = merges
+            for m, (u, n) in enumerate(pairs):
+                recent = targets.misses < targets.misses[u]
+                left = np.flatnonzero(holds[:, m] & (taken == -1) & recent)
+                if len(left) == 1:
+                    held.append((int(left[0]), n))
+                    struck.append((u, n))
+        return (np.array(held, dtype=np.intp).reshape(-1, 2),
+                np.array(struck, dtype=np.intp).reshape(-1, 2))
+
+    @staticmethod
+    def _grown_of(merges: tuple | None) -> np.ndarray:
+        """``grown_pairs`` of the first pass's ``_holders`` (taken -2: as a merge)."""
         grown = []
-        for t, n in self._merges(found, cand):
-            others = np.flatnonzero(holds[:, n])
-            others = others[others != t]
-            if len(others) and np.all((taken[others] >= 0) & (taken[others] != n)):
-                grown.append((t, n))
+        if merges is not None:
+            pairs, taken, holds = merges
+            for m, (t, n) in enumerate(pairs):
+                others = np.flatnonzero(holds[:, m])
+                others = others[others != t]
+                if len(others) and np.all((taken[others] >= 0) & (taken[others] != n)):
+                    grown.append((t, n))
         return np.array(grown, dtype=np.intp).reshape(-1, 2)

@@ -220,3 +220,21 @@ def test_a_block_starts_and_ends_with_no_template_match_kept():
     found = SimpleNamespace(matches=np.zeros((0, 2), np.intp), chosen=None)
     fe.associate(lambda *a: seen.append(dict(fe.matched)) or found, None, None, None)
     assert seen == [{}] and fe.matched == {}
+
+
+def test_the_holders_are_read_in_the_merge_candidates_own_region():
+    # the cav1 scene with its two candidates swapped (the merge is candidate 1 now) and the
+    # other moved away: the merge's holders are read in candidate 1's region, not 0's
+    kinds, cand, t, live = _scene()
+    swap = [1, 0]
+    region = cand.region[swap]
+    region[0, 0] += 100.0  # the standing person's own detection, moved off the merge
+    cand = Candidates(region, region.copy(), cand.head[swap], cand.blob[swap],
+                      cand.heads_in_region[swap])
+    rule = FoundElsewhere(recent_holder=True)
+    targets = _Targets(dof=t.dof, misses=np.array([0, 0]))
+    rule.apply(kinds[:, swap].copy(), cand, targets, live, 0.5)
+    found = _found([[0, 1], [1, 0]], [True, False])
+    assert rule.grown_pairs(found, targets, cand).tolist() == [[0, 1]]
+    targets.misses = np.array([2, 0])  # target 1 took its own: no recent holder left
+    assert rule.recent_pairs(found, targets, cand)[0].size == 0

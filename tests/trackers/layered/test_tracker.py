@@ -873,3 +873,20 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
     assert not ours.birth.supported(np.full(5, 0.1), True)
     assert ours.birth.supported(np.full(5, 0.1), False)
     assert paper.birth.supported(np.zeros(5), True)
+
+
+def test_a_free_candidate_overlapping_a_target_or_an_earlier_birth_starts_none():
+    rng = np.random.default_rng(3)
+    img = rng.integers(0, 256, (240, 320, 3), dtype=np.uint8)
+    boxes = np.array([[50.0, 50.0, 30.0, 80.0], [52.0, 51.0, 30.0, 80.0],  # IoU 0.89
+                      [150.0, 50.0, 30.0, 80.0], [240.0, 60.0, 30.0, 80.0]])
+    assert iou_matrix(boxes[1:2], boxes[:1])[0, 0] > LifeCycleParams().new_track_iou
+    tracker = PBMTracker()
+    # the second box overlaps the target the first started this frame: it starts none
+    first = tracker.update(img, Detections(boxes[:3], np.ones(3)), None)
+    assert sorted(t.id for t in first) == [1, 2]
+    # the first box twice: one is target 1's, the other is left free over it and starts
+    # none; the far box (after them) starts target 3
+    second = tracker.update(img, Detections(boxes[[0, 0, 3]], np.ones(3)), None)
+    ids = {t.id: t.box for t in second}
+    assert max(ids) == 3 and ids[3][0] == 240.0
