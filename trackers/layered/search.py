@@ -34,7 +34,7 @@ from occbench.trackers.layered._search_kernels import (
     covered_count,
     occlusion_kinds_into,
 )
-from occbench.trackers.layered._template_kernels import ccoeff_normed
+from occbench.trackers.layered._template_kernels import best_ccoeff_normed
 from occbench.trackers.layered.split import HEAD_FRACTION
 from scipy.ndimage import minimum_filter1d
 
@@ -355,8 +355,8 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     The search window holds the top-left positions within ``radius`` (a square) of
     ``centre``, clipped to the image; every position is scored by ``cv2.matchTemplate``
     (TM_CCOEFF_NORMED, zero-mean normalised correlation) and the best one (first in
-    raster order on ties, ``cv2.minMaxLoc``) is returned (the scores by
-    ``_template_kernels.ccoeff_normed``, equal to OpenCV's bit for bit).
+    raster order on ties, ``cv2.minMaxLoc``) is returned (by
+    ``_template_kernels.best_ccoeff_normed``, equal to OpenCV's bit for bit).
 
     Args:
         image: (H, W) uint8 grey or (H, W, 3) BGR frame (only the window is converted).
@@ -372,8 +372,7 @@ def match_head_template(image: np.ndarray, template: np.ndarray, centre: np.ndar
     if window is None:
         return np.asarray(centre, dtype=np.float64), -1.0
     r0, r1, c0, c1 = window
-    res = ccoeff_normed(grey_region(image, r0, r1, c0, c1), template)  # TM_CCOEFF_NORMED
-    _, best, _, (bx, by) = cv2.minMaxLoc(res)
+    bx, by, best = best_ccoeff_normed(grey_region(image, r0, r1, c0, c1), template)  # TM_CCOEFF_NORMED
     return np.array([c0 + bx, r0 + by], dtype=np.float64), float(best)
 
 
