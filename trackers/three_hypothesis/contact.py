@@ -1,7 +1,8 @@
 """People in contact (Reta 3.3.1-3.3.3): what a measurement that meets two tracked people
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
 ``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
-``contact_coincident``, ``covered_appearance``, ``split_appearance``, ``merged_unmixed``),
+``contact_coincident``, ``covered_appearance``, ``split_appearance``, ``merged_unmixed``,
+``merged_unmixed_visible``),
 ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
@@ -34,9 +35,10 @@ class MeasurementAppearance:
 
     uses_shares: ClassVar[bool] = False
     uses_partners: ClassVar[bool] = False
+    uses_mixed: ClassVar[bool] = False  # reads no partner_share
 
     def update(self, q: Histogram, p: Histogram, own: float,
-               partner: Histogram | None = None) -> Histogram:
+               partner: Histogram | None = None, mixed: float | None = None) -> Histogram:
         return p
 
 
@@ -52,9 +54,10 @@ class MergedAppearance:
 
     uses_shares: ClassVar[bool] = True
     uses_partners: ClassVar[bool] = False
+    uses_mixed: ClassVar[bool] = False  # reads no partner_share
 
     def update(self, q: Histogram, p: Histogram, own: float,
-               partner: Histogram | None = None) -> Histogram:
+               partner: Histogram | None = None, mixed: float | None = None) -> Histogram:
         if own >= 1.0:
             return p
         return towards(q, p, own) if own > 0 else q
@@ -70,17 +73,49 @@ class UnmixedAppearance(MergedAppearance):
     ``own``: q <- (1 - own) q + own r. A person in front of a look-alike, or wholly inside
     the partner's region (own 0), keeps q; with no partner (own 1) q = p as in the paper.
     (PBM keeps a target's parts model when a part does not match, ``update.part_threshold``:
-    the colours of the person behind do not enter the model of the person in front.)"""
+    the colours of the person behind do not enter the model of the person in front.)
 
+    ``visible`` (``merged_unmixed_visible``): j's share of p is ``mixed``, the part of the
+    measurement's ellipse j's predicted region covers outside i's own predicted region
+    (``partner_share``), not 1 - own. Eq. 3 puts i, measured, in front of the hidden j, so
+    where their regions overlap the pixels are i's: only a measurement reaching beyond i's
+    region into j's (one box fitted over both) holds j's colours. A measurement that is i's
+    own region (exact boxes beside a hidden neighbour) has ``mixed`` 0, and q moves
+    towards p by own as with ``merged_appearance``."""
+
+    visible: bool = False
     uses_partners: ClassVar[bool] = True
 
+    @property
+    def uses_mixed(self) -> bool:
+        return self.visible
+
     def update(self, q: Histogram, p: Histogram, own: float,
-               partner: Histogram | None = None) -> Histogram:
+               partner: Histogram | None = None, mixed: float | None = None) -> Histogram:
         if own >= 1.0 or partner is None:
             return MergedAppearance.update(self, q, p, own)
-        r = np.maximum(p.dense() - (1.0 - own) * partner.dense(), 0.0)  # dense: r.sum()'s order
+        share = 1.0 - own if mixed is None else mixed
+        if share <= 0.0:
+            return MergedAppearance.update(self, q, p, own)
+        r = np.maximum(p.dense() - share * partner.dense(), 0.0)  # dense: r.sum()'s order
         total = r.sum()
         return towards(q, Histogram.of(r / total), own) if own > 0 and total > 0 else q
+
+
+def partner_share(dets: np.ndarray, partners: np.ndarray, fronts: np.ndarray,
+                  samples: int = 12) -> np.ndarray:
+    """(N,) share of each measurement's inscribed ellipse (``dets`` (N, 4) xywh) lying inside
+    its partner's region (``partners`` (N, 4)) and outside the region in front of it
+    (``fronts`` (N, 4)), integrated on a ``samples`` x ``samples`` grid over the measurement
+    (as ``union_cover``)."""
+    out = np.zeros(len(dets))
+    for k, (box, partner, front) in enumerate(zip(np.asarray(dets, dtype=np.float64),
+                                                   np.asarray(partners, dtype=np.float64),
+                                                   np.asarray(fronts, dtype=np.float64))):
+        px, py = _ellipse_points(box, samples)
+        if len(px):
+            out[k] = (_in_ellipse(px, py, partner) & ~_in_ellipse(px, py, front)).mean()
+    return out
 
 
 @dataclass(frozen=True)
@@ -207,19 +242,32 @@ class SplitParts:
 def union_cover(boxes: np.ndarray, others: np.ndarray, samples: int = 12) -> np.ndarray:
     """(N,) share of each box's inscribed ellipse lying inside the union of the ellipses of
     (M, 4) xywh ``others``, integrated on a ``samples`` x ``samples`` grid over the box."""
-    t = (np.arange(samples) + 0.5) / samples
     out = np.zeros(len(boxes))
     for k, (x, y, w, h) in enumerate(np.asarray(boxes, dtype=np.float64).tolist()):
-        px, py = np.meshgrid(x + t * w, y + t * h)
-        inside = ((px - x - w / 2) / (w / 2)) ** 2 + ((py - y - h / 2) / (h / 2)) ** 2 <= 1.0
-        px, py = px[inside], py[inside]
+        px, py = _ellipse_points((x, y, w, h), samples)
         hit = np.zeros(len(px), dtype=bool)
         for ox, oy, ow, oh in np.asarray(others, dtype=np.float64).tolist():
             if ox >= x + w or ox + ow <= x or oy >= y + h or oy + oh <= y:
                 continue
-            hit |= ((px - ox - ow / 2) / (ow / 2)) ** 2 + ((py - oy - oh / 2) / (oh / 2)) ** 2 <= 1.0
+            hit |= _in_ellipse(px, py, (ox, oy, ow, oh))
         out[k] = hit.mean() if len(hit) else 0.0
     return out
+
+
+def _ellipse_points(box, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """The points of a ``samples`` x ``samples`` grid over xywh ``box`` inside its
+    inscribed ellipse (x and y arrays)."""
+    x, y, w, h = (float(v) for v in box)
+    t = (np.arange(samples) + 0.5) / samples
+    px, py = np.meshgrid(x + t * w, y + t * h)
+    inside = _in_ellipse(px, py, (x, y, w, h))
+    return px[inside], py[inside]
+
+
+def _in_ellipse(px: np.ndarray, py: np.ndarray, box) -> np.ndarray:
+    """Bool per point: inside the ellipse inscribed in xywh ``box``."""
+    x, y, w, h = box
+    return ((px - x - w / 2) / (w / 2)) ** 2 + ((py - y - h / 2) / (h / 2)) ** 2 <= 1.0
 
 
 # --------------------------------------------------------------- 3.3.2 step 2: the region term of a person behind others
