@@ -2,7 +2,7 @@
 says about each; the paper's rule and ours beside each (``adaptations.merged_appearance``,
 ``merged_motion``, ``split_parts``, ``visible_region``, ``contact_region``,
 ``contact_coincident``, ``covered_appearance``, ``split_appearance``, ``merged_unmixed``,
-``merged_unmixed_visible``),
+``merged_unmixed_evidence``),
 ``rules.build_rules`` picks one. Issue 35: on real detections of people walking in groups
 one measurement often holds two people, and the person matched to it took the pair's
 histogram as its own. ``docs/adaptations.md`` gives the evidence. Boxes are (N, 4) float64
@@ -19,8 +19,8 @@ from scipy.sparse import csr_array
 
 from occbench.trackers.common.spatial import meeting_pairs
 from occbench.trackers.three_hypothesis import _shares as shares
-from occbench.trackers.three_hypothesis.appearance import Histogram, towards
-from occbench.trackers.three_hypothesis.occlusion import covered_fraction
+from occbench.trackers.three_hypothesis.appearance import Histogram, bhattacharyya, towards
+from occbench.trackers.three_hypothesis.occlusion import covered_fraction, union_cover
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
     from occbench.trackers.three_hypothesis.values import Match
@@ -35,10 +35,9 @@ class MeasurementAppearance:
 
     uses_shares: ClassVar[bool] = False
     uses_partners: ClassVar[bool] = False
-    uses_mixed: ClassVar[bool] = False  # reads no partner_share
 
     def update(self, q: Histogram, p: Histogram, own: float,
-               partner: Histogram | None = None, mixed: float | None = None) -> Histogram:
+               partner: Histogram | None = None) -> Histogram:
         return p
 
 
@@ -54,10 +53,9 @@ class MergedAppearance:
 
     uses_shares: ClassVar[bool] = True
     uses_partners: ClassVar[bool] = False
-    uses_mixed: ClassVar[bool] = False  # reads no partner_share
 
     def update(self, q: Histogram, p: Histogram, own: float,
-               partner: Histogram | None = None, mixed: float | None = None) -> Histogram:
+               partner: Histogram | None = None) -> Histogram:
         if own >= 1.0:
             return p
         return towards(q, p, own) if own > 0 else q
@@ -74,48 +72,26 @@ class UnmixedAppearance(MergedAppearance):
     the partner's region (own 0), keeps q; with no partner (own 1) q = p as in the paper.
     (PBM keeps a target's parts model when a part does not match, ``update.part_threshold``:
     the colours of the person behind do not enter the model of the person in front.)
+    ``evidence`` (``merged_unmixed_evidence``): only where p's colours hold both people,
+    eq. 4 of p with the mixture above its rho with q and with q_j alone; else merged."""
 
-    ``visible`` (``merged_unmixed_visible``): j's share of p is ``mixed``, the part of the
-    measurement's ellipse j's predicted region covers outside i's own predicted region
-    (``partner_share``), not 1 - own. Eq. 3 puts i, measured, in front of the hidden j, so
-    where their regions overlap the pixels are i's: only a measurement reaching beyond i's
-    region into j's (one box fitted over both) holds j's colours. A measurement that is i's
-    own region (exact boxes beside a hidden neighbour) has ``mixed`` 0, and q moves
-    towards p by own as with ``merged_appearance``."""
-
-    visible: bool = False
+    evidence: bool = False
     uses_partners: ClassVar[bool] = True
 
-    @property
-    def uses_mixed(self) -> bool:
-        return self.visible
-
     def update(self, q: Histogram, p: Histogram, own: float,
-               partner: Histogram | None = None, mixed: float | None = None) -> Histogram:
-        if own >= 1.0 or partner is None:
+               partner: Histogram | None = None) -> Histogram:
+        if own >= 1.0 or partner is None or self.evidence and not _holds_both(q, p, own, partner):
             return MergedAppearance.update(self, q, p, own)
-        share = 1.0 - own if mixed is None else mixed
-        if share <= 0.0:
-            return MergedAppearance.update(self, q, p, own)
-        r = np.maximum(p.dense() - share * partner.dense(), 0.0)  # dense: r.sum()'s order
+        r = np.maximum(p.dense() - (1.0 - own) * partner.dense(), 0.0)  # dense: r.sum()'s order
         total = r.sum()
         return towards(q, Histogram.of(r / total), own) if own > 0 and total > 0 else q
 
 
-def partner_share(dets: np.ndarray, partners: np.ndarray, fronts: np.ndarray,
-                  samples: int = 12) -> np.ndarray:
-    """(N,) share of each measurement's inscribed ellipse (``dets`` (N, 4) xywh) lying inside
-    its partner's region (``partners`` (N, 4)) and outside the region in front of it
-    (``fronts`` (N, 4)), integrated on a ``samples`` x ``samples`` grid over the measurement
-    (as ``union_cover``)."""
-    out = np.zeros(len(dets))
-    for k, (box, partner, front) in enumerate(zip(np.asarray(dets, dtype=np.float64),
-                                                   np.asarray(partners, dtype=np.float64),
-                                                   np.asarray(fronts, dtype=np.float64))):
-        px, py = _ellipse_points(box, samples)
-        if len(px):
-            out[k] = (_in_ellipse(px, py, partner) & ~_in_ellipse(px, py, front)).mean()
-    return out
+def _holds_both(q: Histogram, p: Histogram, own: float, partner: Histogram) -> bool:
+    """Eq. 4 of p with the mixture own q + (1 - own) q_j above its rho with q and q_j."""
+    p_, q_, q_j = p.dense(), q.dense(), partner.dense()
+    mix = bhattacharyya(p_, own * q_ + (1.0 - own) * q_j)
+    return mix > max(bhattacharyya(p_, q_), bhattacharyya(p_, q_j))
 
 
 @dataclass(frozen=True)
@@ -237,37 +213,6 @@ class SplitParts:
         out = np.zeros(len(dets), dtype=bool)
         out[~matched] = union_cover(dets[~matched], dets[matched], self.samples) >= self.cover
         return out
-
-
-def union_cover(boxes: np.ndarray, others: np.ndarray, samples: int = 12) -> np.ndarray:
-    """(N,) share of each box's inscribed ellipse lying inside the union of the ellipses of
-    (M, 4) xywh ``others``, integrated on a ``samples`` x ``samples`` grid over the box."""
-    out = np.zeros(len(boxes))
-    for k, (x, y, w, h) in enumerate(np.asarray(boxes, dtype=np.float64).tolist()):
-        px, py = _ellipse_points((x, y, w, h), samples)
-        hit = np.zeros(len(px), dtype=bool)
-        for ox, oy, ow, oh in np.asarray(others, dtype=np.float64).tolist():
-            if ox >= x + w or ox + ow <= x or oy >= y + h or oy + oh <= y:
-                continue
-            hit |= _in_ellipse(px, py, (ox, oy, ow, oh))
-        out[k] = hit.mean() if len(hit) else 0.0
-    return out
-
-
-def _ellipse_points(box, samples: int) -> tuple[np.ndarray, np.ndarray]:
-    """The points of a ``samples`` x ``samples`` grid over xywh ``box`` inside its
-    inscribed ellipse (x and y arrays)."""
-    x, y, w, h = (float(v) for v in box)
-    t = (np.arange(samples) + 0.5) / samples
-    px, py = np.meshgrid(x + t * w, y + t * h)
-    inside = _in_ellipse(px, py, (x, y, w, h))
-    return px[inside], py[inside]
-
-
-def _in_ellipse(px: np.ndarray, py: np.ndarray, box) -> np.ndarray:
-    """Bool per point: inside the ellipse inscribed in xywh ``box``."""
-    x, y, w, h = box
-    return ((px - x - w / 2) / (w / 2)) ** 2 + ((py - y - h / 2) / (h / 2)) ** 2 <= 1.0
 
 
 # --------------------------------------------------------------- 3.3.2 step 2: the region term of a person behind others

@@ -206,3 +206,21 @@ def covered_fraction(boxes: np.ndarray, visible: np.ndarray, samples: int = 24,
                    np.ascontiguousarray(visible, dtype=np.float64), ia, ib, pairs is not None,
                    _grid(samples), out)  # the pairs whose boxes meet, compiled
     return out
+
+
+def union_cover(boxes: np.ndarray, others: np.ndarray, samples: int = 12) -> np.ndarray:
+    """(N,) share of each box's inscribed ellipse lying inside the union of the ellipses of
+    (M, 4) xywh ``others``, integrated on a ``samples`` x ``samples`` grid over the box."""
+    t = (np.arange(samples) + 0.5) / samples
+    out = np.zeros(len(boxes))
+    for k, (x, y, w, h) in enumerate(np.asarray(boxes, dtype=np.float64).tolist()):
+        px, py = np.meshgrid(x + t * w, y + t * h)
+        inside = ((px - x - w / 2) / (w / 2)) ** 2 + ((py - y - h / 2) / (h / 2)) ** 2 <= 1.0
+        px, py = px[inside], py[inside]
+        hit = np.zeros(len(px), dtype=bool)
+        for ox, oy, ow, oh in np.asarray(others, dtype=np.float64).tolist():
+            if ox >= x + w or ox + ow <= x or oy >= y + h or oy + oh <= y:
+                continue
+            hit |= ((px - ox - ow / 2) / (ow / 2)) ** 2 + ((py - oy - oh / 2) / (oh / 2)) ** 2 <= 1.0
+        out[k] = hit.mean() if len(hit) else 0.0
+    return out

@@ -241,12 +241,9 @@ class Adaptations:
             that holds a hidden partner moves q towards the measurement's histogram less
             the partner's q by its share (``contact.UnmixedAppearance``); False: towards
             the measurement's whole histogram p.
-        merged_unmixed_visible: with ``merged_unmixed``, the partner's share of the
-            measurement is the part of its ellipse the partner's predicted region covers
-            outside the matched person's own predicted region (eq. 3 puts the measured
-            person in front of the hidden one: only a measurement reaching beyond the
-            person into the partner holds the partner's colours; ``contact.partner_share``);
-            False: the whole part the partner's region covers (1 - own share).
+        merged_unmixed_evidence: with ``merged_unmixed``, only where the colours say the
+            measurement holds both: eq. 4 of p with the mixture above its rho with q and
+            with the partner's q alone; elsewhere ``merged_appearance``'s update.
         duplicates_together: with ``merge_duplicates``, two hypotheses of a person are one
             only if they also stay together: their velocities differ by less than half a
             pixel over the m frames of pruning (``rules.MergeTogether``); False: by place
@@ -326,7 +323,7 @@ class Adaptations:
     split_appearance: bool = False
     split_appearance_margin: float = 0.1
     merged_unmixed: bool = False
-    merged_unmixed_visible: bool = False
+    merged_unmixed_evidence: bool = False
     duplicates_together: bool = False
     own_return: bool = False
     hold_last: bool = False
@@ -355,7 +352,7 @@ class Adaptations:
                       "split_parts": bool, "merged_motion": bool,
                       "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
-                      "merged_unmixed_visible": bool,
+                      "merged_unmixed_evidence": bool,
                       "duplicates_together": bool, "own_return": bool,
                       "hold_last": bool, "measured_step": bool, "restore_still": bool,
                       "merged_line": bool, "contact_coincident": bool,
@@ -390,8 +387,7 @@ class Adaptations:
                    merged_motion=False, visible_region=False,
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
                    split_appearance=False, split_appearance_margin=0.0,
-                   merged_unmixed=False, merged_unmixed_visible=False,
-                   duplicates_together=False,
+                   merged_unmixed=False, merged_unmixed_evidence=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
                    return_floor=0.0, restore_still=False, merged_line=False,
                    merged_line_shift=0.0, contact_coincident=False,

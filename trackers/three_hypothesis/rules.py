@@ -369,7 +369,7 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
         motion_front=MergedMotion() if a.merged_motion else MeasurementMotion(),
         appearance_behind=BlendVisible() if a.blend_visible else KeepAppearance(),
         appearance_front=(MeasurementAppearance() if not a.merged_appearance
-                          else UnmixedAppearance(a.merged_unmixed_visible) if a.merged_unmixed
+                          else UnmixedAppearance(a.merged_unmixed_evidence) if a.merged_unmixed
                           else MergedAppearance()),
         covered=NearerCover(life_cycle.cover) if a.covered_appearance else AnyCover(),
         shape_behind=EstimateShape() if a.shape_estimate else PredictionShape(),

@@ -8,7 +8,7 @@ import logging
 
 import numpy as np
 
-from occbench.trackers.three_hypothesis.contact import own_shares, partner_share
+from occbench.trackers.three_hypothesis.contact import own_shares
 from occbench.trackers.three_hypothesis.graph import VISIBLE
 from occbench.trackers.three_hypothesis.motion import box_measurements, state_boxes
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction
@@ -49,7 +49,6 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
     behind = np.array(behind_r)
     z = box_measurements(dbox)
     own, partner = _own_share(S, V, O, rules, matches, hidden)
-    mixed = _mixed(S, V, O, rules, matches, own, partner, setting)
     Rs = rules.motion_front.noise(np.array([persons[i].R for i in keys]),
                                   np.where(behind, 1.0, own))
     predicted = S.Xp[idx], S.Pp[idx]
@@ -75,8 +74,7 @@ def update_matched(S: Predictions, V: Measurements, O: Occlusions, A: Matching, 
         if not behind_r[r]:
             if not covered[r]:
                 partner_q = persons[partners[r]].q if partners[r] >= 0 else None
-                person.q = rules.appearance_front.update(person.q, p[d], shares[r], partner_q,
-                                                         mixed[r])
+                person.q = rules.appearance_front.update(person.q, p[d], shares[r], partner_q)
             shape = dbox[r]
         else:
             shape = rules.shape_behind.region(estimate[r], S.boxes[n])
@@ -213,41 +211,12 @@ def _partner_centres(S: Predictions, V: Measurements, O: Occlusions, rules: Rule
     partner = np.full(len(matches), -1)
     own_shares(matches, O.pairs, S.owners, hidden, S.boxes, V.boxes, O.delta, partner)
     for r in np.flatnonzero(partner >= 0).tolist():
-        best = _partner_region(S, V, O, int(partner[r]), matches[r].det)
+        nodes, d = np.flatnonzero(S.owners == partner[r]), matches[r].det
+        b = S.boxes[nodes]  # |S_m & S_d| = delta (|S_m| + |S_d|) / 2 (eq. 5)
+        cover = O.delta[nodes][:, [d]].toarray().ravel() * (b[:, 2] * b[:, 3]
+                                                             + V.boxes[d, 2] * V.boxes[d, 3])
+        best = b[int(np.argmax(cover))]
         out[r] = best[0] + best[2] / 2, best[1] + best[3] / 2
-    return out
-
-
-def _partner_region(S: Predictions, V: Measurements, O: Occlusions, partner: int,
-                    d: int) -> np.ndarray:
-    """(4,) xywh: the predicted region of person ``partner`` that covers most of
-    measurement ``d``."""
-    nodes = np.flatnonzero(S.owners == partner)
-    b = S.boxes[nodes]  # |S_m & S_d| = delta (|S_m| + |S_d|) / 2 (eq. 5)
-    cover = O.delta[nodes][:, [d]].toarray().ravel() * (b[:, 2] * b[:, 3]
-                                                        + V.boxes[d, 2] * V.boxes[d, 3])
-    return b[int(np.argmax(cover))]
-
-
-def _mixed(S: Predictions, V: Measurements, O: Occlusions, rules: Rules,
-           matches: list[Match], own: np.ndarray, partner: np.ndarray,
-           setting: Setting) -> list[float | None]:
-    """Per matched person, the share of its measurement's ellipse its hidden partner's
-    predicted region covers outside its own predicted region (``contact.partner_share``),
-    for a front rule that reads it (``uses_mixed``); None elsewhere."""
-    out: list[float | None] = [None] * len(matches)
-    if not rules.appearance_front.uses_mixed:
-        return out
-    rows = np.flatnonzero((own < 1.0) & (partner >= 0))
-    if not len(rows):
-        return out
-    dets = np.array([matches[r].det for r in rows.tolist()])
-    partners = np.array([_partner_region(S, V, O, int(partner[r]), matches[r].det)
-                         for r in rows.tolist()])
-    fronts = S.boxes[[matches[r].node for r in rows.tolist()]]
-    shares = partner_share(V.boxes[dets], partners, fronts, setting.occlusion.region_samples)
-    for r, share in zip(rows.tolist(), shares.tolist()):
-        out[r] = share
     return out
 
 

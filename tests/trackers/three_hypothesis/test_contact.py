@@ -30,9 +30,8 @@ from occbench.trackers.three_hypothesis.contact import (
     VisibleRegion,
     WholeRegion,
     own_shares,
-    partner_share,
-    union_cover,
 )
+from occbench.trackers.three_hypothesis.occlusion import union_cover
 from occbench.trackers.three_hypothesis.rules import AppearanceMargin, build_rules
 from occbench.trackers.three_hypothesis.values import Match
 
@@ -315,53 +314,37 @@ def test_own_shares_name_the_partner_covering_most():
                                       csr_array(dense)).tolist()
 
 
-def test_unmixed_visible_takes_out_only_the_partner_beyond_the_person():
-    """``merged_unmixed_visible``: the partner's share of p is ``mixed``, what its region
-    covers beyond the matched person's own. Mixed 0 (a measurement that is the person's own
-    region): q moves towards p by own as the merged form does; mixed 0.5: the partner's half
-    taken out as the unmixed form does at own 0.5; none given: 1 - own."""
-    q, q_j = Histogram.of(np.array([0.8, 0.0, 0.2])), Histogram.of(np.array([0.0, 1.0, 0.0]))
-    p = Histogram.of(np.array([0.5, 0.5, 0.0]))
-    rule = UnmixedAppearance(visible=True)
-    assert np.array_equal(rule.update(q, p, 0.5, q_j, 0.0).dense(),
-                          MergedAppearance().update(q, p, 0.5).dense())
-    assert np.allclose(rule.update(q, p, 0.5, q_j, 0.5).dense(), [0.9, 0.0, 0.1])
-    assert np.array_equal(rule.update(q, p, 0.5, q_j).dense(),
-                          UnmixedAppearance().update(q, p, 0.5, q_j).dense())
-    assert rule.uses_mixed and not UnmixedAppearance().uses_mixed
-    assert not MergedAppearance.uses_mixed and not MeasurementAppearance.uses_mixed
+def test_unmixed_evidence_unmixes_only_a_measurement_whose_colours_hold_both():
+    """``merged_unmixed_evidence``: q red, the hidden partner's q_j mostly green, own 0.5. A
+    measurement half q, half q_j fits the mixture (rho 1) better than either alone: the
+    partner's half is taken out as ``merged_unmixed`` does. A measurement that is the person's
+    red alone fits q better than the mixture: q moves towards p by own, as
+    ``merged_appearance`` does."""
+    q, q_j = Histogram.of(np.array([1.0, 0.0, 0.0])), Histogram.of(np.array([0.2, 0.8, 0.0]))
+    both, alone = Histogram.of(np.array([0.6, 0.4, 0.0])), Histogram.of(np.array([0.9, 0.0, 0.1]))
+    rule = UnmixedAppearance(evidence=True)
+    assert np.array_equal(rule.update(q, both, 0.5, q_j).dense(),
+                          UnmixedAppearance().update(q, both, 0.5, q_j).dense())
+    assert np.array_equal(rule.update(q, alone, 0.5, q_j).dense(),
+                          MergedAppearance().update(q, alone, 0.5).dense())
+    assert not np.array_equal(UnmixedAppearance().update(q, alone, 0.5, q_j).dense(),
+                              MergedAppearance().update(q, alone, 0.5).dense())
     h = EllipseHistogrammer()
-    assert build_rules(Adaptations(merged_unmixed=True, merged_unmixed_visible=True),
+    assert build_rules(Adaptations(merged_unmixed=True, merged_unmixed_evidence=True),
                        h).appearance_front == UnmixedAppearance(True)
     assert build_rules(Adaptations(merged_unmixed=True), h).appearance_front == \
         UnmixedAppearance(False)
-    assert "merged_unmixed_visible" not in (Adaptations().changed()
-                                            + Adaptations.paper().changed())
+    assert "merged_unmixed_evidence" not in (Adaptations().changed()
+                                             + Adaptations.paper().changed())
 
 
-def test_partner_share_is_the_partner_beyond_the_person_in_front():
-    """A measurement that is the person's own region (20 x 60) with a partner region
-    overlapping its right half holds nothing of the partner beyond the person: 0. A
-    measurement fitted over both (40 x 60 from the person's left edge to the partner's
-    right) holds the partner's right part: about the right quarter of its ellipse minus
-    what the person covers. A partner region that misses the measurement: 0."""
-    person = np.array([100.0, 50, 20, 60])
-    partner = np.array([110.0, 50, 20, 60])
-    merged = np.array([100.0, 50, 30, 60])
-    far = np.array([300.0, 50, 20, 60])
-    share = partner_share(np.array([person, merged, merged]), np.array([partner, partner, far]),
-                          np.array([person, person, person]), 24)
-    assert share[0] == 0.0 and share[2] == 0.0
-    assert 0.15 < share[1] < 0.4
-
-
-def _walker_colours_after_passing(unmixed: bool, visible: bool = False) -> tuple[float, float]:
+def _walker_colours_after_passing(unmixed: bool, evidence: bool = False) -> tuple[float, float]:
     """A red walker P (28 x 80, 2 px/frame right) passes in front of a blue person Q
     standing (24 x 64 at x 100); from frame 22 to 33 the detector gives one box over both
     (their union) and misses Q. Returns rho of P's and of Q's q (eq. 4) with P's own
     measurement histogram at frame 34, where P is measured alone again."""
     tracker = RetaTracker(adaptations=Adaptations(merged_unmixed=unmixed,
-                                                  merged_unmixed_visible=visible))
+                                                  merged_unmixed_evidence=evidence))
     q_box = np.array([100.0, 30, 24, 64])
     for t in range(35):
         p_box = np.array([40.0 + 2.0 * t, 40, 28, 80])
@@ -384,15 +367,15 @@ def test_a_walker_in_front_keeps_its_colours_through_a_merged_box():
     """``merged_unmixed``: through twelve frames of the pair's box, the walker's q absorbs
     the standing person's blue with the merged form (it moves towards the pair's histogram
     by its own share each frame); unmixed, the partner's share is taken out and the walker's
-    q stays nearer its own red when it is measured alone again; with
-    ``merged_unmixed_visible``, only the part beyond the walker's predicted region."""
+    q stays nearer its own red when it is measured alone again."""
     merged, unmixed = (_walker_colours_after_passing(u) for u in (False, True))
     assert unmixed[0] > merged[0] + 0.03  # 0.94 against 0.89
     assert unmixed[0] > unmixed[1]
-    # merged_unmixed_visible: P's predicted region follows the union box (M corrected by
-    # it), so only the part of the union beyond it is Q's: a little is taken out
-    visible = _walker_colours_after_passing(True, True)
-    assert merged[0] < visible[0] < unmixed[0]  # 0.892 < 0.900 < 0.938
+    # merged_unmixed_evidence: the union's histogram (both people and the floor between
+    # them) fits the walker's q better than the mixture in most of the twelve frames, so
+    # it unmixes in a few: between the two
+    evidence = _walker_colours_after_passing(True, True)
+    assert merged[0] < evidence[0] < unmixed[0]  # 0.8919 < 0.8927 < 0.938
 
 
 def test_coincident_people_seen_at_t_minus_1_share_their_appearance_term():
