@@ -24,8 +24,8 @@ from occbench.trackers.common.checks import require
 from occbench.trackers.three_hypothesis._kernels import blend, ellipse_histograms
 from occbench.trackers.three_hypothesis.features import bhattacharyya
 
-__all__ = ["EllipseHistogrammer", "Histogram", "bhattacharyya", "columns", "snap_boxes",
-           "towards"]
+__all__ = ["EllipseHistogrammer", "Histogram", "bhattacharyya", "columns", "holds_both",
+           "snap_boxes", "towards"]
 
 _NO_MASK = np.zeros((1, 1), dtype=bool)
 """The kernel's placeholder foreground when there is none."""
@@ -56,6 +56,14 @@ def towards(q: Histogram, p: Histogram, v: float) -> Histogram:
     """A new q' = (1 - v) q + v p (v > 0), compiled over the bins either occupies: the bits
     of numpy's dense expression (``_kernels.blend``)."""
     return Histogram(*blend(q.bins, q.values, p.bins, p.values, v), q.size)
+
+
+def holds_both(q: Histogram, p: Histogram, own: float, partner: Histogram) -> bool:
+    """Eq. 4 of p with the mixture own q + (1 - own) q_j above its rho with q and q_j
+    alone: p's colours hold both people (``contact.UnmixedAppearance``'s evidence)."""
+    p_, q_, q_j = p.dense(), q.dense(), partner.dense()
+    mix = bhattacharyya(p_, own * q_ + (1.0 - own) * q_j)
+    return mix > max(bhattacharyya(p_, q_), bhattacharyya(p_, q_j))
 
 
 def columns(histograms: list[Histogram], support: np.ndarray) -> np.ndarray:

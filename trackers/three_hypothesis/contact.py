@@ -18,8 +18,9 @@ import numpy as np
 from scipy.sparse import csr_array
 
 from occbench.trackers.common.spatial import meeting_pairs
+from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis import _shares as shares
-from occbench.trackers.three_hypothesis.appearance import Histogram, bhattacharyya, towards
+from occbench.trackers.three_hypothesis.appearance import Histogram, holds_both, towards
 from occbench.trackers.three_hypothesis.occlusion import covered_fraction, union_cover
 
 if TYPE_CHECKING:  # values imports state, which imports the rules built from this module
@@ -80,18 +81,11 @@ class UnmixedAppearance(MergedAppearance):
 
     def update(self, q: Histogram, p: Histogram, own: float,
                partner: Histogram | None = None) -> Histogram:
-        if own >= 1.0 or partner is None or self.evidence and not _holds_both(q, p, own, partner):
+        if own >= 1.0 or partner is None or self.evidence and not holds_both(q, p, own, partner):
             return MergedAppearance.update(self, q, p, own)
         r = np.maximum(p.dense() - (1.0 - own) * partner.dense(), 0.0)  # dense: r.sum()'s order
         total = r.sum()
         return towards(q, Histogram.of(r / total), own) if own > 0 and total > 0 else q
-
-
-def _holds_both(q: Histogram, p: Histogram, own: float, partner: Histogram) -> bool:
-    """Eq. 4 of p with the mixture own q + (1 - own) q_j above its rho with q and q_j."""
-    p_, q_, q_j = p.dense(), q.dense(), partner.dense()
-    mix = bhattacharyya(p_, own * q_ + (1.0 - own) * q_j)
-    return mix > max(bhattacharyya(p_, q_), bhattacharyya(p_, q_j))
 
 
 @dataclass(frozen=True)
@@ -339,7 +333,8 @@ class RegionAtSplit:
 
     def matches(self, rows: np.ndarray, stages: np.ndarray, rho: Callable,
                 pairs: np.ndarray, owners: np.ndarray, delta: csr_array,
-                merged: np.ndarray, hidden: np.ndarray, mu_rho: float) -> np.ndarray:
+                merged: np.ndarray, hidden: np.ndarray, mu_rho: float,
+                regions: tuple | None = None) -> np.ndarray:
         return rows
 
 
@@ -354,20 +349,24 @@ class AppearanceAtSplit:
     the appearance (eq. 4), which the occlusion did not take from the hidden person, decides
     (the two measurements exchanged when rho_ib + rho_ja > rho_ia + rho_jb + ``margin``:
     like PBM's multiple-response test, colours that fit the exchange only a little better
-    are ambiguous and decide nothing). Nobody else's match changes."""
+    are ambiguous and decide nothing). Nobody else's match changes. ``parted`` > 0
+    (``split_appearance_parted``): only where stage 1 gives i a measurement that does not
+    continue i's region at t - 1 (IoU below it), as no part of a box over two does."""
 
     margin: float = 0.0
+    parted: float = 0.0
     uses_merged: ClassVar[bool] = True
 
     def matches(self, rows: np.ndarray, stages: np.ndarray, rho: Callable,
                 pairs: np.ndarray, owners: np.ndarray, delta: csr_array,
-                merged: np.ndarray, hidden: np.ndarray, mu_rho: float) -> np.ndarray:
+                merged: np.ndarray, hidden: np.ndarray, mu_rho: float,
+                regions: tuple | None = None) -> np.ndarray:
         """(K, 3) rows (person, measurement, node) of a frame's matches, with ``stages``
         (K,); ``rho`` (person, measurement) -> eq. 4; ``pairs`` (K', 2) node rows of O,
         ``owners`` (B,); ``delta`` sparse (B, D) eq. 5; per person (P,) bool ``merged``
         (matched at t - 1 to a measurement that held a hidden partner) and ``hidden``
-        (confirmed, unmatched at t - 1). Returns the rows, a pair's two measurements
-        exchanged where the colours say so (a new array; ``rows`` when none is)."""
+        (confirmed, unmatched at t - 1); ``regions`` (persons, (D, 4) measurements). Returns
+        the rows, the pair's measurements exchanged where the colours say so."""
         out = rows
         at = {int(p): k for k, p in enumerate(rows[:, 0].tolist()) if stages[k] == 1}
         done = set()
@@ -384,10 +383,17 @@ class AppearanceAtSplit:
             to_i = delta[nj][:, [di]].toarray()[:, 0]
             own, other = rho(i, di) + rho(j, dj), rho(i, dj) + rho(j, di)
             if (di == dj or min(rho(i, dj), rho(j, di)) < mu_rho or not to_j.max() > 0
-                    or not to_i.max() > 0 or other <= own + self.margin):
+                    or not to_i.max() > 0 or other <= own + self.margin
+                    or self.parted > 0 and self._continued(i if merged[i] else j,
+                                                           di if merged[i] else dj, regions)):
                 continue
             if out is rows:
                 out = rows.copy()
             out[at[i]] = (i, dj, ni[np.argmax(to_j)])  # the node stage 1 would take
             out[at[j]] = (j, di, nj[np.argmax(to_i)])
         return out
+
+    def _continued(self, k: int, d: int, regions: tuple) -> bool:
+        """Person ``k``'s region at t - 1 is continued by measurement ``d``: IoU >= parted."""
+        persons, dets = regions
+        return bool(iou_matrix(persons[k].shape[None], dets[d][None])[0, 0] >= self.parted)

@@ -237,13 +237,14 @@ class Adaptations:
             much: the exchange is taken only when eq. 4's sum over the exchanged pairs
             exceeds stage 1's by more than this margin (PBM's multiple-response test: an
             ambiguous appearance decides nothing); 0: whenever it is larger.
+        split_appearance_parted: with ``split_appearance``, only where the measurement stage
+            1 gives the merged person has IoU below this with its region at t - 1; 0: always.
         merged_unmixed: with ``merged_appearance``, the person matched to a measurement
             that holds a hidden partner moves q towards the measurement's histogram less
             the partner's q by its share (``contact.UnmixedAppearance``); False: towards
             the measurement's whole histogram p.
-        merged_unmixed_evidence: with ``merged_unmixed``, only where the colours say the
-            measurement holds both: eq. 4 of p with the mixture above its rho with q and
-            with the partner's q alone; elsewhere ``merged_appearance``'s update.
+        merged_unmixed_evidence: with ``merged_unmixed``, only where p's colours hold both
+            (``appearance.holds_both``); elsewhere ``merged_appearance``'s update.
         duplicates_together: with ``merge_duplicates``, two hypotheses of a person are one
             only if they also stay together: their velocities differ by less than half a
             pixel over the m frames of pruning (``rules.MergeTogether``); False: by place
@@ -322,6 +323,7 @@ class Adaptations:
     measured_hypothesis_sigmas: float = 2.0
     split_appearance: bool = False
     split_appearance_margin: float = 0.1
+    split_appearance_parted: float = 0.0
     merged_unmixed: bool = False
     merged_unmixed_evidence: bool = False
     duplicates_together: bool = False
@@ -339,23 +341,20 @@ class Adaptations:
     def __post_init__(self) -> None:
         coerce(self, {"gate_sigmas": float, "report_spread": float, "report_support": float,
                       "shape_gate": float, "early_confirm_score": float,
-                      "measured_hypothesis_sigmas": float,
-                      "split_appearance_margin": float, "return_floor": float,
-                      "merged_line_shift": float,
-                      "report_memory": float, "blend_visible": bool,
-                      "shape_estimate": bool, "foreground_histograms": bool,
+                      "measured_hypothesis_sigmas": float, "split_appearance_margin": float,
+                      "return_floor": float, "merged_line_shift": float,
+                      "split_appearance_parted": float, "report_memory": float,
+                      "blend_visible": bool, "shape_estimate": bool, "foreground_histograms": bool,
                       "foreground_support": bool, "appearance_margin": bool,
                       "measured_velocity": bool, "foreground_presence": bool,
                       "tentative_stage1_only": bool, "inherit_hidden_id": bool,
                       "merge_duplicates": bool, "correct_behind": bool, "filter_size": bool,
-                      "contact_region": bool, "merged_appearance": bool,
-                      "split_parts": bool, "merged_motion": bool,
-                      "visible_region": bool, "measured_hypothesis": bool,
+                      "contact_region": bool, "merged_appearance": bool, "split_parts": bool,
+                      "merged_motion": bool, "visible_region": bool, "measured_hypothesis": bool,
                       "split_appearance": bool, "merged_unmixed": bool,
-                      "merged_unmixed_evidence": bool,
-                      "duplicates_together": bool, "own_return": bool,
-                      "hold_last": bool, "measured_step": bool, "restore_still": bool,
-                      "merged_line": bool, "contact_coincident": bool,
+                      "merged_unmixed_evidence": bool, "duplicates_together": bool,
+                      "own_return": bool, "hold_last": bool, "measured_step": bool,
+                      "restore_still": bool, "merged_line": bool, "contact_coincident": bool,
                       "measured_still": bool, "covered_appearance": bool})
         at_least("adaptations", 0, gate_sigmas=self.gate_sigmas,
                  report_exposed=self.report_exposed, report_spread=self.report_spread,
@@ -364,7 +363,8 @@ class Adaptations:
                  early_confirm=self.early_confirm, report_memory=self.report_memory,
                  measured_hypothesis_sigmas=self.measured_hypothesis_sigmas,
                  split_appearance_margin=self.split_appearance_margin,
-                 merged_line_shift=self.merged_line_shift)
+                 merged_line_shift=self.merged_line_shift,
+                 split_appearance_parted=self.split_appearance_parted)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
              early_confirm_score=self.early_confirm_score, return_floor=self.return_floor)
@@ -386,7 +386,7 @@ class Adaptations:
                    merged_appearance=False, split_parts=False,
                    merged_motion=False, visible_region=False,
                    measured_hypothesis=False, measured_hypothesis_sigmas=0.0,
-                   split_appearance=False, split_appearance_margin=0.0,
+                   split_appearance=False, split_appearance_margin=0.0, split_appearance_parted=0.0,
                    merged_unmixed=False, merged_unmixed_evidence=False, duplicates_together=False,
                    own_return=False, hold_last=False, measured_step=False,
                    return_floor=0.0, restore_still=False, merged_line=False,

@@ -359,7 +359,8 @@ def build_rules(adaptations: Adaptations, histograms: EllipseHistogrammer,
                  else AppearanceAtContact()),
         parts=SplitParts(life_cycle.cover) if a.split_parts else AnyLeftover(),
         region=VisibleRegion() if a.visible_region else WholeRegion(),
-        split=(AppearanceAtSplit(a.split_appearance_margin) if a.split_appearance
+        split=(AppearanceAtSplit(a.split_appearance_margin, a.split_appearance_parted)
+               if a.split_appearance
                else RegionAtSplit()),
         line=(MeasuredLine(life_cycle.m, a.measured_hypothesis_sigmas, a.measured_step,
                            a.merged_line, a.merged_line_shift, a.measured_still)

@@ -110,7 +110,7 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
                                      lambda: _gate_pairs(inp, left, free))]
     m = _merge(found, n_p, n_d)
     if rules.split.uses_merged and len(O.pairs) and len(m.matches):
-        _split(S, O, rules, m, sqrt_q, sqrt_p, association.mu_rho)
+        _split(S, V, O, rules, m, sqrt_q, sqrt_p, association.mu_rho)
     return Matching({i: Match(d, n, s, r) for (i, d, n), s, r
                      in zip(m.matches.tolist(), m.stages.tolist(), m.rho.tolist())},
                     m.unmatched_measurements)
@@ -159,8 +159,8 @@ def _associate_block(s: _Inputs, rows: np.ndarray, cols: np.ndarray, stages: tup
     return _Block(m, rows, cols, nodes)
 
 
-def _split(S: Predictions, O: Occlusions, rules: Rules, m: Matches, sqrt_q: np.ndarray,
-           sqrt_p: np.ndarray, mu_rho: float) -> None:
+def _split(S: Predictions, V: Measurements, O: Occlusions, rules: Rules, m: Matches,
+           sqrt_q: np.ndarray, sqrt_p: np.ndarray, mu_rho: float) -> None:
     """``rules.split`` on the frame's matches ``m`` (its rows and rho, in place): a person
     seen at t - 1 (a visible node) is ``merged`` when its measurement held a hidden
     partner, ``hidden`` when confirmed and seen at t - 1 nowhere."""
@@ -174,7 +174,7 @@ def _split(S: Predictions, O: Occlusions, rules: Rules, m: Matches, sqrt_q: np.n
         return float(np.clip(sqrt_q[i] @ sqrt_p[d], 0.0, 1.0))
 
     rows = rules.split.matches(m.matches, m.stages, rho, O.pairs, S.owners, O.delta,
-                               merged, hidden, mu_rho)
+                               merged, hidden, mu_rho, (persons, V.boxes))
     for k in np.flatnonzero((rows != m.matches).any(axis=1)).tolist():
         m.rho[k] = rho(int(rows[k, 0]), int(rows[k, 1]))
     m.matches = rows

@@ -210,13 +210,17 @@ def test_own_shares_equal_the_per_row_definition_bit_for_bit():
 
 
 def _split_takers(rule, merged: list[bool], hidden: list[bool], stage: int = 1,
-                  delta: list | None = None, rho_10: float = 0.7) -> list[int]:
+                  delta: list | None = None, rho_10: float = 0.7,
+                  region: list | None = None) -> list[int]:
     """pets1-400 sil frame 166 in miniature: persons 0 and 1 in O, two measurements meet
     both. Colours: person 0 rho 0.6 for both, person 1 0.7 for measurement 0 and 0.5 for 1;
     regions: person 0 delta 0.49 / 0.76, person 1 0.24 / 0.83 (person 0's M dragged by the
     merged box, person 1's hypothesis lagging). Stage 1 (the paper's cost) gives each the
     other's measurement; returns the measurement each person takes after ``rule``
-    (``rho_10``: person 1's rho for measurement 0)."""
+    (``rho_10``: person 1's rho for measurement 0; ``region``: person 0's at t - 1, person
+    1's is measurement 1's box)."""
+    from types import SimpleNamespace
+
     from occbench.trackers.three_hypothesis.association import associate
 
     sqrt_q = np.array([[0.6, 0.6, np.sqrt(0.28)],
@@ -231,8 +235,10 @@ def _split_takers(rule, merged: list[bool], hidden: list[bool], stage: int = 1,
     def rho(i, d):
         return float(sqrt_q[i] @ sqrt_p[d])
 
+    shapes = [np.array(boxes[0] if region is None else region, dtype=float), boxes[1]]
+    persons = [SimpleNamespace(shape=s) for s in shapes]
     rows = rule.matches(m.matches, np.full(2, stage), rho, pairs, owners, csr_array(delta),
-                        np.array(merged), np.array(hidden), 0.3)
+                        np.array(merged), np.array(hidden), 0.3, (persons, boxes))
     return rows[np.argsort(rows[:, 0]), 1].tolist()
 
 
@@ -270,6 +276,22 @@ def test_where_a_merged_pair_parts_colours_that_win_by_little_decide_nothing():
     h = EllipseHistogrammer()
     assert build_rules(Adaptations(split_appearance=True), h).split == AppearanceAtSplit(0.1)
     assert Adaptations.paper().split_appearance_margin == 0.0
+
+
+def test_where_a_merged_pair_parts_only_a_measurement_that_does_not_continue_it():
+    """``split_appearance_parted``: person 0's region at t - 1 was its measurement 0 of now
+    (IoU 1: a person's own box continued): no exchange at 0.5. A region 10 px to the right
+    of it (IoU 0.33 with measurement 0: a box over two that parted) is exchanged as before;
+    at 0 (off) either is."""
+    parted = AppearanceAtSplit(0.1, 0.5)
+    assert _split_takers(parted, [True, False], [False, True]) == [0, 1]
+    assert _split_takers(parted, [True, False], [False, True], region=[110, 50, 20, 60]) == [1, 0]
+    assert _split_takers(AppearanceAtSplit(0.1), [True, False], [False, True]) == [1, 0]
+    h = EllipseHistogrammer()
+    assert build_rules(Adaptations(split_appearance=True, split_appearance_parted=0.5),
+                       h).split == parted
+    assert "split_appearance_parted" not in (Adaptations().changed()
+                                             + Adaptations.paper().changed())
 
 
 def test_merged_measurement_unmixed_takes_out_the_hidden_partners_colours():
