@@ -321,9 +321,9 @@ class Adaptations:
     visible_region: bool = False
     measured_hypothesis: bool = True
     measured_hypothesis_sigmas: float = 2.0
-    split_appearance: bool = False
+    split_appearance: bool = True
     split_appearance_margin: float = 0.1
-    split_appearance_parted: float = 0.0
+    split_appearance_parted: float = 0.5
     merged_unmixed: bool = False
     merged_unmixed_evidence: bool = False
     duplicates_together: bool = False

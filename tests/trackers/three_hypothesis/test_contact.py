@@ -262,7 +262,7 @@ def test_where_a_merged_pair_parts_the_colours_say_who_is_whose():
     assert isinstance(build_rules(Adaptations(split_appearance=True), h).split,
                       AppearanceAtSplit)
     assert "split_appearance" not in Adaptations.paper().changed()
-    assert "split_appearance" not in Adaptations().changed()  # off until measured
+    assert "split_appearance" in Adaptations().changed()  # on since the fifteenth round
 
 
 def test_where_a_merged_pair_parts_colours_that_win_by_little_decide_nothing():
@@ -274,7 +274,8 @@ def test_where_a_merged_pair_parts_colours_that_win_by_little_decide_nothing():
                          rho_10=0.55) == [0, 1]
     assert _split_takers(AppearanceAtSplit(0.1), [True, False], [False, True]) == [1, 0]
     h = EllipseHistogrammer()
-    assert build_rules(Adaptations(split_appearance=True), h).split == AppearanceAtSplit(0.1)
+    assert build_rules(Adaptations(), h).split == AppearanceAtSplit(0.1, 0.5)
+    assert build_rules(Adaptations(split_appearance_parted=0.0), h).split == AppearanceAtSplit(0.1)
     assert Adaptations.paper().split_appearance_margin == 0.0
 
 
@@ -290,8 +291,8 @@ def test_where_a_merged_pair_parts_only_a_measurement_that_does_not_continue_it(
     h = EllipseHistogrammer()
     assert build_rules(Adaptations(split_appearance=True, split_appearance_parted=0.5),
                        h).split == parted
-    assert "split_appearance_parted" not in (Adaptations().changed()
-                                             + Adaptations.paper().changed())
+    assert "split_appearance_parted" in Adaptations().changed()
+    assert "split_appearance_parted" not in Adaptations.paper().changed()
 
 
 def test_merged_measurement_unmixed_takes_out_the_hidden_partners_colours():

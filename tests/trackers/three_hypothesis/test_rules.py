@@ -204,4 +204,5 @@ def test_groups_are_frozen_and_paper_mode_changes_nothing_else():
         "measured_velocity", "foreground_presence", "tentative_stage1_only",
         "inherit_hidden_id", "merge_duplicates", "correct_behind", "filter_size",
         "early_confirm", "report_memory", "merged_appearance", "measured_hypothesis",
-        "measured_hypothesis_sigmas", "split_appearance_margin", "measured_step"]
+        "measured_hypothesis_sigmas", "split_appearance", "split_appearance_margin",
+        "split_appearance_parted", "measured_step"]

@@ -339,8 +339,8 @@ def test_paper_mode_turns_every_adaptation_off():
         "max_hidden", "measured_velocity", "appearance_margin", "foreground_presence",
         "tentative_stage1_only", "inherit_hidden_id", "merge_duplicates", "correct_behind",
         "filter_size", "early_confirm", "report_memory", "merged_appearance",
-        "measured_hypothesis", "measured_hypothesis_sigmas", "split_appearance_margin",
-        "measured_step"}
+        "measured_hypothesis", "measured_hypothesis_sigmas", "split_appearance",
+        "split_appearance_margin", "split_appearance_parted", "measured_step"}
     for group in ("association", "occlusion", "appearance", "motion", "life_cycle"):
         assert getattr(paper, group) == getattr(ours, group), group
 
