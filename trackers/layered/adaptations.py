@@ -214,11 +214,11 @@ class Adaptations:
         reported_first_head: with ``reported_first``, a lost target still competes for a
             candidate whose head band (top 1/7 of its box, PBM 2.1's head part) shares rows
             with that of its last box (false: for none).
-        contact_frozen: a matched part whose candidate rectangle lies this share under another
-            target's box (found, or reported unfound) keeps its model as a part not matching
-            (``contact.FrozenAtContact``; PBM 1-2; 0: off, PBM 4.2's update by p_j alone).
-        contact_colour: such a part keeps only its colour histograms
-            (``contact.ColourAtContact``; 0: off); one of the two rules.
+        contact_frozen, contact_colour: a matched part whose candidate rectangle lies this
+            share under another target's box keeps its model as a part not matching / only its
+            colour histograms (``contact.FrozenAtContact`` / ``ColourAtContact``; PBM 1-2; 0:
+            off); one of the two. contact_occluded: a match whose candidate box lies this share
+            under another's is occluded for PBM 4.2's global update (``ContactOcclusion``).
         coarse_search: PBM 3.1's head-anchored boxes of a searched pair are searched coarse
             to fine (every other width and height, then the neighbours of the best of
             those; ``box_search._coarse_group``), not all scored (paper: every box of eqs.
@@ -290,22 +290,22 @@ class Adaptations:
     reported_first_head: bool = False
     contact_frozen: float = 0.0
     contact_colour: float = 0.0
+    contact_occluded: float = 0.0
 
     def __post_init__(self) -> None:
-        require("adaptations.model_spread", self.model_spread > 0, "must be > 0",
-                self.model_spread)
+        require("adaptations.model_spread", self.model_spread > 0, "must be > 0", self.model_spread)
         unit("adaptations", min_support=self.min_support, relative_match=self.relative_match,
              report_support=self.report_support, rival_match=self.rival_match,
              lone_shrink=self.lone_shrink, reported_behind=self.reported_behind,
-             contact_frozen=self.contact_frozen, contact_colour=self.contact_colour)
+             contact_frozen=self.contact_frozen, contact_colour=self.contact_colour,
+             contact_occluded=self.contact_occluded, fold_twins_own=self.fold_twins_own,
+             reported_first_stay=self.reported_first_stay)
         require("adaptations.gate_max_fraction", self.gate_max_fraction > 0, "must be > 0",
                 self.gate_max_fraction)
         at_least("adaptations", 0, exit_misses=self.exit_misses, early_confirm=self.early_confirm,
                  reupdate=self.reupdate, fold_twins=self.fold_twins,
                  large_head_pyramid=self.large_head_pyramid)
         at_least("adaptations", 1, large_head_peaks=self.large_head_peaks)
-        unit("adaptations", fold_twins_own=self.fold_twins_own,
-             reported_first_stay=self.reported_first_stay)
         require("adaptations.reported_first_stay",
                 self.reported_first_stay == 0 or self.reported_first,
                 "needs adaptations.reported_first", self.reported_first_stay)
@@ -353,7 +353,7 @@ class Adaptations:
                                        "lone_shrink", "lone_shrink_shape", "leaving_unreported",
                                        "fold_twins_own", "reported_behind",
                                        "reported_first_stay", "contact_frozen",
-                                       "contact_colour"),
+                                       "contact_colour", "contact_occluded"),
                                       float),
                       **dict.fromkeys(("motion_compensation", "lone_growth", "report_predicted",
                                        "gap_division", "hold_size", "blob_box_ratio",
@@ -391,8 +391,8 @@ class Adaptations:
                    lone_shrink_narrow=False, merge_found_elsewhere=False,
                    distinct_detections=False, merge_recent_holder=False,
                    reported_first=False, reported_first_stay=0.0, reported_first_head=False,
-                   apart_undivided=False, contact_frozen=0.0,
-                   contact_colour=0.0)
+                   apart_undivided=False, contact_frozen=0.0, contact_colour=0.0,
+                   contact_occluded=0.0)
 
     def changed(self) -> list[str]:
         """Names of the fields that differ from the paper's values."""

@@ -76,3 +76,30 @@ class ColourAtContact:
         update_parts(model, cand, m, rates)
         model.hsv[m.rows] = np.where(kept, hsv, model.hsv[m.rows])
         model.xyz[m.rows] = np.where(kept, xyz, model.xyz[m.rows])
+
+
+class SizeOcclusion:
+    """PBM 3.1: a match is occluded (its global model window-averaged, PBM 4.2) when its
+    candidate was carved from a region off the predicted size by the threshold."""
+
+    def occluded(self, targets: Targets, rows: np.ndarray, dof: np.ndarray, carved: np.ndarray,
+                 occluder_misses: int) -> np.ndarray:
+        return carved
+
+
+@dataclass(frozen=True)
+class ContactOcclusion:
+    """``contact_occluded``: a match is also occluded for PBM 4.2's global update (the six
+    DOF window-averaged, alpha and beta not re-measured) when at least ``share`` of its
+    candidate's box (``dof`` (M, 6) of the targets at ``rows``) lies under another target's
+    box, found or unfound for at most ``occluder_misses`` frames, at its global model before
+    this frame's update (``model_update.contact_parts`` on the box as one part)."""
+
+    share: float
+
+    def occluded(self, targets: Targets, rows: np.ndarray, dof: np.ndarray, carved: np.ndarray,
+                 occluder_misses: int) -> np.ndarray:
+        boxes = np.ascontiguousarray(np.asarray(dof, dtype=np.float64)[:, None, [0, 1, 4, 5]])
+        return carved | contact_parts(targets.dof, targets.misses, np.asarray(rows, dtype=np.int64),
+                                      boxes, np.arange(len(rows), dtype=np.int64),
+                                      int(occluder_misses), float(self.share))[:, 0]

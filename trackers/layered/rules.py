@@ -20,7 +20,8 @@ from occbench.trackers.common.assignment import assign
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.layered.adaptations import Adaptations
 from occbench.trackers.layered.confirmation import InARow, IsolatedEarly
-from occbench.trackers.layered.contact import AsMatched, ColourAtContact, FrozenAtContact
+from occbench.trackers.layered.contact import (AsMatched, ColourAtContact, ContactOcclusion,
+                                              FrozenAtContact, SizeOcclusion)
 from occbench.trackers.layered.evidence import (HiddenEvidence, MissesBound, ReportedBehind,
                                                box_foreground)
 from occbench.trackers.layered.exits import (
@@ -324,6 +325,7 @@ class Rules(NamedTuple):
     behind: MissesBound | ReportedBehind | ReportedByRecord  # past reporting.max_misses? (ours)
     lost: AllAtOnce | ReportedFirst  # lost targets' share of the candidates (PBM 4 step 4)
     contact: AsMatched | FrozenAtContact | ColourAtContact  # which parts learn (PBM 4.2)
+    window: SizeOcclusion | ContactOcclusion  # whose global model is window-averaged (4.2)
 
 
 def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Rules:
@@ -362,6 +364,7 @@ def build_rules(a: Adaptations, max_misses: int = ReportParams.max_misses) -> Ru
               else AllAtOnce()),
         contact=(FrozenAtContact(a.contact_frozen) if a.contact_frozen > 0 else
                  ColourAtContact(a.contact_colour) if a.contact_colour > 0 else AsMatched()),
+        window=ContactOcclusion(a.contact_occluded) if a.contact_occluded > 0 else SizeOcclusion(),
     )
 
 

@@ -282,7 +282,9 @@ class PBMTracker:
         mt = found.matches[:, 0]
         dof, pj, occl, ks = found.chosen
         measured = ~occl if fg is not None else np.zeros(len(mt), dtype=bool)
-        shift = self.rules.reupdate.update(targets, mt, dof, measured, occl, pj, u.part_threshold)
+        window = self.rules.window.occluded(targets, mt, dof, occl, self.reporting.max_misses)
+        shift = self.rules.reupdate.update(targets, mt, dof, measured, window, pj, u.part_threshold)
+        targets.occluded[mt] = occl  # PBM 3.1's carved match (exits read it), whatever averaged
         # then the parts models, from the feature arrays the candidates were measured in
         dof_t = targets.dof
         n_occl = np.count_nonzero(occl)

@@ -11,7 +11,8 @@ import pbm_scenes as S
 import pytest
 
 from occbench.trackers.layered import Adaptations, PBMTracker
-from occbench.trackers.layered.contact import AsMatched, ColourAtContact, FrozenAtContact
+from occbench.trackers.layered.contact import (AsMatched, ColourAtContact, ContactOcclusion,
+                                              FrozenAtContact, SizeOcclusion)
 from occbench.trackers.layered.dynamics import Gate
 from occbench.trackers.layered.model_update import contact_parts
 from occbench.trackers.layered.parts import PartFeatureExtractor
@@ -99,6 +100,19 @@ def test_the_switch_is_off_in_paper_mode_and_by_default_and_checked():
             Adaptations(**{name: 1.5})
     with pytest.raises(ValueError, match="contact_colour"):
         Adaptations(contact_frozen=0.5, contact_colour=0.5)
+    assert isinstance(build_rules(Adaptations()).window, SizeOcclusion)
+    assert isinstance(build_rules(Adaptations(contact_occluded=0.5)).window, ContactOcclusion)
+    assert "contact_occluded" not in Adaptations().changed() + Adaptations.paper().changed()
+
+
+def _walker_passing() -> S.Scene:
+    """Person 1 walks in front of the standing person 2."""
+    a = S.walk(70, (30, 70), (3.0, 0.0), (30, 100))
+    b = S.walk(70, (120, 62), (0.0, 0.0), (32, 110))
+    return S.Scene(300, 220, [
+        S.Person(1, a, shirt=(30, 30, 190), pants=(100, 70, 30), depth=1.0),
+        S.Person(2, b, shirt=(40, 170, 40), pants=(50, 50, 50), hair=(30, 90, 150), depth=1.5),
+    ], seed=4)
 
 
 def _crossing(tracker: PBMTracker) -> tuple[int, int, int]:
@@ -106,12 +120,7 @@ def _crossing(tracker: PBMTracker) -> tuple[int, int, int]:
     frame): parts flagged frozen whose colour model changed, parts flagged frozen though
     they match (p_j >= 0.4), and parts whose colour model changed while their rectangle lay
     at least half under the other target's box."""
-    a = S.walk(70, (30, 70), (3.0, 0.0), (30, 100))
-    b = S.walk(70, (120, 62), (0.0, 0.0), (32, 110))
-    scene = S.Scene(300, 220, [
-        S.Person(1, a, shirt=(30, 30, 190), pants=(100, 70, 30), depth=1.0),
-        S.Person(2, b, shirt=(40, 170, 40), pants=(50, 50, 50), hair=(30, 90, 150), depth=1.5),
-    ], seed=4)
+    scene = _walker_passing()
     changed_frozen = matched_frozen = learnt_under = 0
     for k in range(scene.length):
         img, lab = scene.render(k)
@@ -151,3 +160,42 @@ def test_a_walker_in_front_of_a_standing_person_keeps_its_covered_parts():
     changed, matched_frozen, learnt_under = _crossing(PBMTracker(
         adaptations=Adaptations(contact_colour=0.5)))
     assert matched_frozen == 0 and learnt_under == 0
+
+
+def test_a_match_at_a_contact_is_occluded_for_the_global_update():
+    tg, _ = _two_targets()
+    # target 1's candidate box: 0.5 of it under target 2's box, then only 0.25
+    dof = np.array([[50.0, 54.0, 66.0, 74.0, 32.0, 40.0], [42.0, 54.0, 58.0, 74.0, 32.0, 40.0]])
+    carved = np.array([False, False])
+    assert SizeOcclusion().occluded(tg, np.array([0, 0]), dof, carved, 5) is carved
+    occluded = ContactOcclusion(0.5).occluded(tg, np.array([0, 0]), dof, carved, 5)
+    assert occluded.tolist() == [True, False]
+    assert ContactOcclusion(0.2).occluded(tg, np.array([0, 0]), dof, carved, 5).tolist() == [
+        True, True]
+    # a carved match stays occluded; an occluder unfound too long is no contact
+    tg.misses[1] = 6
+    assert ContactOcclusion(0.2).occluded(tg, np.array([0, 0]), dof, np.array([True, False]),
+                                          5).tolist() == [True, False]
+    assert not ContactOcclusion(0.2).occluded(tg, np.array([0, 0]), dof, carved, 5).any()
+
+
+def test_a_contact_averages_the_global_model_and_keeps_the_carved_flag():
+    """The walker in front of the standing person: with ``contact_occluded`` his box is the
+    window's mean in some frame (not the candidate's), while ``targets.occluded`` still says
+    only whether the match was carved (PBM 3.1), as without the rule."""
+    scene = _walker_passing()
+    runs = {}
+    for share in (0.0, 0.5):
+        tracker = PBMTracker(adaptations=Adaptations(contact_occluded=share))
+        boxes, flags = [], []
+        for k in range(scene.length):
+            img, lab = scene.render(k)
+            tracker.update(img, scene.detections(k, lab), lab)
+            boxes.append(tracker.targets.dof.copy())
+            flags.append(tracker.targets.occluded.copy())
+        runs[share] = boxes, flags
+    differ = [k for k in range(scene.length) if runs[0.0][0][k].shape != runs[0.5][0][k].shape
+              or not np.array_equal(runs[0.0][0][k], runs[0.5][0][k])]
+    assert differ
+    k = differ[0]  # up to the first frame they differ in, the carved flags agree
+    assert all(np.array_equal(runs[0.0][1][j], runs[0.5][1][j]) for j in range(k + 1))

@@ -840,7 +840,7 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
                                        AfterPrediction, R.NoContest, R.LoneShrink, R.FoundElsewhere,
                                        R.BorderExit, R.ReportAnywhere, R.KeepStacked,
                                        R.FilterPrediction, R.MissesBound, R.AllAtOnce,
-                                       R.AsMatched]
+                                       R.AsMatched, R.SizeOcclusion]
     # report_support, reupdate, contested_template, leaving_unreported, fold_twins,
     # measured_velocity, reported_behind, reported_first and contact_frozen off
     assert [type(r) for r in paper] == [R.LastModels, R.AnyAboveThreshold, R.AnyCandidate,
@@ -849,7 +849,7 @@ def test_adaptations_pick_the_papers_rule_when_off_and_ours_when_on():
                                         R.OccludedSmaller, R.AllHolders, R.PredictedExit,
                                         R.ReportAnywhere,
                                         R.KeepStacked, R.FilterPrediction, R.MissesBound,
-                                        R.AllAtOnce, R.AsMatched]
+                                        R.AllAtOnce, R.AsMatched, R.SizeOcclusion]
     # relative match: target 0 matched at 0.8 last frame takes no 0.3 (< 0.5 x 0.8)
     tg = Targets(Gate(3.0, 0.5, 2.0, 1.15, 6.0), (0.5, 0.2, 0.5), (0.2, 0.02, 0.5), 4, 3, 4)
     tg.misses, tg.score = np.array([0, 3]), np.array([0.8, 0.9])
