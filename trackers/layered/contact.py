@@ -1,4 +1,5 @@
-"""Which parts of a matched target learn from its candidate (PBM 4.2's parts update).
+"""PBM 4.2's model update at a contact: which parts of a matched target learn from its
+candidate, and whose global model is window-averaged.
 
 The paper updates a part that matches (p_j, eq. 12, at or above the threshold) and keeps a
 part that does not ("all features remain unchanged"); its overview says more: "whenever a
@@ -9,7 +10,10 @@ part holds the neighbour's pixels, and a running average moves the model towards
 neighbour: ``FrozenAtContact`` (``adaptations.contact_frozen``) keeps a part whose
 candidate rectangle lies, by at least a share, under another target's box, as a part that
 does not match; ``ColourAtContact`` (``adaptations.contact_colour``) keeps only its colour
-histograms there, its area, perimeter and centroid learning as PBM 4.2 says.
+histograms there, its area, perimeter and centroid learning as PBM 4.2 says. 4.2 also
+window-averages the global model "in the presence of occlusions": ``SizeOcclusion`` reads
+occlusion as PBM 3.1's size test (a carved candidate), ``ContactOcclusion``
+(``adaptations.contact_occluded``) as that or a candidate box under another target's box.
 """
 
 from __future__ import annotations

@@ -193,8 +193,7 @@ def contact_parts(dof: np.ndarray, misses: np.ndarray, rows: np.ndarray, c_parts
     of ``c_parts`` (N, 5, 4) xywh, at least ``share`` of whose rectangle (the candidate's)
     lies under another target's box (``_under_others``: found, or unfound for at most
     ``occluder_misses`` frames, at its global model ``dof``): a part at a contact
-    (``adaptations.contact_frozen``, PBM 2 and 4.2: a part's model is kept unchanged while
-    a major occlusion lies over it)."""
+    (``contact``: ``adaptations.contact_frozen``, ``contact_colour``, ``contact_occluded``)."""
     out = np.zeros((rows.shape[0], c_parts.shape[1]), np.bool_)
     for q in range(rows.shape[0]):
         r, k = rows[q], ks[q]

@@ -6,7 +6,8 @@ names the step of PBM it replaces; ``docs/adaptations.md`` gives the evidence. (
 parts are ``adaptations.StaleParts`` or None; the pruning adaptations live in
 ``selection.MultipleResponsePruning``, the blob-head ones in ``candidates``, PBM 3.1's
 smaller region in ``smaller``, the exits in ``exits``, confirmation in
-``confirmation``, the parts a contact freezes in ``contact``.) Boxes are (N, 4) float64 xywh pixels.
+``confirmation``, the model update at a contact in ``contact``.) Boxes are (N, 4)
+float64 xywh pixels.
 """
 
 from __future__ import annotations
