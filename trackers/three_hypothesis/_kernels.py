@@ -349,3 +349,94 @@ def line_misses(hist: np.ndarray, sizes: np.ndarray, frame: float, cx: np.ndarra
         out[2, k] = x2 + (x2 - x1) * s - cx[k]
         out[3, k] = y2 + (y2 - y1) * s - cy[k]
         lo += n
+
+
+@numba.njit(cache=True)
+def stage1_costs(rho: np.ndarray, owners: np.ndarray, starts: np.ndarray, mu_rho: np.ndarray,
+                 admissible: np.ndarray, has_admissible: bool, delta: np.ndarray,
+                 margin: bool, cost: np.ndarray, best: np.ndarray, pairs: np.ndarray) -> int:
+    """Stage 1 of MaxSimilarity (3.3.2 steps 1-4) up to the Hungarian step, in one pass:
+    ``association._stage1``'s (P, D) person costs into ``cost`` (min over each person's
+    nodes of (1 - rho) + (1 - delta) (eqs. 4-5) where delta > 0, rho >= mu_rho and the pair
+    is ``admissible``, else +inf) and the first node attaining each into ``best``; with
+    ``margin``, ``association.appearance_margin``'s term in place of rho (cost + (rho -
+    margin)). rho (P, D) clipped to [0, 1]; owners (B,) sorted person of each node; starts
+    (P,) each person's first node; mu_rho (P,); admissible (B, D) bool, read when
+    ``has_admissible``; delta (B, D). The operations of the numpy definition, one by one:
+    the same bits. Returns the number of allowed pairs (cost <= 2) written to ``pairs``
+    (row-major, as ``np.argwhere``) when no two of them share a person or a measurement
+    (``association._hungarian``'s immediate assignment), else -1."""
+    P, D = rho.shape
+    for i in range(P):
+        for j in range(D):
+            cost[i, j] = np.inf
+            best[i, j] = starts[i]
+    for b in range(owners.shape[0]):
+        i = owners[b]
+        for j in range(D):
+            r = rho[i, j]
+            if delta[b, j] > 0 and r >= mu_rho[i] and (not has_admissible or admissible[b, j]):
+                c = (1.0 - r) + (1.0 - delta[b, j])
+                if c < cost[i, j]:  # the first node attaining the minimum keeps it
+                    cost[i, j] = c
+                    best[i, j] = b
+    if margin:
+        _margin_costs(rho, cost)
+    k = 0
+    per_col = np.zeros(D, np.int64)
+    for i in range(P):
+        in_row = 0
+        for j in range(D):
+            if cost[i, j] <= 2.0:  # finite and <= 2
+                in_row += 1
+                per_col[j] += 1
+                if in_row > 1 or per_col[j] > 1:
+                    return -1
+                pairs[k, 0], pairs[k, 1] = i, j
+                k += 1
+    return k
+
+
+@numba.njit(cache=True, inline="always")
+def _top_two(x: np.ndarray) -> tuple[float, float]:
+    """The last two of ``np.sort(x)`` (2 entries at least): the largest and the next."""
+    first, second = -np.inf, -np.inf
+    for v in x:
+        if v > first:
+            first, second = v, first
+        elif v > second:
+            second = v
+    return first, second
+
+
+@numba.njit(cache=True)
+def _margin_costs(rho: np.ndarray, cost: np.ndarray) -> None:
+    """cost += rho - a with a = ``association.appearance_margin``(rho, cost finite): r =
+    rho where the person cost is finite, else 0; a = clip(r - max(rival along the column,
+    rival along the row), 0, 1), a rival the largest other entry (0 alone), as numpy's
+    sorted second-to-last: the same bits."""
+    P, D = rho.shape
+    r = np.empty((P, D))
+    for i in range(P):
+        for j in range(D):
+            r[i, j] = rho[i, j] if cost[i, j] < np.inf else 0.0
+    rival = np.zeros((P, D))
+    if P >= 2:
+        for j in range(D):
+            first, second = _top_two(r[:, j])
+            for i in range(P):
+                rival[i, j] = second if r[i, j] >= first else first
+    if D >= 2:
+        for i in range(P):
+            first, second = _top_two(r[i])
+            for j in range(D):
+                v = second if r[i, j] >= first else first
+                if not rival[i, j] >= v:  # np.maximum
+                    rival[i, j] = v
+    for i in range(P):
+        for j in range(D):
+            a = r[i, j] - rival[i, j]
+            if a == a:  # np.clip: NaN kept, else max with 0 (a > 0 ? a : 0), then min with 1
+                a = a if a > 0.0 else 0.0
+                a = a if a < 1.0 else 1.0
+            cost[i, j] = cost[i, j] + (rho[i, j] - a)

@@ -17,6 +17,7 @@ import numpy as np
 
 from occbench.trackers.common.assignment import assign_min_cost
 from occbench.trackers.geometry import centre_distance_matrix
+from occbench.trackers.three_hypothesis._kernels import stage1_costs
 from occbench.trackers.three_hypothesis.features import region_similarity
 
 
@@ -37,6 +38,31 @@ class Matches:
     rho: np.ndarray
     unmatched_persons: np.ndarray
     unmatched_measurements: np.ndarray
+
+
+def absolute_appearance(rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
+    """3.3.2 as written: a stage-1 pair's appearance term is rho itself (eq. 4)."""
+    return rho
+
+
+def appearance_margin(rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
+    """``appearance_margin``'s term (``rules.AppearanceMargin``): what rho says for a pair
+    against its rivals, rho_ij - max(max_{k != i} rho_kj, max_{l != j} rho_il) over the
+    admissible pairs, floored at 0. (P, D) from rho (P, D) in [0, 1] and admissible (P, D)
+    bool (pairs stage 1 may choose; the others count as rho 0). The numpy definition;
+    ``associate`` runs it compiled (``_kernels.stage1_costs``)."""
+    r = np.where(admissible, rho, 0.0)
+    rival = np.maximum(_rival(r, axis=0), _rival(r, axis=1))
+    return np.clip(r - rival, 0.0, 1.0)
+
+
+def _rival(x: np.ndarray, axis: int) -> np.ndarray:
+    """For every entry of x, the largest other entry along ``axis`` (0 when alone)."""
+    if x.shape[axis] < 2:
+        return np.zeros_like(x)
+    s = np.sort(x, axis=axis)
+    first, second = np.take(s, [-1], axis=axis), np.take(s, [-2], axis=axis)
+    return np.where(x >= first, second, first)
 
 
 def _person_costs(
@@ -130,8 +156,9 @@ def associate(
     if n_persons == 0 or n_meas == 0:
         return Matches(np.zeros((0, 3), dtype=int), np.zeros(0, dtype=int), np.zeros(0),
                        np.arange(n_persons), np.arange(n_meas))
-    pairs = _Pairs.of(node_boxes, owners, sqrt_q, measurement_boxes, sqrt_p, mu_rho, admissible)
-    m1, best1 = _stage1(pairs, delta, evidence)
+    rho = _rho(sqrt_q, sqrt_p)
+    m1, best1, pairs = _stage1_compiled(node_boxes, owners, rho, measurement_boxes, mu_rho,
+                                        admissible, delta, evidence)
     matched_p = np.zeros(n_persons, dtype=bool)
     matched_d = np.zeros(n_meas, dtype=bool)
     matched_p[m1[:, 0]] = True
@@ -139,6 +166,8 @@ def associate(
     eligible = ~matched_p if gated is None else ~matched_p & np.asarray(gated, dtype=bool)
     m2, best2 = np.zeros((0, 2), dtype=int), None
     if eligible.any() and not matched_d.all():
+        if pairs is None:  # the compiled stage 1 made none
+            pairs = _Pairs.of(node_boxes, owners, rho, measurement_boxes, mu_rho, admissible)
         m2, best2 = _stage2(pairs, eligible, matched_d, mu_g, gate, barred)
         matched_p[m2[:, 0]] = True
         matched_d[m2[:, 1]] = True
@@ -146,13 +175,9 @@ def associate(
     m12 = np.concatenate([m1, m2])
     nodes = np.concatenate([m[:, 0] if best is None else best[m[:, 0], m[:, 1]]
                             for m, best in ((m1, best1), (m2, best2))])
-    return Matches(
-        _rows(m12[:, 0], m12[:, 1], nodes),
-        np.array([1] * len(m1) + [2] * len(m2), dtype=int),
-        pairs.rho[m12[:, 0], m12[:, 1]],
-        (~matched_p).nonzero()[0],
-        (~matched_d).nonzero()[0],
-    )
+    return Matches(_rows(m12[:, 0], m12[:, 1], nodes),
+                   np.array([1] * len(m1) + [2] * len(m2), dtype=int), rho[m12[:, 0], m12[:, 1]],
+                   (~matched_p).nonzero()[0], (~matched_d).nonzero()[0])
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,13 +196,11 @@ class _Pairs:
     ok: np.ndarray
 
     @classmethod
-    def of(cls, node_boxes: np.ndarray, owners: np.ndarray, sqrt_q: np.ndarray,
-           measurement_boxes: np.ndarray, sqrt_p: np.ndarray, mu_rho: float | np.ndarray,
+    def of(cls, node_boxes: np.ndarray, owners: np.ndarray, rho: np.ndarray,
+           measurement_boxes: np.ndarray, mu_rho: float | np.ndarray,
            admissible: np.ndarray | None) -> _Pairs:
-        """``associate``'s arguments of the same names, rho computed (eq. 4)."""
-        n_persons = len(sqrt_q)
-        rho = sqrt_q @ sqrt_p.T  # (P, D) eq. 4: sum_u sqrt(q_u p_u)
-        np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)  # clipped to [0, 1]
+        """``associate``'s arguments of the same names and rho (P, D) (``_rho``)."""
+        n_persons = len(rho)
         one_node = len(owners) == n_persons  # nobody has hypotheses: node k is person k
         rho_nodes = rho if one_node else rho[owners]  # (B, D)
         if np.ndim(mu_rho):  # one threshold per person
@@ -188,6 +211,48 @@ class _Pairs:
         starts = (np.arange(n_persons) if one_node
                   else np.searchsorted(owners, np.arange(n_persons)))
         return cls(node_boxes, measurement_boxes, owners, starts, rho, rho_nodes, appearance_ok)
+
+
+def _rho(sqrt_q: np.ndarray, sqrt_p: np.ndarray) -> np.ndarray:
+    """(P, D) eq. 4, rho = sum_u sqrt(q_u p_u), clipped to [0, 1]."""
+    rho = sqrt_q @ sqrt_p.T
+    return np.minimum(np.maximum(rho, 0.0, out=rho), 1.0, out=rho)
+
+
+def _stage1_compiled(node_boxes: np.ndarray, owners: np.ndarray, rho: np.ndarray,
+                     measurement_boxes: np.ndarray, mu_rho: float | np.ndarray,
+                     admissible: np.ndarray | None, delta: np.ndarray | None,
+                     evidence: Callable | None
+                     ) -> tuple[np.ndarray, np.ndarray | None, _Pairs | None]:
+    """``_stage1`` over ``_Pairs.of``'s pairs: with the evidence None, ``absolute_appearance``
+    (the same costs: cost + (rho - rho)) or ``appearance_margin``, in one compiled pass
+    (``_kernels.stage1_costs``, the same bits), the Hungarian method only where pairs
+    compete; any other evidence by ``_stage1`` itself. Returns stage 1's rows, its best
+    nodes and the ``_Pairs`` made (None: none was)."""
+    if delta is None:
+        delta = region_similarity(node_boxes, measurement_boxes)  # (B, D) eq. 5
+    if not (evidence is None or evidence is absolute_appearance
+            or evidence is appearance_margin):
+        pairs = _Pairs.of(node_boxes, owners, rho, measurement_boxes, mu_rho, admissible)
+        return (*_stage1(pairs, delta, evidence), pairs)
+    n_persons, n_meas = rho.shape
+    one_node = len(owners) == n_persons
+    starts = (np.arange(n_persons) if one_node
+              else np.searchsorted(owners, np.arange(n_persons)))
+    mu = np.empty(n_persons)
+    mu[:] = mu_rho  # one threshold, or one per person
+    cost = np.empty((n_persons, n_meas))
+    best = np.empty((n_persons, n_meas), dtype=np.int64)
+    rows = np.empty((min(n_persons, n_meas), 2), dtype=np.int64)
+    k = stage1_costs(rho, owners, starts, mu,
+                     _NO_PAIRS if admissible is None else admissible, admissible is not None,
+                     delta, evidence is appearance_margin, cost, best, rows)
+    m1 = rows[:k] if k >= 0 else assign_min_cost(cost, 2.0)[0]
+    return m1, None if one_node else best, None
+
+
+_NO_PAIRS = np.zeros((1, 1), dtype=bool)
+"""The kernel's placeholder ``admissible`` when every pair is."""
 
 
 def _checked_owners(owners: np.ndarray, n_persons: int) -> np.ndarray:

@@ -16,6 +16,7 @@ import numpy as np
 from occbench.trackers.common.measured_velocity import FilterPrediction, MeasuredVelocity
 from occbench.trackers.geometry import iou_matrix
 from occbench.trackers.three_hypothesis.appearance import EllipseHistogrammer, Histogram, towards
+from occbench.trackers.three_hypothesis.association import absolute_appearance, appearance_margin
 from occbench.trackers.three_hypothesis.contact import (
     AnyCover, AnyLeftover, AppearanceAtContact, AppearanceAtSplit, MeasurementAppearance,
     MeasurementMotion, MergedAppearance, MergedMotion, NearerCover, RegionAtContact, RegionAtSplit,
@@ -96,8 +97,7 @@ class KalmanGate:
 class AbsoluteAppearance:
     """3.3.2 as written: a stage-1 pair's appearance term is rho itself (eq. 4)."""
 
-    def evidence(self, rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
-        return rho
+    evidence = staticmethod(absolute_appearance)  # (rho, admissible) -> rho
 
 
 @dataclass(frozen=True)
@@ -107,21 +107,7 @@ class AppearanceMargin:
     the admissible pairs, floored at 0: people who all look alike earn no pair its place,
     so the region term (eq. 5) decides; a pair with no rival keeps rho."""
 
-    def evidence(self, rho: np.ndarray, admissible: np.ndarray) -> np.ndarray:
-        """(P, D) margins from rho (P, D) in [0, 1] and admissible (P, D) bool (pairs
-        stage 1 may choose; the others count as rho 0)."""
-        r = np.where(admissible, rho, 0.0)
-        rival = np.maximum(_rival(r, axis=0), _rival(r, axis=1))
-        return np.clip(r - rival, 0.0, 1.0)
-
-
-def _rival(x: np.ndarray, axis: int) -> np.ndarray:
-    """For every entry of x, the largest other entry along ``axis`` (0 when alone)."""
-    if x.shape[axis] < 2:
-        return np.zeros_like(x)
-    s = np.sort(x, axis=axis)
-    first, second = np.take(s, [-1], axis=axis), np.take(s, [-2], axis=axis)
-    return np.where(x >= first, second, first)
+    evidence = staticmethod(appearance_margin)  # (rho (P, D), admissible (P, D)) -> (P, D)
 
 
 # --------------------------------------------------------------- 3.3.3: a person matched behind others

@@ -108,7 +108,7 @@ def max_similarity(S: Predictions, V: Measurements, O: Occlusions, pi: Pi, rules
         found += [_associate_block(inp, left[r], free[c], stages=(2,))
                   for r, c in blocks(len(left), len(free),
                                      lambda: _gate_pairs(inp, left, free))]
-    m = _merge(found, n_p, n_d)
+    m = found[0].matches if len(parts) == 1 else _merge(found, n_p, n_d)  # one: the frame's
     if rules.split.uses_merged and len(O.pairs) and len(m.matches):
         _split(S, V, O, rules, m, sqrt_q, sqrt_p, association.mu_rho)
     return Matching({i: Match(d, n, s, r) for (i, d, n), s, r

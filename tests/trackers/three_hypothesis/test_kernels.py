@@ -151,3 +151,71 @@ def test_eq3_kernel_gives_the_verdicts_of_depth_order():
         assert got.tolist() == want
         if n > 2:
             assert 0 in want[:1]  # the tie is undecided
+
+
+def test_stage1_kernel_has_the_bits_of_the_numpy_stage1():
+    """``association._stage1_compiled`` (``_kernels.stage1_costs``) against ``_stage1`` over
+    ``_Pairs.of`` (the numpy definition), bit for bit: the person costs, the best nodes and
+    the rows, with the evidence None / ``absolute_appearance`` / ``appearance_margin``, one
+    threshold or one per person, admissible pairs or all; random frames with persons of one
+    to three nodes, ties (rho and delta on a coarse grid), no meeting pairs, one person, one
+    measurement, isolated pairs (no Hungarian step) and competing ones."""
+    from occbench.trackers.three_hypothesis import association as a
+
+    rng = np.random.default_rng(38)
+    cases = []
+    for trial in range(120):
+        P, D = int(rng.integers(1, 9)), int(rng.integers(1, 9))
+        nodes = rng.integers(1, 4, P) if trial % 3 else np.ones(P, dtype=int)
+        owners = np.repeat(np.arange(P), nodes)
+        grid = trial % 2 == 0  # values on a grid of tenths: ties everywhere
+        rho = rng.integers(0, 11, (P, D)) / 10 if grid else rng.random((P, D))
+        delta = rng.integers(0, 11, (len(owners), D)) / 10 if grid else rng.random((len(owners), D))
+        delta[rng.random(delta.shape) < 0.5] = 0.0  # most pairs do not meet
+        if trial % 7 == 0:
+            delta[:] = 0.0
+        if trial % 5 == 0:  # isolated pairs: one meeting pair per person at most
+            delta[:] = 0.0
+            for i in range(min(P, D)):
+                delta[np.flatnonzero(owners == i)[0], i] = 0.5
+        mu = float(rng.choice([0.0, 0.3, 0.5])) if trial % 4 else rng.random(P) * 0.6
+        admissible = rng.random(delta.shape) < 0.8 if trial % 6 == 1 else None
+        cases.append((owners, rho, delta, mu, admissible))
+    boxes = np.zeros((0, 4))
+    for owners, rho, delta, mu, admissible in cases:
+        for evidence in (None, a.absolute_appearance, a.appearance_margin):
+            pairs = a._Pairs.of(boxes, owners, rho, boxes, mu, admissible)
+            want, want_best = a._stage1(pairs, delta, evidence)
+            got, got_best, made = a._stage1_compiled(boxes, owners, rho.copy(), boxes, mu,
+                                                     admissible, delta, evidence)
+            assert made is None  # compiled, not by _stage1
+            assert got.tobytes() == want.astype(np.int64).tobytes()
+            assert (got_best is None) == (want_best is None)
+            if want_best is not None:
+                assert got_best.tolist() == want_best.tolist()
+
+
+def test_stage1_kernel_costs_equal_the_numpy_costs():
+    """The kernel's (P, D) person costs themselves, bit for bit, against ``_person_costs`` of
+    the numpy stage 1's matrix plus ``appearance_margin``'s term; a margin the kernel
+    dropped (cost = rho + 0) or a cost with rho and delta swapped would fail."""
+    from occbench.trackers.three_hypothesis import association as a
+    from occbench.trackers.three_hypothesis._kernels import stage1_costs
+
+    rng = np.random.default_rng(5)
+    for trial in range(60):
+        P, D = int(rng.integers(1, 7)), int(rng.integers(1, 7))
+        owners = np.repeat(np.arange(P), rng.integers(1, 3, P))
+        rho = rng.random((P, D))
+        delta = rng.random((len(owners), D)) * (rng.random((len(owners), D)) < 0.6)
+        starts = np.searchsorted(owners, np.arange(P))
+        for margin in (False, True):
+            ok = rho[owners] >= 0.2
+            c1 = np.where((delta > 0) & ok, (1.0 - rho[owners]) + (1.0 - delta), np.inf)
+            want = np.minimum.reduceat(c1, starts, axis=0)
+            if margin:
+                want = want + (rho - a.appearance_margin(rho, np.isfinite(want)))
+            cost, best = np.empty((P, D)), np.empty((P, D), np.int64)
+            stage1_costs(rho, owners, starts, np.full(P, 0.2), np.zeros((1, 1), bool), False,
+                         delta, margin, cost, best, np.empty((min(P, D), 2), np.int64))
+            assert cost.tobytes() == want.tobytes()
