@@ -54,6 +54,24 @@ def _lone_growth(kinds: np.ndarray, regions: np.ndarray, heads_in_region: np.nda
 
 
 @numba.njit(cache=True)
+def in_gates(boxes: np.ndarray, gates: np.ndarray) -> np.ndarray:  # pragma: no cover (compiled)
+    """PBM 3's gate: (T, N) bool, candidate n (xywh ``boxes`` (N, 4)) in target t's gate
+    (xywh ``gates`` (T, 4)): its box centre ``box[:2] + 0.5 box[2:]`` lies in it, borders
+    included (False where a gate is NaN)."""
+    T, N = gates.shape[0], boxes.shape[0]
+    inside = np.zeros((T, N), np.bool_)
+    for t in range(T):
+        gx0, gy0 = gates[t, 0], gates[t, 1]
+        gx1, gy1 = gx0 + gates[t, 2], gates[t, 3] + gy0
+        for n in range(N):
+            cx = boxes[n, 0] + 0.5 * boxes[n, 2]
+            cy = boxes[n, 1] + 0.5 * boxes[n, 3]
+            if gx0 <= cx <= gx1 and gy0 <= cy <= gy1:
+                inside[t, n] = True
+    return inside
+
+
+@numba.njit(cache=True)
 def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
                 heads_in_region: np.ndarray, grown_heads: np.ndarray, gates: np.ndarray,
                 pred_wh: np.ndarray, kinds: np.ndarray, dof: np.ndarray, misses: np.ndarray,
@@ -62,7 +80,7 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     """Gating (PBM 3) and the occlusion test's pairs (PBM 3.1) of T targets and N candidates.
 
     A candidate is in target t's gate (xywh ``gates[t]``) when its box centre
-    ``box[:2] + 0.5 box[2:]`` lies in it (borders included). ``kinds`` (T, N) (0, +1
+    ``box[:2] + 0.5 box[2:]`` lies in it (borders included; ``in_gates``). ``kinds`` (T, N) (0, +1
     larger, -1 smaller; ``search.occlusion_kinds``) is set to +1 in place where it is 0
     and the candidate's region holds several heads (a merge) when ``several_heads_merge``
     (an adaptation; the paper's occlusion test is by size alone, PBM 3.1). The occluded pairs keep only
@@ -91,18 +109,13 @@ def gated_pairs(boxes: np.ndarray, regions: np.ndarray, heads: np.ndarray,
     T, N = kinds.shape
     if search_overlap > 0:
         _lone_growth(kinds, regions, grown_heads, dof, present, search_overlap)
-    inside = np.zeros((T, N), np.bool_)
+    inside = in_gates(boxes, gates)
     n_in, n_occ = 0, 0
     for t in range(T):
-        gx0, gy0 = gates[t, 0], gates[t, 1]
-        gx1, gy1 = gx0 + gates[t, 2], gates[t, 3] + gy0
         for n in range(N):
             if several_heads_merge and kinds[t, n] == 0 and heads_in_region[n] > 1:
                 kinds[t, n] = 1
-            cx = boxes[n, 0] + 0.5 * boxes[n, 2]
-            cy = boxes[n, 1] + 0.5 * boxes[n, 3]
-            if gx0 <= cx <= gx1 and gy0 <= cy <= gy1:
-                inside[t, n] = True
+            if inside[t, n]:
                 if kinds[t, n] == 0:
                     n_in += 1
                 else:

@@ -24,7 +24,7 @@ class OccludedSmaller:
     threshold is the target partly occluded; its predicted-size box is aligned on the head."""
 
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, pred_wh: np.ndarray,
-              present: np.ndarray) -> None:
+              present: np.ndarray, inside: np.ndarray | None = None) -> None:
         """Leaves ``kinds`` (T, N) as the size test set them."""
 
 
@@ -54,10 +54,13 @@ class LoneShrink:
     narrow: bool = False
 
     def apply(self, kinds: np.ndarray, cand: Candidates, targets: Targets, pred_wh: np.ndarray,
-              present: np.ndarray) -> None:
+              present: np.ndarray, inside: np.ndarray | None = None) -> None:
         """Sets kinds[t, n] = 0 in place where the smaller detection n has no occluder of t
-        (and, with ``shape``, has t's shape)."""
-        ti, n = np.nonzero((kinds < 0) & ~cand.blob[None, :])
+        (and, with ``shape``, has t's shape), for the pairs ``inside`` (T, N) bool marks
+        (the targets' gates, ``gating.in_gates``: no later step reads a kind outside them;
+        None: every pair)."""
+        smaller = (kinds < 0) & ~cand.blob[None, :]
+        ti, n = np.nonzero(smaller if inside is None else smaller & inside)
         if self.shape > 0 and len(ti):
             region = cand.region[n]
             own = region[:, 3] * pred_wh[ti, 0] >= self.shape * pred_wh[ti, 1] * region[:, 2]

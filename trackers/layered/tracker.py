@@ -54,7 +54,7 @@ from occbench.trackers.layered.candidates import (CandidateFinder, DetectorHeads
                                                   NoHeldDetections, ProfileHeads, checked_inputs)
 from occbench.trackers.layered.dynamics import Gate
 from occbench.trackers.layered.frame_blocks import Association, interacting_pairs, merged
-from occbench.trackers.layered.gating import OcclusionSearch, pairs_in_gates
+from occbench.trackers.layered.gating import OcclusionSearch, in_gates, pairs_in_gates
 from occbench.trackers.layered.model_update import chosen_candidates, survivors
 from occbench.trackers.layered.params import (
     CandidateParams,
@@ -255,7 +255,7 @@ class PBMTracker:
         targets.last_gate = gates  # the gates this frame's candidates were validated in
         kinds = occlusion_kinds(cand.region[:, 2:], pred_wh, self.search.occlusion_threshold)
         live = targets.misses <= self.reporting.max_misses
-        self.rules.smaller.apply(kinds, cand, targets, pred_wh, live)
+        self.rules.smaller.apply(kinds, cand, targets, pred_wh, live, in_gates(cand.box, gates))
         self.rules.merge.apply(kinds, cand, targets, live, self.search.overlap)
         present = live & self.adaptations.lone_growth
         pairs = pairs_in_gates(targets, cand, gates, pred_wh, kinds, present, self.search.overlap,

@@ -141,3 +141,22 @@ def test_narrow_keeps_pbm_31_for_a_sliver_cut_by_a_vertical_edge():
     assert Adaptations.paper().changed() == [] and not Adaptations().lone_shrink_narrow
     with pytest.raises(ValueError, match="lone_shrink_narrow"):
         Adaptations(lone_shrink_shape=0.0, lone_shrink_narrow=True)
+
+
+def test_only_the_pairs_in_the_gates_are_read():
+    """``inside`` (``gating.in_gates``): a smaller pair outside target 0's gate keeps its kind
+    (no later step reads it); inside, the rule applies as without the mask."""
+    from occbench.trackers.layered.gating import in_gates
+
+    kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+    gates = np.array([[0.0, 0.0, 50.0, 50.0], [0.0, 0.0, 1000.0, 1000.0]])  # centre (110, 80)
+    inside = in_gates(cand.box, gates)
+    assert inside.tolist() == [[False], [True]]
+    LoneShrink(0.3).apply(kinds, cand, targets, pred, np.array([True, True]), inside)
+    assert kinds.tolist() == [[-1], [0]]
+    kinds, cand, targets, pred = _scene([300.0, 50.0, 20.0, 60.0])
+    gates[0] = (110.0, 80.0, 10.0, 10.0)  # the centre on the gate's corner: inside
+    LoneShrink(0.3).apply(kinds, cand, targets, pred, np.array([True, True]),
+                          in_gates(cand.box, gates))
+    assert kinds.tolist() == [[0], [0]]
+    assert not in_gates(cand.box, np.full((1, 4), np.nan)).any()
