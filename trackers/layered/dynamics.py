@@ -197,14 +197,10 @@ class ConstantVelocity2D:
             p.append([[pp, 0.0, 0.0, pv], [pp, 0.0, 0.0, pv]])
             q.append([qp**2 * s2, qv**2 * s2, r**2 * s2])
         x, p, q = np.array(x).reshape(-1, 4), np.array(p).reshape(-1, 2, 4), np.array(q).reshape(-1, 3)
-        self.x = np.vstack([self.x, x])
-        self.p = np.concatenate([self.p, p])
-        self.qp = np.append(self.qp, q[:, 0])
-        self.qv = np.append(self.qv, q[:, 1])
-        self.r = np.append(self.r, q[:, 2])
-        self.seen_x = np.vstack([self.seen_x, x])
-        self.seen_p = np.concatenate([self.seen_p, p])
-        self.seen_z = np.vstack([self.seen_z, x[:, :2]])
+        cat = np.concatenate  # one new array each, the old rows first
+        self.x, self.p = cat((self.x, x)), cat((self.p, p))
+        self.qp, self.qv, self.r = cat((self.qp, q[:, 0])), cat((self.qv, q[:, 1])), cat((self.r, q[:, 2]))
+        self.seen_x, self.seen_p, self.seen_z = cat((self.seen_x, x)), cat((self.seen_p, p)), cat((self.seen_z, x[:, :2]))
 
     def take(self, rows) -> None:
         """Keep only the filters at ``rows`` (in that order)."""

@@ -122,28 +122,31 @@ class Targets:
         dof = np.asarray(dof, dtype=np.float64).reshape(K, 6)
         self.kf1.extend(dof[:, 2:4], dof[:, 5] / 10.0)
         self.kf2.extend(dof[:, [5, 4]], dof[:, 5] / 10.0)
-        self.id = np.append(self.id, np.asarray(track_ids, dtype=np.int64))
-        self.dof = np.vstack([self.dof, dof])
+        cat = np.concatenate  # one new array each, the old rows first
+        alpha, beta = [float(a) for a in alpha], [float(b) for b in beta]
+        self.id = cat((self.id, np.asarray(track_ids, dtype=np.int64)))
+        self.dof = cat((self.dof, dof))
         r = np.zeros((K,) + self._ratios.shape[1:])
-        r[:, -1, 0], r[:, -1, 1] = [float(a) for a in alpha], [float(b) for b in beta]
-        self._ratios = np.concatenate([self._ratios, r])
-        self._n_ratios = np.append(self._n_ratios, np.ones(K, dtype=np.int64))
-        self.alpha = np.append(self.alpha, [float(a) for a in alpha])
-        self.beta = np.append(self.beta, [float(b) for b in beta])
+        r[:, -1, 0], r[:, -1, 1] = alpha, beta
+        self._ratios = cat((self._ratios, r))
+        ones, zeros = np.ones(K, dtype=np.int64), np.zeros(K, dtype=np.int64)
+        self._n_ratios = cat((self._n_ratios, ones))
+        self.alpha = cat((self.alpha, alpha))
+        self.beta = cat((self.beta, beta))
         h = np.zeros((K,) + self._history.shape[1:])
         h[:, -1] = dof
-        self._history = np.concatenate([self._history, h])
-        self._n_history = np.append(self._n_history, np.ones(K, dtype=np.int64))
+        self._history = cat((self._history, h))
+        self._n_history = cat((self._n_history, ones))
         self.parts = PartFeatures.concatenate([self.parts, parts], self._bins)
-        self.hits = np.append(self.hits, np.ones(K, dtype=np.int64))
-        self.misses = np.append(self.misses, np.zeros(K, dtype=np.int64))
-        self.confirmed = np.append(self.confirmed, np.zeros(K, dtype=bool))
-        self.occluded = np.append(self.occluded, np.zeros(K, dtype=bool))
-        self.occluded_parts = np.vstack([self.occluded_parts, np.zeros((K, N_PARTS), dtype=bool)])
-        self.part_scores = np.vstack([self.part_scores, np.ones((K, N_PARTS))])
-        self.stale = np.vstack([self.stale, np.zeros((K, N_PARTS), dtype=np.int64)])
-        self.score = np.append(self.score, np.zeros(K))
-        self.last_gate = np.vstack([self.last_gate, np.full((K, 4), np.nan)])
+        self.hits = cat((self.hits, ones))
+        self.misses = cat((self.misses, zeros))
+        self.confirmed = cat((self.confirmed, np.zeros(K, dtype=bool)))
+        self.occluded = cat((self.occluded, np.zeros(K, dtype=bool)))
+        self.occluded_parts = cat((self.occluded_parts, np.zeros((K, N_PARTS), dtype=bool)))
+        self.part_scores = cat((self.part_scores, np.ones((K, N_PARTS))))
+        self.stale = cat((self.stale, np.zeros((K, N_PARTS), dtype=np.int64)))
+        self.score = cat((self.score, np.zeros(K)))
+        self.last_gate = cat((self.last_gate, np.full((K, 4), np.nan)))
         self.head_template.extend(head_templates)
 
     def take(self, rows) -> None:
@@ -156,7 +159,7 @@ class Targets:
                      "occluded_parts", "part_scores", "stale", "score", "last_gate"):
             setattr(self, name, getattr(self, name)[rows])
         self.parts = self.parts.take(rows)
-        self.head_template = [self.head_template[i] for i in rows]
+        self.head_template = [self.head_template[i] for i in rows.tolist()]
 
     def subset(self, rows: np.ndarray) -> Targets:
         """A new ``Targets`` of copies of the targets at ``rows`` (one block of a large frame,

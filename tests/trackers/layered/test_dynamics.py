@@ -243,3 +243,38 @@ def test_a_person_walking_in_through_a_doorway_is_boxed_whole():
     grown, searched = _doorway(True), _doorway(False)
     assert min(grown[8:]) > 40.0
     assert max(searched[8:]) < 30.0
+
+
+def _state(tg: Targets) -> dict:
+    """Every array of the targets and their filters, by name."""
+    out = {k: v for k, v in vars(tg).items() if isinstance(v, np.ndarray)}
+    for f in ("kf1", "kf2"):
+        out.update({f"{f}.{k}": v for k, v in vars(getattr(tg, f)).items() if isinstance(v, np.ndarray)})
+    out.update({f"parts.{k}": v for k, v in vars(tg.parts).items()})
+    return out
+
+
+def test_extend_equals_one_add_each_after_a_take():
+    """``Targets.extend`` of K targets: the same arrays (values, dtypes, shapes) as K ``add``s,
+    also after ``take`` has reordered and dropped rows; the head templates follow."""
+    ex = PartFeatureExtractor(4, 14, 6)
+    ex.start(np.random.default_rng(3).integers(0, 256, (240, 320, 3), dtype=np.uint8), None)
+    boxes = np.array([[100.0, 50.0, 30.0, 90.0], [10.0, 20.0, 25.0, 80.0], [200.0, 60.0, 32.0, 99.0]])
+    parts = ex.extract(boxes, np.full(3, 0.5), np.full(3, 0.45))
+    dof = np.column_stack([boxes[:, :2], boxes[:, :2] + 0.5 * boxes[:, 2:], boxes[:, 2:]])
+    one, many = _targets(), _targets()
+    for tg in (one, many):
+        tg.add(7, dof[0], 0.4, 0.6, parts.take(0), None)
+        tg.add(8, dof[1], 0.5, 0.5, parts.take(1), np.zeros((3, 4, 3), np.uint8))
+        tg.take(np.array([1]))
+    tpl = np.ones((3, 5, 3), np.uint8)
+    for k in range(3):
+        one.add(10 + k, dof[k], 0.3 + 0.1 * k, 0.6, parts.take(k), tpl if k == 1 else None)
+    many.extend([10, 11, 12], dof, [0.3, 0.4, 0.5], [0.6] * 3, parts, [None, tpl, None])
+    a, b = _state(one), _state(many)
+    assert a.keys() == b.keys() and len(many) == 4
+    for k in a:
+        assert a[k].dtype == b[k].dtype and a[k].shape == b[k].shape, k
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    assert many.id.tolist() == [8, 10, 11, 12]
+    assert [t is None for t in many.head_template] == [False, True, False, True]
