@@ -378,14 +378,15 @@ class AppearanceAtSplit:
                 continue
             done.add((i, j))
             di, dj = int(out[at[i], 1]), int(out[at[j], 1])
+            own, other = rho(i, di) + rho(j, dj), rho(i, dj) + rho(j, di)
+            if (di == dj or min(rho(i, dj), rho(j, di)) < mu_rho or other <= own + self.margin
+                    or self.parted > 0 and self._continued(i if merged[i] else j,
+                                                           di if merged[i] else dj, regions)):
+                continue  # the cheap tests first: the regions' below are sparse slices
             ni, nj = np.flatnonzero(owners == i), np.flatnonzero(owners == j)
             to_j = delta[ni][:, [dj]].toarray()[:, 0]  # i's nodes on j's measurement
             to_i = delta[nj][:, [di]].toarray()[:, 0]
-            own, other = rho(i, di) + rho(j, dj), rho(i, dj) + rho(j, di)
-            if (di == dj or min(rho(i, dj), rho(j, di)) < mu_rho or not to_j.max() > 0
-                    or not to_i.max() > 0 or other <= own + self.margin
-                    or self.parted > 0 and self._continued(i if merged[i] else j,
-                                                           di if merged[i] else dj, regions)):
+            if not to_j.max() > 0 or not to_i.max() > 0:
                 continue
             if out is rows:
                 out = rows.copy()
