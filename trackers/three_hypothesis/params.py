@@ -363,11 +363,11 @@ class Adaptations:
                  early_confirm=self.early_confirm, report_memory=self.report_memory,
                  measured_hypothesis_sigmas=self.measured_hypothesis_sigmas,
                  split_appearance_margin=self.split_appearance_margin,
-                 merged_line_shift=self.merged_line_shift,
-                 split_appearance_parted=self.split_appearance_parted)
+                 merged_line_shift=self.merged_line_shift)
         at_least("adaptations", 1, max_hidden=self.max_hidden)
         unit("adaptations", report_support=self.report_support,
-             early_confirm_score=self.early_confirm_score, return_floor=self.return_floor)
+             early_confirm_score=self.early_confirm_score, return_floor=self.return_floor,
+             split_appearance_parted=self.split_appearance_parted)  # an IoU
         require("adaptations.shape_gate", 0.0 <= self.shape_gate < 1.0, "must lie in [0, 1)",
                 self.shape_gate)
 

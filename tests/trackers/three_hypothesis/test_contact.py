@@ -293,6 +293,8 @@ def test_where_a_merged_pair_parts_only_a_measurement_that_does_not_continue_it(
                        h).split == parted
     assert "split_appearance_parted" in Adaptations().changed()
     assert "split_appearance_parted" not in Adaptations.paper().changed()
+    with pytest.raises(ValueError, match=r"adaptations\.split_appearance_parted"):
+        Adaptations(split_appearance_parted=50.0)  # an IoU, not a percentage
 
 
 def test_merged_measurement_unmixed_takes_out_the_hidden_partners_colours():
