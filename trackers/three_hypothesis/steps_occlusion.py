@@ -170,8 +170,8 @@ def _split(S: Predictions, V: Measurements, O: Occlusions, rules: Rules, m: Matc
     merged = np.array([p.merged for p in persons], dtype=bool) & seen
     hidden = np.array([p.confirmed for p in persons], dtype=bool) & ~seen
 
-    def rho(i: int, d: int) -> float:  # eq. 4, clipped to [0, 1] as stage 1's
-        return float(np.clip(sqrt_q[i] @ sqrt_p[d], 0.0, 1.0))
+    def rho(i: int, d: int) -> float:  # eq. 4, clipped to [0, 1] as stage 1's (a scalar:
+        return min(max(float(sqrt_q[i] @ sqrt_p[d]), 0.0), 1.0)  # no np.clip call a pair)
 
     rows = rules.split.matches(m.matches, m.stages, rho, O.pairs, S.owners, O.delta,
                                merged, hidden, mu_rho, (persons, V.boxes))
